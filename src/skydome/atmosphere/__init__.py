@@ -1,0 +1,429 @@
+"""The atmosphere: planet, top of the atmosphere, constituents and ground.
+
+An :class:`Atmosphere` is a spherical shell (planet radius, top altitude) filled with
+constituents. Each :class:`Constituent` has a reference scattering and absorption
+coefficient as a function of wavelength (at sea level, or at the peak of an elevated
+layer), a :mod:`density profile <skydome.atmosphere.profiles>` and a phase function. Every
+physically based model in skydome takes the same object, so a comparison between
+models changes only the method.
+
+Presets: :meth:`Atmosphere.earth` (survey physics: Rayleigh eq. 8 with H0 = 7994 m,
+aerosols from turbidity or optical depth with H = 1200 m, ozone) and
+:meth:`Atmosphere.bruneton2017` (the demo atmosphere of Bruneton's reference
+implementation, for comparisons). :meth:`Atmosphere.custom` builds one from explicit
+coefficients, so that any other program's or paper's atmosphere can be reproduced.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, NamedTuple
+
+import numpy as np
+
+from skydome._validate import as_wavelengths, check_choice, check_number
+from skydome.atmosphere.profiles import (DensityProfile, ExponentialProfile, GaussianLayerProfile,
+                                         TentProfile, UniformProfile)
+from skydome.constants import DOBSON_UNIT, EARTH_RADIUS, H_MIE, H_RAYLEIGH, N_S_SURVEY
+
+__all__ = ["Atmosphere", "Constituent", "OpticalProperties", "SpectralCoefficient",
+           "ExponentialProfile", "TentProfile", "UniformProfile", "GaussianLayerProfile",
+           "ozone_cross_section"]
+
+# phase-function codes shared with the kernels (transport/_kernels.py)
+PHASE_CODES = {"rayleigh": 0, "henyey_greenstein": 1, "cornette_shanks": 2, "isotropic": 3}
+
+
+# ---------------------------------------------------------------------------------------------
+class SpectralCoefficient:
+    """A non-negative coefficient as a function of wavelength [m^-1] (or dimensionless for an
+    albedo).
+
+    Build it from a constant, a power law ``value * (lambda / ref)^-exponent``, a table
+    (linear interpolation, constant beyond the ends) or any callable of wavelength in nm.
+    """
+
+    def __init__(self, func: Callable[[np.ndarray], np.ndarray], description: str):
+        self._func = func
+        self.description = description
+
+    @classmethod
+    def make(cls, value: Any, name: str) -> "SpectralCoefficient":
+        """Coerce a float, a (wavelengths_nm, values) pair, a callable or a
+        SpectralCoefficient into a SpectralCoefficient; ``name`` is used in errors."""
+        if isinstance(value, SpectralCoefficient):
+            return value
+        if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+            return cls.constant(check_number(name, value, 0.0, None), name)
+        if callable(value):
+            return cls(lambda wl: np.asarray(value(wl), dtype=np.float64), f"{name}: callable")
+        if isinstance(value, (tuple, list)) and len(value) == 2:
+            return cls.table(value[0], value[1], name)
+        raise TypeError(f"{name} must be a number, a (wavelengths_nm, values) pair, a callable "
+                        f"or a SpectralCoefficient, got {type(value).__name__}")
+
+    @classmethod
+    def constant(cls, value: float, name: str = "coefficient") -> "SpectralCoefficient":
+        v = check_number(name, value, 0.0, None)
+        return cls(lambda wl: np.full(np.shape(wl), v), f"{v:g}")
+
+    @classmethod
+    def power_law(cls, value_at_ref: float, ref_nm: float, exponent: float,
+                  name: str = "coefficient") -> "SpectralCoefficient":
+        v = check_number(name, value_at_ref, 0.0, None)
+        ref = check_number("ref_nm", ref_nm, 1.0, None, "nm")
+        e = check_number("exponent", exponent, -10.0, 10.0)
+        return cls(lambda wl: v * (np.asarray(wl, dtype=np.float64) / ref) ** (-e),
+                   f"{v:g} (lambda/{ref:g} nm)^-{e:g}")
+
+    @classmethod
+    def table(cls, wavelengths_nm, values, name: str = "coefficient") -> "SpectralCoefficient":
+        wl = as_wavelengths(wavelengths_nm, 1.0, 1e5, name=f"{name} wavelengths")
+        v = np.asarray(values, dtype=np.float64)
+        if v.shape != wl.shape:
+            raise ValueError(f"{name}: values shape {v.shape} does not match wavelengths shape {wl.shape}")
+        if not np.all(np.isfinite(v)) or np.any(v < 0):
+            raise ValueError(f"{name}: values must be finite and non-negative")
+        if np.any(np.diff(wl) <= 0):
+            raise ValueError(f"{name}: wavelengths must be strictly increasing")
+        wl, v = wl.copy(), v.copy()
+        return cls(lambda x: np.interp(np.asarray(x, dtype=np.float64), wl, v),
+                   f"table {wl[0]:g}-{wl[-1]:g} nm ({wl.size} values)")
+
+    def __call__(self, wavelengths_nm) -> np.ndarray:
+        out = np.asarray(self._func(np.asarray(wavelengths_nm, dtype=np.float64)), dtype=np.float64)
+        out = np.broadcast_to(out, np.shape(wavelengths_nm)).astype(np.float64)
+        if not np.all(np.isfinite(out)) or np.any(out < 0):
+            raise ValueError(f"coefficient {self.description} gave NaN or negative values")
+        return out
+
+    def __repr__(self) -> str:
+        return f"SpectralCoefficient({self.description})"
+
+
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Constituent:
+    """One scattering and/or absorbing component of the atmosphere.
+
+    Parameters
+    ----------
+    name : str
+        Label ("rayleigh", "aerosol", "ozone", ...).
+    scattering : SpectralCoefficient or number or (wl, values) or callable
+        Scattering coefficient at reference density [m^-1].
+    absorption : same
+        Absorption coefficient at reference density [m^-1].
+    profile : DensityProfile
+        Density relative to the reference density as a function of altitude.
+    phase : {"rayleigh", "henyey_greenstein", "cornette_shanks", "isotropic"}
+        Phase function of the scattering.
+    g : float
+        Asymmetry parameter of HG / Cornette-Shanks, in (-1, 1).
+    depolarisation : float
+        Depolarisation ratio for the Rayleigh phase function, in [0, 0.5].
+    """
+
+    name: str
+    scattering: Any = 0.0
+    absorption: Any = 0.0
+    profile: DensityProfile = field(default_factory=lambda: ExponentialProfile(H_RAYLEIGH))
+    phase: str = "rayleigh"
+    g: float = 0.0
+    depolarisation: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "scattering", SpectralCoefficient.make(self.scattering, f"{self.name}.scattering"))
+        object.__setattr__(self, "absorption", SpectralCoefficient.make(self.absorption, f"{self.name}.absorption"))
+        if not isinstance(self.profile, DensityProfile):
+            raise TypeError(f"{self.name}.profile must be a DensityProfile, got {type(self.profile).__name__}")
+        check_choice(f"{self.name}.phase", self.phase, tuple(PHASE_CODES))
+        object.__setattr__(self, "g", check_number(f"{self.name}.g", self.g, -1.0, 1.0,
+                                                   low_open=True, high_open=True))
+        object.__setattr__(self, "depolarisation",
+                           check_number(f"{self.name}.depolarisation", self.depolarisation, 0.0, 0.5))
+
+    def phase_param(self) -> float:
+        """The kernel's phase parameter: g for HG/CS; rho/(2 - rho) for Rayleigh."""
+        if self.phase == "rayleigh":
+            return self.depolarisation / (2.0 - self.depolarisation)
+        return self.g
+
+
+class OpticalProperties(NamedTuple):
+    """Plain arrays describing an atmosphere on a wavelength grid, ready for the kernels.
+
+    nc constituents, nl wavelengths. Coefficients are at reference density [m^-1].
+    """
+
+    wavelengths_nm: np.ndarray   # (nl,)
+    planet_radius_m: float
+    top_radius_m: float
+    profile_code: np.ndarray     # (nc,) int64
+    profile_p0: np.ndarray       # (nc,)
+    profile_p1: np.ndarray       # (nc,)
+    scattering: np.ndarray       # (nc, nl)
+    extinction: np.ndarray       # (nc, nl) scattering + absorption
+    phase_code: np.ndarray       # (nc,) int64
+    phase_param: np.ndarray      # (nc,)
+    ground_albedo: np.ndarray    # (nl,)
+
+
+# ---------------------------------------------------------------------------------------------
+def ozone_cross_section(wavelength_nm) -> np.ndarray:
+    """Ozone absorption cross section at 233 K [m^2] (Serdyuchenko et al. 2014, 10 nm bin
+    means from 360-830 nm, placed at the bin centres; linear interpolation; the end values
+    are held beyond the table -- below 365 nm this underestimates the Huggins band)."""
+    from skydome.data import load_table
+
+    _, t = load_table("ozone_cross_section_233k")
+    wl = np.asarray(wavelength_nm, dtype=np.float64)
+    return np.interp(wl, t[:, 0] + 5.0, t[:, 1])
+
+
+@dataclass(frozen=True, eq=False)
+class Atmosphere:
+    """A spherical-shell atmosphere.
+
+    Parameters
+    ----------
+    constituents : sequence of Constituent
+    planet_radius_m : float
+        Radius of the ground sphere [m], in [1e3, 1e8]; Earth 6360 km.
+    top_altitude_m : float
+        Altitude of the top of the atmosphere above the ground [m], in [100, 1e6]; 100 km
+        by default so that twilight (sun down to -18 deg) is lit correctly.
+    ground_albedo : float or spectral
+        Lambertian ground reflectance in [0, 1].
+    name : str
+    """
+
+    constituents: tuple = ()
+    planet_radius_m: float = EARTH_RADIUS
+    top_altitude_m: float = 100e3
+    ground_albedo: Any = 0.1
+    name: str = "custom"
+
+    def __post_init__(self):
+        cons = tuple(self.constituents)
+        for c in cons:
+            if not isinstance(c, Constituent):
+                raise TypeError(f"constituents must be Constituent objects, got {type(c).__name__}")
+        names = [c.name for c in cons]
+        if len(set(names)) != len(names):
+            raise ValueError(f"constituent names must be unique, got {names}")
+        object.__setattr__(self, "constituents", cons)
+        object.__setattr__(self, "planet_radius_m",
+                           check_number("planet_radius_m", self.planet_radius_m, 1e3, 1e8, "m"))
+        object.__setattr__(self, "top_altitude_m",
+                           check_number("top_altitude_m", self.top_altitude_m, 100.0, 1e6, "m"))
+        if isinstance(self.ground_albedo, (int, float)) and not isinstance(self.ground_albedo, bool):
+            check_number("ground_albedo", self.ground_albedo, 0.0, 1.0)
+        object.__setattr__(self, "ground_albedo", SpectralCoefficient.make(self.ground_albedo, "ground_albedo"))
+
+    # -- presets -------------------------------------------------------------------------------
+    @classmethod
+    def earth(cls, turbidity: float | None = None, *, aerosol_optical_depth: float | None = None,
+              angstrom_alpha: float = 1.3, aerosol_g: float = 0.76,
+              aerosol_single_scattering_albedo: float = 0.9,
+              aerosol_phase: str = "cornette_shanks",
+              aerosol_scale_height_m: float = H_MIE,
+              rayleigh_scale_height_m: float = H_RAYLEIGH,
+              refractive_index: str | float = "survey",
+              number_density_m3: float = N_S_SURVEY,
+              depolarisation: float = 0.0,
+              ozone_du: float = 300.0,
+              ground_albedo: Any = 0.1,
+              planet_radius_m: float = EARTH_RADIUS,
+              top_altitude_m: float = 100e3) -> "Atmosphere":
+        """Earth's clear atmosphere with the survey's physics.
+
+        Parameters
+        ----------
+        turbidity : float, optional
+            Preetham turbidity T in [1, 32]; sets the Angstrom beta = 0.04608 T - 0.04586
+            ([PSS99] A.2). Default 2.5 when no aerosol optical depth is given.
+        aerosol_optical_depth : float, optional
+            Vertical aerosol optical depth at 550 nm, in [0, 10] (instead of turbidity).
+        angstrom_alpha : float
+            Angstrom exponent, default 1.3.
+        aerosol_g, aerosol_single_scattering_albedo, aerosol_phase, aerosol_scale_height_m
+            Aerosol phase asymmetry (0.76), albedo (0.9), phase function
+            ("cornette_shanks", survey eq. 11) and scale height (1200 m, survey sec. 4).
+        rayleigh_scale_height_m : float
+            H0 = 7994 m (survey eq. 7).
+        refractive_index, number_density_m3, depolarisation
+            Rayleigh coefficient inputs (survey eqs. 5, 6, 8): n = 1.000278, N_s = 2.545e25
+            m^-3, no King correction (reproduces Table 1).
+        ozone_du : float
+            Total ozone column [DU] in [0, 1000] on a 10-25-40 km tent profile (Bruneton
+            2017); 0 disables ozone.
+        ground_albedo : float or spectral, in [0, 1].
+        """
+        from skydome.atmosphere.aerosols import (aerosol_optical_depth as _aod,
+                                                 angstrom_beta_from_turbidity)
+        from skydome.atmosphere.rayleigh import rayleigh_scattering_coefficient
+
+        if turbidity is not None and aerosol_optical_depth is not None:
+            raise ValueError("give either turbidity or aerosol_optical_depth, not both")
+        alpha = check_number("angstrom_alpha", angstrom_alpha, -1.0, 4.0)
+        if aerosol_optical_depth is not None:
+            aod = check_number("aerosol_optical_depth", aerosol_optical_depth, 0.0, 10.0)
+            beta = aod * (550.0 / 1000.0) ** alpha  # Angstrom beta = tau(1 um)
+        else:
+            beta = angstrom_beta_from_turbidity(2.5 if turbidity is None else turbidity)
+        h_m = check_number("aerosol_scale_height_m", aerosol_scale_height_m, 10.0, 1e5, "m")
+        ssa = check_number("aerosol_single_scattering_albedo", aerosol_single_scattering_albedo, 0.0, 1.0)
+        ozone = check_number("ozone_du", ozone_du, 0.0, 1000.0, "DU")
+        check_number("rayleigh_scale_height_m", rayleigh_scale_height_m, 10.0, 1e5, "m")
+        # validate Rayleigh inputs once, here
+        rayleigh_scattering_coefficient(550.0, refractive_index=refractive_index,
+                                        number_density_m3=number_density_m3,
+                                        depolarisation=depolarisation)
+        top = check_number("top_altitude_m", top_altitude_m, 100.0, 1e6, "m")
+
+        def rayleigh_beta(wl):
+            return rayleigh_scattering_coefficient(wl, refractive_index=refractive_index,
+                                                   number_density_m3=number_density_m3,
+                                                   depolarisation=depolarisation)
+
+        aero_profile = ExponentialProfile(h_m)
+        column = aero_profile.column(top)
+
+        def aerosol_extinction(wl):
+            # sea-level extinction so that the vertical column gives the Angstrom depth
+            return _aod(wl, beta, alpha) / column
+
+        constituents = [
+            Constituent("rayleigh", scattering=rayleigh_beta, absorption=0.0,
+                        profile=ExponentialProfile(rayleigh_scale_height_m), phase="rayleigh",
+                        depolarisation=depolarisation),
+            Constituent("aerosol", scattering=lambda wl: ssa * aerosol_extinction(wl),
+                        absorption=lambda wl: (1.0 - ssa) * aerosol_extinction(wl),
+                        profile=aero_profile, phase=aerosol_phase, g=aerosol_g),
+        ]
+        if ozone > 0:
+            constituents.append(cls.ozone_layer(ozone, top))
+        return cls(tuple(constituents), planet_radius_m=planet_radius_m, top_altitude_m=top,
+                   ground_albedo=ground_albedo,
+                   name=f"earth(beta={beta:.4g}, alpha={alpha:g}, ozone={ozone:g} DU)")
+
+    @staticmethod
+    def ozone_layer(ozone_du: float = 300.0, top_altitude_m: float = 100e3) -> Constituent:
+        """An absorbing ozone constituent of ``ozone_du`` Dobson units on the 10-25-40 km
+        tent profile: peak number density = column / 15 km (Bruneton 2017)."""
+        ozone = check_number("ozone_du", ozone_du, 0.0, 1000.0, "DU")
+        profile = TentProfile(25e3, 15e3)
+        peak_density = ozone * DOBSON_UNIT / profile.column(top_altitude_m)  # [m^-3]
+        return Constituent("ozone", scattering=0.0,
+                           absorption=lambda wl: peak_density * ozone_cross_section(wl),
+                           profile=profile, phase="isotropic")
+
+    @classmethod
+    def bruneton2017(cls) -> "Atmosphere":
+        """The demo atmosphere of Bruneton's 2017 reference implementation
+        (precomputed_atmospheric_scattering, atmosphere/demo/demo.cc): radii 6360/6420 km,
+        Rayleigh 1.24062e-6 lambda^-4 m^-1 (lambda in um), H = 8 km; aerosol Angstrom beta
+        5.328e-3, alpha 0, H = 1.2 km, albedo 0.9, Cornette-Shanks g = 0.8; ozone 300 DU on
+        the 10-25-40 km tent; ground albedo 0.1."""
+        mie_ext = 5.328e-3 / 1200.0
+        return cls(
+            (Constituent("rayleigh", scattering=lambda wl: 1.24062e-6 * (np.asarray(wl) / 1000.0) ** -4.0,
+                         profile=ExponentialProfile(8000.0), phase="rayleigh"),
+             Constituent("aerosol", scattering=0.9 * mie_ext, absorption=0.1 * mie_ext,
+                         profile=ExponentialProfile(1200.0), phase="cornette_shanks", g=0.8),
+             cls.ozone_layer(300.0, 60e3)),
+            planet_radius_m=6360e3, top_altitude_m=60e3, ground_albedo=0.1, name="bruneton2017")
+
+    @classmethod
+    def custom(cls, *, rayleigh_scattering, rayleigh_scale_height_m: float = H_RAYLEIGH,
+               mie_scattering=0.0, mie_extinction=None, mie_scale_height_m: float = H_MIE,
+               mie_phase: str = "cornette_shanks", mie_g: float = 0.76,
+               ozone_absorption=None, ozone_profile: DensityProfile | None = None,
+               planet_radius_m: float = EARTH_RADIUS, top_altitude_m: float = 100e3,
+               ground_albedo: Any = 0.1, depolarisation: float = 0.0,
+               name: str = "custom") -> "Atmosphere":
+        """An atmosphere from explicit sea-level coefficients (each a number, a
+        (wavelengths_nm, values) table or a callable of wavelength in nm, in m^-1).
+
+        ``mie_extinction`` defaults to ``mie_scattering`` (single-scattering albedo 1); it
+        must not be smaller than the scattering at any wavelength (checked when used).
+        """
+        ray = SpectralCoefficient.make(rayleigh_scattering, "rayleigh_scattering")
+        mie_s = SpectralCoefficient.make(mie_scattering, "mie_scattering")
+        mie_e = mie_s if mie_extinction is None else SpectralCoefficient.make(mie_extinction, "mie_extinction")
+
+        def mie_abs(wl):
+            s, e = mie_s(wl), mie_e(wl)
+            if np.any(e < s * (1.0 - 1e-12)):
+                raise ValueError("mie_extinction must be >= mie_scattering at every wavelength")
+            return np.maximum(e - s, 0.0)
+
+        cons = [Constituent("rayleigh", scattering=ray, profile=ExponentialProfile(rayleigh_scale_height_m),
+                            phase="rayleigh", depolarisation=depolarisation),
+                Constituent("aerosol", scattering=mie_s, absorption=mie_abs,
+                            profile=ExponentialProfile(mie_scale_height_m), phase=mie_phase, g=mie_g)]
+        if ozone_absorption is not None:
+            cons.append(Constituent("ozone", absorption=ozone_absorption,
+                                    profile=ozone_profile or TentProfile(25e3, 15e3), phase="isotropic"))
+        return cls(tuple(cons), planet_radius_m=planet_radius_m, top_altitude_m=top_altitude_m,
+                   ground_albedo=ground_albedo, name=name)
+
+    # -- derived quantities --------------------------------------------------------------------
+    @property
+    def top_radius_m(self) -> float:
+        return self.planet_radius_m + self.top_altitude_m
+
+    def constituent(self, name: str) -> Constituent:
+        for c in self.constituents:
+            if c.name == name:
+                return c
+        raise KeyError(f"no constituent named {name!r}; have {[c.name for c in self.constituents]}")
+
+    def optical_properties(self, wavelengths_nm) -> OpticalProperties:
+        """Evaluate every coefficient on a wavelength grid [nm] for the kernels."""
+        wl = as_wavelengths(wavelengths_nm)
+        nc, nl = len(self.constituents), wl.size
+        sca = np.zeros((nc, nl))
+        ext = np.zeros((nc, nl))
+        code = np.zeros(nc, dtype=np.int64)
+        p0 = np.zeros(nc)
+        p1 = np.zeros(nc)
+        ph = np.zeros(nc, dtype=np.int64)
+        pp = np.zeros(nc)
+        for i, c in enumerate(self.constituents):
+            sca[i] = c.scattering(wl)
+            ext[i] = sca[i] + c.absorption(wl)
+            code[i], p0[i], p1[i] = c.profile.kernel_params()
+            ph[i] = PHASE_CODES[c.phase]
+            pp[i] = c.phase_param()
+        albedo = self.ground_albedo(wl)
+        if np.any(albedo > 1.0):
+            raise ValueError(f"ground_albedo = {albedo.max():g} is out of range [0, 1]")
+        return OpticalProperties(wl, self.planet_radius_m, self.top_radius_m, code, p0, p1, sca, ext,
+                                 ph, pp, albedo)
+
+    def extinction(self, altitude_m, wavelengths_nm) -> np.ndarray:
+        """Total extinction coefficient [m^-1] at altitudes (...) and wavelengths: (..., nl)."""
+        wl = as_wavelengths(wavelengths_nm)
+        h = np.asarray(altitude_m, dtype=np.float64)[..., None]
+        total = np.zeros(h.shape[:-1] + (wl.size,))
+        for c in self.constituents:
+            total = total + c.profile.density(h) * (c.scattering(wl) + c.absorption(wl))
+        return total
+
+    def vertical_optical_depth(self, wavelengths_nm) -> dict[str, np.ndarray]:
+        """Vertical optical depth from the ground to the top per constituent (nl,)."""
+        wl = as_wavelengths(wavelengths_nm)
+        return {c.name: c.profile.column(self.top_altitude_m) * (c.scattering(wl) + c.absorption(wl))
+                for c in self.constituents}
+
+    def describe(self) -> dict[str, Any]:
+        """A JSON-friendly summary (for image metadata)."""
+        return {"name": self.name, "planet_radius_m": self.planet_radius_m,
+                "top_altitude_m": self.top_altitude_m,
+                "ground_albedo": self.ground_albedo.description,
+                "constituents": [{"name": c.name, "scattering": c.scattering.description,
+                                  "absorption": c.absorption.description,
+                                  "profile": repr(c.profile), "phase": c.phase, "g": c.g}
+                                 for c in self.constituents]}

@@ -1,0 +1,1 @@
+"""Atmospheric effects: aerial perspective, twilight, polarisation, aureole, ..."""

@@ -1,0 +1,223 @@
+"""The model protocol and the registry of every sky model.
+
+A model is a small class deriving from :class:`SkyModel`. It declares
+
+* ``name``: author+year identifier (``"preetham1999"``), the registry key;
+* ``reference``: the citation;
+* ``native``: ``"spectral"``, ``"xyz"`` or ``"luminance"``, the quantity it computes;
+* ``parameters``: a tuple of :class:`Parameter` (name, unit, default, valid range, meaning);
+
+and implements the native method: ``radiance(directions, wavelengths_nm)`` (spectral,
+W m^-2 sr^-1 nm^-1, wavelength axis last), ``xyz(directions)`` (CIE XYZ with Y in cd m^-2)
+or ``luminance(directions)`` (cd m^-2). The base class derives the others where that is
+physically meaningful. Directions are unit vectors (..., 3) in the East-North-Up frame and
+name the direction the light arrives *from*.
+
+Models register themselves with :func:`register`; the registry discovers every module in
+``skydome.models.analytic`` and ``skydome.models.simulated`` on first use, so adding a
+model needs no edit here. Model modules must not import numba at module level.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Sequence
+
+import numpy as np
+
+from skydome._validate import as_directions, check_choice, check_int, check_number
+
+__all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class"]
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """Description of one model parameter.
+
+    Attributes
+    ----------
+    name : str
+        Keyword accepted by the model's constructor.
+    unit : str
+        Unit of the value ("" for dimensionless).
+    default : Any
+        Default value (None: required or derived).
+    low, high : float or None
+        Inclusive valid range for numbers (None: unbounded).
+    doc : str
+        One line of meaning.
+    kind : str
+        "float", "int", "choice", "object" (validated by the model itself).
+    choices : tuple
+        Allowed values for kind "choice".
+    """
+
+    name: str
+    unit: str = ""
+    default: Any = None
+    low: float | None = None
+    high: float | None = None
+    doc: str = ""
+    kind: str = "float"
+    choices: tuple = field(default_factory=tuple)
+
+    def validate(self, value: Any) -> Any:
+        """Check ``value`` against this parameter's type and range; return it converted."""
+        if value is None:
+            return None
+        if self.kind == "float":
+            return check_number(self.name, value, self.low, self.high, self.unit)
+        if self.kind == "int":
+            lo = None if self.low is None else int(self.low)
+            hi = None if self.high is None else int(self.high)
+            return check_int(self.name, value, lo, hi)
+        if self.kind == "choice":
+            return check_choice(self.name, value, self.choices)
+        return value
+
+    def range_text(self) -> str:
+        if self.kind == "choice":
+            return " | ".join(map(str, self.choices))
+        if self.kind in ("float", "int"):
+            lo = "-inf" if self.low is None else f"{self.low:g}"
+            hi = "inf" if self.high is None else f"{self.high:g}"
+            return f"[{lo}, {hi}]"
+        return ""
+
+
+class SkyModel:
+    """Base class of every sky model (see the module docstring for the protocol)."""
+
+    name: ClassVar[str] = ""
+    reference: ClassVar[str] = ""
+    native: ClassVar[str] = "spectral"
+    parameters: ClassVar[tuple[Parameter, ...]] = ()
+    summary: ClassVar[str] = ""
+
+    sun = None  # a skydome.Sun where the model has one
+
+    # -- helpers for subclasses -------------------------------------------------------
+    @classmethod
+    def _validate_params(cls, params: dict[str, Any]) -> dict[str, Any]:
+        """Validate keyword parameters against ``cls.parameters``; fill defaults.
+
+        Unknown keywords raise TypeError naming the valid ones.
+        """
+        known = {p.name: p for p in cls.parameters}
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            raise TypeError(
+                f"model {cls.name!r} got unknown parameter(s) {', '.join(unknown)}; "
+                f"valid: {', '.join(known) or 'none'}")
+        out = {}
+        for pname, p in known.items():
+            out[pname] = p.validate(params.get(pname, p.default))
+        return out
+
+    # -- the three views of the sky -----------------------------------------------------
+    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1], shape (..., n_wavelengths)."""
+        if self.native == "luminance":
+            raise TypeError(f"model {self.name!r} is luminance-only: use luminance() or xyz()")
+        if self.native == "xyz":
+            # Reconstruct a daylight spectrum with the model's chromaticity (CIE 015 daylight
+            # basis S0 + M1 S1 + M2 S2), scaled to the model's luminance.
+            from skydome.spectra import spectrum_from_xyz_daylight
+
+            return spectrum_from_xyz_daylight(self.xyz(directions), wavelengths_nm)
+        raise NotImplementedError(f"{type(self).__name__} must implement radiance()")
+
+    def xyz(self, directions) -> np.ndarray:
+        """CIE 1931 XYZ tristimulus values with Y = luminance [cd m^-2], shape (..., 3)."""
+        if self.native == "spectral":
+            from skydome.spectra import default_wavelengths, spectrum_to_xyz
+
+            wl = default_wavelengths()
+            return spectrum_to_xyz(self.radiance(directions, wl), wl)
+        if self.native == "luminance":
+            # Luminance-only models carry no colour: give them the chromaticity of CIE
+            # illuminant D65 (x, y) = (0.31271, 0.32902) so that images are neutral.
+            Y = self.luminance(directions)
+            x, y = 0.31271, 0.32902
+            return np.stack([Y * x / y, Y, Y * (1.0 - x - y) / y], axis=-1)
+        raise NotImplementedError(f"{type(self).__name__} must implement xyz()")
+
+    def luminance(self, directions) -> np.ndarray:
+        """Luminance [cd m^-2], shape (...)."""
+        if self.native == "luminance":
+            raise NotImplementedError(f"{type(self).__name__} must implement luminance()")
+        return self.xyz(directions)[..., 1]
+
+    def sun_radiance(self, wavelengths_nm) -> np.ndarray | None:
+        """Spectral radiance of the sun's disc as seen by the observer
+        [W m^-2 sr^-1 nm^-1], shape (n_wavelengths,); None if the model has no sun."""
+        return None
+
+    def describe(self) -> dict[str, Any]:
+        """The model's name, reference, native quantity and parameter values."""
+        values = {p.name: getattr(self, p.name, None) for p in self.parameters}
+        return {"model": self.name, "reference": self.reference, "native": self.native,
+                "parameters": values}
+
+    def __repr__(self) -> str:
+        vals = ", ".join(f"{p.name}={getattr(self, p.name, None)!r}" for p in self.parameters)
+        return f"{type(self).__name__}({vals})"
+
+    @staticmethod
+    def _directions(directions) -> np.ndarray:
+        return as_directions(directions)
+
+
+# -- registry -------------------------------------------------------------------------------
+_REGISTRY: dict[str, type[SkyModel]] = {}
+_DISCOVERED = False
+_PACKAGES = ("skydome.models.analytic", "skydome.models.simulated")
+
+
+def register(cls: type[SkyModel]) -> type[SkyModel]:
+    """Class decorator adding a model to the registry under ``cls.name``."""
+    if not cls.name:
+        raise ValueError(f"{cls.__name__} has no name")
+    if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
+        raise ValueError(f"model name {cls.name!r} registered twice")
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def _discover() -> None:
+    global _DISCOVERED
+    if _DISCOVERED:
+        return
+    for pkg_name in _PACKAGES:
+        pkg = importlib.import_module(pkg_name)
+        for info in pkgutil.iter_modules(pkg.__path__):
+            if not info.name.startswith("_"):
+                importlib.import_module(f"{pkg_name}.{info.name}")
+    _DISCOVERED = True
+
+
+def available() -> dict[str, type[SkyModel]]:
+    """Every registered model, by name (sorted)."""
+    _discover()
+    return dict(sorted(_REGISTRY.items()))
+
+
+def get_model_class(name: str) -> type[SkyModel]:
+    """The model class registered under ``name``; ValueError listing the names otherwise."""
+    models = available()
+    if name not in models:
+        raise ValueError(f"model = {name!r} is not one of {', '.join(models)}")
+    return models[name]
+
+
+def model(name: str, **params: Any) -> SkyModel:
+    """Construct the model registered under ``name`` with keyword parameters.
+
+    Examples
+    --------
+    >>> import skydome as sd
+    >>> sky = sd.model("single_scattering", sun=sd.Sun(elevation_deg=30, azimuth_deg=135))
+    """
+    return get_model_class(name)(**params)

@@ -1,0 +1,1 @@
+"""Analytic and empirical sky models (CIE, ASRC-CIE, Perez, Preetham, ...)."""

@@ -1,0 +1,1 @@
+"""Simulation-based sky models (single scattering, Nishita, Bruneton-style, Monte Carlo, ...)."""

@@ -1,0 +1,1 @@
+"""The numerical engine: geometry, optical depth and the scattering integrals."""
