@@ -1,0 +1,378 @@
+"""The ``skydome`` command line: a thin layer over the public API.
+
+Every command validates all of its input before doing any work; a bad value prints one
+line on stderr (``error: ...``) and exits with code 2, leaving nothing on disk.
+"""
+
+from __future__ import annotations
+
+import sys
+import time as _time
+from typing import Any, Optional
+
+import typer
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
+                  help="skydome: physically based daylight modelling (sky models, spectral sky images).")
+
+PROJECTIONS = ("fisheye", "equirect", "equirect-hemisphere", "angular")
+
+
+class UserError(Exception):
+    """Bad input: reported as one line on stderr with exit code 2."""
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+def _run(func, *args, **kwargs):
+    """Call ``func`` turning ValueError/TypeError/FileNotFoundError into exit code 2."""
+    try:
+        return func(*args, **kwargs)
+    except (UserError, ValueError, TypeError, FileNotFoundError, KeyError) as exc:
+        msg = exc.args[0] if exc.args else str(exc)
+        _fail(str(msg))
+
+
+# -- helpers --------------------------------------------------------------------------------
+def _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method):
+    from skydome.sun import Sun
+
+    by_angles = sun_elevation is not None or sun_azimuth is not None
+    by_place = any(v is not None for v in (lat, lon, time))
+    if by_angles and by_place:
+        raise UserError("give either --sun-elevation/--sun-azimuth or --lat/--lon/--time, not both")
+    if by_place:
+        missing = [n for n, v in (("--lat", lat), ("--lon", lon), ("--time", time)) if v is None]
+        if missing:
+            raise UserError(f"{', '.join(missing)} missing: --lat, --lon and --time go together")
+        return Sun.from_location(lat, lon, time, method=sun_method)
+    return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
+               azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
+
+
+def _parse_model_params(cls, extra: list[str]) -> dict[str, Any]:
+    """Turn ``--name value`` pairs into keyword parameters of model class ``cls``."""
+    params = {p.name: p for p in cls.parameters}
+    out: dict[str, Any] = {}
+    i = 0
+    while i < len(extra):
+        tok = extra[i]
+        if not tok.startswith("--"):
+            raise UserError(f"unexpected argument {tok!r}")
+        key, _, value = tok[2:].partition("=")
+        name = key.replace("-", "_")
+        if name not in params or params[name].kind == "object":
+            valid = ", ".join("--" + p.name.replace("_", "-") for p in cls.parameters if p.kind != "object")
+            raise UserError(f"model {cls.name!r} has no option --{key}; its options: {valid or 'none'}")
+        if not value:
+            if i + 1 >= len(extra):
+                raise UserError(f"--{key} needs a value")
+            value = extra[i + 1]
+            i += 1
+        p = params[name]
+        try:
+            if p.kind == "int":
+                out[name] = int(value)
+            elif p.kind == "float":
+                out[name] = float(value)
+            elif p.kind == "choice":
+                # choices may be numbers or strings
+                conv = type(p.choices[0]) if p.choices else str
+                out[name] = conv(value)
+            elif p.kind == "bool":
+                out[name] = value.lower() in ("1", "true", "yes", "on")
+            else:
+                out[name] = value
+        except ValueError:
+            raise UserError(f"--{key} = {value!r} is not a valid {p.kind}") from None
+        i += 1
+    return out
+
+
+class _Progress:
+    """A rich progress bar that appears only once a render has run for a second."""
+
+    def __init__(self, label: str):
+        self.label = label
+        self.t0 = _time.perf_counter()
+        self.bar = None
+        self.task = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            if _time.perf_counter() - self.t0 < 1.0 or done >= total:
+                return
+            from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+            from rich.console import Console
+
+            self.bar = Progress(TextColumn(self.label), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+                                TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+            self.bar.start()
+            self.task = self.bar.add_task(self.label, total=total)
+        self.bar.update(self.task, completed=done)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.stop()
+
+
+# -- commands ----------------------------------------------------------------------------------
+@app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def render(
+    ctx: typer.Context,
+    model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
+    out: str = typer.Option(..., help="Output file: .exr (float, linear), .hdr (Radiance RGBE) or .png (tone mapped)."),
+    sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation above the horizon [deg], -90..90 (default 30)."),
+    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
+    lat: Optional[float] = typer.Option(None, help="Latitude [deg], -90..90, north positive (with --lon and --time)."),
+    lon: Optional[float] = typer.Option(None, help="Longitude [deg], -180..180, east positive."),
+    time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset, e.g. 2026-06-21T20:45+02:00."),
+    sun_method: str = typer.Option("spa", help="Solar position algorithm: spa (NREL SPA via pvlib) or preetham1999."),
+    projection: str = typer.Option("fisheye", help="fisheye (Radiance angular fisheye), equirect, equirect-hemisphere or angular."),
+    size: str = typer.Option("512", help="Image size in pixels: N (square / width) or WxH."),
+    wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm for spectral models, 3..401."),
+    exposure: Optional[float] = typer.Option(None, help="PNG only: exposure multiplier on luminance in cd/m^2 (default automatic)."),
+    tonemap: str = typer.Option("filmic", help="PNG only: clamp, reinhard or filmic (ACES-like)."),
+    bits: int = typer.Option(8, help="PNG only: 8 or 16 bits per channel."),
+    no_sun: bool = typer.Option(False, "--no-sun", help="Do not draw the sun disc."),
+):
+    """Render a sky model into an image file.
+
+    Model parameters are given as extra options, e.g. `--turbidity 3` or `--sky-type 12`
+    (see `skydome models` for each model's options, units and ranges).
+    """
+    _run(_render, ctx.args, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method,
+         projection, size, wavelengths, exposure, tonemap, bits, not no_sun)
+
+
+def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method, projection,
+            size, wavelengths, exposure, tonemap, bits, draw_sun):
+    from skydome._validate import check_choice, check_int
+    from skydome.models import get_model_class
+    from skydome.render import make_projection, render as render_sky
+    from skydome.render.image import check_output_path
+    from skydome.spectra import wavelength_grid
+
+    # 1. validate everything before any work
+    cls = get_model_class(model)
+    params = _parse_model_params(cls, extra)
+    check_choice("projection", projection, PROJECTIONS)
+    check_choice("tonemap", tonemap, ("clamp", "reinhard", "filmic"))
+    check_choice("bits", bits, (8, 16))
+    check_int("wavelengths", wavelengths, 3, 401)
+    if exposure is not None and not exposure > 0:
+        raise UserError(f"exposure = {exposure} must be > 0")
+    sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
+    proj = make_projection(projection, size)
+    check_output_path(out)
+    sky = cls(sun=sun, **params)
+    wl = wavelength_grid(380.0, 780.0, n=wavelengths)
+
+    # 2. work
+    progress = _Progress(f"rendering {model}")
+    t0 = _time.perf_counter()
+    try:
+        image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun)
+    finally:
+        progress.close()
+    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits)
+    dt = _time.perf_counter() - t0
+    typer.echo(f"wrote {out} ({proj.shape[1]}x{proj.shape[0]}, {model}, sun elevation "
+               f"{sun.elevation_deg:.2f} deg azimuth {sun.azimuth_deg:.2f} deg, {dt:.1f} s)")
+
+
+@app.command()
+def table1():
+    """The survey's Table 1 recomputed from the physics: eq 8 with eqs 5 and 6."""
+    from skydome.atmosphere.rayleigh import rayleigh_scattering_coefficient
+
+    rows = [("red", 700, 4.184e-6, 239), ("yellow", 570, 9.517e-6, 105), ("green", 540, 1.181e-5, 84.6),
+            ("blue", 470, 2.059e-5, 48.5), ("violet", 400, 3.924e-5, 25.5)]
+    typer.echo("Rayleigh attenuation coefficient beta = 8 pi^3 (n^2-1)^2 / (3 N_s lambda^4)")
+    typer.echo("with n = 1.000278 (eq. 6) and N_s = 2.545e25 m^-3 (eq. 5)\n")
+    typer.echo(f"{'colour':<8}{'lambda [nm]':>12}{'beta [1/m]':>14}{'1/beta [km]':>13}"
+               f"{'survey beta':>14}{'survey 1/beta':>15}")
+    for name, wl, beta_s, inv_s in rows:
+        b = float(rayleigh_scattering_coefficient(wl))
+        typer.echo(f"{name:<8}{wl:>12d}{b:>14.4e}{1e-3 / b:>13.4g}{beta_s:>14.4e}{inv_s:>15g}")
+
+
+@app.command()
+def sun(
+    lat: float = typer.Option(..., help="Latitude [deg], -90..90, north positive."),
+    lon: float = typer.Option(..., help="Longitude [deg], -180..180, east positive."),
+    time: str = typer.Option(..., help="ISO 8601 time with UTC offset, e.g. 2026-06-21T12:00+02:00."),
+    method: str = typer.Option("spa", help="spa (NREL SPA via pvlib) or preetham1999."),
+):
+    """Solar position (apparent elevation, azimuth from north towards east) for a place and time."""
+    from skydome.sun import Sun
+
+    s = _run(Sun.from_location, lat, lon, time, method=method)
+    typer.echo(f"time            {time}")
+    typer.echo(f"method          {method}")
+    typer.echo(f"elevation       {s.elevation_deg:.4f} deg")
+    typer.echo(f"azimuth         {s.azimuth_deg:.4f} deg (from north towards east)")
+    typer.echo(f"zenith          {s.zenith_deg:.4f} deg")
+    typer.echo(f"distance        {s.distance_au:.6f} au")
+
+
+@app.command()
+def models():
+    """Every registered model with its parameters, units and valid ranges."""
+    from skydome.models import available
+
+    for name, cls in available().items():
+        typer.echo(f"{name}  [{cls.native}]  {cls.summary}")
+        if cls.reference:
+            typer.echo(f"    reference: {cls.reference}")
+        for p in cls.parameters:
+            unit = f" [{p.unit}]" if p.unit else ""
+            rng = p.range_text()
+            default = "" if p.default is None else f" (default {p.default})"
+            opt = "--" + p.name.replace("_", "-") if p.kind != "object" else f"{p.name} (Python API)"
+            typer.echo(f"    {opt}{unit} {rng}{default}: {p.doc}")
+        typer.echo("")
+
+
+plot_app = typer.Typer(no_args_is_help=True, help="Figures: luminance maps and model comparisons.")
+app.add_typer(plot_app, name="plot")
+
+
+def _model_spec(spec: str, shared: list[str], sun):
+    """Build a model from 'name' or 'name:value' (value for the model's first option) or
+    'name:key=value,key=value', with shared '--key value' options applied where the model
+    has that option."""
+    from skydome.models import get_model_class
+
+    name, _, rest = spec.partition(":")
+    cls = get_model_class(name.strip())
+    params: dict[str, Any] = {}
+    options = [p for p in cls.parameters if p.kind != "object"]
+    if rest:
+        for item in rest.split(","):
+            key, eq, value = item.partition("=")
+            if not eq:
+                if not options:
+                    raise UserError(f"model {cls.name!r} takes no options (got {spec!r})")
+                key, value = options[0].name, item
+            params.update(_parse_model_params(cls, [f"--{key.strip()}", value.strip()]))
+    names = {p.name for p in options}
+    pairs = [(shared[i], shared[i + 1]) for i in range(0, len(shared) - 1, 2)]
+    for key, value in pairs:
+        if key.lstrip("-").replace("-", "_") in names:
+            params.update(_parse_model_params(cls, [key, value]))
+    return cls(sun=sun, **params)
+
+
+def _check_shared(shared: list[str], classes) -> None:
+    if len(shared) % 2:
+        raise UserError(f"options must come as --name value pairs, got {' '.join(shared)}")
+    for key in shared[::2]:
+        name = key.lstrip("-").replace("-", "_")
+        if not key.startswith("--") or not any(name in {p.name for p in c.parameters} for c in classes):
+            raise UserError(f"no model given accepts the option {key}")
+
+
+@plot_app.command("luminance", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def plot_luminance(
+    ctx: typer.Context,
+    model: str = typer.Option(..., help="Model name, optionally name:value for its first option (e.g. cie2003:12)."),
+    out: str = typer.Option(..., help="Output figure (.png, .pdf or .svg)."),
+    sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation [deg] (default 30)."),
+    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
+    lat: Optional[float] = typer.Option(None, help="Latitude [deg] (with --lon and --time)."),
+    lon: Optional[float] = typer.Option(None, help="Longitude [deg], east positive."),
+    time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset."),
+    linear: bool = typer.Option(False, "--linear", help="Linear instead of logarithmic colour scale."),
+):
+    """Polar false-colour luminance map [cd/m^2] with a colour bar and the sun marked."""
+    def go():
+        from skydome.models import get_model_class
+
+        _check_figure_path(out)
+        _check_shared(ctx.args, [get_model_class(model.partition(":")[0])])
+        s = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, "spa")
+        sky = _model_spec(model, ctx.args, s)
+        from skydome.render.plots import plot_luminance_map
+
+        plot_luminance_map(sky, out, log=not linear, title=f"{model}: luminance [cd/m$^2$]")
+        typer.echo(f"wrote {out}")
+    _run(go)
+
+
+@plot_app.command("compare", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def plot_compare_cmd(
+    ctx: typer.Context,
+    models: str = typer.Option(..., help="Comma-separated model specs, e.g. cie2003:12,perez1993,preetham1999."),
+    out: str = typer.Option(..., help="Output figure (.png, .pdf or .svg)."),
+    sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation [deg] (default 30)."),
+    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
+    lat: Optional[float] = typer.Option(None, help="Latitude [deg] (with --lon and --time)."),
+    lon: Optional[float] = typer.Option(None, help="Longitude [deg], east positive."),
+    time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset."),
+    relative: bool = typer.Option(False, "--relative", help="Plot L/Lz instead of absolute luminance."),
+):
+    """Luminance along the solar meridian and along the almucantar for several models, one figure.
+
+    Options after the list (e.g. --dni 650 --dhi 120 --turbidity 3) go to every model that has them.
+    """
+    def go():
+        from skydome.models import get_model_class
+
+        _check_figure_path(out)
+        specs = _split_specs(models)
+        _check_shared(ctx.args, [get_model_class(sp.partition(":")[0]) for sp in specs])
+        s = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, "spa")
+        skies = [_model_spec(sp, ctx.args, s) for sp in specs]
+        from skydome.render.plots import plot_compare
+
+        plot_compare(skies, specs, out, relative=relative)
+        typer.echo(f"wrote {out}")
+    _run(go)
+
+
+def _split_specs(models: str) -> list[str]:
+    """Split 'a:1,b,c:k=v,k2=v2' at commas that start a new model name."""
+    from skydome.models import available
+
+    names = set(available())
+    specs: list[str] = []
+    for part in models.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        if part.partition(":")[0] in names or not specs or "=" not in part:
+            specs.append(part)
+        else:
+            specs[-1] += "," + part
+    if not specs:
+        raise UserError("models is empty")
+    return specs
+
+
+def _check_figure_path(out: str) -> None:
+    from pathlib import Path
+
+    p = Path(out)
+    if p.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise UserError(f"out = {out!r}: figure must be .png, .pdf or .svg")
+    if not p.parent.exists() or not p.parent.is_dir():
+        raise UserError(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
+    import os
+
+    if not os.access(p.parent, os.W_OK):
+        raise UserError(f"out = {out!r}: folder {str(p.parent)!r} is not writable")
+
+
+def main() -> None:  # console-script entry point
+    try:
+        app()
+    except KeyboardInterrupt:  # pragma: no cover
+        sys.exit(130)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

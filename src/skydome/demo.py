@@ -1,0 +1,99 @@
+"""The main job of ``./scripts/demo``: render sample skies into an output folder.
+
+Run as ``python -m skydome.demo --out out``. Every image is rendered through the public API
+(the same calls as the README's examples) and a labelled contact sheet ``gallery.png`` ties
+them together.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+# (file stem, model, model params, sun spec, projection, size, label)
+JOBS = [
+    ("noon_fisheye", "single_scattering", {}, {"elevation_deg": 60.0, "azimuth_deg": 180.0},
+     "fisheye", "512", "single scattering, sun 60 deg"),
+    ("morning_fisheye", "single_scattering", {}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
+     "fisheye", "512", "single scattering, sun 30 deg SE"),
+    ("sunset_fisheye", "single_scattering", {}, {"elevation_deg": 2.0, "azimuth_deg": 270.0},
+     "fisheye", "512", "single scattering, sun 2 deg W"),
+    ("hazy_fisheye", "single_scattering", {"turbidity": 8.0}, {"elevation_deg": 30.0, "azimuth_deg": 180.0},
+     "fisheye", "512", "single scattering, turbidity 8"),
+    ("vienna_sunset_equirect", "single_scattering", {},
+     {"location": (48.21, 16.37, "2026-06-21T20:45+02:00")}, "equirect", "1024x512",
+     "Vienna 2026-06-21 20:45, equirect"),
+]
+
+
+def _sun(spec):
+    from skydome.sun import Sun
+
+    if "location" in spec:
+        lat, lon, t = spec["location"]
+        return Sun.from_location(lat, lon, t)
+    return Sun(**spec)
+
+
+def run(out_dir: Path, only: list[str] | None = None) -> list[Path]:
+    import skydome as sd
+    from skydome.render import make_projection
+    from skydome.spectra import wavelength_grid
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    wl = wavelength_grid(380.0, 780.0, n=16)
+    written: list[Path] = []
+    tiles = []
+    for stem, name, params, sun_spec, proj_name, size, label in JOBS:
+        if only and stem not in only:
+            continue
+        t0 = time.perf_counter()
+        sky = sd.model(name, sun=_sun(sun_spec), **params)
+        image = sd.render(sky, make_projection(proj_name, size), wl)
+        png = out_dir / f"{stem}.png"
+        image.save(png)
+        hdr = out_dir / f"{stem}.exr"
+        image.save(hdr)
+        written += [png, hdr]
+        tiles.append((png, label))
+        print(f"{png}  ({label}, {time.perf_counter() - t0:.1f} s)")
+    if tiles:
+        sheet = out_dir / "gallery.png"
+        _contact_sheet(tiles, sheet)
+        written.append(sheet)
+        print(sheet)
+    return written
+
+
+def _contact_sheet(tiles, path: Path, tile: int = 256) -> None:
+    """A labelled grid of the rendered PNGs (Pillow only)."""
+    from PIL import Image, ImageDraw
+
+    cols = min(3, len(tiles))
+    rows = (len(tiles) + cols - 1) // cols
+    label_h = 18
+    sheet = Image.new("RGB", (cols * tile, rows * (tile + label_h)), (24, 24, 24))
+    draw = ImageDraw.Draw(sheet)
+    for i, (png, label) in enumerate(tiles):
+        im = Image.open(png).convert("RGB")
+        im.thumbnail((tile, tile))
+        x = (i % cols) * tile + (tile - im.width) // 2
+        y = (i // cols) * (tile + label_h)
+        sheet.paste(im, (x, y + (tile - im.height) // 2))
+        draw.text(((i % cols) * tile + 4, y + tile + 3), label, fill=(230, 230, 230))
+    tmp = path.with_name(path.name + ".tmp.png")
+    sheet.save(tmp)
+    tmp.replace(path)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description="Render skydome's sample skies.")
+    ap.add_argument("--out", default="out", help="output folder (default: out)")
+    ap.add_argument("--only", nargs="*", help="render only these stems")
+    args = ap.parse_args(argv)
+    run(Path(args.out), args.only)
+
+
+if __name__ == "__main__":
+    main()

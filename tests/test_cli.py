@@ -1,0 +1,114 @@
+"""The command line: outputs, every bad input named in issue 2, and start-up hygiene."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from skydome.cli import app
+
+runner = CliRunner()
+
+
+def _run(*args):
+    return runner.invoke(app, list(args))
+
+
+def test_table1_prints_survey_values():
+    res = _run("table1")
+    assert res.exit_code == 0
+    for text in ("4.1842e-06", "9.5170e-06", "1.1815e-05", "2.0588e-05", "3.9243e-05"):
+        assert text in res.output
+
+
+def test_models_lists_registry_with_units_and_ranges():
+    res = _run("models")
+    assert res.exit_code == 0
+    assert "single_scattering" in res.output
+    assert "--observer-altitude-m [m]" in res.output
+
+
+def test_sun_command():
+    res = _run("sun", "--lat", "48.21", "--lon", "16.37", "--time", "2026-06-21T13:00+02:00")
+    assert res.exit_code == 0, res.output
+    line = [ln for ln in res.output.splitlines() if ln.startswith("elevation")][0]
+    # solstice solar noon in Vienna: 90 - 48.21 + 23.44 = 65.2 deg (geometry)
+    assert float(line.split()[1]) == pytest.approx(65.2, abs=0.3)
+
+
+def test_render_small_png_and_exr(tmp_path):
+    png = tmp_path / "sky.png"
+    res = _run("render", "--sun-elevation", "30", "--sun-azimuth", "135", "--projection", "fisheye",
+               "--size", "48", "--wavelengths", "8", "--out", str(png))
+    assert res.exit_code == 0, res.output
+    assert png.exists()
+    from PIL import Image
+
+    im = np.asarray(Image.open(png))
+    assert im.shape == (48, 48, 3)
+    centre = im[24, 24].astype(int)
+    assert centre[2] > centre[0]  # blue zenith
+
+
+def test_render_model_option_and_location(tmp_path):
+    out = tmp_path / "sunset.exr"
+    res = _run("render", "--lat", "48.21", "--lon", "16.37", "--time", "2026-06-21T20:45+02:00",
+               "--projection", "equirect", "--size", "32x16", "--wavelengths", "6",
+               "--turbidity", "3", "--out", str(out))
+    assert res.exit_code == 0, res.output
+    assert out.exists()
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["--turbidity", "-1"], "turbidity = -1"),
+    (["--sun-elevation", "91"], "elevation_deg = 91"),
+    (["--model", "nosuchmodel"], "model = 'nosuchmodel'"),
+    (["--projection", "cylinder"], "projection = 'cylinder'"),
+    (["--lat", "48", "--lon", "16", "--time", "yesterday noon"], "time"),
+    (["--lat", "48", "--lon", "16"], "--time missing"),
+    (["--size", "0"], "size"),
+    (["--bogus-flag", "3"], "no option --bogus-flag"),
+])
+def test_bad_input_exit_2_and_nothing_written(tmp_path, args, fragment):
+    out = tmp_path / "x.png"
+    res = runner.invoke(app, ["render", "--size", "16", "--out", str(out)] + args)
+    assert res.exit_code == 2, res.output
+    assert fragment in res.output
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unwritable_output_path(tmp_path):
+    out = tmp_path / "no" / "such" / "dir" / "x.png"
+    res = _run("render", "--size", "16", "--out", str(out))
+    assert res.exit_code == 2
+    assert "x.png" in res.output
+
+
+def test_unknown_output_extension(tmp_path):
+    res = _run("render", "--size", "16", "--out", str(tmp_path / "x.jpg"))
+    assert res.exit_code == 2
+    assert ".exr" in res.output
+
+
+def test_error_is_one_line_on_stderr(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "skydome.cli", "render", "--sun-elevation", "91",
+                           "--out", str(tmp_path / "a.png")], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert proc.stderr.strip().count("\n") == 0
+    assert proc.stderr.startswith("error: ")
+
+
+def test_import_is_light():
+    """`import skydome` and `skydome --help` must not pull in the heavy libraries
+    (numba kernels, pvlib, matplotlib, colour-science); timings are in
+    benchmarks/bench_startup.py."""
+    code = ("import sys, skydome, skydome.cli, skydome.models; skydome.models.available(); "
+            "heavy = [m for m in ('numba', 'pvlib', 'matplotlib', 'colour', 'pandas', 'OpenEXR') "
+            "if m in sys.modules]; print(','.join(heavy))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == ""
