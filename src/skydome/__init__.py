@@ -40,7 +40,12 @@ _LAZY = {
 __all__ = sorted(_LAZY) + ["__version__"]
 
 
+_SUBMODULES = {"models", "spectra", "atmosphere", "transport", "render", "sun", "effects", "data"}
+
+
 def __getattr__(name: str):
+    if name in _SUBMODULES:
+        return importlib.import_module(f"skydome.{name}")
     if name == "available_models":
         from skydome.models import available
 

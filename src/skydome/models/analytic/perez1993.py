@@ -1,0 +1,539 @@
+"""Perez, Seals & Michalsky (1993) all-weather sky luminance distribution.
+
+The relative luminance of a sky element at zenith angle zeta and angle gamma from the sun is
+
+    lv(zeta, gamma) = [1 + a exp(b / cos zeta)] [1 + c exp(d gamma) + e cos^2 gamma]
+
+with five coefficients a..e that depend on the solar zenith angle Z, the sky clearness epsilon
+and the sky brightness Delta (eight clearness bins of Table 1, with the erratum). The absolute
+level comes from the diffuse horizontal illuminance, itself from the diffuse horizontal
+irradiance and the Perez et al. (1990) luminous efficacy model: the distribution is scaled so
+that its integral over the sky hemisphere, L cos(zeta) dOmega, reproduces it.
+
+The sky parameters come from the measured direct normal and diffuse horizontal irradiances
+(Perez et al. 1990), from the corresponding illuminances (as Radiance's ``gendaylit -L`` does),
+or are given directly.
+
+References
+----------
+.. [PSM93] R. Perez, R. Seals, J. Michalsky, "All-weather model for sky luminance distribution -
+   preliminary configuration and validation", Solar Energy 50(3) 235-245 (1993); erratum Solar
+   Energy 51(5) 423 (1993).
+.. [PISMS90] R. Perez, P. Ineichen, R. Seals, J. Michalsky, R. Stewart, "Modeling daylight
+   availability and irradiance components from direct and global irradiance", Solar Energy
+   44(5) 271-289 (1990).
+.. [KY89] F. Kasten, A. T. Young, "Revised optical air mass tables and approximation formula",
+   Applied Optics 28(22) 4735-4738 (1989).
+.. [K66] F. Kasten, "A new table and approximation formula for the relative optical air mass",
+   Arch. Meteorol. Geophys. Bioklimatol. B14, 206-223 (1966).
+.. [S71] J. W. Spencer, "Fourier series representation of the position of the sun", Search
+   2(5) 172 (1971).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from skydome._validate import check_choice, check_number, clamp_cosine
+from skydome.models import Parameter, SkyModel, register
+
+__all__ = [
+    "Perez1993",
+    "LuminousEfficacy",
+    "perez1990_luminous_efficacy",
+    "perez1993_coefficients",
+    "perez1993_relative_luminance",
+    "sky_clearness",
+    "sky_brightness",
+    "air_mass",
+    "eccentricity_correction",
+    "precipitable_water_from_dew_point",
+]
+
+# Extraterrestrial normal irradiance at 1 au used by [PISMS90] and by Radiance's gendaylit
+# [W m^-2]. (The project's SOLAR_CONSTANT, 1361 W m^-2 after Kopp & Lean 2011, is not used here:
+# the model's epsilon/Delta bins were fitted with 1367 W m^-2.)
+SOLAR_CONSTANT_PEREZ = 1367.0
+# Extraterrestrial normal illuminance used by gendaylit to start the -L iteration [lx].
+SOLAR_ILLUMINANCE_CONSTANT = 127500.0
+# Radiance's luminous efficacy of "white" light, WHTEFFICACY in color.h [lm W^-1].
+WHITE_EFFICACY = 179.0
+# Sky-clearness bin edges of [PSM93] Table 1 and [PISMS90] Table 4.
+EPSILON_EDGES = (1.0, 1.065, 1.23, 1.5, 1.95, 2.8, 4.5, 6.2)
+# Limits of the model's parameters, as gendaylit applies them (its check_parametrization).
+EPSILON_MAX = 12.01
+DELTA_MIN = 0.01
+DELTA_MAX = 0.6
+# Horizon guard of Radiance's perezlum.cal: cos(zeta) is not taken below 0.01 in the gradation
+# term (the last 0.57 deg above the horizon).
+COS_ZETA_MIN = 0.01
+# Default dew point of gendaylit [deg C]: W = exp(0.07 Td - 0.075) = 2 cm.
+DEFAULT_DEW_POINT_C = 10.97353115
+
+# Tregenza patch centres used by gendaylit to normalise the distribution (defangle_theta and
+# the number of patches per 12-deg band): zenith angle [deg], count. Azimuths are evenly spaced
+# from the sun's azimuth.
+_TREGENZA_BANDS = ((84.0, 30), (72.0, 30), (60.0, 24), (48.0, 24), (36.0, 18), (24.0, 12),
+                   (12.0, 6), (0.0, 1))
+
+
+# -- tables ---------------------------------------------------------------------------------
+def _luminance_table() -> np.ndarray:
+    """(8, 5, 4) array of [PSM93] Table 1: bin, coefficient a..e, index 1..4."""
+    from skydome.data import load_table
+
+    _, values = load_table("perez1993_coefficients")
+    return values[:, 3:23].reshape(8, 5, 4)
+
+
+def _efficacy_table() -> np.ndarray:
+    """(8, 3, 4) array of [PISMS90] Table 4: bin, (global, diffuse, direct), a..d."""
+    from skydome.data import load_table
+
+    _, values = load_table("perez1990_efficacy")
+    return values[:, 3:15].reshape(8, 3, 4)
+
+
+def _bin_index(epsilon) -> np.ndarray:
+    """0-based clearness bin of ``epsilon`` (bins closed below, open above; last open-ended)."""
+    eps = np.asarray(epsilon, dtype=np.float64)
+    return np.clip(np.searchsorted(EPSILON_EDGES, eps, side="right") - 1, 0, 7)
+
+
+# -- atmosphere helpers -----------------------------------------------------------------------
+def air_mass(sun_zenith_deg, model: str = "kastenyoung1989"):
+    """Relative optical air mass [-].
+
+    Parameters
+    ----------
+    sun_zenith_deg : array_like
+        Solar zenith angle [deg], clipped to [0, 90].
+    model : {"kastenyoung1989", "kasten1966"}
+        ``kastenyoung1989``: 1 / (cos Z + 0.50572 (96.07995 - Z)^-1.6364) [KY89];
+        ``kasten1966``: 1 / (cos Z + 0.15 (93.885 - Z)^-1.253) [K66], the form used by
+        [PISMS90] and by Radiance's gendaylit.
+    """
+    check_choice("air_mass", model, ("kastenyoung1989", "kasten1966"))
+    z = np.clip(np.asarray(sun_zenith_deg, dtype=np.float64), 0.0, 90.0)
+    cz = np.cos(np.radians(z))
+    if model == "kastenyoung1989":
+        return 1.0 / (cz + 0.50572 * (96.07995 - z) ** -1.6364)  # [KY89] eq. 3
+    return 1.0 / (cz + 0.15 * (93.885 - z) ** -1.253)  # [K66]
+
+
+def eccentricity_correction(day_of_year):
+    """Earth-sun distance factor E0 = (r0 / r)^2 of Spencer's series [S71] [-].
+
+    ``day_of_year`` 1..366; day 0 gives the same value as day 365 (the series is periodic).
+    """
+    g = 2.0 * np.pi * (np.asarray(day_of_year, dtype=np.float64) - 1.0) / 365.0
+    return (1.000110 + 0.034221 * np.cos(g) + 0.001280 * np.sin(g)
+            + 0.000719 * np.cos(2.0 * g) + 0.000077 * np.sin(2.0 * g))  # [S71]
+
+
+def precipitable_water_from_dew_point(dew_point_c):
+    """Atmospheric precipitable water W [cm] from the surface dew point Td [deg C].
+
+    W = exp(0.07 Td - 0.075) ([PISMS90] eq. 3, after Wright, Perez & Michalsky 1989).
+    """
+    return np.exp(0.07 * np.asarray(dew_point_c, dtype=np.float64) - 0.075)
+
+
+def sky_clearness(dni, dhi, sun_zenith_deg):
+    """Perez sky clearness epsilon [-] ([PISMS90] eq. 1).
+
+    epsilon = ((Dh + I) / Dh + 1.041 Z^3) / (1 + 1.041 Z^3), Z in radians; Dh = diffuse
+    horizontal and I = direct normal irradiance (or illuminance-derived irradiance) [W m^-2].
+    Returns +inf where Dh = 0.
+    """
+    dni = np.asarray(dni, dtype=np.float64)
+    dhi = np.asarray(dhi, dtype=np.float64)
+    k = 1.041 * np.radians(np.asarray(sun_zenith_deg, dtype=np.float64)) ** 3
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(dhi > 0.0, (dhi + dni) / np.where(dhi > 0.0, dhi, 1.0), np.inf)
+    return (ratio + k) / (1.0 + k)  # [PISMS90] eq. 1
+
+
+def sky_brightness(dhi, sun_zenith_deg, day_of_year=172, air_mass_model="kastenyoung1989"):
+    """Perez sky brightness Delta = Dh m / I0 [-] ([PISMS90] eq. 2).
+
+    I0 = 1367 W m^-2 times the eccentricity correction of ``day_of_year`` [S71].
+    """
+    m = air_mass(sun_zenith_deg, air_mass_model)
+    i0 = SOLAR_CONSTANT_PEREZ * eccentricity_correction(day_of_year)
+    return np.asarray(dhi, dtype=np.float64) * m / i0  # [PISMS90] eq. 2
+
+
+class LuminousEfficacy(NamedTuple):
+    """Luminous efficacies of [PISMS90] [lm W^-1]."""
+
+    direct: np.ndarray
+    diffuse: np.ndarray
+    global_horizontal: np.ndarray
+
+
+def perez1990_luminous_efficacy(epsilon, delta, sun_zenith_deg, precipitable_water_cm=2.0):
+    """Perez et al. (1990) luminous efficacy of direct, diffuse and global irradiance.
+
+    Parameters
+    ----------
+    epsilon : array_like
+        Sky clearness [-], >= 1 (values above the last bin edge use the last bin).
+    delta : array_like
+        Sky brightness [-], > 0.
+    sun_zenith_deg : array_like
+        Solar zenith angle [deg], in [0, 90].
+    precipitable_water_cm : array_like
+        Atmospheric precipitable water W [cm], >= 0 (default 2 cm, gendaylit's default).
+
+    Returns
+    -------
+    LuminousEfficacy
+        ``direct`` (per unit direct normal irradiance), ``diffuse`` (per unit diffuse
+        horizontal irradiance) and ``global_horizontal`` [lm W^-1], broadcast arrays.
+
+    Notes
+    -----
+    global, diffuse: K = a + b W + c cos Z + d ln Delta ([PISMS90] eqs. 6-7);
+    direct: K = a + b W + c exp(5.73 Z - 5) + d Delta ([PISMS90] eq. 8), Z in radians;
+    coefficients from Table 4. The direct efficacy is floored at 0 (as gendaylit does): the
+    fit turns negative only far outside its data (e.g. bin 1 at Z > 85 deg).
+    """
+    eps = np.asarray(epsilon, dtype=np.float64)
+    dl = np.asarray(delta, dtype=np.float64)
+    z = np.asarray(sun_zenith_deg, dtype=np.float64)
+    w = np.asarray(precipitable_water_cm, dtype=np.float64)
+    if np.any(~np.isfinite(eps)) or np.any(eps < 1.0):
+        raise ValueError(f"epsilon = {eps.min():g} is out of range [1, inf)")
+    if np.any(~np.isfinite(dl)) or np.any(dl <= 0.0):
+        raise ValueError(f"delta = {dl.min():g} is out of range (0, inf)")
+    if np.any(~np.isfinite(z)) or np.any(z < 0.0) or np.any(z > 90.0):
+        raise ValueError(f"sun_zenith_deg = {z.max():g} deg is out of range [0, 90] deg")
+    if np.any(~np.isfinite(w)) or np.any(w < 0.0):
+        raise ValueError(f"precipitable_water_cm = {w.min():g} cm is out of range [0, inf) cm")
+    tab = _efficacy_table()[_bin_index(eps)]  # (..., 3, 4)
+    zr = np.radians(z)
+    g = tab[..., 0, :]
+    f = tab[..., 1, :]
+    s = tab[..., 2, :]
+    k_glob = g[..., 0] + g[..., 1] * w + g[..., 2] * np.cos(zr) + g[..., 3] * np.log(dl)  # eq. 6
+    k_diff = f[..., 0] + f[..., 1] * w + f[..., 2] * np.cos(zr) + f[..., 3] * np.log(dl)  # eq. 7
+    k_dir = s[..., 0] + s[..., 1] * w + s[..., 2] * np.exp(5.73 * zr - 5.0) + s[..., 3] * dl  # eq. 8
+    return LuminousEfficacy(direct=np.maximum(k_dir, 0.0), diffuse=k_diff,
+                            global_horizontal=k_glob)
+
+
+# -- the luminance distribution ---------------------------------------------------------------
+def perez1993_coefficients(sun_zenith_rad: float, epsilon: float, delta: float,
+                           delta_floor: bool = True) -> tuple[float, float, float, float, float]:
+    """Coefficients (a, b, c, d, e) of the [PSM93] distribution.
+
+    Parameters
+    ----------
+    sun_zenith_rad : float
+        Solar zenith angle Z [rad].
+    epsilon : float
+        Sky clearness [-], in [1, 12.01].
+    delta : float
+        Sky brightness [-], in [0.01, 0.6].
+    delta_floor : bool
+        Raise Delta to 0.2 inside the clearness range 1.065 < epsilon < 2.8 (the adjustment
+        Radiance's gendaylit applies before evaluating the coefficients; see Notes).
+
+    Notes
+    -----
+    Bins 2-8: x = x1 + x2 Z + Delta (x3 + x4 Z) ([PSM93] eq. 2 and Table 1). Bin 1:
+    c = exp((Delta (c1 + c2 Z))^c3) - c4 and d = -exp(Delta (d1 + d2 Z)) + d3 + Delta d4.
+    Without the Delta floor the intermediate bins give b > 0 and a negative gradation term for
+    low Delta (e.g. epsilon = 1.5, Delta = 0.05, Z = 30 deg: a = -0.89, b = +0.18, so
+    1 + a exp(b / cos zeta) = -0.07 at the zenith), which is why gendaylit applies it.
+    """
+    eps = float(epsilon)
+    dl = float(delta)
+    z = float(sun_zenith_rad)
+    if delta_floor and 1.065 < eps < 2.8 and dl < 0.2:
+        dl = 0.2
+    k = int(_bin_index(eps))
+    x = _luminance_table()[k]
+    lin = x[:, 0] + x[:, 1] * z + dl * (x[:, 2] + x[:, 3] * z)  # [PSM93] eq. 2
+    a, b, c, d, e = (float(v) for v in lin)
+    if k == 0:  # [PSM93] Table 1, first bin: special forms of c and d
+        c = math.exp((dl * (x[2, 0] + x[2, 1] * z)) ** x[2, 2]) - x[2, 3]
+        d = -math.exp(dl * (x[3, 0] + x[3, 1] * z)) + x[3, 2] + dl * x[3, 3]
+    return a, b, c, d, e
+
+
+def perez1993_relative_luminance(cos_zeta, cos_gamma, coefficients):
+    """Relative luminance lv of [PSM93] eq. 1 (unnormalised, dimensionless).
+
+    Parameters
+    ----------
+    cos_zeta : array_like
+        Cosine of the element's zenith angle; values below 0.01 are taken as 0.01 in the
+        gradation term (Radiance perezlum.cal's horizon guard).
+    cos_gamma : array_like
+        Cosine of the angle between the element and the sun.
+    coefficients : tuple of 5 floats
+        (a, b, c, d, e) from :func:`perez1993_coefficients`.
+    """
+    a, b, c, d, e = coefficients
+    cz = np.maximum(np.asarray(cos_zeta, dtype=np.float64), COS_ZETA_MIN)
+    cg = clamp_cosine(np.asarray(cos_gamma, dtype=np.float64))
+    gamma = np.arccos(cg)
+    gradation = 1.0 + a * np.exp(b / cz)  # [PSM93] eq. 1, first factor
+    indicatrix = 1.0 + c * np.exp(d * gamma) + e * cg * cg  # [PSM93] eq. 1, second factor
+    return gradation * indicatrix
+
+
+def _horizontal_integral(sun_zenith_rad: float, coefficients, method: str) -> float:
+    """Integral of lv cos(zeta) dOmega over the sky hemisphere [sr], in the sun's frame."""
+    sz, cz_sun = math.sin(sun_zenith_rad), math.cos(sun_zenith_rad)
+    if method == "gendaylit":
+        # gendaylit integ_lv: 145 Tregenza patch centres, sum lv cos(theta) * 2 pi / 145.
+        theta, phi = [], []
+        for th, n in _TREGENZA_BANDS:
+            theta.extend([th] * n)
+            phi.extend(np.arange(n) * 360.0 / n)
+        th = np.radians(np.array(theta))
+        ph = np.radians(np.array(phi))
+        cg = cz_sun * np.cos(th) + sz * np.sin(th) * np.cos(ph)
+        lv = perez1993_relative_luminance(np.cos(th), cg, coefficients)
+        return float(np.sum(lv * np.cos(th)) * (2.0 * np.pi / 145.0))
+    # Gauss-Legendre in mu = cos(zeta) on [0, 1] times the periodic trapezoid rule in the
+    # azimuth relative to the sun (even in phi, so [0, pi] doubled).
+    mu, wmu = np.polynomial.legendre.leggauss(128)
+    mu = 0.5 * (mu + 1.0)
+    wmu = 0.5 * wmu
+    nphi = 256
+    ph = (np.arange(nphi) + 0.5) * np.pi / nphi
+    wph = 2.0 * np.pi / nphi
+    st = np.sqrt(1.0 - mu * mu)
+    cg = cz_sun * mu[:, None] + sz * st[:, None] * np.cos(ph)[None, :]
+    lv = np.maximum(perez1993_relative_luminance(mu[:, None], cg, coefficients), 0.0)
+    return float(np.sum(lv * (mu * wmu)[:, None]) * wph)
+
+
+@register
+class Perez1993(SkyModel):
+    """Perez, Seals & Michalsky (1993) all-weather sky luminance distribution.
+
+    Parameters
+    ----------
+    sun : skydome.Sun
+        Position of the sun. With the sun below the horizon (elevation < 0) the model does
+        not apply and the sky is black (luminance 0 everywhere), as gendaylit's "error sky".
+    epsilon, delta : float, optional
+        Sky clearness [-] in [1, 12.01] and sky brightness [-] in [0.01, 0.6], given together.
+        The absolute level then follows from the implied irradiances,
+        Dh = Delta I0 / m and I = Dh (epsilon - 1)(1 + 1.041 Z^3).
+    dni, dhi : float, optional
+        Direct normal irradiance [W m^-2] in [0, 1415] and diffuse horizontal irradiance
+        [W m^-2] in [0, 1000], given together.
+    dni_illuminance, dhi_illuminance : float, optional
+        Direct normal and diffuse horizontal illuminance [lx], given together; epsilon and
+        Delta are found by the fixed-point iteration of gendaylit -L (irradiance = illuminance /
+        efficacy, 9 iterations). Exactly one of the three pairs must be given.
+    day_of_year : int
+        Day of the year 1..366 for the eccentricity correction of I0 [S71] (default 172).
+    dew_point_c : float
+        Surface dew point [deg C] in [-40, 40]; W = exp(0.07 Td - 0.075) [cm] enters the
+        efficacy model. The default 10.9735 deg C gives W = 2 cm, as gendaylit.
+    air_mass : {"kastenyoung1989", "kasten1966"}
+        Air mass formula for Delta. gendaylit and [PISMS90] use Kasten 1966.
+    scaling : {"perez1990", "white179", "relative"}
+        Absolute level: ``perez1990`` scales to the diffuse horizontal illuminance
+        Dh x K_diffuse ([PISMS90] efficacy) or to ``dhi_illuminance`` when given;
+        ``white179`` uses Dh x 179 lm/W (Radiance's WHTEFFICACY; gendaylit -O1 x 179);
+        ``relative`` returns lv / lv(zenith) (dimensionless, 1 at the zenith).
+    normalization : {"quadrature", "gendaylit"}
+        How the hemispherical integral of L cos(zeta) is taken: an accurate 128 x 256
+        Gauss-Legendre/trapezoid quadrature, or gendaylit's sum over the 145 Tregenza patch
+        centres, sum lv cos(theta) 2 pi / 145 (see docs: up to a few per cent different).
+    invalid : {"raise", "black"}
+        For inputs where the fitted coefficients give no meaningful sky (b > 0, i.e. a
+        luminance that grows without bound towards the horizon, which gendaylit answers with
+        an all-zero "error sky"; or a distribution that is negative over the whole sky):
+        ``raise`` a ValueError naming epsilon, Delta, Z and b, or return a ``black`` sky
+        (luminance 0, as gendaylit). Where the formula is negative over only part of the
+        sky, those directions get 0 (as gendaymtx does) and the normalisation uses the
+        clipped distribution.
+
+    Attributes
+    ----------
+    sky_clearness, sky_brightness : float
+        epsilon and Delta actually used (after gendaylit's limits [1, 12.01), [0.01, 0.6]).
+    coefficients : tuple
+        (a, b, c, d, e) of eq. 1.
+    diffuse_illuminance, direct_illuminance : float
+        Horizontal diffuse and normal direct illuminance [lx] (nan for ``relative``).
+    diffuse_irradiance, direct_irradiance : float
+        Horizontal diffuse and normal direct irradiance [W m^-2].
+    zenith_luminance : float
+        Luminance at the zenith [cd m^-2].
+
+    References
+    ----------
+    [PSM93] eqs. 1-2 and Table 1 (with erratum); [PISMS90] eqs. 1-3, 6-8 and Table 4.
+    """
+
+    name = "perez1993"
+    reference = ("R. Perez, R. Seals, J. Michalsky, 'All-weather model for sky luminance "
+                 "distribution - preliminary configuration and validation', Solar Energy 50(3) "
+                 "235-245 (1993); erratum Solar Energy 51(5) 423 (1993)")
+    native = "luminance"
+    summary = "Perez all-weather sky luminance from irradiances, illuminances or (epsilon, Delta)"
+    parameters = (
+        Parameter("epsilon", "", None, 1.0, EPSILON_MAX, "sky clearness (with delta)"),
+        Parameter("delta", "", None, DELTA_MIN, DELTA_MAX, "sky brightness (with epsilon)"),
+        Parameter("dni", "W/m^2", None, 0.0, 1415.0, "direct normal irradiance (with dhi)"),
+        Parameter("dhi", "W/m^2", None, 0.0, 1000.0, "diffuse horizontal irradiance (with dni)"),
+        Parameter("dni_illuminance", "lx", None, 0.0, 135000.0,
+                  "direct normal illuminance (with dhi_illuminance)"),
+        Parameter("dhi_illuminance", "lx", None, 0.0, 150000.0,
+                  "diffuse horizontal illuminance (with dni_illuminance)"),
+        Parameter("day_of_year", "", 172, 1, 366, "day of year for the sun-earth distance",
+                  kind="int"),
+        Parameter("dew_point_c", "degC", DEFAULT_DEW_POINT_C, -40.0, 40.0,
+                  "surface dew point (precipitable water for the efficacy model)"),
+        Parameter("air_mass", "", "kastenyoung1989", doc="air mass formula", kind="choice",
+                  choices=("kastenyoung1989", "kasten1966")),
+        Parameter("scaling", "", "perez1990", doc="absolute scaling", kind="choice",
+                  choices=("perez1990", "white179", "relative")),
+        Parameter("normalization", "", "quadrature", doc="hemispherical integral",
+                  kind="choice", choices=("quadrature", "gendaylit")),
+        Parameter("invalid", "", "raise", doc="what to do outside the fit's domain",
+                  kind="choice", choices=("raise", "black")),
+    )
+
+    def __init__(self, sun=None, **params):
+        from skydome.sun import Sun
+
+        if not isinstance(sun, Sun):
+            raise TypeError(f"sun must be a skydome.Sun, got {sun!r}")
+        p = self._validate_params(params)
+        pairs = {"epsilon/delta": ("epsilon", "delta"), "dni/dhi": ("dni", "dhi"),
+                 "dni_illuminance/dhi_illuminance": ("dni_illuminance", "dhi_illuminance")}
+        given = []
+        for label, (k1, k2) in pairs.items():
+            n = (p[k1] is not None) + (p[k2] is not None)
+            if n == 1:
+                raise ValueError(f"{k1} and {k2} must be given together")
+            if n == 2:
+                given.append(label)
+        if len(given) != 1:
+            raise ValueError("give exactly one of epsilon/delta, dni/dhi or "
+                             f"dni_illuminance/dhi_illuminance (got {', '.join(given) or 'none'})")
+        self.sun = sun
+        for k, v in p.items():
+            setattr(self, k, v)
+        self.input_mode = given[0]
+        self._setup()
+
+    # -- set-up: sky parameters, coefficients, scale ----------------------------------------
+    def _setup(self) -> None:
+        self.precipitable_water_cm = float(precipitable_water_from_dew_point(self.dew_point_c))
+        self._black = self.sun.elevation_deg < 0.0
+        z_deg = min(max(self.sun.zenith_deg, 0.0), 90.0)
+        self._sun_zenith_deg = z_deg
+        nan = float("nan")
+        self.diffuse_irradiance = self.direct_irradiance = nan
+        self.diffuse_illuminance = self.direct_illuminance = nan
+        self.sky_clearness = self.sky_brightness = nan
+        self.coefficients = (nan,) * 5
+        self.zenith_luminance = 0.0
+        self._scale = 0.0
+        self.valid = True
+        if self._black:
+            self.diffuse_irradiance = self.direct_irradiance = 0.0
+            self.diffuse_illuminance = self.direct_illuminance = 0.0
+            return
+        m = float(air_mass(z_deg, self.air_mass))
+        i0 = SOLAR_CONSTANT_PEREZ * float(eccentricity_correction(self.day_of_year))
+        k3 = 1.041 * math.radians(z_deg) ** 3
+        W = self.precipitable_water_cm
+
+        def limits(eps, dl):  # gendaylit check_parametrization
+            eps = 1.0 if eps < 1.0 else (EPSILON_MAX - 0.001 if eps > EPSILON_MAX else eps)
+            return eps, min(max(dl, DELTA_MIN), DELTA_MAX)
+
+        e_diff = None  # diffuse horizontal illuminance when given directly
+        if self.input_mode == "epsilon/delta":
+            eps, dl = limits(self.epsilon, self.delta)
+            dhi = dl * i0 / m  # inverse of [PISMS90] eq. 2
+            dni = dhi * (eps - 1.0) * (1.0 + k3)  # inverse of [PISMS90] eq. 1
+        elif self.input_mode == "dni/dhi":
+            dni, dhi = self.dni, self.dhi
+            eps, dl = limits(float(sky_clearness(dni, dhi, z_deg)), dhi * m / i0)
+        else:
+            e_dir, e_diff = self.dni_illuminance, self.dhi_illuminance
+            # gendaylit illu_to_irra_index: start from the extraterrestrial efficacy, then
+            # alternate efficacy and (epsilon, Delta); its loop always runs 9 times.
+            dhi = e_diff * SOLAR_CONSTANT_PEREZ / SOLAR_ILLUMINANCE_CONSTANT
+            dni = e_dir * SOLAR_CONSTANT_PEREZ / SOLAR_ILLUMINANCE_CONSTANT
+            eps, dl = limits(float(sky_clearness(dni, dhi, z_deg)), dhi * m / i0)
+            for _ in range(9):
+                eff = perez1990_luminous_efficacy(eps, dl, z_deg, W)
+                dhi = e_diff / float(eff.diffuse) if eff.diffuse > 0 else 0.0
+                dni = e_dir / float(eff.direct) if eff.direct >= 0.1 else 0.0
+                eps, dl = limits(float(sky_clearness(dni, dhi, z_deg)), dhi * m / i0)
+        self.sky_clearness, self.sky_brightness = eps, dl
+        self.diffuse_irradiance, self.direct_irradiance = float(dhi), float(dni)
+        z = math.radians(z_deg)
+        self.coefficients = perez1993_coefficients(z, eps, dl)
+        lv_zenith = float(perez1993_relative_luminance(1.0, math.cos(z), self.coefficients))
+        integral = _horizontal_integral(z, self.coefficients, self.normalization)
+        b = self.coefficients[1]
+        if b > 0.0 or integral <= 0.0 or (self.scaling == "relative" and lv_zenith <= 0.0):
+            self.valid = False
+            if self.invalid == "raise":
+                raise ValueError(
+                    f"perez1993: epsilon = {eps:g}, delta = {dl:g} at sun zenith {z_deg:g} deg "
+                    f"is outside the fitted model's domain (b = {b:.4g} > 0 or a sky that is "
+                    "negative everywhere); pass invalid='black' for gendaylit's zero sky")
+            self.diffuse_illuminance = self.direct_illuminance = 0.0
+            self._black = True
+            return
+        if self.scaling == "relative":
+            self._scale = 1.0 / lv_zenith if lv_zenith > 0 else 0.0
+            self.zenith_luminance = 1.0
+            return
+        eff = perez1990_luminous_efficacy(eps, dl, z_deg, W)
+        if e_diff is None:
+            k_diff = float(eff.diffuse) if self.scaling == "perez1990" else WHITE_EFFICACY
+            k_dir = float(eff.direct) if self.scaling == "perez1990" else WHITE_EFFICACY
+            self.diffuse_illuminance = max(dhi * k_diff, 0.0)
+            self.direct_illuminance = max(dni * k_dir, 0.0)
+        else:
+            self.diffuse_illuminance = float(e_diff)
+            self.direct_illuminance = float(self.dni_illuminance)
+        self._scale = self.diffuse_illuminance / integral if integral > 0 else 0.0
+        self.zenith_luminance = max(self._scale * lv_zenith, 0.0)
+
+    # -- evaluation -----------------------------------------------------------------------
+    def luminance(self, directions) -> np.ndarray:
+        """Sky luminance [cd m^-2] arriving from ``directions`` (unit vectors (..., 3), ENU).
+
+        Directions below the horizon (z < 0) get 0; within 0.57 deg above it the gradation
+        term uses cos(zeta) = 0.01 (perezlum.cal). ``scaling="relative"`` returns lv/lv(zenith)
+        instead (dimensionless). Any negative value of the fitted formula is clipped to 0.
+        """
+        d = self._directions(directions)
+        out = np.zeros(d.shape[:-1])
+        if self._black or self._scale == 0.0:
+            return out
+        up = d[..., 2] >= 0.0
+        cg = d @ self.sun.direction
+        lv = perez1993_relative_luminance(d[..., 2], cg, self.coefficients)
+        out[up] = np.maximum(lv[up] * self._scale, 0.0)
+        return out
+
+    def sun_luminance(self) -> float:
+        """Mean luminance of the solar disc [cd m^-2]: direct normal illuminance spread over
+        the disc's solid angle (as gendaylit's 'solar source'); 0 with the sun below the
+        horizon or for ``scaling="relative"``."""
+        if self._black or self.scaling == "relative":
+            return 0.0
+        return float(self.direct_illuminance / self.sun.solid_angle_sr)

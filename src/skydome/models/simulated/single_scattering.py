@@ -1,0 +1,123 @@
+"""``single_scattering``: the brute-force single-scattering reference sky.
+
+Survey eqs. 15-16 integrated numerically in a spherical-shell atmosphere with any
+:class:`skydome.atmosphere.Atmosphere` (Rayleigh, aerosols with their phase function,
+ozone absorption, earth shadow, sunlit ground). Later, faster models are measured against
+it; its sample counts are exposed so that its convergence can be shown
+(``tests/test_single_scattering.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skydome._validate import as_directions, as_wavelengths
+from skydome.models import Parameter, SkyModel, register
+
+__all__ = ["SingleScatteringSky"]
+
+
+@register
+class SingleScatteringSky(SkyModel):
+    """Single scattering of sunlight (Rayleigh + aerosols + ozone), integrated numerically.
+
+    Parameters
+    ----------
+    sun : skydome.Sun
+        Sun position; any elevation in [-90, 90] deg (below the horizon only the upper
+        atmosphere is lit, through the earth's shadow boundary).
+    atmosphere : skydome.Atmosphere, optional
+        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
+    turbidity : float
+        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
+    observer_altitude_m : float
+        Observer altitude above the ground [m], [0, top of the atmosphere).
+    view_samples : int
+        Quadrature nodes per piece of each view ray (default 16: error <= 0.16 % against
+        the converged result, see docs/performance.md).
+    light_samples : int
+        Quadrature nodes per light-path column (default 128).
+    light_exact : bool
+        Integrate each light path directly instead of through the column table.
+    """
+
+    name = "single_scattering"
+    reference = ("Kment, Rauter & Zotti, Modelling of Daylight for Computer Graphics, eqs. 12, "
+                 "15-16; Nishita et al. 1993, SIGGRAPH, eqs. 1-3 (numerical integration)")
+    native = "spectral"
+    summary = "Brute-force single scattering in a spherical atmosphere (the reference)."
+    parameters = (
+        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
+                  kind="object"),
+        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
+        Parameter("observer_altitude_m", "m", 0.0, 0.0, 99_999.0, "observer altitude above the ground"),
+        Parameter("view_samples", "", 16, 2, 4096, "quadrature nodes per view-ray piece", kind="int"),
+        Parameter("light_samples", "", 128, 2, 4096, "quadrature nodes per light-path column",
+                  kind="int"),
+        Parameter("light_exact", "", False, doc="integrate light paths directly (slow)", kind="object"),
+    )
+
+    def __init__(self, sun, **params):
+        from skydome.atmosphere import Atmosphere
+        from skydome.sun import Sun
+
+        if not isinstance(sun, Sun):
+            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+        p = self._validate_params(params)
+        atm = p["atmosphere"]
+        if atm is None:
+            atm = Atmosphere.earth(turbidity=p["turbidity"])
+        elif not isinstance(atm, Atmosphere):
+            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
+        elif "turbidity" in params:
+            raise ValueError("give either atmosphere or turbidity, not both")
+        if p["observer_altitude_m"] >= atm.top_altitude_m:
+            raise ValueError(f"observer_altitude_m = {p['observer_altitude_m']:g} m is out of range "
+                             f"[0, {atm.top_altitude_m:g}) m (inside the atmosphere)")
+        self.sun = sun
+        self.atmosphere = atm
+        self.turbidity = p["turbidity"]
+        self.observer_altitude_m = p["observer_altitude_m"]
+        self.view_samples = p["view_samples"]
+        self.light_samples = p["light_samples"]
+        self.light_exact = bool(p["light_exact"])
+        self._integrators: dict = {}
+
+    def _integrator(self, wl):
+        from skydome.transport.single import SingleScattering
+
+        key = tuple(np.round(wl, 9))
+        if key not in self._integrators:
+            if len(self._integrators) > 4:
+                self._integrators.clear()
+            self._integrators[key] = SingleScattering(
+                self.atmosphere, wl, self.observer_altitude_m, self.view_samples,
+                self.light_samples, self.light_exact)
+        return self._integrators[key]
+
+    def _solar(self, wl):
+        from skydome.spectra import solar_irradiance
+
+        return solar_irradiance(wl) * self.sun.irradiance_scale
+
+    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] arriving from ``directions`` (..., 3),
+        shape (..., n_wavelengths). Directions below the horizon see the sunlit ground
+        (Lambertian, the atmosphere's ground albedo) through the air in front of it."""
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        ss = self._integrator(wl)
+        return ss.radiance(d, self.sun.direction, self._solar(wl))
+
+    def sun_radiance(self, wavelengths_nm) -> np.ndarray:
+        """Radiance of the sun's disc seen through the atmosphere [W m^-2 sr^-1 nm^-1]:
+        E_sun / Omega_sun x T(observer -> top); 0 when the planet hides the sun. The disc is
+        uniform (no limb darkening)."""
+        wl = as_wavelengths(wavelengths_nm)
+        t = self._integrator(wl).transmittance(self.sun.direction)
+        return self._solar(wl) / self.sun.solid_angle_sr * t
+
+    def describe(self):
+        out = super().describe()
+        out["parameters"]["atmosphere"] = self.atmosphere.describe()
+        return out
