@@ -218,8 +218,14 @@ class SkyImage:
     def auto_exposure(self) -> float:
         """Exposure multiplier k [m^2/cd] mapping the log-average luminance of the sky
         pixels to Reinhard's key 0.18 [Rei02] eq. 1; pixels brighter than 1e5 cd m^-2
-        (the sun) and black pixels are left out. 1 if no pixel qualifies."""
-        Y = self.luminance()[self.mask]
+        (the sun), black pixels and, where the projection is known, pixels below the
+        horizon (the ground) are left out. 1 if no pixel qualifies."""
+        sel = self.mask
+        if self.projection is not None:
+            dirs, _ = self.projection.directions()
+            if np.any(sel & (dirs[..., 2] > 0.0)):
+                sel = sel & (dirs[..., 2] > 0.0)
+        Y = self.luminance()[sel]
         Y = Y[(Y > 0.0) & (Y <= AUTO_EXPOSURE_CUTOFF)]
         if Y.size == 0:
             return 1.0

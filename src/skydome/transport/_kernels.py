@@ -71,6 +71,29 @@ def phase_value(code, param, cos_theta):
     return INV_4PI
 
 
+@njit(cache=True, fastmath=True)
+def exp_neg_array(x, out, ibuf):
+    """out[l] = exp(x[l]) for x[l] <= 0 (x below -700 is clamped), relative error < 1e-8.
+
+    Written so that LLVM vectorises it (numba's math.exp is a scalar libm call): 2^y with
+    y = x log2(e) split into k = floor(y) and f = y - k; 2^f = exp(f ln 2) by its Taylor
+    series to degree 10 on [0, ln 2); 2^k assembled from the IEEE-754 exponent bits.
+    About twice the throughput of math.exp in the spectral loops.
+    """
+    n = x.shape[0]
+    fbuf = ibuf.view(np.float64)
+    for l in range(n):
+        y = max(x[l], -700.0) * 1.4426950408889634
+        k = math.floor(y)
+        t = (y - k) * 0.6931471805599453
+        out[l] = 1.0 + t * (1.0 + t * (0.5 + t * (1.0 / 6.0 + t * (1.0 / 24.0 + t * (
+            1.0 / 120.0 + t * (1.0 / 720.0 + t * (1.0 / 5040.0 + t * (1.0 / 40320.0 + t * (
+                1.0 / 362880.0 + t / 3628800.0)))))))))
+        ibuf[l] = (np.int64(k) + 1023) << 52
+    for l in range(n):
+        out[l] *= fbuf[l]
+
+
 @njit(cache=True)
 def distance_to_sphere_far(r, mu, radius):
     """Distance along the ray to the far intersection with a sphere (r <= radius)."""
@@ -246,16 +269,23 @@ def single_scattering(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, pha
         rho_prev = np.zeros(nc)
         rho_mid = np.zeros(nc)
         rho = np.zeros(nc)
+        ebuf = np.zeros(nl)
+        ibuf = np.zeros(nl, dtype=np.int64)
+        scat = np.zeros(nc)       # 1 for constituents that scatter (ozone only absorbs)
+        for c in range(nc):
+            for l in range(nl):
+                if beta_s[c, l] > 0.0:
+                    scat[c] = 1.0
         for i in range(ib * block, min(n, (ib + 1) * block)):
             _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
                         phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
-                        out, acc, tau, dcol, scol, rho_prev, rho_mid, rho)
+                        out, acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat)
 
 
 @njit(cache=True, fastmath=True)
 def _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
                 phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light, out,
-                acc, tau, dcol, scol, rho_prev, rho_mid, rho):
+                acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat):
     """One ray of :func:`single_scattering` (work arrays passed in, reset here)."""
     nc = codes.shape[0]
     nl = e_sun.shape[0]
@@ -310,12 +340,17 @@ def _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_
                                    ts, scol):
                     continue
                 for l in range(nl):
-                    s = 0.0
-                    for c in range(nc):
-                        s += beta_e[c, l] * (dcol[c] + scol[c])
-                    e = w * math.exp(-s)
-                    for c in range(nc):
-                        acc[c, l] += rho[c] * e
+                    tau[l] = 0.0
+                for c in range(nc):
+                    col = dcol[c] + scol[c]
+                    for l in range(nl):
+                        tau[l] -= beta_e[c, l] * col
+                exp_neg_array(tau, ebuf, ibuf)
+                for c in range(nc):
+                    wr = w * rho[c] * scat[c]
+                    if wr > 0.0:
+                        for l in range(nl):
+                            acc[c, l] += wr * ebuf[l]
         # phase functions and scattering coefficients
         for c in range(nc):
             p = phase_value(phase_codes[c], phase_params[c], nu)
