@@ -334,6 +334,47 @@ def plot_compare_cmd(
     _run(go)
 
 
+@app.command("compare", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def compare_cmd(
+    ctx: typer.Context,
+    models: str = typer.Option(..., help="Comma-separated model specs, e.g. single_scattering,kaneda1991,preetham1999:3."),
+    sun_elevation: str = typer.Option("5,30,60", help="Comma-separated sun elevations [deg], -90..90."),
+    sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg]."),
+    reference: str = typer.Option("single_scattering", help="Model the others are measured against."),
+    size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
+    wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
+    out: str = typer.Option(..., help="Output folder (created if missing): grid.png, error_*.png, table.md, table.csv."),
+):
+    """Render several models for several sun elevations and measure each against a reference.
+
+    Options after the list (e.g. --turbidity 3) go to every model that has them.
+    """
+    def go():
+        from skydome.compare import run_comparison
+        from skydome.models import get_model_class
+
+        specs = _split_specs(models)
+        _check_shared(ctx.args, [get_model_class(sp.partition(":")[0]) for sp in specs + [reference]])
+        get_model_class(reference)
+        try:
+            elevs = [float(v) for v in sun_elevation.split(",") if v.strip()]
+        except ValueError:
+            raise UserError(f"sun_elevation = {sun_elevation!r} is not a comma-separated list of numbers") from None
+        progress = _Progress("comparing models")
+        try:
+            rows = run_comparison(specs, elevs, out, reference=reference, sun_azimuth_deg=sun_azimuth,
+                                  size=size, wavelengths=wavelengths,
+                                  build=lambda spec, sun: _model_spec(spec, ctx.args, sun),
+                                  progress=progress)
+        finally:
+            progress.close()
+        from skydome.compare import table_markdown
+
+        typer.echo(table_markdown(rows, reference))
+        typer.echo(f"wrote {out}/grid.png, error_*.png, table.md, table.csv")
+    _run(go)
+
+
 def _split_specs(models: str) -> list[str]:
     """Split 'a:1,b,c:k=v,k2=v2' at commas that start a new model name."""
     from skydome.models import available

@@ -1,0 +1,256 @@
+"""Side-by-side comparison of sky models against a reference (``skydome compare``).
+
+For every sun elevation, every model is rendered on the same fisheye grid and compared
+with the reference model (by default the brute-force ``single_scattering``):
+
+* ``grid.png``: models (rows) x sun elevations (columns), tone mapped with ONE exposure
+  per column (the reference's automatic exposure), labelled;
+* ``error_<model>.png``: the luminance ratio per sun elevation as log2(L / L_ref), false
+  colour from -2 to +2 (a quarter to four times the reference);
+* ``table.md`` and ``table.csv``: per model and sun elevation, the luminance RMS relative
+  error and the mean / max chromaticity distance (CIE 1931 xy) over the upper hemisphere
+  (solid-angle weighted), and the run time.
+
+Luminance-only models carry no colour: their chromaticity error is reported as "n/a".
+A model that refuses a sun elevation (outside its valid range) gets "n/a" with the reason.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import shutil
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+__all__ = ["ComparisonRow", "run_comparison", "sky_errors"]
+
+
+@dataclass
+class ComparisonRow:
+    model: str
+    sun_elevation_deg: float
+    luminance_rms: float = float("nan")        # relative, solid-angle weighted
+    luminance_mean_bias: float = float("nan")  # relative
+    chromaticity_mean: float = float("nan")    # xy distance
+    chromaticity_max: float = float("nan")
+    seconds: float = float("nan")
+    note: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+def sky_errors(xyz, xyz_ref, weights, has_colour: bool = True) -> dict:
+    """Errors of one sky against a reference over the pixels with weight > 0.
+
+    Returns luminance RMS relative error, mean relative bias, and mean/max xy distance.
+    """
+    Y, Yr = xyz[..., 1], xyz_ref[..., 1]
+    m = (weights > 0) & (Yr > 0) & np.isfinite(Y)
+    w = weights[m] / weights[m].sum()
+    rel = Y[m] / Yr[m] - 1.0
+    out = {"luminance_rms": float(np.sqrt(np.sum(w * rel * rel))),
+           "luminance_mean_bias": float(np.sum(w * rel))}
+    if has_colour:
+        from skydome.spectra import xyz_to_xy
+
+        d = np.linalg.norm(xyz_to_xy(xyz[m]) - xyz_to_xy(xyz_ref[m]), axis=-1)
+        out["chromaticity_mean"] = float(np.sum(w * d))
+        out["chromaticity_max"] = float(d.max())
+    return out
+
+
+def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_dir, *,
+                   reference: str = "single_scattering", sun_azimuth_deg: float = 180.0,
+                   size: int = 128, wavelengths: int = 16,
+                   build: Callable | None = None, progress: Callable | None = None) -> list[ComparisonRow]:
+    """Render and compare; write the report into ``out_dir`` (created if missing).
+
+    Parameters
+    ----------
+    specs : sequence of str
+        Model specs; ``build(spec, sun)`` turns each into a model (default: the registered
+        model of that name with default parameters). The reference is added first if absent.
+    sun_elevations : sequence of float
+        Sun elevations [deg].
+    out_dir : path
+        Output folder; files are written to a temporary folder first and moved in at the end.
+    """
+    from skydome._validate import check_int, check_number
+    from skydome.render import render
+    from skydome.render.projections import Fisheye
+    from skydome.spectra import wavelength_grid
+    from skydome.sun import Sun
+
+    size = check_int("size", size, 16, 4096)
+    wavelengths = check_int("wavelengths", wavelengths, 3, 401)
+    elevs = [check_number("sun_elevation", e, -90.0, 90.0, "deg") for e in sun_elevations]
+    if not elevs:
+        raise ValueError("sun_elevation is empty: give at least one sun elevation")
+    if build is None:
+        from skydome.models import model as _model
+
+        def build(spec, sun):
+            return _model(spec, sun=sun)
+    specs = list(specs)
+    if reference not in [s.partition(":")[0] for s in specs]:
+        specs.insert(0, reference)
+    ref_spec = next(s for s in specs if s.partition(":")[0] == reference)
+    out_dir = Path(out_dir)
+    parent = out_dir.parent if out_dir.parent != Path("") else Path(".")
+    if not parent.is_dir():
+        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ValueError(f"out = '{out_dir}': folder '{parent}' is not writable")
+    # build every model once up front so that bad specs fail before any work
+    for spec in specs:
+        try:
+            build(spec, Sun(elevation_deg=45.0, azimuth_deg=sun_azimuth_deg))
+        except ValueError as exc:
+            if "elevation" not in str(exc):
+                raise
+
+    wl = wavelength_grid(380.0, 780.0, n=wavelengths)
+    proj = Fisheye(size)
+    dirs, mask = proj.directions()
+    weights = np.where(mask & (dirs[..., 2] > 0), proj.solid_angles(), 0.0)
+
+    images: dict[tuple[str, float], object] = {}
+    xyzs: dict[tuple[str, float], np.ndarray] = {}
+    rows: list[ComparisonRow] = []
+    total = len(specs) * len(elevs)
+    done = 0
+    for e in elevs:
+        sun = Sun(elevation_deg=e, azimuth_deg=sun_azimuth_deg)
+        for spec in specs:
+            row = ComparisonRow(spec, e)
+            try:
+                sky = build(spec, sun)
+                t0 = time.perf_counter()
+                img = render(sky, proj, wl, draw_sun=False)
+                row.seconds = time.perf_counter() - t0
+                images[spec, e] = img
+                xyzs[spec, e] = img.xyz()
+                row.extra["native"] = sky.native
+            except ValueError as exc:
+                row.note = str(exc)
+            rows.append(row)
+            done += 1
+            if progress is not None:
+                progress(done, total)
+    for row in rows:
+        ref = xyzs.get((ref_spec, row.sun_elevation_deg))
+        got = xyzs.get((row.model, row.sun_elevation_deg))
+        if ref is None or got is None:
+            if not row.note:
+                row.note = "reference unavailable"
+            continue
+        err = sky_errors(got, ref, weights, has_colour=row.extra.get("native") != "luminance")
+        for k, v in err.items():
+            setattr(row, k, v)
+
+    tmp = Path(tempfile.mkdtemp(prefix=".skydome-compare-", dir=parent))
+    try:
+        _write_grid(tmp / "grid.png", specs, elevs, images, ref_spec)
+        for spec in specs:
+            if spec != ref_spec:
+                _write_error_image(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
+        (tmp / "table.md").write_text(table_markdown(rows, ref_spec))
+        (tmp / "table.csv").write_text(table_csv(rows))
+        out_dir.mkdir(exist_ok=True)
+        for f in sorted(tmp.iterdir()):
+            os.replace(f, out_dir / f.name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return rows
+
+
+def _safe(spec: str) -> str:
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in spec)
+
+
+def _fmt(v, pct=False):
+    if v is None or not np.isfinite(v):
+        return "n/a"
+    return f"{v * 100:.2f} %" if pct else f"{v:.4f}"
+
+
+def table_markdown(rows: list[ComparisonRow], reference: str) -> str:
+    lines = [f"Errors against `{reference}` over the upper hemisphere (solid-angle weighted).", "",
+             "| model | sun elevation | luminance RMS error | luminance bias | xy error mean | xy error max | render time | note |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        t = "n/a" if not np.isfinite(r.seconds) else f"{r.seconds:.2f} s"
+        note = r.note.replace("|", "/")[:120]
+        lines.append(f"| {r.model} | {r.sun_elevation_deg:g} deg | {_fmt(r.luminance_rms, True)} | "
+                     f"{_fmt(r.luminance_mean_bias, True)} | {_fmt(r.chromaticity_mean)} | "
+                     f"{_fmt(r.chromaticity_max)} | {t} | {note} |")
+    return "\n".join(lines) + "\n"
+
+
+def table_csv(rows: list[ComparisonRow]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(["model", "sun_elevation_deg", "luminance_rms", "luminance_mean_bias",
+                "chromaticity_mean", "chromaticity_max", "seconds", "note"])
+    for r in rows:
+        w.writerow([r.model, r.sun_elevation_deg, r.luminance_rms, r.luminance_mean_bias,
+                    r.chromaticity_mean, r.chromaticity_max, r.seconds, r.note])
+    return buf.getvalue()
+
+
+def _write_grid(path: Path, specs, elevs, images, ref_spec, tile: int = 192) -> None:
+    """Models x elevations, one exposure per column (the reference's automatic one)."""
+    from PIL import Image, ImageDraw
+
+    label_w, label_h = 150, 18
+    sheet = Image.new("RGB", (label_w + tile * len(elevs), label_h + tile * len(specs)), (24, 24, 24))
+    draw = ImageDraw.Draw(sheet)
+    for j, e in enumerate(elevs):
+        ref = images.get((ref_spec, e))
+        k = ref.auto_exposure() if ref is not None else None
+        draw.text((label_w + j * tile + 4, 3), f"sun {e:g} deg", fill=(230, 230, 230))
+        for i, spec in enumerate(specs):
+            if j == 0:
+                draw.text((4, label_h + i * tile + tile // 2), spec[:24], fill=(230, 230, 230))
+            img = images.get((spec, e))
+            if img is None:
+                draw.text((label_w + j * tile + 10, label_h + i * tile + tile // 2), "n/a",
+                          fill=(200, 120, 120))
+                continue
+            rgb = img.to_srgb(exposure=k if k is not None else img.auto_exposure())
+            im = Image.fromarray((np.clip(rgb, 0, 1) * 255 + 0.5).astype(np.uint8))
+            im = im.resize((tile, tile), Image.LANCZOS)
+            sheet.paste(im, (label_w + j * tile, label_h + i * tile))
+    sheet.save(path)
+
+
+def _write_error_image(path: Path, spec, elevs, xyzs, ref_spec, weights) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(elevs), figsize=(3.2 * len(elevs) + 1.0, 3.4), squeeze=False)
+    im = None
+    for j, e in enumerate(elevs):
+        ax = axes[0, j]
+        ax.set_axis_off()
+        got, ref = xyzs.get((spec, e)), xyzs.get((ref_spec, e))
+        if got is None or ref is None:
+            ax.set_title(f"sun {e:g} deg: n/a", fontsize=9)
+            continue
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(weights > 0, np.log2(got[..., 1] / ref[..., 1]), np.nan)
+        im = ax.imshow(ratio, cmap="RdBu_r", vmin=-2, vmax=2)
+        ax.set_title(f"sun {e:g} deg", fontsize=9)
+    if im is not None:
+        fig.colorbar(im, ax=axes.ravel().tolist(), label="log2(L / L_ref)", shrink=0.85)
+    fig.suptitle(f"{spec} against {ref_spec} (fisheye, north up, east left)", fontsize=10)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
