@@ -15,7 +15,7 @@ import typer
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                   help="skydome: physically based daylight modelling (sky models, spectral sky images).")
 
-PROJECTIONS = ("fisheye", "equirect", "equirect-hemisphere", "angular")
+PROJECTIONS = ("fisheye", "equirect", "equirect-hemisphere", "angular", "camera")
 
 
 class UserError(Exception):
@@ -131,7 +131,7 @@ def render(
     lon: Optional[float] = typer.Option(None, help="Longitude [deg], -180..180, east positive."),
     time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset, e.g. 2026-06-21T20:45+02:00."),
     sun_method: str = typer.Option("spa", help="Solar position algorithm: spa (NREL SPA via pvlib) or preetham1999."),
-    projection: str = typer.Option("fisheye", help="fisheye (Radiance angular fisheye), equirect, equirect-hemisphere or angular."),
+    projection: str = typer.Option("fisheye", help="fisheye (Radiance angular fisheye), equirect, equirect-hemisphere, angular or camera (the model's own camera view, e.g. nishita1993)."),
     size: str = typer.Option("512", help="Image size in pixels: N (square / width) or WxH."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm for spectral models, 3..401."),
     exposure: Optional[float] = typer.Option(None, help="PNG only: exposure multiplier on luminance in cd/m^2 (default automatic)."),
@@ -166,9 +166,20 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     if exposure is not None and not exposure > 0:
         raise UserError(f"exposure = {exposure} must be > 0")
     sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
-    proj = make_projection(projection, size)
-    check_output_path(out)
-    sky = cls(sun=sun, **params)
+    if projection == "camera":
+        if not hasattr(cls, "default_projection"):
+            raise UserError(f"projection = 'camera' needs a model with its own camera "
+                            f"(e.g. nishita1993); model {model!r} has none")
+        from skydome.render.projections import _parse_size
+
+        _parse_size(size)
+        check_output_path(out)
+        sky = cls(sun=sun, **params)
+        proj = sky.default_projection(size)
+    else:
+        proj = make_projection(projection, size)
+        check_output_path(out)
+        sky = cls(sun=sun, **params)
     wl = wavelength_grid(380.0, 780.0, n=wavelengths)
 
     # 2. work
@@ -372,6 +383,52 @@ def compare_cmd(
 
         typer.echo(table_markdown(rows, reference))
         typer.echo(f"wrote {out}/grid.png, error_*.png, table.md, table.csv")
+    _run(go)
+
+
+@app.command("timelapse", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def timelapse_cmd(
+    ctx: typer.Context,
+    lat: float = typer.Option(..., help="Latitude [deg], -90..90, north positive."),
+    lon: float = typer.Option(..., help="Longitude [deg], -180..180, east positive."),
+    date: str = typer.Option(..., help="Local date YYYY-MM-DD."),
+    utc_offset: str = typer.Option("+00:00", help="UTC offset of the local times, e.g. +02:00."),
+    every: str = typer.Option("10min", help="Time step: 10min, 1h, 30s (1 min .. 12 h)."),
+    start: str = typer.Option("00:00", help="First local time HH:MM."),
+    end: str = typer.Option("23:59", help="Last local time HH:MM."),
+    min_elevation: float = typer.Option(-6.0, help="Render only while the sun is above this elevation [deg]."),
+    model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
+    projection: str = typer.Option("fisheye", help="fisheye, equirect, equirect-hemisphere or angular."),
+    size: int = typer.Option(256, help="Frame size in pixels, 16..4096."),
+    wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
+    out: str = typer.Option(..., help="Output folder: frame_HHMM.png, contact_sheet.png, colours.png, colours.csv."),
+):
+    """The colour of the sky through a day: frames, a contact sheet and a colour-against-time plot.
+
+    Model parameters are given as extra options, e.g. --turbidity 3.
+    """
+    def go():
+        from skydome._validate import check_choice
+        from skydome.effects.timelapse import day_times, parse_every, run_timelapse
+        from skydome.models import get_model_class
+
+        cls = get_model_class(model)
+        params = _parse_model_params(cls, ctx.args)
+        check_choice("projection", projection, PROJECTIONS)
+        times = day_times(date, utc_offset, parse_every(every), start, end)
+        progress = _Progress("timelapse")
+        try:
+            frames = run_timelapse(lambda sun: cls(sun=sun, **params), lat, lon, times, out,
+                                   min_elevation_deg=min_elevation, size=size, wavelengths=wavelengths,
+                                   projection=projection, progress=progress)
+        finally:
+            progress.close()
+        done = [f for f in frames if f.image_path is not None]
+        typer.echo(f"wrote {len(done)} frames ({done[0].time.strftime('%H:%M')}-{done[-1].time.strftime('%H:%M')}), "
+                   f"contact_sheet.png, colours.png, colours.csv into {out}")
+        skipped = [f for f in frames if f.image_path is None]
+        if skipped:
+            typer.echo(f"skipped {len(skipped)} frames the model refused: {skipped[0].note}")
     _run(go)
 
 

@@ -1,0 +1,226 @@
+"""The colour of the sky through a day (survey section 5.1): ``skydome timelapse``.
+
+For a place and a date, the sun's position is computed every ``every`` minutes (NREL SPA),
+and for every time at which the sun is above ``min_elevation_deg`` the model is rendered
+(a fisheye by default). Besides the frames, the sequence is summarised by
+
+* ``contact_sheet.png``: the frames in order, labelled with the local time, all at ONE
+  exposure (that of the brightest frame's automatic exposure, so that dusk is dark);
+* ``colours.png``: the colour of the zenith, of the horizon under the sun (elevation 3 deg
+  at the sun's azimuth) and of the sun's disc (where the model has a sun) against time, as
+  colour strips (chromaticity at constant brightness) with their luminance [cd m^-2] and
+  the sun's elevation below;
+* ``colours.csv``: the numbers behind the figure (time, sun elevation/azimuth, XYZ of the
+  zenith, horizon and sun).
+
+Frames a model refuses (e.g. a sun below its valid range) are skipped and listed.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as _dt
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["TimelapseFrame", "day_times", "run_timelapse"]
+
+
+@dataclass
+class TimelapseFrame:
+    time: _dt.datetime
+    elevation_deg: float
+    azimuth_deg: float
+    image_path: Path | None
+    zenith_xyz: np.ndarray | None
+    horizon_xyz: np.ndarray | None
+    sun_xyz: np.ndarray | None
+    note: str = ""
+
+
+def day_times(date: str, utc_offset: str = "+00:00", every_min: float = 10.0,
+              start: str = "00:00", end: str = "23:59") -> list[_dt.datetime]:
+    """Timezone-aware times on ``date`` (YYYY-MM-DD) from ``start`` to ``end`` (HH:MM local)
+    every ``every_min`` minutes."""
+    from skydome._validate import check_number
+    from skydome.sun import parse_time
+
+    every = check_number("every", every_min, 1.0, 720.0, "min")
+    t0 = parse_time(f"{date}T{start}{utc_offset}")
+    t1 = parse_time(f"{date}T{end}{utc_offset}")
+    if t1 < t0:
+        raise ValueError(f"end = {end!r} is before start = {start!r}")
+    out = []
+    t = t0
+    while t <= t1:
+        out.append(t)
+        t = t + _dt.timedelta(minutes=every)
+    return out
+
+
+def parse_every(text: str) -> float:
+    """'10min', '1h', '30s' or a number of minutes -> minutes."""
+    s = str(text).strip().lower()
+    for suffix, factor in (("min", 1.0), ("m", 1.0), ("h", 60.0), ("s", 1.0 / 60.0)):
+        if s.endswith(suffix):
+            try:
+                return float(s[: -len(suffix)]) * factor
+            except ValueError:
+                break
+    try:
+        return float(s)
+    except ValueError:
+        raise ValueError(f"every = {text!r} is not a duration such as 10min, 1h or 30s") from None
+
+
+def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_dir, *,
+                  min_elevation_deg: float = -6.0, size: int = 256, wavelengths: int = 16,
+                  projection: str = "fisheye", progress: Callable | None = None) -> list[TimelapseFrame]:
+    """Render ``build(sun)`` at each time with the sun above ``min_elevation_deg``.
+
+    Everything is written into a temporary folder beside ``out_dir`` and moved in at the
+    end, so a failure leaves nothing behind.
+    """
+    from skydome._validate import check_int, check_number
+    from skydome.render import make_projection, render
+    from skydome.spectra import spectrum_to_xyz, wavelength_grid
+    from skydome.sun import Sun, solar_position
+    from skydome.transport.geometry import direction_from_angles
+
+    check_number("lat", lat_deg, -90.0, 90.0, "deg")
+    check_number("lon", lon_deg, -180.0, 180.0, "deg")
+    min_el = check_number("min_elevation_deg", min_elevation_deg, -90.0, 90.0, "deg")
+    check_int("size", size, 16, 4096)
+    wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
+    proj = make_projection(projection, str(size))
+    out_dir = Path(out_dir)
+    parent = out_dir.parent if str(out_dir.parent) else Path(".")
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist or is not writable")
+    times = list(times)
+    el, az = solar_position(lat_deg, lon_deg, times)
+    el, az = np.atleast_1d(el), np.atleast_1d(az)
+    todo = [i for i in range(len(times)) if el[i] >= min_el]
+    if not todo:
+        raise ValueError(f"the sun never rises above min_elevation_deg = {min_el:g} deg on that day")
+
+    tmp = Path(tempfile.mkdtemp(prefix=".skydome-timelapse-", dir=parent))
+    frames: list[TimelapseFrame] = []
+    images = []
+    try:
+        for n, i in enumerate(todo):
+            t = times[i]
+            sun = Sun(elevation_deg=float(el[i]), azimuth_deg=float(az[i]))
+            frame = TimelapseFrame(t, float(el[i]), float(az[i]), None, None, None, None)
+            try:
+                sky = build(sun)
+                img = render(sky, proj, wl)
+                name = f"frame_{t.strftime('%H%M')}.png"
+                images.append((t, img, name))
+                probe = direction_from_angles(np.array([90.0, 3.0]), np.array([0.0, az[i]]))
+                frame.zenith_xyz, frame.horizon_xyz = sky.xyz(probe)
+                if sky.native == "spectral" and sky.sun_radiance(wl) is not None:
+                    frame.sun_xyz = spectrum_to_xyz(sky.sun_radiance(wl), wl)
+                frame.image_path = out_dir / name
+            except ValueError as exc:
+                frame.note = str(exc)
+            frames.append(frame)
+            if progress is not None:
+                progress(n + 1, len(todo))
+        if not images:
+            raise ValueError("the model refused every frame: " + frames[0].note)
+        # one exposure for the whole day: the brightest frame's automatic exposure
+        k = min(img.auto_exposure() for _, img, _ in images)
+        for _, img, name in images:
+            img.save(tmp / name, exposure=k)
+        _contact_sheet(images, tmp / "contact_sheet.png", k)
+        _write_csv(frames, tmp / "colours.csv")
+        _colour_plot(frames, tmp / "colours.png")
+        out_dir.mkdir(exist_ok=True)
+        for f in sorted(tmp.iterdir()):
+            os.replace(f, out_dir / f.name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return frames
+
+
+def _contact_sheet(images, path: Path, k: float, tile: int = 128) -> None:
+    from PIL import Image, ImageDraw
+
+    cols = min(8, len(images))
+    rows = (len(images) + cols - 1) // cols
+    label_h = 14
+    sheet = Image.new("RGB", (cols * tile, rows * (tile + label_h)), (16, 16, 16))
+    draw = ImageDraw.Draw(sheet)
+    for n, (t, img, _) in enumerate(images):
+        rgb = (np.clip(img.to_srgb(exposure=k), 0, 1) * 255 + 0.5).astype(np.uint8)
+        im = Image.fromarray(rgb)
+        im.thumbnail((tile, tile))
+        x, y = (n % cols) * tile, (n // cols) * (tile + label_h)
+        sheet.paste(im, (x + (tile - im.width) // 2, y + (tile - im.height) // 2))
+        draw.text((x + 3, y + tile + 1), t.strftime("%H:%M"), fill=(220, 220, 220))
+    sheet.save(path)
+
+
+def _write_csv(frames, path: Path) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["time", "sun_elevation_deg", "sun_azimuth_deg", "zenith_X", "zenith_Y", "zenith_Z",
+                    "horizon_X", "horizon_Y", "horizon_Z", "sun_X", "sun_Y", "sun_Z", "note"])
+        for f in frames:
+            def tri(v):
+                return ["" if v is None else f"{x:.6g}" for x in (v if v is not None else (None,) * 3)]
+            w.writerow([f.time.isoformat(), f"{f.elevation_deg:.4f}", f"{f.azimuth_deg:.4f}",
+                        *tri(f.zenith_xyz), *tri(f.horizon_xyz), *tri(f.sun_xyz), f.note])
+
+
+def _display_colour(xyz) -> np.ndarray:
+    """Chromaticity shown at constant brightness: linear sRGB / max, gamut-clipped, encoded."""
+    from skydome.spectra import srgb_encode, xyz_to_linear_srgb
+
+    if xyz is None or not np.all(np.isfinite(xyz)) or xyz[1] <= 0:
+        return np.array([0.1, 0.1, 0.1])
+    rgb = np.maximum(xyz_to_linear_srgb(np.asarray(xyz, dtype=float)), 0.0)
+    return np.clip(srgb_encode(rgb / max(rgb.max(), 1e-30)), 0, 1)
+
+
+def _colour_plot(frames, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = [f for f in frames if f.zenith_xyz is not None]
+    hours = np.array([f.time.hour + f.time.minute / 60 + f.time.second / 3600 for f in ok])
+    fig, axes = plt.subplots(3, 1, figsize=(9, 6.5), sharex=True,
+                             gridspec_kw={"height_ratios": [1.2, 2, 1.2]})
+    strip = axes[0]
+    labels = [("zenith", "zenith_xyz"), ("horizon under the sun", "horizon_xyz"), ("sun disc", "sun_xyz")]
+    dt = np.median(np.diff(hours)) if hours.size > 1 else 0.25
+    for row, (label, attr) in enumerate(labels):
+        for h, f in zip(hours, ok):
+            strip.add_patch(plt.Rectangle((h - dt / 2, row), dt, 0.9, color=_display_colour(getattr(f, attr))))
+    strip.set_ylim(0, 3)
+    strip.set_yticks([0.45, 1.45, 2.45], [lab for lab, _ in labels])
+    strip.set_title("colour (chromaticity at constant brightness)")
+    lum = axes[1]
+    for label, attr in labels:
+        y = [getattr(f, attr)[1] if getattr(f, attr) is not None else np.nan for f in ok]
+        lum.semilogy(hours, y, label=label)
+    lum.set_ylabel("luminance [cd/m$^2$]")
+    lum.legend(fontsize=8)
+    lum.grid(alpha=0.3, which="both")
+    axes[2].plot(hours, [f.elevation_deg for f in ok], color="k")
+    axes[2].axhline(0, color="0.6", lw=0.8)
+    axes[2].set_ylabel("sun elevation [deg]")
+    axes[2].set_xlabel(f"local time [h] (UTC{ok[0].time.strftime('%z')})" if ok else "local time [h]")
+    axes[2].grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
