@@ -336,6 +336,42 @@ class Atmosphere:
             planet_radius_m=6360e3, top_altitude_m=60e3, ground_albedo=0.1, name="bruneton2017")
 
     @classmethod
+    def volcanic_ash(cls, optical_depth_550: float = 1.0, *, median_radius_um: float = 0.45,
+                     geometric_std: float = 1.15, refractive_index: Any = 1.5 - 0.001j,
+                     layer_altitude_m: float = 20e3, layer_width_m: float = 3e3,
+                     background_turbidity: float = 2.0, **earth_kwargs) -> "Atmosphere":
+        """Earth plus a stratospheric layer of narrow log-normal volcanic ash (Lorenz-Mie,
+        :mod:`skydome.atmosphere.mie`): the blue sun and blue moon of the survey's section
+        5.6 (Krakatoa 1883). Parameters: vertical optical depth of the layer at 550 nm
+        (0, 20]; median radius [um] and geometric standard deviation of the number
+        distribution; complex refractive index (ash 1.5 - 0.001i); Gaussian layer centre
+        and width [m]; turbidity of the ordinary aerosol below; other keywords go to
+        :meth:`earth`."""
+        from skydome.atmosphere.mie import layered_mie_atmosphere
+
+        return layered_mie_atmosphere("volcanic_ash", optical_depth_550=optical_depth_550,
+                                      median_radius_um=median_radius_um, geometric_std=geometric_std,
+                                      refractive_index=refractive_index,
+                                      layer_altitude_m=layer_altitude_m, layer_width_m=layer_width_m,
+                                      background_turbidity=background_turbidity, **earth_kwargs)
+
+    @classmethod
+    def forest_fire_smoke(cls, optical_depth_550: float = 1.0, *, median_radius_um: float = 0.5,
+                          geometric_std: float = 1.15, refractive_index: Any = 1.5 - 0.01j,
+                          layer_altitude_m: float = 10e3, layer_width_m: float = 2e3,
+                          background_turbidity: float = 2.0, **earth_kwargs) -> "Atmosphere":
+        """Earth plus an elevated layer of uniform smoke droplets (Lorenz-Mie): the blue
+        sun of 1950 September after the Alberta forest fires (Wilson, MNRAS 111, 1951;
+        survey section 5.6). Same parameters as :meth:`volcanic_ash`."""
+        from skydome.atmosphere.mie import layered_mie_atmosphere
+
+        return layered_mie_atmosphere("forest_fire_smoke", optical_depth_550=optical_depth_550,
+                                      median_radius_um=median_radius_um, geometric_std=geometric_std,
+                                      refractive_index=refractive_index,
+                                      layer_altitude_m=layer_altitude_m, layer_width_m=layer_width_m,
+                                      background_turbidity=background_turbidity, **earth_kwargs)
+
+    @classmethod
     def custom(cls, *, rayleigh_scattering, rayleigh_scale_height_m: float = H_RAYLEIGH,
                mie_scattering=0.0, mie_extinction=None, mie_scale_height_m: float = H_MIE,
                mie_phase: str = "cornette_shanks", mie_g: float = 0.76,
