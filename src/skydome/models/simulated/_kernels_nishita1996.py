@@ -1,0 +1,526 @@
+"""numba kernels of the ``nishita1996`` model (private; imported lazily by the model).
+
+Plain floats and arrays, metres and m^-1. The frame is planet-centred: x points towards
+the sun's azimuth, z through the observer, the observer at (0, 0, r0).
+
+* Cylindrical optical-depth table ([NDKY96] sec. 3.2): the optical depth from a point to
+  the sun depends only on the point's distance ``rc`` from the axis through the planet's
+  centre parallel to the sunlight and on its coordinate ``z`` along that axis. Along each
+  line rc = const the column towards the sun is accumulated once, from the top of the
+  atmosphere downwards.
+* Sky-sphere directions ([NDKY96] sec. 4): the light arriving at a point is approximated by
+  the light from a fixed set of directions d_k; each direction owns the cell of the sphere
+  nearer to it than to any other, and the phase function is integrated over that cell.
+  The light of order n-1 from each d_k is stored on a lattice of points covering the part
+  of the atmosphere the observer sees; order n is gathered along rays through it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skydome.transport._kernels import phase_value, profile_density
+
+
+# -- cylindrical optical-depth table -----------------------------------------------------------
+@njit(cache=True)
+def _line_column(codes, p0s, p1s, R, rc, za, zb, n_sub, col):
+    """Add the column densities between z = za and z = zb (za < zb) along the line at
+    distance rc from the axis to ``col`` (Simpson's rule with n_sub intervals)."""
+    nc = codes.shape[0]
+    h = (zb - za) / n_sub
+    for k in range(n_sub + 1):
+        z = za + k * h
+        w = 1.0 if (k == 0 or k == n_sub) else (4.0 if k % 2 == 1 else 2.0)
+        alt = math.sqrt(rc * rc + z * z) - R
+        for c in range(nc):
+            col[c] += w * h / 3.0 * profile_density(codes[c], p0s[c], p1s[c], alt)
+
+
+@njit(parallel=True, cache=True)
+def build_cylinder_table(codes, p0s, p1s, R, Rt, n_lo, n_hi, n_u, n_sub):
+    """Columns to the sun on the cylindrical grid ([NDKY96] fig. 3).
+
+    lower part (rc < R, lines that start on the sunlit ground): rc_i = R (1 - (1 - s)^3),
+    s = i / (n_lo - 1); along the line the node j sits at altitude u_j = (Rt - R) w^2,
+    w = j / (n_u - 1). Upper part (R <= rc <= Rt): rc_i = R + (Rt - R) s^2; node j at
+    u = sign(w) (Rt - rc) w^2 with w = 2 j / (n_u - 1) - 1, where u = sign(z) (r - rc).
+    Returns (lower (nc, n_lo, n_u), upper (nc, n_hi, n_u)).
+    """
+    nc = codes.shape[0]
+    lo = np.zeros((nc, n_lo, n_u))
+    hi = np.zeros((nc, n_hi, n_u))
+    H = Rt - R
+    for i in prange(n_lo + n_hi):
+        col = np.zeros(nc)
+        zs = np.zeros(n_u)
+        if i < n_lo:
+            s = i / (n_lo - 1.0)
+            rc = R * (1.0 - (1.0 - s) ** 3)
+            for j in range(n_u):
+                w = j / (n_u - 1.0)
+                r = R + H * w * w
+                zs[j] = math.sqrt(max(r * r - rc * rc, 0.0))
+        else:
+            s = (i - n_lo) / (n_hi - 1.0)
+            rc = R + H * s * s
+            for j in range(n_u):
+                w = 2.0 * j / (n_u - 1.0) - 1.0
+                u = (Rt - rc) * w * w
+                r = rc + u
+                z = math.sqrt(max(r * r - rc * rc, 0.0))
+                zs[j] = z if w >= 0 else -z
+        # accumulate from the top (largest z) downwards
+        for c in range(nc):
+            col[c] = 0.0
+        for j in range(n_u - 1, -1, -1):
+            if j < n_u - 1:
+                _line_column(codes, p0s, p1s, R, rc, zs[j], zs[j + 1], n_sub, col)
+            for c in range(nc):
+                if i < n_lo:
+                    lo[c, i, j] = col[c]
+                else:
+                    hi[c, i - n_lo, j] = col[c]
+    return lo, hi
+
+
+@njit(cache=True)
+def cylinder_lookup(lo, hi, R, Rt, px, py, pz, sx, sy, sz, out):
+    """Columns from point p towards the sun direction s (bilinear); False in the shadow."""
+    nc = lo.shape[0]
+    z = px * sx + py * sy + pz * sz
+    qx = px - z * sx
+    qy = py - z * sy
+    qz = pz - z * sz
+    rc = math.sqrt(qx * qx + qy * qy + qz * qz)
+    r = math.sqrt(rc * rc + z * z)
+    H = Rt - R
+    n_u = lo.shape[2]
+    if rc < R:
+        if z < 0.0:
+            return False
+        n_lo = lo.shape[1]
+        s = 1.0 - (max(1.0 - rc / R, 0.0)) ** (1.0 / 3.0)
+        fi = s * (n_lo - 1)
+        w = math.sqrt(min(max((r - R) / H, 0.0), 1.0))
+        fj = w * (n_u - 1)
+        i = min(int(fi), n_lo - 2)
+        j = min(int(fj), n_u - 2)
+        a = fi - i
+        b = fj - j
+        for c in range(nc):
+            out[c] = ((1 - a) * ((1 - b) * lo[c, i, j] + b * lo[c, i, j + 1])
+                      + a * ((1 - b) * lo[c, i + 1, j] + b * lo[c, i + 1, j + 1]))
+        return True
+    if rc >= Rt:
+        for c in range(nc):
+            out[c] = 0.0
+        return True
+    n_hi = hi.shape[1]
+    s = math.sqrt((rc - R) / H)
+    fi = s * (n_hi - 1)
+    i = min(int(fi), n_hi - 2)
+    a = fi - i
+    # each line has its own u range; interpolate in w on both neighbouring lines
+    u = r - rc
+    if z < 0.0:
+        u = -u
+    for c in range(nc):
+        out[c] = 0.0
+    for side in range(2):
+        ii = i + side
+        wgt = (1.0 - a) if side == 0 else a
+        rci = R + H * (ii / (n_hi - 1.0)) ** 2
+        span = Rt - rci
+        if span <= 0.0:
+            continue
+        w = math.sqrt(min(abs(u) / span, 1.0))
+        if u < 0.0:
+            w = -w
+        fj = (w + 1.0) * 0.5 * (n_u - 1)
+        j = min(max(int(fj), 0), n_u - 2)
+        b = fj - j
+        for c in range(nc):
+            out[c] += wgt * ((1 - b) * hi[c, ii, j] + b * hi[c, ii, j + 1])
+    return True
+
+
+# -- rays -----------------------------------------------------------------------------------------
+@njit(cache=True)
+def _segment(px, py, pz, dx, dy, dz, R, Rt):
+    """(t0, t1, hits_ground) of the ray from p along unit d inside the atmosphere."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    disc_t = b * b - r2 + Rt * Rt
+    if disc_t < 0.0:
+        return 0.0, -1.0, False
+    sq = math.sqrt(disc_t)
+    t_far = -b + sq
+    if t_far <= 0.0:
+        return 0.0, -1.0, False
+    t0 = max(-b - sq, 0.0)
+    disc_g = b * b - r2 + R * R
+    if b < 0.0 and disc_g >= 0.0:
+        tg = max(-b - math.sqrt(disc_g), 0.0)
+        return t0, max(tg, t0), True
+    return t0, t_far, False
+
+
+@njit(cache=True)
+def ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
+              pos, wts, rho, trans, t_end):
+    """Quadrature nodes along the ray from p along d: positions pos (m, 3), weights wts [m],
+    relative densities rho (m, nc) and the transmittance from p to each node trans (m, nl)
+    (optical depth by Simpson's rule between nodes). The ray is split at its lowest point;
+    each piece has n midpoint nodes spaced geometrically from its dense end (scale ts).
+    Returns (m, hits_ground); t_end[0] = distance to the end, and trans[m] holds the
+    transmittance to the end point."""
+    nc = codes.shape[0]
+    nl = beta_e.shape[1]
+    t0, t1, hits = _segment(px, py, pz, dx, dy, dz, R, Rt)
+    t_end[0] = t1
+    if t1 < t0 or (t1 == t0 and not hits):
+        for l in range(nl):
+            trans[0, l] = 1.0
+        return 0, False
+    a_ = t0
+    b_ = t0
+    dv = 0.0
+    cnt = 0
+    b = px * dx + py * dy + pz * dz
+    tmin = min(max(-b, t0), t1)
+    m = 0
+    t_prev = t0
+    dcol = np.zeros(nc)
+    rho_prev = np.zeros(nc)
+    xr = math.sqrt(px * px + py * py + pz * pz + 2 * b * t0 + t0 * t0)
+    for c in range(nc):
+        rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], xr - R)
+    for piece in range(3):
+        if piece < 2:
+            if piece == 0:
+                a_, b_ = t0, tmin
+            else:
+                a_, b_ = tmin, t1
+            length = b_ - a_
+            if length <= 0.0:
+                continue
+            dv = math.log1p(length / ts) / n
+            cnt = n
+        else:
+            cnt = 1
+        for kk in range(cnt):
+            if piece < 2:
+                k = n - 1 - kk if piece == 0 else kk
+                u = ts * math.expm1((k + 0.5) * dv)
+                w = (u + ts) * dv
+                t = b_ - u if piece == 0 else a_ + u
+            else:
+                t = t1
+                w = 0.0
+            qx = px + t * dx
+            qy = py + t * dy
+            qz = pz + t * dz
+            rr = math.sqrt(qx * qx + qy * qy + qz * qz)
+            tm = 0.5 * (t + t_prev)
+            rm = math.sqrt((px + tm * dx) ** 2 + (py + tm * dy) ** 2 + (pz + tm * dz) ** 2)
+            hh = t - t_prev
+            for c in range(nc):
+                rc_ = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                rmid = profile_density(codes[c], p0s[c], p1s[c], rm - R)
+                dcol[c] += hh / 6.0 * (rho_prev[c] + 4.0 * rmid + rc_)
+                rho_prev[c] = rc_
+                rho[m, c] = rc_
+            t_prev = t
+            pos[m, 0] = qx
+            pos[m, 1] = qy
+            pos[m, 2] = qz
+            wts[m] = w
+            for l in range(nl):
+                s = 0.0
+                for c in range(nc):
+                    s += beta_e[c, l] * dcol[c]
+                trans[m, l] = math.exp(-s)
+            m += 1
+    return m - 1, hits
+
+
+@njit(cache=True)
+def single_along(px, py, pz, dx, dy, dz, sx, sy, sz, R, Rt, codes, p0s, p1s, beta_s, beta_e,
+                 phase_codes, phase_params, albedo, e_sun, lo, hi, n, ts, out,
+                 pos, wts, rho, trans, t_end, col):
+    """Single-scattered radiance arriving at p from direction d ([NDKY96] eq. 1; survey
+    eqs. 15-16) with the sun columns from the cylindrical table, plus the sunlit ground
+    (Lambertian) where the ray hits it. Writes out (nl,)."""
+    nc = codes.shape[0]
+    nl = e_sun.shape[0]
+    for l in range(nl):
+        out[l] = 0.0
+    m, hits = ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
+                        pos, wts, rho, trans, t_end)
+    nu = dx * sx + dy * sy + dz * sz
+    for k in range(m):
+        if not cylinder_lookup(lo, hi, R, Rt, pos[k, 0], pos[k, 1], pos[k, 2], sx, sy, sz, col):
+            continue
+        for l in range(nl):
+            s = 0.0
+            for c in range(nc):
+                s += beta_e[c, l] * col[c]
+            ts_ = math.exp(-s) * trans[k, l] * wts[k]
+            acc = 0.0
+            for c in range(nc):
+                acc += beta_s[c, l] * rho[k, c] * phase_value(phase_codes[c], phase_params[c], nu)
+            out[l] += e_sun[l] * acc * ts_
+    if hits:
+        gx = pos[m, 0]
+        gy = pos[m, 1]
+        gz = pos[m, 2]
+        rg = math.sqrt(gx * gx + gy * gy + gz * gz)
+        mu_s = (gx * sx + gy * sy + gz * sz) / rg
+        if mu_s > 0.0:
+            f = (R * (1.0 + 1e-9)) / rg
+            cylinder_lookup(lo, hi, R, Rt, gx * f, gy * f, gz * f, sx, sy, sz, col)
+            for l in range(nl):
+                s = 0.0
+                for c in range(nc):
+                    s += beta_e[c, l] * col[c]
+                out[l] += albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s) * trans[m, l]
+    return m, hits
+
+
+# -- lattice --------------------------------------------------------------------------------------
+@njit(cache=True)
+def lattice_coords(qx, qy, qz, R, D, Htop, nx, nh):
+    """Fractional lattice indices (fx, fy, fh) of point q. Lattice nodes: x = D sign(s) s^2,
+    s in [-1, 1] (nx nodes), same for y; h = Htop w^2, w in [0, 1] (nh nodes); the node
+    (x, y, h) sits at (R + h) unit(x, y, R) (gnomonic projection about the observer)."""
+    r = math.sqrt(qx * qx + qy * qy + qz * qz)
+    z = max(qz, 1.0)
+    x = R * qx / z
+    y = R * qy / z
+    sx = math.sqrt(min(abs(x) / D, 1.0))
+    if x < 0:
+        sx = -sx
+    sy = math.sqrt(min(abs(y) / D, 1.0))
+    if y < 0:
+        sy = -sy
+    w = math.sqrt(min(max((r - R) / Htop, 0.0), 1.0))
+    return (sx + 1.0) * 0.5 * (nx - 1), (sy + 1.0) * 0.5 * (nx - 1), w * (nh - 1)
+
+
+@njit(cache=True)
+def _corner(f, n):
+    i = min(max(int(f), 0), n - 2)
+    return i, min(max(f - i, 0.0), 1.0)
+
+
+@njit(cache=True)
+def lattice_interp(field, fx, fy, fh, k, out):
+    """Trilinear interpolation of field[ix, iy, ih, k, :] into out (nl,)."""
+    nx = field.shape[0]
+    nh = field.shape[2]
+    nl = field.shape[4]
+    ix, ax = _corner(fx, nx)
+    iy, ay = _corner(fy, nx)
+    ih, ah = _corner(fh, nh)
+    for l in range(nl):
+        out[l] = 0.0
+    for a in range(2):
+        wa = ax if a else 1.0 - ax
+        for b in range(2):
+            wb = ay if b else 1.0 - ay
+            for c in range(2):
+                wc = ah if c else 1.0 - ah
+                w = wa * wb * wc
+                if w == 0.0:
+                    continue
+                for l in range(nl):
+                    out[l] += w * field[ix + a, iy + b, ih + c, k, l]
+
+
+@njit(cache=True)
+def ground_interp(g, fx, fy, out):
+    """Bilinear interpolation of g[ix, iy, :] into out (nl,)."""
+    nx = g.shape[0]
+    nl = g.shape[2]
+    ix, ax = _corner(fx, nx)
+    iy, ay = _corner(fy, nx)
+    for l in range(nl):
+        out[l] = ((1 - ax) * ((1 - ay) * g[ix, iy, l] + ay * g[ix, iy + 1, l])
+                  + ax * ((1 - ay) * g[ix + 1, iy, l] + ay * g[ix + 1, iy + 1, l]))
+
+
+@njit(parallel=True, cache=True)
+def lattice_single(nodes, dirs, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
+                   phase_params, albedo, e_sun, lo, hi, n, ts, out):
+    """Order 1 on the lattice: out[p, k, :] = single-scattered light (and sunlit ground)
+    arriving at lattice node p from sky-sphere direction k."""
+    npt = nodes.shape[0]
+    K = dirs.shape[0]
+    nc = codes.shape[0]
+    nl = e_sun.shape[0]
+    for idx in prange(npt * K):
+        p = idx // K
+        k = idx % K
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
+        col = np.zeros(nc)
+        res = np.zeros(nl)
+        single_along(nodes[p, 0], nodes[p, 1], nodes[p, 2], dirs[k, 0], dirs[k, 1], dirs[k, 2],
+                     sun[0], sun[1], sun[2], R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
+                     phase_params, albedo, e_sun, lo, hi, n, ts, res, pos, wts, rho, trans, t_end,
+                     col)
+        for l in range(nl):
+            out[p, k, l] = res[l]
+
+
+@njit(parallel=True, cache=True)
+def lattice_source(I, rho_nodes, beta_s, W, J):
+    """Scattered light leaving each lattice node towards -d_k per metre [NDKY96] eq. 6:
+    J[p, k, l] = sum_c beta_s[c, l] rho_c(p) sum_j I[p, j, l] W[c, j, k]."""
+    npt = I.shape[0]
+    K = I.shape[1]
+    nl = I.shape[2]
+    nc = beta_s.shape[0]
+    for p in prange(npt):
+        for k in range(K):
+            for l in range(nl):
+                s = 0.0
+                for c in range(nc):
+                    acc = 0.0
+                    for j in range(K):
+                        acc += I[p, j, l] * W[c, j, k]
+                    s += beta_s[c, l] * rho_nodes[p, c] * acc
+                J[p, k, l] = s
+
+
+@njit(cache=True)
+def gather_along(px, py, pz, dx, dy, dz, k, Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, n,
+                 ts, out, pos, wts, rho, trans, t_end, tmp):
+    """Light of the next order arriving at p from direction d: the source Jf[..., k, :]
+    (interpolated on the lattice) integrated along the ray with its transmittance, plus the
+    ground's Lambertian reflection G of the previous order's irradiance where it hits."""
+    nl = out.shape[0]
+    nx = Jf.shape[0]
+    nh = Jf.shape[2]
+    for l in range(nl):
+        out[l] = 0.0
+    m, hits = ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
+                        pos, wts, rho, trans, t_end)
+    for q in range(m):
+        fx, fy, fh = lattice_coords(pos[q, 0], pos[q, 1], pos[q, 2], R, D, Htop, nx, nh)
+        lattice_interp(Jf, fx, fy, fh, k, tmp)
+        for l in range(nl):
+            out[l] += wts[q] * trans[q, l] * tmp[l]
+    if hits:
+        fx, fy, fh = lattice_coords(pos[m, 0], pos[m, 1], pos[m, 2], R, D, Htop, nx, nh)
+        ground_interp(G, fx, fy, tmp)
+        for l in range(nl):
+            out[l] += trans[m, l] * tmp[l]
+
+
+@njit(parallel=True, cache=True)
+def lattice_gather(nodes, dirs, Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, n, ts, out):
+    """Order n on the lattice from the order n-1 source Jf (nx, ny, nh, K, nl) and ground
+    radiance G (nx, ny, nl): out[p, k, :]."""
+    npt = nodes.shape[0]
+    K = dirs.shape[0]
+    nc = codes.shape[0]
+    nl = Jf.shape[4]
+    for idx in prange(npt * K):
+        p = idx // K
+        k = idx % K
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
+        tmp = np.zeros(nl)
+        res = np.zeros(nl)
+        gather_along(nodes[p, 0], nodes[p, 1], nodes[p, 2], dirs[k, 0], dirs[k, 1], dirs[k, 2], k,
+                     Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, n, ts, res, pos, wts, rho,
+                     trans, t_end, tmp)
+        for l in range(nl):
+            out[p, k, l] = res[l]
+
+
+# -- the observer's view rays ---------------------------------------------------------------------
+@njit(parallel=True, cache=True)
+def view_single(vdirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params,
+                albedo, e_sun, lo, hi, n, ts, out):
+    """Order 1 towards the observer at (0, 0, r0) for every view direction."""
+    nv = vdirs.shape[0]
+    nc = codes.shape[0]
+    nl = e_sun.shape[0]
+    for i in prange(nv):
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
+        col = np.zeros(nc)
+        res = np.zeros(nl)
+        single_along(0.0, 0.0, r0, vdirs[i, 0], vdirs[i, 1], vdirs[i, 2], sun[0], sun[1], sun[2],
+                     R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params, albedo,
+                     e_sun, lo, hi, n, ts, res, pos, wts, rho, trans, t_end, col)
+        for l in range(nl):
+            out[i, l] = res[l]
+
+
+@njit(parallel=True, cache=True)
+def view_gather(vdirs, r0, I, G, fine_dirs, fine_dw, fine_owner, R, Rt, D, Htop, codes, p0s,
+                p1s, beta_s, beta_e, phase_codes, phase_params, n, ts, out):
+    """Order n towards the observer from the order n-1 lattice light I (nx, ny, nh, K, nl)
+    and ground radiance G: the phase function of each constituent is integrated over each
+    sky-sphere cell around the view direction (cells = fine_owner of the fine grid)."""
+    nv = vdirs.shape[0]
+    nc = codes.shape[0]
+    nl = I.shape[4]
+    K = I.shape[3]
+    nx = I.shape[0]
+    nh = I.shape[2]
+    nf = fine_dirs.shape[0]
+    for i in prange(nv):
+        dx = vdirs[i, 0]
+        dy = vdirs[i, 1]
+        dz = vdirs[i, 2]
+        W = np.zeros((nc, K))
+        for c in range(nc):
+            tot = 0.0
+            for f in range(nf):
+                cs = fine_dirs[f, 0] * dx + fine_dirs[f, 1] * dy + fine_dirs[f, 2] * dz
+                v = phase_value(phase_codes[c], phase_params[c], cs) * fine_dw[f]
+                W[c, fine_owner[f]] += v
+                tot += v
+            for j in range(K):
+                W[c, j] /= tot          # normalise: sum_j W = 1 (energy conservation)
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
+        tmp = np.zeros(nl)
+        for l in range(nl):
+            out[i, l] = 0.0
+        m, hits = ray_nodes(0.0, 0.0, r0, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
+                            pos, wts, rho, trans, t_end)
+        for q in range(m):
+            fx, fy, fh = lattice_coords(pos[q, 0], pos[q, 1], pos[q, 2], R, D, Htop, nx, nh)
+            for j in range(K):
+                lattice_interp(I, fx, fy, fh, j, tmp)
+                for l in range(nl):
+                    s = 0.0
+                    for c in range(nc):
+                        s += beta_s[c, l] * rho[q, c] * W[c, j]
+                    out[i, l] += wts[q] * trans[q, l] * s * tmp[l]
+        if hits:
+            fx, fy, fh = lattice_coords(pos[m, 0], pos[m, 1], pos[m, 2], R, D, Htop, nx, nh)
+            ground_interp(G, fx, fy, tmp)
+            for l in range(nl):
+                out[i, l] += trans[m, l] * tmp[l]
