@@ -76,6 +76,21 @@ def test_phase_forward_backward_symmetry_and_ratio():
     assert rayleigh_phase(1.0) / rayleigh_phase(0.0) == pytest.approx(2.0)
 
 
+def test_depolarised_phase_shape_hansen_travis():
+    """With depolarisation rho the phase function is P11 = 3 / (4 (1 + 2 g)) ((1 + 3 g) +
+    (1 - g) cos^2) / (4 pi), g = rho / (2 - rho) (Hansen & Travis 1974, eq. 2.15): the
+    side-scattering ratio P(90)/P(0) is (1 + 3 g) / (2 (1 + g)), 0.5140 for rho = 0.0279."""
+    g = 0.0279 / (2 - 0.0279)
+    p = rayleigh_phase_normalised(np.array([1.0, 0.0]), 0.0279)
+    assert p[1] / p[0] == pytest.approx((1 + 3 * g) / (2 * (1 + g)), rel=1e-12)
+    assert p[1] / p[0] == pytest.approx(0.5140, abs=1e-4)
+    # the kernel's phase function is the same function
+    from skydome.transport._kernels import phase_value
+
+    for c in (-0.7, 0.0, 0.4, 1.0):
+        assert phase_value(0, g, c) == pytest.approx(float(rayleigh_phase_normalised(c, 0.0279)), rel=1e-12)
+
+
 def test_king_factor_value():
     # Bates 1984: rho = 0.0279 gives F_K = 1.0480
     assert king_factor(0.0279) == pytest.approx(1.0480, abs=2e-4)

@@ -136,11 +136,11 @@ def rayleigh_phase_normalised(cos_theta, depolarisation: float = 0.0) -> np.ndar
 
     p(theta) = 3 / (16 pi) (1 + cos^2 theta) for rho = 0, i.e. survey eq. 3 divided by
     4 pi. With depolarisation rho, Chandrasekhar's form
-    p = 3 / (16 pi) * 2 / (2 + rho') ((1 + rho') + (1 - rho') cos^2 theta),
-    rho' = rho / (2 - rho) (Chandrasekhar 1950, Radiative Transfer, sec. 18), which keeps
-    the normalisation.
+    p = 3 / (16 pi) / (1 + 2 g) ((1 + 3 g) + (1 - g) cos^2 theta),
+    g = rho / (2 - rho) (Chandrasekhar 1950, Radiative Transfer, sec. 18; Hansen & Travis
+    1974, eq. 2.15), which keeps the normalisation.
     """
     c = np.asarray(cos_theta, dtype=np.float64)
     rho = check_number("depolarisation", depolarisation, 0.0, 0.5)
     gamma = rho / (2.0 - rho)
-    return 3.0 / (16.0 * np.pi) * 2.0 / (2.0 + gamma) * ((1.0 + gamma) + (1.0 - gamma) * c * c)
+    return 3.0 / (16.0 * np.pi) * 1.0 / (1.0 + 2.0 * gamma) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * c * c)

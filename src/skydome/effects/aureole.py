@@ -50,7 +50,7 @@ INV_4PI = 1.0 / (4.0 * np.pi)
 def _analytic_phase(code: int, param: float, c: np.ndarray) -> np.ndarray:
     """The kernels' analytic phase functions [sr^-1] ([KRZ06] eqs. 3, 10, 11 over 4 pi)."""
     if code == 0:       # Rayleigh with depolarisation parameter
-        return 3.0 / (16.0 * np.pi) * 2.0 / (2.0 + param) * ((1.0 + param) + (1.0 - param) * c * c)
+        return 3.0 / (16.0 * np.pi) * 1.0 / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c)
     if code in (1, 2):
         g = param
         d = 1.0 + g * g - 2.0 * g * c

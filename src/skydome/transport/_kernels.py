@@ -53,13 +53,13 @@ def profile_density(code, p0, p1, h):
 def phase_value(code, param, cos_theta):
     """Phase function normalised over the sphere [sr^-1] for scattering angle theta.
 
-    Rayleigh: 3/(16 pi) 2/(2+g)((1+g) + (1-g) cos^2) with g = rho/(2-rho) ([KRZ06] eq. 3
-    over 4 pi, Chandrasekhar's depolarised form); Henyey-Greenstein ([KRZ06] eq. 10 / 4 pi);
+    Rayleigh: 3/(16 pi) 1/(1+2g)((1+3g) + (1-g) cos^2) with g = rho/(2-rho) ([KRZ06] eq. 3
+    over 4 pi, Chandrasekhar's depolarised form, Hansen & Travis 1974 eq. 2.15); Henyey-Greenstein ([KRZ06] eq. 10 / 4 pi);
     Cornette-Shanks ([KRZ06] eq. 11 / 4 pi); isotropic 1/(4 pi).
     """
     c = cos_theta
     if code == RAYLEIGH:
-        return 3.0 / (16.0 * math.pi) * 2.0 / (2.0 + param) * ((1.0 + param) + (1.0 - param) * c * c)
+        return 3.0 / (16.0 * math.pi) * 1.0 / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c)
     if code == HENYEY_GREENSTEIN:
         g = param
         d = 1.0 + g * g - 2.0 * g * c

@@ -311,7 +311,7 @@ def _phase(code, param, c):
     """Normalised phase functions [sr^-1] (same forms as skydome.transport._kernels)."""
     if code == 0:
         g = param
-        return 3.0 / (16.0 * math.pi) * 2.0 / (2.0 + g) * ((1.0 + g) + (1.0 - g) * c * c)
+        return 3.0 / (16.0 * math.pi) * 1.0 / (1.0 + 2.0 * g) * ((1.0 + 3.0 * g) + (1.0 - g) * c * c)
     if code in (1, 2):
         g = param
         d = 1.0 + g * g - 2.0 * g * c

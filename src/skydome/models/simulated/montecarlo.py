@@ -1,0 +1,245 @@
+"""``montecarlo``: spectral, optionally polarised, Monte Carlo reference sky.
+
+Backward path tracing from the observer through the spherical-shell atmosphere of an
+:class:`skydome.atmosphere.Atmosphere`, with every order of scattering (Russian roulette, no
+cut-off), next-event estimation towards the sun's disc, a Lambertian ground and, in polarised
+mode, Stokes vectors with Rayleigh scattering matrices including depolarisation. It returns
+the radiance with its standard error, so that other models can be judged against it within
+a stated uncertainty. The kernels are in :mod:`skydome.models.simulated._kernels_montecarlo`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skydome._validate import as_directions, as_wavelengths
+from skydome.models import Parameter, SkyModel, register
+
+__all__ = ["MonteCarloSky", "degree_of_polarisation", "angle_of_polarisation", "stokes_frame"]
+
+
+def degree_of_polarisation(stokes) -> np.ndarray:
+    """Degree of polarisation sqrt(Q^2 + U^2 + V^2) / I of Stokes vectors (..., 4), in [0, 1]
+    (0 where I = 0)."""
+    s = np.asarray(stokes, dtype=np.float64)
+    i = s[..., 0]
+    p = np.sqrt(s[..., 1] ** 2 + s[..., 2] ** 2 + s[..., 3] ** 2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(i > 0, p / np.where(i > 0, i, 1.0), 0.0)
+    return np.clip(out, 0.0, 1.0)
+
+
+def angle_of_polarisation(stokes) -> np.ndarray:
+    """Angle of linear polarisation [deg] in (-90, 90]: 0.5 atan2(U, Q), measured from the
+    parallel axis of :func:`stokes_frame` (the local meridian, towards the zenith) towards the
+    perpendicular axis."""
+    s = np.asarray(stokes, dtype=np.float64)
+    a = 0.5 * np.degrees(np.arctan2(s[..., 2], s[..., 1]))
+    return np.where(a <= -90.0, a + 180.0, a)
+
+
+def stokes_frame(directions) -> tuple[np.ndarray, np.ndarray]:
+    """Reference frame of the Stokes vectors for light arriving from ``directions`` (..., 3).
+
+    Returns (e_par, e_perp), unit vectors perpendicular to the ray. e_par lies in the local
+    meridian plane (the vertical plane through the direction) and points towards increasing
+    elevation, d(direction)/d(elevation) = (-sin e sin a, -sin e cos a, cos e) in
+    East-North-Up; e_perp = k x e_par with k = -direction the propagation direction of the
+    light (at the zenith, the limit from azimuth 0: e_par = south, (0, -1, 0)). Q > 0 means
+    the electric field vibrates preferentially in the meridian plane.
+    """
+    d = as_directions(directions)
+    z = np.array([0.0, 0.0, 1.0])
+    a = z - d[..., 2:3] * d
+    n = np.linalg.norm(a, axis=-1, keepdims=True)
+    fallback = np.broadcast_to(np.array([0.0, -1.0, 0.0]), a.shape)
+    a = np.where(n > 1e-12, a / np.where(n > 1e-12, n, 1.0), fallback)
+    # a is z projected perpendicular to d: increasing elevation (also for d below the horizon)
+    b = np.cross(-d, a)
+    return a, b
+
+
+@register
+class MonteCarloSky(SkyModel):
+    """Monte Carlo sky: every order of scattering, with standard errors, optionally polarised.
+
+    Parameters
+    ----------
+    sun : skydome.Sun
+        Sun position, any elevation in [-90, 90] deg (below the horizon only light that
+        reaches the air above the earth's shadow contributes, by any number of scatterings).
+    atmosphere : skydome.Atmosphere, optional
+        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
+    turbidity : float
+        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
+    observer_altitude_m : float
+        Observer altitude above the ground [m], [0, top of the atmosphere).
+    samples : int
+        Paths per direction per wavelength (default 256); the standard error falls as
+        1/sqrt(samples).
+    seed : int
+        Seed of the random streams (default 0). Every (direction index, wavelength index)
+        has its own stream derived from the seed, so results do not depend on the number of
+        threads.
+    polarised : bool
+        Carry Stokes vectors (I, Q, U, V) with scattering matrices (default False).
+    max_order : int or None
+        Highest scattering order (ground reflections count as orders); None: unbounded,
+        terminated by Russian roulette (unbiased).
+
+    Notes
+    -----
+    ``radiance`` excludes the directly visible sun: its disc is in :meth:`sun_radiance`.
+    Directions below the horizon see the ground (Lambertian, the atmosphere's albedo, lit by
+    the sun and the sky) through the air in front of it. See ``docs/sections/montecarlo.md``.
+
+    References
+    ----------
+    Woodcock et al. 1965 (delta tracking); Hansen & Travis 1974, Space Sci. Rev. 16, eq. 2.15
+    (Rayleigh scattering matrix with depolarisation); Chandrasekhar 1950, Radiative Transfer;
+    Kment, Rauter & Zotti, Modelling of Daylight for Computer Graphics, eqs. 3, 10-12.
+    """
+
+    name = "montecarlo"
+    reference = ("Backward Monte Carlo path tracing: Woodcock et al. 1965 (delta tracking); "
+                 "Hansen & Travis 1974, Space Sci. Rev. 16, 527, eq. 2.15 (Rayleigh matrix); "
+                 "Kment, Rauter & Zotti, Modelling of Daylight for Computer Graphics, eqs. 3, 10-12")
+    native = "spectral"
+    summary = "Polarised multiple-scattering Monte Carlo reference with standard errors."
+    parameters = (
+        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
+                  kind="object"),
+        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
+        Parameter("observer_altitude_m", "m", 0.0, 0.0, 999_999.0, "observer altitude above the ground"),
+        Parameter("samples", "", 256, 2, 100_000_000, "paths per direction per wavelength", kind="int"),
+        Parameter("seed", "", 0, 0, 2 ** 63 - 1, "seed of the random streams", kind="int"),
+        Parameter("polarised", "", False, doc="carry Stokes vectors (I, Q, U, V)", kind="object"),
+        Parameter("max_order", "", None, 1, 100_000, "highest scattering order (None: unbounded)",
+                  kind="int"),
+    )
+
+    def __init__(self, sun, **params):
+        from skydome.atmosphere import Atmosphere
+        from skydome.sun import Sun
+
+        if not isinstance(sun, Sun):
+            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+        if isinstance(params.get("polarised"), (np.bool_,)):
+            params["polarised"] = bool(params["polarised"])
+        if "polarised" in params and not isinstance(params["polarised"], bool):
+            raise TypeError(f"polarised must be True or False, not {params['polarised']!r}")
+        p = self._validate_params(params)
+        atm = p["atmosphere"]
+        if atm is None:
+            atm = Atmosphere.earth(turbidity=p["turbidity"])
+        elif not isinstance(atm, Atmosphere):
+            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
+        elif "turbidity" in params:
+            raise ValueError("give either atmosphere or turbidity, not both")
+        if p["observer_altitude_m"] >= atm.top_altitude_m:
+            raise ValueError(f"observer_altitude_m = {p['observer_altitude_m']:g} m is out of range "
+                             f"[0, {atm.top_altitude_m:g}) m (inside the atmosphere)")
+        self.sun = sun
+        self.atmosphere = atm
+        self.turbidity = p["turbidity"]
+        self.observer_altitude_m = p["observer_altitude_m"]
+        self.samples = p["samples"]
+        self.seed = p["seed"]
+        self.polarised = bool(p["polarised"])
+        self.max_order = p["max_order"]
+        self._last = None
+
+    # -- engine --------------------------------------------------------------------------
+    def _run(self, d, wl):
+        """(mean, stderr), each (n, nl, 4), for flat directions d (n, 3)."""
+        key = (d.tobytes(), wl.tobytes(), self.samples, self.seed, self.polarised, self.max_order)
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        from skydome.models.simulated import _kernels_montecarlo as K
+        from skydome.spectra import solar_irradiance
+        from skydome.transport.optical_depth import DEFAULT_QUADRATURE_SCALE_M, ColumnTable
+
+        props = self.atmosphere.optical_properties(wl)
+        table = ColumnTable.cached(props, 256, 512, 128, DEFAULT_QUADRATURE_SCALE_M)
+        codes = props.phase_code
+        pp = props.phase_param
+        # Rayleigh: the Atmosphere's parameter is rho/(2 - rho); the kernels take rho
+        rho = np.where(codes == 0, 2.0 * pp / (1.0 + pp), 0.0)
+        g = np.where(codes == 0, 0.0, pp)
+        e_sun = solar_irradiance(wl) * self.sun.irradiance_scale
+        zen_ref, _ = stokes_frame(d)
+        n, nl = d.shape[0], wl.size
+        mean = np.zeros((n, nl, 4))
+        err = np.zeros((n, nl, 4))
+        R = float(props.planet_radius_m)
+        K.trace(np.ascontiguousarray(d), np.ascontiguousarray(zen_ref), R + self.observer_altitude_m,
+                np.ascontiguousarray(self.sun.direction, dtype=np.float64),
+                float(np.cos(np.radians(self.sun.angular_radius_deg))), R,
+                float(props.top_radius_m), props.profile_code, props.profile_p0, props.profile_p1,
+                np.ascontiguousarray(props.scattering), np.ascontiguousarray(props.extinction),
+                codes, np.ascontiguousarray(g), np.ascontiguousarray(rho), props.ground_albedo,
+                e_sun, table.table, int(self.samples), int(self.seed), self.polarised,
+                -1 if self.max_order is None else int(self.max_order), mean, err)
+        mean[..., 0] = np.maximum(mean[..., 0], 0.0)
+        self._last = (key, (mean, err))
+        return mean, err
+
+    def _inputs(self, directions, wavelengths_nm):
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        return d, np.ascontiguousarray(d.reshape(-1, 3)), wl
+
+    # -- public API ----------------------------------------------------------------------
+    def radiance_with_error(self, directions, wavelengths_nm):
+        """Spectral radiance and its standard error [W m^-2 sr^-1 nm^-1], each
+        (..., n_wavelengths). The directly visible sun is excluded (see sun_radiance)."""
+        d, flat, wl = self._inputs(directions, wavelengths_nm)
+        mean, err = self._run(flat, wl)
+        shape = d.shape[:-1] + (wl.size,)
+        return mean[..., 0].reshape(shape).copy(), err[..., 0].reshape(shape).copy()
+
+    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] arriving from ``directions`` (..., 3),
+        shape (..., n_wavelengths), without the directly visible sun."""
+        return self.radiance_with_error(directions, wavelengths_nm)[0]
+
+    def stokes_with_error(self, directions, wavelengths_nm):
+        """Stokes vectors (I, Q, U, V) [W m^-2 sr^-1 nm^-1] and their standard errors, each
+        (..., n_wavelengths, 4), in the frame of :func:`stokes_frame` (Q > 0 along the local
+        meridian plane). Requires ``polarised=True``."""
+        if not self.polarised:
+            raise ValueError("polarised = False: build the model with polarised=True for Stokes vectors")
+        d, flat, wl = self._inputs(directions, wavelengths_nm)
+        mean, err = self._run(flat, wl)
+        shape = d.shape[:-1] + (wl.size, 4)
+        return mean.reshape(shape).copy(), err.reshape(shape).copy()
+
+    def stokes(self, directions, wavelengths_nm) -> np.ndarray:
+        """Stokes vectors (..., n_wavelengths, 4); see :meth:`stokes_with_error`."""
+        return self.stokes_with_error(directions, wavelengths_nm)[0]
+
+    def degree_of_polarisation(self, directions, wavelengths_nm) -> np.ndarray:
+        """Degree of polarisation in [0, 1], (..., n_wavelengths)."""
+        return degree_of_polarisation(self.stokes(directions, wavelengths_nm))
+
+    def angle_of_polarisation(self, directions, wavelengths_nm) -> np.ndarray:
+        """Angle of polarisation [deg] from the local meridian, (..., n_wavelengths)."""
+        return angle_of_polarisation(self.stokes(directions, wavelengths_nm))
+
+    def sun_radiance(self, wavelengths_nm) -> np.ndarray:
+        """Radiance of the sun's disc seen through the atmosphere [W m^-2 sr^-1 nm^-1]:
+        E_sun / Omega_sun x T(observer -> top) (column table); 0 when the planet hides the
+        sun. Uniform disc (no limb darkening)."""
+        from skydome.transport.single import SingleScattering
+
+        wl = as_wavelengths(wavelengths_nm)
+        ss = SingleScattering(self.atmosphere, wl, self.observer_altitude_m)
+        from skydome.spectra import solar_irradiance
+
+        t = ss.transmittance(self.sun.direction)
+        return solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr * t
+
+    def describe(self):
+        out = super().describe()
+        out["parameters"]["atmosphere"] = self.atmosphere.describe()
+        return out
