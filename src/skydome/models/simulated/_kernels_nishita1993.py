@@ -1,0 +1,389 @@
+"""numba kernels of the ``nishita1993`` model (the earth seen from anywhere).
+
+Private: plain floats and arrays, lengths in metres. Imported lazily by
+:mod:`skydome.models.simulated.nishita1993`, never at package import.
+
+Geometry ([NSTN93] sec. 3 and 4): the planet is a sphere of radius ``R`` centred on the
+origin, the atmosphere ends at radius ``Rt``; the camera sits at distance ``r0`` from the
+centre on the +z axis of the East-North-Up frame of the sub-camera point (so its frame
+is that point's ENU frame shifted up by the camera altitude). Sunlight is parallel.
+
+Optical-depth table ([NSTN93] sec. 4.1, fig. 3): the atmosphere is cut by ``n_s``
+concentric spheres and by cylinders whose common axis passes through the planet's centre
+parallel to the sunlight. Because the light is parallel and the atmosphere spherically
+symmetric, the column from any point to the sun depends only on the point's sphere (its
+radius r) and cylinder (its distance c from the axis) and on which side of the plane
+through the centre normal to the sunlight it lies; the columns at the lattice points
+(sphere i x cylinder j x side) are computed once and interpolated bilinearly in (sphere
+index, cylinder index). The spheres are spaced so that the density changes by about the
+same amount between neighbours. Departure from the paper: the cylinders are chosen per
+sphere (see :func:`_lattice_mu`) and log(column) is interpolated; one shared set of
+cylinders interpolated linearly was 10-30 % wrong near the sun's horizon.
+
+View ray ([NSTN93] sec. 4.2): sample points are the view ray's crossings of the same
+spheres (plus its end points and lowest point), each interval split into ``substeps``
+equal pieces, and the view column and the in-scattering integral use the trapezoidal
+rule ([NSTN93] eqs. 1-3).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skydome.transport._kernels import (column_quadrature, phase_value, profile_density,
+                                        ray_hits_ground)
+
+SURFACE_ALBEDO, SURFACE_OCEAN, SURFACE_TEXTURE = 0, 1, 2
+
+
+# -- sphere / cylinder index mapping -----------------------------------------------------------
+@njit(cache=True)
+def sphere_u(h, H, top, w):
+    """Monotone map of altitude h [m] in [0, top] to [0, 1]: a blend (weight w) of the
+    linear map h/top and the relative density drop (1 - exp(-h/H)) / (1 - exp(-top/H))."""
+    h = min(max(h, 0.0), top)
+    return (1.0 - w) * (-math.expm1(-h / H)) / (-math.expm1(-top / H)) + w * h / top
+
+
+@njit(cache=True)
+def _frac_sphere(r, R, H, top, w, n_s):
+    return sphere_u(r - R, H, top, w) * (n_s - 1)
+
+
+@njit(cache=True)
+def _lattice_mu(r, R, j, n_j, side):
+    """Cosine of the sun's zenith angle at lattice point j of the sphere of radius r.
+
+    Sun side (0): the cylinder through the point where mu_s = (j / (n_j - 1))^2 (dense
+    towards the sun's horizon). Far side (1): the cylinder of radius
+    c = R + (r - R) j / (n_j - 1), from the shadow boundary c = R to the horizon c = r."""
+    x = j / (n_j - 1.0)
+    if side == 0:
+        return x * x
+    c = R + (r - R) * x
+    return -math.sqrt(max(r * r - c * c, 0.0)) / r
+
+
+@njit(parallel=True, cache=True)
+def build_table(codes, p0s, p1s, R, Rt, sph_r, n_j, n_light, ts):
+    """log(column + 1 m) to the sun (column: relative density integrated [m]) at every
+    lattice point, shape (n_c, 2, n_s, n_j): side 0 on the sun's side of the plane through
+    the centre normal to the sunlight, side 1 behind it (see :func:`_lattice_mu`)."""
+    nc = codes.shape[0]
+    n_s = sph_r.shape[0]
+    out = np.zeros((nc, 2, n_s, n_j))
+    for idx in prange(n_s * n_j):
+        i = idx // n_j
+        j = idx % n_j
+        r = sph_r[i]
+        for side in range(2):
+            mu = _lattice_mu(r, R, j, n_j, side)
+            for k in range(nc):
+                col = column_quadrature(codes[k], p0s[k], p1s[k], r, mu, R, Rt, n_light, ts, False)
+                out[k, side, i, j] = math.log(col + 1.0)
+    return out
+
+
+@njit(cache=True)
+def table_columns(table, r, mu_s, R, H, top, w, n_in, out):
+    """Bilinear look-up (in sphere index x cylinder index, of log(column + 1 m)) of the
+    columns to the sun from (r, mu_s) into ``out`` (n_c,)."""
+    n_s = table.shape[2]
+    n_j = table.shape[3]
+    fi = _frac_sphere(r, R, H, top, w, n_s)
+    if mu_s >= 0.0:
+        side = 0
+        fj = math.sqrt(mu_s) * (n_j - 1)
+    else:
+        side = 1
+        c = r * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        fj = (n_j - 1.0) if r - R <= 0.0 else (c - R) / (r - R) * (n_j - 1)
+    i = min(max(int(fi), 0), n_s - 2)
+    j = min(max(int(fj), 0), n_j - 2)
+    a = min(max(fi - i, 0.0), 1.0)
+    b = min(max(fj - j, 0.0), 1.0)
+    for k in range(table.shape[0]):
+        v = ((1.0 - a) * ((1.0 - b) * table[k, side, i, j] + b * table[k, side, i, j + 1])
+             + a * ((1.0 - b) * table[k, side, i + 1, j] + b * table[k, side, i + 1, j + 1]))
+        out[k] = max(math.exp(v) - 1.0, 0.0)
+
+
+@njit(cache=True)
+def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, H, top, w, n_in, exact, n_light, ts,
+                out):
+    """Columns from (r, mu_s) to the sun into ``out``; False in the earth's shadow."""
+    if ray_hits_ground(r, mu_s, R):
+        return False
+    if exact:
+        for k in range(codes.shape[0]):
+            out[k] = column_quadrature(codes[k], p0s[k], p1s[k], r, mu_s, R, Rt, n_light, ts,
+                                       True)
+    else:
+        table_columns(table, r, mu_s, R, H, top, w, n_in, out)
+    return True
+
+
+# -- surface --------------------------------------------------------------------------------------
+@njit(cache=True)
+def fresnel(cos_i, n):
+    """Unpolarised Fresnel reflectance of a smooth air-water interface for a ray meeting
+    it at incidence cosine cos_i from the air side (relative index n)."""
+    ci = min(max(cos_i, 0.0), 1.0)
+    st2 = (1.0 - ci * ci) / (n * n)
+    if st2 >= 1.0:
+        return 1.0
+    ct = math.sqrt(1.0 - st2)
+    rs = (ci - n * ct) / (ci + n * ct)
+    rp = (n * ci - ct) / (n * ci + ct)
+    return 0.5 * (rs * rs + rp * rp)
+
+
+@njit(cache=True)
+def _interp_irradiance(mu_grid, e_grid, mu, l):
+    n = mu_grid.shape[0]
+    if mu <= mu_grid[0]:
+        return e_grid[0, l] if mu == mu_grid[0] else 0.0
+    if mu >= mu_grid[n - 1]:
+        return e_grid[n - 1, l]
+    f = (mu - mu_grid[0]) / (mu_grid[n - 1] - mu_grid[0]) * (n - 1)
+    i = min(int(f), n - 2)
+    a = f - i
+    return (1.0 - a) * e_grid[i, l] + a * e_grid[i + 1, l]
+
+
+# -- the view rays --------------------------------------------------------------------------------
+@njit(cache=True)
+def _nodes(r0, mu, R, Rt, sph_r, substeps, t_nodes):
+    """Fill t_nodes with the increasing distances of the view ray's sample points; return
+    (count, hits_ground). The ray's part inside the atmosphere is cut at the spheres."""
+    disc_t = r0 * r0 * (mu * mu - 1.0) + Rt * Rt
+    if disc_t < 0.0:
+        return 0, False
+    tm = -r0 * mu                        # distance to the lowest point of the ray
+    t_far = tm + math.sqrt(disc_t)
+    if t_far <= 0.0:
+        return 0, False
+    t0 = max(tm - math.sqrt(disc_t), 0.0)
+    t1 = t_far
+    disc_g = r0 * r0 * (mu * mu - 1.0) + R * R
+    hits = mu < 0.0 and disc_g >= 0.0
+    if hits:
+        t1 = max(tm - math.sqrt(disc_g), t0)
+    n_s = sph_r.shape[0]
+    # breakpoints in increasing t: t0, near-side crossings (spheres top down), lowest
+    # point, far-side crossings (bottom up), t1
+    m = 0
+    t_nodes[m] = t0
+    m += 1
+    for k in range(n_s - 1, -1, -1):
+        d = r0 * r0 * (mu * mu - 1.0) + sph_r[k] * sph_r[k]
+        if d > 0.0:
+            t = tm - math.sqrt(d)
+            if t > t_nodes[m - 1] and t < t1:
+                t_nodes[m] = t
+                m += 1
+    if tm > t_nodes[m - 1] and tm < t1:
+        t_nodes[m] = tm
+        m += 1
+    for k in range(n_s):
+        d = r0 * r0 * (mu * mu - 1.0) + sph_r[k] * sph_r[k]
+        if d > 0.0:
+            t = tm + math.sqrt(d)
+            if t > t_nodes[m - 1] and t < t1:
+                t_nodes[m] = t
+                m += 1
+    if t1 > t_nodes[m - 1]:
+        t_nodes[m] = t1
+        m += 1
+    return m, hits
+
+
+@njit(cache=True, fastmath=True)
+def _ray(d, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params, e_sun,
+         sph_r, table, H, top, w, n_in, exact, n_light, ts, substeps, surface, albedo, mu_grid,
+         e_sky, water_c, water_b, n_water, tex, tex_basis, rot, res, t_nodes, acc, dcol, scol,
+         rho, rho_prev, f_prev):
+    nc = codes.shape[0]
+    nl = e_sun.shape[0]
+    for l in range(nl):
+        res[l] = 0.0
+    mu = d[2]
+    nu = d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]       # cos of the scattering angle
+    m, hits = _nodes(r0, mu, R, Rt, sph_r, substeps, t_nodes)
+    if m < 2:
+        return
+    for c in range(nc):
+        dcol[c] = 0.0
+        for l in range(nl):
+            acc[c, l] = 0.0
+    t_prev = t_nodes[0]
+    first = True
+    for q in range(m - 1):
+        ta = t_nodes[q]
+        tb = t_nodes[q + 1]
+        for s in range(0 if first else 1, substeps + 1):
+            t = ta + (tb - ta) * s / substeps
+            rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
+            h = t - t_prev
+            for c in range(nc):
+                rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                if not first:
+                    dcol[c] += 0.5 * h * (rho_prev[c] + rho[c])          # [NSTN93] eq. 2
+            mu_s = (r0 * sun[2] + t * nu) / rr
+            lit = sun_columns(table, codes, p0s, p1s, rr, mu_s, R, Rt, H, top, w, n_in, exact,
+                              n_light, ts, scol)
+            for l in range(nl):
+                tau = 0.0
+                for c in range(nc):
+                    tau += beta_e[c, l] * (dcol[c] + scol[c])
+                e = math.exp(-tau) if lit else 0.0
+                for c in range(nc):
+                    f = rho[c] * e
+                    if not first:
+                        acc[c, l] += 0.5 * h * (f_prev[c, l] + f)            # [NSTN93] eq. 1
+                    f_prev[c, l] = f
+            for c in range(nc):
+                rho_prev[c] = rho[c]
+            t_prev = t
+            first = False
+    for c in range(nc):
+        p = phase_value(phase_codes[c], phase_params[c], nu)
+        for l in range(nl):
+            res[l] += e_sun[l] * beta_s[c, l] * p * acc[c, l]
+    if not hits:
+        return
+    # the surface point seen, its normal and the sun there ([NSTN93] sec. 5)
+    t = t_nodes[m - 1]
+    px = t * d[0]
+    py = t * d[1]
+    pz = r0 + t * d[2]
+    pn = math.sqrt(px * px + py * py + pz * pz)
+    nx = px / pn
+    ny = py / pn
+    nz = pz / pn
+    mu_s = nx * sun[0] + ny * sun[1] + nz * sun[2]
+    mu_v = -(nx * d[0] + ny * d[1] + nz * d[2])             # cos of the viewing angle there
+    direct = sun_columns(table, codes, p0s, p1s, R * (1.0 + 1e-12), mu_s, R, Rt, H, top, w, n_in,
+                         exact, n_light, ts, scol) and mu_s > 0.0
+    # texture albedo: latitude / longitude of the point (rot: local ENU -> earth-fixed)
+    tr = 0.0
+    tg = 0.0
+    tb_ = 0.0
+    if surface == SURFACE_TEXTURE:
+        ex = rot[0, 0] * nx + rot[0, 1] * ny + rot[0, 2] * nz
+        ey = rot[1, 0] * nx + rot[1, 1] * ny + rot[1, 2] * nz
+        ez = rot[2, 0] * nx + rot[2, 1] * ny + rot[2, 2] * nz
+        lat = math.asin(min(max(ez, -1.0), 1.0))
+        lon = math.atan2(ey, ex)
+        th = tex.shape[0]
+        tw = tex.shape[1]
+        row = min(max(int((0.5 - lat / math.pi) * th), 0), th - 1)
+        col = int((lon / (2.0 * math.pi) + 0.5) * tw) % tw
+        tr = tex[row, col, 0]
+        tg = tex[row, col, 1]
+        tb_ = tex[row, col, 2]
+    if surface == SURFACE_OCEAN:
+        n = n_water
+        r_v = fresnel(mu_v, n)
+        r_s = fresnel(mu_s, n) if mu_s > 0.0 else 1.0
+        mv_w = math.sqrt(max(1.0 - (1.0 - mu_v * mu_v) / (n * n), 0.0))   # refracted cosines
+        ms_w = math.sqrt(max(1.0 - (1.0 - mu_s * mu_s) / (n * n), 0.0))
+        # scattering angle in the water between the refracted sunbeam (going down) and the
+        # refracted view ray (going up): directions in the local frame
+        sv = math.sqrt(max(1.0 - mv_w * mv_w, 0.0))
+        ss = math.sqrt(max(1.0 - ms_w * ms_w, 0.0))
+        # horizontal unit vectors of the view ray (towards the camera) and of the sun
+        vhx = -d[0] + mu_v * nx
+        vhy = -d[1] + mu_v * ny
+        vhz = -d[2] + mu_v * nz
+        shx = sun[0] - mu_s * nx
+        shy = sun[1] - mu_s * ny
+        shz = sun[2] - mu_s * nz
+        vn = math.sqrt(vhx * vhx + vhy * vhy + vhz * vhz)
+        sn = math.sqrt(shx * shx + shy * shy + shz * shz)
+        cphi = 0.0
+        if vn > 1e-12 and sn > 1e-12:
+            cphi = (vhx * shx + vhy * shy + vhz * shz) / (vn * sn)
+        # propagation directions in the water: the refracted sunbeam going down, away from
+        # the sun, k_s = -ss s_h - ms_w n; the refracted view ray going up towards the
+        # camera, k_v = sv v_h + mv_w n; the scattering angle psi between them
+        cos_psi = -(ss * sv * cphi) - ms_w * mv_w
+        p_w = (1.0 + 0.835 * cos_psi * cos_psi) / (4.0 * math.pi * (1.0 + 0.835 / 3.0))
+        mbar = 0.842
+        for l in range(nl):
+            t_sun = 0.0
+            if direct:
+                tau = 0.0
+                for c in range(nc):
+                    tau += beta_e[c, l] * scol[c]
+                t_sun = math.exp(-tau)
+            e_dir = e_sun[l] * t_sun * max(mu_s, 0.0)
+            e_dif = _interp_irradiance(mu_grid, e_sky, mu_s, l)
+            cw = water_c[l]
+            up = water_b[l] * (p_w * e_dir * (1.0 - r_s) / (cw * (ms_w + mv_w))
+                               + e_dif * (1.0 - 0.066) / (4.0 * math.pi) / (cw * (mbar + mv_w)))
+            l_surf = r_v * e_dif / math.pi + (1.0 - r_v) / (n * n) * up
+            res[l] += l_surf * _view_transmittance(beta_e, dcol, l, nc)
+        return
+    for l in range(nl):
+        t_sun = 0.0
+        if direct:
+            tau = 0.0
+            for c in range(nc):
+                tau += beta_e[c, l] * scol[c]
+            t_sun = math.exp(-tau)
+        if surface == SURFACE_TEXTURE:
+            a = tr * tex_basis[0, l] + tg * tex_basis[1, l] + tb_ * tex_basis[2, l]
+        else:
+            a = albedo[l]
+        e_tot = e_sun[l] * t_sun * max(mu_s, 0.0) + _interp_irradiance(mu_grid, e_sky, mu_s, l)
+        res[l] += a / math.pi * e_tot * _view_transmittance(beta_e, dcol, l, nc)
+
+
+@njit(cache=True)
+def _view_transmittance(beta_e, dcol, l, nc):
+    tau = 0.0
+    for c in range(nc):
+        tau += beta_e[c, l] * dcol[c]
+    return math.exp(-tau)
+
+
+@njit(parallel=True, cache=True)
+def render_rays(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params,
+                e_sun, sph_r, table, H, top, w, n_in, exact, n_light, ts, substeps, surface,
+                albedo, mu_grid, e_sky, water_c, water_b, n_water, tex, tex_basis, rot, out):
+    """Radiance [W m^-2 sr^-1 nm^-1] reaching the camera at (0, 0, r0) from each of
+    ``dirs`` (n, 3): single scattering along the view ray ([NSTN93] eqs. 1-3) plus the
+    attenuated light of the surface point it hits (sec. 5)."""
+    n = dirs.shape[0]
+    nc = codes.shape[0]
+    nl = e_sun.shape[0]
+    n_nodes = 2 * sph_r.shape[0] + 4
+    block = 64
+    n_blocks = (n + block - 1) // block
+    for ib in prange(n_blocks):
+        t_nodes = np.empty(n_nodes)
+        acc = np.zeros((nc, nl))
+        f_prev = np.zeros((nc, nl))
+        dcol = np.zeros(nc)
+        scol = np.zeros(nc)
+        rho = np.zeros(nc)
+        rho_prev = np.zeros(nc)
+        res = np.zeros(nl)
+        for i in range(ib * block, min(n, (ib + 1) * block)):
+            _ray(dirs[i], r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
+                 phase_params, e_sun, sph_r, table, H, top, w, n_in, exact, n_light, ts, substeps,
+                 surface, albedo, mu_grid, e_sky, water_c, water_b, n_water, tex, tex_basis, rot,
+                 res, t_nodes, acc, dcol, scol, rho, rho_prev, f_prev)
+            for l in range(nl):
+                out[i, l] = max(res[l], 0.0)
+
+
+@njit(parallel=True, cache=True)
+def lookup_columns(table, r, mu_s, R, H, top, w, n_in, out):
+    """Table columns (n, n_c) for arrays of (r, mu_s) (for tests and benchmarks)."""
+    for i in prange(r.shape[0]):
+        table_columns(table, r[i], mu_s[i], R, H, top, w, n_in, out[i])
