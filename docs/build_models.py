@@ -1,4 +1,5 @@
-"""Assemble docs/models.md from the sections in docs/sections/ in a fixed order."""
+"""Assemble docs/models.md (models and physics) and docs/effects.md (effects_* sections)
+from the sections in docs/sections/ in a fixed order."""
 
 from pathlib import Path
 
@@ -8,8 +9,17 @@ ORDER = [
     "cie", "perez", "preetham",
     "klassen_kaneda", "nishita1993", "nishita1996_dobashi1995", "oneil_dobashi2002",
     "montecarlo", "precomputed", "hillaire2020", "validation",
-    "effects_mie", "comparison",
+    "comparison",
 ]
+EFFECTS_ORDER = ["effects_timelapse", "effects_twilight", "effects_airlight", "effects_mie",
+                 "effects_polarisation"]
+EFFECTS_HEADER = """# skydome: atmospheric effects (survey section 5)
+
+Each effect with the physics that causes it, how to run it (CLI and API), its parameters,
+a rendered figure, and the numeric signature the tests assert. Assembled from
+`docs/sections/effects_*.md` by `scripts/build-docs`.
+
+"""
 HEADER = """# skydome: the models
 
 Every model and every piece of physics in skydome: the paper and equations it implements,
@@ -21,8 +31,15 @@ paper, and what it was checked against, with the numbers. This file is assembled
 
 
 def main() -> None:
-    sections = {p.stem: p for p in (HERE / "sections").glob("*.md")}
-    names = [n for n in ORDER if n in sections] + sorted(set(sections) - set(ORDER))
+    allsec = {p.stem: p for p in (HERE / "sections").glob("*.md")}
+    effects = {k: v for k, v in allsec.items() if k.startswith("effects_")}
+    models = {k: v for k, v in allsec.items() if k not in effects}
+    build(models, ORDER, HEADER, HERE / "models.md")
+    build(effects, EFFECTS_ORDER, EFFECTS_HEADER, HERE / "effects.md")
+
+
+def build(sections, order, header, target) -> None:
+    names = [n for n in order if n in sections] + sorted(set(sections) - set(order))
     toc = []
     body = []
     for n in names:
@@ -30,9 +47,9 @@ def main() -> None:
         title = next((ln.lstrip("# ").strip() for ln in text.splitlines() if ln.startswith("#")), n)
         toc.append(f"- [{title}](sections/{n}.md)")
         body.append(text)
-    out = HEADER + "## Contents\n\n" + "\n".join(toc) + "\n\n" + "\n\n".join(body)
-    (HERE / "models.md").write_text(out)
-    print(f"wrote {HERE / 'models.md'} ({len(names)} sections)")
+    out = header + "## Contents\n\n" + "\n".join(toc) + "\n\n" + "\n\n".join(body)
+    target.write_text(out)
+    print(f"wrote {target} ({len(names)} sections)")
 
 
 if __name__ == "__main__":
