@@ -240,6 +240,39 @@ def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts
     return True
 
 
+@njit(cache=True)
+def shadow_crossings(r0, mu, sz, nu, R):
+    """Distances t along the ray from (0, 0, r0) with direction d (d_z = mu, d . s = nu)
+    where it crosses the boundary of the planet's shadow (the cylinder of radius R about
+    the axis through the centre along the sun direction s, on the night side: p . s < 0).
+
+    With o_perp, d_perp the parts perpendicular to s: |o_perp + t d_perp|^2 = R^2, i.e.
+    a t^2 + 2 b t + c = 0, a = 1 - nu^2, b = r0 (mu - sz nu), c = r0^2 (1 - sz^2) - R^2.
+    Returns (count, t1, t2) of the valid crossings (t > 0, night side).
+    """
+    a = 1.0 - nu * nu
+    if a <= 1e-14:
+        return 0, 0.0, 0.0
+    b = r0 * (mu - sz * nu)
+    c = r0 * r0 * (1.0 - sz * sz) - R * R
+    disc = b * b - a * c
+    if disc <= 0.0:
+        return 0, 0.0, 0.0
+    sq = math.sqrt(disc)
+    n = 0
+    out1 = 0.0
+    out2 = 0.0
+    for sign in (-1.0, 1.0):
+        t = (-b + sign * sq) / a
+        if t > 0.0 and r0 * sz + t * nu < 0.0:
+            if n == 0:
+                out1 = t
+            else:
+                out2 = t
+            n += 1
+    return n, out1, out2
+
+
 @njit(parallel=True, cache=True, fastmath=True)
 def single_scattering(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
                       phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
@@ -272,6 +305,7 @@ def single_scattering(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, pha
         ebuf = np.zeros(nl)
         ibuf = np.zeros(nl, dtype=np.int64)
         scat = np.zeros(nc)       # 1 for constituents that scatter (ozone only absorbs)
+        brk = np.zeros(6)
         for c in range(nc):
             for l in range(nl):
                 if beta_s[c, l] > 0.0:
@@ -279,13 +313,13 @@ def single_scattering(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, pha
         for i in range(ib * block, min(n, (ib + 1) * block)):
             _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
                         phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
-                        out, acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat)
+                        out, acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat, brk)
 
 
 @njit(cache=True, fastmath=True)
 def _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
                 phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light, out,
-                acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat):
+                acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat, brk):
     """One ray of :func:`single_scattering` (work arrays passed in, reset here)."""
     nc = codes.shape[0]
     nl = e_sun.shape[0]
@@ -305,26 +339,48 @@ def _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_
         if t1 < t0 or (t1 == t0 and not hits_ground):
             return
         tmin = min(max(-r0 * mu, t0), t1)
+        # break points: the lowest point of the ray and where it crosses the boundary of
+        # the earth's shadow (the integrand jumps there); each piece gets n_view nodes
+        brk[0] = t0
+        nbrk = 1
+        if t0 < tmin < t1:
+            brk[nbrk] = tmin
+            nbrk += 1
+        nsh, sh1, sh2 = shadow_crossings(r0, mu, sun[2], nu, R)
+        if nsh > 0 and t0 < sh1 < t1:
+            brk[nbrk] = sh1
+            nbrk += 1
+        if nsh > 1 and t0 < sh2 < t1:
+            brk[nbrk] = sh2
+            nbrk += 1
+        brk[nbrk] = t1
+        nbrk += 1
+        for q in range(1, nbrk):            # insertion sort of the few break points
+            x = brk[q]
+            j = q - 1
+            while j >= 0 and brk[j] > x:
+                brk[j + 1] = brk[j]
+                j -= 1
+            brk[j + 1] = x
         t_prev = t0
         r_prev = math.sqrt(r0 * r0 + 2.0 * r0 * mu * t0 + t0 * t0)
         for c in range(nc):
             rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
-        for piece in range(2):
-            if piece == 0:
-                a, b = t0, tmin
-            else:
-                a, b = tmin, t1
+        for q in range(nbrk - 1):
+            a = brk[q]
+            b = brk[q + 1]
+            dense_at_b = b <= tmin      # before the lowest point the density grows with t
             length = b - a
             if length <= 0.0:
                 continue
             vmax = math.log1p(length / ts)
             dv = vmax / n_view
             for kk in range(n_view):
-                # nodes in increasing t: piece 0 runs from the far end of u towards b
-                k = n_view - 1 - kk if piece == 0 else kk
+                # nodes in increasing t
+                k = n_view - 1 - kk if dense_at_b else kk
                 u = ts * math.expm1((k + 0.5) * dv)
                 w = (u + ts) * dv
-                t = b - u if piece == 0 else a + u
+                t = b - u if dense_at_b else a + u
                 rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
                 tm = 0.5 * (t_prev + t)
                 rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
