@@ -232,11 +232,27 @@ def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts
     the sun is hidden by the planet (earth shadow: the light ray hits the ground)."""
     if ray_hits_ground(r, mu_s, R):
         return False
-    for c in range(codes.shape[0]):
-        if light_exact:
+    if light_exact:
+        for c in range(codes.shape[0]):
             out[c] = column_quadrature(codes[c], p0s[c], p1s[c], r, mu_s, R, Rt, n_light, ts)
-        else:
-            out[c] = table_lookup(table, c, r, mu_s, R, Rt)
+        return True
+    # bilinear interpolation, the coordinates shared by every constituent
+    n_r = table.shape[1]
+    n_mu = table.shape[2]
+    x_r, x_mu = table_coords(r, mu_s, R, Rt)
+    fr = x_r * (n_r - 1)
+    fm = x_mu * (n_mu - 1)
+    i = min(int(fr), n_r - 2)
+    j = min(int(fm), n_mu - 2)
+    a = fr - i
+    b = fm - j
+    w00 = (1 - a) * (1 - b)
+    w01 = (1 - a) * b
+    w10 = a * (1 - b)
+    w11 = a * b
+    for c in range(codes.shape[0]):
+        out[c] = (w00 * table[c, i, j] + w01 * table[c, i, j + 1]
+                  + w10 * table[c, i + 1, j] + w11 * table[c, i + 1, j + 1])
     return True
 
 
