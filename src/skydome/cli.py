@@ -432,6 +432,59 @@ def timelapse_cmd(
     _run(go)
 
 
+@app.command("polarisation")
+def polarisation_cmd(
+    sun_elevation: float = typer.Option(20.0, help="Sun elevation [deg], -90..90."),
+    sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg], 0..360."),
+    method: str = typer.Option("montecarlo", help="montecarlo (multiple scattering, aerosols) or rayleigh_single (analytic)."),
+    size: int = typer.Option(48, help="Fisheye size in pixels, 4..1024."),
+    samples: int = typer.Option(2000, help="Monte Carlo paths per pixel, 2..10^8."),
+    seed: int = typer.Option(0, help="Monte Carlo seed, >= 0."),
+    wavelength: float = typer.Option(550.0, help="Wavelength [nm], 300..1000."),
+    turbidity: float = typer.Option(2.5, help="Turbidity of the atmosphere, 1..32."),
+    out: str = typer.Option(..., help="Output figure (.png, .pdf or .svg): degree and angle of polarisation maps."),
+    csv: Optional[str] = typer.Option(None, help="Also write the numbers per pixel to this .csv file."),
+):
+    """Maps of the degree and angle of polarisation of the sky (fisheye, north up, east left)."""
+    def go():
+        from pathlib import Path
+
+        from skydome._validate import check_choice, check_int, check_number
+        from skydome.effects.polarisation_maps import METHODS
+        from skydome.sun import Sun
+
+        _check_figure_path(out)
+        if csv is not None:
+            p = Path(csv)
+            if p.suffix.lower() != ".csv":
+                raise UserError(f"csv = {csv!r}: the file must end in .csv")
+            if not p.parent.is_dir():
+                raise UserError(f"csv = {csv!r}: folder {str(p.parent)!r} does not exist")
+        check_choice("method", method, METHODS)
+        check_int("size", size, 4, 1024)
+        check_int("samples", samples, 2, 100_000_000)
+        check_int("seed", seed, 0, 2 ** 63 - 1)
+        check_number("wavelength", wavelength, 300.0, 1000.0, "nm")
+        check_number("turbidity", turbidity, 1.0, 32.0)
+        s = Sun(elevation_deg=check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg"),
+                azimuth_deg=check_number("sun_azimuth", sun_azimuth, 0.0, 360.0, "deg"))
+        from skydome.effects.polarisation_maps import plot_polarisation_maps, polarisation_maps, write_map_csv
+
+        kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
+        pmap = polarisation_maps(method, s, size=size, wavelength_nm=wavelength, turbidity=turbidity, **kw)
+        plot_polarisation_maps(pmap, out)
+        if csv is not None:
+            write_map_csv(pmap, csv)
+        sky = pmap.mask & (pmap.dirs[..., 2] > 0)
+        i = np.nanargmax(np.where(sky, pmap.dop, -1.0))
+        typer.echo(f"maximum degree of polarisation {pmap.dop.flat[i]:.3f} at "
+                   f"{np.degrees(np.arccos(np.clip(pmap.dirs.reshape(-1, 3)[i] @ s.direction, -1, 1))):.1f} deg "
+                   f"from the sun; wrote {out}" + (f" and {csv}" if csv else ""))
+    import numpy as np
+
+    _run(go)
+
+
 def _split_specs(models: str) -> list[str]:
     """Split 'a:1,b,c:k=v,k2=v2' at commas that start a new model name."""
     from skydome.models import available

@@ -16,8 +16,12 @@ scattering lacks.
 Stokes parameters are given in the local meridian frame of each viewing direction: the
 reference axis is the direction of increasing elevation on the sky (towards the zenith
 along the vertical circle through the point), Q > 0 means polarisation along that
-vertical, and the angle of polarisation is measured from it towards increasing azimuth
-(north -> east), in (-90, 90] deg. At the zenith the reference axis is north.
+vertical, and the angle of polarisation is measured from it towards the second axis
+k x e_vertical (k = -d, the direction the light travels), in (-90, 90] deg: counter-clockwise
+as seen by an observer facing the sky, i.e. towards decreasing azimuth (for a view due
+north the second axis points west). At the zenith the reference axis is north. This is the
+frame of the ``montecarlo`` model's ``stokes_frame`` (which takes south at the zenith, a
+rotation by 180 deg that leaves Q and U unchanged).
 """
 
 from __future__ import annotations
@@ -27,7 +31,8 @@ import numpy as np
 from skydome._validate import as_directions, check_number
 
 __all__ = ["rayleigh_degree_of_polarisation", "local_frame", "rayleigh_single_scattering_stokes",
-           "degree_of_polarisation", "angle_of_polarisation", "neutral_points_on_meridian"]
+           "degree_of_polarisation", "angle_of_polarisation", "neutral_points_on_meridian",
+           "neutral_points_from_sign"]
 
 
 def rayleigh_degree_of_polarisation(cos_theta, depolarisation: float = 0.0) -> np.ndarray:
@@ -40,7 +45,9 @@ def rayleigh_degree_of_polarisation(cos_theta, depolarisation: float = 0.0) -> n
 
 def local_frame(directions) -> tuple[np.ndarray, np.ndarray]:
     """(e_vertical, e_horizontal) unit vectors perpendicular to each direction: the
-    direction of increasing elevation and of increasing azimuth (north -> east)."""
+    direction of increasing elevation, and e_horizontal = k x e_vertical with k = -d the
+    direction the light travels (horizontal, towards decreasing azimuth: west for a view
+    due north). At the zenith: north and east."""
     d = as_directions(directions)
     z = np.array([0.0, 0.0, 1.0])
     # azimuthal unit vector (east for a direction due north): z x d normalised; at the
@@ -114,3 +121,34 @@ def neutral_points_on_meridian(elevation_deg, dop, sun_elevation_deg: float,
             else:
                 out.setdefault("brewster", float(e[i]))
     return out
+
+
+def neutral_points_from_sign(elevation_deg, signed_dop, sun_elevation_deg: float,
+                             exclude_deg: float = 4.0) -> dict[str, float]:
+    """Neutral points along the solar meridian as the zero crossings of the signed degree
+    of polarisation.
+
+    ``elevation_deg`` is the angle along the solar meridian as in
+    :func:`neutral_points_on_meridian` (0..180, 90 the zenith); ``signed_dop`` is -Q/I in
+    the local meridian frame: > 0 where the E-vector is perpendicular to the meridian (the
+    normal Rayleigh polarisation), < 0 where it is parallel ("negative" polarisation, between
+    the Babinet and Brewster points and beyond the Arago point). Each sign change is
+    located by linear interpolation; crossings within ``exclude_deg`` of the sun or the
+    antisolar point are ignored, and when noise gives several crossings of one kind their
+    median is returned. Names as in :func:`neutral_points_on_meridian`.
+    """
+    e = np.asarray(elevation_deg, dtype=np.float64)
+    p = np.asarray(signed_dop, dtype=np.float64)
+    sun_e = check_number("sun_elevation_deg", sun_elevation_deg, -90.0, 90.0, "deg")
+    ex = check_number("exclude_deg", exclude_deg, 0.0, 45.0, "deg")
+    anti = 180.0 + sun_e          # the antisolar point on the same scale
+    found: dict[str, list[float]] = {}
+    for i in range(len(p) - 1):
+        if p[i] == 0.0 or np.sign(p[i]) == np.sign(p[i + 1]):
+            continue
+        x = e[i] + (e[i + 1] - e[i]) * p[i] / (p[i] - p[i + 1])
+        if abs(x - sun_e) < ex or abs(x - anti) < ex:
+            continue
+        name = "arago" if x > 90.0 else ("babinet" if x > sun_e else "brewster")
+        found.setdefault(name, []).append(float(x))
+    return {k: float(np.median(v)) for k, v in found.items()}
