@@ -27,6 +27,14 @@ JOBS = [
      "fisheye", "512", "Perez 1993, DNI 650 DHI 120 W/m2 (luminance)"),
     ("cie2003_type12_fisheye", "cie2003", {"sky_type": 12}, {"elevation_deg": 40.0, "azimuth_deg": 180.0},
      "fisheye", "512", "CIE 2003 type 12 (luminance)"),
+    ("precomputed_fisheye", "precomputed", {}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
+     "fisheye", "512", "precomputed (Bruneton), 4 orders, sun 30 deg"),
+    ("precomputed_twilight_fisheye", "precomputed", {}, {"elevation_deg": -4.0, "azimuth_deg": 270.0},
+     "fisheye", "512", "precomputed, sun -4 deg W (civil twilight)"),
+    ("hillaire_fisheye", "hillaire2020", {}, {"elevation_deg": 10.0, "azimuth_deg": 90.0},
+     "fisheye", "512", "Hillaire 2020, sun 10 deg E"),
+    ("earth_from_space", "nishita1993", {"camera_altitude_m": 36e6}, {"elevation_deg": 30.0, "azimuth_deg": 180.0},
+     "camera", "384", "Nishita 1993, earth from 36000 km"),
     ("vienna_sunset_equirect", "single_scattering", {},
      {"location": (48.21, 16.37, "2026-06-21T20:45+02:00")}, "equirect", "1024x512",
      "Vienna 2026-06-21 20:45, equirect"),
@@ -56,19 +64,73 @@ def run(out_dir: Path, only: list[str] | None = None) -> list[Path]:
             continue
         t0 = time.perf_counter()
         sky = sd.model(name, sun=_sun(sun_spec), **params)
-        image = sd.render(sky, make_projection(proj_name, size), wl)
+        proj = sky.default_projection(int(size)) if proj_name == "camera" else make_projection(proj_name, size)
+        image = sd.render(sky, proj, wl)
         png = out_dir / f"{stem}.png"
-        image.save(png)
+        exposure = None
+        if proj_name == "camera":
+            # a planet on black space: expose for the bright disc, not for the log-average
+            import numpy as np
+
+            Y = image.luminance()[image.mask]
+            exposure = 0.8 / float(np.percentile(Y[Y > 0], 99))
+        image.save(png, exposure=exposure)
         hdr = out_dir / f"{stem}.exr"
         image.save(hdr)
         written += [png, hdr]
         tiles.append((png, label))
         print(f"{png}  ({label}, {time.perf_counter() - t0:.1f} s)")
+    if not only:
+        written += _effects(out_dir)
     if tiles:
         sheet = out_dir / "gallery.png"
         _contact_sheet(tiles, sheet)
         written.append(sheet)
         print(sheet)
+    return written
+
+
+def _effects(out_dir: Path) -> list[Path]:
+    """Small versions of the atmospheric effects (survey section 5) into out/effects/."""
+    import importlib
+
+    import skydome as sd
+
+    eff = out_dir / "effects"
+    eff.mkdir(exist_ok=True)
+    written: list[Path] = []
+    t0 = time.perf_counter()
+    # 5.1 the colour of the sky through a day (Vienna, summer solstice, hourly)
+    from skydome.effects.timelapse import day_times, run_timelapse
+
+    times = day_times("2026-06-21", "+02:00", 60.0)
+    run_timelapse(lambda sun: sd.model("single_scattering", sun=sun), 48.21, 16.37, times,
+                  eff / "timelapse", size=96, wavelengths=12)
+    written.append(eff / "timelapse" / "contact_sheet.png")
+    # 5.5 Bishop's ring: a close-up of the sun through a ~1 um volcanic layer
+    from skydome.effects.aureole import bishops_ring_atmosphere, render_closeup
+
+    img = render_closeup(bishops_ring_atmosphere(), sd.Sun(elevation_deg=45.0, azimuth_deg=180.0),
+                         fov_deg=60.0, size=161)
+    img.save(eff / "bishops_ring.png")
+    written.append(eff / "bishops_ring.png")
+    # 5.7 polarisation: single-scattering Rayleigh field (analytic)
+    from skydome.effects.polarisation_maps import plot_polarisation_maps, polarisation_maps
+
+    pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
+    plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")
+    written.append(eff / "polarisation_rayleigh.png")
+    # twilight and aerial perspective, where those modules provide a demo
+    for mod in ("skydome.effects.twilight", "skydome.effects.airlight"):
+        try:
+            m = importlib.import_module(mod)
+        except ImportError:
+            continue
+        if hasattr(m, "demo_effects"):
+            written += list(m.demo_effects(eff) or [])
+    for p in written:
+        print(p)
+    print(f"effects ({time.perf_counter() - t0:.1f} s)")
     return written
 
 
