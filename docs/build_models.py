@@ -43,7 +43,8 @@ def build(sections, order, header, target) -> None:
     toc = []
     body = []
     for n in names:
-        text = sections[n].read_text().strip() + "\n"
+        # figure links are relative to docs/sections/; the assembled file lives in docs/
+        text = sections[n].read_text().strip().replace("](../figures/", "](figures/") + "\n"
         title = next((ln.lstrip("# ").strip() for ln in text.splitlines() if ln.startswith("#")), n)
         toc.append(f"- [{title}](sections/{n}.md)")
         body.append(text)
