@@ -485,6 +485,38 @@ def polarisation_cmd(
     _run(go)
 
 
+@app.command("twilight", context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def twilight_cmd(
+    ctx: typer.Context,
+    model: str = typer.Option("precomputed", help="Model valid with the sun below the horizon (precomputed, single_scattering, montecarlo)."),
+    step: float = typer.Option(2.0, help="Step in sun depression [deg], 0.25..9; the sequence runs 0..-18 deg."),
+    size: int = typer.Option(192, help="Fisheye frame size in pixels, 16..2048."),
+    wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
+    out: str = typer.Option(..., help="Output folder: frames, contact_sheet.png, twilight.png, twilight.csv."),
+):
+    """Twilight: the sky for the sun from 0 to -18 deg, zenith luminance and illuminance against depression,
+    the earth's shadow and the Belt of Venus opposite the sun.
+
+    Model parameters are given as extra options, e.g. --turbidity 3.
+    """
+    def go():
+        from skydome.effects.twilight import run_twilight
+        from skydome.models import get_model_class
+
+        cls = get_model_class(model)
+        params = _parse_model_params(cls, ctx.args)
+        progress = _Progress("twilight")
+        try:
+            res = run_twilight(out, model=model, step_deg=step, size=size, wavelengths=wavelengths,
+                               progress=progress, **params)
+        finally:
+            progress.close()
+        for d, z, e in zip(res["depression_deg"], res["zenith_luminance"], res["horizontal_illuminance"]):
+            typer.echo(f"sun {-d + 0.0:6.2f} deg: zenith {z:.3g} cd/m^2, horizontal illuminance {e:.3g} lx")
+        typer.echo(f"wrote frames, contact_sheet.png, twilight.png, twilight.csv into {out}")
+    _run(go)
+
+
 def _split_specs(models: str) -> list[str]:
     """Split 'a:1,b,c:k=v,k2=v2' at commas that start a new model name."""
     from skydome.models import available
