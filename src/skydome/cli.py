@@ -517,6 +517,31 @@ def twilight_cmd(
     _run(go)
 
 
+@app.command("airlight")
+def airlight_cmd(
+    image: Optional[str] = typer.Option(None, help="Input image: .png (sRGB) or .exr/.npy (linear), white-balanced to the sun."),
+    depth: Optional[str] = typer.Option(None, help="Depth map [m]: .exr (Z, Y or R channel) or .npy; inf = sky."),
+    synthetic: bool = typer.Option(False, "--synthetic", help="Use the generated synthetic mountain scene instead of --image/--depth."),
+    sun_elevation: float = typer.Option(20.0, help="Sun elevation [deg]."),
+    sun_azimuth: float = typer.Option(120.0, help="Sun azimuth from north towards east [deg]."),
+    method: str = typer.Option("precomputed", help="precomputed, hillaire2020, preetham1999, hoffman_preetham2002 or dobashi2002."),
+    turbidity: float = typer.Option(2.5, help="Turbidity of the air, 2..10 for the Preetham methods, 1..32 otherwise."),
+    fov: float = typer.Option(60.0, help="Horizontal field of view of the (pinhole) camera [deg]."),
+    view_azimuth: float = typer.Option(0.0, help="Azimuth the camera looks towards [deg] (horizontal view)."),
+    out: str = typer.Option(..., help="Output .png (sRGB; before/after sheet with --synthetic), .exr or .npy (linear)."),
+):
+    """Aerial perspective / airlight: extinction and in-scattered light over an image with a depth map."""
+    def go():
+        from skydome.effects.airlight import airlight_cli
+        from skydome.sun import Sun
+
+        sun = Sun(elevation_deg=sun_elevation, azimuth_deg=sun_azimuth)
+        airlight_cli(image, depth, out, sun, method=method, turbidity=turbidity, fov_deg=fov,
+                     view_azimuth_deg=view_azimuth, synthetic=synthetic)
+        typer.echo(f"wrote {out} ({method}, turbidity {turbidity:g})")
+    _run(go)
+
+
 def _split_specs(models: str) -> list[str]:
     """Split 'a:1,b,c:k=v,k2=v2' at commas that start a new model name."""
     from skydome.models import available
