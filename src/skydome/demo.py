@@ -128,6 +128,19 @@ def _effects(out_dir: Path) -> list[Path]:
             continue
         if hasattr(m, "demo_effects"):
             written += list(m.demo_effects(eff) or [])
+    labels = {"contact_sheet.png": "", "bishops_ring.png": "Bishop's ring (1 um ash, Mie)",
+              "polarisation_rayleigh.png": "polarisation (single Rayleigh)",
+              "twilight.png": "twilight: zenith luminance, Belt of Venus",
+              "airlight_mountains.png": "airlight: none / clear / haze"}
+    tiles = []
+    for p in written:
+        label = labels.get(p.name, p.name)
+        if p.name == "contact_sheet.png":
+            label = "timelapse, Vienna 21 June" if "timelapse" in str(p) else "twilight 0..-18 deg"
+        tiles.append((p, label))
+    sheet = eff / "effects_gallery.png"
+    _contact_sheet(tiles, sheet, tile=320)
+    written.append(sheet)
     for p in written:
         print(p)
     print(f"effects ({time.perf_counter() - t0:.1f} s)")
