@@ -235,3 +235,22 @@ def test_no_nan_no_negative(small, elev, az, dz, dphi, alt):
     T, S = m.aerial_perspective(d, 5000.0, [550.0])
     assert np.all(np.isfinite(S)) and np.all(S >= 0.0) and np.all((T >= 0) & (T <= 1))
     assert np.all(m.ground_irradiance([550.0]) >= 0.0)
+
+
+def test_geometric_remaining_orders_approximates_more_orders():
+    """The geometric estimate of the orders beyond N brings 3 orders closer to 8 computed
+    orders (small tables, turbidity 4: within 10 % where 3 orders alone are up to 37 % low)."""
+    import skydome as sd
+    from skydome.transport.geometry import direction_from_angles
+
+    small = dict(scattering_r_size=8, scattering_mu_size=32, scattering_mu_s_size=8, n_wavelengths=4,
+                 turbidity=4.0)
+    sun = sd.Sun(elevation_deg=20.0, azimuth_deg=180.0)
+    d = direction_from_angles(np.array([80.0, 30.0, 5.0, 5.0]), np.array([0.0, 90.0, 0.0, 180.0]))
+    wl = np.array([450.0, 600.0])
+    ref = sd.model("precomputed", sun=sun, orders=8, **small).radiance(d, wl)
+    plain = sd.model("precomputed", sun=sun, orders=3, **small).radiance(d, wl)
+    geo = sd.model("precomputed", sun=sun, orders=3, remaining_orders="geometric", **small).radiance(d, wl)
+    assert np.all(geo >= plain)
+    assert np.max(np.abs(geo / ref - 1)) < 0.1
+    assert np.max(np.abs(geo / ref - 1)) < 0.5 * np.max(np.abs(plain / ref - 1))
