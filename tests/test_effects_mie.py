@@ -80,3 +80,21 @@ def test_errors():
     with pytest.raises(ValueError, match="constituents"):
         A.single_scattering_true_phase(Atmosphere.earth(), [[0, 0, 1]], 30.0, [550.0],
                                        constituents=["dust"])
+
+
+def test_cli_aureole_blue_sun(tmp_path):
+    """`skydome aureole --aerosol volcanic_ash`: the transmitted sun is blue (T(450) >
+    T(650)), the clear sky's is not; files written; bad aerosol name -> exit 2."""
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    out = tmp_path / "ash"
+    res = CliRunner().invoke(app, ["aureole", "--aerosol", "volcanic_ash", "--size", "24", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    lines = (out / "sun.txt").read_text().splitlines()
+    assert "(blue sun)" in lines[1] and "(blue sun)" not in lines[0]
+    assert (out / "profile.png").exists() and (out / "closeup.png").exists()
+    res = CliRunner().invoke(app, ["aureole", "--aerosol", "dust", "--out", str(tmp_path / "x")])
+    assert res.exit_code == 2 and "aerosol = 'dust'" in res.output
+    assert not (tmp_path / "x").exists()

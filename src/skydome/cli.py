@@ -542,6 +542,71 @@ def airlight_cmd(
     _run(go)
 
 
+@app.command("aureole")
+def aureole_cmd(
+    aerosol: str = typer.Option("earth", help="earth (turbidity 2, 4, 8), volcanic_ash (blue sun), forest_fire_smoke (blue sun) or bishops_ring (~1 um layer)."),
+    sun_elevation: float = typer.Option(30.0, help="Sun elevation [deg], 1..90."),
+    fov: float = typer.Option(50.0, help="Field of view of the close-up around the sun [deg], 2..120."),
+    size: int = typer.Option(161, help="Close-up size in pixels, 16..1024."),
+    out: str = typer.Option(..., help="Output folder: profile.png (radiance against angle from the sun), closeup.png, sun.txt."),
+):
+    """The aureole, Bishop's ring and the blue sun (survey 5.4-5.6): radiance around the sun with
+    Lorenz-Mie aerosols, a close-up image and the sun's transmittance at 450 and 650 nm."""
+    def go():
+        import os
+        import shutil
+        import tempfile
+        from pathlib import Path
+
+        import numpy as np
+
+        from skydome._validate import check_choice, check_int, check_number
+        from skydome.atmosphere import Atmosphere
+        from skydome.effects.aureole import (bishops_ring_atmosphere, plot_radiance_profiles,
+                                             radiance_profile, render_closeup, sun_disc_radiance)
+        from skydome.sun import Sun
+
+        check_choice("aerosol", aerosol, ("earth", "volcanic_ash", "forest_fire_smoke", "bishops_ring"))
+        elev = check_number("sun_elevation", sun_elevation, 1.0, 90.0, "deg")
+        check_number("fov", fov, 2.0, 120.0, "deg")
+        check_int("size", size, 16, 1024)
+        o = Path(out)
+        if not (o.parent if str(o.parent) else Path(".")).is_dir():
+            raise UserError(f"out = {out!r}: folder {str(o.parent)!r} does not exist")
+        sun = Sun(elevation_deg=elev, azimuth_deg=180.0)
+        if aerosol == "earth":
+            atms = [Atmosphere.earth(turbidity=t) for t in (2.0, 4.0, 8.0)]
+            labels = ["turbidity 2", "turbidity 4", "turbidity 8"]
+        elif aerosol == "bishops_ring":
+            atms, labels = [Atmosphere.earth(turbidity=2.0), bishops_ring_atmosphere()], ["clear", "1 um layer"]
+        else:
+            make = getattr(Atmosphere, aerosol)
+            atms, labels = [Atmosphere.earth(turbidity=2.0), make()], ["clear", aerosol.replace("_", " ")]
+        ang = np.concatenate([np.linspace(1.0, 10.0, 19), np.linspace(11.0, 60.0, 25)])
+        wl = np.array([450.0, 550.0, 650.0])
+        prof = radiance_profile(atms, elev, ang, wl)
+        tmp = Path(tempfile.mkdtemp(prefix=".skydome-aureole-", dir=o.parent if str(o.parent) else "."))
+        try:
+            plot_radiance_profiles(ang, [p[:, 1] for p in prof], labels, tmp / "profile.png",
+                                   title=f"radiance at 550 nm against the angle from the sun (sun {elev:g} deg)")
+            render_closeup(atms[-1], sun, fov_deg=fov, size=size).save(tmp / "closeup.png")
+            lines = []
+            for a, lab in zip(atms, labels):
+                t = sun_disc_radiance(a, sun, wl) / sun_disc_radiance(Atmosphere.custom(rayleigh_scattering=0.0), sun, wl)
+                lines.append(f"{lab}: sun transmittance T(450) = {t[0]:.4f}, T(650) = {t[2]:.4f}, "
+                             f"T(450)/T(650) = {t[0] / t[2]:.3f}" + (" (blue sun)" if t[0] > t[2] else ""))
+            (tmp / "sun.txt").write_text("\n".join(lines) + "\n")
+            o.mkdir(exist_ok=True)
+            for f in sorted(tmp.iterdir()):
+                os.replace(f, o / f.name)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        for ln in lines:
+            typer.echo(ln)
+        typer.echo(f"wrote {out}/profile.png, closeup.png, sun.txt")
+    _run(go)
+
+
 def _split_specs(models: str) -> list[str]:
     """Split 'a:1,b,c:k=v,k2=v2' at commas that start a new model name."""
     from skydome.models import available
