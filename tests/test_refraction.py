@@ -49,3 +49,18 @@ def test_no_refraction_well_below_horizon_and_errors():
         rf.refraction_bennett_arcmin(1.0, pressure_pa=-1.0)
     with pytest.raises(ValueError, match="true_elevation_deg"):
         rf.sun_disc_shape(-10.0)
+
+
+def test_sun_command_reports_refraction():
+    """`skydome sun` near sunset: apparent elevation above the geometric one by ~0.5 deg
+    and a flattened disc (ratio < 0.9)."""
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    res = CliRunner().invoke(app, ["sun", "--lat", "48.21", "--lon", "16.37", "--time", "2026-06-21T20:55+02:00"])
+    assert res.exit_code == 0, res.output
+    val = {ln.split()[0]: float(ln.split()[1]) for ln in res.output.splitlines()
+           if ln.split() and ln.split()[0] in ("elevation", "apparent", "disc")}
+    assert 0.4 < val["apparent"] - val["elevation"] < 0.65
+    assert val["disc"] < 0.9

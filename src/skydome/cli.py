@@ -218,13 +218,22 @@ def sun(
     time: str = typer.Option(..., help="ISO 8601 time with UTC offset, e.g. 2026-06-21T12:00+02:00."),
     method: str = typer.Option("spa", help="spa (NREL SPA via pvlib) or preetham1999."),
 ):
-    """Solar position (apparent elevation, azimuth from north towards east) for a place and time."""
+    """Solar position for a place and time: geometric (true) elevation, the apparent elevation
+    and the flattening of the disc by atmospheric refraction, azimuth from north towards east."""
     from skydome.sun import Sun
 
     s = _run(Sun.from_location, lat, lon, time, method=method)
     typer.echo(f"time            {time}")
     typer.echo(f"method          {method}")
-    typer.echo(f"elevation       {s.elevation_deg:.4f} deg")
+    typer.echo(f"elevation       {s.elevation_deg:.4f} deg (geometric)")
+    if s.elevation_deg > -2.0:
+        from skydome.effects.refraction import apparent_elevation, sun_disc_shape
+
+        shape = sun_disc_shape(s.elevation_deg)
+        ratio = shape["ratio"]
+        typer.echo(f"apparent        {float(apparent_elevation(s.elevation_deg)):.4f} deg "
+                   f"(Saemundsson refraction, 101 kPa, 10 C)")
+        typer.echo(f"disc shape      {float(ratio):.3f} (apparent height / width)")
     typer.echo(f"azimuth         {s.azimuth_deg:.4f} deg (from north towards east)")
     typer.echo(f"zenith          {s.zenith_deg:.4f} deg")
     typer.echo(f"distance        {s.distance_au:.6f} au")
