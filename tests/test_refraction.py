@@ -60,7 +60,7 @@ def test_sun_command_reports_refraction():
 
     res = CliRunner().invoke(app, ["sun", "--lat", "48.21", "--lon", "16.37", "--time", "2026-06-21T20:55+02:00"])
     assert res.exit_code == 0, res.output
-    val = {ln.split()[0]: float(ln.split()[1]) for ln in res.output.splitlines()
-           if ln.split() and ln.split()[0] in ("elevation", "apparent", "disc")}
+    val = {ln.split()[0]: float(ln.split()[2] if ln.startswith("disc") else ln.split()[1])
+           for ln in res.output.splitlines() if ln.split() and ln.split()[0] in ("elevation", "apparent", "disc")}
     assert 0.4 < val["apparent"] - val["elevation"] < 0.65
     assert val["disc"] < 0.9
