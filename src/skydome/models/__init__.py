@@ -23,13 +23,14 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Sequence
+from typing import Any, ClassVar
 
 import numpy as np
 
 from skydome._validate import as_directions, check_choice, check_int, check_number
 
-__all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class"]
+__all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
+           "resolve_atmosphere"]
 
 
 @dataclass(frozen=True)
@@ -168,6 +169,36 @@ class SkyModel:
     @staticmethod
     def _directions(directions) -> np.ndarray:
         return as_directions(directions)
+
+
+# -- shared by the physically based models ---------------------------------------------------
+def check_sun(sun) -> None:
+    """TypeError unless ``sun`` is a :class:`skydome.Sun`."""
+    from skydome.sun import Sun
+
+    if not isinstance(sun, Sun):
+        raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+
+
+def resolve_atmosphere(p: dict[str, Any], given: dict[str, Any]):
+    """The Atmosphere of a model with ``atmosphere``, ``turbidity`` and
+    ``observer_altitude_m`` parameters: ``p["atmosphere"]`` or ``Atmosphere.earth(turbidity=
+    p["turbidity"])``; refuses both at once (``given`` are the caller's keywords) and an
+    observer at or above the top of the atmosphere."""
+    from skydome.atmosphere import Atmosphere
+
+    atm = p["atmosphere"]
+    if atm is None:
+        atm = Atmosphere.earth(turbidity=p["turbidity"])
+    elif not isinstance(atm, Atmosphere):
+        raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
+    elif "turbidity" in given:
+        raise ValueError("give either atmosphere or turbidity, not both")
+    h = p.get("observer_altitude_m")
+    if h is not None and h >= atm.top_altitude_m:
+        raise ValueError(f"observer_altitude_m = {h:g} m is out of range "
+                         f"[0, {atm.top_altitude_m:g}) m (inside the atmosphere)")
+    return atm
 
 
 # -- registry -------------------------------------------------------------------------------

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_choice
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
 
 __all__ = ["Hillaire2020Sky"]
 
@@ -167,25 +167,13 @@ class Hillaire2020Sky(SkyModel):
     )
 
     def __init__(self, sun, **params):
-        from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+        check_sun(sun)
         p = self._validate_params(params)
         if not -10.0 <= sun.elevation_deg <= 90.0:
             raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
                              f"[-10, 90] deg for hillaire2020")
-        atm = p["atmosphere"]
-        if atm is None:
-            atm = Atmosphere.earth(turbidity=p["turbidity"])
-        elif not isinstance(atm, Atmosphere):
-            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
-        elif "turbidity" in params:
-            raise ValueError("give either atmosphere or turbidity, not both")
-        if p["observer_altitude_m"] >= atm.top_altitude_m:
-            raise ValueError(f"observer_altitude_m = {p['observer_altitude_m']:g} m is out of range "
-                             f"[0, {atm.top_altitude_m:g}) m (inside the atmosphere)")
+        atm = resolve_atmosphere(p, params)
         sq = int(round(np.sqrt(p["ms_directions"])))
         if sq * sq != p["ms_directions"]:
             raise ValueError(f"ms_directions = {p['ms_directions']} is not a square number "

@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_number
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
 
 __all__ = ["PrecomputedSky", "Precomputed"]
 
@@ -110,22 +110,10 @@ class PrecomputedSky(SkyModel):
     )
 
     def __init__(self, sun, **params):
-        from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+        check_sun(sun)
         p = self._validate_params(params)
-        atm = p["atmosphere"]
-        if atm is None:
-            atm = Atmosphere.earth(turbidity=p["turbidity"])
-        elif not isinstance(atm, Atmosphere):
-            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
-        elif "turbidity" in params:
-            raise ValueError("give either atmosphere or turbidity, not both")
-        if p["observer_altitude_m"] >= atm.top_altitude_m:
-            raise ValueError(f"observer_altitude_m = {p['observer_altitude_m']:g} m is out of range "
-                             f"[0, {atm.top_altitude_m:g}) m (inside the atmosphere)")
+        atm = resolve_atmosphere(p, params)
         if p["scattering_mu_size"] % 2:
             raise ValueError(f"scattering_mu_size = {p['scattering_mu_size']} is out of range: "
                              "it must be even, in [4, 2048]")
@@ -213,6 +201,7 @@ class PrecomputedSky(SkyModel):
             delta = np.zeros((1, 1, 1, 1, nl), dtype=np.float32)
             dE = np.zeros_like(E)
             L_in = np.empty((n_r, n_ms, n_in, nl))
+            dE_prev = prev_dE = prev_delta = None
             for order in range(2, p["orders"] + 1):
                 first = order == 2
                 # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
@@ -236,7 +225,7 @@ class PrecomputedSky(SkyModel):
                 if first:
                     delta = np.empty_like(ms)
                 prev_delta = None if first else delta.copy()
-                prev_dE = dE_prev if not first else None
+                prev_dE = dE_prev
                 dE_prev = dE_new.copy()
                 KP.multiple_scattering_table(J, col, beta_e, R, Rt, mu_s_min, n_q_ms, ts, delta)
                 ms += delta

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
 
 __all__ = ["SingleScatteringSky"]
 
@@ -61,22 +61,10 @@ class SingleScatteringSky(SkyModel):
     )
 
     def __init__(self, sun, **params):
-        from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+        check_sun(sun)
         p = self._validate_params(params)
-        atm = p["atmosphere"]
-        if atm is None:
-            atm = Atmosphere.earth(turbidity=p["turbidity"])
-        elif not isinstance(atm, Atmosphere):
-            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
-        elif "turbidity" in params:
-            raise ValueError("give either atmosphere or turbidity, not both")
-        if p["observer_altitude_m"] >= atm.top_altitude_m:
-            raise ValueError(f"observer_altitude_m = {p['observer_altitude_m']:g} m is out of range "
-                             f"[0, {atm.top_altitude_m:g}) m (inside the atmosphere)")
+        atm = resolve_atmosphere(p, params)
         self.sun = sun
         self.atmosphere = atm
         self.turbidity = p["turbidity"]
