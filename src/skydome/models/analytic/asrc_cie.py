@@ -120,6 +120,9 @@ class _TurbidClear(_CIEBase):
         rel = self._f(np.arccos(cg), cg) * grad / self._norm
         return np.where(z >= 0.0, rel, 0.0)
 
+    def _kernel(self, K, flat, scale):
+        return K.cie_kittler(flat, self._sun_dir, 0.856, 16.0, 0.3, self._norm, scale)
+
 
 @register
 class ASRCCIE(_CIEBase):
@@ -223,6 +226,21 @@ class ASRCCIE(_CIEBase):
         p["diffuse_horizontal_irradiance"] = None
         out["weights"] = dict(self.weights)
         return out
+
+    def _kernel(self, K, flat, scale):
+        # One pass over the directions for the whole mixture (weights and zenith
+        # normalisations of the clear, turbid, intermediate and overcast components).
+        w = np.array([self.weights[k] for k in ("clear", "turbid", "intermediate", "overcast")])
+        norms = np.ones(4)
+        for _, comp in self._components:
+            if isinstance(comp, CIE1994Clear):
+                norms[0] = comp._norm
+            elif isinstance(comp, _TurbidClear):
+                norms[1] = comp._norm
+            elif isinstance(comp, CIE1994Intermediate):
+                norms[2] = comp._norm
+        zt = math.radians(self.sun.zenith_deg)
+        return K.asrc_cie(flat, self._sun_dir, w, norms, zt, scale)
 
     def _relative(self, d, _aligned: bool = False):
         total = np.zeros(d.shape[:-1])

@@ -197,15 +197,26 @@ class _CIEBase(SkyModel):
         pass
 
     # -- public ----------------------------------------------------------------------------
+    # ``_relative`` (numpy) is the reference implementation of each sky (also used for the
+    # hemisphere integral); the public methods evaluate the same formulas with a parallel
+    # numba kernel (``_kernels_analytic``, imported on first use), equal to 1e-12 relative.
+    def _evaluate(self, directions, scale: float) -> np.ndarray:
+        from skydome.models.analytic import _kernels_analytic as K
+
+        flat, lead = K.flat_directions(directions)
+        return self._kernel(K, flat, float(scale)).reshape(lead)
+
+    def _kernel(self, K, flat, scale):  # pragma: no cover - abstract
+        raise NotImplementedError
+
     def relative_luminance(self, directions) -> np.ndarray:
         """Luminance relative to the zenith, L/Lz (dimensionless), shape (...); 0 below
         the horizon (z < 0)."""
-        d = self._directions(directions)
-        return self._relative(d)
+        return self._evaluate(directions, 1.0)
 
     def luminance(self, directions) -> np.ndarray:
         """Sky luminance [cd m^-2], shape (...); 0 below the horizon (z < 0)."""
-        return self.zenith_luminance * self.relative_luminance(directions)
+        return self._evaluate(directions, self.zenith_luminance)
 
     def _cos_gamma(self, d, aligned):
         s = self._sun_dir_aligned if aligned else self._sun_dir
@@ -254,6 +265,9 @@ class CIE1994Overcast(_CIEBase):
     def _relative(self, d, _aligned: bool = False):
         z = d[..., 2]
         return np.where(z >= 0.0, (1.0 + 2.0 * np.maximum(z, 0.0)) / 3.0, 0.0)  # eq. 13
+
+    def _kernel(self, K, flat, scale):
+        return K.cie_overcast(flat, scale)
 
 
 # -- CIE 1994 clear ------------------------------------------------------------------------------
@@ -313,6 +327,9 @@ class CIE1994Clear(_CIEBase):
         rel = _clear_indicatrix(gamma, cg) * grad / self._norm  # eq. 14
         return np.where(z >= 0.0, rel, 0.0)
 
+    def _kernel(self, K, flat, scale):
+        return K.cie_kittler(flat, self._sun_dir, 0.91, 10.0, 0.45, self._norm, scale)
+
 
 # -- CIE intermediate (gensky +i) ----------------------------------------------------------------
 @register
@@ -367,6 +384,9 @@ class CIE1994Intermediate(_CIEBase):
         gamma = np.arccos(self._cos_gamma(d, _aligned))
         rel = np.maximum(self._g(eta, self._zt, gamma), 0.0) / self._norm
         return np.where(z >= 0.0, rel, 0.0)
+
+    def _kernel(self, K, flat, scale):
+        return K.cie_intermediate(flat, self._sun_dir, self._zt, self._norm, scale)
 
 
 # -- CIE 2003 standard general sky ----------------------------------------------------------------
@@ -468,3 +488,7 @@ class CIE2003(_CIEBase):
         rel = (_indicatrix(self.c, self.d, self.e, chi, cchi)
                * _gradation(self.a, self.b, z) / self._norm)
         return np.where(z >= 0.0, np.maximum(rel, 0.0), 0.0)
+
+    def _kernel(self, K, flat, scale):
+        return K.cie2003(flat, self._sun_dir, self.a, self.b, self.c, self.d, self.e,
+                         self._norm, scale)

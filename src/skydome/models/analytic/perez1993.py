@@ -520,6 +520,18 @@ class Perez1993(SkyModel):
         term uses cos(zeta) = 0.01 (perezlum.cal). ``scaling="relative"`` returns lv/lv(zenith)
         instead (dimensionless). Any negative value of the fitted formula is clipped to 0.
         """
+        from skydome.models.analytic import _kernels_analytic as K
+
+        flat, lead = K.flat_directions(directions)
+        if self._black or self._scale == 0.0:
+            return np.zeros(lead)
+        a, b, c, d, e = (float(v) for v in self.coefficients)
+        s = np.asarray(self.sun.direction, dtype=np.float64)
+        # [PSM93] eq. 1 in a parallel numba kernel; _luminance_reference is the numpy form.
+        return K.perez1993(flat, s, a, b, c, d, e, COS_ZETA_MIN, float(self._scale)).reshape(lead)
+
+    def _luminance_reference(self, directions) -> np.ndarray:
+        """numpy reference implementation of :meth:`luminance` (same result, slower)."""
         d = self._directions(directions)
         out = np.zeros(d.shape[:-1])
         if self._black or self._scale == 0.0:

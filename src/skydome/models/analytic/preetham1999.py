@@ -548,6 +548,25 @@ class Preetham1999(SkyModel):
 
         Below the horizon (z < 0): (x_z, y_z, 0) (zero luminance, zenith chromaticity).
         """
+        return self._kernel_eval(directions, False)
+
+    def _kernel_eval(self, directions, want_xyz: bool) -> np.ndarray:
+        # [PSS99] eq. 3 for x, y and Y in one parallel numba kernel; _xyY_reference is the
+        # numpy form of the same formulas.
+        from skydome.models.analytic import _kernels_analytic as K
+
+        flat, lead = K.flat_directions(directions)
+        if not hasattr(self, "_kcoef"):
+            self._kcoef = np.ascontiguousarray(
+                np.stack([self._coef[k] for k in ("x", "y", "Y")]), dtype=np.float64)
+            self._kzen = np.array([self._xz / self._norm["x"], self._yz / self._norm["y"],
+                                   self._Yz / self._norm["Y"], self._xz, self._yz])
+        s = np.asarray(self.sun.direction, dtype=np.float64)
+        out = K.preetham(flat, s, self._kcoef, self._kzen, _COS_FLOOR, want_xyz)
+        return out.reshape(lead + (3,))
+
+    def _xyY_reference(self, directions) -> np.ndarray:
+        """numpy reference implementation of :meth:`xyY`."""
         d = as_directions(directions)
         cos_t = d[..., 2]
         cos_g = np.clip(d @ self.sun.direction, -1.0, 1.0)
@@ -565,7 +584,11 @@ class Preetham1999(SkyModel):
 
     def xyz(self, directions) -> np.ndarray:
         """CIE 1931 XYZ with Y = luminance [cd m^-2], shape (..., 3); zero below the horizon."""
-        xyY = self.xyY(directions)
+        return self._kernel_eval(directions, True)
+
+    def _xyz_reference(self, directions) -> np.ndarray:
+        """numpy reference implementation of :meth:`xyz`."""
+        xyY = self._xyY_reference(directions)
         x, y, Y = xyY[..., 0], xyY[..., 1], xyY[..., 2]
         return np.stack([x * Y / y, Y, (1.0 - x - y) * Y / y], axis=-1)
 
