@@ -10,9 +10,13 @@ a cosine (Fourier) series ([DNKY95] sec. 3; survey sec. 7.4, figs. 11-12)
 (the sky is symmetric about the sun's vertical plane, so no sine terms), with N_r the
 smallest number of terms for which the reconstruction error on the ring stays within
 ``max_error`` ([DNKY95]'s criterion for the minimum number of cosine functions, survey
-figs. 12-13). For any sun altitude the coefficients are interpolated linearly between the
-two nearest precomputed altitudes, and between rings the intensity is interpolated
-linearly in elevation.
+figs. 12-13). For any sun altitude the paper interpolates the coefficients linearly
+between the two nearest precomputed altitudes and the intensity linearly in elevation
+between rings; this implementation uses cubic (Catmull-Rom / Hermite) interpolation for
+both by default (``ring_interpolation="linear"`` restores the paper's rings), which cuts
+the error about threefold for the same table. Evaluation runs in numba kernels: either the
+series per ray, each ring summed over its own number of terms, or (default) a ring x azimuth
+grid of the series built once per sun and wavelength grid and interpolated per ray.
 
 References
 ----------
@@ -59,6 +63,19 @@ class Dobashi1995Sky(SkyModel):
         Samples per ring over [0, 180] deg relative to the sun ([4, 720], default 64).
     min_sun_elevation_deg : float
         Lowest precomputed sun altitude [deg], [-20, 80] (default 0).
+    ring_interpolation : {"cubic", "linear"}
+        Interpolation of the intensity between rings in elevation: cubic Hermite with
+        finite-difference slopes over four rings (default; a deviation from the paper, which
+        interpolates linearly, that cuts the error of the default 33 rings by about 3x), or
+        ``linear`` between the two nearest rings, as [DNKY95].
+    evaluation : {"grid", "series"}
+        ``series``: the cosine series is summed for every ray (each ring with its own number
+        of terms). ``grid`` (default): once per sun and wavelength grid, the series of every
+        ring is evaluated at 721 azimuths (0.25 deg steps) from the sun, and rays interpolate
+        that ring x azimuth grid (linearly in azimuth), like the paper's display step,
+        which evaluates the basis functions at the vertices of the dome's mesh and
+        interpolates between them. Cost per ray no longer grows with the number of terms;
+        the difference from ``series`` is below 0.2 % (see docs).
     **base_params
         Passed to the base model.
     """
@@ -77,7 +94,14 @@ class Dobashi1995Sky(SkyModel):
         Parameter("azimuth_samples", "", 64, 4, 720, "samples per ring over [0, 180] deg",
                   kind="int"),
         Parameter("min_sun_elevation_deg", "deg", 0.0, -20.0, 80.0, "lowest precomputed sun altitude"),
+        Parameter("ring_interpolation", "", "cubic", doc="interpolation between rings in elevation",
+                  kind="choice", choices=("cubic", "linear")),
+        Parameter("evaluation", "", "grid", doc="per-ray cosine series or ring x azimuth grid",
+                  kind="choice", choices=("grid", "series")),
     )
+
+    #: Azimuths of the evaluation grid over [0, 180] deg from the sun (0.25 deg steps).
+    GRID_AZIMUTHS = 721
 
     def __init__(self, sun, base: str = "nishita1996", **params):
         from skydome.sun import Sun
@@ -108,7 +132,10 @@ class Dobashi1995Sky(SkyModel):
         self.rings = p["rings"]
         self.azimuth_samples = p["azimuth_samples"]
         self.min_sun_elevation_deg = lo
+        self.ring_interpolation = p["ring_interpolation"]
+        self.evaluation = p["evaluation"]
         self._tables: dict = {}
+        self._grids: dict = {}
 
     # -- grids ------------------------------------------------------------------------------
     def sun_grid_deg(self) -> np.ndarray:
@@ -183,11 +210,9 @@ class Dobashi1995Sky(SkyModel):
                     memory_bytes=int(terms.sum()) * wl.size * 8)
 
     # -- evaluation -------------------------------------------------------------------------
-    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
-        """Spectral radiance [W m^-2 sr^-1 nm^-1] from the cosine series, shape
-        (..., n_wavelengths)."""
-        d = as_directions(directions)
-        wl = as_wavelengths(wavelengths_nm)
+    def _coefficients(self, wl):
+        """Coefficients for the actual sun altitude, (n_rings, n_terms_max, n_lambda), and
+        the number of non-zero terms per ring (n_rings,)."""
         t = self.table(wl)
         coef = t["coef"]
         # interpolate coefficients in sun altitude
@@ -197,31 +222,107 @@ class Dobashi1995Sky(SkyModel):
         f = (a - grid[i]) / (grid[i + 1] - grid[i])
         # Catmull-Rom (cubic Hermite) interpolation between the two nearest altitudes
         # (deviation: the paper interpolates linearly; the cubic halves the error)
-        p0 = coef[max(i - 1, 0)]
-        p3 = coef[min(i + 2, grid.size - 1)]
-        p1, p2 = coef[i], coef[i + 1]
+        used = (max(i - 1, 0), i, i + 1, min(i + 2, grid.size - 1))
+        p0, p1, p2, p3 = (coef[k] for k in used)
         m1 = 0.5 * (p2 - p0) if i > 0 else p2 - p1
         m2 = 0.5 * (p3 - p1) if i + 2 < grid.size else p2 - p1
         f2, f3 = f * f, f * f * f
         c = ((2 * f3 - 3 * f2 + 1) * p1 + (f3 - 2 * f2 + f) * m1 + (-2 * f3 + 3 * f2) * p2
              + (f3 - f2) * m2)                                      # (nr, n, nl)
+        # beyond the largest count among the altitudes used, a ring's coefficients are 0
+        n_terms = t["terms"][list(used)].max(axis=0).astype(np.int64)
+        return c, n_terms
+
+    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] from the cosine series, shape
+        (..., n_wavelengths); never negative.
+
+        Evaluated by a numba kernel (parallel over rays for large batches) that sums, on
+        each ring around a ray, only that ring's own number of cosine terms;
+        :meth:`_radiance_reference` is the same sum in numpy over all terms.
+        """
+        from skydome.models.simulated import _kernels_dobashi1995 as K
+
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        cubic = self.ring_interpolation == "cubic"
+        az = math.radians(self.sun.azimuth_deg)
+        if self.evaluation == "grid":
+            out = K.evaluate_grid(d.reshape(-1, 3), self._ring_grid(wl),
+                                  self.ring_elevations_deg(), az, cubic)
+        else:
+            c, n_terms = self._coefficients(wl)
+            out = K.evaluate(d.reshape(-1, 3), c, n_terms, self.ring_elevations_deg(), az,
+                             cubic)
+        return out.reshape(d.shape[:-1] + (wl.size,))
+
+    def _ring_grid(self, wl):
+        """Every ring's cosine series (at the actual sun altitude) evaluated at
+        ``GRID_AZIMUTHS`` azimuths over [0, 180] deg from the sun, (n_rings, n_az, n_lambda);
+        cached per wavelength grid."""
+        from skydome.models.simulated import _kernels_dobashi1995 as K
+
+        key = tuple(np.round(wl, 9))
+        if key not in self._grids:
+            if len(self._grids) > 2:
+                self._grids.clear()
+            c, n_terms = self._coefficients(wl)
+            self._grids[key] = K.ring_table(np.ascontiguousarray(c), n_terms,
+                                            self.GRID_AZIMUTHS)
+        return self._grids[key]
+
+    def _ring_weights(self, elev):
+        """numpy form of the ring interpolation: lowest ring index j - 1 of the four rings
+        j-1..j+2 and their weights, (N,) and (N, 4)."""
+        rings = self.ring_elevations_deg()
+        nr = rings.size
+        j = np.clip(np.searchsorted(rings, elev, side="right") - 1, 0, nr - 2)
+        e1, e2 = rings[j], rings[j + 1]
+        h = e2 - e1
+        t = np.clip((elev - e1) / h, 0.0, 1.0)
+        w = np.zeros(elev.shape + (4,))
+        if self.ring_interpolation == "linear":
+            w[:, 1], w[:, 2] = 1.0 - t, t
+            return j - 1, w
+        t2, t3 = t * t, t * t * t
+        h00, h10 = 2 * t3 - 3 * t2 + 1, t3 - 2 * t2 + t          # cubic Hermite basis
+        h01, h11 = -2 * t3 + 3 * t2, t3 - t2
+        w[:, 1], w[:, 2] = h00, h01
+        first, last = j == 0, j + 2 >= nr
+        s1 = np.where(first, 0.0, h10 * h / (e2 - rings[np.maximum(j - 1, 0)]))
+        w[:, 0] -= s1
+        w[:, 2] += np.where(first, h10, s1)
+        w[:, 1] -= np.where(first, h10, 0.0)
+        s2 = np.where(last, 0.0, h11 * h / (rings[np.minimum(j + 2, nr - 1)] - e1))
+        w[:, 3] += s2
+        w[:, 1] -= np.where(last, h11, s2)
+        w[:, 2] += np.where(last, h11, 0.0)
+        return j - 1, w
+
+    def _radiance_reference(self, directions, wavelengths_nm) -> np.ndarray:
+        """numpy reference implementation of :meth:`radiance` (all terms on every ring)."""
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        c, _ = self._coefficients(wl)
         flat = d.reshape(-1, 3)
         elev = np.degrees(np.arcsin(np.clip(flat[:, 2], -1.0, 1.0)))
         az = np.arctan2(flat[:, 0], flat[:, 1]) - math.radians(self.sun.azimuth_deg)
         cphi = np.cos(az)
-        # cos(n phi) by the Chebyshev recurrence
+        # cos(n phi) by the Chebyshev recurrence: T (n_terms, N)
         n_terms = c.shape[1]
-        rings = self.ring_elevations_deg()
-        j = np.clip(np.searchsorted(rings, elev, side="right") - 1, 0, rings.size - 2)
-        g = ((elev - rings[j]) / (rings[j + 1] - rings[j]))[:, None]
+        T = np.empty((n_terms, cphi.size))
+        T[0] = 1.0
+        if n_terms > 1:
+            T[1] = cphi
+        for n in range(2, n_terms):
+            T[n] = 2.0 * cphi * T[n - 1] - T[n - 2]
+        j0, w = self._ring_weights(elev)
+        nr = c.shape[0]
         out = np.zeros((flat.shape[0], wl.size))
-        t_prev = np.ones_like(cphi)
-        t_cur = cphi.copy()
-        for n in range(n_terms):
-            tn = t_prev if n == 0 else t_cur
-            out += tn[:, None] * ((1.0 - g) * c[j, n] + g * c[j + 1, n])
-            if n >= 1:
-                t_prev, t_cur = t_cur, 2.0 * cphi * t_cur - t_prev
+        for q in range(4):
+            r = np.clip(j0 + q, 0, nr - 1)
+            ring_val = np.einsum("nk,knl->kl", T, c[r])          # (N, nl)
+            out += w[:, q:q + 1] * ring_val
         np.maximum(out, 0.0, out=out)
         return out.reshape(d.shape[:-1] + (wl.size,))
 
