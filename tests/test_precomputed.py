@@ -254,3 +254,29 @@ def test_geometric_remaining_orders_approximates_more_orders():
     assert np.all(geo >= plain)
     assert np.max(np.abs(geo / ref - 1)) < 0.1
     assert np.max(np.abs(geo / ref - 1)) < 0.5 * np.max(np.abs(plain / ref - 1))
+
+
+def test_hazy_sky_against_monte_carlo():
+    """AOD 0.2 (Cornette-Shanks aerosol, g = 0.76), sun at 60 deg, 550 nm, 6 orders plus the
+    geometric remainder on a 64-node mu_s axis, against the independent ``montecarlo`` model
+    (all orders, 20 000 paths per direction: relative standard error 0.4-0.7 %). Directions:
+    zenith (30 deg from the sun), 90 deg from the sun, 5 deg from the sun, the side, and the
+    horizon towards the sun. Before the scattering density was kept in the sun's frame and the
+    observer's orders 2..N integrated at the sun's own mu_s, the zenith sky at AOD 0.5 was 16 %
+    too bright (confirmed by a brute-force second-order integral); measured now with these
+    (reduced) tables: within 1.6 % above 10 deg elevation and 3.6 % at 5 deg. Required: 3 %
+    above 10 deg, 6 % at 5 deg (the measured error plus three MC standard errors)."""
+    atm = Atmosphere.earth(aerosol_optical_depth=0.2)
+    s = sun(60.0)
+    wl = [550.0]
+    d = direction_from_angles(np.array([89.9, 30.0, 65.0, 20.0, 5.0]),
+                              np.array([0.0, 0.0, 180.0, 270.0, 180.0]))
+    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=20000,
+                        seed=11).radiance_with_error(d, wl)
+    assert np.all(err / ref < 0.01)
+    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
+                 remaining_orders="geometric", scattering_mu_s_size=64, scattering_r_size=16,
+                 scattering_mu_size=64, transmittance_mu_size=128, transmittance_r_size=32)
+    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    assert np.all(rel[:4] < 0.03), rel
+    assert rel[4] < 0.06, rel
