@@ -5,8 +5,8 @@ import pytest
 from typer.testing import CliRunner
 
 from skydome.cli import app
-from skydome.effects.twilight import (anti_solar_profile, belt_of_venus, horizontal_illuminance,
-                                      twilight_models)
+from skydome.effects.twilight import (anti_solar_profile, belt_of_venus, horizon_views,
+                                      horizontal_illuminance, twilight_models, zenith_luminance_curve)
 
 SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,
              n_wavelengths=10)
@@ -31,6 +31,28 @@ def test_zenith_luminance_falls_monotonically_by_four_orders(skies):
     assert z[-1] == 0.0
 
 
+def test_zenith_luminance_curve_orders_of_magnitude():
+    """zenith_luminance_curve: at sunset of order 10^2 cd/m^2 (10^2-10^3 is the usual range
+    for a clear sky); at -12 deg of order 10^-3 (above the natural night sky's ~2.5e-4
+    cd/m^2, V = 21.6 mag/arcsec^2, Patat 2003, A&A 400, 1183, by > 1 magnitude as Patat et
+    al. 2006, A&A 455, 385 found between -12 and -18 deg); at -18 deg below that night level."""
+    z = zenith_luminance_curve("precomputed", [0.0, 12.0, 18.0], wavelengths_nm=np.linspace(400, 700, 10),
+                               **SMALL)
+    assert 30.0 < z[0] < 1000.0
+    assert 2.5e-4 * 10 ** 0.4 < z[1] < 2e-2
+    assert 0.0 < z[2] < 2.5e-4
+
+
+def test_horizon_views_look_both_ways():
+    sun_side, anti = horizon_views(32, 270.0)
+    d0, m0 = sun_side.directions()
+    d1, m1 = anti.directions()
+    c = (8, 16)
+    assert d0[c][0] < -0.8 and d1[c][0] > 0.8            # west (sun) and east (anti-sun)
+    assert d0[0, 16, 2] > d0[-1, 16, 2]                  # image top towards the zenith
+    assert -0.2 < d1[-1, 16, 2] < 0.0                    # horizon just above the bottom edge
+
+
 def test_illuminance_order_of_magnitude_at_end_of_civil_twilight(skies):
     """Horizontal illuminance at sun -6 deg: of order 1-10 lx (about 3 lx is the usual
     figure for the end of civil twilight); the model gives 5-6 lx with the default tables."""
@@ -39,15 +61,32 @@ def test_illuminance_order_of_magnitude_at_end_of_civil_twilight(skies):
     assert 1.0 < e6 < 20.0
 
 
-def test_belt_of_venus_above_earth_shadow(skies):
-    """Sun 2 deg below the horizon: opposite the sun, a redder band (the Belt of Venus,
-    maximum R/B) lies above a bluer band near the horizon (the earth's shadow)."""
+@pytest.mark.parametrize("depression", [2.0, 4.0])
+def test_belt_of_venus_above_earth_shadow(skies, depression):
+    """Sun 2 and 4 deg below the horizon: opposite the sun, a redder band (the Belt of Venus,
+    maximum R/B) lies above a bluer, darker band on the horizon (the earth's shadow), as
+    measured by hyperspectral imaging of clear civil twilights (R. L. Lee, "Measuring and
+    modeling twilight's Belt of Venus", Appl. Opt. 54(4), B194-B203, 2015: a reddish band
+    above the antisolar horizon over the bluish-grey, darker earth's shadow)."""
     deps, sk = skies
     el = np.arange(0.5, 30.0, 0.5)
-    _, rb = anti_solar_profile(sk[deps.index(2.0)], el, np.linspace(400, 700, 10))
-    b = belt_of_venus(el, rb)
-    assert 3.0 < b["belt_deg"] < 15.0
-    assert b["contrast"] > 0.1
+    lum, rb = anti_solar_profile(sk[deps.index(depression)], el, np.linspace(400, 700, 10))
+    b = belt_of_venus(el, rb, lum)
+    assert b["found"] and 3.0 < b["belt_deg"] < 20.0
+    assert b["contrast"] > 0.1                                   # belt redder than the shadow
+    assert 0.5 < b["shadow_top_deg"] < b["belt_deg"]             # shadow under the belt
+    assert b["shadow_luminance"] < 0.8 * b["belt_luminance"]     # and darker
+
+
+def test_no_belt_in_a_uniform_profile():
+    """A profile with constant colour has no Belt of Venus (found is False)."""
+    el = np.arange(0.5, 30.0, 0.5)
+    assert not belt_of_venus(el, np.full(el.shape, 0.6))["found"]
+
+
+def test_belt_of_venus_rejects_profile_without_data():
+    with pytest.raises(ValueError, match="elevations_deg"):
+        belt_of_venus([0.5, 1.0], [1.0, 1.0])
 
 
 def test_cli_twilight(tmp_path):
@@ -57,6 +96,11 @@ def test_cli_twilight(tmp_path):
                                    "--scattering-mu-s-size", "8", "--orders", "2", "--out", str(out)])
     assert res.exit_code == 0, res.output
     assert (out / "twilight.csv").exists() and (out / "contact_sheet.png").exists()
+    assert (out / "horizon_sheet.png").exists() and (out / "horizon_sun_minus_090.png").exists()
     assert "sun  -9.00 deg" in res.output
+    head = (out / "twilight.csv").read_text().splitlines()
+    assert head[0].startswith("sun_elevation_deg,zenith_luminance_cd_m2") and len(head) == 4
     res = CliRunner().invoke(app, ["twilight", "--step", "20", "--out", str(tmp_path / "x")])
     assert res.exit_code == 2 and "step = 20" in res.output
+    res = CliRunner().invoke(app, ["twilight", "--exposure", "fixed", "--out", str(tmp_path / "y")])
+    assert res.exit_code == 2 and "exposure = 'fixed'" in res.output

@@ -501,7 +501,8 @@ def twilight_cmd(
     step: float = typer.Option(2.0, help="Step in sun depression [deg], 0.25..9; the sequence runs 0..-18 deg."),
     size: int = typer.Option(192, help="Fisheye frame size in pixels, 16..2048."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
-    out: str = typer.Option(..., help="Output folder: frames, contact_sheet.png, twilight.png, twilight.csv."),
+    exposure: str = typer.Option("auto", help="auto: each fisheye/horizon pair at its own automatic exposure; ramp: exposure makes up 80 % of the fall in log zenith luminance (frames darken visibly, by 10^1.4 over 0..-18 deg)."),
+    out: str = typer.Option(..., help="Output folder: fisheye and horizon frames, contact_sheet.png, horizon_sheet.png, twilight.png, twilight.csv."),
 ):
     """Twilight: the sky for the sun from 0 to -18 deg, zenith luminance and illuminance against depression,
     the earth's shadow and the Belt of Venus opposite the sun.
@@ -517,12 +518,12 @@ def twilight_cmd(
         progress = _Progress("twilight")
         try:
             res = run_twilight(out, model=model, step_deg=step, size=size, wavelengths=wavelengths,
-                               progress=progress, **params)
+                               exposure=exposure, progress=progress, **params)
         finally:
             progress.close()
         for d, z, e in zip(res["depression_deg"], res["zenith_luminance"], res["horizontal_illuminance"]):
             typer.echo(f"sun {-d + 0.0:6.2f} deg: zenith {z:.3g} cd/m^2, horizontal illuminance {e:.3g} lx")
-        typer.echo(f"wrote frames, contact_sheet.png, twilight.png, twilight.csv into {out}")
+        typer.echo(f"wrote frames, contact_sheet.png, horizon_sheet.png, twilight.png, twilight.csv into {out}")
     _run(go)
 
 
@@ -537,6 +538,7 @@ def airlight_cmd(
     turbidity: float = typer.Option(2.5, help="Turbidity of the air, 2..10 for the Preetham methods, 1..32 otherwise."),
     fov: float = typer.Option(60.0, help="Horizontal field of view of the (pinhole) camera [deg]."),
     view_azimuth: float = typer.Option(0.0, help="Azimuth the camera looks towards [deg] (horizontal view)."),
+    white_balance: str = typer.Option("fixed", help="fixed: true colour relative to a white surface under the unattenuated sun (clear and hazy air on one scale); sun: output in the input's units (white = white card facing the sun)."),
     out: str = typer.Option(..., help="Output .png (sRGB; before/after sheet with --synthetic), .exr or .npy (linear)."),
 ):
     """Aerial perspective / airlight: extinction and in-scattered light over an image with a depth map."""
@@ -546,7 +548,7 @@ def airlight_cmd(
 
         sun = Sun(elevation_deg=sun_elevation, azimuth_deg=sun_azimuth)
         airlight_cli(image, depth, out, sun, method=method, turbidity=turbidity, fov_deg=fov,
-                     view_azimuth_deg=view_azimuth, synthetic=synthetic)
+                     view_azimuth_deg=view_azimuth, synthetic=synthetic, white_balance=white_balance)
         typer.echo(f"wrote {out} ({method}, turbidity {turbidity:g})")
     _run(go)
 

@@ -17,12 +17,14 @@ Image convention: input linear sRGB white-balanced to the direct sunlight at the
 ((1, 1, 1) = a white Lambertian surface facing the sun, as :mod:`skydome.effects.dobashi2002`
 and its synthetic scene use). With the sun's transmitted spectral irradiance E_t(lambda),
 such a surface has radiance E_t / pi; the object is attenuated by the transmittance weighted
-with E_t, the airlight added, and the result divided by the luminance of a white surface
-under the unattenuated sun (E_0 / pi): the output is in true colour on a fixed scale, so
-that clear and hazy air (whose sunlight differs) can be compared. (The ``dobashi2002``
-method keeps that module's white-balanced output.) PNG input is decoded from sRGB; output is
-encoded to sRGB (clipped) for PNG, linear for EXR. Sky pixels (depth inf or <= 0) are left
-unchanged.
+with E_t and the airlight added. ``white_balance="fixed"`` (default) divides the result by
+the luminance of a white surface under the unattenuated sun (E_0 / pi): true colour on a
+fixed scale, so that clear and hazy air (whose sunlight differs) can be compared;
+``white_balance="sun"`` expresses it in the input's units instead (each channel divided by
+that of the white surface: a camera balanced on a white card facing the sun). (The ``dobashi2002`` method
+keeps that module's output, white-balanced on the sun.) PNG input is decoded from sRGB;
+output is encoded to sRGB (clipped) for PNG, linear for EXR/NPY. Sky pixels (depth inf, nan
+or <= 0) are left unchanged.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import numpy as np
 
 from skydome._validate import check_choice, check_number
 
-__all__ = ["METHODS", "apply_airlight", "airlight_cli", "demo_effects"]
+__all__ = ["METHODS", "WHITE_BALANCES", "apply_airlight", "airlight_cli", "demo_effects"]
 
 METHODS = ("precomputed", "hillaire2020", "preetham1999", "hoffman_preetham2002", "dobashi2002")
 
@@ -42,19 +44,58 @@ def _white_rgb(spectrum, wl):
     return xyz_to_linear_srgb(spectrum_to_xyz(spectrum, wl))
 
 
+WHITE_BALANCES = ("fixed", "sun")
+
+
 def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidity: float = 2.5,
                    fov_deg: float = 60.0, view_azimuth_deg: float = 0.0,
-                   view_elevation_deg: float = 0.0, n_wavelengths: int = 16, return_parts=False):
+                   view_elevation_deg: float = 0.0, n_wavelengths: int = 16,
+                   white_balance: str = "fixed", model_params: dict | None = None, return_parts=False):
     """Aerial perspective on a white-balanced linear sRGB image (H, W, 3) with depth [m].
 
-    Returns the new image (H, W, 3) in the same units; with ``return_parts`` also the
-    per-pixel transmittance and airlight (H, W, 3).
+    Parameters
+    ----------
+    image : array_like (H, W, 3)
+        Linear sRGB, (1, 1, 1) = a white Lambertian surface facing the sun (radiance
+        E_t / pi with E_t the sun's transmitted spectral irradiance at the camera).
+    depth_m : array_like (H, W)
+        Distance along each pixel's ray [m]; inf, nan or <= 0: sky (left unchanged).
+    sun : skydome.Sun
+    method : {"precomputed", "hillaire2020", "preetham1999", "hoffman_preetham2002", "dobashi2002"}
+    turbidity : float
+        Turbidity of the air (2..10 for the Preetham methods).
+    fov_deg, view_azimuth_deg, view_elevation_deg : float
+        Pinhole camera: horizontal field of view, azimuth (from north towards east) and
+        elevation of the optical axis [deg]; image top towards the zenith.
+    white_balance : {"fixed", "sun"}
+        ``"fixed"`` (default): the output is true colour relative to a white surface under
+        the unattenuated (extraterrestrial) sun, so that clear and hazy air, whose sunlight
+        differs, compare on one scale (the sun's own colour at the camera is applied to the
+        objects). ``"sun"``: the output has the input's units (white-balanced to the
+        transmitted direct sunlight, as a camera balanced on a white card facing the sun);
+        a distance of 0 leaves the image unchanged. Needs the sun above the horizon. In
+        haze with a low sun the direct sunlight is strongly reddened while the airlight is
+        lit also by the bluer diffuse skylight, so with ``"sun"`` hazy airlight comes out
+        blue.
+    model_params : dict, optional
+        Further keyword parameters for the model (e.g. smaller tables for ``precomputed``).
+    return_parts : bool
+        Also return the per-pixel transmittance (weighted with the reflected sunlight) and
+        the airlight in the output's units, each (H, W, 3).
+
+    Returns
+    -------
+    ndarray (H, W, 3)
     """
     import skydome as sd
     from skydome.effects.dobashi2002 import Camera, apply_aerial_perspective
     from skydome.spectra import solar_irradiance, spectrum_to_xyz, wavelength_grid, xyz_to_linear_srgb
 
     check_choice("method", method, METHODS)
+    check_choice("white_balance", white_balance, WHITE_BALANCES)
+    if white_balance == "sun" and sun.elevation_deg <= 0.0:
+        raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range (0, 90] deg "
+                         "for white_balance 'sun' (use white_balance='fixed')")
     img = np.asarray(image, dtype=np.float64)
     depth = np.asarray(depth_m, dtype=np.float64)
     if img.ndim != 3 or img.shape[-1] != 3:
@@ -72,14 +113,17 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
         raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range [0, 90] deg "
                          f"for method {method!r}")
     wl = wavelength_grid(380.0, 780.0, n=n_wavelengths)
-    sky = sd.model(method, sun=sun, turbidity=turbidity)
+    sky = sd.model(method, sun=sun, turbidity=turbidity, **(model_params or {}))
     h, w = depth.shape
     dirs = cam.ray_directions(w, h)
     obj = np.isfinite(depth) & (depth > 0)
     T = np.ones(depth.shape + (wl.size,))
     Lin = np.zeros(depth.shape + (wl.size,))
     if obj.any():
-        t, l_in = sky.aerial_perspective(dirs[obj], depth[obj], wl)
+        # hillaire2020: march each ray; its froxel volume (4 km slices) halves the
+        # extinction over the first kilometres and clamps distances beyond ~30 km
+        kw = {"use_volume": False} if method == "hillaire2020" else {}
+        t, l_in = sky.aerial_perspective(dirs[obj], depth[obj], wl, **kw)
         T[obj], Lin[obj] = t, l_in
     # the object: image (1, 1, 1) = a white Lambertian surface facing the transmitted sun,
     # radiance E_trans / pi; the result is divided by the luminance of a white surface under
@@ -90,9 +134,16 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
     white_trans = np.maximum(e_trans, 1e-12 * e_sun) / np.pi
     y_ref = float(spectrum_to_xyz(e_sun / np.pi, wl)[1])
     rgb_white_trans = _white_rgb(white_trans, wl)
-    t_rgb = xyz_to_linear_srgb(spectrum_to_xyz(T * white_trans, wl)) / rgb_white_trans
-    l_rgb = xyz_to_linear_srgb(spectrum_to_xyz(Lin, wl)) / y_ref
-    out = img * (rgb_white_trans / y_ref) * t_rgb + l_rgb
+    # transmittance of each channel, weighted with the light the object reflects (E_t / pi);
+    # small negative values from out-of-gamut spectra are clipped
+    t_rgb = np.maximum(xyz_to_linear_srgb(spectrum_to_xyz(T * white_trans, wl)) / rgb_white_trans, 0.0)
+    l_abs = xyz_to_linear_srgb(spectrum_to_xyz(Lin, wl))
+    if white_balance == "sun":
+        l_rgb = l_abs / rgb_white_trans                    # units of the input image
+        out = img * t_rgb + l_rgb
+    else:
+        l_rgb = l_abs / y_ref
+        out = img * (rgb_white_trans / y_ref) * t_rgb + l_rgb   # the sun's colour applied
     out[~obj] = img[~obj]
     out = np.maximum(out, 0.0)
     if return_parts:
@@ -193,7 +244,7 @@ def _side_by_side(before, after, path, labels):
 
 
 def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azimuth_deg,
-                 synthetic: bool = False, width: int = 320, height: int = 180):
+                 synthetic: bool = False, white_balance: str = "fixed", width: int = 320, height: int = 180):
     """The ``skydome airlight`` command: validates, applies, writes (atomically)."""
     from pathlib import Path
 
@@ -203,13 +254,15 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
     if not o.parent.is_dir():
         raise ValueError(f"out = '{out}': folder '{o.parent}' does not exist")
     check_choice("method", method, METHODS)
+    check_choice("white_balance", white_balance, WHITE_BALANCES)
     if synthetic:
         from skydome.effects.dobashi2002 import Camera, synthetic_mountains
 
         cam = Camera(fov_deg=fov_deg, azimuth_deg=view_azimuth_deg, elevation_deg=2.0, altitude_m=300.0)
         img, dep, _ = synthetic_mountains(width, height, camera=cam, sun=sun)
         res = apply_airlight(img, dep, sun, method=method, turbidity=turbidity, fov_deg=fov_deg,
-                             view_azimuth_deg=view_azimuth_deg, view_elevation_deg=2.0)
+                             view_azimuth_deg=view_azimuth_deg, view_elevation_deg=2.0,
+                             white_balance=white_balance)
         _side_by_side(img, [res], o, ["scene without air", f"{method}, turbidity {turbidity:g}"]) \
             if o.suffix.lower() == ".png" else _write(o, res)
         return res
@@ -218,7 +271,7 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
     img = _read_image(image)
     dep = _read_depth(depth)
     res = apply_airlight(img, dep, sun, method=method, turbidity=turbidity, fov_deg=fov_deg,
-                         view_azimuth_deg=view_azimuth_deg)
+                         view_azimuth_deg=view_azimuth_deg, white_balance=white_balance)
     _write(o, res)
     return res
 
@@ -232,8 +285,12 @@ def demo_effects(out_dir):
 
     sun = sd.Sun(elevation_deg=20.0, azimuth_deg=120.0)
     img, dep, _ = synthetic_mountains(240, 135, sun=sun)
-    clear = apply_airlight(img, dep, sun, method="precomputed", turbidity=2.0)
-    hazy = apply_airlight(img, dep, sun, method="precomputed", turbidity=8.0)
+    # half-size tables (a few seconds each); the docs figure uses the defaults
+    small = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,
+                 n_wavelengths=12)
+    clear = apply_airlight(img, dep, sun, method="precomputed", turbidity=2.0, model_params=small)
+    hazy = apply_airlight(img, dep, sun, method="precomputed", turbidity=8.0, model_params=small)
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     path = Path(out_dir) / "airlight_mountains.png"
     _side_by_side(img, [clear, hazy], path, ["no air", "clear air (turbidity 2)", "haze (turbidity 8)"])
     return [path]

@@ -11,7 +11,8 @@ valid to -18 deg with multiple scattering, is the default; ``single_scattering``
   opposite the sun, where the earth's shadow (a blue-grey band on the horizon) rises under
   the Belt of Venus (a pinkish band above it);
 * :func:`belt_of_venus`: locates the two bands in that profile;
-* :func:`run_twilight`: frames, a contact sheet, the curves as figure and CSV
+* :func:`horizon_views`: cameras towards the sun (twilight arch) and away from it;
+* :func:`run_twilight`: frames, contact sheets, the curves as figure and CSV
   (``skydome twilight``).
 
 The night sky's own light (airglow, starlight, zodiacal light: about 1e-4 cd m^-2 in total)
@@ -30,7 +31,7 @@ from typing import Callable
 import numpy as np
 
 __all__ = ["twilight_models", "zenith_luminance_curve", "horizontal_illuminance",
-           "anti_solar_profile", "belt_of_venus", "run_twilight", "demo_effects"]
+           "anti_solar_profile", "belt_of_venus", "horizon_views", "run_twilight", "demo_effects"]
 
 SUN_AZIMUTH_DEG = 270.0   # the sun sets in the west in every figure
 
@@ -99,34 +100,105 @@ def anti_solar_profile(sky, elevations_deg=np.arange(0.5, 40.0, 0.5), wavelength
     return xyz[:, 1], rb
 
 
-def belt_of_venus(elevations_deg, red_blue) -> dict:
-    """The Belt of Venus as the elevation of the reddest point (maximum R/B) of the
-    anti-solar profile above 2 deg, and the earth's shadow as the bluer band below it:
-    returns {"belt_deg", "belt_rb", "shadow_rb", "contrast"} with contrast = belt_rb -
-    shadow_rb (the shadow's R/B is the minimum below the belt)."""
+def belt_of_venus(elevations_deg, red_blue, luminance=None) -> dict:
+    """Locate the Belt of Venus and the earth's shadow in an anti-solar profile.
+
+    The belt is the reddest point (maximum R/B) of the profile above 2 deg elevation; the
+    earth's shadow is the band between the horizon and the belt, bluer (lower R/B) and, where
+    ``luminance`` [cd m^-2] is given, darker than the belt.
+
+    Parameters
+    ----------
+    elevations_deg : array_like
+        Elevations along the anti-solar vertical [deg], increasing.
+    red_blue : array_like
+        R/B of linear sRGB at those elevations (:func:`anti_solar_profile`).
+    luminance : array_like, optional
+        Luminance at those elevations [cd m^-2].
+
+    Returns
+    -------
+    dict
+        ``belt_deg`` (elevation of the R/B maximum [deg]), ``belt_rb``, ``shadow_rb`` (the
+        minimum R/B below the belt), ``contrast`` (belt_rb - shadow_rb), ``shadow_top_deg``
+        (where R/B, rising from the shadow towards the belt, passes half way between the two
+        [deg]), ``found`` (True where the belt is at least 0.05 redder than the shadow, lies
+        above the profile's lowest point above 2 deg and the shadow band has a top); with ``luminance`` also ``belt_luminance`` and ``shadow_luminance`` (mean
+        luminance below ``shadow_top_deg``) [cd m^-2].
+    """
     e = np.asarray(elevations_deg, dtype=float)
     rb = np.asarray(red_blue, dtype=float)
     ok = (e >= 2.0) & np.isfinite(rb)
+    if not ok.any():
+        raise ValueError("elevations_deg: the profile needs finite R/B values above 2 deg")
     i = int(np.flatnonzero(ok)[np.argmax(rb[ok])])
     below = np.isfinite(rb) & (e < e[i])
-    shadow = float(np.min(rb[below])) if below.any() else float("nan")
-    return {"belt_deg": float(e[i]), "belt_rb": float(rb[i]), "shadow_rb": shadow,
-            "contrast": float(rb[i] - shadow)}
+    if below.any():
+        j = int(np.flatnonzero(below)[np.argmin(rb[below])])
+        shadow = float(rb[j])
+        half = 0.5 * (shadow + rb[i])
+        k = j + int(np.argmax(rb[j:i + 1] >= half))      # first point at or above half way
+        top = float(e[k])
+    else:
+        shadow, top = float("nan"), float("nan")
+    out = {"belt_deg": float(e[i]), "belt_rb": float(rb[i]), "shadow_rb": shadow,
+           "contrast": float(rb[i] - shadow), "shadow_top_deg": top}
+    out["found"] = bool(out["contrast"] >= 0.05 and i > int(np.flatnonzero(ok)[0]) and np.isfinite(top))
+    if luminance is not None:
+        lum = np.asarray(luminance, dtype=float)
+        out["belt_luminance"] = float(lum[i])
+        sel = e < top
+        out["shadow_luminance"] = float(np.mean(lum[sel])) if sel.any() else float("nan")
+    return out
+
+
+def horizon_views(size: int, sun_azimuth_deg: float = SUN_AZIMUTH_DEG, fov_deg: float = 100.0,
+                  centre_elevation_deg: float = 25.0):
+    """Two pinhole cameras (:class:`skydome.render.camera.Camera`) looking at the horizon:
+    towards the sun (the twilight arch) and away from it (the earth's shadow under the Belt
+    of Venus). Each is ``size`` x ``size // 2`` pixels with a horizontal field ``fov_deg``,
+    its centre ``centre_elevation_deg`` above the horizon (so the horizon lies near the
+    bottom edge), image top towards the zenith."""
+    from skydome.render.camera import Camera
+    from skydome.transport.geometry import direction_from_angles
+
+    cams = []
+    for az in (sun_azimuth_deg, (sun_azimuth_deg + 180.0) % 360.0):
+        d = direction_from_angles(centre_elevation_deg, az)
+        cams.append(Camera(size, max(2, size // 2), fov_deg=fov_deg, position=(0.0, 0.0, 0.0),
+                           look_at=tuple(d), up=(0.0, 0.0, 1.0)))
+    return cams
+
+
+EXPOSURES = ("auto", "ramp")
 
 
 def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, size: int = 192,
-                 wavelengths: int = 16, progress: Callable | None = None, **params) -> dict:
+                 wavelengths: int = 16, exposure: str = "auto", progress: Callable | None = None,
+                 **params) -> dict:
     """Render the twilight sequence 0..-18 deg into ``out_dir`` (written atomically):
-    ``frame_sun_minus_DDD.png`` fisheyes (DDD in tenths of a degree) (each with its own automatic exposure, labelled with the
-    zenith luminance in the contact sheet, since the sky dims by 10^7), ``contact_sheet.png``,
-    ``twilight.png`` (zenith luminance and horizontal illuminance against depression, the
-    anti-solar profiles) and ``twilight.csv``."""
+    ``frame_sun_minus_DDD.png`` fisheyes and ``horizon_sun_minus_DDD.png`` horizon views
+    (towards the sun | away from it, see :func:`horizon_views`) (DDD in tenths of a degree),
+    ``contact_sheet.png`` (fisheyes), ``horizon_sheet.png`` (horizon views), ``twilight.png``
+    (zenith luminance and horizontal illuminance against depression, the anti-solar
+    profiles) and ``twilight.csv``.
+
+    Exposure (the sky dims by 10^7 from 0 to -18 deg): each fisheye and its horizon view
+    share one exposure multiplier k [m^2/cd]. ``exposure="auto"``: k is the fisheye's
+    automatic exposure (Reinhard's key 0.18 on the log-average sky luminance), so every
+    pair looks about equally bright and the sheets label each frame with its zenith
+    luminance. ``exposure="ramp"``: k = k_0 (L_z0 / L_z)^0.8, with k_0 and L_z0 the first
+    frame's auto exposure and zenith luminance: the exposure makes up 80 % of the fall in log
+    luminance, so the frames darken visibly (by 10^1.4 over 10^7) and stay readable."""
     from skydome._validate import check_int, check_number
     from skydome.render import render
     from skydome.render.projections import Fisheye
     from skydome.spectra import wavelength_grid
 
+    from skydome._validate import check_choice
+
     step = check_number("step", step_deg, 0.25, 9.0, "deg")
+    check_choice("exposure", exposure, EXPOSURES)
     size = check_int("size", size, 16, 2048)
     wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
     out_dir = Path(out_dir)
@@ -136,7 +208,9 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
     deps = np.arange(0.0, 18.0 + 1e-9, step)
     skies = twilight_models(model, list(deps), **params)
     prof_el = np.arange(0.5, 40.0, 0.5)
-    rows, frames = [], []
+    rows, frames, horizons = [], [], []
+    cams = horizon_views(max(16, size), skies[0].sun.azimuth_deg)
+    k0 = z0 = None
     tmp = Path(tempfile.mkdtemp(prefix=".skydome-twilight-", dir=parent))
     try:
         for n, (dep, sky) in enumerate(zip(deps, skies)):
@@ -144,20 +218,37 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
             eh = horizontal_illuminance(sky, wl)
             lum, rb = anti_solar_profile(sky, prof_el, wl)
             img = render(sky, Fisheye(size), wl, draw_sun=False)
-            name = f"frame_sun_minus_{int(round(dep * 10)):03d}.png"   # tenths of a degree
+            tag = f"sun_minus_{int(round(dep * 10)):03d}.png"   # tenths of a degree
             if zen > 0:
-                img.save(tmp / name)
-                frames.append((dep, zen, tmp / name))
-            rows.append((dep, zen, eh, lum, rb))
+                k = img.auto_exposure()
+                if exposure == "ramp":
+                    if k0 is None:
+                        k0, z0 = k, zen
+                    k = k0 * (z0 / zen) ** 0.8
+                img.save(tmp / f"frame_{tag}", exposure=k)
+                frames.append((dep, zen, tmp / f"frame_{tag}"))
+                halves = [render(sky, c, wl, draw_sun=False).to_srgb(exposure=k) for c in cams]
+                gap = np.zeros((halves[0].shape[0], 2, 3))
+                _save_srgb(np.concatenate([halves[0], gap, halves[1]], axis=1), tmp / f"horizon_{tag}")
+                horizons.append((dep, zen, tmp / f"horizon_{tag}"))
+            belt = belt_of_venus(prof_el, rb, lum) if (zen > 0 and dep <= 6.0) else None
+            rows.append((dep, zen, eh, lum, rb, belt if belt is not None and belt["found"] else None))
             if progress is not None:
                 progress(n + 1, len(deps))
         _contact_sheet(frames, tmp / "contact_sheet.png")
+        _contact_sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
+                       caption="sun side | anti-sun side")
         _plot(rows, prof_el, tmp / "twilight.png")
         with open(tmp / "twilight.csv", "w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(["sun_elevation_deg", "zenith_luminance_cd_m2", "horizontal_illuminance_lx"])
-            for dep, zen, eh, _, _ in rows:
-                w.writerow([-dep, f"{zen:.6g}", f"{eh:.6g}"])
+            w.writerow(["sun_elevation_deg", "zenith_luminance_cd_m2", "horizontal_illuminance_lx",
+                        "belt_of_venus_elevation_deg", "belt_red_blue", "shadow_red_blue",
+                        "shadow_top_deg", "belt_luminance_cd_m2", "shadow_luminance_cd_m2"])
+            for dep, zen, eh, _, _, b in rows:
+                extra = ([f"{b[k]:.4g}" for k in ("belt_deg", "belt_rb", "shadow_rb", "shadow_top_deg",
+                                                   "belt_luminance", "shadow_luminance")]
+                         if b is not None else [""] * 6)
+                w.writerow([-dep + 0.0, f"{zen:.6g}", f"{eh:.6g}"] + extra)
         out_dir.mkdir(exist_ok=True)
         for f in sorted(tmp.iterdir()):
             os.replace(f, out_dir / f.name)
@@ -167,21 +258,29 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
             "horizontal_illuminance": np.array([r[2] for r in rows])}
 
 
-def _contact_sheet(frames, path: Path, tile: int = 160) -> None:
+def _save_srgb(rgb, path: Path) -> None:
+    from PIL import Image
+
+    Image.fromarray((np.clip(rgb, 0.0, 1.0) * 255 + 0.5).astype(np.uint8)).save(path)
+
+
+def _contact_sheet(frames, path: Path, tile: int = 160, cols: int = 5, caption: str = "") -> None:
     from PIL import Image, ImageDraw
 
-    cols = min(5, max(1, len(frames)))
+    cols = min(cols, max(1, len(frames)))
     rows = (len(frames) + cols - 1) // cols
     lab = 28
-    sheet = Image.new("RGB", (cols * tile, max(1, rows) * (tile + lab)), (12, 12, 12))
-    draw = ImageDraw.Draw(sheet)
-    for n, (dep, zen, p) in enumerate(frames):
-        im = Image.open(p).convert("RGB")
+    ims = [Image.open(p).convert("RGB") for _, _, p in frames]
+    for im in ims:
         im.thumbnail((tile, tile))
-        x, y = (n % cols) * tile, (n // cols) * (tile + lab)
+    th = max([im.height for im in ims], default=tile)
+    sheet = Image.new("RGB", (cols * tile, max(1, rows) * (th + lab)), (12, 12, 12))
+    draw = ImageDraw.Draw(sheet)
+    for n, ((dep, zen, _), im) in enumerate(zip(frames, ims)):
+        x, y = (n % cols) * tile, (n // cols) * (th + lab)
         sheet.paste(im, (x, y))
-        draw.text((x + 3, y + tile + 1), f"sun {-dep + 0.0:g} deg", fill=(220, 220, 220))
-        draw.text((x + 3, y + tile + 14), f"zenith {zen:.2g} cd/m2", fill=(170, 170, 170))
+        draw.text((x + 3, y + th + 1), f"sun {-dep + 0.0:g} deg  {caption}", fill=(220, 220, 220))
+        draw.text((x + 3, y + th + 14), f"zenith {zen:.2g} cd/m2", fill=(170, 170, 170))
     sheet.save(path)
 
 
@@ -195,13 +294,20 @@ def _plot(rows, prof_el, path: Path) -> None:
     fig, ax = plt.subplots(1, 3, figsize=(14, 4))
     ax[0].semilogy(-deps, [max(r[1], 1e-12) for r in rows], "o-", label="zenith luminance [cd/m$^2$]")
     ax[0].semilogy(-deps, [max(r[2], 1e-12) for r in rows], "s-", label="horizontal illuminance [lx]")
+    # published clear-sky horizontal illuminance (AMS Glossary of Meteorology, "civil
+    # twilight", "astronomical twilight") and the natural night sky's zenith luminance
+    # (V = 21.6 mag/arcsec^2, Patat 2003, A&A 400, 1183: 10.8e4 * 10^(-0.4 V) = 2.5e-4 cd/m^2)
+    for x, lo, hi in ((0.0, 410.0, 585.0), (-6.0, 2.0, 3.5)):
+        ax[0].plot([x, x], [lo, hi], "k-", lw=3)
+    ax[0].plot([-12.0, -18.0], [8e-3, 6e-4], "kx", ms=8, label="AMS glossary illuminance [lx]")
+    ax[0].axhline(2.5e-4, color="k", ls=":", lw=1, label="night sky zenith (not modelled)")
     for x, name in ((-6, "civil"), (-12, "nautical"), (-18, "astronomical")):
         ax[0].axvline(x, color="0.7", lw=0.8)
         ax[0].text(x + 0.2, 1e2, name, rotation=90, fontsize=8, color="0.4")
     ax[0].set_xlabel("sun elevation [deg]")
     ax[0].legend(fontsize=8)
     ax[0].grid(alpha=0.3, which="both")
-    for dep, _, _, lum, rb in rows:
+    for dep, _, _, lum, rb, _ in rows:
         if dep <= 6:
             ax[1].plot(prof_el, rb, label=f"sun {-dep + 0.0:g}")
             ax[2].semilogy(prof_el, np.maximum(lum, 1e-12), label=f"sun {-dep + 0.0:g}")
@@ -219,7 +325,10 @@ def _plot(rows, prof_el, path: Path) -> None:
 
 
 def demo_effects(out_dir) -> list[Path]:
-    """A small twilight sequence for ./scripts/demo (steps of 3 deg, 128 px)."""
+    """A small twilight sequence for ./scripts/demo (steps of 3 deg, 112 px)."""
     target = Path(out_dir) / "twilight"
-    run_twilight(target, step_deg=3.0, size=128, wavelengths=12)
-    return [target / "contact_sheet.png", target / "twilight.png"]
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    # half-size precomputed tables (the docs figures use the defaults)
+    run_twilight(target, step_deg=3.0, size=112, wavelengths=10, scattering_r_size=16,
+                 scattering_mu_size=64, scattering_mu_s_size=16, orders=3, n_wavelengths=10)
+    return [target / "contact_sheet.png", target / "horizon_sheet.png", target / "twilight.png"]
