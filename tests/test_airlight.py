@@ -137,3 +137,24 @@ def test_short_paths_follow_beer_lambert_with_more_than_rayleigh(method):
     assert abs(k[1] / k[0] - 1.0) < 0.04
     assert k[0] > 1.5 * BETA_R_550
     assert abs(k[0] / 9.2e-5 - 1.0) < 0.08
+
+
+def test_fill_sky_puts_the_models_sky_in_the_sky_pixels():
+    """fill_sky: sky pixels get the model's sky along their rays, on the output's scale; a
+    clear noon-side sky seen 2-10 deg up (precomputed tables) is blue (B/R > 1) and, on the
+    fixed scale (1 = white surface under the extraterrestrial sun, E0/pi ~ 4e4 cd/m^2), the
+    clear sky near the horizon is a fraction of it (~5-10 kcd/m^2 -> 0.1-0.4)."""
+    img = np.full((2, 3, 3), 0.2)
+    dep = np.array([[np.inf, np.inf, np.inf], [5e3, 5e3, 5e3]])
+    out = apply_airlight(img, dep, SUN, method="preetham1999", turbidity=2.0, fov_deg=20,
+                         view_elevation_deg=5.0, fill_sky=True)
+    sky = out[0]
+    assert np.all(sky[:, 2] > sky[:, 0])
+    y = sky @ np.array([0.2126, 0.7152, 0.0722])
+    assert np.all((y > 0.05) & (y < 0.6))
+    kept = apply_airlight(img, dep, SUN, method="preetham1999", turbidity=2.0, fov_deg=20,
+                          view_elevation_deg=5.0)
+    np.testing.assert_array_equal(kept[0], img[0])
+    np.testing.assert_array_equal(kept[1], out[1])          # objects are unaffected
+    with pytest.raises(ValueError, match="fill_sky"):
+        apply_airlight(img, dep, SUN, method="dobashi2002", fill_sky=True)

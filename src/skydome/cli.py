@@ -539,6 +539,7 @@ def airlight_cmd(
     fov: float = typer.Option(60.0, help="Horizontal field of view of the (pinhole) camera [deg]."),
     view_azimuth: float = typer.Option(0.0, help="Azimuth the camera looks towards [deg] (horizontal view)."),
     white_balance: str = typer.Option("fixed", help="fixed: true colour relative to a white surface under the unattenuated sun (clear and hazy air on one scale); sun: output in the input's units (white = white card facing the sun)."),
+    fill_sky: bool = typer.Option(False, "--fill-sky", help="Replace the sky pixels (depth inf) by the model's sky along their rays (not for dobashi2002)."),
     out: str = typer.Option(..., help="Output .png (sRGB; before/after sheet with --synthetic), .exr or .npy (linear)."),
 ):
     """Aerial perspective / airlight: extinction and in-scattered light over an image with a depth map."""
@@ -548,7 +549,8 @@ def airlight_cmd(
 
         sun = Sun(elevation_deg=sun_elevation, azimuth_deg=sun_azimuth)
         airlight_cli(image, depth, out, sun, method=method, turbidity=turbidity, fov_deg=fov,
-                     view_azimuth_deg=view_azimuth, synthetic=synthetic, white_balance=white_balance)
+                     view_azimuth_deg=view_azimuth, synthetic=synthetic, white_balance=white_balance,
+                     fill_sky=fill_sky)
         typer.echo(f"wrote {out} ({method}, turbidity {turbidity:g})")
     _run(go)
 

@@ -50,7 +50,8 @@ WHITE_BALANCES = ("fixed", "sun")
 def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidity: float = 2.5,
                    fov_deg: float = 60.0, view_azimuth_deg: float = 0.0,
                    view_elevation_deg: float = 0.0, n_wavelengths: int = 16,
-                   white_balance: str = "fixed", model_params: dict | None = None, return_parts=False):
+                   white_balance: str = "fixed", model_params: dict | None = None, fill_sky: bool = False,
+                   return_parts=False):
     """Aerial perspective on a white-balanced linear sRGB image (H, W, 3) with depth [m].
 
     Parameters
@@ -79,6 +80,10 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
         blue.
     model_params : dict, optional
         Further keyword parameters for the model (e.g. smaller tables for ``precomputed``).
+    fill_sky : bool
+        Replace the sky pixels (depth inf, nan or <= 0) by the model's sky radiance along
+        their rays, in the output's units (default False: sky pixels are left unchanged).
+        Not available for ``dobashi2002``, which keeps its own sky handling.
     return_parts : bool
         Also return the per-pixel transmittance (weighted with the reflected sunlight) and
         the airlight in the output's units, each (H, W, 3).
@@ -106,6 +111,9 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
                  azimuth_deg=check_number("view_azimuth", view_azimuth_deg, -360.0, 360.0, "deg"),
                  elevation_deg=check_number("view_elevation", view_elevation_deg, -89.0, 89.0, "deg"))
     if method == "dobashi2002":
+        if fill_sky:
+            raise ValueError("fill_sky = True is not available for method 'dobashi2002' "
+                             "(choose one of precomputed, hillaire2020, preetham1999, hoffman_preetham2002)")
         atm = sd.Atmosphere.earth(turbidity=turbidity)
         out = apply_aerial_perspective(img, depth, cam, sun, atmosphere=atm, return_parts=return_parts)
         return out
@@ -145,6 +153,9 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
         l_rgb = l_abs / y_ref
         out = img * (rgb_white_trans / y_ref) * t_rgb + l_rgb   # the sun's colour applied
     out[~obj] = img[~obj]
+    if fill_sky and (~obj).any():
+        sky_abs = xyz_to_linear_srgb(spectrum_to_xyz(sky.radiance(dirs[~obj], wl), wl))
+        out[~obj] = sky_abs / (rgb_white_trans if white_balance == "sun" else y_ref)
     out = np.maximum(out, 0.0)
     if return_parts:
         return out, t_rgb, l_rgb
@@ -244,7 +255,8 @@ def _side_by_side(before, after, path, labels):
 
 
 def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azimuth_deg,
-                 synthetic: bool = False, white_balance: str = "fixed", width: int = 320, height: int = 180):
+                 synthetic: bool = False, white_balance: str = "fixed", fill_sky: bool = False,
+                 width: int = 320, height: int = 180):
     """The ``skydome airlight`` command: validates, applies, writes (atomically)."""
     from pathlib import Path
 
@@ -262,7 +274,7 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
         img, dep, _ = synthetic_mountains(width, height, camera=cam, sun=sun)
         res = apply_airlight(img, dep, sun, method=method, turbidity=turbidity, fov_deg=fov_deg,
                              view_azimuth_deg=view_azimuth_deg, view_elevation_deg=2.0,
-                             white_balance=white_balance)
+                             white_balance=white_balance, fill_sky=fill_sky)
         _side_by_side(img, [res], o, ["scene without air", f"{method}, turbidity {turbidity:g}"]) \
             if o.suffix.lower() == ".png" else _write(o, res)
         return res
@@ -271,7 +283,8 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
     img = _read_image(image)
     dep = _read_depth(depth)
     res = apply_airlight(img, dep, sun, method=method, turbidity=turbidity, fov_deg=fov_deg,
-                         view_azimuth_deg=view_azimuth_deg, white_balance=white_balance)
+                         view_azimuth_deg=view_azimuth_deg, white_balance=white_balance,
+                         fill_sky=fill_sky)
     _write(o, res)
     return res
 
@@ -284,13 +297,24 @@ def demo_effects(out_dir):
     from skydome.effects.dobashi2002 import synthetic_mountains
 
     sun = sd.Sun(elevation_deg=20.0, azimuth_deg=120.0)
-    img, dep, _ = synthetic_mountains(240, 135, sun=sun)
-    # half-size tables (a few seconds each); the docs figure uses the defaults
+    img, dep, _ = synthetic_mountains(320, 180, sun=sun)
+    # half-size tables (a few seconds each)
     small = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,
                  n_wavelengths=12)
-    clear = apply_airlight(img, dep, sun, method="precomputed", turbidity=2.0, model_params=small)
-    hazy = apply_airlight(img, dep, sun, method="precomputed", turbidity=8.0, model_params=small)
+    kw = dict(method="precomputed", model_params=small, fill_sky=True)
+    clear = apply_airlight(img, dep, sun, turbidity=2.0, **kw)
+    hazy = apply_airlight(img, dep, sun, turbidity=8.0, **kw)
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     path = Path(out_dir) / "airlight_mountains.png"
-    _side_by_side(img, [clear, hazy], path, ["no air", "clear air (turbidity 2)", "haze (turbidity 8)"])
+
+    def gain(x):
+        # display exposure per panel (a daylight-balanced camera with auto exposure):
+        # the 99th percentile of the luminance at 0.85
+        y = x @ np.array([0.2126, 0.7152, 0.0722])
+        return 0.85 / max(float(np.percentile(y, 99.0)), 1e-12)
+
+    g_clear = gain(clear)
+    _side_by_side(g_clear * img, [g_clear * clear, gain(hazy) * hazy], path,
+                  ["no air (sky pixels black), exposure of the next", "clear air (turbidity 2), sky from the model",
+                   "haze (turbidity 8), sky from the model"])
     return [path]
