@@ -280,3 +280,26 @@ def test_hazy_sky_against_monte_carlo():
     rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
     assert np.all(rel[:4] < 0.03), rel
     assert rel[4] < 0.06, rel
+
+
+def test_very_hazy_low_sun_against_monte_carlo():
+    """AOD 0.5, sun 10 deg up, 550 nm, the hazy-air settings of docs/validation.md (6 orders +
+    geometric remainder, sphere_samples 32, scattering_nu_size 16), against ``montecarlo``
+    (150 000 paths per direction: relative standard error 0.4-0.8 %). Directions 20-40 deg
+    from the sun near the horizon (where the multiply scattered aureole is) and 20 deg from
+    the zenith towards and away from the sun. With Bruneton's default sphere quadrature
+    (16) and nu nodes (8), and the observer's orders 2..N on the table's (mu, nu) mapping,
+    these were 16-22 % too bright near the horizon and -7 / +8 % off at 70 deg elevation;
+    measured now: within 3 %. Required: 5 % (the measured error plus three standard errors)."""
+    atm = Atmosphere.earth(aerosol_optical_depth=0.5)
+    s = sun(10.0)
+    wl = [550.0]
+    d = direction_from_angles(np.array([3.0, 10.0, 25.0, 70.0, 70.0, 89.9]),
+                              np.array([150.0, 150.0, 120.0, 180.0, 0.0, 0.0]))
+    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=150000,
+                        seed=12).radiance_with_error(d, wl)
+    assert np.all(err / ref < 0.01)
+    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
+                 remaining_orders="geometric", sphere_samples=32, scattering_nu_size=16)
+    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    assert np.all(rel < 0.05), rel

@@ -670,11 +670,14 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
 
 @njit(parallel=True, cache=True, fastmath=True)
 def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, r, mu_s,
-                              n_q, ts, out):
-    """Orders 2..N seen by an observer at radius r with the sun at mu_s, on the (mu, nu)
-    nodes of the scattering table's mu mapping at r and on n_nu uniform nu nodes:
-    out[mu, nu, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt
+                              n_q, ts, mu_nodes, ground_nodes, cphi_nodes, out):
+    """Orders 2..N seen by an observer at radius r with the sun at mu_s, on a sky map of view
+    directions: view zenith cosines ``mu_nodes`` (with ``ground_nodes``: does the ray end on
+    the ground) x azimuths from the sun's with cosines ``cphi_nodes``:
+    out[mu, phi, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt
     ([BN08] eq. 8 with J summed over the orders), J as in :func:`multiple_scattering_table`.
+    (The map is uniform in view zenith angle and azimuth, see :func:`slice_index`: the
+    table's own (mu, nu) mapping is coarse near the zenith and near the sun.)
 
     Integrating at the observer's own r and mu_s (instead of interpolating the 4-D table)
     keeps the multiply scattered aerosol aureole, which is sharp in the angle from the sun,
@@ -695,7 +698,9 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
         cs = np.empty(nc)
         tw = np.empty((nsc, nl))
         acc = np.zeros((n_nu, nl))
-        mu, ground = cell_mu(imu, n_mu, r, R, Rt)
+        mu = mu_nodes[imu]
+        ground = ground_nodes[imu]
+        s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
         nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
         for q in range(nq):
@@ -715,7 +720,7 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
                 for l in range(nl):
                     tw[kk, l] = tw[0, l] * dk
             for inu in range(n_nu):
-                nu = cell_nu(inu, n_nu, mu, mu_s)
+                nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
                 disc = R * R * (mu_s_t * mu_s_t - 1.0) + Rt * Rt
                 dtop = max(-R * mu_s_t + math.sqrt(max(disc, 0.0)), 0.0)
@@ -746,24 +751,50 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
                 out[imu, inu, l] = acc[inu, l]
 
 
+@njit(cache=True)
+def slice_index(mu, cphi, ground, geom):
+    """(node, fraction) on the view-zenith axis and on the azimuth axis of the observer's
+    sky map of :func:`multiple_scattering_slice`. ``geom`` = (n_ground, n_sky, theta_h):
+    nodes 0..n_ground-1 run uniformly in view zenith angle from the nadir to the horizon
+    (theta_h), nodes n_ground.. from the horizon to the zenith; azimuth from the sun's,
+    n_phi nodes uniform over [0, pi]."""
+    n_g = int(geom[0])
+    n_s = int(geom[1])
+    th_h = geom[2]
+    th = math.acos(clamp_cos(mu))
+    if ground:
+        x = (math.pi - th) / max(math.pi - th_h, 1e-12)
+        i, b = _split(x * (n_g - 1.0), n_g)
+    else:
+        x = (th_h - th) / th_h
+        i, b = _split(x * (n_s - 1.0), n_s)
+        i += n_g
+    return i, b
+
+
 # -- rendering --------------------------------------------------------------------------------------
 @njit(parallel=True, cache=True, fastmath=True)
 def render_observer(dirs, r, sun, ss_slice, pc, pp, ms_slice, col, beta_e, albedo, E, scale, R,
-                    Rt, alpha, out):
+                    Rt, alpha, geom, out):
     """Radiance [scale units] from each direction for an observer at radius r on the +z axis.
 
     ``ss_slice`` (nsc, n_mu, n_nu, nl) and ``ms_slice`` (n_mu, n_nu, nl) are the 4-D tables
     already interpolated at the observer's r and mu_s (multilinear interpolation is
-    separable, so the result equals the full 4-D lookup). Ground-hitting rays add the
+    separable, so the result equals the full 4-D lookup). With ``geom[0] > 0``, ``ms_slice``
+    is instead the observer's sky map (n_ground + n_sky, n_phi, nl) of
+    :func:`multiple_scattering_slice`, indexed by :func:`slice_index`. Ground-hitting rays add the
     Lambertian ground lit by the sun and the sky ([Bru17] GetSunAndSkyIrradiance) times the
     transmittance to the ground: both exponentials (sun to the ground point, observer to the
     ground point) are taken at once for all wavelengths by the vectorised
     :func:`skydome.transport._kernels.exp_neg_array` (relative error < 1e-8)."""
     n = dirs.shape[0]
     nsc = ss_slice.shape[0]
-    n_mu = ms_slice.shape[0]
+    n_mu = ss_slice.shape[1]
     n_nu = ss_slice.shape[2]
+    n_mu_ms = ms_slice.shape[0]
     n_nu_ms = ms_slice.shape[1]
+    sky_map = geom[0] > 0.0
+    sh = math.sqrt(sun[0] * sun[0] + sun[1] * sun[1])
     nl = out.shape[1]
     nc = col.shape[0]
     mu_s = sun[2]
@@ -787,10 +818,19 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, ms_slice, col, beta_e, albed
             w01 = (1.0 - b) * e
             w10 = b * (1.0 - e)
             w11 = b * e
-            jn, f = _split((nu + 1.0) * 0.5 * (n_nu_ms - 1), n_nu_ms)
+            if sky_map:
+                dh = math.sqrt(dirs[i, 0] * dirs[i, 0] + dirs[i, 1] * dirs[i, 1])
+                cphi = 1.0
+                if dh * sh > 1e-12:
+                    cphi = clamp_cos((dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1]) / (dh * sh))
+                jm, bm = slice_index(mu, cphi, ground, geom)
+                jn, f = _split(math.acos(cphi) / math.pi * (n_nu_ms - 1), n_nu_ms)
+            else:
+                jm, bm = mu_index(r, mu, ground, n_mu_ms, R, Rt)
+                jn, f = _split((nu + 1.0) * 0.5 * (n_nu_ms - 1), n_nu_ms)
             for l in range(nl):
-                acc[l] = ((1.0 - b) * ((1.0 - f) * ms_slice[im, jn, l] + f * ms_slice[im, jn + 1, l])
-                          + b * ((1.0 - f) * ms_slice[im + 1, jn, l] + f * ms_slice[im + 1, jn + 1, l]))
+                acc[l] = ((1.0 - bm) * ((1.0 - f) * ms_slice[jm, jn, l] + f * ms_slice[jm, jn + 1, l])
+                          + bm * ((1.0 - f) * ms_slice[jm + 1, jn, l] + f * ms_slice[jm + 1, jn + 1, l]))
             for k in range(nsc):
                 p = phase_value(pc[k], pp[k], nu)
                 s = ss_slice[k]

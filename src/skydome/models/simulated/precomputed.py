@@ -20,6 +20,7 @@ References
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 import time
@@ -33,7 +34,9 @@ __all__ = ["PrecomputedSky", "Precomputed"]
 
 _FORMAT = "skydome.precomputed/1"
 _QUADRATURE_SCALE_M = 500.0
-_SLICE_NU = 64   # nu nodes of the observer's multiple-scattering slice
+# the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
+# in angle) and azimuth nodes from the sun's over [0, 180] deg
+_SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
 
 
 @register
@@ -365,15 +368,31 @@ class PrecomputedSky(SkyModel):
         key = (self._r0, mu_s)
         if key not in cache:
             t = self._t
-            out = np.empty((ms.shape[1], _SLICE_NU, ms.shape[-1]))
+            geom = self._slice_geometry()
+            n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
+            th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
+                                 th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
+            ground = np.arange(n_g + n_s) < n_g
+            cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
+            out = np.empty((n_g + n_s, _SLICE_PHI, ms.shape[-1]))
             KP.multiple_scattering_slice(t["scattering_density"], t["profile_code"], t["profile_p0"],
                                          t["profile_p1"], t["scattering_index"], t["columns"],
                                          t["beta_e"], R, Rt, self._mu_s_min, self._r0, mu_s,
-                                         int(self.integration_samples), _QUADRATURE_SCALE_M, out)
+                                         int(self.integration_samples), _QUADRATURE_SCALE_M,
+                                         np.cos(th), ground, cphi, out)
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out
         return sl(ss), cache[key]
+
+    def _slice_geometry(self, table=False):
+        """``geom`` of :func:`_kernels_precomputed.render_observer`: (n_ground, n_sky,
+        horizon zenith angle [rad]) of the observer's sky map, or (0, 0, 0) for the table's
+        own mu mapping."""
+        if table or "scattering_density" not in self._t or float(self.sun.direction[2]) < self._mu_s_min:
+            return np.zeros(3)
+        mu_h = -math.sqrt(max(1.0 - (self._R / self._r0) ** 2, 0.0))
+        return np.array([_SLICE_GROUND, _SLICE_SKY, math.acos(mu_h)])
 
     # -- public API ---------------------------------------------------------------------------------
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
@@ -418,7 +437,7 @@ class PrecomputedSky(SkyModel):
         KP.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
                            t["phase_code"], t["phase_param"], ms_s, t["columns"], t["beta_e"],
                            t["ground_albedo"], t["irradiance"], scale, self._R, self._Rt,
-                           self._alpha, out)
+                           self._alpha, self._slice_geometry(), out)
         return out
 
     def _transmittance_table(self, r, mu):
@@ -512,10 +531,12 @@ class PrecomputedSky(SkyModel):
             no_ground = np.zeros_like(t["ground_albedo"])
             one = np.ones(nl)
             a_sl, a_tab = np.empty_like(ins), np.empty_like(ins)
-            for ms_x, o in ((ms_s, a_sl), (ms_tab, a_tab)):
+            for ms_x, o, geom in ((ms_s, a_sl, self._slice_geometry()),
+                                  (ms_tab, a_tab, self._slice_geometry(table=True))):
                 KP.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), zero,
                                    t["phase_code"], t["phase_param"], ms_x, t["columns"], t["beta_e"],
-                                   no_ground, t["irradiance"], one, self._R, self._Rt, self._alpha, o)
+                                   no_ground, t["irradiance"], one, self._R, self._Rt, self._alpha,
+                                   geom, o)
             # applied in proportion to the path's share of the whole ray's extinction,
             # 1 - T(d) over 1 - T(end): 0 at distance 0, all of it at the end of the ray
             tr_end, ins_end = np.empty_like(tr), np.zeros_like(ins)
