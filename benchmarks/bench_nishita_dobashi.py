@@ -76,7 +76,8 @@ def main():
                                                    "evaluation": "series"}, L_ss),
                             ("single_scattering", {"rings": 65}, L_ss),
                             ("nishita1996", {"orders": 6}, L6)]:
-        m = sd.model("dobashi1995", sun=SUN, base=base, sun_altitudes=19, **kw)
+        # 19 sun altitudes (the default) and 33 rings unless given (the default is 65)
+        m = sd.model("dobashi1995", sun=SUN, base=base, **{"sun_altitudes": 19, "rings": 33, **kw})
         _, tpre = timed(lambda: m.table(WL))
         L = m.radiance(DIRS, WL)
         t_small = best(lambda: m.radiance(DIRS, WL), 5)

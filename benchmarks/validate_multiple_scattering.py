@@ -33,10 +33,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_single_scattering import machine  # noqa: E402
 
 MODELS = ("precomputed", "hillaire2020")
-# precomputed settings for hazy air (AOD >= 0.2): more orders plus the geometric estimate of
-# the rest, a finer sphere quadrature of the scattering density and finer nu nodes for the
-# multiply scattered aureole (Bruneton's defaults, 16 and 8, are set for clear air)
-HAZY = {"orders": 6, "remaining_orders": "geometric", "sphere_samples": 32, "scattering_nu_size": 16}
+# precomputed settings of the validation (docs/sections/precomputed.md, "recommended
+# settings"): more orders plus the geometric estimate of the rest, a finer sphere quadrature
+# of the scattering density and finer nu nodes for the multiply scattered aureole
+# (Bruneton's 16 and 8 are too coarse for the aerosol's forward peak), and a finer mu_s axis
+# of the scattering density (at fixed sun-frame angles the local horizon moves with mu_s)
+VALIDATED = {"orders": 6, "remaining_orders": "geometric", "sphere_samples": 32, "scattering_nu_size": 16,
+             "density_mu_s_size": 64}
 
 
 def directions(step_deg: float = 10.0):
@@ -105,10 +108,7 @@ def main(argv=None):
         for m in models:
             t0 = time.perf_counter()
             try:
-                kw = {}
-                if m == "precomputed" and aod >= 0.2:
-                    # hazy air: more orders and the geometric estimate of the rest
-                    kw = dict(HAZY)
+                kw = dict(VALIDATED) if m == "precomputed" else {}
                 sky = sd.model(m, sun=sun, atmosphere=atm, **kw)
                 got = sky.radiance(dirs, wl)
             except ValueError as exc:
@@ -140,9 +140,10 @@ def write_report(rows, rels, dirs, args, total):
              "atmosphere `Atmosphere.earth(aerosol_optical_depth=AOD)` (ozone 300 DU, ground albedo 0.1). "
              "Luminance errors are relative and solid-angle weighted; chromaticity errors are CIE 1931 xy "
              "distances; 'MC noise' is the reference's own relative standard error in luminance.", "",
-             "Settings: `precomputed` with its defaults (4 orders, Bruneton's table sizes) at AOD 0.05 and "
-             "with `orders=6, remaining_orders=\"geometric\", sphere_samples=32, scattering_nu_size=16` "
-             "at AOD 0.2 and 0.5; "
+             "Settings: `precomputed` with `orders=6, remaining_orders=\"geometric\", sphere_samples=32, "
+             "scattering_nu_size=16, density_mu_s_size=64` (the recommended settings of docs/models.md; "
+             "otherwise Bruneton's "
+             "table sizes, 20 wavelengths); "
              "`hillaire2020` with its defaults.", "",
              "Acceptance (issue 5): `precomputed` luminance RMS < 2 % and chromaticity < 0.003 for the day "
              "skies, twilight (sun -2, -4, -6 deg) within 10 %; `hillaire2020` reported as measured.", "",

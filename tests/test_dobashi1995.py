@@ -62,3 +62,21 @@ def test_bad_parameters():
         sd.model("dobashi1995", sun=sd.Sun(elevation_deg=-5, azimuth_deg=0), base="preetham1999")
     with pytest.raises(TypeError):
         sd.model("dobashi1995", sun=sun, base="preetham1999", bogus=1)
+
+
+def test_defaults_within_one_percent_of_the_base_everywhere():
+    """Issue 4's criterion (under 1 % error) with the default table (19 sun altitudes, 65
+    rings): single_scattering base, sun at 37 deg (between grid altitudes), 2048 random
+    directions 2-88 deg elevation, luminance. Measured: median 0.14 %, p95 0.41 %, max
+    0.91 % (with 10 altitudes and 33 rings, max 8.3 %, 8 deg from the sun)."""
+    from skydome.spectra import spectrum_to_xyz
+
+    sun = sd.Sun(elevation_deg=37.0, azimuth_deg=150.0)
+    wl = np.linspace(380.0, 780.0, 9)
+    rng = np.random.default_rng(0)
+    d = direction_from_angles(rng.uniform(2, 88, 2048), rng.uniform(0, 360, 2048))
+    m = sd.model("dobashi1995", sun=sun, base="single_scattering")
+    y = spectrum_to_xyz(m.radiance(d, wl), wl)[..., 1]
+    y_ref = spectrum_to_xyz(sd.model("single_scattering", sun=sun).radiance(d, wl), wl)[..., 1]
+    err = np.abs(y / y_ref - 1.0)
+    assert np.percentile(err, 95) < 0.006 and err.max() < 0.01, (np.percentile(err, 95), err.max())

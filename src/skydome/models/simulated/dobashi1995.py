@@ -56,9 +56,12 @@ class Dobashi1995Sky(SkyModel):
         interpolated by Catmull-Rom splines.
     sun_altitudes : int
         Precomputed sun altitudes, equally spaced over [min_sun_elevation_deg, 90]
-        ([2, 91], default 10).
+        ([2, 91], default 19: every 5 deg from 0).
     rings : int
-        Elevation slices over [-90, 90] deg, denser near the horizon ([5, 181], default 33).
+        Elevation slices over [-90, 90] deg, denser near the horizon ([5, 181], default 65).
+        The defaults are the smallest of the tried settings that keep the error against
+        the base under 1 % in every direction (single_scattering base, sun between grid
+        altitudes; 10 altitudes and 33 rings: p95 2.4 %, max 8.3 % near the sun).
     azimuth_samples : int
         Samples per ring over [0, 180] deg relative to the sun ([4, 720], default 64).
     min_sun_elevation_deg : float
@@ -89,8 +92,8 @@ class Dobashi1995Sky(SkyModel):
         Parameter("base", "", "nishita1996", doc="registered name of the model represented",
                   kind="object"),
         Parameter("max_error", "", 0.01, 1e-4, 1.0, "largest relative error per ring"),
-        Parameter("sun_altitudes", "", 10, 2, 91, "precomputed sun altitudes", kind="int"),
-        Parameter("rings", "", 33, 5, 181, "elevation slices over [-90, 90] deg", kind="int"),
+        Parameter("sun_altitudes", "", 19, 2, 91, "precomputed sun altitudes", kind="int"),
+        Parameter("rings", "", 65, 5, 181, "elevation slices over [-90, 90] deg", kind="int"),
         Parameter("azimuth_samples", "", 64, 4, 720, "samples per ring over [0, 180] deg",
                   kind="int"),
         Parameter("min_sun_elevation_deg", "deg", 0.0, -20.0, 80.0, "lowest precomputed sun altitude"),

@@ -229,11 +229,12 @@ class Nishita1996Sky(SkyModel):
                              np.ascontiguousarray(G), R, Rt, D, Htop, pr.profile_code,
                              pr.profile_p0, pr.profile_p1, pr.extinction, n, 500.0, In)
             fields.append(In)
+        # every order's lattice light (order k at index k - 1) and ground radiance, stacked
+        fields_all = np.ascontiguousarray(np.stack([f.reshape(nx, nx, nh, Kd, nl) for f in fields]))
+        grounds_all = np.ascontiguousarray(albedo * np.einsum("oxyjl,xyj->oxyl",
+                                                              fields_all[:, :, :, 0], Wg))
         st.update(dirs=dirs, fine=fine, dw=dw, owner=owner, D=D, Htop=Htop, nx=nx, nh=nh,
-                  fields=[np.ascontiguousarray(f.reshape(nx, nx, nh, Kd, nl)) for f in fields],
-                  grounds=[np.ascontiguousarray(albedo * np.einsum(
-                      "xyjl,xyj->xyl", f.reshape(nx, nx, nh, Kd, nl)[:, :, 0], Wg))
-                      for f in fields])
+                  fields_all=fields_all, grounds_all=grounds_all)
         return st
 
     # -- evaluation -----------------------------------------------------------------------
@@ -258,12 +259,13 @@ class Nishita1996Sky(SkyModel):
         K.view_single(v, st["r0"], self._sun, st["R"], st["Rt"], pr.profile_code, pr.profile_p0,
                       pr.profile_p1, pr.scattering, pr.extinction, pr.phase_code, pr.phase_param,
                       albedo, st["e_sun"], st["lo"], st["hi"], self.view_samples, 500.0, out[0])
-        for o in range(1, self.orders):
-            K.view_gather(v, st["r0"], st["fields"][o - 1], st["grounds"][o - 1], st["fine"],
-                          st["dw"], st["owner"], st["R"], st["Rt"], st["D"], st["Htop"],
-                          pr.profile_code, pr.profile_p0, pr.profile_p1, pr.scattering,
-                          pr.extinction, pr.phase_code, pr.phase_param, self.view_samples, 500.0,
-                          out[o])
+        if self.orders > 1:
+            # orders 2..N in one pass: the phase-cell weights and the ray's nodes are shared
+            K.view_gather_orders(v, st["r0"], st["fields_all"], st["grounds_all"], st["fine"],
+                                 st["dw"], st["owner"], st["R"], st["Rt"], st["D"], st["Htop"],
+                                 pr.profile_code, pr.profile_p0, pr.profile_p1, pr.scattering,
+                                 pr.extinction, pr.phase_code, pr.phase_param, self.view_samples,
+                                 500.0, out[1:])
         np.maximum(out, 0.0, out=out)
         out[~np.isfinite(out)] = 0.0
         return out.reshape((self.orders,) + d.shape[:-1] + (nl,))

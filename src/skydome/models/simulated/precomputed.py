@@ -64,14 +64,12 @@ class PrecomputedSky(SkyModel):
     remaining_orders : {"none", "geometric"}
         "geometric" adds the orders beyond ``orders`` as a geometric series whose ratio is
         that of the last two computed orders' total radiance, per wavelength (clamped to 0.9;
-        after Hillaire 2020, eq. 10). Recommended for every aerosol load with ``orders=6`` (it also
-        removes the colour bias of the truncated series); see the documentation.
+        after Hillaire 2020, eq. 10); see the validated settings below.
     transmittance_mu_size, transmittance_r_size : int
         Transmittance (column) table size, default 256 x 64.
     scattering_r_size, scattering_mu_size, scattering_mu_s_size, scattering_nu_size : int
-        4-D scattering table size, default 32 x 128 x 32 x 8 (``scattering_mu_size`` even);
-        ``scattering_mu_s_size=64`` is recommended for aerosol optical depths >= 0.2 (the
-        multiply scattered aureole carried from order to order needs the finer sun axis).
+        4-D scattering table size, default 32 x 128 x 32 x 8 (Bruneton's; ``scattering_mu_size``
+        even).
     irradiance_mu_s_size, irradiance_r_size : int
         Ground-irradiance table size, default 64 x 16.
     integration_samples : int
@@ -79,6 +77,13 @@ class PrecomputedSky(SkyModel):
     sphere_samples : int
         Zenith-angle samples of the incident directions in the scattering density
         (Bruneton's 16; azimuth gets twice as many over the full circle).
+    density_mu_s_size : int, optional
+        mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
+
+    The defaults are Bruneton's sizes. The settings validated against the Monte Carlo
+    reference to under 2 % (docs/validation.md) are ``orders=6, remaining_orders="geometric",
+    sphere_samples=32, scattering_nu_size=16, density_mu_s_size=64`` (about 6x the
+    precomputation time and memory).
     max_sun_zenith_deg : float
         Largest sun zenith angle in the tables [deg], [90, 120] (default 108: astronomical
         twilight).
@@ -112,6 +117,8 @@ class PrecomputedSky(SkyModel):
         Parameter("integration_samples", "", 20, 2, 1000, "quadrature nodes per ray piece", kind="int"),
         Parameter("sphere_samples", "", 16, 4, 256, "zenith samples of the scattering density",
                   kind="int"),
+        Parameter("density_mu_s_size", "", None, 2, 512,
+                  "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
     )
 
@@ -225,20 +232,22 @@ class PrecomputedSky(SkyModel):
                               for rr in r_nodes] for c in sc_idx])          # (nsc, n_r)
             delta = np.zeros((1, 1, 1, 1, nl), dtype=np.float32)
             dE = np.zeros_like(E)
-            L_in = np.empty((n_in, n_r, n_ms, nl))
-            rhs = np.empty((int(rows[-1]), n_r * n_ms * nl), dtype=np.float32)
+            # the scattering density's own mu_s axis (same mapping, its own node count)
+            n_ms_j = p["density_mu_s_size"] or n_ms
+            L_in = np.empty((n_in, n_r, n_ms_j, nl))
+            rhs = np.empty((int(rows[-1]), n_r * n_ms_j * nl), dtype=np.float32)
             # weight of each constituent at every (r, mu_s, l) column of L_in: its scattering
             # coefficient at reference density (the density profile is applied exactly along
             # each ray in 3d: J_k / rho_k is smooth in r, rho_k J_k is not)
             w_col = [np.broadcast_to(np.ones_like(dens[k])[:, None, None] * beta_s[k][None, None, :],
-                                     (n_r, n_ms, nl)).reshape(-1) for k in range(sc_idx.size)]
+                                     (n_r, n_ms_j, nl)).reshape(-1) for k in range(sc_idx.size)]
             dE_prev = prev_dE = prev_delta = None
             J_sum = None
             for order in range(2, p["orders"] + 1):
                 first = order == 2
                 # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
                 KP.incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt,
-                                     mu_s_min, alpha, n_r, n_ms, th_in, ph_in, L_in)
+                                     mu_s_min, alpha, n_r, n_ms_j, th_in, ph_in, L_in)
                 # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid: one float32
                 # matrix product (BLAS) over all (r, mu_s, l), laid out [k, theta, phi, r, mu_s, l]
                 lin = L_in.reshape(n_in, -1)
@@ -246,7 +255,7 @@ class PrecomputedSky(SkyModel):
                     blk = lin if right[k] is None else right[k] @ lin
                     np.multiply(blk, w_col[k], out=rhs[rows[k]:rows[k + 1]], casting="unsafe")
                 if J_sum is None:
-                    J = np.empty((sc_idx.size, th_out.size, ph_out.size, n_r, n_ms, nl),
+                    J = np.empty((sc_idx.size, th_out.size, ph_out.size, n_r, n_ms_j, nl),
                                  dtype=np.float32)
                 for k in range(sc_idx.size):
                     np.matmul(left_all[:, rows[k]:rows[k + 1]], rhs[rows[k]:rows[k + 1]],
