@@ -37,9 +37,10 @@ MODELS = ("precomputed", "hillaire2020")
 # settings"): more orders plus the geometric estimate of the rest, a finer sphere quadrature
 # of the scattering density and finer nu nodes for the multiply scattered aureole
 # (Bruneton's 16 and 8 are too coarse for the aerosol's forward peak), and a finer mu_s axis
-# of the scattering density (at fixed sun-frame angles the local horizon moves with mu_s)
+# of the scattering density (at fixed sun-frame angles the local horizon moves with mu_s) and
+# of the 4-D tables (orders >= 3 and twilight)
 VALIDATED = {"orders": 6, "remaining_orders": "geometric", "sphere_samples": 32, "scattering_nu_size": 16,
-             "density_mu_s_size": 64}
+             "scattering_mu_s_size": 64, "density_mu_s_size": 64}
 
 
 def directions(step_deg: float = 10.0):
@@ -84,6 +85,12 @@ def main(argv=None):
     ap.add_argument("--samples", type=int, default=4000, help="Monte Carlo paths per direction and wavelength")
     ap.add_argument("--wavelengths", type=int, default=12)
     ap.add_argument("--models", default=",".join(MODELS))
+    ap.add_argument("--aods", default="0.05,0.2,0.5", help="aerosol optical depths of the day skies")
+    ap.add_argument("--no-twilight", action="store_true", help="leave out the twilight skies")
+    ap.add_argument("--out", default="docs/validation.md", help="report (relative to the repository)")
+    ap.add_argument("--twilight-samples", type=int, default=1_000_000,
+                    help="Monte Carlo paths per direction and wavelength for the twilight skies "
+                         "(on 20 deg rings and 6 wavelengths: few paths reach the sunlit air)")
     args = ap.parse_args(argv)
 
     import skydome as sd
@@ -91,18 +98,26 @@ def main(argv=None):
 
     wl = np.linspace(400.0, 700.0, args.wavelengths)
     dirs, w = directions(20.0 if args.quick else 10.0)
-    configs = [(e, a) for a in (0.05, 0.2, 0.5) for e in (2.0, 10.0, 30.0, 60.0, 90.0)]
-    configs += [(e, 0.2) for e in (-2.0, -4.0, -6.0)]
+    aods = [float(x) for x in args.aods.split(",") if x]
+    configs = [(e, a) for a in aods for e in (2.0, 10.0, 30.0, 60.0, 90.0)]
+    if not args.no_twilight:
+        configs += [(e, 0.2) for e in (-2.0, -4.0, -6.0)]
     if args.quick:
         configs = [(30.0, 0.2), (-4.0, 0.2)]
     models = [m for m in args.models.split(",") if m]
     rows, rels = [], {m: [] for m in models}
     t_all = time.perf_counter()
+    dirs_day, w_day, wl_day = dirs, w, wl
+    dirs_tw, w_tw = directions(20.0)
+    wl_tw = np.linspace(400.0, 700.0, 6)
     for elev, aod in configs:
         atm = Atmosphere.earth(aerosol_optical_depth=aod)
         sun = sd.Sun(elevation_deg=elev, azimuth_deg=180.0)
+        twilight = elev < 0 and not args.quick
+        dirs, w, wl = (dirs_tw, w_tw, wl_tw) if twilight else (dirs_day, w_day, wl_day)
+        samples = args.twilight_samples if twilight else args.samples
         t0 = time.perf_counter()
-        mc = sd.model("montecarlo", sun=sun, atmosphere=atm, samples=args.samples, seed=1)
+        mc = sd.model("montecarlo", sun=sun, atmosphere=atm, samples=samples, seed=1)
         ref, err = mc.radiance_with_error(dirs, wl)
         t_mc = time.perf_counter() - t0
         for m in models:
@@ -124,10 +139,10 @@ def main(argv=None):
     total = time.perf_counter() - t_all
     if args.quick:
         return
-    write_report(rows, rels, dirs, args, total)
+    write_report(rows, rels, dirs_day, args, total, len(dirs_tw))
 
 
-def write_report(rows, rels, dirs, args, total):
+def write_report(rows, rels, dirs, args, total, n_dirs_twilight):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -139,9 +154,13 @@ def write_report(rows, rels, dirs, args, total):
              f"wavelengths 400-700 nm) on {len(dirs)} upper-hemisphere directions (10 deg rings); "
              "atmosphere `Atmosphere.earth(aerosol_optical_depth=AOD)` (ozone 300 DU, ground albedo 0.1). "
              "Luminance errors are relative and solid-angle weighted; chromaticity errors are CIE 1931 xy "
-             "distances; 'MC noise' is the reference's own relative standard error in luminance.", "",
+             "distances; 'MC noise' is the reference's own relative standard error in luminance. "
+             f"Twilight rows (sun below the horizon): {args.twilight_samples} paths per direction and "
+             f"wavelength on {n_dirs_twilight} directions (20 deg rings) and 6 wavelengths 400-700 nm, "
+             "since few paths reach the sunlit air.", "",
              "Settings: `precomputed` with `orders=6, remaining_orders=\"geometric\", sphere_samples=32, "
-             "scattering_nu_size=16, density_mu_s_size=64` (the recommended settings of docs/models.md; "
+             "scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64` (the validated settings of "
+             "docs/models.md; "
              "otherwise Bruneton's "
              "table sizes, 20 wavelengths); "
              "`hillaire2020` with its defaults.", "",
@@ -161,7 +180,13 @@ def write_report(rows, rels, dirs, args, total):
             continue
         fig, axes = plt.subplots(1, 3, figsize=(13, 3.6), sharey=True)
         el = np.degrees(np.arcsin(np.clip(dirs[:, 2], -1, 1)))
-        for ax, aod in zip(axes, (0.05, 0.2, 0.5)):
+        aods = sorted({a for e, a, _, _ in items if e >= 0})
+        if len(aods) < 3:
+            plt.close(fig)
+            fig, axes = plt.subplots(1, len(aods), figsize=(4.4 * len(aods), 3.6), sharey=True,
+                                     squeeze=False)
+            axes = axes[0]
+        for ax, aod in zip(axes, aods):
             for e, a, _, rel in items:
                 if a == aod and e >= 0:
                     ax.plot(el + np.random.default_rng(0).uniform(-1, 1, el.size), rel * 100, ".", ms=3,
@@ -173,12 +198,13 @@ def write_report(rows, rels, dirs, args, total):
         axes[0].set_ylabel("luminance error vs Monte Carlo [%]")
         axes[-1].legend(fontsize=7)
         fig.tight_layout()
-        path = ROOT / "docs" / "figures" / f"validation_{m}.png"
+        stem = Path(args.out).stem
+        path = ROOT / "docs" / "figures" / f"{stem}_{m.replace('validation_', '')}.png"
         fig.savefig(path, dpi=90)
         plt.close(fig)
-        lines.append(f"![{m} error against Monte Carlo](figures/validation_{m}.png)")
+        lines.append(f"![{m} error against Monte Carlo](figures/{path.name})")
         lines.append("")
-    out = ROOT / "docs" / "validation.md"
+    out = ROOT / args.out
     tmp = out.with_suffix(".tmp")
     tmp.write_text("\n".join(lines))
     tmp.replace(out)

@@ -332,3 +332,27 @@ def test_high_sun_horizon_against_monte_carlo():
 def test_density_mu_s_size_is_validated():
     with pytest.raises(ValueError, match="density_mu_s_size"):
         sd.model("precomputed", sun=sun(30.0), density_mu_s_size=1)
+
+
+def test_twilight_against_monte_carlo():
+    """Sun 4 deg below the horizon, AOD 0.2, 550 nm, the validated settings (with
+    scattering_mu_s_size 64), against ``montecarlo`` (400 000 paths: relative standard error
+    1.3-2.9 %). Horizon and 10 deg up towards the anti-sun side (the twilight arch is
+    towards the sun, azimuth 180), 45 deg up at the side, zenith. With the table's default
+    32 mu_s nodes these were 13-34 % too bright (in twilight the sky changes quickly with
+    the sun's depression); measured now 2.8-10.5 % (mean 6.7 %). Required: every direction
+    within 16 % and the mean within 10 % (the measured error plus about two standard
+    errors)."""
+    atm = Atmosphere.earth(aerosol_optical_depth=0.2)
+    s = sun(-4.0)
+    wl = [550.0]
+    d = direction_from_angles(np.array([2.0, 10.0, 10.0, 45.0, 89.9]),
+                              np.array([0.0, 0.0, 45.0, 90.0, 0.0]))
+    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=400000,
+                        seed=14).radiance_with_error(d, wl)
+    assert np.all(err / ref < 0.035)
+    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
+                 remaining_orders="geometric", sphere_samples=32, scattering_nu_size=16,
+                 scattering_mu_s_size=64, density_mu_s_size=64)
+    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    assert np.all(rel < 0.16) and rel.mean() < 0.10, rel

@@ -81,9 +81,9 @@ class PrecomputedSky(SkyModel):
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
 
     The defaults are Bruneton's sizes. The settings validated against the Monte Carlo
-    reference to under 2 % (docs/validation.md) are ``orders=6, remaining_orders="geometric",
-    sphere_samples=32, scattering_nu_size=16, density_mu_s_size=64`` (about 6x the
-    precomputation time and memory).
+    reference (docs/validation.md) are ``orders=6, remaining_orders="geometric",
+    sphere_samples=32, scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64``
+    (several times the precomputation time and memory).
     max_sun_zenith_deg : float
         Largest sun zenith angle in the tables [deg], [90, 120] (default 108: astronomical
         twilight).
