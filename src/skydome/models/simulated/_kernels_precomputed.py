@@ -558,6 +558,48 @@ def indirect_irradiance(first, ss, pc, pp, delta, R, Rt, mu_s_min, th, ph, d_ome
                                2.0 * ct * d_omega[a], o)
 
 
+@njit(cache=True, fastmath=True)
+def node_weights(col, r, mu, t, ground, rt, w_q, R, Rt, codes, p0s, p1s, sc_idx, beta_e, w1, w2,
+                 cs, tw):
+    """Quadrature weight x transmittance from the ray's start to the node at distance t, per
+    scattering constituent k times its density at the node: tw[k, l] (the weights of J_k
+    in the ray integrals of :func:`multiple_scattering_table` and
+    :func:`multiple_scattering_slice`)."""
+    nl = tw.shape[1]
+    nc = col.shape[0]
+    columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
+    for l in range(nl):
+        s = 0.0
+        for c in range(nc):
+            s += beta_e[c, l] * cs[c]
+        tw[0, l] = w_q * math.exp(-s)
+    for kk in range(tw.shape[0] - 1, -1, -1):
+        c = sc_idx[kk]
+        dk = profile_density(codes[c], p0s[c], p1s[c], rt - R)
+        for l in range(nl):
+            tw[kk, l] = tw[0, l] * dk
+
+
+@njit(cache=True, fastmath=True)
+def density_mu_s_index(mu_s_t, R, Rt, d_min_s, inv_span_s, A, n_msj):
+    """Node and fraction of mu_s_t on the scattering density's mu_s axis ([Bru17] mu_s
+    mapping, constants d_min_s, inv_span_s, A hoisted by the caller)."""
+    disc = R * R * (mu_s_t * mu_s_t - 1.0) + Rt * Rt
+    dtop = max(-R * mu_s_t + math.sqrt(max(disc, 0.0)), 0.0)
+    a_s = (dtop - d_min_s) * inv_span_s
+    return _split(max(1.0 - a_s / A, 0.0) / (1.0 + a_s) * (n_msj - 1), n_msj)
+
+
+@njit(cache=True, fastmath=True)
+def density_phi_index(nu, mu_s_t, mt, n_pj):
+    """Node and fraction of the azimuth about the sun, measured from the sun's vertical plane
+    on the zenith side, of a ray with local zenith cosine mt and sun cosine nu (local sun
+    zenith cosine mu_s_t), on the scattering density's phi axis over [0, pi]."""
+    den = math.sqrt(max((1.0 - nu * nu) * (1.0 - mu_s_t * mu_s_t), 0.0))
+    cphi = 1.0 if den < 1e-9 else clamp_cos((mt - nu * mu_s_t) / den)
+    return _split(math.acos(cphi) / math.pi * (n_pj - 1), n_pj)
+
+
 @njit(parallel=True, cache=True, fastmath=True)
 def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q,
                               ts, out):
@@ -620,32 +662,18 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             rt = point_along(r, mu, t, R, Rt)
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
-            columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
-            for l in range(nl):
-                s = 0.0
-                for c in range(nc):
-                    s += beta_e[c, l] * cs[c]
-                tw[0, l] = wq[q] * math.exp(-s)
-            for kk in range(nsc - 1, -1, -1):
-                c = sc_idx[kk]
-                dk = profile_density(codes[c], p0s[c], p1s[c], rt - R)
-                for l in range(nl):
-                    tw[kk, l] = tw[0, l] * dk
+            node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                         w1, w2, cs, tw)
             inv_rt = 1.0 / rt
             for k in range(nk):
                 nu = nus[k]
                 mu_s_t = clamp_cos((r * mus[k // n_nu] + t * nu) * inv_rt)
-                disc = R * R * (mu_s_t * mu_s_t - 1.0) + Rt * Rt
-                dtop = max(-R * mu_s_t + math.sqrt(max(disc, 0.0)), 0.0)
-                a_s = (dtop - d_min_s) * inv_span_s
-                ims_j, c = _split(max(1.0 - a_s / A, 0.0) / (1.0 + a_s) * (n_msj - 1), n_msj)
+                ims_j, c = density_mu_s_index(mu_s_t, R, Rt, d_min_s, inv_span_s, A, n_msj)
                 # J in the sun's frame: angle from the sun (acos nu) and azimuth about the
                 # sun from its vertical plane (zenith side)
                 jt = jts[k]
                 jb = jbs[k]
-                den = math.sqrt(max((1.0 - nu * nu) * (1.0 - mu_s_t * mu_s_t), 0.0))
-                cphi = 1.0 if den < 1e-9 else clamp_cos((mt - nu * mu_s_t) / den)
-                ip, e = _split(math.acos(cphi) / math.pi * (n_pj - 1), n_pj)
+                ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
                 o = acc[k]
                 for kk in range(nsc):
                     twk = tw[kk]
@@ -708,28 +736,14 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             rt = point_along(r, mu, t, R, Rt)
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
-            columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
-            for l in range(nl):
-                s = 0.0
-                for c in range(nc):
-                    s += beta_e[c, l] * cs[c]
-                tw[0, l] = wq[q] * math.exp(-s)
-            for kk in range(nsc - 1, -1, -1):
-                c = sc_idx[kk]
-                dk = profile_density(codes[c], p0s[c], p1s[c], rt - R)
-                for l in range(nl):
-                    tw[kk, l] = tw[0, l] * dk
+            node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                         w1, w2, cs, tw)
             for inu in range(n_nu):
                 nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
-                disc = R * R * (mu_s_t * mu_s_t - 1.0) + Rt * Rt
-                dtop = max(-R * mu_s_t + math.sqrt(max(disc, 0.0)), 0.0)
-                a_s = (dtop - d_min_s) * inv_span_s
-                ims_j, c = _split(max(1.0 - a_s / A, 0.0) / (1.0 + a_s) * (n_msj - 1), n_msj)
+                ims_j, c = density_mu_s_index(mu_s_t, R, Rt, d_min_s, inv_span_s, A, n_msj)
                 jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
-                den = math.sqrt(max((1.0 - nu * nu) * (1.0 - mu_s_t * mu_s_t), 0.0))
-                cphi = 1.0 if den < 1e-9 else clamp_cos((mt - nu * mu_s_t) / den)
-                ip, e = _split(math.acos(cphi) / math.pi * (n_pj - 1), n_pj)
+                ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
                 o = acc[inu]
                 for kk in range(nsc):
                     Jk = J[kk]
