@@ -256,6 +256,23 @@ def test_geometric_remaining_orders_approximates_more_orders():
     assert np.max(np.abs(geo / ref - 1)) < 0.5 * np.max(np.abs(plain / ref - 1))
 
 
+def _error_vs_monte_carlo(aod, sun_elevation, elevations, azimuths, samples, seed, max_noise,
+                          **model_kw):
+    """|precomputed / montecarlo - 1| at 550 nm in the given directions (sun at azimuth 180),
+    after checking that the reference's relative standard error is below ``max_noise``;
+    the model uses 6 orders + the geometric remainder and ``model_kw``."""
+    atm = Atmosphere.earth(aerosol_optical_depth=aod)
+    s = sun(sun_elevation)
+    wl = [550.0]
+    d = direction_from_angles(np.array(elevations), np.array(azimuths))
+    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=samples,
+                        seed=seed).radiance_with_error(d, wl)
+    assert np.all(err / ref < max_noise)
+    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
+                 remaining_orders="geometric", **model_kw)
+    return np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+
+
 def test_hazy_sky_against_monte_carlo():
     """AOD 0.2 (Cornette-Shanks aerosol, g = 0.76), sun at 60 deg, 550 nm, 6 orders plus the
     geometric remainder on a 64-node mu_s axis, against the independent ``montecarlo`` model
@@ -266,18 +283,12 @@ def test_hazy_sky_against_monte_carlo():
     too bright (confirmed by a brute-force second-order integral); measured now with these
     (reduced) tables: within 1.6 % above 10 deg elevation and 3.6 % at 5 deg. Required: 3 %
     above 10 deg, 6 % at 5 deg (the measured error plus three MC standard errors)."""
-    atm = Atmosphere.earth(aerosol_optical_depth=0.2)
-    s = sun(60.0)
-    wl = [550.0]
-    d = direction_from_angles(np.array([89.9, 30.0, 65.0, 20.0, 5.0]),
-                              np.array([0.0, 0.0, 180.0, 270.0, 180.0]))
-    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=20000,
-                        seed=11).radiance_with_error(d, wl)
-    assert np.all(err / ref < 0.01)
-    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
-                 remaining_orders="geometric", scattering_mu_s_size=64, scattering_r_size=16,
-                 scattering_mu_size=64, transmittance_mu_size=128, transmittance_r_size=32)
-    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    rel = _error_vs_monte_carlo(0.2, 60.0, [89.9, 30.0, 65.0, 20.0, 5.0],
+                                [0.0, 0.0, 180.0, 270.0, 180.0],
+                                samples=20000, seed=11, max_noise=0.01,
+                                scattering_mu_s_size=64, scattering_r_size=16,
+                                scattering_mu_size=64, transmittance_mu_size=128,
+                                transmittance_r_size=32)
     assert np.all(rel[:4] < 0.03), rel
     assert rel[4] < 0.06, rel
 
@@ -291,17 +302,10 @@ def test_very_hazy_low_sun_against_monte_carlo():
     (16) and nu nodes (8), and the observer's orders 2..N on the table's (mu, nu) mapping,
     these were 16-22 % too bright near the horizon and -7 / +8 % off at 70 deg elevation;
     measured now: within 3 %. Required: 5 % (the measured error plus three standard errors)."""
-    atm = Atmosphere.earth(aerosol_optical_depth=0.5)
-    s = sun(10.0)
-    wl = [550.0]
-    d = direction_from_angles(np.array([3.0, 10.0, 25.0, 70.0, 70.0, 89.9]),
-                              np.array([150.0, 150.0, 120.0, 180.0, 0.0, 0.0]))
-    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=150000,
-                        seed=12).radiance_with_error(d, wl)
-    assert np.all(err / ref < 0.01)
-    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
-                 remaining_orders="geometric", sphere_samples=32, scattering_nu_size=16)
-    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    rel = _error_vs_monte_carlo(0.5, 10.0, [3.0, 10.0, 25.0, 70.0, 70.0, 89.9],
+                                [150.0, 150.0, 120.0, 180.0, 0.0, 0.0],
+                                samples=150000, seed=12, max_noise=0.01,
+                                sphere_samples=32, scattering_nu_size=16)
     assert np.all(rel < 0.05), rel
 
 
@@ -314,18 +318,10 @@ def test_high_sun_horizon_against_monte_carlo():
     local horizon moves with mu_s, and the aerosol's forward peak picks it up); measured now
     -1.3, -0.7, +0.2, +0.4, +0.01 %. Required: 2 % (the measured error plus three standard
     errors)."""
-    atm = Atmosphere.earth(aerosol_optical_depth=0.05)
-    s = sun(60.0)
-    wl = [550.0]
-    d = direction_from_angles(np.array([3.0, 3.0, 25.0, 45.0, 89.9]),
-                              np.array([180.0, 150.0, 0.0, 0.0, 0.0]))
-    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=150000,
-                        seed=13).radiance_with_error(d, wl)
-    assert np.all(err / ref < 0.003)
-    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
-                 remaining_orders="geometric", sphere_samples=32, scattering_nu_size=16,
-                 density_mu_s_size=64)
-    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    rel = _error_vs_monte_carlo(0.05, 60.0, [3.0, 3.0, 25.0, 45.0, 89.9],
+                                [180.0, 150.0, 0.0, 0.0, 0.0],
+                                samples=150000, seed=13, max_noise=0.003,
+                                sphere_samples=32, scattering_nu_size=16, density_mu_s_size=64)
     assert np.all(rel < 0.02), rel
 
 
@@ -343,16 +339,9 @@ def test_twilight_against_monte_carlo():
     the sun's depression); measured now 2.8-10.5 % (mean 6.7 %). Required: every direction
     within 16 % and the mean within 10 % (the measured error plus about two standard
     errors)."""
-    atm = Atmosphere.earth(aerosol_optical_depth=0.2)
-    s = sun(-4.0)
-    wl = [550.0]
-    d = direction_from_angles(np.array([2.0, 10.0, 10.0, 45.0, 89.9]),
-                              np.array([0.0, 0.0, 45.0, 90.0, 0.0]))
-    ref, err = sd.model("montecarlo", sun=s, atmosphere=atm, samples=400000,
-                        seed=14).radiance_with_error(d, wl)
-    assert np.all(err / ref < 0.035)
-    m = sd.model("precomputed", sun=s, atmosphere=atm, table_wavelengths_nm=wl, orders=6,
-                 remaining_orders="geometric", sphere_samples=32, scattering_nu_size=16,
-                 scattering_mu_s_size=64, density_mu_s_size=64)
-    rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
+    rel = _error_vs_monte_carlo(0.2, -4.0, [2.0, 10.0, 10.0, 45.0, 89.9],
+                                [0.0, 0.0, 45.0, 90.0, 0.0],
+                                samples=400000, seed=14, max_noise=0.035,
+                                sphere_samples=32, scattering_nu_size=16,
+                                scattering_mu_s_size=64, density_mu_s_size=64)
     assert np.all(rel < 0.16) and rel.mean() < 0.10, rel
