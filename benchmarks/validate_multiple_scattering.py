@@ -205,7 +205,7 @@ def write_report(rows, rels, dirs, args, total, n_dirs_twilight):
         axes[-1].legend(fontsize=7)
         fig.tight_layout()
         stem = Path(args.out).stem
-        path = ROOT / "docs" / "figures" / f"{stem}_{m.replace('validation_', '')}.png"
+        path = ROOT / "docs" / "figures" / f"{stem}_{m}.png"
         fig.savefig(path, dpi=90)
         plt.close(fig)
         lines.append(f"![{m} error against Monte Carlo](figures/{path.name})")

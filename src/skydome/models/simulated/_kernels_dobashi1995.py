@@ -83,18 +83,22 @@ def ring_weights(elev, rings_deg, cubic):
 
 
 @njit(cache=True, fastmath=True, inline="always")
+def _elevation_cphi(d, i, sin_az, cos_az):
+    """Elevation [deg] of ray i and cos(phi), phi = its azimuth - the solar azimuth (azimuth
+    from north (+y) towards east (+x))."""
+    x, y, z = d[i, 0], d[i, 1], d[i, 2]
+    elev = math.asin(min(max(z, -1.0), 1.0)) * (180.0 / math.pi)
+    hh = math.sqrt(x * x + y * y)
+    if hh > 0.0:
+        return elev, min(max((y * cos_az + x * sin_az) / hh, -1.0), 1.0)
+    return elev, cos_az              # atan2(0, 0) = 0, as the reference
+
+
+@njit(cache=True, fastmath=True, inline="always")
 def _ray(d, i, coef, terms, rings_deg, sin_az, cos_az, cubic, out):
     nr = rings_deg.shape[0]
     nl = coef.shape[2]
-    x, y, z = d[i, 0], d[i, 1], d[i, 2]
-    zc = min(max(z, -1.0), 1.0)
-    elev = math.asin(zc) * (180.0 / math.pi)
-    # cos(phi), phi = azimuth - solar azimuth (azimuth from north (+y) towards east (+x))
-    hh = math.sqrt(x * x + y * y)
-    if hh > 0.0:
-        cphi = min(max((y * cos_az + x * sin_az) / hh, -1.0), 1.0)
-    else:
-        cphi = cos_az              # atan2(0, 0) = 0, as the reference
+    elev, cphi = _elevation_cphi(d, i, sin_az, cos_az)
     j, w0, w1, w2, w3 = ring_weights(elev, rings_deg, cubic)
     for l in range(nl):
         out[i, l] = 0.0
@@ -197,14 +201,7 @@ def _ray_grid(d, i, table, rings_deg, sin_az, cos_az, cubic, out):
     nr = rings_deg.shape[0]
     n_az = table.shape[1]
     nl = table.shape[2]
-    x, y, z = d[i, 0], d[i, 1], d[i, 2]
-    zc = min(max(z, -1.0), 1.0)
-    elev = math.asin(zc) * (180.0 / math.pi)
-    hh = math.sqrt(x * x + y * y)
-    if hh > 0.0:
-        cphi = min(max((y * cos_az + x * sin_az) / hh, -1.0), 1.0)
-    else:
-        cphi = cos_az
+    elev, cphi = _elevation_cphi(d, i, sin_az, cos_az)
     u = math.acos(cphi) * ((n_az - 1) / math.pi)      # fractional azimuth index
     k0 = int(u)
     if k0 > n_az - 2:
