@@ -26,49 +26,17 @@ import math
 import numpy as np
 from numba import njit, prange
 
-# profile codes (mirror of skydome.atmosphere.profiles.PROFILE_CODES)
-EXPONENTIAL, TENT, UNIFORM, GAUSSIAN = 0, 1, 2, 3
-# phase codes (mirror of skydome.atmosphere.PHASE_CODES)
-RAYLEIGH, HENYEY_GREENSTEIN, CORNETTE_SHANKS, ISOTROPIC = 0, 1, 2, 3
-
-INV_4PI = 1.0 / (4.0 * math.pi)
-
-
-@njit(cache=True, fastmath=False)
-def profile_density(code, p0, p1, h):
-    """Density relative to the reference density at altitude h [m] ([KRZ06] eq. 7)."""
-    if code == EXPONENTIAL:
-        return math.exp(-max(h, 0.0) / p0)
-    if code == TENT:
-        return max(0.0, 1.0 - abs(h - p0) / p1)
-    if code == UNIFORM:
-        return 1.0 if h < p0 else 0.0
-    if code == GAUSSIAN:
-        x = (h - p0) / p1
-        return math.exp(-0.5 * x * x)
-    return 0.0
-
-
-@njit(cache=True)
-def phase_value(code, param, cos_theta):
-    """Phase function normalised over the sphere [sr^-1] for scattering angle theta.
-
-    Rayleigh: 3/(16 pi) 1/(1+2g)((1+3g) + (1-g) cos^2) with g = rho/(2-rho) ([KRZ06] eq. 3
-    over 4 pi, Chandrasekhar's depolarised form, Hansen & Travis 1974 eq. 2.15); Henyey-Greenstein ([KRZ06] eq. 10 / 4 pi);
-    Cornette-Shanks ([KRZ06] eq. 11 / 4 pi); isotropic 1/(4 pi).
-    """
-    c = cos_theta
-    if code == RAYLEIGH:
-        return 3.0 / (16.0 * math.pi) * 1.0 / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c)
-    if code == HENYEY_GREENSTEIN:
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        return (1.0 - g * g) / (d * math.sqrt(d)) * INV_4PI
-    if code == CORNETTE_SHANKS:
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        return 3.0 * (1.0 - g * g) / (2.0 * (2.0 + g * g)) * (1.0 + c * c) / (d * math.sqrt(d)) * INV_4PI
-    return INV_4PI
+from skydome.transport._geometry import (distance_to_sphere_far, ray_hits_ground,  # noqa: F401
+                                        ray_segment, safe_sqrt, shadow_crossings)
+from skydome.transport._medium import (EXPONENTIAL, GAUSSIAN, TENT, UNIFORM,  # noqa: F401
+                                      profile_density)
+from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4PI,  # noqa: F401
+                                     ISOTROPIC, RAYLEIGH, phase_value)
+from skydome.transport._quadrature import column_quadrature  # noqa: F401
+from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
+from skydome.transport._tables import lookup_columns
+from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
+from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
 
 
 @njit(cache=True, fastmath=True)
@@ -94,106 +62,7 @@ def exp_neg_array(x, out, ibuf):
         out[l] *= fbuf[l]
 
 
-@njit(cache=True)
-def distance_to_sphere_far(r, mu, radius):
-    """Distance along the ray to the far intersection with a sphere (r <= radius)."""
-    disc = r * r * (mu * mu - 1.0) + radius * radius
-    return -r * mu + math.sqrt(max(disc, 0.0))
-
-
-@njit(cache=True)
-def ray_hits_ground(r, mu, R):
-    """True where the ray from (r, mu) intersects the ground sphere in front of it."""
-    return mu < 0.0 and r * r * (mu * mu - 1.0) + R * R >= 0.0
-
-
-@njit(cache=True)
-def ray_segment(r, mu, R, Rt, ground=True):
-    """(t_start, t_end, hits_ground) of the part of the ray inside the atmosphere.
-
-    t_start > 0 when the origin lies above the top of the atmosphere; t_end < 0 when the
-    ray misses the atmosphere. With ``ground`` False the planet is transparent (used for
-    the grazing rays of the column table).
-    """
-    disc_t = r * r * (mu * mu - 1.0) + Rt * Rt
-    if disc_t < 0.0:
-        return 0.0, -1.0, False
-    sq = math.sqrt(disc_t)
-    t_near = -r * mu - sq
-    t_far = -r * mu + sq
-    if t_far <= 0.0:
-        return 0.0, -1.0, False
-    t0 = max(t_near, 0.0)
-    disc_g = r * r * (mu * mu - 1.0) + R * R
-    if ground and mu < 0.0 and disc_g >= 0.0:
-        # an observer on (or, by rounding, just below) the ground looking down sees the
-        # ground at its feet: t_ground = 0
-        tg = max(-r * mu - math.sqrt(disc_g), 0.0)
-        return t0, max(tg, t0), True
-    return t0, t_far, False
-
-
-@njit(cache=True)
-def column_quadrature(code, p0, p1, r, mu, R, Rt, n, ts, ground=True):
-    """Column density of one profile from (r, mu) to the end of the ray [m]:
-    integral of the relative density along the ray ([KRZ06] eq. 12 without beta).
-
-    The ray ends at the top of the atmosphere or at the ground (where it hits it).
-    ``n`` midpoint nodes per piece (see the module docstring), scale ``ts`` [m].
-    """
-    t0, t1, _ = ray_segment(r, mu, R, Rt, ground)
-    if t1 <= t0:
-        return 0.0
-    tmin = min(max(-r * mu, t0), t1)   # lowest point of the ray
-    total = 0.0
-    for piece in range(2):
-        if piece == 0:
-            a, b = t0, tmin            # dense end at b
-        else:
-            a, b = tmin, t1            # dense end at a
-        length = b - a
-        if length <= 0.0:
-            continue
-        vmax = math.log1p(length / ts)
-        dv = vmax / n
-        for k in range(n):
-            u = ts * math.expm1((k + 0.5) * dv)
-            w = (u + ts) * dv
-            t = b - u if piece == 0 else a + u
-            rr = math.sqrt(max(r * r + 2.0 * r * mu * t + t * t, 0.0))
-            total += w * profile_density(code, p0, p1, rr - R)
-    return total
-
-
 # -- column-density table (Bruneton 2017 transmittance parametrisation) --------------------------
-@njit(cache=True)
-def table_coords(r, mu, R, Rt):
-    """(x_r, x_mu) in [0, 1]^2 of Bruneton's (2017) transmittance texture mapping
-    (GetTransmittanceTextureUvFromRMu, without the texel-centre offset)."""
-    H = math.sqrt(Rt * Rt - R * R)
-    rho = math.sqrt(max(r * r - R * R, 0.0))
-    d = distance_to_sphere_far(r, mu, Rt)
-    d_min = Rt - r
-    d_max = rho + H
-    x_mu = 0.0 if d_max <= d_min else (d - d_min) / (d_max - d_min)
-    return rho / H, min(max(x_mu, 0.0), 1.0)
-
-
-@njit(cache=True)
-def table_rmu(x_r, x_mu, R, Rt):
-    """Inverse of :func:`table_coords` (GetRMuFromTransmittanceTextureUv)."""
-    H = math.sqrt(Rt * Rt - R * R)
-    rho = H * x_r
-    r = math.sqrt(rho * rho + R * R)
-    d_min = Rt - r
-    d_max = rho + H
-    d = d_min + x_mu * (d_max - d_min)
-    if d == 0.0:
-        return r, 1.0
-    mu = (H * H - rho * rho - d * d) / (2.0 * r * d)
-    return r, min(max(mu, -1.0), 1.0)
-
-
 @njit(parallel=True, cache=True)
 def build_column_table(codes, p0s, p1s, R, Rt, n_r, n_mu, n, ts):
     """Column densities to the top of the atmosphere, shape (n_c, n_r, n_mu), on the grid
@@ -211,22 +80,6 @@ def build_column_table(codes, p0s, p1s, R, Rt, n_r, n_mu, n, ts):
 
 
 @njit(cache=True)
-def table_lookup(table, c, r, mu, R, Rt):
-    """Bilinear interpolation of constituent c's column to the top from (r, mu)."""
-    n_r = table.shape[1]
-    n_mu = table.shape[2]
-    x_r, x_mu = table_coords(r, mu, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(int(fr), n_r - 2)
-    j = min(int(fm), n_mu - 2)
-    a = fr - i
-    b = fm - j
-    return ((1 - a) * ((1 - b) * table[c, i, j] + b * table[c, i, j + 1])
-            + a * ((1 - b) * table[c, i + 1, j] + b * table[c, i + 1, j + 1]))
-
-
-@njit(cache=True)
 def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts, out):
     """Fill ``out[c]`` with the column from (r, mu_s) towards the sun; returns False when
     the sun is hidden by the planet (earth shadow: the light ray hits the ground)."""
@@ -236,57 +89,8 @@ def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts
         for c in range(codes.shape[0]):
             out[c] = column_quadrature(codes[c], p0s[c], p1s[c], r, mu_s, R, Rt, n_light, ts)
         return True
-    # bilinear interpolation, the coordinates shared by every constituent
-    n_r = table.shape[1]
-    n_mu = table.shape[2]
-    x_r, x_mu = table_coords(r, mu_s, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(int(fr), n_r - 2)
-    j = min(int(fm), n_mu - 2)
-    a = fr - i
-    b = fm - j
-    w00 = (1 - a) * (1 - b)
-    w01 = (1 - a) * b
-    w10 = a * (1 - b)
-    w11 = a * b
-    for c in range(codes.shape[0]):
-        out[c] = (w00 * table[c, i, j] + w01 * table[c, i, j + 1]
-                  + w10 * table[c, i + 1, j] + w11 * table[c, i + 1, j + 1])
+    lookup_columns(table, r, mu_s, R, Rt, out)
     return True
-
-
-@njit(cache=True)
-def shadow_crossings(r0, mu, sz, nu, R):
-    """Distances t along the ray from (0, 0, r0) with direction d (d_z = mu, d . s = nu)
-    where it crosses the boundary of the planet's shadow (the cylinder of radius R about
-    the axis through the centre along the sun direction s, on the night side: p . s < 0).
-
-    With o_perp, d_perp the parts perpendicular to s: |o_perp + t d_perp|^2 = R^2, i.e.
-    a t^2 + 2 b t + c = 0, a = 1 - nu^2, b = r0 (mu - sz nu), c = r0^2 (1 - sz^2) - R^2.
-    Returns (count, t1, t2) of the valid crossings (t > 0, night side).
-    """
-    a = 1.0 - nu * nu
-    if a <= 1e-14:
-        return 0, 0.0, 0.0
-    b = r0 * (mu - sz * nu)
-    c = r0 * r0 * (1.0 - sz * sz) - R * R
-    disc = b * b - a * c
-    if disc <= 0.0:
-        return 0, 0.0, 0.0
-    sq = math.sqrt(disc)
-    n = 0
-    out1 = 0.0
-    out2 = 0.0
-    for sign in (-1.0, 1.0):
-        t = (-b + sign * sq) / a
-        if t > 0.0 and r0 * sz + t * nu < 0.0:
-            if n == 0:
-                out1 = t
-            else:
-                out2 = t
-            n += 1
-    return n, out1, out2
 
 
 @njit(parallel=True, cache=True, fastmath=True)
