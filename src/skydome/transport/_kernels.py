@@ -22,17 +22,20 @@ same few nodes.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._geometry import (distance_to_sphere_far, ray_hits_ground,  # noqa: F401
-                                        ray_segment, safe_sqrt, shadow_crossings)
+from skydome.transport._geometry import (distance_to_sphere_far, lowest_point,  # noqa: F401
+                                        ray_hits_ground, ray_segment, safe_sqrt,
+                                        shadow_crossings)
 from skydome.transport._medium import (EXPONENTIAL, GAUSSIAN, TENT, UNIFORM,  # noqa: F401
                                       profile_density)
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4PI,  # noqa: F401
-                                     ISOTROPIC, RAYLEIGH, phase_value)
-from skydome.transport._quadrature import column_quadrature  # noqa: F401
+                                     ISOTROPIC, RAYLEIGH, phase_fill, phase_value)
+from skydome.transport._quadrature import (column_quadrature, geometric_node,  # noqa: F401
+                                          geometric_step, medium_columns, simpson)
 from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
 from skydome.transport._tables import lookup_columns
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
@@ -93,184 +96,246 @@ def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts
     return True
 
 
+@njit(cache=True)
+def light_columns(table, m, r, mu_s, light_exact, n_light, ts, out):
+    """Fill ``out[c]`` with the column of every constituent of the medium m from (r, mu_s)
+    towards the sun [m]; returns False when the sun is hidden by the planet (earth
+    shadow: the light ray hits the ground)."""
+    if ray_hits_ground(r, mu_s, m.R):
+        return False
+    if light_exact:
+        medium_columns(m, r, mu_s, n_light, ts, True, out)
+        return True
+    lookup_columns(table, r, mu_s, m.R, m.Rt, out)
+    return True
+
+
+@njit(cache=True)
+def _sort_small(brk, n):
+    """Insertion sort of the first n entries of brk in place (the few break points)."""
+    for q in range(1, n):
+        x = brk[q]
+        j = q - 1
+        while j >= 0 and brk[j] > x:
+            brk[j + 1] = brk[j]
+            j -= 1
+        brk[j + 1] = x
+
+
+@njit(cache=True)
+def view_break_points(r0, mu, sz, nu, R, t0, t1, brk):
+    """Break points of the view ray in brk (sorted), and their count: its ends, its lowest
+    point and where it crosses the boundary of the earth's shadow (the integrand jumps
+    there); each piece gets its own nodes."""
+    tmin = lowest_point(r0, mu, t0, t1)
+    brk[0] = t0
+    nbrk = 1
+    if t0 < tmin < t1:
+        brk[nbrk] = tmin
+        nbrk += 1
+    nsh, sh1, sh2 = shadow_crossings(r0, mu, sz, nu, R)
+    if nsh > 0 and t0 < sh1 < t1:
+        brk[nbrk] = sh1
+        nbrk += 1
+    if nsh > 1 and t0 < sh2 < t1:
+        brk[nbrk] = sh2
+        nbrk += 1
+    brk[nbrk] = t1
+    nbrk += 1
+    _sort_small(brk, nbrk)
+    return nbrk
+
+
+class _SingleWork(NamedTuple):
+    """Work arrays of one thread of :func:`single_scattering` (allocated once per block)."""
+
+    acc: np.ndarray        # (nc, nl) integral of rho_c exp(-tau) along the ray
+    tau: np.ndarray        # (nl,) -optical depth of the current node
+    dcol: np.ndarray       # (nc,) view-ray column from the observer
+    scol: np.ndarray       # (nc,) light-path column
+    rho_prev: np.ndarray   # (nc,) densities at the previous node
+    rho_mid: np.ndarray    # (nc,) ... at the midpoint
+    rho: np.ndarray        # (nc,) ... at the node
+    ebuf: np.ndarray       # (nl,) exp(tau)
+    ibuf: np.ndarray       # (nl,) int64 scratch of exp_neg_array
+    scat: np.ndarray       # (nc,) 1 where the constituent scatters
+    brk: np.ndarray        # (6,) break points
+    phs: np.ndarray        # (nl,) phase function per wavelength
+
+
 @njit(parallel=True, cache=True, fastmath=True)
-def single_scattering(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                      phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
-                      out):
+def single_scattering(dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out):
     """Single-scattered radiance arriving at an observer at distance r0 from the centre
     (on the +z axis) from each direction ``dirs[i]`` ([NSTN93] eqs. 1-3, [KRZ06] eqs. 15-16):
 
-    L(lambda) = E_sun sum_c beta_s,c P_c(theta) int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt
+    L(lambda) = E_sun sum_c beta_s,c P_c(theta, lambda) int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt
                 + ground term,
 
-    with the view-ray optical depth tau(0,t) accumulated by Simpson's rule between the
-    quadrature nodes, tau_sun from the column table (or exact quadrature when
-    ``light_exact``), zero sunlight where the light ray hits the planet (earth shadow),
-    and, where the view ray hits the ground, the Lambertian reflection of the attenuated
-    direct sun: albedo / pi E_sun T_sun cos(theta_s) T(0, t_ground).
+    in the medium m (:class:`skydome.transport._medium.Medium`), with the view-ray optical
+    depth tau(0,t) accumulated by Simpson's rule between the quadrature nodes, tau_sun from
+    the column table (or exact quadrature when ``light_exact``), zero sunlight where the
+    light ray hits the planet (earth shadow), and, where the view ray hits the ground, the
+    Lambertian reflection of the attenuated direct sun:
+    albedo / pi E_sun T_sun cos(theta_s) T(0, t_ground).
     """
     n = dirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
     block = 64
     n_blocks = (n + block - 1) // block
     for ib in prange(n_blocks):
-        acc = np.zeros((nc, nl))
-        tau = np.zeros(nl)
-        dcol = np.zeros(nc)
-        scol = np.zeros(nc)
-        rho_prev = np.zeros(nc)
-        rho_mid = np.zeros(nc)
-        rho = np.zeros(nc)
-        ebuf = np.zeros(nl)
-        ibuf = np.zeros(nl, dtype=np.int64)
-        scat = np.zeros(nc)       # 1 for constituents that scatter (ozone only absorbs)
-        brk = np.zeros(6)
-        for c in range(nc):
-            for l in range(nl):
-                if beta_s[c, l] > 0.0:
-                    scat[c] = 1.0
-        for i in range(ib * block, min(n, (ib + 1) * block)):
-            _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                        phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
-                        out, acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat, brk)
+        _ray_block(ib * block, min(n, (ib + 1) * block), dirs, r0, sun, m, e_sun, table,
+                   n_view, ts, light_exact, n_light, out)
 
 
 @njit(cache=True, fastmath=True)
-def _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light, out,
-                acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat, brk):
-    """One ray of :func:`single_scattering` (work arrays passed in, reset here)."""
-    nc = codes.shape[0]
+def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out):
+    """Rays i0..i1-1 of :func:`single_scattering` with one set of work arrays (made here,
+    in a serial function: writes into the arrays of a NamedTuple built directly in a
+    prange body were lost under numba 0.68's parfor lowering)."""
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
-    if True:
-        dx = dirs[i, 0]
-        dy = dirs[i, 1]
-        dz = dirs[i, 2]
-        mu = dz
-        nu = dx * sun[0] + dy * sun[1] + dz * sun[2]    # cos of the scattering angle
+    w = _SingleWork(np.zeros((nc, nl)), np.zeros(nl), np.zeros(nc), np.zeros(nc),
+                    np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nl),
+                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl))
+    for c in range(nc):
         for l in range(nl):
-            out[i, l] = 0.0
-            for c in range(nc):
-                acc[c, l] = 0.0
-        for c in range(nc):
-            dcol[c] = 0.0
-        t0, t1, hits_ground = ray_segment(r0, mu, R, Rt)
-        if t1 < t0 or (t1 == t0 and not hits_ground):
-            return
-        tmin = min(max(-r0 * mu, t0), t1)
-        # break points: the lowest point of the ray and where it crosses the boundary of
-        # the earth's shadow (the integrand jumps there); each piece gets n_view nodes
-        brk[0] = t0
-        nbrk = 1
-        if t0 < tmin < t1:
-            brk[nbrk] = tmin
-            nbrk += 1
-        nsh, sh1, sh2 = shadow_crossings(r0, mu, sun[2], nu, R)
-        if nsh > 0 and t0 < sh1 < t1:
-            brk[nbrk] = sh1
-            nbrk += 1
-        if nsh > 1 and t0 < sh2 < t1:
-            brk[nbrk] = sh2
-            nbrk += 1
-        brk[nbrk] = t1
-        nbrk += 1
-        for q in range(1, nbrk):            # insertion sort of the few break points
-            x = brk[q]
-            j = q - 1
-            while j >= 0 and brk[j] > x:
-                brk[j + 1] = brk[j]
-                j -= 1
-            brk[j + 1] = x
-        t_prev = t0
-        r_prev = math.sqrt(r0 * r0 + 2.0 * r0 * mu * t0 + t0 * t0)
-        for c in range(nc):
-            rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
-        for q in range(nbrk - 1):
-            a = brk[q]
-            b = brk[q + 1]
-            dense_at_b = b <= tmin      # before the lowest point the density grows with t
-            length = b - a
-            if length <= 0.0:
-                continue
-            vmax = math.log1p(length / ts)
-            dv = vmax / n_view
-            for kk in range(n_view):
-                # nodes in increasing t
-                k = n_view - 1 - kk if dense_at_b else kk
-                u = ts * math.expm1((k + 0.5) * dv)
-                w = (u + ts) * dv
-                t = b - u if dense_at_b else a + u
-                rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
-                tm = 0.5 * (t_prev + t)
-                rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
-                h = t - t_prev
-                for c in range(nc):
-                    rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                    rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                    dcol[c] += h / 6.0 * (rho_prev[c] + 4.0 * rho_mid[c] + rho[c])   # Simpson
-                    rho_prev[c] = rho[c]
-                t_prev = t
-                mu_s = (r0 * sun[2] + t * nu) / rr
-                if not sun_columns(table, codes, p0s, p1s, rr, mu_s, R, Rt, light_exact, n_light,
-                                   ts, scol):
-                    continue
-                for l in range(nl):
-                    tau[l] = 0.0
-                for c in range(nc):
-                    col = dcol[c] + scol[c]
-                    for l in range(nl):
-                        tau[l] -= beta_e[c, l] * col
-                exp_neg_array(tau, ebuf, ibuf)
-                for c in range(nc):
-                    wr = w * rho[c] * scat[c]
-                    if wr > 0.0:
-                        for l in range(nl):
-                            acc[c, l] += wr * ebuf[l]
-        # phase functions and scattering coefficients
-        for c in range(nc):
-            p = phase_value(phase_codes[c], phase_params[c], nu)
-            for l in range(nl):
-                out[i, l] += e_sun[l] * beta_s[c, l] * p * acc[c, l]
-        if hits_ground:
-            # finish the view optical depth exactly at the ground point
-            t = t1
+            if m.scattering[c, l] > 0.0:
+                w.scat[c] = 1.0       # 1 for constituents that scatter (ozone only absorbs)
+    for i in range(i0, i1):
+        _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w)
+
+
+@njit(cache=True, fastmath=True)
+def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light, t0, t1,
+                       nbrk, w):
+    """Accumulate w.acc[c, l] = int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt over the pieces
+    between the break points, and w.dcol the view column to t1; returns (t_prev, rho at
+    t_prev already in w.rho_prev) as the distance of the last node."""
+    nc = m.profile_code.shape[0]
+    nl = w.tau.shape[0]
+    R = m.R
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
+    tmin = lowest_point(r0, mu, t0, t1)
+    t_prev = t0
+    r_prev = math.sqrt(r0 * r0 + 2.0 * r0 * mu * t0 + t0 * t0)
+    for c in range(nc):
+        w.rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
+    for q in range(nbrk - 1):
+        a = w.brk[q]
+        b = w.brk[q + 1]
+        dense_at_b = b <= tmin      # before the lowest point the density grows with t
+        length = b - a
+        if length <= 0.0:
+            continue
+        dv = geometric_step(length, n_view, ts)
+        for kk in range(n_view):
+            # nodes in increasing t
+            k = n_view - 1 - kk if dense_at_b else kk
+            u, wt = geometric_node(k, dv, ts)
+            t = b - u if dense_at_b else a + u
+            rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
             tm = 0.5 * (t_prev + t)
             rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
             h = t - t_prev
             for c in range(nc):
-                rho[c] = profile_density(codes[c], p0s[c], p1s[c], 0.0)
-                rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                dcol[c] += h / 6.0 * (rho_prev[c] + 4.0 * rho_mid[c] + rho[c])
-            mu_s = (r0 * sun[2] + t * nu) / R
-            if mu_s > 0.0:
-                sun_columns(table, codes, p0s, p1s, R * (1.0 + 1e-12), mu_s, R, Rt, light_exact,
-                            n_light, ts, scol)
+                w.rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                w.rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
+                w.dcol[c] += simpson(w.rho_prev[c], w.rho_mid[c], w.rho[c], h)
+                w.rho_prev[c] = w.rho[c]
+            t_prev = t
+            mu_s = (r0 * sun[2] + t * nu) / rr
+            if not light_columns(table, m, rr, mu_s, light_exact, n_light, ts, w.scol):
+                continue
+            for l in range(nl):
+                w.tau[l] = 0.0
+            for c in range(nc):
+                col = w.dcol[c] + w.scol[c]
                 for l in range(nl):
-                    s = 0.0
-                    for c in range(nc):
-                        s += beta_e[c, l] * (dcol[c] + scol[c])
-                    out[i, l] += albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+                    w.tau[l] -= beta_e[c, l] * col
+            exp_neg_array(w.tau, w.ebuf, w.ibuf)
+            for c in range(nc):
+                wr = wt * w.rho[c] * w.scat[c]
+                if wr > 0.0:
+                    for l in range(nl):
+                        w.acc[c, l] += wr * w.ebuf[l]
+    return t_prev
+
+
+@njit(cache=True, fastmath=True)
+def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
+                 out, w):
+    """Add the Lambertian reflection of the attenuated direct sun at the ground point t1,
+    finishing the view optical depth exactly there."""
+    nc = m.profile_code.shape[0]
+    nl = e_sun.shape[0]
+    R = m.R
+    t = t1
+    tm = 0.5 * (t_prev + t)
+    rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
+    h = t - t_prev
+    for c in range(nc):
+        w.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], 0.0)
+        w.rho_mid[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], rm - R)
+        w.dcol[c] += simpson(w.rho_prev[c], w.rho_mid[c], w.rho[c], h)
+    mu_s = (r0 * sun[2] + t * nu) / R
+    if mu_s > 0.0:
+        light_columns(table, m, R * (1.0 + 1e-12), mu_s, light_exact, n_light, ts, w.scol)
+        for l in range(nl):
+            s = 0.0
+            for c in range(nc):
+                s += m.extinction[c, l] * (w.dcol[c] + w.scol[c])
+            out[i, l] += m.albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+
+
+@njit(cache=True, fastmath=True)
+def _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w):
+    """One ray of :func:`single_scattering` (work arrays w passed in, reset here)."""
+    nc = m.profile_code.shape[0]
+    nl = e_sun.shape[0]
+    mu = dirs[i, 2]
+    nu = dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2]   # cos of the scattering angle
+    for l in range(nl):
+        out[i, l] = 0.0
+        for c in range(nc):
+            w.acc[c, l] = 0.0
+    for c in range(nc):
+        w.dcol[c] = 0.0
+    t0, t1, hits_ground = ray_segment(r0, mu, m.R, m.Rt)
+    if t1 < t0 or (t1 == t0 and not hits_ground):
+        return
+    nbrk = view_break_points(r0, mu, sun[2], nu, m.R, t0, t1, w.brk)
+    t_prev = _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light,
+                                t0, t1, nbrk, w)
+    # phase functions and scattering coefficients
+    for c in range(nc):
+        phase_fill(m, c, nu, w.phs)
+        for l in range(nl):
+            out[i, l] += e_sun[l] * m.scattering[c, l] * w.phs[l] * w.acc[c, l]
+    if hits_ground:
+        _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
+                     out, w)
 
 
 @njit(parallel=True, cache=True)
-def transmittance_to_top(r, mu, table, codes, p0s, p1s, R, Rt, beta_e, light_exact, n_light, ts,
-                         out):
-    """Transmittance from (r[i], mu[i]) to the top of the atmosphere, (n, nl); 0 where the
-    ray hits the ground."""
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+def transmittance_to_top(r, mu, table, m, light_exact, n_light, ts, out):
+    """Transmittance from (r[i], mu[i]) to the top of the atmosphere of the medium m,
+    (n, nl); 0 where the ray hits the ground."""
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     for i in prange(r.shape[0]):
         col = np.zeros(nc)
-        if not sun_columns(table, codes, p0s, p1s, r[i], mu[i], R, Rt, light_exact, n_light, ts,
-                           col):
+        if not light_columns(table, m, r[i], mu[i], light_exact, n_light, ts, col):
             for l in range(nl):
                 out[i, l] = 0.0
             continue
         for l in range(nl):
             s = 0.0
             for c in range(nc):
-                s += beta_e[c, l] * col[c]
+                s += m.extinction[c, l] * col[c]
             out[i, l] = math.exp(-s)
 
 
