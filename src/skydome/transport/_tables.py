@@ -236,3 +236,21 @@ def lookup_rmu(table, r, mu, R, Rt, w, out):
     for l in range(out.shape[0]):
         out[l] = (w00 * table[i, j, l] + w01 * table[i, j + 1, l]
                   + w10 * table[i + 1, j, l] + w11 * table[i + 1, j + 1, l])
+
+
+@njit(cache=True)
+def bilerp_last(tab, i, j, a, b, l):
+    """Bilinear interpolation of tab[:, :, l] at cell (i, j), fractions (a, b) (a table with
+    the wavelength axis last)."""
+    return ((1.0 - a) * ((1.0 - b) * tab[i, j, l] + b * tab[i, j + 1, l])
+            + a * ((1.0 - b) * tab[i + 1, j, l] + b * tab[i + 1, j + 1, l]))
+
+
+@njit(cache=True)
+def irradiance_cell(r, mu_s, R, Rt, n_r, n_mu_s):
+    """(i, j, a, b): bilinear cell and fractions of (r, mu_s) on an n_r x n_mu_s table in
+    the irradiance mapping (linear in altitude and in mu_s)."""
+    x_r, x_m = irradiance_unit_from_r_mu_s(r, mu_s, R, Rt)
+    i, a = cell(x_r, n_r)
+    j, b = cell(x_m, n_mu_s)
+    return i, j, a, b
