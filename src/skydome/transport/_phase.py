@@ -161,3 +161,12 @@ def sample_tabulated(cdf, ci, l, u):
     f = 0.5 if c1 <= c0 else (u - c0) / (c1 - c0)
     theta = (lo + min(max(f, 0.0), 1.0)) * math.pi / (na - 1)
     return math.cos(theta)
+
+
+@njit(cache=True)
+def phase_values_many(m, cos_theta, out):
+    """out[i, c, l] = phase function of constituent c at wavelength l and cosine
+    cos_theta[i] [sr^-1] (every constituent of the medium m)."""
+    for i in range(cos_theta.shape[0]):
+        for ci in range(m.phase_code.shape[0]):
+            phase_fill(m, ci, cos_theta[i], out[i, ci])
