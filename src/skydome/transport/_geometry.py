@@ -77,6 +77,13 @@ def radius_along(r, mu, t):
 
 
 @njit(cache=True)
+def radius_along_above(r, mu, t, R):
+    """Radius [m] of the point at distance t along the ray, at least R (a point that
+    rounding puts just below the ground is taken on it): sqrt(max(r_t^2, R^2))."""
+    return math.sqrt(max(r * r + 2.0 * r * mu * t + t * t, R * R))
+
+
+@njit(cache=True)
 def point_along(r, mu, t, R, Rt):
     """Radius of the point at distance t along the ray, clamped to the shell [R, Rt] [m]."""
     return clamp_radius(radius_along(r, mu, t), R, Rt)

@@ -28,8 +28,8 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.transport._geometry import (distance_to_sphere_far, lowest_point,  # noqa: F401
-                                        ray_hits_ground, ray_segment, safe_sqrt,
-                                        shadow_crossings)
+                                        radius_along_above, ray_hits_ground, ray_segment,
+                                        safe_sqrt, shadow_crossings)
 from skydome.transport._medium import (EXPONENTIAL, GAUSSIAN, TENT, UNIFORM,  # noqa: F401
                                       profile_density)
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4PI,  # noqa: F401
@@ -237,9 +237,9 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
             k = n_view - 1 - kk if dense_at_b else kk
             u, wt = geometric_node(k, dv, ts)
             t = b - u if dense_at_b else a + u
-            rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
+            rr = radius_along_above(r0, mu, t, R)
             tm = 0.5 * (t_prev + t)
-            rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
+            rm = radius_along_above(r0, mu, tm, R)
             h = t - t_prev
             for c in range(nc):
                 w.rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
@@ -275,7 +275,7 @@ def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, 
     R = m.R
     t = t1
     tm = 0.5 * (t_prev + t)
-    rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
+    rm = radius_along_above(r0, mu, tm, R)
     h = t - t_prev
     for c in range(nc):
         w.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], 0.0)

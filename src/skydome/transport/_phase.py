@@ -26,6 +26,8 @@ import math
 
 from numba import njit
 
+from skydome.transport._geometry import clamp_cosine
+
 # phase codes (mirror of skydome.atmosphere.PHASE_CODES)
 RAYLEIGH, HENYEY_GREENSTEIN, CORNETTE_SHANKS, ISOTROPIC, TABULATED = 0, 1, 2, 3, 4
 
@@ -84,7 +86,7 @@ def phase_value(code, param, c):
 def angle_cell(c, na):
     """(k, f): node and fraction of the scattering angle acos(c) on the uniform grid of na
     nodes over [0, pi]."""
-    x = math.acos(min(max(c, -1.0), 1.0)) / math.pi * (na - 1)
+    x = math.acos(clamp_cosine(c)) / math.pi * (na - 1)
     k = min(int(x), na - 2)
     return k, x - k
 
@@ -139,7 +141,7 @@ def sample_henyey_greenstein(g, u):
     if abs(g) < 1e-6:
         return 2.0 * u - 1.0
     s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u)
-    return min(max((1.0 + g * g - s * s) / (2.0 * g), -1.0), 1.0)
+    return clamp_cosine((1.0 + g * g - s * s) / (2.0 * g))
 
 
 @njit(cache=True)

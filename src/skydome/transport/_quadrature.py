@@ -21,7 +21,7 @@ import math
 
 from numba import njit
 
-from skydome.transport._geometry import lowest_point, radius_along, ray_segment
+from skydome.transport._geometry import lowest_point, radius_along, ray_segment, safe_sqrt
 from skydome.transport._medium import profile_density
 
 
@@ -98,6 +98,6 @@ def sphere_node(k, n_mu, n_phi):
     i = k // n_phi
     j = k % n_phi
     z = 1.0 - (i + 0.5) * 2.0 / n_mu
-    s = math.sqrt(max(1.0 - z * z, 0.0))
+    s = safe_sqrt(1.0 - z * z)
     phi = (j + 0.5) * 2.0 * math.pi / n_phi
     return s * math.cos(phi), s * math.sin(phi), z, 4.0 * math.pi / (n_mu * n_phi)

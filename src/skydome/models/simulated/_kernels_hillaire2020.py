@@ -34,7 +34,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._geometry import clamp_cosine, ray_hits_ground, ray_segment, safe_sqrt
+from skydome.transport._geometry import (clamp_cosine, radius_along_above, ray_hits_ground,
+                                        ray_segment, safe_sqrt)
 from skydome.transport._medium import profile_density
 from skydome.transport._phase import INV_4PI, phase_fill
 from skydome.transport._quadrature import geometric_edge, geometric_node, geometric_step, medium_columns
@@ -117,7 +118,7 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
             us, _w = geometric_node(k, dv, ts)
             dt = ub - ua
             t = b - us if piece == 0 else a + us
-            r = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
+            r = radius_along_above(r0, mu, t, R)
             for c in range(nc):
                 rho[c] = profile_density(codes[c], p0s[c], p1s[c], r - R)
             mu_s = clamp_cosine((r0 * sz + t * nu) / r)

@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._geometry import radius_along, ray_segment, safe_sqrt
+from skydome.transport._geometry import radius_along, radius_along_above, ray_segment, safe_sqrt
 from skydome.transport._kernels import light_columns
 from skydome.transport._medium import EXPONENTIAL, UNIFORM, profile_density
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, RAYLEIGH, TABULATED,
@@ -151,7 +151,7 @@ def sample_phase(m, c, l, state):
 @njit(cache=True)
 def rotate_about(w, c, phi, out):
     """out = unit vector at angle acos(c) from w with azimuth phi about w."""
-    s = math.sqrt(max(1.0 - c * c, 0.0))
+    s = safe_sqrt(1.0 - c * c)
     # orthonormal basis (Duff et al. 2017)
     sign = 1.0 if w[2] >= 0.0 else -1.0
     a = -1.0 / (sign + w[2])
@@ -273,7 +273,7 @@ def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
             for q in range(3):
                 tt = tp if q == 0 else (tm if q == 1 else t)
                 wq = 1.0 if q != 1 else 4.0
-                rr = math.sqrt(max(r * r + 2.0 * r * mu * tt + tt * tt, R * R))
+                rr = radius_along_above(r, mu, tt, R)
                 for c in range(nc):
                     if ext_l[c] > 0.0:
                         sacc += wq * ext_l[c] * profile_density(m.profile_code[c], m.profile_p0[c],

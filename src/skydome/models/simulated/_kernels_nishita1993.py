@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._geometry import clamp_cosine, ray_hits_ground, safe_sqrt
+from skydome.transport._geometry import clamp_cosine, radius_along_above, ray_hits_ground, safe_sqrt
 from skydome.transport._medium import profile_density
 from skydome.transport._phase import phase_fill
 from skydome.transport._quadrature import column_quadrature, medium_columns
@@ -145,7 +145,7 @@ def table_columns(table, r, mu_s, R, H, top, w, n_in, out):
         fj = math.sqrt(mu_s) * (n_j - 1)
     else:
         side = 1
-        c = r * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        c = r * safe_sqrt(1.0 - mu_s * mu_s)
         fj = (n_j - 1.0) if r - R <= 0.0 else (c - R) / (r - R) * (n_j - 1)
     i = min(max(int(fi), 0), n_s - 2)
     j = min(max(int(fj), 0), n_j - 2)
@@ -271,7 +271,7 @@ def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
         tb = wk.t_nodes[q + 1]
         for s in range(0 if first else 1, substeps + 1):
             t = ta + (tb - ta) * s / substeps
-            rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
+            rr = radius_along_above(r0, mu, t, R)
             h = t - t_prev
             for c in range(nc):
                 wk.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
