@@ -156,6 +156,34 @@ class SkyModel:
         [W m^-2 sr^-1 nm^-1], shape (n_wavelengths,); None if the model has no sun."""
         return None
 
+    def sun_luminance(self) -> float | None:
+        """Mean luminance of the solar disc seen by the observer [cd m^-2]; None if the
+        model has no sun.
+
+        Spectral and XYZ models derive it from :meth:`sun_radiance` (683 lm/W x the
+        integral with y-bar over the default grid); luminance-only models that carry a sun
+        (Perez 1993, ASRC-CIE, the CIE skies given a direct normal illuminance) override
+        it. Renders paint the disc with this value where a model has no spectral sun."""
+        from skydome.spectra import default_wavelengths, luminance_from_spectrum
+
+        if self.native == "luminance":
+            return None
+        wl = default_wavelengths()
+        ls = self.sun_radiance(wl)
+        if ls is None:
+            return None
+        return float(luminance_from_spectrum(np.asarray(ls, dtype=np.float64).reshape(-1), wl))
+
+    def direct_normal_illuminance(self) -> float:
+        """Illuminance of the sun's disc on a plane facing it [lx]: :meth:`sun_luminance`
+        times the disc's solid angle; 0 for a model without a sun. (The whole disc: the
+        part below the horizon is not removed; :mod:`skydome.illuminance` counts the sun
+        only while its centre is above the horizon.)"""
+        lum = self.sun_luminance()
+        if lum is None or self.sun is None:
+            return 0.0
+        return float(lum) * float(self.sun.solid_angle_sr)
+
     def describe(self) -> dict[str, Any]:
         """The model's name, reference, native quantity and parameter values."""
         values = {p.name: getattr(self, p.name, None) for p in self.parameters}
