@@ -30,7 +30,14 @@ import numpy as np
 from skydome._validate import as_directions, check_choice, check_int, check_number
 
 __all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
-           "resolve_atmosphere"]
+           "resolve_atmosphere", "ATMOSPHERE", "TURBIDITY", "OBSERVER_ALTITUDE_M",
+           "ATMOSPHERE_PARAMETERS"]
+
+
+class ParameterTypeError(TypeError, ValueError):
+    """A parameter of the wrong type (e.g. ``"yes"`` for a boolean). A TypeError; also a
+    ValueError, which some models raised for bad booleans before the protocol was
+    enforced in one place."""
 
 
 @dataclass(frozen=True)
@@ -50,7 +57,8 @@ class Parameter:
     doc : str
         One line of meaning.
     kind : str
-        "float", "int", "choice", "object" (validated by the model itself).
+        "float", "int", "choice", "bool" (True or False only, strictly) or "object"
+        (validated by the model itself).
     choices : tuple
         Allowed values for kind "choice".
     """
@@ -76,11 +84,18 @@ class Parameter:
             return check_int(self.name, value, lo, hi)
         if self.kind == "choice":
             return check_choice(self.name, value, self.choices)
+        if self.kind == "bool":
+            if not isinstance(value, (bool, np.bool_)):
+                raise ParameterTypeError(f"{self.name} must be True or False, got {value!r} "
+                                f"({type(value).__name__})")
+            return bool(value)
         return value
 
     def range_text(self) -> str:
         if self.kind == "choice":
             return " | ".join(map(str, self.choices))
+        if self.kind == "bool":
+            return "True | False"
         if self.kind in ("float", "int"):
             lo = "-inf" if self.low is None else f"{self.low:g}"
             hi = "inf" if self.high is None else f"{self.high:g}"
@@ -98,6 +113,55 @@ class SkyModel:
     summary: ClassVar[str] = ""
 
     sun = None  # a skydome.Sun where the model has one
+
+    #: Sun elevations [deg] (inclusive) where the model applies.
+    sun_elevation_range_deg: ClassVar[tuple[float, float]] = (-90.0, 90.0)
+    #: What happens with the sun outside that range: "raise" (ValueError naming
+    #: ``sun.elevation_deg``, the model and the range) or "black" (the model is built and
+    #: its sky is black, luminance 0 everywhere). A model that supports every elevation by
+    #: a documented extension (twilight) declares the full range [-90, 90].
+    sun_outside_range: ClassVar[str] = "raise"
+
+    # -- the common constructor --------------------------------------------------------
+    def __init__(self, sun=None, **params):
+        """Validate ``sun`` and the keyword parameters against the declarations, resolve
+        the atmosphere, then call the model's own :meth:`_setup`."""
+        p = self._begin(sun, params)
+        self._setup(p, params)
+
+    def _setup(self, p: dict[str, Any], given: dict[str, Any]) -> None:
+        """The model's own set-up, after the common checks; ``p`` holds every declared
+        parameter (validated, defaults filled, ``atmosphere`` resolved), ``given`` the
+        caller's keywords. The default stores ``p`` as attributes."""
+        for k, v in p.items():
+            setattr(self, k, v)
+
+    def _begin(self, sun, params: dict[str, Any]) -> dict[str, Any]:
+        """The common constructor work, once for every model: the sun is a
+        :class:`skydome.Sun`; every keyword is declared and valid; the sun is inside the
+        declared range (or the model is marked black); the atmosphere is resolved where
+        the model declares one. Sets ``self.sun`` and ``self._black``."""
+        check_sun(sun)
+        p = self._validate_params(params)
+        self.sun = sun
+        self._black = not self.sun_in_range(sun.elevation_deg)
+        if self._black and self.sun_outside_range == "raise":
+            raise ValueError(self._sun_range_message(sun.elevation_deg))
+        if "atmosphere" in p and "turbidity" in p:
+            p["atmosphere"] = resolve_atmosphere(p, params)
+        return p
+
+    @classmethod
+    def sun_in_range(cls, elevation_deg: float) -> bool:
+        """Whether the model applies with the sun at ``elevation_deg`` [deg]."""
+        lo, hi = cls.sun_elevation_range_deg
+        return lo <= float(elevation_deg) <= hi
+
+    @classmethod
+    def _sun_range_message(cls, elevation_deg: float) -> str:
+        lo, hi = cls.sun_elevation_range_deg
+        return (f"sun.elevation_deg = {float(elevation_deg):g} deg is out of range "
+                f"[{lo:g}, {hi:g}] deg for model {cls.name!r}")
 
     # -- helpers for subclasses -------------------------------------------------------
     @classmethod
@@ -200,6 +264,20 @@ class SkyModel:
 
 
 # -- shared by the physically based models ---------------------------------------------------
+# One declaration per shared parameter, with the range that is enforced. The observer must
+# also be inside the atmosphere (below ``Atmosphere.top_altitude_m``, 100 km for
+# ``Atmosphere.earth``), which :func:`resolve_atmosphere` checks against the atmosphere
+# actually used.
+ATMOSPHERE = Parameter("atmosphere", "", None,
+                       doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
+                       kind="object")
+TURBIDITY = Parameter("turbidity", "", 2.5, 1.0, 32.0,
+                      "Preetham turbidity when no atmosphere is given")
+OBSERVER_ALTITUDE_M = Parameter("observer_altitude_m", "m", 0.0, 0.0, 99_999.0,
+                                "observer altitude above the ground (inside the atmosphere)")
+#: The declarations every model built on an Atmosphere takes, in this order.
+ATMOSPHERE_PARAMETERS = (ATMOSPHERE, TURBIDITY, OBSERVER_ALTITUDE_M)
+
 def check_sun(sun) -> None:
     """TypeError unless ``sun`` is a :class:`skydome.Sun`."""
     from skydome.sun import Sun

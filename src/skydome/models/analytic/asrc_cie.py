@@ -103,7 +103,7 @@ class _TurbidClear(_CIEBase):
     parameters = ()
 
     def __init__(self, sun):
-        self._setup(sun, {})
+        self._begin_cie(sun, {})
         zs = math.radians(sun.zenith_deg)
         self._norm = float(self._f(zs, math.cos(zs)) * (1.0 - math.exp(-0.32)))
 
@@ -179,7 +179,7 @@ class ASRCCIE(_CIEBase):
     DEFAULT_ZENITH_LUMINANCE = 1000.0
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         eps, dlt = self.sky_clearness, self.sky_brightness
         dni, dhi = self.direct_normal_irradiance, self.diffuse_horizontal_irradiance
         have_perez = eps is not None or dlt is not None

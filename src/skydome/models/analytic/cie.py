@@ -150,18 +150,10 @@ class _CIEBase(SkyModel):
     """Shared machinery: scaling by Lz or E_h, zero below the horizon."""
 
     native = "luminance"
-    _needs_sun_above_horizon = True
+    sun_elevation_range_deg = (0.0, 90.0)
 
-    def _setup(self, sun, kwargs):
-        from skydome.sun import Sun
-
-        if not isinstance(sun, Sun):
-            raise TypeError(f"model {self.name!r} needs sun=skydome.Sun(...), got {sun!r}")
-        params = self._validate_params(kwargs)
-        if self._needs_sun_above_horizon:
-            check_number(f"sun.elevation_deg (model {self.name})", sun.elevation_deg,
-                         0.0, 90.0, "deg")
-        self.sun = sun
+    def _begin_cie(self, sun, kwargs):
+        params = self._begin(sun, kwargs)
         for k, v in params.items():
             setattr(self, k, v)
         self._sun_dir = np.asarray(sun.direction, dtype=np.float64)
@@ -253,10 +245,10 @@ class CIE1994Overcast(_CIEBase):
                  "CIE 110-1994 standard overcast sky")
     summary = "CIE standard overcast sky, L = Lz (1 + 2 cos theta) / 3"
     parameters = (_LZ_PARAM, _EH_PARAM)
-    _needs_sun_above_horizon = False
+    sun_elevation_range_deg = (-90.0, 90.0)   # black below -0.82 deg (default Lz = 0)
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         self._resolve_scale(zenith_luminance_overcast(self.sun.elevation_deg))
 
     def _illuminance_per_zenith_luminance(self) -> float:
@@ -311,7 +303,7 @@ class CIE1994Clear(_CIEBase):
     parameters = (_LZ_PARAM, _EH_PARAM, _TURB_PARAM)
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         zs = math.radians(self.sun.zenith_deg)
         # Denominator of eq. 14: f(theta_s) phi(0)
         self._norm = float(_clear_indicatrix(zs, math.cos(zs)) * (1.0 - math.exp(-0.32)))
@@ -366,7 +358,7 @@ class CIE1994Intermediate(_CIEBase):
     parameters = (_LZ_PARAM, _EH_PARAM, _TURB_PARAM)
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         self._zt = math.radians(self.sun.zenith_deg)
         self._norm = float(self._g(np.array(0.0), self._zt, np.array(self._zt)))
         self._resolve_scale(zenith_luminance_intermediate(self.sun.elevation_deg,
@@ -474,7 +466,7 @@ class CIE2003(_CIEBase):
     DEFAULT_ZENITH_LUMINANCE = 1000.0
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         self.a, self.b, self.c, self.d, self.e = cie2003_parameters(self.sky_type)
         zs = math.radians(self.sun.zenith_deg)
         self._norm = float(_indicatrix(self.c, self.d, self.e, zs, math.cos(zs))

@@ -209,18 +209,7 @@ class HoffmanPreetham2002(SkyModel):
                   doc="Mie phase form"),
     )
 
-    def __init__(self, sun=None, **params):
-        from skydome.sun import Sun
-
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, got {sun!r}")
-        vals = self._validate_params(params)
-        if sun.elevation_deg < 0.0:
-            raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
-                             f"[0, 90] deg for model 'hoffman_preetham2002'")
-        self.sun = sun
-        for k, v in vals.items():
-            setattr(self, k, v)
+    sun_elevation_range_deg = (0.0, 90.0)
 
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
         """Sky spectral radiance [W m^-2 sr^-1 nm^-1], shape (..., n); wavelengths in

@@ -408,12 +408,10 @@ class Perez1993(SkyModel):
                   kind="choice", choices=("raise", "black")),
     )
 
-    def __init__(self, sun=None, **params):
-        from skydome.sun import Sun
+    sun_elevation_range_deg = (0.0, 90.0)
+    sun_outside_range = "black"    # gendaylit's "error sky"
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, got {sun!r}")
-        p = self._validate_params(params)
+    def _setup(self, p, params):
         pairs = {"epsilon/delta": ("epsilon", "delta"), "dni/dhi": ("dni", "dhi"),
                  "dni_illuminance/dhi_illuminance": ("dni_illuminance", "dhi_illuminance")}
         given = []
@@ -430,10 +428,10 @@ class Perez1993(SkyModel):
         for k, v in p.items():
             setattr(self, k, v)
         self.input_mode = given[0]
-        self._setup()
+        self._sky_parameters()
 
     # -- set-up: sky parameters, coefficients, scale ----------------------------------------
-    def _setup(self) -> None:
+    def _sky_parameters(self) -> None:
         self.precipitable_water_cm = float(precipitable_water_from_dew_point(self.dew_point_c))
         self._black = self.sun.elevation_deg < 0.0
         z_deg = min(max(self.sun.zenith_deg, 0.0), 90.0)

@@ -521,16 +521,10 @@ class Preetham1999(SkyModel):
                   "atmospheric turbidity T = (t_molecules + t_haze) / t_molecules"),
     )
 
-    def __init__(self, sun=None, **params):
-        from skydome.sun import Sun
+    sun_elevation_range_deg = (0.0, 90.0)   # the fit has no twilight
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, got {sun!r}")
-        vals = self._validate_params(params)
-        if sun.elevation_deg < 0.0:
-            raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
-                             f"[0, 90] deg for model 'preetham1999' (the fit has no twilight)")
-        self.sun = sun
+    def _setup(self, vals, given):
+        sun = self.sun
         for k, v in vals.items():
             setattr(self, k, v)
         T = self.turbidity

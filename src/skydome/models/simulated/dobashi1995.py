@@ -126,6 +126,10 @@ class Dobashi1995Sky(SkyModel):
         mine["base"] = base
         p = self._validate_params(mine)
         lo = p["min_sun_elevation_deg"]
+        base_lo = cls.sun_elevation_range_deg[0] if cls.sun_outside_range == "raise" else -90.0
+        if lo < base_lo:
+            raise ValueError(f"min_sun_elevation_deg = {lo:g} deg is out of range "
+                             f"[{base_lo:g}, 90] deg for base = {base!r} (its valid sun range)")
         check_number("sun.elevation_deg", sun.elevation_deg, lo, 90.0, "deg")
         self.sun = sun
         self.base = base

@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import ATMOSPHERE, TURBIDITY, Parameter, SkyModel, register
 
 __all__ = ["Kaneda1991Sky", "phase_hazy", "phase_murky"]
 
@@ -161,9 +161,8 @@ class Kaneda1991Sky(SkyModel):
     native = "spectral"
     summary = "Spherical earth, exponential air and aerosols, single scattering, fog layer."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
+        ATMOSPHERE,
+        TURBIDITY,
         Parameter("mie_phase", "", "atmosphere", kind="choice", choices=("atmosphere", "hazy", "murky"),
                   doc="aerosol phase function"),
         Parameter("fog_density", "m^-1", 0.0, 0.0, 0.1, "fog extinction at the ground (0: no fog)"),
@@ -177,20 +176,9 @@ class Kaneda1991Sky(SkyModel):
     )
 
     def __init__(self, sun, **params):
-        from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
-
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
+        # (the common checks of the protocol; ``_setup`` is this model's table builder)
+        p = self._begin(sun, params)
         atm = p["atmosphere"]
-        if atm is None:
-            atm = Atmosphere.earth(turbidity=p["turbidity"])
-        elif not isinstance(atm, Atmosphere):
-            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
-        elif "turbidity" in params:
-            raise ValueError("give either atmosphere or turbidity, not both")
-        self.sun = sun
         self.atmosphere = atm
         for k, v in p.items():
             if k != "atmosphere":

@@ -153,13 +153,10 @@ class Klassen1987Sky(SkyModel):
                   doc="air mass of the sun path"),
     )
 
-    def __init__(self, sun, **params):
-        from skydome.sun import Sun
+    sun_elevation_range_deg = (0.0, 90.0)
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
-        check_number("sun.elevation_deg", sun.elevation_deg, 0.0, 90.0, "deg")
+    def _setup(self, p, params):
+        sun = self.sun
         if p["haze_layer_height_m"] > p["air_layer_height_m"]:
             raise ValueError(f"haze_layer_height_m = {p['haze_layer_height_m']:g} m is out of range "
                              f"[0, {p['air_layer_height_m']:g}] m (at most air_layer_height_m)")

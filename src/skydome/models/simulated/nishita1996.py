@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
+from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
 __all__ = ["Nishita1996Sky"]
 
@@ -109,25 +109,19 @@ class Nishita1996Sky(SkyModel):
     native = "spectral"
     summary = "Multiple scattering by sky-sphere sample directions; cylindrical sun tables."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
-        Parameter("observer_altitude_m", "m", 0.0, 0.0, 99_999.0, "observer altitude above the ground"),
+        *ATMOSPHERE_PARAMETERS,
         Parameter("orders", "", 6, 1, 10, "scattering orders summed", kind="int"),
         Parameter("sky_directions", "", 26, 6, 200, "sample directions of the sky sphere", kind="int"),
         Parameter("lattice_size", "", 13, 5, 41, "lattice nodes per horizontal axis (odd)", kind="int"),
         Parameter("view_samples", "", 16, 2, 1024, "quadrature nodes per ray piece", kind="int"),
     )
 
-    def __init__(self, sun, **params):
-
-        check_sun(sun)
-        p = self._validate_params(params)
-        atm = resolve_atmosphere(p, params)
+    def _setup(self, p, given):
+        sun = self.sun
+        atm = p["atmosphere"]
         if p["lattice_size"] % 2 == 0:
             raise ValueError(f"lattice_size = {p['lattice_size']} is out of range: odd integers "
                              "in [5, 41]")
-        self.sun = sun
         self.atmosphere = atm
         self.turbidity = p["turbidity"]
         self.observer_altitude_m = p["observer_altitude_m"]

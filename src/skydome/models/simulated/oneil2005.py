@@ -217,13 +217,10 @@ class ONeil2005Sky(SkyModel):
 
     _DERIVED = ("kr", "km", "g", "scale_depth", "outer_ratio")
 
-    def __init__(self, sun, **params):
+    def _setup(self, p, params):
         from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
+        sun = self.sun
         atm = p["atmosphere"]
         if atm is not None:
             if not isinstance(atm, Atmosphere):
