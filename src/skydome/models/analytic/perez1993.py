@@ -424,7 +424,6 @@ class Perez1993(SkyModel):
         if len(given) != 1:
             raise ValueError("give exactly one of epsilon/delta, dni/dhi or "
                              f"dni_illuminance/dhi_illuminance (got {', '.join(given) or 'none'})")
-        self.sun = sun
         for k, v in p.items():
             setattr(self, k, v)
         self.input_mode = given[0]
