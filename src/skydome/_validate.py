@@ -66,9 +66,19 @@ def check_choice(name: str, value: Any, choices) -> Any:
 def as_directions(directions: Any, name: str = "directions") -> np.ndarray:
     """Validate an array of direction vectors of shape (..., 3) and normalise them.
 
-    Raises ValueError for a wrong last axis, non-finite entries or zero-length vectors.
+    Raises TypeError for complex or non-numeric input, ValueError for a wrong last axis,
+    NaN or infinite entries or zero-length vectors.
     """
-    d = np.asarray(directions, dtype=np.float64)
+    raw = np.asarray(directions)
+    if np.iscomplexobj(raw):
+        raise TypeError(f"{name} must be real unit vectors (..., 3), got complex values")
+    if raw.dtype.kind not in "biuf":
+        try:
+            raw = raw.astype(np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be an array of numbers of shape (..., 3), "
+                            f"got dtype {raw.dtype}") from None
+    d = np.asarray(raw, dtype=np.float64)
     if d.ndim == 0 or d.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3), got {d.shape}")
     if not np.all(np.isfinite(d)):

@@ -227,9 +227,9 @@ class HoffmanPreetham2002(SkyModel):
         1999 Appendix A.1 attenuation), shape (n,)."""
         return _p99.sun_radiance(wavelengths_nm, self.sun, self.turbidity)
 
-    def aerial_perspective(self, view_direction, distance_m, wavelengths_nm, **kwargs):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, **kwargs):
         """(F_ex, L_in) of :func:`aerial_perspective` with this model's sun, turbidity, g
         and phase form (sea-level coefficients)."""
         kw = dict(turbidity=self.turbidity, g=self.g, phase=self.phase)
         kw.update(kwargs)
-        return aerial_perspective(view_direction, distance_m, wavelengths_nm, sun=self.sun, **kw)
+        return aerial_perspective(directions, distance_m, wavelengths_nm, sun=self.sun, **kw)

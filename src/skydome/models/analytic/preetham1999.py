@@ -256,7 +256,9 @@ def relative_air_mass(sun_zenith_deg) -> np.ndarray:
     z = np.asarray(sun_zenith_deg, dtype=np.float64)
     if np.any((z < 0.0) | (z > 90.0)):
         raise ValueError("sun_zenith_deg is out of range [0, 90] deg")
-    return 1.0 / (np.cos(np.radians(z)) + 0.15 * (93.885 - z) ** -1.253)
+    from skydome.atmosphere.airmass import kasten1966
+
+    return kasten1966(z)
 
 
 def _interp_table(w, x, y):
@@ -591,10 +593,10 @@ class Preetham1999(SkyModel):
         wavelengths in [380, 780] nm. See :func:`sun_radiance`."""
         return sun_radiance(wavelengths_nm, self.sun, self.turbidity)
 
-    def aerial_perspective(self, view_direction, distance_m, wavelengths_nm, **kwargs):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, **kwargs):
         """Extinction and in-scattered radiance along a view ray; see
         :func:`aerial_perspective` (this model's sun and turbidity)."""
-        return aerial_perspective(view_direction, distance_m, wavelengths_nm, sun=self.sun,
+        return aerial_perspective(directions, distance_m, wavelengths_nm, sun=self.sun,
                                   turbidity=self.turbidity, sky=self, **kwargs)
 
 
@@ -631,7 +633,7 @@ def _sky_grid(n_theta: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]:
     return d.reshape(-1, 3), dom.reshape(-1)
 
 
-def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbidity: float,
+def aerial_perspective(directions, distance_m, wavelengths_nm, *, sun, turbidity: float,
                        observer_altitude_m: float = 0.0, include_skylight: bool = True,
                        sky=None, n_quadrature: int = 32, sky_samples: int = 16):
     """Transmittance and in-scattered radiance between the eye and an object
@@ -651,10 +653,10 @@ def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbi
 
     Parameters
     ----------
-    view_direction : array_like
+    directions : array_like
         Unit vector(s) (..., 3) from the eye towards the object (East-North-Up).
     distance_m : array_like
-        Eye-object distance s [m], >= 0, broadcast against ``view_direction[..., 0]``.
+        Eye-object distance s [m], >= 0, broadcast against ``directions[..., 0]``.
     wavelengths_nm : array_like
         1-D strictly increasing wavelengths [nm] in [380, 780].
     sun : skydome.Sun
@@ -689,7 +691,7 @@ def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbi
     optical depths). The haze concentration c is converted to SI as in :func:`_mie_c_si`.
     The sun's radiance seen from each point is that at the eye (the paper's assumption).
     """
-    d = as_directions(view_direction, "view_direction")
+    d = as_directions(directions, "directions")
     s = np.asarray(distance_m, dtype=np.float64)
     if not np.all(np.isfinite(s)) or np.any(s < 0.0):
         raise ValueError("distance_m is out of range [0, inf) m (got a negative or "

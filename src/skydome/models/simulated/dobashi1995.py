@@ -35,11 +35,11 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths, check_int, check_number
 from skydome.models import Parameter, SkyModel, get_model_class, register
 
-__all__ = ["Dobashi1995Sky"]
+__all__ = ["Dobashi1995", "Dobashi1995Sky"]
 
 
 @register
-class Dobashi1995Sky(SkyModel):
+class Dobashi1995(SkyModel):
     """Cosine-series (basis function) representation of another model's sky [DNKY95].
 
     Parameters
@@ -343,3 +343,7 @@ class Dobashi1995Sky(SkyModel):
         out["parameters"]["base_params"] = {k: (v.describe() if hasattr(v, "describe") else v)
                                             for k, v in self.base_params.items()}
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Dobashi1995Sky = Dobashi1995

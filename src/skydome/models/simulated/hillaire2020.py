@@ -26,7 +26,7 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths, check_choice
 from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
-__all__ = ["Hillaire2020Sky"]
+__all__ = ["Hillaire2020", "Hillaire2020Sky"]
 
 
 def _bool(name, value):
@@ -96,7 +96,7 @@ class _Tables:
 
 
 @register
-class Hillaire2020Sky(SkyModel):
+class Hillaire2020(SkyModel):
     """Hillaire's (2020) LUT-based sky with the isotropic multiple-scattering transfer
     table, run per wavelength.
 
@@ -271,17 +271,17 @@ class Hillaire2020Sky(SkyModel):
         t = self.transmittance(self.sun.direction, wl)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
-    def aerial_perspective(self, view_direction, distance_m, wavelengths_nm, *,
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, *,
                            use_volume: bool = True):
         """Transmittance and in-scattered radiance between the observer and an object
         ([Hil20] sec. 5.4).
 
         Parameters
         ----------
-        view_direction : array_like (..., 3)
+        directions : array_like (..., 3)
             Unit vector(s) from the eye towards the object (East-North-Up).
         distance_m : array_like
-            Eye-object distance [m] >= 0, broadcast against ``view_direction[..., 0]``.
+            Eye-object distance [m] >= 0, broadcast against ``directions[..., 0]``.
         wavelengths_nm : array_like
             Wavelengths [nm].
         use_volume : bool
@@ -298,7 +298,7 @@ class Hillaire2020Sky(SkyModel):
         """
         from skydome.models.simulated import _kernels_hillaire2020 as K
 
-        d = as_directions(view_direction, "view_direction")
+        d = as_directions(directions, "directions")
         s = np.asarray(distance_m, dtype=np.float64)
         if not np.all(np.isfinite(s)) or np.any(s < 0.0):
             raise ValueError("distance_m is out of range [0, inf) m (got a negative or "
@@ -333,3 +333,7 @@ class Hillaire2020Sky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Hillaire2020Sky = Hillaire2020

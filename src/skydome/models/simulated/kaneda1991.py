@@ -13,7 +13,7 @@ The radiance arriving at the eye on the ground from direction v is
 molecules, aerosols, ozone (absorbing only) and, when enabled, fog; tau_view is the optical
 depth from the eye to the point t and tau_sun the optical depth from that point to the
 sun (zero radiance contribution from points in the earth's shadow). ``t_max`` is the top
-of the atmosphere for the sky, or an object's distance for :meth:`Kaneda1991Sky.fog`.
+of the atmosphere for the sky, or an object's distance for :meth:`Kaneda1991.fog`.
 
 Sample placement: the view ray is sampled where it crosses spherical shells whose
 altitudes divide each exponential profile into intervals of equal density decrement
@@ -44,7 +44,7 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths
 from skydome.models import ATMOSPHERE, TURBIDITY, Parameter, SkyModel, register
 
-__all__ = ["Kaneda1991Sky", "phase_hazy", "phase_murky"]
+__all__ = ["Kaneda1991", "Kaneda1991Sky", "phase_hazy", "phase_murky"]
 
 _INV_4PI = 1.0 / (4.0 * math.pi)
 
@@ -123,7 +123,7 @@ def _shell_altitudes(props, top, n_shells, fog):
 
 
 @register
-class Kaneda1991Sky(SkyModel):
+class Kaneda1991(SkyModel):
     """Kaneda et al. (1991): single scattering over a spherical earth, with optional fog.
 
     Parameters
@@ -291,16 +291,16 @@ class Kaneda1991Sky(SkyModel):
                              float(self.fog_height_m), s["beta_e"], t)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
-    def fog(self, distance_m, view_direction, wavelengths_nm, object_radiance=None):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
         """Transmittance and in-scattered radiance between the eye (on the ground) and an
-        object at ``distance_m`` along ``view_direction`` (air, aerosols, ozone and fog).
+        object at ``distance_m`` along ``directions`` (air, aerosols, ozone and fog).
 
         Parameters
         ----------
-        distance_m : float or array_like (...)
-            Distance to the object [m], >= 0.
-        view_direction : array_like (..., 3)
+        directions : array_like (..., 3)
             Unit vectors from the eye towards the object (z < 0 is treated as horizontal).
+        distance_m : float or array_like (...)
+            Distance to the object [m], >= 0; broadcast with the directions.
         wavelengths_nm : array_like (n,)
         object_radiance : array_like (..., n), optional
             Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
@@ -312,7 +312,7 @@ class Kaneda1991Sky(SkyModel):
             In-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance`` is
             given, the radiance reaching the eye, ``L_0 T + L_in``.
         """
-        d = as_directions(view_direction)
+        d = as_directions(directions)
         wl = as_wavelengths(wavelengths_nm)
         dist = np.asarray(distance_m, dtype=np.float64)
         if not np.all(np.isfinite(dist)) or np.any(dist < 0):
@@ -332,3 +332,7 @@ class Kaneda1991Sky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Kaneda1991Sky = Kaneda1991

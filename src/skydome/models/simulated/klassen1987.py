@@ -51,7 +51,7 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths, check_number
 from skydome.models import Parameter, SkyModel, register
 
-__all__ = ["Klassen1987Sky", "refraction_saemundsson_deg", "refraction_bennett_deg",
+__all__ = ["Klassen1987", "Klassen1987Sky", "refraction_saemundsson_deg", "refraction_bennett_deg",
            "kasten_young_airmass"]
 
 
@@ -81,8 +81,10 @@ def kasten_young_airmass(elevation_deg):
     """Relative optical air mass for a (apparent) elevation [deg] >= 0 ([KY89]):
     ``m = 1 / (sin h + 0.50572 (h + 6.07995)^-1.6364)``; 1 at the zenith, 38.09 at the
     horizon."""
+    from skydome.atmosphere.airmass import kastenyoung1989
+
     h = np.asarray(elevation_deg, dtype=np.float64)
-    return 1.0 / (np.sin(np.radians(h)) + 0.50572 * (h + 6.07995) ** -1.6364)
+    return kastenyoung1989(90.0 - h)
 
 
 def _hg(cos_theta, g):
@@ -97,7 +99,7 @@ def _rayleigh_phase(cos_theta):
 
 
 @register
-class Klassen1987Sky(SkyModel):
+class Klassen1987(SkyModel):
     """Klassen's (1987) two-layer flat-earth atmosphere: sky, sun and fog colour.
 
     Parameters
@@ -301,17 +303,17 @@ class Klassen1987Sky(SkyModel):
         return (solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr
                 * np.exp(-self.sun_airmass * tau))
 
-    def fog(self, distance_m, view_direction, wavelengths_nm, object_radiance=None):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
         """Transmittance and in-scattered radiance between the eye (on the ground) and an
-        object at ``distance_m`` along ``view_direction`` (closed form per layer).
+        object at ``distance_m`` along ``directions`` (closed form per layer).
 
         Parameters
         ----------
-        distance_m : float or array_like (...)
-            Distance to the object [m], >= 0.
-        view_direction : array_like (..., 3)
+        directions : array_like (..., 3)
             Unit vectors from the eye towards the object (z < 0 is taken as the horizontal
             direction of the same azimuth: the eye is on the flat ground).
+        distance_m : float or array_like (...)
+            Distance to the object [m], >= 0; broadcast with the directions.
         wavelengths_nm : array_like (n,)
         object_radiance : array_like (..., n), optional
             Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
@@ -323,7 +325,7 @@ class Klassen1987Sky(SkyModel):
             The in-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance``
             is given, the radiance reaching the eye, ``L_0 T + L_in``.
         """
-        d = as_directions(view_direction)
+        d = as_directions(directions)
         wl = as_wavelengths(wavelengths_nm)
         dist = np.asarray(distance_m, dtype=np.float64)
         if not np.all(np.isfinite(dist)) or np.any(dist < 0):
@@ -341,3 +343,7 @@ class Klassen1987Sky(SkyModel):
         if object_radiance is not None:
             L = np.asarray(object_radiance, dtype=np.float64) * t + L
         return t, L
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Klassen1987Sky = Klassen1987

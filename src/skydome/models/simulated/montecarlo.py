@@ -15,7 +15,7 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths
 from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
-__all__ = ["MonteCarloSky", "degree_of_polarisation", "angle_of_polarisation", "stokes_frame"]
+__all__ = ["MonteCarlo", "MonteCarloSky", "degree_of_polarisation", "angle_of_polarisation", "stokes_frame"]
 
 
 def degree_of_polarisation(stokes) -> np.ndarray:
@@ -60,7 +60,7 @@ def stokes_frame(directions) -> tuple[np.ndarray, np.ndarray]:
 
 
 @register
-class MonteCarloSky(SkyModel):
+class MonteCarlo(SkyModel):
     """Monte Carlo sky: every order of scattering, with standard errors, optionally polarised.
 
     Parameters
@@ -219,3 +219,7 @@ class MonteCarloSky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+MonteCarloSky = MonteCarlo

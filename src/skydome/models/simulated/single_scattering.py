@@ -14,11 +14,11 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths
 from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
-__all__ = ["SingleScatteringSky"]
+__all__ = ["SingleScattering", "SingleScatteringSky"]
 
 
 @register
-class SingleScatteringSky(SkyModel):
+class SingleScattering(SkyModel):
     """Single scattering of sunlight (Rayleigh + aerosols + ozone), integrated numerically.
 
     Parameters
@@ -109,3 +109,7 @@ class SingleScatteringSky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+SingleScatteringSky = SingleScattering
