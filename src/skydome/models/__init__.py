@@ -20,6 +20,7 @@ model needs no edit here. Model modules must not import numba at module level.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
@@ -27,7 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from skydome._validate import as_directions, check_choice, check_int, check_number
+from skydome._validate import as_directions, check_choice, check_int, check_number, check_real
 
 __all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
            "resolve_atmosphere", "ATMOSPHERE", "TURBIDITY", "OBSERVER_ALTITUDE_M",
@@ -61,6 +62,8 @@ class Parameter:
         (validated by the model itself).
     choices : tuple
         Allowed values for kind "choice".
+    low_open : bool
+        True where ``low`` itself is excluded (a range "(low, high]").
     """
 
     name: str
@@ -71,13 +74,15 @@ class Parameter:
     doc: str = ""
     kind: str = "float"
     choices: tuple = field(default_factory=tuple)
+    low_open: bool = False
 
     def validate(self, value: Any) -> Any:
         """Check ``value`` against this parameter's type and range; return it converted."""
         if value is None:
             return None
         if self.kind == "float":
-            return check_number(self.name, value, self.low, self.high, self.unit)
+            return check_number(self.name, value, self.low, self.high, self.unit,
+                                low_open=self.low_open)
         if self.kind == "int":
             lo = None if self.low is None else int(self.low)
             hi = None if self.high is None else int(self.high)
@@ -99,12 +104,34 @@ class Parameter:
         if self.kind in ("float", "int"):
             lo = "-inf" if self.low is None else f"{self.low:g}"
             hi = "inf" if self.high is None else f"{self.high:g}"
-            return f"[{lo}, {hi}]"
+            return f"{'(' if self.low_open else '['}{lo}, {hi}]"
         return ""
+
+
+def _guard_directions(method):
+    """Wrap a model's ``radiance``/``xyz``/``luminance`` so that complex or non-numeric
+    directions are refused (TypeError naming ``directions``) whatever path the model takes
+    to its kernels; NaN, shape and zero-length checks stay with the model's own validation
+    (:func:`skydome._validate.as_directions` or its kernel twin)."""
+
+    @functools.wraps(method)
+    def checked(self, directions, *args, **kwargs):
+        check_real("directions", directions)
+        return method(self, directions, *args, **kwargs)
+
+    checked._guards_directions = True
+    return checked
 
 
 class SkyModel:
     """Base class of every sky model (see the module docstring for the protocol)."""
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        for meth in ("radiance", "xyz", "luminance"):
+            f = cls.__dict__.get(meth)
+            if callable(f) and not getattr(f, "_guards_directions", False):
+                setattr(cls, meth, _guard_directions(f))
 
     name: ClassVar[str] = ""
     reference: ClassVar[str] = ""

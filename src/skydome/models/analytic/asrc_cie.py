@@ -37,7 +37,6 @@ import math
 
 import numpy as np
 
-from skydome._validate import check_number
 from skydome.constants import SOLAR_CONSTANT_WRC
 from skydome.models import Parameter, register
 from skydome.models.analytic.cie import (DNI_ILLUMINANCE_PARAM, CIE1994Clear,
@@ -175,7 +174,7 @@ class ASRCCIE(_CIEBase):
         Parameter("delta", "", None, 0.0, 5.0, "Perez sky brightness (with epsilon)"),
         Parameter("dni", "W/m^2", None, 0.0, 1500.0, "direct normal irradiance (with dhi)"),
         Parameter("dhi", "W/m^2", None, 0.0, 1000.0,
-                  "diffuse horizontal irradiance (with dni), > 0"),
+                  "diffuse horizontal irradiance (with dni)", low_open=True),
         Parameter("zenith_luminance", "cd/m^2", None, 0.0, 1.0e6,
                   "luminance of the zenith; default 1000 (relative scale)"),
         Parameter("diffuse_horizontal_illuminance", "lx", None, 0.0, 2.0e5,
@@ -196,7 +195,6 @@ class ASRCCIE(_CIEBase):
         if have_irr:
             if dni is None or dhi is None:
                 raise ValueError("asrc_cie: dni and dhi must be given together")
-            check_number("dhi", dhi, 0.0, 1000.0, "W/m^2", low_open=True)
             zen = self.sun.zenith_deg
             eps = sky_clearness(dni, dhi, zen)               # [PISMS90] eq. for epsilon
             dlt = sky_brightness(dhi, zen, self.sun.distance_au)  # [PISMS90] Delta
