@@ -65,7 +65,9 @@ class Dobashi1995(SkyModel):
     azimuth_samples : int
         Samples per ring over [0, 180] deg relative to the sun ([4, 720], default 64).
     min_sun_elevation_deg : float
-        Lowest precomputed sun altitude [deg], [-20, 80] (default 0).
+        Lowest precomputed sun altitude [deg], [-20, 80] (default 0), and the lowest sun
+        the model accepts. It may not lie below the base model's valid sun range (e.g. 0 deg
+        for ``preetham1999``): that fails at construction, naming this parameter.
     ring_interpolation : {"cubic", "linear"}
         Interpolation of the intensity between rings in elevation: cubic Hermite with
         finite-difference slopes over four rings (default; a deviation from the paper, which
@@ -105,6 +107,10 @@ class Dobashi1995(SkyModel):
 
     #: Azimuths of the evaluation grid over [0, 180] deg from the sun (0.25 deg steps).
     GRID_AZIMUTHS = 721
+
+    #: With the default ``min_sun_elevation_deg`` = 0; that parameter lowers it (to -20 deg
+    #: at most, and not below the base model's own range).
+    sun_elevation_range_deg = (0.0, 90.0)
 
     def __init__(self, sun, base: str = "nishita1996", **params):
         from skydome.sun import Sun
