@@ -6,12 +6,46 @@ A model is a small class deriving from :class:`SkyModel`. It declares
 * ``reference``: the citation;
 * ``native``: ``"spectral"``, ``"xyz"`` or ``"luminance"``, the quantity it computes;
 * ``parameters``: a tuple of :class:`Parameter` (name, unit, default, valid range, meaning);
+  shared ones come from here (:data:`ATMOSPHERE`, :data:`TURBIDITY`,
+  :data:`OBSERVER_ALTITUDE_M`, :data:`ATMOSPHERE_PARAMETERS`) so each has one range;
+* ``sun_elevation_range_deg`` and ``sun_outside_range``: the sun elevations where it applies
+  and what happens outside them (``"raise"`` or ``"black"``; a model that extends itself to
+  every elevation, twilight included, declares [-90, 90]);
 
 and implements the native method: ``radiance(directions, wavelengths_nm)`` (spectral,
 W m^-2 sr^-1 nm^-1, wavelength axis last), ``xyz(directions)`` (CIE XYZ with Y in cd m^-2)
 or ``luminance(directions)`` (cd m^-2). The base class derives the others where that is
 physically meaningful. Directions are unit vectors (..., 3) in the East-North-Up frame and
-name the direction the light arrives *from*.
+name the direction the light arrives *from*; complex or non-numeric directions are refused
+for every model by the base class.
+
+Construction
+------------
+``SkyModel.__init__(sun, **params)`` does the common work once: ``sun`` must be a
+:class:`skydome.Sun`; every keyword must be declared (TypeError listing the valid ones) and
+valid (:meth:`Parameter.validate`: floats, ints, choices and strict booleans, each error
+naming the parameter, its value and its range); the sun must lie in
+``sun_elevation_range_deg`` (ValueError naming ``sun.elevation_deg``, the model and the
+range) unless the model is declared black outside it (then ``self._black`` is True); the
+atmosphere is resolved where the model declares ``atmosphere`` and ``turbidity``. It then
+calls the model's own ``_setup(p, given)`` with the validated parameters. Models whose
+constructor takes more than the sun and keywords call ``self._begin(sun, params)``.
+
+The sun
+-------
+``sun_radiance(wavelengths_nm)`` [W m^-2 sr^-1 nm^-1] (spectral models; None without a
+sun), ``sun_luminance()`` [cd m^-2] (every model; None without a sun: luminance-only models
+such as ``perez1993``, ``asrc_cie`` and the CIE skies given ``dni_illuminance`` return the
+disc's mean luminance, spectral models derive it from ``sun_radiance``) and
+``direct_normal_illuminance()`` [lx]. A renderer draws the disc of a luminance-only model
+with ``sun_luminance()`` over ``sun.solid_angle_sr`` (D65 chromaticity, as the sky);
+:mod:`skydome.illuminance` uses ``direct_normal_illuminance()``.
+
+Aerial perspective
+------------------
+Models that have it implement one signature, ``aerial_perspective(directions, distance_m,
+wavelengths_nm, ...) -> (transmittance, in-scattered radiance)``, both of shape
+(..., n_wavelengths); model-specific options follow as keywords.
 
 Models register themselves with :func:`register`; the registry discovers every module in
 ``skydome.models.analytic`` and ``skydome.models.simulated`` on first use, so adding a
