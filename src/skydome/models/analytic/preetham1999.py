@@ -262,7 +262,9 @@ def relative_air_mass(sun_zenith_deg) -> np.ndarray:
 
 
 def _interp_table(w, x, y):
-    return np.interp(w, x, y, left=0.0, right=0.0)
+    from skydome.spectra import resample
+
+    return resample(w, x, y, "zero")
 
 
 def sun_transmittance(wavelengths_nm, sun_zenith_deg: float, turbidity: float, *,
@@ -438,7 +440,9 @@ def mie_coefficient(wavelengths_nm, turbidity: float) -> np.ndarray:
     w = np.asarray(wavelengths_nm, dtype=np.float64)
     as_wavelengths(w.ravel())
     wt, K = _spectra_table()
-    k = np.interp(w, wt, K)
+    from skydome.spectra import resample
+
+    k = resample(w, wt, K, "hold")
     lam = w * 1e-9
     return 0.434 * _mie_c_si(T) * np.pi * (2.0 * np.pi / lam) ** (_JUNGE_V - 2.0) * k
 

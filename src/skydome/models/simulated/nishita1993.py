@@ -258,8 +258,9 @@ class Nishita1993(SkyModel):
         else:
             albedo = np.zeros(wl.size)
         _, sea = load_table("seawater_optical_properties")
-        a_w = np.interp(wl, sea[:, 0], sea[:, 1])
-        b_w = np.interp(wl, sea[:, 0], sea[:, 2])
+        from skydome.spectra import resample
+
+        a_w, b_w = resample(wl, sea[:, 0], sea[:, 1:3], "hold").T
         entry = {"props": props, "e_sun": e_sun, "albedo": np.ascontiguousarray(albedo),
                  "water_c": np.ascontiguousarray(a_w + b_w), "water_b": np.ascontiguousarray(b_w),
                  "basis": np.ascontiguousarray(_texture_basis(wl))}
