@@ -254,14 +254,21 @@ def sun_illuminance(sky, tilt_deg=0.0, azimuth_deg=180.0):
     """Direct illuminance of the sun on a plane [lx]: ``E_n max(s . n, 0)``, 0 with the sun
     at or below the horizon or for a model without a sun."""
     _check_model(sky)
+    return _direct(sky, tilt_deg, azimuth_deg, lambda: float(sky.direct_normal_illuminance()),
+                   0.0)
+
+
+def _direct(sky, tilt_deg, azimuth_deg, normal_value, zero):
+    """``normal_value() x max(s . n, 0)`` on each plane (``zero`` where the sun does not
+    reach it); ``normal_value`` is called at most once."""
     shape, planes = _planes(tilt_deg, azimuth_deg)
     e_n = None
     out = []
     for t, a in planes:
         c = _sun_cosine(sky, t, a)
         if c > 0.0 and e_n is None:
-            e_n = float(sky.direct_normal_illuminance())
-        out.append(e_n * c if c > 0.0 else 0.0)
+            e_n = normal_value()
+        out.append(e_n * c if c > 0.0 else zero)
     return _shape_out(shape, out)
 
 
@@ -363,17 +370,13 @@ def sun_irradiance(sky, wavelengths_nm, tilt_deg=0.0, azimuth_deg=180.0):
     """Direct spectral irradiance of the sun on a plane [W m^-2 nm^-1]:
     ``sun_radiance x solid angle x max(s . n, 0)``; zeros without a sun above the horizon."""
     wl = _check_spectral(sky, wavelengths_nm)
-    shape, planes = _planes(tilt_deg, azimuth_deg)
-    e_n = None
-    out = []
-    for t, a in planes:
-        c = _sun_cosine(sky, t, a)
-        if c > 0.0 and e_n is None:
-            ls = sky.sun_radiance(wl)
-            e_n = (np.zeros(wl.size) if ls is None
-                   else np.asarray(ls, dtype=np.float64).reshape(-1) * sky.sun.solid_angle_sr)
-        out.append(e_n * c if c > 0.0 else np.zeros(wl.size))
-    return _shape_out(shape, out)
+
+    def normal_value():
+        ls = sky.sun_radiance(wl)
+        return (np.zeros(wl.size) if ls is None
+                else np.asarray(ls, dtype=np.float64).reshape(-1) * sky.sun.solid_angle_sr)
+
+    return _direct(sky, tilt_deg, azimuth_deg, normal_value, np.zeros(wl.size))
 
 
 def irradiance(sky, wavelengths_nm, tilt_deg=0.0, azimuth_deg=180.0, *,

@@ -323,6 +323,33 @@ class SkyModel:
     def _directions(directions) -> np.ndarray:
         return as_directions(directions)
 
+    @staticmethod
+    def _aerial_inputs(directions, distance_m, wavelengths_nm):
+        """The checked inputs of ``aerial_perspective``: flat unit directions (k, 3), flat
+        distances (k,) [m], wavelengths (n,) [nm] and the broadcast shape (...)."""
+        from skydome._validate import as_wavelengths
+
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        dist = np.asarray(distance_m, dtype=np.float64)
+        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
+            raise ValueError(f"distance_m = {dist.min() if dist.size else dist} m is out of "
+                             "range [0, inf) m")
+        shape = np.broadcast_shapes(d.shape[:-1], dist.shape)
+        flat = np.broadcast_to(d, shape + (3,)).reshape(-1, 3)
+        return flat, np.broadcast_to(dist, shape).reshape(-1), wl, shape
+
+    @staticmethod
+    def _aerial_outputs(t, L, shape, object_radiance=None):
+        """(transmittance, radiance) reshaped to ``shape`` + (n,); with ``object_radiance``
+        the radiance reaching the eye, ``L_0 T + L_in``."""
+        n = t.shape[-1]
+        t = t.reshape(shape + (n,))
+        L = L.reshape(shape + (n,))
+        if object_radiance is not None:
+            L = np.asarray(object_radiance, dtype=np.float64) * t + L
+        return t, L
+
 
 # -- shared by the physically based models ---------------------------------------------------
 # One declaration per shared parameter, with the range that is enforced. The observer must

@@ -44,7 +44,7 @@ import math
 
 import numpy as np
 
-from skydome._validate import check_number, clamp_cosine
+from skydome._validate import clamp_cosine
 from skydome.models import Parameter, SkyModel, register
 
 __all__ = ["CIE1994Overcast", "CIE1994Clear", "CIE1994Intermediate", "CIE2003",

@@ -312,21 +312,9 @@ class Kaneda1991(SkyModel):
             In-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance`` is
             given, the radiance reaching the eye, ``L_0 T + L_in``.
         """
-        d = as_directions(directions)
-        wl = as_wavelengths(wavelengths_nm)
-        dist = np.asarray(distance_m, dtype=np.float64)
-        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
-            raise ValueError(f"distance_m = {dist.min() if dist.size else dist} m is out of "
-                             "range [0, inf) m")
-        shape = np.broadcast_shapes(d.shape[:-1], dist.shape)
-        dd = np.broadcast_to(d, shape + (3,)).reshape(-1, 3)
-        dist_f = np.broadcast_to(dist, shape).reshape(-1)
+        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
         t, L = self._trace(dd, dist_f, wl)
-        t = t.reshape(shape + (wl.size,))
-        L = L.reshape(shape + (wl.size,))
-        if object_radiance is not None:
-            L = np.asarray(object_radiance, dtype=np.float64) * t + L
-        return t, L
+        return self._aerial_outputs(t, L, shape, object_radiance)
 
     def describe(self):
         out = super().describe()

@@ -48,7 +48,7 @@ import math
 
 import numpy as np
 
-from skydome._validate import as_directions, as_wavelengths, check_number
+from skydome._validate import as_directions, as_wavelengths
 from skydome.models import Parameter, SkyModel, register
 
 __all__ = ["Klassen1987", "Klassen1987Sky", "refraction_saemundsson_deg", "refraction_bennett_deg",
@@ -325,24 +325,13 @@ class Klassen1987(SkyModel):
             The in-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance``
             is given, the radiance reaching the eye, ``L_0 T + L_in``.
         """
-        d = as_directions(directions)
-        wl = as_wavelengths(wavelengths_nm)
-        dist = np.asarray(distance_m, dtype=np.float64)
-        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
-            raise ValueError(f"distance_m = {dist.min() if dist.size else dist} m is out of "
-                             "range [0, inf) m")
-        shape = np.broadcast_shapes(d.shape[:-1], dist.shape)
         from skydome.models.simulated.kaneda1991 import _horizon_clamp
 
-        dd = _horizon_clamp(np.broadcast_to(d, shape + (3,)).reshape(-1, 3))
-        dist_f = np.broadcast_to(dist, shape).reshape(-1)
+        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
+        dd = _horizon_clamp(dd)
         nu = np.clip(dd @ self.apparent_sun_direction, -1.0, 1.0)
         t, L = self._path(dd[:, 2], nu, dist_f, wl)
-        t = t.reshape(shape + (wl.size,))
-        L = L.reshape(shape + (wl.size,))
-        if object_radiance is not None:
-            L = np.asarray(object_radiance, dtype=np.float64) * t + L
-        return t, L
+        return self._aerial_outputs(t, L, shape, object_radiance)
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
