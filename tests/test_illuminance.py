@@ -179,3 +179,25 @@ def test_bad_input_names_the_parameter():
         il.irradiance(sky, [550.0])
     with pytest.raises(ValueError, match="wavelengths_nm"):
         il.irradiance(_UniformSpectral(1.0), [np.nan])
+
+
+def test_cie_sky_with_a_sun():
+    """A CIE sky given dni_illuminance carries that sun: E_sun on the horizontal is
+    E_n sin(h), and without it the model has no sun."""
+    sun = Sun(35.0, 200.0)
+    sky = skydome.model("cie2003", sun=sun, sky_type=12, dni_illuminance=70000.0)
+    assert sky.sun_luminance() == pytest.approx(70000.0 / sun.solid_angle_sr, rel=1e-12)
+    assert il.sun_illuminance(sky) == pytest.approx(70000.0 * math.sin(math.radians(35.0)),
+                                                    rel=1e-12)
+    bare = skydome.model("cie2003", sun=sun, sky_type=12)
+    assert bare.sun_luminance() is None and il.sun_illuminance(bare) == 0.0
+
+
+def test_asrc_cie_sun_from_dni_matches_perez():
+    """ASRC-CIE given dni/dhi converts dni with the Perez et al. 1990 direct efficacy, as
+    perez1993 does from the same irradiances (their air mass formulas differ: Kasten 1966
+    against Kasten & Young 1989, hence 1 %)."""
+    sun = Sun(40.0, 180.0)
+    asrc = skydome.model("asrc_cie", sun=sun, dni=600.0, dhi=120.0)
+    perez = skydome.model("perez1993", sun=sun, dni=600.0, dhi=120.0)
+    assert asrc.direct_normal_illuminance() == pytest.approx(perez.direct_illuminance, rel=1e-2)
