@@ -16,28 +16,45 @@ from skydome.models.simulated.precomputed._geometry import clamp_cos
 
 
 # -- table mappings -------------------------------------------------------------------------------
+# the mu_s mapping's knee: node density peaks at this sun zenith angle [rad] and falls off
+# over MU_S_WIDTH (see mu_s_unit)
+MU_S_CENTRE = math.radians(92.0)
+MU_S_WIDTH = math.radians(6.0)
+
+
+@njit(cache=True)
+def _mu_s_u(th):
+    return math.asinh((th - MU_S_CENTRE) / MU_S_WIDTH)
+
+
 @njit(cache=True)
 def mu_s_unit(mu_s, mu_s_min):
-    """mu_s mapping to [0, 1]: x = 1 - (theta_s / theta_max)^2, theta_s = acos(mu_s),
-    theta_max = acos(mu_s_min); 0 at mu_s_min (clamped below), 1 at the zenith.
+    """mu_s mapping to [0, 1] (0 at mu_s_min, clamped below; 1 at the zenith):
+    x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)), u(theta) = asinh((theta - 92 deg)
+    / 6 deg), theta_s = acos(mu_s), theta_max = acos(mu_s_min).
 
-    Not [Bru17]'s mapping (which follows the distance to the top of the atmosphere towards
-    the sun and, at the earth's radius, gives sun zeniths 0-60 deg only 3.3 of 31 cells, and
-    at a radius of 1e8 m squeezes them into the last 1.5 cells): quadratic in the zenith
-    angle, so that it is linear in mu_s near the zenith (where the sky is smooth in mu_s),
-    densest towards the horizon and twilight, and independent of the planet's radius. With
-    a 108 deg range and 32 nodes sun zeniths 0-60 deg get 9.6 cells, 60-90 deg 12 and
-    90-108 deg 9.5 (1.9 deg per cell)."""
+    Not [Bru17]'s mapping, which follows the distance to the top of the atmosphere towards
+    the sun: at the earth's radius it gives sun zeniths 0-60 deg only 3.3 of 31 cells, and
+    at a radius of 1e8 m it squeezes them into the last 1.5 cells (the sky between was
+    +42 % off). This one depends on the sun's zenith angle alone, so it is the same for
+    every planet radius; its node density, 1 / sqrt(6^2 + (theta - 92)^2) per degree, is
+    highest around sunset and civil twilight, where the sky changes fastest with the sun's
+    elevation, and 15x lower at the zenith, where it changes slowly. Cells for 64 nodes
+    (sun zenith bands 0-30, 30-60, 60-80, 80-90, 90-96, 96-102, 102-108 deg): 4.8, 8.0,
+    11.4, 13.7, 11.7, 8.1, 5.2; [Bru17]'s at 64 nodes: 1.1, 5.5, 14.4, 18.3, 11.4, 7.6, 4.6."""
     th = math.acos(clamp_cos(mu_s))
-    u = min(th / math.acos(clamp_cos(mu_s_min)), 1.0)
-    return 1.0 - u * u
+    th_max = math.acos(clamp_cos(mu_s_min))
+    top = _mu_s_u(th_max)
+    x = (top - _mu_s_u(min(th, th_max))) / (top - _mu_s_u(0.0))
+    return min(max(x, 0.0), 1.0)
 
 
 @njit(cache=True)
 def mu_s_from_unit(x, mu_s_min):
     """Inverse of :func:`mu_s_unit`."""
-    u = math.sqrt(min(max(1.0 - x, 0.0), 1.0))
-    return clamp_cos(math.cos(u * math.acos(clamp_cos(mu_s_min))))
+    top = _mu_s_u(math.acos(clamp_cos(mu_s_min)))
+    u = top - min(max(x, 0.0), 1.0) * (top - _mu_s_u(0.0))
+    return clamp_cos(math.cos(max(MU_S_CENTRE + MU_S_WIDTH * math.sinh(u), 0.0)))
 
 
 @njit(cache=True)
