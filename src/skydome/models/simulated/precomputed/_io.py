@@ -114,9 +114,9 @@ def export_textures(model, folder) -> list:
                   "x = (d - (r-R))/(rho - (r-R)), d the distance to the ground; second half: "
                   "node n/2 = zenith .. n-1 = horizon, x = (d - (Rt-r))/(rho + H - (Rt-r)), "
                   "d the distance to the top; node k of a half at x = k/(n/2-1)",
-            "mu_s": "x = max(1 - a/A, 0)/(1 + a), a = (d - (Rt-R))/(H - (Rt-R)), d the distance "
-                    "to the top from the ground towards the sun, A = a(mu_s_min); node i at "
-                    "x = i/(n-1)",
+            "mu_s": "x = (u(theta_max) - u(theta_s))/(u(theta_max) - u(0)), u(theta) = "
+                    "asinh((theta - 92 deg)/6 deg), theta_s = acos(mu_s), theta_max = "
+                    "acos(mu_s_min) (0 at mu_s_min, 1 at the zenith); node i at x = i/(n-1)",
             "nu": "x = (nu + 1)/2, node i at x = i/(n-1)",
         },
         "textures": {},
