@@ -4,7 +4,7 @@ E. Bruneton's "Precomputed Atmospheric Scattering: a New Implementation" (2017; 
 reworking of Bruneton & Neyret 2008) tabulates, for a spherical-shell atmosphere, the
 transmittance T(r, mu), the in-scattered radiance S(r, mu, mu_s, nu) summed over N
 scattering orders and the ground irradiance E(r, mu_s). Rendering any view is then a few
-table lookups. This module computes the tables with numba on the CPU, per wavelength (20
+table lookups. This package computes the tables with numba on the CPU, per wavelength (20
 by default over 380-780 nm), for any :class:`skydome.atmosphere.Atmosphere`; it keeps
 each constituent's single scattering apart (the phase function is applied at render
 time, so the aerosol forward peak stays sharp) and stores multiple scattering as full
@@ -33,6 +33,7 @@ __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
 # the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
 # in angle) and azimuth nodes from the sun's over [0, 180] deg
 _SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
+_TABULATED = 4      # skydome.transport._phase.TABULATED (not imported: it loads numba)
 
 
 @register
@@ -55,34 +56,40 @@ class PrecomputedSky(SkyModel):
     table_wavelengths_nm : array_like, optional
         Explicit table wavelength grid [nm] (instead of ``n_wavelengths``).
     orders : int
-        Number of scattering orders, [1, 20] (default 4). Ground reflections count as
-        orders.
+        Number of computed scattering orders, [1, 20] (default 6). Ground reflections
+        count as orders.
     remaining_orders : {"none", "geometric"}
         "geometric" adds the orders beyond ``orders`` as a geometric series whose ratio is
         that of the last two computed orders' total radiance, per wavelength (clamped to 0.9;
-        after Hillaire 2020, eq. 10); see the validated settings below.
+        after Hillaire 2020, eq. 10). Default "geometric".
     transmittance_mu_size, transmittance_r_size : int
         Transmittance (column) table size, default 256 x 64.
     scattering_r_size, scattering_mu_size, scattering_mu_s_size, scattering_nu_size : int
-        4-D scattering table size, default 32 x 128 x 32 x 8 (Bruneton's; ``scattering_mu_size``
-        even).
+        4-D scattering table size, default 32 x 128 x 48 x 16 (``scattering_mu_size`` even;
+        mu_s on a sunset-centred mapping of the sun's zenith angle, the same for every
+        planet radius).
     irradiance_mu_s_size, irradiance_r_size : int
         Ground-irradiance table size, default 64 x 16.
     integration_samples : int
         Quadrature nodes per ray piece for single and multiple scattering (default 20).
     sphere_samples : int
         Zenith-angle samples of the incident directions in the scattering density
-        (Bruneton's 16; azimuth gets twice as many over the full circle).
+        (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
 
-    The defaults are Bruneton's sizes. The settings validated against the Monte Carlo
-    reference (docs/validation.md) are ``orders=6, remaining_orders="geometric",
-    sphere_samples=32, scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64``
-    (several times the precomputation time and memory).
+    The defaults are the settings validated against the Monte Carlo reference
+    (docs/validation.md). Bruneton's cheaper sizes, 5-14 % off in hazy air: ``orders=4,
+    remaining_orders="none", sphere_samples=16, scattering_nu_size=8,
+    scattering_mu_s_size=32``.
     max_sun_zenith_deg : float
         Largest sun zenith angle in the tables [deg], [90, 120] (default 108: astronomical
         twilight).
+    cache : bool
+        Read and write the on-disk table cache (default True): a second model with the same
+        atmosphere, wavelengths and settings reads its tables instead of computing them
+        (``from_cache`` says which). Folder ``$SKYDOME_CACHE_DIR`` or the user cache folder;
+        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 2 GB); :func:`clear_cache`.
     """
 
     name = "precomputed"
@@ -156,6 +163,12 @@ class PrecomputedSky(SkyModel):
         from skydome.models.simulated.precomputed._precompute import precompute
 
         props = atm.optical_properties(wl)
+        tab = [c.name for c, code, sc in zip(atm.constituents, props.phase_code, props.scattering)
+               if code == _TABULATED and np.any(sc > 0)]
+        if tab:
+            raise ValueError(f"atmosphere constituent(s) {', '.join(tab)} have a tabulated phase "
+                             "function, which the precomputed model does not support yet: give "
+                             "them an analytic phase (henyey_greenstein, cornette_shanks)")
         if not use_cache:
             return precompute(props, wl, p), False
         settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}

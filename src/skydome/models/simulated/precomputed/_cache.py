@@ -59,8 +59,13 @@ def key(props, settings: dict) -> str:
     h.update(CACHE_FORMAT.encode())
     h.update(json.dumps(settings, sort_keys=True, default=str).encode())
     for name in props._fields:
-        v = np.ascontiguousarray(np.asarray(getattr(props, name)))
         h.update(name.encode())
+        if getattr(props, name) is None:
+            h.update(b"None")
+            continue
+        v = np.ascontiguousarray(np.asarray(getattr(props, name), dtype=None))
+        if v.dtype == object:
+            raise TypeError(f"optical property {name} is not numeric: cannot key the cache")
         h.update(str(v.dtype).encode() + str(v.shape).encode())
         h.update(v.tobytes())
     return h.hexdigest()

@@ -11,51 +11,12 @@ from numba import njit
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
-from skydome.transport._kernels import phase_value, profile_density, table_coords
+from skydome.transport._kernels import phase_value, profile_density
+from skydome.transport._tables import lookup_columns as columns_at
 
 
 
 # -- columns and transmittance --------------------------------------------------------------------
-@njit(cache=True)
-def columns_at(col, r, mu, R, Rt, out):
-    """Column density of every constituent from (r, mu) to the top [m], bilinear in the
-    (n_c, n_r, n_mu) table of :func:`skydome.transport._kernels.build_column_table`."""
-    n_r = col.shape[1]
-    n_mu = col.shape[2]
-    x_r, x_mu = table_coords(r, mu, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(int(fr), n_r - 2)
-    j = min(int(fm), n_mu - 2)
-    a = fr - i
-    b = fm - j
-    for c in range(col.shape[0]):
-        out[c] = ((1.0 - a) * ((1.0 - b) * col[c, i, j] + b * col[c, i, j + 1])
-                  + a * ((1.0 - b) * col[c, i + 1, j] + b * col[c, i + 1, j + 1]))
-
-
-@njit(cache=True)
-def transmittance_at(trans, r, mu, R, Rt, w, out):
-    """out[l] = w x transmittance from (r, mu) to the top, bilinear in the per-wavelength
-    table trans[r, mu, l] (Bruneton's transmittance texture, same mapping as the columns)."""
-    n_r = trans.shape[0]
-    n_mu = trans.shape[1]
-    x_r, x_mu = table_coords(r, mu, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(int(fr), n_r - 2)
-    j = min(int(fm), n_mu - 2)
-    a = fr - i
-    b = fm - j
-    w00 = w * (1.0 - a) * (1.0 - b)
-    w01 = w * (1.0 - a) * b
-    w10 = w * a * (1.0 - b)
-    w11 = w * a * b
-    for l in range(out.shape[0]):
-        out[l] = (w00 * trans[i, j, l] + w01 * trans[i, j + 1, l]
-                  + w10 * trans[i + 1, j, l] + w11 * trans[i + 1, j + 1, l])
-
-
 @njit(cache=True)
 def columns_segment(col, r, mu, d, ground, R, Rt, w1, w2, out):
     """Columns between (r, mu) and the point at distance d along the ray ([Bru17]
