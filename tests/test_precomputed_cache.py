@@ -28,8 +28,9 @@ def tiny(**kw):
 
 
 def files():
+    """The cache entries (one folder per table set)."""
     d = _cache.cache_dir()
-    return sorted(n for n in os.listdir(d) if n.endswith(".npz")) if os.path.isdir(d) else []
+    return sorted(n for n in os.listdir(d) if not n.startswith(".")) if os.path.isdir(d) else []
 
 
 def assert_same_tables(a, b, timing=True):
@@ -106,15 +107,22 @@ def test_changed_setting_or_atmosphere_recomputes():
     assert tiny().from_cache is True
 
 
-@pytest.mark.parametrize("damage", ["garbage", "truncated", "empty"])
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "empty", "no meta", "bad meta"])
 def test_corrupt_cache_file_is_recomputed(damage):
     ref = tiny()
     (name,) = files()
-    path = os.path.join(_cache.cache_dir(), name)
-    data = open(path, "rb").read()
-    with open(path, "wb") as f:
-        f.write({"garbage": b"not a table file" * 100, "truncated": data[: len(data) // 2],
-                 "empty": b""}[damage])
+    entry = os.path.join(_cache.cache_dir(), name)
+    if damage == "no meta":
+        os.remove(os.path.join(entry, "meta.json"))
+    elif damage == "bad meta":
+        with open(os.path.join(entry, "meta.json"), "w") as f:
+            f.write("{not json")
+    else:
+        path = os.path.join(entry, "single_scattering.npy")
+        data = open(path, "rb").read()
+        with open(path, "wb") as f:
+            f.write({"garbage": b"not a table file" * 100, "truncated": data[: len(data) // 2],
+                     "empty": b""}[damage])
     again = tiny()
     assert not again.from_cache
     assert_same_tables(ref._t, again._t, timing=False)   # recomputed: same tables, new timing
@@ -123,14 +131,14 @@ def test_corrupt_cache_file_is_recomputed(damage):
 
 def test_size_limit_evicts_least_recently_used(monkeypatch):
     a = tiny()
-    size = os.path.getsize(os.path.join(_cache.cache_dir(), files()[0]))
+    size = _cache._size(os.path.join(_cache.cache_dir(), files()[0]))
     monkeypatch.setenv("SKYDOME_CACHE_LIMIT_BYTES", str(int(2.5 * size)))
     tiny(orders=3)
     first_two = files()
     # touch a's file (a cache hit), so that the orders=3 file is the least recently used
-    old = os.path.getmtime(os.path.join(_cache.cache_dir(), first_two[0])) - 100
+    old = os.path.getmtime(os.path.join(_cache.cache_dir(), first_two[0], "meta.json")) - 100
     for n in first_two:
-        os.utime(os.path.join(_cache.cache_dir(), n), (old, old))
+        os.utime(os.path.join(_cache.cache_dir(), n, "meta.json"), (old, old))
     assert tiny().from_cache
     tiny(orders=4)
     assert len(files()) == 2
@@ -154,9 +162,10 @@ def test_bad_limit_is_refused(monkeypatch):
 def test_clear_cache():
     tiny()
     tiny(orders=3)
+    os.makedirs(os.path.join(_cache.cache_dir(), ".left-by-a-killed-write.tmp"))
     assert len(files()) == 2
     assert P.clear_cache() > 0
-    assert files() == []
+    assert os.listdir(_cache.cache_dir()) == []
     assert not tiny().from_cache
 
 

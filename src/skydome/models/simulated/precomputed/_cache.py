@@ -1,11 +1,12 @@
 """On-disk cache of precomputed tables.
 
-One ``.npz`` file per table set, named by a SHA-256 hash of everything the precomputation
+One folder per table set (an ``.npy`` file per array and ``meta.json``), named by a SHA-256 hash of everything the precomputation
 reads: the cache format version, the table wavelengths, the atmosphere's optical properties
 on them (radii, density profiles, scattering and extinction coefficients, phase functions,
 ground albedo) and every table setting. A different atmosphere field or setting gives a
-different key; a file that cannot be read (truncated, corrupt, another format) is deleted
-and the tables are recomputed.
+different key; an entry that cannot be read (truncated, corrupt, another format) is deleted
+and the tables are recomputed. The arrays are memory-mapped when read, so a cached start-up
+does not read the (hundreds of MB of) tables up front.
 
 Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydome")`` /
 ``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 2 GB); after each
@@ -18,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 
 import numpy as np
@@ -25,7 +27,7 @@ import numpy as np
 # bump when the tables' meaning or layout changes (mapping, units, fields)
 CACHE_FORMAT = "skydome.precomputed-cache/2"
 DEFAULT_LIMIT_BYTES = 2_000_000_000
-_SUFFIX = ".npz"
+_META = "meta.json"
 
 
 def cache_dir() -> str:
@@ -72,50 +74,66 @@ def key(props, settings: dict) -> str:
 
 
 def _path(k: str) -> str:
-    return os.path.join(cache_dir(), k + _SUFFIX)
+    return os.path.join(cache_dir(), k)
 
 
 def load(k: str):
     """The cached :class:`._tables.Tables` under key ``k``, or None (absent or unreadable;
-    an unreadable file is removed)."""
+    an unreadable entry is removed). The arrays are memory-mapped copy-on-write, so the
+    start-up reads only the header of each file and pages come in as the tables are used."""
     from skydome.models.simulated.precomputed._tables import Tables
 
     path = _path(k)
-    if not os.path.exists(path):
+    if not os.path.isdir(path):
         return None
     try:
-        with np.load(path, allow_pickle=False) as z:
-            if str(z["cache_key"]) != k or str(z["cache_format"]) != CACHE_FORMAT:
-                raise ValueError("key mismatch")
-            tables = Tables.from_arrays({n: z[n] for n in z.files})
+        with open(os.path.join(path, _META)) as f:
+            meta = json.load(f)
+        if meta.get("cache_key") != k or meta.get("cache_format") != CACHE_FORMAT:
+            raise ValueError("key mismatch")
+        arrays = dict(meta["scalars"])
+        for name in meta["arrays"]:
+            arrays[name] = np.asarray(np.load(os.path.join(path, name + ".npy"), mmap_mode="c",
+                                              allow_pickle=False))
+        tables = Tables.from_arrays(arrays)
     except Exception:
         _remove(path)
         return None
     try:
-        os.utime(path)      # least recently used: the access time is the file's mtime
+        os.utime(os.path.join(path, _META))   # least recently used: the meta file's mtime
     except OSError:
         pass
     return tables
 
 
 def store(k: str, tables) -> str | None:
-    """Write ``tables`` under key ``k`` atomically and trim the folder to the size limit;
+    """Write ``tables`` under key ``k`` (a folder of ``.npy`` files and ``meta.json``,
+    written under a temporary name and renamed) and trim the cache to the size limit;
     returns the path, or None where the folder cannot be written or the tables alone exceed
     the limit (the cache is a convenience: a failure to write it is not an error)."""
     limit = limit_bytes()
     arrays = tables.arrays()
-    size = sum(a.nbytes for a in arrays.values())
-    if size > limit:
+    if sum(a.nbytes for a in arrays.values()) > limit:
         return None
     folder = cache_dir()
     tmp = None
+    path = _path(k)
     try:
         os.makedirs(folder, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(suffix=".tmp", prefix=".", dir=folder)
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, cache_key=np.array(k), cache_format=np.array(CACHE_FORMAT), **arrays)
-        path = _path(k)
-        os.replace(tmp, path)
+        tmp = tempfile.mkdtemp(prefix="." + k[:16] + "-", suffix=".tmp", dir=folder)
+        names, scalars = [], {}
+        for name, a in arrays.items():
+            if a.ndim == 0:
+                scalars[name] = a.item()
+            else:
+                np.save(os.path.join(tmp, name + ".npy"), a, allow_pickle=False)
+                names.append(name)
+        with open(os.path.join(tmp, _META), "w") as f:
+            json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
+                       "scalars": scalars}, f)
+        if os.path.isdir(path):
+            _remove(path)
+        os.rename(tmp, path)
         tmp = None
     except OSError:
         return None
@@ -126,20 +144,33 @@ def store(k: str, tables) -> str | None:
     return path
 
 
+def _size(path) -> int:
+    total = 0
+    for d, _, files in os.walk(path):
+        for f in files:
+            try:
+                total += os.path.getsize(os.path.join(d, f))
+            except OSError:
+                pass
+    return total
+
+
 def _entries(folder):
+    """(last use, size [bytes], path) of every cache entry, least recently used first."""
     out = []
     try:
         names = os.listdir(folder)
     except OSError:
         return out
     for n in names:
-        if n.endswith(_SUFFIX) and not n.startswith("."):
-            p = os.path.join(folder, n)
-            try:
-                st = os.stat(p)
-            except OSError:
-                continue
-            out.append((st.st_mtime, st.st_size, p))
+        p = os.path.join(folder, n)
+        if n.startswith(".") or not os.path.isdir(p):
+            continue
+        try:
+            used = os.stat(os.path.join(p, _META)).st_mtime
+        except OSError:
+            used = 0.0      # incomplete entry: first to go
+        out.append((used, _size(p), p))
     return sorted(out)
 
 
@@ -157,15 +188,29 @@ def _evict(folder, limit, keep=None):
 
 def _remove(path):
     try:
-        os.remove(path)
+        if os.path.isdir(path):
+            shutil.rmtree(path)
+        else:
+            os.remove(path)
     except OSError:
         pass
 
 
 def clear_cache() -> int:
-    """Remove every cached table set; returns the number of bytes freed."""
+    """Remove every cached table set (and temporary folders left by interrupted writes);
+    returns the number of bytes freed."""
+    folder = cache_dir()
     freed = 0
-    for _, size, p in _entries(cache_dir()):
+    for _, size, p in _entries(folder):
         _remove(p)
         freed += size
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        names = []
+    for n in names:
+        if n.startswith(".") and n.endswith(".tmp"):
+            p = os.path.join(folder, n)
+            freed += _size(p)
+            _remove(p)
     return freed
