@@ -89,7 +89,7 @@ class PrecomputedSky(SkyModel):
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
         (``from_cache`` says which). Folder ``$SKYDOME_CACHE_DIR`` or the user cache folder;
-        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 2 GB); :func:`clear_cache`.
+        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); :func:`clear_cache`.
     """
 
     name = "precomputed"

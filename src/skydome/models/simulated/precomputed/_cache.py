@@ -9,7 +9,7 @@ and the tables are recomputed. The arrays are memory-mapped when read, so a cach
 does not read the (hundreds of MB of) tables up front.
 
 Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydome")`` /
-``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 2 GB); after each
+``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); after each
 write the least recently used files are removed until the folder fits. Files are written
 to a temporary name in the folder and renamed, so a reader never sees a partial file.
 """
@@ -26,7 +26,7 @@ import numpy as np
 
 # bump when the tables' meaning or layout changes (mapping, units, fields)
 CACHE_FORMAT = "skydome.precomputed-cache/2"
-DEFAULT_LIMIT_BYTES = 2_000_000_000
+DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 
 
