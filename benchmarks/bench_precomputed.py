@@ -1,11 +1,13 @@
-"""Benchmark of the ``precomputed`` model (skydome issue 5 performance targets).
+"""Benchmark of the ``precomputed`` model.
 
 Prints, on this machine:
 
-1. the table precomputation at Bruneton's (2017) default sizes (transmittance 256 x 64,
-   scattering 32 x 128 x 32 x 8, irradiance 64 x 16), 20 wavelengths, 4 orders, with the
+1. the table precomputation (cache off) at the earlier default (Bruneton's 2017 sizes:
+   transmittance 256 x 64, scattering 32 x 128 x 32 x 8, irradiance 64 x 16, 4 orders), at
+   the earlier validated settings and at this version's default, 20 wavelengths, with the
    time of each stage (transmittance columns, single scattering, and per further order:
-   incident radiance, scattering density, indirect irradiance, multiple scattering);
+   incident radiance, scattering density, indirect irradiance, multiple scattering), and
+   the start-up from the on-disk cache at the default (where the version has one);
 2. the precomputation at Radiance ``genssky``'s own table sizes (its source, gen/atmos.c:
    transmittance 256 x 64, scattering 16 x 64 x 16 x 4, irradiance 64 x 16, 20 wavelengths
    380-780 nm, 4 orders), and ``genssky`` itself (shipped in pyradiance's ``bin/`` folder)
@@ -17,7 +19,9 @@ Prints, on this machine:
 The machine's load average is printed with each figure (on a shared machine the wall
 times vary with the other jobs).
 
-Run: python benchmarks/bench_precomputed.py [--quick] [--no-genssky]
+Run: python benchmarks/bench_precomputed.py [--quick] [--no-genssky] [--only=LABEL]
+(LABEL old_default, old_validated or default: only that precomputation is timed, for
+/usr/bin/time -v peak-memory runs)
 """
 
 from __future__ import annotations
@@ -31,6 +35,11 @@ import time
 
 import numpy as np
 
+OLD_DEFAULT = dict(orders=4, remaining_orders="none", sphere_samples=16, scattering_nu_size=8,
+                   scattering_mu_s_size=32, integration_samples=20)
+OLD_VALIDATED = dict(orders=6, remaining_orders="geometric", sphere_samples=32,
+                     scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64,
+                     integration_samples=20)
 GENSSKY_SIZES = dict(transmittance_mu_size=256, transmittance_r_size=64, scattering_r_size=16,
                      scattering_mu_size=64, scattering_mu_s_size=16, scattering_nu_size=4,
                      irradiance_mu_s_size=64, irradiance_r_size=16)
@@ -48,11 +57,16 @@ def _load():
 @contextlib.contextmanager
 def _stage_timer(times):
     """Time the numba kernels called by the precomputation (module attributes wrapped)."""
-    from skydome.models.simulated import _kernels_precomputed as KP
     from skydome.transport import _kernels as K
 
+    try:   # the package layout (skydome.models.simulated.precomputed._single, ...)
+        from skydome.models.simulated.precomputed import _density, _irradiance, _multiple, _single
+        mods = (_single, _density, _irradiance, _multiple, K)
+    except ImportError:   # the single kernel module of earlier versions
+        from skydome.models.simulated import _kernels_precomputed as KP
+        mods = (KP, K)
     saved = []
-    for mod in (KP, K):
+    for mod in mods:
         for name in STAGES:
             if hasattr(mod, name):
                 f = getattr(mod, name)
@@ -72,14 +86,21 @@ def _stage_timer(times):
             setattr(mod, name, f)
 
 
+def _has_cache(sd) -> bool:
+    return any(p.name == "cache" for p in sd.models.get_model_class("precomputed").parameters)
+
+
 def _precompute(sd, sun, repeats, **kw):
-    """Best wall time [s] of ``repeats`` precomputations, and the stage times of the best."""
+    """Best wall time [s] of ``repeats`` precomputations (cache off), and the stage times of
+    the best."""
     best, best_stages = np.inf, {}
+    if _has_cache(sd):
+        kw["cache"] = False
     for _ in range(repeats):
         stages = {}
         with _stage_timer(stages):
             t0 = time.perf_counter()
-            sd.model("precomputed", sun=sun, n_wavelengths=20, orders=4, **kw)
+            sd.model("precomputed", sun=sun, n_wavelengths=20, **kw)
             dt = time.perf_counter() - t0
         if dt < best:
             best, best_stages = dt, stages
@@ -113,7 +134,7 @@ def _genssky_seconds(threads: int):
         return dt, f"tables {', '.join(files)}{note}"
 
 
-def main(quick: bool = False, genssky: bool = True) -> None:
+def main(quick: bool = False, genssky: bool = True, only=()) -> None:
     import skydome as sd
     from skydome.transport.geometry import direction_from_angles
 
@@ -129,17 +150,33 @@ def main(quick: bool = False, genssky: bool = True) -> None:
     print(f"kernel compile/load (first use): {time.perf_counter() - t0:.1f} s")
 
     repeats = 1 if quick else 2
-    t_bru, stages = _precompute(sd, sun, repeats)
-    print(f"precompute, Bruneton sizes (32 x 128 x 32 x 8), 20 wavelengths, 4 orders: "
-          f"{t_bru:.2f} s (best of {repeats}; target < 15 s; load {_load():.1f})")
-    for name, label in STAGES.items():
-        if name in stages:
-            v = stages[name]
-            print(f"    {label:34s} {sum(v):6.2f} s  [{', '.join(f'{x:.2f}' for x in v)}]")
-    acc = sum(sum(v) for v in stages.values())
-    print(f"    {'other (numpy: scattering density J, ...)':34s} {t_bru - acc:6.2f} s")
+    for key, label, kw in (("old_default", "old default (Bruneton sizes 32 x 128 x 32 x 8, 4 orders)",
+                             OLD_DEFAULT), ("old_validated", "old validated settings", OLD_VALIDATED),
+                            ("default", "this version's default", {})):
+        if only and key not in only:
+            continue
+        t_bru, stages = _precompute(sd, sun, repeats, **kw)
+        print(f"precompute, {label}, 20 wavelengths: {t_bru:.2f} s (best of {repeats}; "
+              f"load {_load():.1f})")
+        for name, text in STAGES.items():
+            if name in stages:
+                v = stages[name]
+                print(f"    {text:34s} {sum(v):6.2f} s  [{', '.join(f'{x:.2f}' for x in v)}]")
+        acc = sum(sum(v) for v in stages.values())
+        print(f"    {'other (numpy: scattering density J, ...)':34s} {t_bru - acc:6.2f} s")
+    if _has_cache(sd):
+        with tempfile.TemporaryDirectory() as tmp:
+            os.environ["SKYDOME_CACHE_DIR"] = tmp
+            sd.model("precomputed", sun=sun)
+            t0 = time.perf_counter()
+            m = sd.model("precomputed", sun=sun)
+            print(f"cached start-up at the default settings: {time.perf_counter() - t0:.2f} s "
+                  f"(from cache: {m.from_cache}; load {_load():.1f})")
+            del os.environ["SKYDOME_CACHE_DIR"]
+    if only:
+        return
 
-    t_gen, _ = _precompute(sd, sun, repeats, **GENSSKY_SIZES)
+    t_gen, _ = _precompute(sd, sun, repeats, orders=4, **GENSSKY_SIZES)
     print(f"precompute, genssky sizes (16 x 64 x 16 x 4), 20 wavelengths, 4 orders: "
           f"{t_gen:.2f} s (best of {repeats}; load {_load():.1f})")
 
@@ -148,7 +185,7 @@ def main(quick: bool = False, genssky: bool = True) -> None:
     lat = 90.0 - (np.arange(h) + 0.5) / h * 180.0
     LA, LO = np.meshgrid(lat, lon, indexing="ij")
     dirs = direction_from_angles(LA, LO).reshape(-1, 3)
-    m = sd.model("precomputed", sun=sun, n_wavelengths=20, orders=4)
+    m = sd.model("precomputed", sun=sun, n_wavelengths=20, **({"cache": False} if _has_cache(sd) else {}))
     wl = m.table_wavelengths_nm
     m.radiance(dirs[:1000], wl)
     best = np.inf
@@ -177,4 +214,5 @@ def main(quick: bool = False, genssky: bool = True) -> None:
 
 
 if __name__ == "__main__":
-    main(quick="--quick" in sys.argv, genssky="--no-genssky" not in sys.argv)
+    only = [a.split("=", 1)[1] for a in sys.argv if a.startswith("--only=")]
+    main(quick="--quick" in sys.argv, genssky="--no-genssky" not in sys.argv, only=only)

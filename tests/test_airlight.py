@@ -11,8 +11,9 @@ from skydome.effects.airlight import apply_airlight
 SUN = sd.Sun(elevation_deg=20.0, azimuth_deg=120.0)
 DIST = np.array([[1e3, 3e3, 10e3, 30e3]])
 GREY = np.full((1, 4, 3), 0.1)
-# small precomputed tables keep the file fast
-SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3, n_wavelengths=10)
+# small precomputed tables (and the earlier default orders and quadrature) keep the file fast
+SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3, n_wavelengths=10,
+             remaining_orders="none", sphere_samples=16, scattering_nu_size=8)
 
 
 def _mp(method):

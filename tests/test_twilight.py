@@ -9,7 +9,7 @@ from skydome.effects.twilight import (anti_solar_profile, belt_of_venus, horizon
                                       horizontal_illuminance, twilight_models, zenith_luminance_curve)
 
 SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,
-             n_wavelengths=10)
+             n_wavelengths=10, remaining_orders="none", sphere_samples=16, scattering_nu_size=8)
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,87 @@
+"""Accuracy and cost of ``precomputed`` table settings against the Monte Carlo reference.
+
+For a few skies (sun elevation, aerosol optical depth at 550 nm, ``Atmosphere.earth``) the
+``montecarlo`` model gives the reference radiance on 20-deg rings of upper-hemisphere
+directions (``validate_multiple_scattering.directions(20)``) at 6 wavelengths over
+400-700 nm; the references are kept in an ``.npz`` file (``--refs``) so that several
+settings can be compared against the same paths. For each named setting the script prints
+the precomputation wall time and the luminance RMS / max relative error per sky (solid-angle
+weighted, as in ``validate_multiple_scattering.py``) and the Monte Carlo noise floor.
+
+Run: python benchmarks/accuracy_precomputed.py [--refs FILE] [--samples N] [--settings a,b]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from validate_multiple_scattering import compare, directions  # noqa: E402
+
+SKIES = [(60.0, 0.5), (30.0, 0.2), (10.0, 0.5), (2.0, 0.2), (60.0, 0.05), (-4.0, 0.2),
+         (-6.0, 0.2)]
+# the previous default (Bruneton's sizes, 4 orders), the previous validated settings, and
+# candidates for the new default
+SETTINGS = {
+    "old_default": dict(orders=4, remaining_orders="none", sphere_samples=16,
+                        scattering_nu_size=8, scattering_mu_s_size=32, integration_samples=20),
+    "old_validated": dict(orders=6, remaining_orders="geometric", sphere_samples=32,
+                          scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64,
+                          integration_samples=20),
+    "default": {},
+}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--refs", default=os.path.join("benchmarks", "_mc_refs.npz"))
+    ap.add_argument("--samples", type=int, default=4000)
+    ap.add_argument("--twilight-samples", type=int, default=100_000)
+    ap.add_argument("--settings", default=",".join(SETTINGS))
+    ap.add_argument("--skies", default="", help="indices into SKIES, e.g. 0,1 (default all)")
+    args = ap.parse_args(argv)
+
+    import skydome as sd
+    from skydome.atmosphere import Atmosphere
+
+    wl = np.linspace(400.0, 700.0, 6)
+    dirs, w = directions(20.0)
+    skies = [SKIES[int(i)] for i in args.skies.split(",")] if args.skies else SKIES
+    refs = dict(np.load(args.refs)) if os.path.exists(args.refs) else {}
+    for elev, aod in skies:
+        k = f"{elev:g}_{aod:g}"
+        if k in refs:
+            continue
+        n = args.twilight_samples if elev < 0 else args.samples
+        t0 = time.perf_counter()
+        mc = sd.model("montecarlo", sun=sd.Sun(elevation_deg=elev, azimuth_deg=180.0),
+                      atmosphere=Atmosphere.earth(aerosol_optical_depth=aod), samples=n, seed=1)
+        refs[k], refs[k + "_err"] = mc.radiance_with_error(dirs, wl)
+        np.savez(args.refs, **refs)
+        print(f"reference sun {elev:g} aod {aod:g}: {n} paths, {time.perf_counter() - t0:.0f} s",
+              flush=True)
+    print(f"load average {os.getloadavg()[0]:.1f} (shared machine)")
+    for name in [n for n in args.settings.split(",") if n]:
+        kw = SETTINGS[name]
+        print(f"{name}: {kw}", flush=True)
+        for aod in sorted({a for _, a in skies}):
+            t0 = time.perf_counter()
+            m = sd.model("precomputed", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=180.0),
+                         atmosphere=Atmosphere.earth(aerosol_optical_depth=aod), cache=False, **kw)
+            print(f"  aod {aod:g}: precompute {time.perf_counter() - t0:.1f} s", flush=True)
+            for elev in [e for e, a in skies if a == aod]:
+                k = f"{elev:g}_{aod:g}"
+                sky = m.with_sun(sd.Sun(elevation_deg=elev, azimuth_deg=180.0))
+                c = compare(refs[k], refs[k + "_err"], sky.radiance(dirs, wl), wl, w)
+                print(f"    sun {elev:5.1f}: lum RMS {100 * c['rms']:5.2f} %  max "
+                      f"{100 * c['max']:5.2f} %  (MC noise {100 * c['noise']:.2f} %)", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,515 @@
+"""``precomputed``: a spectral sky from precomputed scattering tables (Bruneton 2017).
+
+E. Bruneton's "Precomputed Atmospheric Scattering: a New Implementation" (2017; the
+reworking of Bruneton & Neyret 2008) tabulates, for a spherical-shell atmosphere, the
+transmittance T(r, mu), the in-scattered radiance S(r, mu, mu_s, nu) summed over N
+scattering orders and the ground irradiance E(r, mu_s). Rendering any view is then a few
+table lookups. This package computes the tables with numba on the CPU, per wavelength (20
+by default over 380-780 nm), for any :class:`skydome.atmosphere.Atmosphere`; it keeps
+each constituent's single scattering apart (the phase function is applied at render
+time, so the aerosol forward peak stays sharp) and stores multiple scattering as full
+radiance.
+
+References
+----------
+[Bru17] E. Bruneton, Precomputed Atmospheric Scattering: a New Implementation, 2017,
+    https://ebruneton.github.io/precomputed_atmospheric_scattering/ (atmosphere/functions.glsl).
+[BN08] E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008, eqs. 1-9.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skydome._validate import as_directions, as_wavelengths, check_number
+from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
+from skydome.models.simulated.precomputed._precompute import QUADRATURE_SCALE_M
+from skydome.models.simulated.precomputed._tables import Tables
+
+__all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
+
+# the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
+# in angle) and azimuth nodes from the sun's over [0, 180] deg
+_SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
+_TABULATED = 4      # skydome.transport._phase.TABULATED (not imported: it loads numba)
+
+
+@register
+class PrecomputedSky(SkyModel):
+    """Bruneton's (2017) precomputed multiple-scattering sky, spectral, built on the CPU.
+
+    Parameters
+    ----------
+    sun : skydome.Sun
+        Sun position. Sun elevations down to ``90 - max_sun_zenith_deg`` (-18 deg by
+        default) are in the tables; below that the sky is night: radiance 0.
+    atmosphere : skydome.Atmosphere, optional
+        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
+    turbidity : float
+        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
+    observer_altitude_m : float
+        Observer altitude above the ground [m], [0, top of the atmosphere).
+    n_wavelengths : int
+        Number of table wavelengths, evenly spaced over 380-780 nm (default 20).
+    table_wavelengths_nm : array_like, optional
+        Explicit table wavelength grid [nm] (instead of ``n_wavelengths``).
+    orders : int
+        Number of computed scattering orders, [1, 20] (default 6). Ground reflections
+        count as orders.
+    remaining_orders : {"none", "geometric"}
+        "geometric" adds the orders beyond ``orders`` as a geometric series whose ratio is
+        that of the last two computed orders' total radiance, per wavelength (clamped to 0.9;
+        after Hillaire 2020, eq. 10). Default "geometric".
+    transmittance_mu_size, transmittance_r_size : int
+        Transmittance (column) table size, default 256 x 64.
+    scattering_r_size, scattering_mu_size, scattering_mu_s_size, scattering_nu_size : int
+        4-D scattering table size, default 32 x 128 x 48 x 16 (``scattering_mu_size`` even;
+        mu_s on a sunset-centred mapping of the sun's zenith angle, the same for every
+        planet radius).
+    irradiance_mu_s_size, irradiance_r_size : int
+        Ground-irradiance table size, default 64 x 16.
+    integration_samples : int
+        Quadrature nodes per ray piece for single and multiple scattering (default 20).
+    sphere_samples : int
+        Zenith-angle samples of the incident directions in the scattering density
+        (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
+    density_mu_s_size : int, optional
+        mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
+
+    The defaults are the settings validated against the Monte Carlo reference
+    (docs/validation.md). Bruneton's cheaper sizes, 5-14 % off in hazy air: ``orders=4,
+    remaining_orders="none", sphere_samples=16, scattering_nu_size=8,
+    scattering_mu_s_size=32``.
+    max_sun_zenith_deg : float
+        Largest sun zenith angle in the tables [deg], [90, 120] (default 108: astronomical
+        twilight).
+    cache : bool
+        Read and write the on-disk table cache (default True): a second model with the same
+        atmosphere, wavelengths and settings reads its tables instead of computing them
+        (``from_cache`` says which). Folder ``$SKYDOME_CACHE_DIR`` or the user cache folder;
+        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); :func:`clear_cache`.
+    """
+
+    name = "precomputed"
+    reference = ("Bruneton, Precomputed Atmospheric Scattering: a New Implementation (2017); "
+                 "Bruneton & Neyret, Precomputed Atmospheric Scattering, EGSR 2008, eqs. 1-9")
+    native = "spectral"
+    summary = "Bruneton-style precomputed multiple scattering tables (spectral, any atmosphere)."
+    parameters = (
+        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
+                  kind="object"),
+        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
+        Parameter("observer_altitude_m", "m", 0.0, 0.0, 999_999.0, "observer altitude above the ground"),
+        Parameter("n_wavelengths", "", 20, 1, 400, "table wavelengths over 380-780 nm", kind="int"),
+        Parameter("table_wavelengths_nm", "nm", None, doc="explicit table wavelength grid",
+                  kind="object"),
+        Parameter("orders", "", 6, 1, 20, "scattering orders", kind="int"),
+        Parameter("remaining_orders", "", "geometric", doc="orders beyond N: none, or geometric "
+                  "(series with the ratio of the last two orders per table cell)",
+                  kind="choice", choices=("none", "geometric")),
+        Parameter("transmittance_mu_size", "", 256, 4, 4096, "transmittance table, mu axis", kind="int"),
+        Parameter("transmittance_r_size", "", 64, 4, 4096, "transmittance table, r axis", kind="int"),
+        Parameter("scattering_r_size", "", 32, 2, 512, "scattering table, r axis", kind="int"),
+        Parameter("scattering_mu_size", "", 128, 4, 2048, "scattering table, mu axis (even)", kind="int"),
+        Parameter("scattering_mu_s_size", "", 48, 2, 512, "scattering table, mu_s axis", kind="int"),
+        Parameter("scattering_nu_size", "", 16, 2, 256, "scattering table, nu axis", kind="int"),
+        Parameter("irradiance_mu_s_size", "", 64, 2, 4096, "irradiance table, mu_s axis", kind="int"),
+        Parameter("irradiance_r_size", "", 16, 2, 4096, "irradiance table, r axis", kind="int"),
+        Parameter("integration_samples", "", 20, 2, 1000, "quadrature nodes per ray piece", kind="int"),
+        Parameter("sphere_samples", "", 32, 4, 256, "zenith samples of the scattering density",
+                  kind="int"),
+        Parameter("density_mu_s_size", "", None, 2, 512,
+                  "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
+        Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
+        Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),
+    )
+
+    def __init__(self, sun, **params):
+
+        check_sun(sun)
+        p = self._validate_params(params)
+        if not isinstance(p["cache"], (bool, np.bool_)):
+            raise TypeError(f"cache must be True or False, not {p['cache']!r}")
+        atm = resolve_atmosphere(p, params)
+        if p["scattering_mu_size"] % 2:
+            raise ValueError(f"scattering_mu_size = {p['scattering_mu_size']} is out of range: "
+                             "it must be even, in [4, 2048]")
+        if p["table_wavelengths_nm"] is not None:
+            if "n_wavelengths" in params:
+                raise ValueError("give either n_wavelengths or table_wavelengths_nm, not both")
+            wl = as_wavelengths(p["table_wavelengths_nm"], 280.0, 4000.0, "table_wavelengths_nm")
+            if wl.size > 1 and np.any(np.diff(wl) <= 0):
+                raise ValueError("table_wavelengths_nm must be strictly increasing")
+        else:
+            n = p["n_wavelengths"]
+            wl = np.array([550.0]) if n == 1 else np.linspace(380.0, 780.0, n)
+        for k, v in p.items():
+            setattr(self, k, v)
+        self.sun = sun
+        self.atmosphere = atm
+        self.cache = bool(p["cache"])
+        self.table_wavelengths_nm = wl
+        self.n_wavelengths = wl.size
+        self._t, self.from_cache = self._tables(atm, wl, p, self.cache)
+        self.precompute_seconds = self._t.precompute_seconds
+
+    @staticmethod
+    def _tables(atm, wl, p, use_cache):
+        """(tables, from_cache): from the on-disk cache when it holds this atmosphere and
+        these settings, else precomputed (and stored there)."""
+        from skydome.models.simulated.precomputed import _cache
+        from skydome.models.simulated.precomputed._precompute import precompute
+
+        props = atm.optical_properties(wl)
+        tab = [c.name for c, code, sc in zip(atm.constituents, props.phase_code, props.scattering)
+               if code == _TABULATED and np.any(sc > 0)]
+        if tab:
+            raise ValueError(f"atmosphere constituent(s) {', '.join(tab)} have a tabulated phase "
+                             "function, which the precomputed model does not support yet: give "
+                             "them an analytic phase (henyey_greenstein, cornette_shanks)")
+        if not use_cache:
+            return precompute(props, wl, p), False
+        settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}
+        k = _cache.key(props, settings)
+        tables = _cache.load(k)
+        if tables is not None:
+            return tables, True
+        tables = precompute(props, wl, p)
+        _cache.store(k, tables)
+        return tables, False
+
+    # -- tables helpers -----------------------------------------------------------------------------
+    @property
+    def _R(self):
+        return self._t.planet_radius_m
+
+    @property
+    def _Rt(self):
+        return self._t.top_radius_m
+
+    @property
+    def _mu_s_min(self):
+        return self._t.mu_s_min
+
+    @property
+    def _alpha(self):
+        return self._t.sun_angular_radius_rad
+
+    @property
+    def _r0(self):
+        return self._R + self.observer_altitude_m
+
+    def _night(self) -> bool:
+        return self.sun.direction[2] < self._mu_s_min - 1e-12
+
+    def _solar(self, wl):
+        from skydome.spectra import solar_irradiance
+
+        return solar_irradiance(wl) * self.sun.irradiance_scale
+
+    def _to_wavelengths(self, values, wl):
+        """Per-unit-solar-irradiance values on the table grid (..., n_table) -> radiometric
+        values on ``wl``: linear interpolation in wavelength (end values held beyond the
+        table), times the solar spectrum at ``wl``."""
+        tw = self._t.table_wavelengths_nm
+        if wl.shape == tw.shape and np.allclose(wl, tw, rtol=0, atol=1e-9):
+            return values * self._solar(wl)
+        W = np.zeros((wl.size, tw.size))
+        if tw.size == 1:
+            W[:, 0] = 1.0
+        else:
+            x = np.clip(wl, tw[0], tw[-1])
+            j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
+            f = (x - tw[j]) / (tw[j + 1] - tw[j])
+            W[np.arange(wl.size), j] = 1.0 - f
+            W[np.arange(wl.size), j + 1] += f
+        return (values @ W.T) * self._solar(wl)
+
+    def _observer_slices(self, table_only=False):
+        """The 4-D tables interpolated at the observer's r and the sun's mu_s."""
+        from skydome.models.simulated.precomputed import _mapping, _multiple
+
+        R, Rt = self._R, self._Rt
+        ss, ms = self._t.single_scattering, self._t.multiple_scattering
+        n_r, n_ms = ms.shape[0], ms.shape[2]
+        ir, a = _mapping.r_index(self._r0, n_r, R, Rt)
+        x = _mapping.mu_s_unit(float(self.sun.direction[2]), self._mu_s_min)
+        ims, c = _mapping._split(x * (n_ms - 1), n_ms)
+
+        def sl(t):
+            out = ((1 - a) * ((1 - c) * t[..., ir, :, ims, :, :] + c * t[..., ir, :, ims + 1, :, :])
+                   + a * ((1 - c) * t[..., ir + 1, :, ims, :, :] + c * t[..., ir + 1, :, ims + 1, :, :]))
+            return np.ascontiguousarray(out, dtype=np.float64)
+
+        mu_s = float(self.sun.direction[2])
+        if table_only or not self._t.has_density or mu_s < self._mu_s_min:
+            return sl(ss), sl(ms)
+        # orders 2..N integrated at the observer's own r and mu_s (the aureole of the
+        # multiply scattered light is too sharp for the table's mu_s and nu nodes), cached
+        cache = self.__dict__.setdefault("_slice_cache", {})
+        key = (self._r0, mu_s)
+        if key not in cache:
+            t = self._t
+            geom = self._slice_geometry()
+            n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
+            th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
+                                 th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
+            ground = np.arange(n_g + n_s) < n_g
+            cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
+            out = np.empty((n_g + n_s, _SLICE_PHI, ms.shape[-1]))
+            _multiple.multiple_scattering_slice(t.scattering_density, t.profile_code, t.profile_p0,
+                                         t.profile_p1, t.scattering_index, t.columns,
+                                         t.beta_e, R, Rt, self._mu_s_min, self._r0, mu_s,
+                                         int(self.integration_samples), QUADRATURE_SCALE_M,
+                                         np.cos(th), ground, cphi, out)
+            if len(cache) > 8:
+                cache.clear()
+            cache[key] = out
+        return sl(ss), cache[key]
+
+    def _slice_geometry(self, table=False):
+        """``geom`` of :func:`._render.render_observer`: (n_ground, n_sky,
+        horizon zenith angle [rad]) of the observer's sky map, or (0, 0, 0) for the table's
+        own mu mapping."""
+        if table or not self._t.has_density or float(self.sun.direction[2]) < self._mu_s_min:
+            return np.zeros(3)
+        mu_h = -math.sqrt(max(1.0 - (self._R / self._r0) ** 2, 0.0))
+        return np.array([_SLICE_GROUND, _SLICE_SKY, math.acos(mu_h)])
+
+    # -- public API ---------------------------------------------------------------------------------
+    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] arriving from ``directions`` (..., 3), shape
+        (..., n_wavelengths).
+
+        Directions below the horizon see the Lambertian ground (the atmosphere's albedo) lit
+        by the transmitted sun and the sky irradiance table, through the air in front of it.
+        Wavelengths between table wavelengths are interpolated linearly (relative to the
+        solar spectrum); beyond the table's ends its end values are held. Sun below
+        ``90 - max_sun_zenith_deg``: 0 (night)."""
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        flat = np.ascontiguousarray(d.reshape(-1, 3))
+        tw = self._t.table_wavelengths_nm
+        if wl.shape == tw.shape and np.allclose(wl, tw, rtol=0, atol=1e-9):
+            # fast path: the kernel applies the solar spectrum itself
+            out = self._radiance_table(flat, self._solar(wl))
+        else:
+            out = self._to_wavelengths(self._radiance_table(flat), wl)
+            np.maximum(out, 0.0, out=out)
+        return out.reshape(d.shape[:-1] + (wl.size,))
+
+    def radiance_table(self, directions) -> np.ndarray:
+        """Radiance per unit extraterrestrial irradiance [sr^-1] on the table wavelengths,
+        shape (..., n_table_wavelengths) (the fast path: no spectral interpolation)."""
+        d = as_directions(directions)
+        return self._radiance_table(np.ascontiguousarray(d.reshape(-1, 3))).reshape(
+            d.shape[:-1] + (self.n_wavelengths,))
+
+    def _radiance_table(self, flat, scale=None):
+        from skydome.models.simulated.precomputed import _render
+
+        nl = self.n_wavelengths
+        scale = np.ones(nl) if scale is None else np.ascontiguousarray(scale, dtype=np.float64)
+        out = np.empty((flat.shape[0], nl))
+        if self._night():
+            out[:] = 0.0
+            return out
+        ss_s, ms_s = self._observer_slices()
+        t = self._t
+        _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
+                           t.phase_code, t.phase_param, ms_s, t.columns, t.beta_e,
+                           t.ground_albedo, t.irradiance, scale, self._R, self._Rt,
+                           self._alpha, self._slice_geometry(), out)
+        return out
+
+    def _transmittance_table(self, r, mu):
+        from skydome.models.simulated.precomputed import _lookup
+
+        cs = np.empty(self._t.columns.shape[0])
+        _lookup.columns_at(self._t.columns, r, mu, self._R, self._Rt, cs)
+        return np.exp(-(cs @ self._t.beta_e))
+
+    def sun_radiance(self, wavelengths_nm) -> np.ndarray:
+        """Radiance of the sun's disc [W m^-2 sr^-1 nm^-1]: E_sun / Omega_sun x T(observer ->
+        top) x the fraction of the disc above the horizon; 0 when the planet hides it."""
+        from skydome.models.simulated.precomputed import _lookup
+
+        wl = as_wavelengths(wavelengths_nm)
+        mu_s = float(self.sun.direction[2])
+        vis = _lookup.sun_visible_fraction(self._r0, mu_s, self._R, self._alpha)
+        t = self._transmittance_table(self._r0, mu_s) * vis
+        return self._to_wavelengths(t[None, :], wl)[0] / self.sun.solid_angle_sr
+
+    def irradiance_components(self, wavelengths_nm):
+        """(direct, diffuse) spectral irradiance on a horizontal surface at the observer
+        [W m^-2 nm^-1]: the transmitted sun (averaged over the disc, [Bru17]
+        ComputeDirectIrradiance) and the sky (the irradiance table, orders 1..N-1)."""
+        from skydome.models.simulated.precomputed import _irradiance, _lookup
+
+        wl = as_wavelengths(wavelengths_nm)
+        nl = self.n_wavelengths
+        mu_s = float(self.sun.direction[2])
+        direct = np.zeros(nl)
+        diffuse = np.zeros(nl)
+        if not self._night():
+            cs = np.empty(self._t.columns.shape[0])
+            _irradiance.direct_irradiance_acc(self._t.columns, self._t.beta_e, self._r0, mu_s, self._R,
+                                     self._Rt, self._alpha, 1.0, cs, direct)
+            _lookup.irradiance_lookup_acc(self._t.irradiance, self._r0, mu_s, self._R, self._Rt, 1.0,
+                                     diffuse)
+        return (np.maximum(self._to_wavelengths(direct[None], wl)[0], 0.0),
+                np.maximum(self._to_wavelengths(diffuse[None], wl)[0], 0.0))
+
+    def ground_irradiance(self, wavelengths_nm) -> np.ndarray:
+        """Global spectral irradiance on a horizontal surface at the observer
+        [W m^-2 nm^-1] (direct + diffuse, see :meth:`irradiance_components`)."""
+        direct, diffuse = self.irradiance_components(wavelengths_nm)
+        return direct + diffuse
+
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm):
+        """Transmittance and in-scattered radiance between the observer and the point at
+        ``distance_m`` along each direction ([Bru17] GetSkyRadianceToPoint).
+
+        Parameters
+        ----------
+        directions : array_like (..., 3)
+        distance_m : float or array_like broadcastable to (...)
+            Distance to the object [m], >= 0; clamped to the end of the ray (ground or top
+            of the atmosphere).
+        wavelengths_nm : array_like
+
+        Returns
+        -------
+        transmittance : ndarray (..., n_wavelengths)
+            Dimensionless.
+        inscattered : ndarray (..., n_wavelengths)
+            [W m^-2 sr^-1 nm^-1]. An object of radiance L0 appears as T L0 + inscattered.
+        """
+        from skydome.models.simulated.precomputed import _render
+
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        dist = np.asarray(distance_m, dtype=np.float64)
+        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
+            raise ValueError("distance_m must be finite and >= 0 m")
+        dist = np.ascontiguousarray(np.broadcast_to(dist, d.shape[:-1]).reshape(-1))
+        flat = np.ascontiguousarray(d.reshape(-1, 3))
+        nl = self.n_wavelengths
+        tr = np.empty((flat.shape[0], nl))
+        ins = np.zeros((flat.shape[0], nl))
+        t = self._t
+        _render.aerial_perspective(flat, dist, self._r0, np.ascontiguousarray(self.sun.direction),
+                              t.single_scattering, t.phase_code, t.phase_param,
+                              t.multiple_scattering, t.columns, t.beta_e, self._R,
+                              self._Rt, self._mu_s_min, tr, ins)
+        if self._night():
+            ins[:] = 0.0
+        elif t.has_density:
+            # the observer's end of the path: orders 2..N from the observer's slice (as in
+            # radiance()) instead of the 4-D table, so that an infinite distance gives the sky
+            ss_s, ms_s = self._observer_slices()
+            ms_tab = self._observer_slices(table_only=True)[1]
+            zero = np.zeros_like(ss_s)
+            no_ground = np.zeros_like(t.ground_albedo)
+            one = np.ones(nl)
+            a_sl, a_tab = np.empty_like(ins), np.empty_like(ins)
+            for ms_x, o, geom in ((ms_s, a_sl, self._slice_geometry()),
+                                  (ms_tab, a_tab, self._slice_geometry(table=True))):
+                _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), zero,
+                                   t.phase_code, t.phase_param, ms_x, t.columns, t.beta_e,
+                                   no_ground, t.irradiance, one, self._R, self._Rt, self._alpha,
+                                   geom, o)
+            # applied in proportion to the path's share of the whole ray's extinction,
+            # 1 - T(d) over 1 - T(end): 0 at distance 0, all of it at the end of the ray
+            tr_end, ins_end = np.empty_like(tr), np.zeros_like(ins)
+            _render.aerial_perspective(flat, np.full(flat.shape[0], 1e12), self._r0,
+                                  np.ascontiguousarray(self.sun.direction), t.single_scattering,
+                                  t.phase_code, t.phase_param, t.multiple_scattering,
+                                  t.columns, t.beta_e, self._R, self._Rt, self._mu_s_min,
+                                  tr_end, ins_end)
+            share = np.clip((1.0 - tr) / np.maximum(1.0 - tr_end, 1e-300), 0.0, 1.0)
+            np.maximum(ins + share * (a_sl - a_tab), 0.0, out=ins)
+        tw = t.table_wavelengths_nm
+        shape = d.shape[:-1] + (wl.size,)
+        trans = np.stack([np.interp(wl, tw, row) for row in tr]) if tw.size > 1 else \
+            np.repeat(tr, wl.size, axis=1)
+        return (np.clip(trans, 0.0, 1.0).reshape(shape),
+                np.maximum(self._to_wavelengths(ins, wl), 0.0).reshape(shape))
+
+    def with_sun(self, sun=None, observer_altitude_m=None) -> "PrecomputedSky":
+        """The same tables for another sun position and/or observer altitude [m] (no
+        precomputation: the tables hold every altitude and sun zenith angle)."""
+        import copy
+
+        from skydome.sun import Sun
+
+        new = copy.copy(self)
+        if sun is not None:
+            if not isinstance(sun, Sun):
+                raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
+            new.sun = sun
+        if observer_altitude_m is not None:
+            top = self._Rt - self._R
+            new.observer_altitude_m = check_number("observer_altitude_m", observer_altitude_m,
+                                                   0.0, top, "m", high_open=True)
+        return new
+
+    # -- persistence --------------------------------------------------------------------------------
+    _atmosphere_description = None
+
+    def save(self, path) -> None:
+        """Write the tables and parameters to an ``.npz`` file (atomically)."""
+        from skydome.models.simulated.precomputed import _io
+
+        _io.save(self, path)
+
+    @classmethod
+    def load(cls, path, sun=None) -> "PrecomputedSky":
+        """Read tables written by :meth:`save`. ``sun`` replaces the saved sun position.
+
+        The loaded model has ``atmosphere = None`` (its description is kept in
+        ``describe()``): it renders from the tables alone."""
+        from skydome.models.simulated.precomputed import _io
+
+        return _io.load(cls, path, sun)
+
+    @property
+    def precompute_time_s(self) -> float:
+        """Wall time of the precomputation [s] (of the run that filled the cache, for tables
+        read from it)."""
+        return float(self._t.precompute_seconds)
+
+    def describe(self):
+        out = super().describe()
+        out["parameters"]["atmosphere"] = (self.atmosphere.describe() if self.atmosphere is not None
+                                           else self._atmosphere_description)
+        out["parameters"]["table_wavelengths_nm"] = [float(x) for x in self.table_wavelengths_nm]
+        return out
+
+    def export_textures(self, folder) -> list:
+        """Write the tables as float32 textures (``.npy``, and ``.exr`` where OpenEXR is
+        available) plus ``textures.json`` and ``textures.md`` describing axes, mappings and
+        units. Returns the written paths."""
+        from skydome.models.simulated.precomputed import _io
+
+        return _io.export_textures(self, folder)
+
+
+Precomputed = PrecomputedSky
+
+# the parameters that change the tables (the cache key); observer altitude, turbidity (it
+# enters through the atmosphere) and the wavelength count (through the grid) do not
+_TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "transmittance_r_size",
+                   "scattering_r_size", "scattering_mu_size", "scattering_mu_s_size",
+                   "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
+                   "integration_samples", "sphere_samples", "density_mu_s_size",
+                   "max_sun_zenith_deg")
+
+
+def clear_cache() -> int:
+    """Remove every cached table set from the cache folder; returns the bytes freed."""
+    from skydome.models.simulated.precomputed import _cache
+
+    return _cache.clear_cache()

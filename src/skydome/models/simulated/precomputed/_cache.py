@@ -1,0 +1,216 @@
+"""On-disk cache of precomputed tables.
+
+One folder per table set (an ``.npy`` file per array and ``meta.json``), named by a SHA-256 hash of everything the precomputation
+reads: the cache format version, the table wavelengths, the atmosphere's optical properties
+on them (radii, density profiles, scattering and extinction coefficients, phase functions,
+ground albedo) and every table setting. A different atmosphere field or setting gives a
+different key; an entry that cannot be read (truncated, corrupt, another format) is deleted
+and the tables are recomputed. The arrays are memory-mapped when read, so a cached start-up
+does not read the (hundreds of MB of) tables up front.
+
+Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydome")`` /
+``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); after each
+write the least recently used files are removed until the folder fits. Files are written
+to a temporary name in the folder and renamed, so a reader never sees a partial file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+
+import numpy as np
+
+# bump when the tables' meaning or layout changes (mapping, units, fields)
+CACHE_FORMAT = "skydome.precomputed-cache/2"
+DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
+_META = "meta.json"
+
+
+def cache_dir() -> str:
+    """The cache folder (not created)."""
+    env = os.environ.get("SKYDOME_CACHE_DIR")
+    if env:
+        return os.path.abspath(env)
+    import platformdirs
+
+    return os.path.join(platformdirs.user_cache_dir("skydome"), "precomputed")
+
+
+def limit_bytes() -> int:
+    """The size limit of the cache folder [bytes]."""
+    env = os.environ.get("SKYDOME_CACHE_LIMIT_BYTES")
+    if env is None or env == "":
+        return DEFAULT_LIMIT_BYTES
+    try:
+        v = float(env)
+    except ValueError:
+        v = float("nan")
+    if not (v >= 0 and np.isfinite(v)):
+        raise ValueError(f"SKYDOME_CACHE_LIMIT_BYTES = {env!r} is not valid: give a size in "
+                         "bytes, >= 0")
+    return int(v)
+
+
+def key(props, settings: dict) -> str:
+    """Hex SHA-256 of the format version, the optical properties and the settings."""
+    h = hashlib.sha256()
+    h.update(CACHE_FORMAT.encode())
+    h.update(json.dumps(settings, sort_keys=True, default=str).encode())
+    for name in props._fields:
+        h.update(name.encode())
+        if getattr(props, name) is None:
+            h.update(b"None")
+            continue
+        v = np.ascontiguousarray(np.asarray(getattr(props, name), dtype=None))
+        if v.dtype == object:
+            raise TypeError(f"optical property {name} is not numeric: cannot key the cache")
+        h.update(str(v.dtype).encode() + str(v.shape).encode())
+        h.update(v.tobytes())
+    return h.hexdigest()
+
+
+def _path(k: str) -> str:
+    return os.path.join(cache_dir(), k)
+
+
+def load(k: str):
+    """The cached :class:`._tables.Tables` under key ``k``, or None (absent or unreadable;
+    an unreadable entry is removed). The arrays are memory-mapped copy-on-write, so the
+    start-up reads only the header of each file and pages come in as the tables are used."""
+    from skydome.models.simulated.precomputed._tables import Tables
+
+    path = _path(k)
+    if not os.path.isdir(path):
+        return None
+    try:
+        with open(os.path.join(path, _META)) as f:
+            meta = json.load(f)
+        if meta.get("cache_key") != k or meta.get("cache_format") != CACHE_FORMAT:
+            raise ValueError("key mismatch")
+        arrays = dict(meta["scalars"])
+        for name in meta["arrays"]:
+            arrays[name] = np.asarray(np.load(os.path.join(path, name + ".npy"), mmap_mode="c",
+                                              allow_pickle=False))
+        tables = Tables.from_arrays(arrays)
+    except Exception:
+        _remove(path)
+        return None
+    try:
+        os.utime(os.path.join(path, _META))   # least recently used: the meta file's mtime
+    except OSError:
+        pass
+    return tables
+
+
+def store(k: str, tables) -> str | None:
+    """Write ``tables`` under key ``k`` (a folder of ``.npy`` files and ``meta.json``,
+    written under a temporary name and renamed) and trim the cache to the size limit;
+    returns the path, or None where the folder cannot be written or the tables alone exceed
+    the limit (the cache is a convenience: a failure to write it is not an error)."""
+    limit = limit_bytes()
+    arrays = tables.arrays()
+    if sum(a.nbytes for a in arrays.values()) > limit:
+        return None
+    folder = cache_dir()
+    tmp = None
+    path = _path(k)
+    try:
+        os.makedirs(folder, exist_ok=True)
+        tmp = tempfile.mkdtemp(prefix="." + k[:16] + "-", suffix=".tmp", dir=folder)
+        names, scalars = [], {}
+        for name, a in arrays.items():
+            if a.ndim == 0:
+                scalars[name] = a.item()
+            else:
+                np.save(os.path.join(tmp, name + ".npy"), a, allow_pickle=False)
+                names.append(name)
+        with open(os.path.join(tmp, _META), "w") as f:
+            json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
+                       "scalars": scalars}, f)
+        if os.path.isdir(path):
+            _remove(path)
+        os.rename(tmp, path)
+        tmp = None
+    except OSError:
+        return None
+    finally:
+        if tmp is not None:
+            _remove(tmp)
+    _evict(folder, limit, keep=path)
+    return path
+
+
+def _size(path) -> int:
+    total = 0
+    for d, _, files in os.walk(path):
+        for f in files:
+            try:
+                total += os.path.getsize(os.path.join(d, f))
+            except OSError:
+                pass
+    return total
+
+
+def _entries(folder):
+    """(last use, size [bytes], path) of every cache entry, least recently used first."""
+    out = []
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return out
+    for n in names:
+        p = os.path.join(folder, n)
+        if n.startswith(".") or not os.path.isdir(p):
+            continue
+        try:
+            used = os.stat(os.path.join(p, _META)).st_mtime
+        except OSError:
+            used = 0.0      # incomplete entry: first to go
+        out.append((used, _size(p), p))
+    return sorted(out)
+
+
+def _evict(folder, limit, keep=None):
+    entries = _entries(folder)
+    total = sum(e[1] for e in entries)
+    for _, size, p in entries:
+        if total <= limit:
+            break
+        if p == keep:
+            continue
+        _remove(p)
+        total -= size
+
+
+def _remove(path):
+    try:
+        if os.path.isdir(path):
+            shutil.rmtree(path)
+        else:
+            os.remove(path)
+    except OSError:
+        pass
+
+
+def clear_cache() -> int:
+    """Remove every cached table set (and temporary folders left by interrupted writes);
+    returns the number of bytes freed."""
+    folder = cache_dir()
+    freed = 0
+    for _, size, p in _entries(folder):
+        _remove(p)
+        freed += size
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        names = []
+    for n in names:
+        if n.startswith(".") and n.endswith(".tmp"):
+            p = os.path.join(folder, n)
+            freed += _size(p)
+            _remove(p)
+    return freed

@@ -1,0 +1,138 @@
+"""The scattering density J ([Bru17] ComputeScatteringDensity, [BN08] eq. 7): the radiance of
+the previous order arriving at each node (with one more ground reflection) and the phase
+matrix of the quadrature over the sphere.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_to_ground, hits_ground
+from skydome.models.simulated.precomputed._irradiance import direct_irradiance_acc
+from skydome.models.simulated.precomputed._lookup import (columns_segment, irradiance_lookup_acc,
+                                                           sky_lookup_acc)
+from skydome.models.simulated.precomputed._mapping import cell_r, mu_s_from_unit
+from skydome.transport._kernels import phase_value
+
+INV_PI = 1.0 / math.pi
+
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt, mu_s_min, alpha,
+                      n_r, n_ms, th_in, ph_in, out):
+    """Radiance of the previous order arriving at each (r, mu_s) node of the 4-D table
+    from the incident directions, including the light reflected once more by the ground
+    ([Bru17] ComputeScatteringDensity, inner loop): out[i, r, mu_s, l] (the incident
+    direction first: the right-hand side of the matrix product that gives J).
+
+    The incident directions are given in the sun's frame: th_in the angle from the sun
+    (so nu = cos th_in), ph_in the azimuth about the sun measured from the sun's vertical
+    plane, on the zenith side (so that mu = cos th mu_s + sin th cos ph sin theta_s). The
+    aerosol aureole (the forward peak of the previous order) is then resolved along one
+    axis of the grid, at every sun elevation alike."""
+    n_th = th_in.shape[0]
+    n_ph = ph_in.shape[0]
+    nl = out.shape[3]
+    nc = col.shape[0]
+    for idx in prange(n_r * n_ms):
+        ir = idx // n_ms
+        ims = idx % n_ms
+        w1 = np.empty(nc)
+        w2 = np.empty(nc)
+        cs = np.empty(nc)
+        tg = np.empty(nl)
+        eg = np.empty(nl)
+        r = cell_r(ir, n_r, R, Rt)
+        mu_s = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        for a in range(n_th):
+            nu = math.cos(th_in[a])
+            sg = math.sin(th_in[a])
+            for b in range(n_ph):
+                i = a * n_ph + b
+                ct = clamp_cos(nu * mu_s + sg * math.cos(ph_in[b]) * sin_s)
+                ground = hits_ground(r, ct, R)
+                o = out[i, ir, ims]
+                o[:] = 0.0
+                sky_lookup_acc(first, ss, pc, pp, delta, r, ct, mu_s, nu, ground, R, Rt, mu_s_min,
+                               1.0, o)
+                if ground:
+                    dg = distance_to_ground(r, ct, R)
+                    columns_segment(col, r, ct, dg, True, R, Rt, w1, w2, cs)
+                    for l in range(nl):
+                        s = 0.0
+                        for c in range(nc):
+                            s += beta_e[c, l] * cs[c]
+                        tg[l] = math.exp(-s) * albedo[l] * INV_PI
+                    mu_g = clamp_cos((r * mu_s + dg * nu) / R)
+                    eg[:] = 0.0
+                    if first:
+                        direct_irradiance_acc(col, beta_e, R, mu_g, R, Rt, alpha, 1.0, cs, eg)
+                    else:
+                        irradiance_lookup_acc(dE, R, mu_g, R, Rt, 1.0, eg)
+                    for l in range(nl):
+                        o[l] += tg[l] * eg[l]
+
+
+@njit(parallel=True, cache=True)
+def phase_matrix(code, param, th_out, ph_out, th_in, ph_in, d_omega, out):
+    """out[o, i] = dOmega_i (P(w_o . w_i) + P(w_o . w_i')) with w_i' the mirror image of w_i
+    in the sun's vertical plane (the incident field is symmetric about it), so that
+    J(w_o) = sum_i out[o, i] L(w_i) is [Bru17] ComputeScatteringDensity's quadrature over the
+    sphere ([BN08] eq. 7) evaluated on a fixed grid of outgoing directions."""
+    n_to = th_out.shape[0]
+    n_po = ph_out.shape[0]
+    n_ti = th_in.shape[0]
+    n_pi = ph_in.shape[0]
+    for o in prange(n_to * n_po):
+        ct_o = math.cos(th_out[o // n_po])
+        st_o = math.sin(th_out[o // n_po])
+        cp_o = math.cos(ph_out[o % n_po])
+        sp_o = math.sin(ph_out[o % n_po])
+        for a in range(n_ti):
+            ct = math.cos(th_in[a])
+            st = math.sin(th_in[a])
+            for b in range(n_pi):
+                cp = math.cos(ph_in[b])
+                sp = math.sin(ph_in[b])
+                c1 = clamp_cos(st_o * st * (cp_o * cp + sp_o * sp) + ct_o * ct)
+                c2 = clamp_cos(st_o * st * (cp_o * cp - sp_o * sp) + ct_o * ct)
+                out[o, a * n_pi + b] = d_omega[a] * (phase_value(code, param, c1)
+                                                     + phase_value(code, param, c2))
+
+
+def quadratic_phase_factors(code, param, th_out, ph_out, th_in, ph_in, d_omega, P):
+    """(left, right) with left @ right == P (the phase matrix of
+    :func:`phase_matrix`) when the phase function is a polynomial of
+    degree <= 2 in the cosine (Rayleigh, isotropic); None otherwise.
+
+    P[o, i] = dOmega_i (p(o.w_i) + p(o.w_i')), w_i' the mirror image of w_i (y -> -y), and
+    p(c) = a0 + a1 c + a2 c^2 with (o.w)^2 = sum_m o_m^2 w_m^2 + 2 sum_{m<n} o_m o_n w_m w_n."""
+    if code not in (0, 3):
+        return None
+    fm, f0, fp = (phase_value(code, param, c) for c in (-1.0, 0.0, 1.0))
+    a0, a1, a2 = f0, 0.5 * (fp - fm), 0.5 * (fp + fm) - f0
+
+    def unit(th, ph):
+        T, F = np.meshgrid(th, ph, indexing="ij")
+        return np.stack([np.sin(T) * np.cos(F), np.sin(T) * np.sin(F), np.cos(T)], -1).reshape(-1, 3)
+
+    o = unit(th_out, ph_out)
+    w = unit(th_in, ph_in)
+    ox, oy, oz = o.T
+    left = np.stack([np.ones_like(ox), ox, oy, oz, ox * ox, oy * oy, oz * oz, ox * oy, ox * oz,
+                     oy * oz], axis=1)
+
+    def feats(x, y, z):
+        return np.stack([np.full_like(x, a0), a1 * x, a1 * y, a1 * z, a2 * x * x, a2 * y * y,
+                         a2 * z * z, 2 * a2 * x * y, 2 * a2 * x * z, 2 * a2 * y * z])
+
+    wx, wy, wz = w.T
+    right = (feats(wx, wy, wz) + feats(wx, -wy, wz)) * np.repeat(d_omega, ph_in.size)[None, :]
+    if np.abs(left @ right - P).max() > 1e-9 * np.abs(P).max():
+        return None
+    return left, right

@@ -1,0 +1,54 @@
+"""Direct ([Bru17] ComputeDirectIrradiance) and indirect ([Bru17] ComputeIndirectIrradiance,
+[BN08] eq. 9) irradiance on a horizontal surface, per unit solar irradiance.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+from skydome.models.simulated.precomputed._geometry import clamp_cos
+from skydome.models.simulated.precomputed._lookup import columns_at, sky_lookup_acc
+
+
+
+@njit(cache=True)
+def direct_irradiance_acc(col, beta_e, r, mu_s, R, Rt, alpha, scale, cs, out):
+    """Add scale x the direct solar irradiance on a horizontal surface at r ([Bru17]
+    ComputeDirectIrradiance: transmittance x the average cosine over the disc)."""
+    if mu_s < -alpha:
+        return
+    if mu_s > alpha:
+        f = mu_s
+    else:
+        f = (mu_s + alpha) * (mu_s + alpha) / (4.0 * alpha)
+    columns_at(col, r, mu_s, R, Rt, cs)
+    for l in range(out.shape[0]):
+        s = 0.0
+        for c in range(cs.shape[0]):
+            s += beta_e[c, l] * cs[c]
+        out[l] += scale * f * math.exp(-s)
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def indirect_irradiance(first, ss, pc, pp, delta, R, Rt, mu_s_min, th, ph, d_omega, out):
+    """Irradiance on a horizontal surface from the sky of one scattering order ([Bru17]
+    ComputeIndirectIrradiance, [BN08] eq. 9 for one order): out[r, mu_s, l] =
+    sum over the upper hemisphere of L(w) cos(theta) dOmega (phi over [0, pi], doubled)."""
+    n_r, n_m, nl = out.shape
+    for idx in prange(n_r * n_m):
+        ir = idx // n_m
+        im = idx % n_m
+        r = R + (Rt - R) * ir / (n_r - 1.0)
+        mu_s = -1.0 + 2.0 * im / (n_m - 1.0)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        o = out[ir, im]
+        o[:] = 0.0
+        for a in range(th.shape[0]):
+            ct = math.cos(th[a])
+            st = math.sin(th[a])
+            for b in range(ph.shape[0]):
+                nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)
+                sky_lookup_acc(first, ss, pc, pp, delta, r, ct, mu_s, nu, False, R, Rt, mu_s_min,
+                               2.0 * ct * d_omega[a], o)

@@ -1,0 +1,130 @@
+"""Table lookups of the precomputed model: columns and transmittance ([Bru17]
+GetTransmittance), the sun's visible fraction, the 4-D scattering and 2-D irradiance tables
+([Bru17] GetScattering, GetIrradiance), and the transmittance-weighted quadrature weights.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
+from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
+from skydome.transport._kernels import phase_value, profile_density
+from skydome.transport._tables import lookup_columns as columns_at
+
+
+
+# -- columns and transmittance --------------------------------------------------------------------
+@njit(cache=True)
+def columns_segment(col, r, mu, d, ground, R, Rt, w1, w2, out):
+    """Columns between (r, mu) and the point at distance d along the ray ([Bru17]
+    GetTransmittance): differences of columns to the top; for rays that hit the ground
+    both rays are reversed so that neither does."""
+    rd = point_along(r, mu, d, R, Rt)
+    mud = clamp_cos((r * mu + d) / rd)
+    if ground:
+        columns_at(col, rd, -mud, R, Rt, w1)
+        columns_at(col, r, -mu, R, Rt, w2)
+    else:
+        columns_at(col, r, mu, R, Rt, w1)
+        columns_at(col, rd, mud, R, Rt, w2)
+    for c in range(out.shape[0]):
+        out[c] = max(w1[c] - w2[c], 0.0)
+
+
+@njit(cache=True)
+def sun_visible_fraction(r, mu_s, R, alpha):
+    """Fraction of the sun's disc (angular radius alpha [rad]) above the horizon seen
+    from radius r ([Bru17] GetTransmittanceToSun, smoothstep over the disc)."""
+    sin_h = R / r
+    cos_h = -math.sqrt(max(1.0 - sin_h * sin_h, 0.0))
+    e = sin_h * alpha
+    x = (mu_s - cos_h + e) / (2.0 * e)
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    return x * x * (3.0 - 2.0 * x)
+
+
+@njit(cache=True)
+def _quad_acc(tab, ir, a, imu, b, ims, c, inu, e, w, out):
+    """out[l] += w x quadrilinear interpolation of tab[r, mu, mu_s, nu, l]."""
+    nl = out.shape[0]
+    for dr in range(2):
+        wr = a if dr else 1.0 - a
+        if wr == 0.0:
+            continue
+        for dm in range(2):
+            wm = b if dm else 1.0 - b
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                ws = c if ds else 1.0 - c
+                if ws == 0.0:
+                    continue
+                for dn in range(2):
+                    wn = e if dn else 1.0 - e
+                    if wn == 0.0:
+                        continue
+                    wt = w * wr * wm * ws * wn
+                    for l in range(nl):
+                        out[l] += wt * tab[ir + dr, imu + dm, ims + ds, inu + dn, l]
+
+
+@njit(cache=True)
+def sky_lookup_acc(first, ss, pc, pp, delta, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, w, out):
+    """out += w x radiance of one scattering order arriving at r from (mu) ([Bru17]
+    GetScattering): order 1 from the single-scattering tables times each constituent's
+    phase function at nu; higher orders from the full-radiance table ``delta``."""
+    if first:
+        n_r, n_mu, n_ms, n_nu = ss.shape[1], ss.shape[2], ss.shape[3], ss.shape[4]
+    else:
+        n_r, n_mu, n_ms, n_nu = delta.shape[0], delta.shape[1], delta.shape[2], delta.shape[3]
+    ir, a = r_index(r, n_r, R, Rt)
+    imu, b = mu_index(r, mu, ground, n_mu, R, Rt)
+    ims, c = _split(mu_s_unit(mu_s, mu_s_min) * (n_ms - 1), n_ms)
+    inu, e = _split((nu + 1.0) * 0.5 * (n_nu - 1), n_nu)
+    if first:
+        for k in range(ss.shape[0]):
+            p = phase_value(pc[k], pp[k], nu)
+            _quad_acc(ss[k], ir, a, imu, b, ims, c, inu, e, w * p, out)
+    else:
+        _quad_acc(delta, ir, a, imu, b, ims, c, inu, e, w, out)
+
+
+@njit(cache=True)
+def irradiance_lookup_acc(E, r, mu_s, R, Rt, w, out):
+    """out += w x bilinear lookup of the irradiance table E[r, mu_s, l] ([Bru17]
+    GetIrradianceTextureUvFromRMuS: x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2)."""
+    n_r = E.shape[0]
+    n_m = E.shape[1]
+    i, a = _split((r - R) / (Rt - R) * (n_r - 1), n_r)
+    j, b = _split((mu_s + 1.0) * 0.5 * (n_m - 1), n_m)
+    for l in range(out.shape[0]):
+        out[l] += w * ((1.0 - a) * ((1.0 - b) * E[i, j, l] + b * E[i, j + 1, l])
+                       + a * ((1.0 - b) * E[i + 1, j, l] + b * E[i + 1, j + 1, l]))
+
+
+@njit(cache=True, fastmath=True)
+def node_weights(col, r, mu, t, ground, rt, w_q, R, Rt, codes, p0s, p1s, sc_idx, beta_e, w1, w2,
+                 cs, tw):
+    """Quadrature weight x transmittance from the ray's start to the node at distance t, per
+    scattering constituent k times its density at the node: tw[k, l] (the weights of J_k
+    in the ray integrals of :func:`multiple_scattering_table` and
+    :func:`multiple_scattering_slice`)."""
+    nl = tw.shape[1]
+    nc = col.shape[0]
+    columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
+    for l in range(nl):
+        s = 0.0
+        for c in range(nc):
+            s += beta_e[c, l] * cs[c]
+        tw[0, l] = w_q * math.exp(-s)
+    for kk in range(tw.shape[0] - 1, -1, -1):
+        c = sc_idx[kk]
+        dk = profile_density(codes[c], p0s[c], p1s[c], rt - R)
+        for l in range(nl):
+            tw[kk, l] = tw[0, l] * dk

@@ -1,0 +1,149 @@
+"""Bruneton's (2017) table mappings: node <-> (r, mu, mu_s, nu), as inverse pairs, and the
+interpolation cells (node, fraction) of a continuous coordinate.
+
+[Bru17] GetScatteringTextureUvwzFromRMuMuSNu and its inverse; node i of an axis of n nodes at
+x = i / (n - 1). The mu_s axis is this package's own mapping (see :func:`mu_s_unit`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from skydome.models.simulated.precomputed._geometry import clamp_cos
+
+
+
+# -- table mappings -------------------------------------------------------------------------------
+# the mu_s mapping's knee: node density peaks at this sun zenith angle [rad] and falls off
+# over MU_S_WIDTH (see mu_s_unit)
+MU_S_CENTRE = math.radians(92.0)
+MU_S_WIDTH = math.radians(6.0)
+
+
+@njit(cache=True)
+def _mu_s_u(th):
+    return math.asinh((th - MU_S_CENTRE) / MU_S_WIDTH)
+
+
+@njit(cache=True)
+def mu_s_unit(mu_s, mu_s_min):
+    """mu_s mapping to [0, 1] (0 at mu_s_min, clamped below; 1 at the zenith):
+    x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)), u(theta) = asinh((theta - 92 deg)
+    / 6 deg), theta_s = acos(mu_s), theta_max = acos(mu_s_min).
+
+    Not [Bru17]'s mapping, which follows the distance to the top of the atmosphere towards
+    the sun: at the earth's radius it gives sun zeniths 0-60 deg only 3.3 of 31 cells, and
+    at a radius of 1e8 m it squeezes them into the last 1.5 cells (the sky between was
+    +42 % off). This one depends on the sun's zenith angle alone, so it is the same for
+    every planet radius; its node density, 1 / sqrt(6^2 + (theta - 92)^2) per degree, is
+    highest around sunset and civil twilight, where the sky changes fastest with the sun's
+    elevation, and 15x lower at the zenith, where it changes slowly. Cells for 64 nodes
+    (sun zenith bands 0-30, 30-60, 60-80, 80-90, 90-96, 96-102, 102-108 deg): 4.8, 8.0,
+    11.4, 13.7, 11.7, 8.1, 5.2; [Bru17]'s at 64 nodes: 1.1, 5.5, 14.4, 18.3, 11.4, 7.6, 4.6."""
+    th = math.acos(clamp_cos(mu_s))
+    th_max = math.acos(clamp_cos(mu_s_min))
+    top = _mu_s_u(th_max)
+    x = (top - _mu_s_u(min(th, th_max))) / (top - _mu_s_u(0.0))
+    return min(max(x, 0.0), 1.0)
+
+
+@njit(cache=True)
+def mu_s_from_unit(x, mu_s_min):
+    """Inverse of :func:`mu_s_unit`."""
+    top = _mu_s_u(math.acos(clamp_cos(mu_s_min)))
+    u = top - min(max(x, 0.0), 1.0) * (top - _mu_s_u(0.0))
+    return clamp_cos(math.cos(max(MU_S_CENTRE + MU_S_WIDTH * math.sinh(u), 0.0)))
+
+
+@njit(cache=True)
+def cell_r(ir, n_r, R, Rt):
+    H = math.sqrt(Rt * Rt - R * R)
+    rho = H * ir / (n_r - 1.0)
+    return math.sqrt(rho * rho + R * R)
+
+
+@njit(cache=True)
+def cell_mu(imu, n_mu, r, R, Rt):
+    """(mu, hits_ground) of node imu of the mu axis at radius r (inverse mapping)."""
+    H = math.sqrt(Rt * Rt - R * R)
+    rho = math.sqrt(max(r * r - R * R, 0.0))
+    half = n_mu // 2
+    if imu < half:
+        x = (half - 1.0 - imu) / (half - 1.0)
+        d_min = r - R
+        d_max = rho
+        d = d_min + x * (d_max - d_min)
+        if d <= 0.0:
+            return -1.0, True
+        return clamp_cos(-(rho * rho + d * d) / (2.0 * r * d)), True
+    x = (imu - half) / (half - 1.0)
+    d_min = Rt - r
+    d_max = rho + H
+    d = d_min + x * (d_max - d_min)
+    if d <= 0.0:
+        return 1.0, False
+    return clamp_cos((H * H - rho * rho - d * d) / (2.0 * r * d)), False
+
+
+@njit(cache=True)
+def cell_nu(inu, n_nu, mu, mu_s):
+    nu = -1.0 + 2.0 * inu / (n_nu - 1.0)
+    s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    return min(max(nu, mu * mu_s - s), mu * mu_s + s)
+
+
+@njit(cache=True)
+def _split(f, n):
+    """Integer node and fraction of a continuous index f on an axis of n nodes."""
+    f = min(max(f, 0.0), n - 1.0)
+    i = min(int(f), n - 2)
+    return i, f - i
+
+
+@njit(cache=True)
+def r_index(r, n_r, R, Rt):
+    H = math.sqrt(Rt * Rt - R * R)
+    rho = math.sqrt(max(r * r - R * R, 0.0))
+    return _split(rho / H * (n_r - 1), n_r)
+
+
+@njit(cache=True)
+def mu_index(r, mu, ground, n_mu, R, Rt):
+    """Node and fraction on the mu axis, staying in the half of the ray's kind."""
+    H = math.sqrt(Rt * Rt - R * R)
+    rho = math.sqrt(max(r * r - R * R, 0.0))
+    half = n_mu // 2
+    rmu = r * mu
+    disc = rmu * rmu - r * r + R * R
+    if ground:
+        d = -rmu - math.sqrt(max(disc, 0.0))
+        d_min = r - R
+        d_max = rho
+        x = 0.0 if d_max <= d_min else (d - d_min) / (d_max - d_min)
+        i, b = _split((half - 1.0) * (1.0 - x), half)
+        return i, b
+    d = -rmu + math.sqrt(max(disc + H * H, 0.0))
+    d_min = Rt - r
+    d_max = rho + H
+    x = (d - d_min) / (d_max - d_min)
+    i, b = _split(x * (half - 1.0), half)
+    return i + half, b
+
+
+@njit(cache=True, fastmath=True)
+def density_mu_s_index(mu_s_t, mu_s_min, n_msj):
+    """Node and fraction of mu_s_t on the scattering density's mu_s axis (the mapping of
+    :func:`mu_s_unit`, its own node count)."""
+    return _split(mu_s_unit(mu_s_t, mu_s_min) * (n_msj - 1), n_msj)
+
+
+@njit(cache=True, fastmath=True)
+def density_phi_index(nu, mu_s_t, mt, n_pj):
+    """Node and fraction of the azimuth about the sun, measured from the sun's vertical plane
+    on the zenith side, of a ray with local zenith cosine mt and sun cosine nu (local sun
+    zenith cosine mu_s_t), on the scattering density's phi axis over [0, pi]."""
+    den = math.sqrt(max((1.0 - nu * nu) * (1.0 - mu_s_t * mu_s_t), 0.0))
+    cphi = 1.0 if den < 1e-9 else clamp_cos((mt - nu * mu_s_t) / den)
+    return _split(math.acos(cphi) / math.pi * (n_pj - 1), n_pj)

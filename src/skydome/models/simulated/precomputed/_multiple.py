@@ -1,0 +1,195 @@
+"""Multiple scattering ([Bru17] ComputeMultipleScattering, [BN08] eq. 8): one order on the 4-D
+table, and orders 2..N on the observer's own sky map.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
+                                                             distance_to_top, point_along, ray_nodes)
+from skydome.models.simulated.precomputed._lookup import node_weights
+from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
+                                                            density_mu_s_index, density_phi_index,
+                                                            mu_s_from_unit, r_index)
+
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q,
+                              ts, out):
+    """One scattering order, full radiance ([Bru17] ComputeMultipleScattering, [BN08] eq. 8):
+    out[r, mu, mu_s, nu, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt.
+
+    J_k is the scattering density of scattering constituent k (constituent sc_idx[k] of the
+    profile arrays) per unit number density, which is smooth in r; its density profile
+    rho_k is applied exactly at each quadrature node (the r nodes of the table do not
+    resolve the 1.2 km aerosol layer: interpolating rho_k J_k between them overestimated
+    the aerosol's multiple scattering by up to 20 %).
+
+    J (float32) is tabulated on [k, theta, phi, r, mu_s, l] in the sun's frame (theta the
+    angle between the view ray and the sun, acos nu, uniform in [0, pi]; phi the azimuth of
+    the view ray about the sun from the sun's vertical plane, uniform in [0, pi]; r and mu_s
+    on the scattering-table nodes): at fixed (theta, phi) J varies smoothly with mu_s, while
+    in a zenith frame the aerosol aureole sweeps across the coarse mu_s nodes (that
+    overestimated order 2 by up to 66 % at AOD 0.5) and interpolated quadrilinearly. Loop order: per view ray,
+    the quadrature nodes outside (their r, theta, weights and view transmittance computed
+    once and the J rows they touch staying in cache) and every (mu_s, nu) node inside; the
+    wavelength axis innermost and contiguous, accumulated in float32 (at most 16 x 20
+    positive terms per value)."""
+    n_r, n_mu, n_ms, n_nu, nl = out.shape
+    nc = col.shape[0]
+    nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    nk = n_ms * n_nu
+    mus = np.empty(n_ms)
+    for ims in range(n_ms):
+        mus[ims] = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+    for idx in prange(n_r * n_mu):
+        ir = idx // n_mu
+        imu = idx % n_mu
+        tq = np.empty(2 * n_q)
+        wq = np.empty(2 * n_q)
+        w1 = np.empty(nc)
+        w2 = np.empty(nc)
+        cs = np.empty(nc)
+        tw = np.empty((nsc, nl), dtype=np.float32)
+        acc = np.zeros((nk, nl), dtype=np.float32)
+        nus = np.empty(nk)
+        jts = np.empty(nk, dtype=np.int64)
+        jbs = np.empty(nk)
+        r = cell_r(ir, n_r, R, Rt)
+        mu, ground = cell_mu(imu, n_mu, r, R, Rt)
+        for ims in range(n_ms):
+            for inu in range(n_nu):
+                k = ims * n_nu + inu
+                nus[k] = cell_nu(inu, n_nu, mu, mus[ims])
+                # the angle from the sun (acos nu) is the same at every node of the ray
+                jts[k], jbs[k] = _split(math.acos(nus[k]) / math.pi * (n_tj - 1), n_tj)
+        d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+        for q in range(nq):
+            t = tq[q]
+            rt = point_along(r, mu, t, R, Rt)
+            mt = clamp_cos((r * mu + t) / rt)
+            jr, ja = r_index(rt, n_rj, R, Rt)
+            node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                         w1, w2, cs, tw)
+            inv_rt = 1.0 / rt
+            for k in range(nk):
+                nu = nus[k]
+                mu_s_t = clamp_cos((r * mus[k // n_nu] + t * nu) * inv_rt)
+                ims_j, c = density_mu_s_index(mu_s_t, mu_s_min, n_msj)
+                # J in the sun's frame: angle from the sun (acos nu) and azimuth about the
+                # sun from its vertical plane (zenith side)
+                jt = jts[k]
+                jb = jbs[k]
+                ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
+                o = acc[k]
+                for kk in range(nsc):
+                    twk = tw[kk]
+                    Jk = J[kk]
+                    for dt in range(2):
+                        wt = jb if dt else 1.0 - jb
+                        for dr in range(2):
+                            wr = ja if dr else 1.0 - ja
+                            for ds in range(2):
+                                ws = c if ds else 1.0 - c
+                                w0 = wt * wr * ws
+                                row0 = Jk[jt + dt, ip, jr + dr, ims_j + ds]
+                                row1 = Jk[jt + dt, ip + 1, jr + dr, ims_j + ds]
+                                wa = np.float32(w0 * (1.0 - e))
+                                wb = np.float32(w0 * e)
+                                for l in range(nl):
+                                    o[l] += (wa * row0[l] + wb * row1[l]) * twk[l]
+        for k in range(nk):
+            for l in range(nl):
+                out[ir, imu, k // n_nu, k % n_nu, l] = acc[k, l]
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, r, mu_s,
+                              n_q, ts, mu_nodes, ground_nodes, cphi_nodes, out):
+    """Orders 2..N seen by an observer at radius r with the sun at mu_s, on a sky map of view
+    directions: view zenith cosines ``mu_nodes`` (with ``ground_nodes``: does the ray end on
+    the ground) x azimuths from the sun's with cosines ``cphi_nodes``:
+    out[mu, phi, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt
+    ([BN08] eq. 8 with J summed over the orders), J as in :func:`multiple_scattering_table`.
+    (The map is uniform in view zenith angle and azimuth, see :func:`slice_index`: the
+    table's own (mu, nu) mapping is coarse near the zenith and near the sun.)
+
+    Integrating at the observer's own r and mu_s (instead of interpolating the 4-D table)
+    keeps the multiply scattered aerosol aureole, which is sharp in the angle from the sun,
+    out of the coarse mu_s interpolation: at AOD 0.5 that interpolation overestimated the
+    zenith sky by 16 % with the sun at 60 deg."""
+    n_mu, n_nu, nl = out.shape
+    nc = col.shape[0]
+    nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    for imu in prange(n_mu):
+        tq = np.empty(2 * n_q)
+        wq = np.empty(2 * n_q)
+        w1 = np.empty(nc)
+        w2 = np.empty(nc)
+        cs = np.empty(nc)
+        tw = np.empty((nsc, nl))
+        acc = np.zeros((n_nu, nl))
+        mu = mu_nodes[imu]
+        ground = ground_nodes[imu]
+        s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+        for q in range(nq):
+            t = tq[q]
+            rt = point_along(r, mu, t, R, Rt)
+            mt = clamp_cos((r * mu + t) / rt)
+            jr, ja = r_index(rt, n_rj, R, Rt)
+            node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                         w1, w2, cs, tw)
+            for inu in range(n_nu):
+                nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
+                mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
+                ims_j, c = density_mu_s_index(mu_s_t, mu_s_min, n_msj)
+                jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
+                ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
+                o = acc[inu]
+                for kk in range(nsc):
+                    Jk = J[kk]
+                    for dt in range(2):
+                        wt = jb if dt else 1.0 - jb
+                        for dr in range(2):
+                            wr = ja if dr else 1.0 - ja
+                            for ds in range(2):
+                                ws = c if ds else 1.0 - c
+                                w0 = wt * wr * ws
+                                row0 = Jk[jt + dt, ip, jr + dr, ims_j + ds]
+                                row1 = Jk[jt + dt, ip + 1, jr + dr, ims_j + ds]
+                                wa = w0 * (1.0 - e)
+                                wb = w0 * e
+                                for l in range(nl):
+                                    o[l] += (wa * row0[l] + wb * row1[l]) * tw[kk, l]
+        for inu in range(n_nu):
+            for l in range(nl):
+                out[imu, inu, l] = acc[inu, l]
+
+
+@njit(cache=True)
+def slice_index(mu, cphi, ground, geom):
+    """(node, fraction) on the view-zenith axis and on the azimuth axis of the observer's
+    sky map of :func:`multiple_scattering_slice`. ``geom`` = (n_ground, n_sky, theta_h):
+    nodes 0..n_ground-1 run uniformly in view zenith angle from the nadir to the horizon
+    (theta_h), nodes n_ground.. from the horizon to the zenith; azimuth from the sun's,
+    n_phi nodes uniform over [0, pi]."""
+    n_g = int(geom[0])
+    n_s = int(geom[1])
+    th_h = geom[2]
+    th = math.acos(clamp_cos(mu))
+    if ground:
+        x = (math.pi - th) / max(math.pi - th_h, 1e-12)
+        i, b = _split(x * (n_g - 1.0), n_g)
+    else:
+        x = (th_h - th) / th_h
+        i, b = _split(x * (n_s - 1.0), n_s)
+        i += n_g
+    return i, b

@@ -1,0 +1,201 @@
+"""The precomputation ([Bru17] Model::Precompute): transmittance, single scattering, and per
+further order the scattering density, the indirect irradiance and the multiple scattering.
+
+Each step is one function here calling its numba kernel (modules ``_single``, ``_density``,
+``_irradiance``, ``_multiple``; called through the module so that a benchmark can time
+them). Working memory: the 4-D tables are float32, the incident radiance and the
+right-hand side of the scattering-density product are float32, the previous order is kept
+only as its per-wavelength totals, and the geometric remainder is added in place.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+QUADRATURE_SCALE_M = 500.0
+# sun angular radius used for the earth's shadow edge [rad] ([Bru17] demo: 0.2666 deg)
+SUN_ANGULAR_RADIUS_RAD = float(np.radians(0.2666))
+
+
+def transmittance_columns(codes, p0s, p1s, R, Rt, p):
+    """Step 1: column densities to the top on Bruneton's (r, mu) mapping ([Bru17]
+    ComputeTransmittanceToTopAtmosphereBoundary, kept per constituent so that any
+    wavelength's transmittance is exp(-sum_c beta_c col_c))."""
+    from skydome.transport import _kernels as K
+
+    return K.build_column_table(codes, p0s, p1s, R, Rt, p["transmittance_r_size"],
+                                p["transmittance_mu_size"], 128, QUADRATURE_SCALE_M)
+
+
+def single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p):
+    """Step 2: single scattering per scattering constituent, no phase ([Bru17]
+    ComputeSingleScattering)."""
+    from skydome.models.simulated.precomputed import _single
+
+    nl = beta_e.shape[1]
+    trans = np.exp(-np.einsum("cij,cl->ijl", col, beta_e)).astype(np.float32)
+    ss = np.empty((sc_idx.size, p["scattering_r_size"], p["scattering_mu_size"],
+                   p["scattering_mu_s_size"], p["scattering_nu_size"], nl), dtype=np.float32)
+    _single.single_scattering_table(col, trans, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt,
+                                    mu_s_min, alpha, p["integration_samples"],
+                                    QUADRATURE_SCALE_M, ss)
+    return ss
+
+
+class _DensityQuadrature:
+    """Step 3b's fixed parts: incident directions (Bruneton's n x 2n over the sphere in the
+    sun's frame, kept on phi in [0, pi]), the outgoing grid of J, and the phase matrices,
+    factored where the phase function is a polynomial of degree <= 2 in the cosine."""
+
+    def __init__(self, pc, pp, n_th):
+        from skydome.models.simulated.precomputed import _density
+
+        self.th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
+        self.ph_in = (np.arange(n_th) + 0.5) * np.pi / n_th
+        d_omega = np.sin(self.th_in) * (np.pi / n_th) ** 2
+        # outgoing grid of the scattering density, in the sun's frame: theta (angle from the
+        # sun) and phi (azimuth about the sun) in [0, pi]
+        self.th_out = np.linspace(0.0, np.pi, 2 * n_th + 1)
+        self.ph_out = np.linspace(0.0, np.pi, n_th + 1)
+        self.n_in = self.th_in.size * self.ph_in.size
+        self.n_out = self.th_out.size * self.ph_out.size
+        # P(o.i) = a0 + a1 o.i + a2 (o.i)^2 is exactly left(o) . right(i) with 10 terms, so
+        # the Rayleigh part of the product costs 10/256 of the full one (checked against the
+        # full matrix to 1e-9 of its largest entry, else the full matrix is used):
+        # J = sum_k P_k (L w_k) = [left_k | ...] [right_k (L w_k); ...]
+        left, self.right = [], []
+        for k in range(pc.size):
+            P = np.empty((self.n_out, self.n_in))
+            _density.phase_matrix(int(pc[k]), float(pp[k]), self.th_out, self.ph_out, self.th_in,
+                                  self.ph_in, d_omega, P)
+            fac = _density.quadratic_phase_factors(int(pc[k]), float(pp[k]), self.th_out,
+                                                   self.ph_out, self.th_in, self.ph_in, d_omega, P)
+            left.append(P if fac is None else fac[0])
+            self.right.append(None if fac is None else np.ascontiguousarray(fac[1], np.float32))
+        self.left = np.ascontiguousarray(np.hstack(left), dtype=np.float32)
+        self.rows = np.cumsum([0] + [m.shape[1] for m in left])
+
+
+def precompute(props, wl, p):
+    """Every table for the optical properties ``props`` (of the atmosphere on ``wl``) with
+    the validated settings ``p`` (a dict of the model's parameters) -> :class:`._tables.Tables`."""
+    from skydome.models.simulated.precomputed import _density, _irradiance, _multiple
+    from skydome.models.simulated.precomputed._tables import Tables
+
+    t_start = time.perf_counter()
+    R = float(props.planet_radius_m)
+    Rt = float(props.top_radius_m)
+    mu_s_min = float(np.cos(np.radians(p["max_sun_zenith_deg"])))
+    alpha = SUN_ANGULAR_RADIUS_RAD
+    codes, p0s, p1s = props.profile_code, props.profile_p0, props.profile_p1
+    beta_e = np.ascontiguousarray(props.extinction)
+    sc_idx = np.nonzero(np.any(props.scattering > 0.0, axis=1))[0].astype(np.int64)
+    if sc_idx.size == 0:
+        sc_idx = np.array([0], dtype=np.int64)
+    beta_s = np.ascontiguousarray(props.scattering[sc_idx])
+    pc = np.ascontiguousarray(props.phase_code[sc_idx])
+    pp = np.ascontiguousarray(props.phase_param[sc_idx])
+    albedo = np.ascontiguousarray(props.ground_albedo)
+    nl = wl.size
+    n_r = p["scattering_r_size"]
+    nsc = sc_idx.size
+    n_q_ms = max(4, (p["integration_samples"] + 1) // 2)   # J is smooth along the ray
+
+    # 1. transmittance; 2. single scattering
+    col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
+    ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
+    ms = np.zeros(ss.shape[1:], dtype=np.float32)
+    E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
+    J_sum = None
+    if p["orders"] >= 2:
+        q = _DensityQuadrature(pc, pp, p["sphere_samples"])
+        # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
+        # hemisphere; phi on [0, pi] doubled)
+        n_ti = 16
+        th_i = (np.arange(n_ti) + 0.5) * (0.5 * np.pi) / n_ti
+        ph_i = (np.arange(2 * n_ti) + 0.5) * np.pi / (2 * n_ti)
+        dom_i = np.sin(th_i) * (0.5 * np.pi / n_ti) * (np.pi / (2 * n_ti))
+        delta = np.zeros((1, 1, 1, 1, nl), dtype=np.float32)
+        dE = np.zeros_like(E)
+        # the scattering density's own mu_s axis (same mapping, its own node count)
+        n_ms_j = p["density_mu_s_size"] or p["scattering_mu_s_size"]
+        L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
+        rhs = np.empty((int(q.rows[-1]), n_r * n_ms_j * nl), dtype=np.float32)
+        # weight of each constituent at every (r, mu_s, l) column of L_in: its scattering
+        # coefficient at reference density (the density profile is applied exactly along
+        # each ray in 3d: J_k / rho_k is smooth in r, rho_k J_k is not)
+        w_col = [np.ascontiguousarray(np.broadcast_to(beta_s[k].astype(np.float32),
+                                                      (n_r, n_ms_j, nl)).reshape(-1))
+                 for k in range(nsc)]
+        J = np.empty((nsc, q.th_out.size, q.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+        tot = tot_prev = dE_prev = None
+        axes = tuple(range(ms.ndim - 1))
+        for order in range(2, p["orders"] + 1):
+            first = order == 2
+            # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
+            _density.incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt,
+                                       mu_s_min, alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
+            # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid: one float32
+            # matrix product (BLAS) over all (r, mu_s, l), laid out [k, theta, phi, r, mu_s, l]
+            lin = L_in.reshape(q.n_in, -1)
+            for k in range(nsc):
+                out = rhs[q.rows[k]:q.rows[k + 1]]
+                if q.right[k] is None:
+                    np.multiply(lin, w_col[k], out=out)
+                else:
+                    np.matmul(q.right[k], lin, out=out)
+                    out *= w_col[k]
+            for k in range(nsc):
+                np.matmul(q.left[:, q.rows[k]:q.rows[k + 1]], rhs[q.rows[k]:q.rows[k + 1]],
+                          out=J[k].reshape(q.n_out, -1))
+            # the density of orders 2..N, kept for the observer's slice at render time
+            if J_sum is None:
+                J_sum = J.copy()
+            else:
+                J_sum += J
+            # 3c. ground irradiance of order-1 ([BN08] eq. 9)
+            dE_new = np.empty_like(E)
+            _irradiance.indirect_irradiance(first, ss, pc, pp, delta, R, Rt, mu_s_min, th_i, ph_i,
+                                            dom_i, dE_new)
+            E += dE_new
+            dE_prev, dE = dE, dE_new
+            # 3d. scattering of this order along every ray ([BN08] eq. 8)
+            if first:
+                delta = np.empty_like(ms)
+            _multiple.multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                                mu_s_min, n_q_ms, QUADRATURE_SCALE_M, delta)
+            ms += delta
+            tot_prev, tot = tot, delta.sum(axis=axes, dtype=np.float64)
+        if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
+            # the orders beyond N as a geometric series whose ratio f is that of the last two
+            # orders' total radiance, per wavelength (the idea of [Hil20] eq. 10):
+            # L_N f / (1 - f). (A per-cell ratio was tried: it is unstable in cells where the
+            # ground reflection enters.) Added in place: the last order's delta and J are
+            # not needed afterwards.
+            g = _series_factor(tot, tot_prev).astype(np.float32)
+            ms += np.multiply(delta, g, out=delta)
+            J_sum += np.multiply(J, g, out=J)
+            ea = tuple(range(dE.ndim - 1))
+            E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
+        del J, L_in, rhs
+    dens = {}
+    if J_sum is not None:
+        dens = dict(scattering_density=J_sum, profile_code=np.asarray(codes),
+                    profile_p0=np.asarray(p0s, dtype=np.float64),
+                    profile_p1=np.asarray(p1s, dtype=np.float64), scattering_index=sc_idx)
+    return Tables(table_wavelengths_nm=np.asarray(wl, dtype=np.float64), columns=col,
+                  beta_e=beta_e, single_scattering=ss, multiple_scattering=ms, irradiance=E,
+                  phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
+                  scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
+                  mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
+                  precompute_seconds=time.perf_counter() - t_start, **dens)
+
+
+def _series_factor(tot, tot_prev):
+    """f / (1 - f) of the geometric series with ratio f = tot / tot_prev, clamped to
+    [0, 0.9] (0 where the previous order is 0)."""
+    ok = tot_prev > 0
+    f = np.clip(np.where(ok, tot / np.where(ok, tot_prev, 1.0), 0.0), 0.0, 0.9)
+    return f / (1.0 - f)

@@ -1,0 +1,177 @@
+"""The on-disk cache of the ``precomputed`` model's tables: hits without recomputation,
+invalidation by every atmosphere field and table setting, recovery from corrupt files,
+the size limit (least recently used files go first) and clearing.
+
+The cache folder is the per-test temporary folder set by ``conftest.py``."""
+
+import dataclasses
+import os
+
+import numpy as np
+import pytest
+
+import skydome as sd
+from skydome.transport.geometry import direction_from_angles
+from skydome.atmosphere import Atmosphere
+from skydome.models.simulated import precomputed as P
+from skydome.models.simulated.precomputed import _cache, _precompute
+
+TINY = dict(scattering_r_size=4, scattering_mu_size=8, scattering_mu_s_size=4,
+            scattering_nu_size=2, irradiance_mu_s_size=4, irradiance_r_size=4,
+            transmittance_mu_size=8, transmittance_r_size=4, orders=2,
+            table_wavelengths_nm=[550.0])
+SUN = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
+
+
+def tiny(**kw):
+    return sd.model("precomputed", sun=SUN, **{**TINY, **kw})
+
+
+def files():
+    """The cache entries (one folder per table set)."""
+    d = _cache.cache_dir()
+    return sorted(n for n in os.listdir(d) if not n.startswith(".")) if os.path.isdir(d) else []
+
+
+def assert_same_tables(a, b, timing=True):
+    for f in dataclasses.fields(a):
+        if f.name == "precompute_seconds" and not timing:
+            continue
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray):
+            assert x.dtype == y.dtype and np.array_equal(x, y), f.name
+        else:
+            assert x == y, f.name
+
+
+def test_second_build_reads_the_cache_without_recomputing(monkeypatch):
+    first = tiny()
+    assert not first.from_cache and len(files()) == 1
+
+    def fail(*a, **k):
+        raise AssertionError("recomputed although the tables are cached")
+
+    monkeypatch.setattr(_precompute, "precompute", fail)
+    second = tiny()
+    assert second.from_cache
+    assert_same_tables(first._t, second._t)
+    d = direction_from_angles([89.0, 20.0, 5.0], [0.0, 90.0, 180.0])
+    assert np.array_equal(first.radiance(d, [550.0]), second.radiance(d, [550.0]))
+
+
+def test_cache_false_neither_reads_nor_writes():
+    tiny()
+    assert len(files()) == 1
+    m = tiny(cache=False)
+    assert not m.from_cache and len(files()) == 1
+    with pytest.raises(TypeError, match="cache"):
+        tiny(cache="yes")
+
+
+@pytest.mark.parametrize("name", P._TABLE_SETTINGS)
+def test_every_table_setting_changes_the_key(name):
+    base = {k: v for k, v in P.PrecomputedSky._validate_params({}).items() if k in P._TABLE_SETTINGS}
+    props = Atmosphere.earth().optical_properties(np.array([550.0]))
+    changed = dict(base)
+    v = base[name]
+    if name == "remaining_orders":
+        changed[name] = "geometric" if v == "none" else "none"
+    elif v is None:
+        changed[name] = 64
+    else:
+        changed[name] = v + (1.0 if isinstance(v, float) else 2)
+    assert _cache.key(props, changed) != _cache.key(props, base)
+
+
+@pytest.mark.parametrize("atm", [
+    Atmosphere.earth(turbidity=3.0),
+    Atmosphere.earth(ground_albedo=0.31),
+    Atmosphere.earth(aerosol_optical_depth=0.2),
+    Atmosphere.earth(planet_radius_m=6.371e6),
+])
+def test_every_atmosphere_field_changes_the_key(atm):
+    wl = np.array([550.0])
+    s = {"orders": 4}
+    assert _cache.key(atm.optical_properties(wl), s) != _cache.key(
+        Atmosphere.earth().optical_properties(wl), s)
+    assert _cache.key(Atmosphere.earth().optical_properties(wl), s) == _cache.key(
+        Atmosphere.earth().optical_properties(wl), s)
+
+
+def test_changed_setting_or_atmosphere_recomputes():
+    tiny()
+    assert tiny(orders=3).from_cache is False
+    assert tiny(atmosphere=Atmosphere.earth(ground_albedo=0.2)).from_cache is False
+    assert tiny(table_wavelengths_nm=[560.0]).from_cache is False
+    assert len(files()) == 4
+    assert tiny().from_cache is True
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "empty", "no meta", "bad meta"])
+def test_corrupt_cache_file_is_recomputed(damage):
+    ref = tiny()
+    (name,) = files()
+    entry = os.path.join(_cache.cache_dir(), name)
+    if damage == "no meta":
+        os.remove(os.path.join(entry, "meta.json"))
+    elif damage == "bad meta":
+        with open(os.path.join(entry, "meta.json"), "w") as f:
+            f.write("{not json")
+    else:
+        path = os.path.join(entry, "single_scattering.npy")
+        data = open(path, "rb").read()
+        with open(path, "wb") as f:
+            f.write({"garbage": b"not a table file" * 100, "truncated": data[: len(data) // 2],
+                     "empty": b""}[damage])
+    again = tiny()
+    assert not again.from_cache
+    assert_same_tables(ref._t, again._t, timing=False)   # recomputed: same tables, new timing
+    assert tiny().from_cache      # rewritten
+
+
+def test_size_limit_evicts_least_recently_used(monkeypatch):
+    a = tiny()
+    size = _cache._size(os.path.join(_cache.cache_dir(), files()[0]))
+    monkeypatch.setenv("SKYDOME_CACHE_LIMIT_BYTES", str(int(2.5 * size)))
+    tiny(orders=3)
+    first_two = files()
+    # touch a's file (a cache hit), so that the orders=3 file is the least recently used
+    old = os.path.getmtime(os.path.join(_cache.cache_dir(), first_two[0], "meta.json")) - 100
+    for n in first_two:
+        os.utime(os.path.join(_cache.cache_dir(), n, "meta.json"), (old, old))
+    assert tiny().from_cache
+    tiny(orders=4)
+    assert len(files()) == 2
+    assert tiny().from_cache            # kept: used most recently
+    assert not tiny(orders=3).from_cache  # evicted
+    del a
+
+
+def test_tables_larger_than_the_limit_are_not_stored(monkeypatch):
+    monkeypatch.setenv("SKYDOME_CACHE_LIMIT_BYTES", "1000")
+    tiny()
+    assert files() == []
+
+
+def test_bad_limit_is_refused(monkeypatch):
+    monkeypatch.setenv("SKYDOME_CACHE_LIMIT_BYTES", "-5")
+    with pytest.raises(ValueError, match="SKYDOME_CACHE_LIMIT_BYTES"):
+        tiny()
+
+
+def test_clear_cache():
+    tiny()
+    tiny(orders=3)
+    os.makedirs(os.path.join(_cache.cache_dir(), ".left-by-a-killed-write.tmp"))
+    assert len(files()) == 2
+    assert P.clear_cache() > 0
+    assert os.listdir(_cache.cache_dir()) == []
+    assert not tiny().from_cache
+
+
+def test_unwritable_cache_folder_still_builds(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    monkeypatch.setenv("SKYDOME_CACHE_DIR", str(blocker / "sub"))
+    m = tiny()
+    assert not m.from_cache and np.all(np.isfinite(m._t.multiple_scattering))
