@@ -6,10 +6,6 @@ importing this module is cheap. Figures are written atomically.
 
 from __future__ import annotations
 
-import os
-import tempfile
-from pathlib import Path
-
 import numpy as np
 
 __all__ = ["plot_luminance_map", "plot_compare", "meridian_profiles"]
@@ -25,16 +21,10 @@ def _pyplot():
 
 
 def _save(fig, path) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
+    from skydome._io import atomic_file
+
+    with atomic_file(path) as tmp:
         fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _polar_grid(n_zenith: int = 90, n_azimuth: int = 360):
