@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skydome.effects.polarisation_maps import (find_neutral_points, meridian_profile,
+from skydome.apps.polarisation_maps import (find_neutral_points, meridian_profile,
                                                plot_polarisation_maps, polarisation_maps)
 from skydome.sun import Sun
 

@@ -7,7 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 from skydome.cli import app
-from skydome.compare import run_comparison, sky_errors
+from skydome.apps.compare import run_comparison, sky_errors
 
 runner = CliRunner()
 

@@ -30,7 +30,8 @@ import threading
 from pathlib import Path
 from typing import Callable, Iterator
 
-__all__ = ["atomic_file", "atomic_write", "atomic_folder", "check_output_folder", "current_umask"]
+__all__ = ["atomic_file", "atomic_write", "atomic_folder", "check_output_file", "check_output_folder",
+           "current_umask"]
 
 # live temporaries: path -> True for a folder, False for a file
 _LIVE: dict[str, bool] = {}
@@ -162,6 +163,25 @@ def check_output_folder(path, name: str = "out") -> Path:
     writable = p if p.is_dir() else parent
     if not os.access(writable, os.W_OK | os.X_OK):
         raise ValueError(f"{name} = {str(path)!r}: folder {str(writable)!r} is not writable")
+    return p
+
+
+def check_output_file(path, suffixes=None, name: str = "out") -> Path:
+    """Check, before any work, that ``path`` can be written as an output file: its suffix is
+    one of ``suffixes`` (when given), it is not an existing folder, and its folder exists and
+    is writable. Raises ValueError naming the option ``name`` and the value."""
+    p = Path(path)
+    if str(path) == "":
+        raise ValueError(f"{name} = '': give an output file")
+    if suffixes is not None and p.suffix.lower() not in suffixes:
+        raise ValueError(f"{name} = {str(path)!r}: the file must end in {', '.join(suffixes)}")
+    if p.is_dir():
+        raise ValueError(f"{name} = {str(path)!r} is an existing folder, not a file")
+    parent = _parent(p)
+    if not parent.is_dir():
+        raise ValueError(f"{name} = {str(path)!r}: folder {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{name} = {str(path)!r}: folder {str(parent)!r} is not writable")
     return p
 
 

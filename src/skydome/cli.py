@@ -370,7 +370,7 @@ def compare_cmd(
     Options after the list (e.g. --turbidity 3) go to every model that has them.
     """
     def go():
-        from skydome.compare import run_comparison
+        from skydome.apps.compare import run_comparison
         from skydome.models import get_model_class
 
         specs = _split_specs(models)
@@ -388,7 +388,7 @@ def compare_cmd(
                                   progress=progress)
         finally:
             progress.close()
-        from skydome.compare import table_markdown
+        from skydome.apps.compare import table_markdown
 
         typer.echo(table_markdown(rows, reference))
         typer.echo(f"wrote {out}/grid.png, error_*.png, table.md, table.csv")
@@ -418,7 +418,7 @@ def timelapse_cmd(
     """
     def go():
         from skydome._validate import check_choice
-        from skydome.effects.timelapse import day_times, parse_every, run_timelapse
+        from skydome.apps.timelapse import day_times, parse_every, run_timelapse
         from skydome.models import get_model_class
 
         cls = get_model_class(model)
@@ -459,7 +459,7 @@ def polarisation_cmd(
         from pathlib import Path
 
         from skydome._validate import check_choice, check_int, check_number
-        from skydome.effects.polarisation_maps import METHODS
+        from skydome.apps.polarisation_maps import METHODS
         from skydome.sun import Sun
 
         _check_figure_path(out)
@@ -477,7 +477,7 @@ def polarisation_cmd(
         check_number("turbidity", turbidity, 1.0, 32.0)
         s = Sun(elevation_deg=check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg"),
                 azimuth_deg=check_number("sun_azimuth", sun_azimuth, 0.0, 360.0, "deg"))
-        from skydome.effects.polarisation_maps import plot_polarisation_maps, polarisation_maps, write_map_csv
+        from skydome.apps.polarisation_maps import plot_polarisation_maps, polarisation_maps, write_map_csv
 
         kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
         pmap = polarisation_maps(method, s, size=size, wavelength_nm=wavelength, turbidity=turbidity, **kw)
@@ -510,7 +510,7 @@ def twilight_cmd(
     Model parameters are given as extra options, e.g. --turbidity 3.
     """
     def go():
-        from skydome.effects.twilight import run_twilight
+        from skydome.apps.twilight import run_twilight
         from skydome.models import get_model_class
 
         cls = get_model_class(model)
@@ -544,7 +544,7 @@ def airlight_cmd(
 ):
     """Aerial perspective / airlight: extinction and in-scattered light over an image with a depth map."""
     def go():
-        from skydome.effects.airlight import airlight_cli
+        from skydome.apps.airlight import airlight_cli
         from skydome.sun import Sun
 
         sun = Sun(elevation_deg=sun_elevation, azimuth_deg=sun_azimuth)
@@ -566,55 +566,9 @@ def aureole_cmd(
     """The aureole, Bishop's ring and the blue sun (survey 5.4-5.6): radiance around the sun with
     Lorenz-Mie aerosols, a close-up image and the sun's transmittance at 450 and 650 nm."""
     def go():
-        import os
-        import shutil
-        import tempfile
-        from pathlib import Path
+        from skydome.apps.aureole import run_aureole
 
-        import numpy as np
-
-        from skydome._validate import check_choice, check_int, check_number
-        from skydome.atmosphere import Atmosphere
-        from skydome.effects.aureole import (bishops_ring_atmosphere, plot_radiance_profiles,
-                                             radiance_profile, render_closeup, sun_disc_radiance)
-        from skydome.sun import Sun
-
-        check_choice("aerosol", aerosol, ("earth", "volcanic_ash", "forest_fire_smoke", "bishops_ring"))
-        elev = check_number("sun_elevation", sun_elevation, 1.0, 90.0, "deg")
-        check_number("fov", fov, 2.0, 120.0, "deg")
-        check_int("size", size, 16, 1024)
-        o = Path(out)
-        if not (o.parent if str(o.parent) else Path(".")).is_dir():
-            raise UserError(f"out = {out!r}: folder {str(o.parent)!r} does not exist")
-        sun = Sun(elevation_deg=elev, azimuth_deg=180.0)
-        if aerosol == "earth":
-            atms = [Atmosphere.earth(turbidity=t) for t in (2.0, 4.0, 8.0)]
-            labels = ["turbidity 2", "turbidity 4", "turbidity 8"]
-        elif aerosol == "bishops_ring":
-            atms, labels = [Atmosphere.earth(turbidity=2.0), bishops_ring_atmosphere()], ["clear", "1 um layer"]
-        else:
-            make = getattr(Atmosphere, aerosol)
-            atms, labels = [Atmosphere.earth(turbidity=2.0), make()], ["clear", aerosol.replace("_", " ")]
-        ang = np.concatenate([np.linspace(1.0, 10.0, 19), np.linspace(11.0, 60.0, 25)])
-        wl = np.array([450.0, 550.0, 650.0])
-        prof = radiance_profile(atms, elev, ang, wl)
-        tmp = Path(tempfile.mkdtemp(prefix=".skydome-aureole-", dir=o.parent if str(o.parent) else "."))
-        try:
-            plot_radiance_profiles(ang, [p[:, 1] for p in prof], labels, tmp / "profile.png",
-                                   title=f"radiance at 550 nm against the angle from the sun (sun {elev:g} deg)")
-            render_closeup(atms[-1], sun, fov_deg=fov, size=size).save(tmp / "closeup.png")
-            lines = []
-            for a, lab in zip(atms, labels):
-                t = sun_disc_radiance(a, sun, wl) / sun_disc_radiance(Atmosphere.custom(rayleigh_scattering=0.0), sun, wl)
-                lines.append(f"{lab}: sun transmittance T(450) = {t[0]:.4f}, T(650) = {t[2]:.4f}, "
-                             f"T(450)/T(650) = {t[0] / t[2]:.3f}" + (" (blue sun)" if t[0] > t[2] else ""))
-            (tmp / "sun.txt").write_text("\n".join(lines) + "\n")
-            o.mkdir(exist_ok=True)
-            for f in sorted(tmp.iterdir()):
-                os.replace(f, o / f.name)
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
-        for ln in lines:
+        for ln in run_aureole(out, aerosol=aerosol, sun_elevation_deg=sun_elevation, fov_deg=fov, size=size):
             typer.echo(ln)
         typer.echo(f"wrote {out}/profile.png, closeup.png, sun.txt")
     _run(go)

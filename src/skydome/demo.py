@@ -101,7 +101,7 @@ def _effects(out_dir: Path) -> list[Path]:
     written: list[Path] = []
     t0 = time.perf_counter()
     # 5.1 the colour of the sky through a day (Vienna, summer solstice, hourly)
-    from skydome.effects.timelapse import day_times, run_timelapse
+    from skydome.apps.timelapse import day_times, run_timelapse
 
     times = day_times("2026-06-21", "+02:00", 60.0)
     run_timelapse(lambda sun: sd.model("single_scattering", sun=sun), 48.21, 16.37, times,
@@ -115,13 +115,13 @@ def _effects(out_dir: Path) -> list[Path]:
     img.save(eff / "bishops_ring.png")
     written.append(eff / "bishops_ring.png")
     # 5.7 polarisation: single-scattering Rayleigh field (analytic)
-    from skydome.effects.polarisation_maps import plot_polarisation_maps, polarisation_maps
+    from skydome.apps.polarisation_maps import plot_polarisation_maps, polarisation_maps
 
     pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
     plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")
     written.append(eff / "polarisation_rayleigh.png")
     # twilight and aerial perspective, where those modules provide a demo
-    for mod in ("skydome.effects.twilight", "skydome.effects.airlight"):
+    for mod in ("skydome.apps.twilight", "skydome.apps.airlight"):
         try:
             m = importlib.import_module(mod)
         except ImportError:

@@ -19,15 +19,14 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import shutil
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+
+from skydome._io import atomic_folder, check_output_folder
 
 __all__ = ["ComparisonRow", "run_comparison", "sky_errors"]
 
@@ -101,12 +100,7 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
     if reference not in [s.partition(":")[0] for s in specs]:
         specs.insert(0, reference)
     ref_spec = next(s for s in specs if s.partition(":")[0] == reference)
-    out_dir = Path(out_dir)
-    parent = out_dir.parent if out_dir.parent != Path("") else Path(".")
-    if not parent.is_dir():
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' is not writable")
+    out_dir = check_output_folder(out_dir)
     # build every model once up front so that bad specs fail before any work
     for spec in specs:
         try:
@@ -154,19 +148,13 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
         for k, v in err.items():
             setattr(row, k, v)
 
-    tmp = Path(tempfile.mkdtemp(prefix=".skydome-compare-", dir=parent))
-    try:
+    with atomic_folder(out_dir) as tmp:
         _write_grid(tmp / "grid.png", specs, elevs, images, ref_spec)
         for spec in specs:
             if spec != ref_spec:
                 _write_error_image(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
         (tmp / "table.md").write_text(table_markdown(rows, ref_spec))
         (tmp / "table.csv").write_text(table_csv(rows))
-        out_dir.mkdir(exist_ok=True)
-        for f in sorted(tmp.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return rows
 
 

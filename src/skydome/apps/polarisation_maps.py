@@ -234,8 +234,6 @@ def plot_polarisation_maps(pmap: PolarisationMap, path, title: str | None = None
     colour bar -90..90 deg) of polarisation of ``pmap``; the degree panel carries E-vector
     segments on a ``segments`` x ``segments`` grid, of length proportional to the degree.
     North up, east left; the sun is marked. Written atomically (.png, .pdf or .svg)."""
-    import os
-    import tempfile
     from pathlib import Path
 
     import matplotlib
@@ -243,6 +241,7 @@ def plot_polarisation_maps(pmap: PolarisationMap, path, title: str | None = None
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
 
+    from skydome._io import atomic_file
     from skydome.render.projections import Fisheye
 
     path = Path(path)
@@ -300,16 +299,9 @@ def plot_polarisation_maps(pmap: PolarisationMap, path, title: str | None = None
                  f"{pmap.sun.azimuth_deg:g} deg, {pmap.wavelength_nm:g} nm (north up, east left)")
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix,
-                               dir=str(path.parent) if str(path.parent) else ".")
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        with atomic_file(path) as tmp:
+            fig.savefig(tmp, dpi=110)
     finally:
         plt.close(fig)
 
@@ -318,9 +310,9 @@ def write_map_csv(pmap: PolarisationMap, path) -> None:
     """Write the sky-disc pixels of ``pmap`` as CSV (atomically): row, col, elevation and
     azimuth [deg], I, Q, U, V, their standard errors, degree and angle [deg] of
     polarisation."""
-    import os
-    import tempfile
     from pathlib import Path
+
+    from skydome._io import atomic_file
 
     from skydome.transport.geometry import angles_from_direction
 
@@ -335,18 +327,10 @@ def write_map_csv(pmap: PolarisationMap, path) -> None:
               f"{pmap.wavelength_nm:g} nm; Stokes in W m^-2 sr^-1 nm^-1, frame: reference axis "
               "towards increasing elevation, angle counter-clockwise seen facing the sky\n"
               "row,col,elevation_deg,azimuth_deg,I,Q,U,V,I_err,Q_err,U_err,V_err,dop,aop_deg\n")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
-                               dir=str(path.parent) if str(path.parent) else ".")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(header)
-            np.savetxt(f, np.column_stack(cols), delimiter=",",
-                       fmt=["%d", "%d"] + ["%.4f"] * 2 + ["%.6e"] * 8 + ["%.5f", "%.3f"])
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_file(path) as tmp, open(tmp, "w") as f:
+        f.write(header)
+        np.savetxt(f, np.column_stack(cols), delimiter=",",
+                   fmt=["%d", "%d"] + ["%.4f"] * 2 + ["%.6e"] * 8 + ["%.5f", "%.3f"])
 
 
 # ---------------------------------------------------------------------------------------

@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import csv
 import datetime as _dt
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from skydome._io import atomic_folder, check_output_folder
 
 __all__ = ["TimelapseFrame", "day_times", "run_timelapse"]
 
@@ -99,10 +98,7 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     check_int("size", size, 16, 4096)
     wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
     proj = make_projection(projection, str(size))
-    out_dir = Path(out_dir)
-    parent = out_dir.parent if str(out_dir.parent) else Path(".")
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist or is not writable")
+    out_dir = check_output_folder(out_dir)
     times = list(times)
     el, az = solar_position(lat_deg, lon_deg, times)
     el, az = np.atleast_1d(el), np.atleast_1d(az)
@@ -110,10 +106,9 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     if not todo:
         raise ValueError(f"the sun never rises above min_elevation_deg = {min_el:g} deg on that day")
 
-    tmp = Path(tempfile.mkdtemp(prefix=".skydome-timelapse-", dir=parent))
     frames: list[TimelapseFrame] = []
     images = []
-    try:
+    with atomic_folder(out_dir) as tmp:
         for n, i in enumerate(todo):
             t = times[i]
             sun = Sun(elevation_deg=float(el[i]), azimuth_deg=float(az[i]))
@@ -142,11 +137,6 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
         _contact_sheet(images, tmp / "contact_sheet.png", k)
         _write_csv(frames, tmp / "colours.csv")
         _colour_plot(frames, tmp / "colours.png")
-        out_dir.mkdir(exist_ok=True)
-        for f in sorted(tmp.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return frames
 
 

@@ -22,13 +22,12 @@ is not modelled: below -18 deg ``precomputed`` returns 0.
 from __future__ import annotations
 
 import csv
-import os
-import shutil
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from skydome._io import atomic_folder, check_output_folder
 
 __all__ = ["twilight_models", "zenith_luminance_curve", "horizontal_illuminance",
            "anti_solar_profile", "belt_of_venus", "horizon_views", "run_twilight", "demo_effects"]
@@ -201,18 +200,14 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
     check_choice("exposure", exposure, EXPOSURES)
     size = check_int("size", size, 16, 2048)
     wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
-    out_dir = Path(out_dir)
-    parent = out_dir.parent if str(out_dir.parent) else Path(".")
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist or is not writable")
+    out_dir = check_output_folder(out_dir)
     deps = np.arange(0.0, 18.0 + 1e-9, step)
     skies = twilight_models(model, list(deps), **params)
     prof_el = np.arange(0.5, 40.0, 0.5)
     rows, frames, horizons = [], [], []
     cams = horizon_views(max(16, size), skies[0].sun.azimuth_deg)
     k0 = z0 = None
-    tmp = Path(tempfile.mkdtemp(prefix=".skydome-twilight-", dir=parent))
-    try:
+    with atomic_folder(out_dir) as tmp:
         for n, (dep, sky) in enumerate(zip(deps, skies)):
             zen = float(_luminance(sky, np.array([0.0, 0.0, 1.0]), wl))
             eh = horizontal_illuminance(sky, wl)
@@ -249,11 +244,6 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
                                                    "belt_luminance", "shadow_luminance")]
                          if b is not None else [""] * 6)
                 w.writerow([-dep + 0.0, f"{zen:.6g}", f"{eh:.6g}"] + extra)
-        out_dir.mkdir(exist_ok=True)
-        for f in sorted(tmp.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return {"depression_deg": deps, "zenith_luminance": np.array([r[1] for r in rows]),
             "horizontal_illuminance": np.array([r[2] for r in rows])}
 

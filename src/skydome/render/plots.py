@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot_luminance_map", "plot_compare", "meridian_profiles"]
+__all__ = ["plot_luminance_map", "plot_compare", "meridian_profiles", "plot_radiance_profiles"]
 
 
 def _pyplot():
@@ -126,3 +126,23 @@ def plot_compare(skies, labels, path, *, title: str | None = None, relative: boo
     fig.tight_layout()
     _save(fig, path)
     plt.close(fig)
+
+
+def plot_radiance_profiles(angles_deg, profiles, labels, path, *, title: str | None = None,
+                           ylabel: str = "radiance [W m$^{-2}$ sr$^{-1}$ nm$^{-1}$]",
+                           log: bool = True) -> None:
+    """Plot radiance (or any quantity) against the angle from the sun: ``profiles`` is a
+    sequence of (na,) arrays, one per label; written to ``path`` (PNG/PDF/SVG)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for prof, lab in zip(profiles, labels):
+        ax.plot(angles_deg, prof, label=lab)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel("angle from the sun [deg]")
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
