@@ -152,6 +152,7 @@ class PrecomputedSky(SkyModel):
     @staticmethod
     def _precompute(atm, wl, p) -> dict:
         """Build every table ([Bru17] Model::Precompute) and return them as a dict of arrays."""
+        from skydome._progress import report
         from skydome.models.simulated import _kernels_precomputed as KP
         from skydome.transport import _kernels as K
 
@@ -185,6 +186,7 @@ class PrecomputedSky(SkyModel):
         ss = np.empty((sc_idx.size, n_r, n_mu, n_ms, n_nu, nl), dtype=np.float32)
         KP.single_scattering_table(col, trans, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min,
                                    alpha, n_q, ts, ss)
+        report("precomputing tables: scattering orders", 1, p["orders"])
         ms = np.zeros((n_r, n_mu, n_ms, n_nu, nl), dtype=np.float32)
         E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
         if p["orders"] >= 2:
@@ -279,6 +281,7 @@ class PrecomputedSky(SkyModel):
                 dE_prev = dE_new.copy()
                 KP.multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms, ts, delta)
                 ms += delta
+                report("precomputing tables: scattering orders", order, p["orders"])
             if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
                 # the orders beyond N as a geometric series whose ratio f is that of the
                 # last two orders' total radiance, per wavelength (the idea of [Hil20] eq. 10):
