@@ -15,8 +15,30 @@ import typer
 from typer.core import TyperGroup
 
 
-def _one_line(exc: Exception) -> str:
+def _given_value(args, opts) -> str | None:
+    """The value given on the command line to the option spelled ``opts`` (last one wins)."""
+    found = None
+    for i, a in enumerate(args):
+        for o in opts:
+            if a == o and i + 1 < len(args):
+                found = args[i + 1]
+            elif a.startswith(o + "="):
+                found = a[len(o) + 1:]
+    return found
+
+
+def _one_line(exc: Exception, args=()) -> str:
     """A usage error of the parser (typer/click) as one line: option, value, expected type."""
+    param = getattr(exc, "param", None)
+    opts = [o for o in getattr(param, "opts", ()) if o.startswith("--")]
+    value = _given_value(list(args), opts) if opts else None
+    if value is not None and type(exc).__name__ == "BadParameter":
+        reason = " ".join(str(getattr(exc, "message", exc)).split()).lower()
+        kind = ("an integer" if "integer" in reason else "a number" if "number" in reason or "float" in reason
+                else None)
+        if kind is not None:
+            return f"{opts[0]} = {value!r} is not {kind}"
+        return f"{opts[0]} = {value!r}: {reason.rstrip('.')}"
     msg = " ".join(str(exc.format_message() if hasattr(exc, "format_message") else exc).split())
     msg = msg.rstrip(".")
     return msg[:1].lower() + msg[1:]
@@ -29,6 +51,7 @@ class _OneLineGroup(TyperGroup):
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        argv = list(sys.argv[1:] if args is None else args)
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except typer.Abort:
@@ -38,7 +61,7 @@ class _OneLineGroup(TyperGroup):
             if type(exc).__name__ == "NoArgsIsHelpError":   # bare command: its help, as before
                 exc.show()
                 sys.exit(2)
-            typer.echo(f"error: {_one_line(exc)}", err=True)
+            typer.echo(f"error: {_one_line(exc, argv)}", err=True)
             sys.exit(2)
         sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
 
@@ -372,6 +395,7 @@ def render(
 
 def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method, projection,
             size, wavelengths, exposure, tonemap, bits, draw_sun):
+    from skydome._io import check_output_file
     from skydome._validate import check_choice, check_int, check_number
     from skydome.models import get_model_class
     from skydome.render import make_projection, render as render_sky
@@ -397,11 +421,13 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
 
         w, h = _parse_size(size)
         _check_memory("size", size, w * (w if h is None else h), n_channels)
+        check_output_file(out, (".exr", ".hdr", ".png"))
         check_output_path(out)
         proj = None
     else:
         proj = make_projection(projection, size)
         _check_memory("size", size, proj.shape[0] * proj.shape[1], n_channels)
+        check_output_file(out, (".exr", ".hdr", ".png"))
         check_output_path(out)
     wl = wavelength_grid(380.0, 780.0, n=wavelengths)
 
@@ -665,6 +691,7 @@ def timelapse_cmd(
         check_output_folder(out)
         cls = get_model_class(model)
         params = _parse_model_params(cls, ctx.args)
+        cls._validate_params(dict(params))
         check_choice("projection", projection, PROJECTIONS[:-1])
         check_number("lat", lat, -90.0, 90.0, "deg")
         check_number("lon", lon, -180.0, 180.0, "deg")
@@ -775,6 +802,7 @@ def twilight_cmd(
         check_output_folder(out)
         cls = get_model_class(model)
         params = _parse_model_params(cls, ctx.args)
+        cls._validate_params(dict(params))
         check_int("size", size, 16, 2048)
         check_int("wavelengths", wavelengths, 3, 401)
         _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3)
@@ -783,6 +811,10 @@ def twilight_cmd(
             with reporting(progress):
                 res = run_twilight(out, model=model, step_deg=step, size=size, wavelengths=wavelengths,
                                    exposure=exposure, progress=progress, **params)
+        except ValueError as exc:
+            if "sun elevation" in str(exc) and model in str(exc):
+                raise UserError(f"model = {model!r} does not cover the sun from 0 to -18 deg: {exc}") from None
+            raise
         finally:
             progress.close()
         for d, z, e in zip(res["depression_deg"], res["zenith_luminance"], res["horizontal_illuminance"]):
