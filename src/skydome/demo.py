@@ -108,7 +108,8 @@ def _effects(out_dir: Path) -> list[Path]:
                   eff / "timelapse", size=96, wavelengths=12)
     written.append(eff / "timelapse" / "contact_sheet.png")
     # 5.5 Bishop's ring: a close-up of the sun through a ~1 um volcanic layer
-    from skydome.effects.aureole import bishops_ring_atmosphere, render_closeup
+    from skydome.apps.aureole import render_closeup
+    from skydome.effects.aureole import bishops_ring_atmosphere
 
     img = render_closeup(bishops_ring_atmosphere(), sd.Sun(elevation_deg=45.0, azimuth_deg=180.0),
                          fov_deg=60.0, size=161)
@@ -148,24 +149,11 @@ def _effects(out_dir: Path) -> list[Path]:
 
 
 def _contact_sheet(tiles, path: Path, tile: int = 256) -> None:
-    """A labelled grid of the rendered PNGs (Pillow only)."""
-    from PIL import Image, ImageDraw
+    """A labelled grid of the rendered PNGs, three across."""
+    from skydome.render.sheets import contact_sheet
 
-    cols = min(3, len(tiles))
-    rows = (len(tiles) + cols - 1) // cols
-    label_h = 18
-    sheet = Image.new("RGB", (cols * tile, rows * (tile + label_h)), (24, 24, 24))
-    draw = ImageDraw.Draw(sheet)
-    for i, (png, label) in enumerate(tiles):
-        im = Image.open(png).convert("RGB")
-        im.thumbnail((tile, tile))
-        x = (i % cols) * tile + (tile - im.width) // 2
-        y = (i // cols) * (tile + label_h)
-        sheet.paste(im, (x, y + (tile - im.height) // 2))
-        draw.text(((i % cols) * tile + 4, y + tile + 3), label, fill=(230, 230, 230))
-    tmp = path.with_name(path.name + ".tmp.png")
-    sheet.save(tmp)
-    tmp.replace(path)
+    contact_sheet(tiles, path, cols=3, tile=tile, line_height=18, background=(24, 24, 24),
+                  text_colours=((230, 230, 230),))
 
 
 def main(argv=None) -> None:

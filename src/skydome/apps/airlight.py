@@ -79,18 +79,13 @@ def _write(path, img):
 
 
 def _side_by_side(before, after, path, labels):
-    from PIL import Image, ImageDraw
-
+    from skydome.render.sheets import contact_sheet
     from skydome.spectra import srgb_encode
 
-    tiles = [(np.clip(srgb_encode(np.clip(x, 0, 1)), 0, 1) * 255 + 0.5).astype(np.uint8) for x in (before, *after)]
-    h, w = tiles[0].shape[:2]
-    sheet = Image.new("RGB", (w, (h + 16) * len(tiles)), (20, 20, 20))
-    d = ImageDraw.Draw(sheet)
-    for i, (t, lab) in enumerate(zip(tiles, labels)):
-        sheet.paste(Image.fromarray(t), (0, i * (h + 16) + 16))
-        d.text((4, i * (h + 16) + 2), lab, fill=(230, 230, 230))
-    sheet.save(path)
+    imgs = [srgb_encode(np.clip(x, 0, 1)) for x in (before, *after)]
+    h, w = imgs[0].shape[:2]
+    contact_sheet(list(zip(imgs, labels)), path, cols=1, tile=(w, h), labels_above=True, line_height=16,
+                  background=(20, 20, 20), text_colours=((230, 230, 230),))
 
 
 def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azimuth_deg,

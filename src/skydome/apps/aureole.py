@@ -8,14 +8,47 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
-from skydome._validate import check_choice, check_int, check_number
+from skydome._validate import as_wavelengths, check_choice, check_int, check_number
 from skydome.effects.aureole import (bishops_ring_atmosphere, diffraction_ring_radius_deg,
-                                     radiance_profile, render_closeup, ring_analysis,
+                                     radiance_profile, ring_analysis, single_scattering_true_phase,
                                      sun_disc_radiance)
 
-__all__ = ["AEROSOLS", "run_aureole", "doc_figures"]
+__all__ = ["AEROSOLS", "render_closeup", "run_aureole", "doc_figures"]
 
 AEROSOLS = ("earth", "volcanic_ash", "forest_fire_smoke", "bishops_ring")
+
+
+def render_closeup(atmosphere, sun, wavelengths_nm=None, *, fov_deg: float = 50.0, size: int = 161,
+                   with_sun: bool = True, **kwargs):
+    """A narrow-field (gnomonic) image centred on the sun: SkyImage of spectral radiance,
+    ``size`` x ``size`` pixels over ``fov_deg`` (in (1, 120) deg). The sun disc is drawn
+    with :func:`sun_disc_radiance` where ``with_sun``."""
+    from skydome.effects.aureole import _sun
+    from skydome.render.image import SkyImage
+
+    sun = _sun(sun)
+    fov = check_number("fov_deg", fov_deg, 1.0, 120.0, "deg", low_open=True, high_open=True)
+    n = check_int("size", size, 8, 2048)
+    wl = np.linspace(380.0, 780.0, 21) if wavelengths_nm is None else as_wavelengths(wavelengths_nm)
+    f = sun.direction
+    up = np.array([0.0, 0.0, 1.0])
+    right = np.cross(f, up)
+    if np.linalg.norm(right) < 1e-9:
+        right = np.array([1.0, 0.0, 0.0])
+    right /= np.linalg.norm(right)
+    upv = np.cross(right, f)
+    t = np.tan(np.radians(fov / 2.0)) * np.linspace(-1.0, 1.0, n)
+    u, v = np.meshgrid(t, -t)
+    dirs = f + u[..., None] * right + v[..., None] * upv
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    L = single_scattering_true_phase(atmosphere, dirs, sun, wl, **kwargs)
+    if with_sun:
+        inside = (dirs @ f) >= np.cos(np.radians(sun.angular_radius_deg))
+        if np.any(inside):
+            L[inside] = sun_disc_radiance(atmosphere, sun, wl)
+    return SkyImage(L, "spectral", wl, metadata={"atmosphere": atmosphere.describe(),
+                                                  "sun_elevation_deg": sun.elevation_deg,
+                                                  "fov_deg": fov, "projection": "gnomonic"})
 
 
 def check_aureole_args(aerosol: str, sun_elevation_deg: float, fov_deg: float, size: int, out) -> float:

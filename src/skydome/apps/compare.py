@@ -27,6 +27,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
+from skydome.render.sheets import contact_sheet
 
 __all__ = ["ComparisonRow", "run_comparison", "sky_errors"]
 
@@ -194,28 +195,19 @@ def table_csv(rows: list[ComparisonRow]) -> str:
 
 def _write_grid(path: Path, specs, elevs, images, ref_spec, tile: int = 192) -> None:
     """Models x elevations, one exposure per column (the reference's automatic one)."""
-    from PIL import Image, ImageDraw
-
-    label_w, label_h = 150, 18
-    sheet = Image.new("RGB", (label_w + tile * len(elevs), label_h + tile * len(specs)), (24, 24, 24))
-    draw = ImageDraw.Draw(sheet)
-    for j, e in enumerate(elevs):
+    ks = {}
+    for e in elevs:
         ref = images.get((ref_spec, e))
-        k = ref.auto_exposure() if ref is not None else None
-        draw.text((label_w + j * tile + 4, 3), f"sun {e:g} deg", fill=(230, 230, 230))
-        for i, spec in enumerate(specs):
-            if j == 0:
-                draw.text((4, label_h + i * tile + tile // 2), spec[:24], fill=(230, 230, 230))
+        ks[e] = ref.auto_exposure() if ref is not None else None
+    tiles = []
+    for spec in specs:
+        for e in elevs:
             img = images.get((spec, e))
-            if img is None:
-                draw.text((label_w + j * tile + 10, label_h + i * tile + tile // 2), "n/a",
-                          fill=(200, 120, 120))
-                continue
-            rgb = img.to_srgb(exposure=k if k is not None else img.auto_exposure())
-            im = Image.fromarray((np.clip(rgb, 0, 1) * 255 + 0.5).astype(np.uint8))
-            im = im.resize((tile, tile), Image.LANCZOS)
-            sheet.paste(im, (label_w + j * tile, label_h + i * tile))
-    sheet.save(path)
+            rgb = None if img is None else img.to_srgb(exposure=ks[e] if ks[e] is not None else img.auto_exposure())
+            tiles.append((rgb, ()))
+    contact_sheet(tiles, path, cols=len(elevs), tile=tile, upscale=True, background=(24, 24, 24),
+                  column_labels=[f"sun {e:g} deg" for e in elevs], row_labels=list(specs),
+                  text_colours=((230, 230, 230),))
 
 
 def _write_error_image(path: Path, spec, elevs, xyzs, ref_spec, weights) -> None:

@@ -27,6 +27,7 @@ from typing import Callable
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
+from skydome.render.sheets import contact_sheet
 
 __all__ = ["TimelapseFrame", "day_times", "run_timelapse"]
 
@@ -134,28 +135,11 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
         k = min(img.auto_exposure() for _, img, _ in images)
         for _, img, name in images:
             img.save(tmp / name, exposure=k)
-        _contact_sheet(images, tmp / "contact_sheet.png", k)
+        contact_sheet([(img.to_srgb(exposure=k), t.strftime("%H:%M")) for t, img, _ in images],
+                      tmp / "contact_sheet.png", cols=8, tile=128)
         _write_csv(frames, tmp / "colours.csv")
         _colour_plot(frames, tmp / "colours.png")
     return frames
-
-
-def _contact_sheet(images, path: Path, k: float, tile: int = 128) -> None:
-    from PIL import Image, ImageDraw
-
-    cols = min(8, len(images))
-    rows = (len(images) + cols - 1) // cols
-    label_h = 14
-    sheet = Image.new("RGB", (cols * tile, rows * (tile + label_h)), (16, 16, 16))
-    draw = ImageDraw.Draw(sheet)
-    for n, (t, img, _) in enumerate(images):
-        rgb = (np.clip(img.to_srgb(exposure=k), 0, 1) * 255 + 0.5).astype(np.uint8)
-        im = Image.fromarray(rgb)
-        im.thumbnail((tile, tile))
-        x, y = (n % cols) * tile, (n // cols) * (tile + label_h)
-        sheet.paste(im, (x + (tile - im.width) // 2, y + (tile - im.height) // 2))
-        draw.text((x + 3, y + tile + 1), t.strftime("%H:%M"), fill=(220, 220, 220))
-    sheet.save(path)
 
 
 def _write_csv(frames, path: Path) -> None:

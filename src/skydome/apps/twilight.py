@@ -28,6 +28,7 @@ from typing import Callable
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
+from skydome.render.sheets import contact_sheet, to_uint8
 
 __all__ = ["twilight_models", "zenith_luminance_curve", "horizontal_illuminance",
            "anti_solar_profile", "belt_of_venus", "horizon_views", "run_twilight", "demo_effects"]
@@ -153,12 +154,12 @@ def belt_of_venus(elevations_deg, red_blue, luminance=None) -> dict:
 
 def horizon_views(size: int, sun_azimuth_deg: float = SUN_AZIMUTH_DEG, fov_deg: float = 100.0,
                   centre_elevation_deg: float = 25.0):
-    """Two pinhole cameras (:class:`skydome.render.camera.Camera`) looking at the horizon:
+    """Two pinhole cameras (:class:`skydome.camera.Camera`) looking at the horizon:
     towards the sun (the twilight arch) and away from it (the earth's shadow under the Belt
     of Venus). Each is ``size`` x ``size // 2`` pixels with a horizontal field ``fov_deg``,
     its centre ``centre_elevation_deg`` above the horizon (so the horizon lies near the
     bottom edge), image top towards the zenith."""
-    from skydome.render.camera import Camera
+    from skydome.camera import Camera
     from skydome.transport.geometry import direction_from_angles
 
     cams = []
@@ -230,9 +231,9 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
             rows.append((dep, zen, eh, lum, rb, belt if belt is not None and belt["found"] else None))
             if progress is not None:
                 progress(n + 1, len(deps))
-        _contact_sheet(frames, tmp / "contact_sheet.png")
-        _contact_sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
-                       caption="sun side | anti-sun side")
+        _sheet(frames, tmp / "contact_sheet.png", tile=160, cols=5)
+        _sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
+               caption="sun side | anti-sun side")
         _plot(rows, prof_el, tmp / "twilight.png")
         with open(tmp / "twilight.csv", "w", newline="") as fh:
             w = csv.writer(fh)
@@ -251,27 +252,14 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
 def _save_srgb(rgb, path: Path) -> None:
     from PIL import Image
 
-    Image.fromarray((np.clip(rgb, 0.0, 1.0) * 255 + 0.5).astype(np.uint8)).save(path)
+    Image.fromarray(to_uint8(rgb)).save(path)
 
 
-def _contact_sheet(frames, path: Path, tile: int = 160, cols: int = 5, caption: str = "") -> None:
-    from PIL import Image, ImageDraw
-
-    cols = min(cols, max(1, len(frames)))
-    rows = (len(frames) + cols - 1) // cols
-    lab = 28
-    ims = [Image.open(p).convert("RGB") for _, _, p in frames]
-    for im in ims:
-        im.thumbnail((tile, tile))
-    th = max([im.height for im in ims], default=tile)
-    sheet = Image.new("RGB", (cols * tile, max(1, rows) * (th + lab)), (12, 12, 12))
-    draw = ImageDraw.Draw(sheet)
-    for n, ((dep, zen, _), im) in enumerate(zip(frames, ims)):
-        x, y = (n % cols) * tile, (n // cols) * (th + lab)
-        sheet.paste(im, (x, y))
-        draw.text((x + 3, y + th + 1), f"sun {-dep + 0.0:g} deg  {caption}", fill=(220, 220, 220))
-        draw.text((x + 3, y + th + 14), f"zenith {zen:.2g} cd/m2", fill=(170, 170, 170))
-    sheet.save(path)
+def _sheet(frames, path: Path, tile: int, cols: int, caption: str = "") -> None:
+    """Frames (depression, zenith luminance, png) as a contact sheet with both in the label."""
+    if frames:
+        contact_sheet([(p, [f"sun {-dep + 0.0:g} deg  {caption}", f"zenith {zen:.2g} cd/m2"])
+                       for dep, zen, p in frames], path, cols=cols, tile=tile, background=(12, 12, 12))
 
 
 def _plot(rows, prof_el, path: Path) -> None:

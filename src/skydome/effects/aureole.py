@@ -42,7 +42,7 @@ from skydome._validate import as_directions, as_wavelengths, check_int, check_nu
 
 __all__ = ["single_scattering_true_phase", "almucantar_directions", "radiance_profile",
            "sun_disc_radiance", "bishops_ring_atmosphere", "ring_analysis",
-           "diffraction_ring_radius_deg", "render_closeup"]
+           "diffraction_ring_radius_deg"]
 
 INV_4PI = 1.0 / (4.0 * np.pi)
 
@@ -253,36 +253,3 @@ def ring_analysis(atmosphere, sun_elevation_deg: float = 30.0, angles_deg=None,
     return {"angles_deg": ang, "wavelengths_nm": wl_all[keep], "radiance": L[:, keep], "xy": xy,
             "red_blue": rb, "bluish_disc_deg": inner_deg, "red_border_deg": float(ang[i_red]),
             "red_border_outer_deg": outer_deg}
-
-
-# ---------------------------------------------------------------------------------------------
-def render_closeup(atmosphere, sun, wavelengths_nm=None, *, fov_deg: float = 50.0, size: int = 161,
-                   with_sun: bool = True, **kwargs):
-    """A narrow-field (gnomonic) image centred on the sun: SkyImage of spectral radiance,
-    ``size`` x ``size`` pixels over ``fov_deg`` (in (1, 120) deg). The sun disc is drawn
-    with :func:`sun_disc_radiance` where ``with_sun``."""
-    from skydome.render.image import SkyImage
-
-    sun = _sun(sun)
-    fov = check_number("fov_deg", fov_deg, 1.0, 120.0, "deg", low_open=True, high_open=True)
-    n = check_int("size", size, 8, 2048)
-    wl = np.linspace(380.0, 780.0, 21) if wavelengths_nm is None else as_wavelengths(wavelengths_nm)
-    f = sun.direction
-    up = np.array([0.0, 0.0, 1.0])
-    right = np.cross(f, up)
-    if np.linalg.norm(right) < 1e-9:
-        right = np.array([1.0, 0.0, 0.0])
-    right /= np.linalg.norm(right)
-    upv = np.cross(right, f)
-    t = np.tan(np.radians(fov / 2.0)) * np.linspace(-1.0, 1.0, n)
-    u, v = np.meshgrid(t, -t)
-    dirs = f + u[..., None] * right + v[..., None] * upv
-    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
-    L = single_scattering_true_phase(atmosphere, dirs, sun, wl, **kwargs)
-    if with_sun:
-        inside = (dirs @ f) >= np.cos(np.radians(sun.angular_radius_deg))
-        if np.any(inside):
-            L[inside] = sun_disc_radiance(atmosphere, sun, wl)
-    return SkyImage(L, "spectral", wl, metadata={"atmosphere": atmosphere.describe(),
-                                                  "sun_elevation_deg": sun.elevation_deg,
-                                                  "fov_deg": fov, "projection": "gnomonic"})
