@@ -741,7 +741,7 @@ def polarisation_cmd(
         from pathlib import Path
 
         from skydome._validate import check_choice, check_int, check_number
-        from skydome.apps.polarisation_maps import METHODS
+        from skydome.effects.polarisation_maps import METHODS
         from skydome.sun import Sun
 
         _check_figure_path(out)
@@ -759,7 +759,9 @@ def polarisation_cmd(
         check_number("turbidity", turbidity, 1.0, 32.0)
         s = Sun(elevation_deg=check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg"),
                 azimuth_deg=_check_azimuth("sun_azimuth", sun_azimuth))
-        from skydome.apps.polarisation_maps import plot_polarisation_maps, polarisation_maps, write_map_csv
+        from skydome.apps.polarisation import write_map_csv
+        from skydome.effects.polarisation_maps import polarisation_maps
+        from skydome.render.plots import plot_polarisation_maps
 
         kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
         pmap = polarisation_maps(method, s, size=size, wavelength_nm=wavelength, turbidity=turbidity, **kw)

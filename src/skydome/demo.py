@@ -116,7 +116,8 @@ def _effects(out_dir: Path) -> list[Path]:
     img.save(eff / "bishops_ring.png")
     written.append(eff / "bishops_ring.png")
     # 5.7 polarisation: single-scattering Rayleigh field (analytic)
-    from skydome.apps.polarisation_maps import plot_polarisation_maps, polarisation_maps
+    from skydome.effects.polarisation_maps import polarisation_maps
+    from skydome.render.plots import plot_polarisation_maps
 
     pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
     plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")

@@ -27,6 +27,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
+from skydome.render.plots import plot_error_maps
 from skydome.render.sheets import contact_sheet
 
 __all__ = ["ComparisonRow", "run_comparison", "sky_errors"]
@@ -153,7 +154,7 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
         _write_grid(tmp / "grid.png", specs, elevs, images, ref_spec)
         for spec in specs:
             if spec != ref_spec:
-                _write_error_image(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
+                plot_error_maps(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
         (tmp / "table.md").write_text(table_markdown(rows, ref_spec))
         (tmp / "table.csv").write_text(table_csv(rows))
     return rows
@@ -208,29 +209,3 @@ def _write_grid(path: Path, specs, elevs, images, ref_spec, tile: int = 192) -> 
     contact_sheet(tiles, path, cols=len(elevs), tile=tile, upscale=True, background=(24, 24, 24),
                   column_labels=[f"sun {e:g} deg" for e in elevs], row_labels=list(specs),
                   text_colours=((230, 230, 230),))
-
-
-def _write_error_image(path: Path, spec, elevs, xyzs, ref_spec, weights) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(elevs), figsize=(3.2 * len(elevs) + 1.0, 3.4), squeeze=False)
-    im = None
-    for j, e in enumerate(elevs):
-        ax = axes[0, j]
-        ax.set_axis_off()
-        got, ref = xyzs.get((spec, e)), xyzs.get((ref_spec, e))
-        if got is None or ref is None:
-            ax.set_title(f"sun {e:g} deg: n/a", fontsize=9)
-            continue
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(weights > 0, np.log2(got[..., 1] / ref[..., 1]), np.nan)
-        im = ax.imshow(ratio, cmap="RdBu_r", vmin=-2, vmax=2)
-        ax.set_title(f"sun {e:g} deg", fontsize=9)
-    if im is not None:
-        fig.colorbar(im, ax=axes.ravel().tolist(), label="log2(L / L_ref)", shrink=0.85)
-    fig.suptitle(f"{spec} against {ref_spec} (fisheye, north up, east left)", fontsize=10)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)

@@ -27,6 +27,7 @@ from typing import Callable
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
+from skydome.render.plots import plot_day_colours
 from skydome.render.sheets import contact_sheet
 
 __all__ = ["TimelapseFrame", "day_times", "run_timelapse"]
@@ -138,7 +139,7 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
         contact_sheet([(img.to_srgb(exposure=k), t.strftime("%H:%M")) for t, img, _ in images],
                       tmp / "contact_sheet.png", cols=8, tile=128)
         _write_csv(frames, tmp / "colours.csv")
-        _colour_plot(frames, tmp / "colours.png")
+        plot_day_colours(frames, tmp / "colours.png", _display_colour)
     return frames
 
 
@@ -162,39 +163,3 @@ def _display_colour(xyz) -> np.ndarray:
         return np.array([0.1, 0.1, 0.1])
     rgb = np.maximum(xyz_to_linear_srgb(np.asarray(xyz, dtype=float)), 0.0)
     return np.clip(srgb_encode(rgb / max(rgb.max(), 1e-30)), 0, 1)
-
-
-def _colour_plot(frames, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ok = [f for f in frames if f.zenith_xyz is not None]
-    hours = np.array([f.time.hour + f.time.minute / 60 + f.time.second / 3600 for f in ok])
-    fig, axes = plt.subplots(3, 1, figsize=(9, 6.5), sharex=True,
-                             gridspec_kw={"height_ratios": [1.2, 2, 1.2]})
-    strip = axes[0]
-    labels = [("zenith", "zenith_xyz"), ("horizon under the sun", "horizon_xyz"), ("sun disc", "sun_xyz")]
-    dt = np.median(np.diff(hours)) if hours.size > 1 else 0.25
-    for row, (label, attr) in enumerate(labels):
-        for h, f in zip(hours, ok):
-            strip.add_patch(plt.Rectangle((h - dt / 2, row), dt, 0.9, color=_display_colour(getattr(f, attr))))
-    strip.set_ylim(0, 3)
-    strip.set_yticks([0.45, 1.45, 2.45], [lab for lab, _ in labels])
-    strip.set_title("colour (chromaticity at constant brightness)")
-    lum = axes[1]
-    for label, attr in labels:
-        y = [getattr(f, attr)[1] if getattr(f, attr) is not None else np.nan for f in ok]
-        lum.semilogy(hours, y, label=label)
-    lum.set_ylabel("luminance [cd/m$^2$]")
-    lum.legend(fontsize=8)
-    lum.grid(alpha=0.3, which="both")
-    axes[2].plot(hours, [f.elevation_deg for f in ok], color="k")
-    axes[2].axhline(0, color="0.6", lw=0.8)
-    axes[2].set_ylabel("sun elevation [deg]")
-    axes[2].set_xlabel(f"local time [h] (UTC{ok[0].time.strftime('%z')})" if ok else "local time [h]")
-    axes[2].grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)

@@ -28,6 +28,7 @@ from typing import Callable
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
+from skydome.render.plots import plot_twilight
 from skydome.render.sheets import contact_sheet, to_uint8
 
 __all__ = ["twilight_models", "zenith_luminance_curve", "horizontal_illuminance",
@@ -234,7 +235,7 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
         _sheet(frames, tmp / "contact_sheet.png", tile=160, cols=5)
         _sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
                caption="sun side | anti-sun side")
-        _plot(rows, prof_el, tmp / "twilight.png")
+        plot_twilight(rows, prof_el, tmp / "twilight.png")
         with open(tmp / "twilight.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["sun_elevation_deg", "zenith_luminance_cd_m2", "horizontal_illuminance_lx",
@@ -260,46 +261,6 @@ def _sheet(frames, path: Path, tile: int, cols: int, caption: str = "") -> None:
     if frames:
         contact_sheet([(p, [f"sun {-dep + 0.0:g} deg  {caption}", f"zenith {zen:.2g} cd/m2"])
                        for dep, zen, p in frames], path, cols=cols, tile=tile, background=(12, 12, 12))
-
-
-def _plot(rows, prof_el, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    deps = np.array([r[0] for r in rows])
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
-    ax[0].semilogy(-deps, [max(r[1], 1e-12) for r in rows], "o-", label="zenith luminance [cd/m$^2$]")
-    ax[0].semilogy(-deps, [max(r[2], 1e-12) for r in rows], "s-", label="horizontal illuminance [lx]")
-    # published clear-sky horizontal illuminance (AMS Glossary of Meteorology, "civil
-    # twilight", "astronomical twilight") and the natural night sky's zenith luminance
-    # (V = 21.6 mag/arcsec^2, Patat 2003, A&A 400, 1183: 10.8e4 * 10^(-0.4 V) = 2.5e-4 cd/m^2)
-    for x, lo, hi in ((0.0, 410.0, 585.0), (-6.0, 2.0, 3.5)):
-        ax[0].plot([x, x], [lo, hi], "k-", lw=3)
-    ax[0].plot([-12.0, -18.0], [8e-3, 6e-4], "kx", ms=8, label="AMS glossary illuminance [lx]")
-    ax[0].axhline(2.5e-4, color="k", ls=":", lw=1, label="night sky zenith (not modelled)")
-    for x, name in ((-6, "civil"), (-12, "nautical"), (-18, "astronomical")):
-        ax[0].axvline(x, color="0.7", lw=0.8)
-        ax[0].text(x + 0.2, 1e2, name, rotation=90, fontsize=8, color="0.4")
-    ax[0].set_xlabel("sun elevation [deg]")
-    ax[0].legend(fontsize=8)
-    ax[0].grid(alpha=0.3, which="both")
-    for dep, _, _, lum, rb, _ in rows:
-        if dep <= 6:
-            ax[1].plot(prof_el, rb, label=f"sun {-dep + 0.0:g}")
-            ax[2].semilogy(prof_el, np.maximum(lum, 1e-12), label=f"sun {-dep + 0.0:g}")
-    ax[1].set_xlabel("elevation opposite the sun [deg]")
-    ax[1].set_ylabel("R/B (linear sRGB)")
-    ax[1].set_title("Belt of Venus (R/B peak) over the earth's shadow")
-    ax[1].legend(fontsize=7)
-    ax[1].grid(alpha=0.3)
-    ax[2].set_xlabel("elevation opposite the sun [deg]")
-    ax[2].set_ylabel("luminance [cd/m$^2$]")
-    ax[2].grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
 
 
 def demo_effects(out_dir) -> list[Path]:

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from skydome._validate import check_choice
-from skydome.camera import _MAX_SIZE, _MIN_SIZE, Projection, _as_dirs, _check_size, _parse_size  # noqa: F401
+from skydome.camera import _MIN_SIZE, Projection, _as_dirs, _check_size, _parse_size  # noqa: F401 (re-exported)
 
 __all__ = ["Projection", "Equirect", "Fisheye", "AngularMap", "make_projection", "PROJECTION_NAMES"]
 
