@@ -1,6 +1,6 @@
 """The main job of ``./scripts/demo``: render sample skies into an output folder.
 
-Run as ``python -m skydome.demo --out out``. Every image is rendered through the public API
+Run as ``python -m skydome.apps.demo --out out``. Every image is rendered through the public API
 (the same calls as the README's examples) and a labelled contact sheet ``gallery.png`` ties
 them together.
 """
