@@ -119,7 +119,7 @@ CASES = [
     ("compare", ["--models", "preetham1999", "--sun-elevation", "5,95", "--out", "OUT_DIR"], "--sun-elevation", "95"),
     ("compare", ["--models", "preetham1999", "--sun-elevation", ",", "--out", "OUT_DIR"], "--sun-elevation", "','"),
     ("compare", ["--models", "preetham1999", "--sun-azimuth", "1e300", "--out", "OUT_DIR"], "--sun-azimuth", "1e+300"),
-    ("compare", ["--models", "preetham1999", "--reference", "nosuch", "--out", "OUT_DIR"], "--model", "'nosuch'"),
+    ("compare", ["--models", "preetham1999", "--reference", "nosuch", "--out", "OUT_DIR"], "--reference", "'nosuch'"),
     ("compare", ["--models", "nosuch", "--out", "OUT_DIR"], "--model", "'nosuch'"),
     ("compare", ["--models", "preetham1999", "--turbidity", "1", "--out", "OUT_DIR"], "--turbidity", "1"),
     ("compare", ["--models", "preetham1999", "--frobnicate", "1", "--out", "OUT_DIR"], "--frobnicate", "no model"),

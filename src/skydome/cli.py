@@ -628,7 +628,11 @@ def compare_cmd(
         from skydome._io import check_output_folder
         from skydome._validate import check_int, check_number
 
+        from skydome.models import available
+
         check_output_folder(out)
+        if reference not in available():
+            raise UserError(f"reference = {reference!r} is not a registered model (see skydome models)")
         specs = _split_specs(models)
         classes = [get_model_class(sp.partition(":")[0]) for sp in specs + [reference]]
         _check_shared(ctx.args, classes)
