@@ -763,22 +763,12 @@ def polarisation_cmd(
         check_number("turbidity", turbidity, 1.0, 32.0)
         s = Sun(elevation_deg=check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg"),
                 azimuth_deg=_check_azimuth("sun_azimuth", sun_azimuth))
-        from skydome.apps.polarisation import write_map_csv
-        from skydome.effects.polarisation_maps import polarisation_maps
-        from skydome.render.plots import plot_polarisation_maps
+        from skydome.apps.polarisation import run_polarisation
 
-        kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
-        pmap = polarisation_maps(method, s, size=size, wavelength_nm=wavelength, turbidity=turbidity, **kw)
-        plot_polarisation_maps(pmap, out)
-        if csv is not None:
-            write_map_csv(pmap, csv)
-        sky = pmap.mask & (pmap.dirs[..., 2] > 0)
-        i = np.nanargmax(np.where(sky, pmap.dop, -1.0))
-        typer.echo(f"maximum degree of polarisation {pmap.dop.flat[i]:.3f} at "
-                   f"{np.degrees(np.arccos(np.clip(pmap.dirs.reshape(-1, 3)[i] @ s.direction, -1, 1))):.1f} deg "
-                   f"from the sun; wrote {out}" + (f" and {csv}" if csv else ""))
-    import numpy as np
-
+        dop, angle = run_polarisation(out, s, method=method, csv=csv, size=size, samples=samples, seed=seed,
+                                      wavelength_nm=wavelength, turbidity=turbidity)
+        typer.echo(f"maximum degree of polarisation {dop:.3f} at {angle:.1f} deg from the sun; wrote {out}"
+                   + (f" and {csv}" if csv else ""))
     _run(go)
 
 

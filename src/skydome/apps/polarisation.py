@@ -6,7 +6,35 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["write_map_csv"]
+__all__ = ["run_polarisation", "write_map_csv"]
+
+
+def run_polarisation(out, sun, *, method: str = "montecarlo", csv=None, size: int = 48,
+                     samples: int = 2000, seed: int = 0, wavelength_nm: float = 550.0,
+                     turbidity: float = 2.5) -> tuple[float, float]:
+    """Compute the polarisation maps, write the figure ``out`` (and the numbers to ``csv``),
+    and return the largest degree of polarisation in the sky with its angle from the sun
+    [deg]. If the CSV cannot be written, a figure this call created is removed again."""
+    import os
+
+    from skydome.effects.polarisation_maps import polarisation_maps
+    from skydome.render.plots import plot_polarisation_maps
+
+    kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
+    pmap = polarisation_maps(method, sun, size=size, wavelength_nm=wavelength_nm, turbidity=turbidity, **kw)
+    existed = os.path.exists(out)
+    plot_polarisation_maps(pmap, out)
+    if csv is not None:
+        try:
+            write_map_csv(pmap, csv)
+        except BaseException:
+            if not existed and os.path.exists(out):
+                os.unlink(out)
+            raise
+    sky = pmap.mask & (pmap.dirs[..., 2] > 0)
+    i = int(np.nanargmax(np.where(sky, pmap.dop, -1.0)))
+    cos = float(np.clip(pmap.dirs.reshape(-1, 3)[i] @ sun.direction, -1.0, 1.0))
+    return float(pmap.dop.flat[i]), float(np.degrees(np.arccos(cos)))
 
 
 def write_map_csv(pmap, path) -> None:
