@@ -201,6 +201,12 @@ CASES = [
 FOLDER_COMMANDS = {"compare", "timelapse", "twilight", "aureole"}
 
 
+@pytest.fixture(autouse=True)
+def memory_cap(monkeypatch):
+    """The documented cap (16 GiB), so that the memory refusals do not depend on the machine."""
+    monkeypatch.setenv("SKYDOME_MEMORY_LIMIT", str(16 * 2 ** 30))
+
+
 def _materialise(command, args, root: Path):
     """Replace the placeholders by paths in ``root``; return the argument list."""
     subs = {"OUT_PNG": root / "out.png", "OUT_JPG": root / "out.jpg", "OUT_SVGZ": root / "out.svgz",
@@ -273,6 +279,15 @@ def test_bad_invocation_in_a_real_process(tmp_path, command, args, option, value
                           capture_output=True, text=True, env=env, timeout=120)
     _check(tmp_path, before, proc.returncode, proc.stderr, option, value)
     assert proc.stdout == ""
+
+
+@pytest.mark.parametrize("limit, fragment", [("1e6", "GiB of memory"), ("lots", "SKYDOME_MEMORY_LIMIT = 'lots'")])
+def test_memory_limit_from_the_environment(tmp_path, monkeypatch, limit, fragment):
+    monkeypatch.setenv("SKYDOME_MEMORY_LIMIT", limit)
+    res = runner.invoke(app, ["render", "--size", "512", "--out", str(tmp_path / "a.png")])
+    assert res.exit_code == 2
+    assert fragment in res.stderr
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_version():
