@@ -82,6 +82,8 @@ CASES = [
     ("render", ["--model", "cie2003", "--sky-type", "16"], "--sky-type", "16"),
     ("render", ["--model", "cie2003", "--sky-type", "twelve"], "--sky-type", "'twelve'"),
     ("render", ["--model", "preetham1999", "--turbidity", "1.5"], "--turbidity", "1.5"),
+    ("render", ["--model", "preetham1999", "--sun-elevation", "-5"], "--sun-elevation", "-5"),
+    ("render", ["--model", "cie2003", "--sun-elevation", "-5"], "--sun-elevation", "-5"),
     ("render", ["stray"], "'stray'", "unexpected"),
     # -- render: output file
     ("render", ["--out", "OUT_JPG"], "--out", "out.jpg"),

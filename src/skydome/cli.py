@@ -120,8 +120,14 @@ def _current_options() -> tuple[set[str], bool]:
     return opts, bool(ctx.allow_extra_args)
 
 
+_SUN_LEAD = re.compile(r"^sun[ .]elevation_deg(?= \(model | = )")
+
+
 def _name_option(message: str) -> str:
-    """Spell a leading ``name = value`` as the command's option ``--name = value``."""
+    """Spell a leading ``name = value`` as the command's option ``--name = value`` (and a
+    model's refusal of the sun's elevation as ``--sun-elevation``)."""
+    if _SUN_LEAD.match(message) and "--sun-elevation" in _current_options()[0]:
+        return _SUN_LEAD.sub("--sun-elevation", message, count=1)
     m = _LEAD.match(message)
     if not m:
         return message
