@@ -64,7 +64,7 @@ def test_render_model_option_and_location(tmp_path):
 
 @pytest.mark.parametrize("args, fragment", [
     (["--turbidity", "-1"], "turbidity = -1"),
-    (["--sun-elevation", "91"], "elevation_deg = 91"),
+    (["--sun-elevation", "91"], "--sun-elevation = 91"),
     (["--model", "nosuchmodel"], "model = 'nosuchmodel'"),
     (["--projection", "cylinder"], "projection = 'cylinder'"),
     (["--lat", "48", "--lon", "16", "--time", "yesterday noon"], "time"),

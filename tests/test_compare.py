@@ -7,7 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 from skydome.cli import app
-from skydome.compare import run_comparison, sky_errors
+from skydome.apps.compare import run_comparison, sky_errors
 
 runner = CliRunner()
 
@@ -60,7 +60,7 @@ def test_cli_compare_with_refusing_model(tmp_path):
 
 @pytest.mark.parametrize("args, frag", [
     (["--models", "nosuch"], "model = 'nosuch'"),
-    (["--models", "cie2003", "--sun-elevation", "a,b"], "sun_elevation"),
+    (["--models", "cie2003", "--sun-elevation", "a,b"], "--sun-elevation = 'a,b'"),
     (["--models", "cie2003", "--bogus", "1"], "--bogus"),
 ])
 def test_cli_compare_bad_input(tmp_path, args, frag):

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from skydome.atmosphere import Atmosphere
+from skydome.apps.aureole import render_closeup
 from skydome.effects import aureole as A
 
 
@@ -67,8 +68,8 @@ def test_bishops_ring_reddish_border_at_mie_radius():
 
 
 def test_closeup_image_no_nan_and_sun_brightest():
-    img = A.render_closeup(A.bishops_ring_atmosphere(), 30.0, np.linspace(400, 700, 4),
-                           fov_deg=20.0, size=15, view_samples=16)
+    img = render_closeup(A.bishops_ring_atmosphere(), 30.0, np.linspace(400, 700, 4),
+                         fov_deg=20.0, size=15, view_samples=16)
     assert np.all(np.isfinite(img.data)) and np.all(img.data >= 0)
     Y = img.luminance()
     assert Y[7, 7] == Y.max()

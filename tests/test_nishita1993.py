@@ -16,7 +16,7 @@ import pytest
 import skydome as sd
 from skydome.atmosphere import Atmosphere
 from skydome.models import get_model_class
-from skydome.render.camera import Camera
+from skydome.camera import Camera
 from skydome.spectra import spectrum_to_xyz, wavelength_grid, xyz_to_linear_srgb
 
 WL = wavelength_grid(380.0, 780.0, n=12)

@@ -8,7 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from skydome.cli import app
-from skydome.effects.timelapse import day_times, parse_every
+from skydome.apps.timelapse import day_times, parse_every
 
 runner = CliRunner()
 

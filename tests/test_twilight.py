@@ -5,7 +5,7 @@ import pytest
 from typer.testing import CliRunner
 
 from skydome.cli import app
-from skydome.effects.twilight import (anti_solar_profile, belt_of_venus, horizon_views,
+from skydome.apps.twilight import (anti_solar_profile, belt_of_venus, horizon_views,
                                       horizontal_illuminance, twilight_models, zenith_luminance_curve)
 
 SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,

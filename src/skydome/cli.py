@@ -6,40 +6,236 @@ line on stderr (``error: ...``) and exits with code 2, leaving nothing on disk.
 
 from __future__ import annotations
 
+import re
 import sys
 import time as _time
 from typing import Any, Optional
 
 import typer
+from typer.core import TyperGroup
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
+
+def _given_value(args, opts) -> str | None:
+    """The value given on the command line to the option spelled ``opts`` (last one wins)."""
+    found = None
+    for i, a in enumerate(args):
+        for o in opts:
+            if a == o and i + 1 < len(args):
+                found = args[i + 1]
+            elif a.startswith(o + "="):
+                found = a[len(o) + 1:]
+    return found
+
+
+def _one_line(exc: Exception, args=()) -> str:
+    """A usage error of the parser (typer/click) as one line: option, value, expected type."""
+    param = getattr(exc, "param", None)
+    opts = [o for o in getattr(param, "opts", ()) if o.startswith("--")]
+    value = _given_value(list(args), opts) if opts else None
+    if value is not None and type(exc).__name__ == "BadParameter":
+        reason = " ".join(str(getattr(exc, "message", exc)).split()).lower()
+        kind = ("an integer" if "integer" in reason else "a number" if "number" in reason or "float" in reason
+                else None)
+        if kind is not None:
+            return f"{opts[0]} = {value!r} is not {kind}"
+        return f"{opts[0]} = {value!r}: {reason.rstrip('.')}"
+    msg = " ".join(str(exc.format_message() if hasattr(exc, "format_message") else exc).split())
+    msg = msg.rstrip(".")
+    return msg[:1].lower() + msg[1:]
+
+
+class _OneLineGroup(TyperGroup):
+    """The command group: parser errors (a non-numeric value, an unknown or missing option)
+    are reported as one line ``error: ...`` on stderr with exit code 2, not a usage block."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        argv = list(sys.argv[1:] if args is None else args)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except typer.Abort:
+            typer.echo("aborted", err=True)
+            sys.exit(1)
+        except typer.TyperException as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":   # bare command: its help, as before
+                exc.show()
+                sys.exit(2)
+            typer.echo(f"error: {_one_line(exc, argv)}", err=True)
+            sys.exit(2)
+        sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
+
+
+def _version(value: bool) -> None:
+    if value:
+        from skydome import __version__
+
+        typer.echo(f"skydome {__version__}")
+        raise typer.Exit()
+
+
+app = typer.Typer(cls=_OneLineGroup, add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                   help="skydome: physically based daylight modelling (sky models, spectral sky images).")
 
+
+@app.callback()
+def _main_options(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                               help="Print the version and exit.")) -> None:
+    """skydome: physically based daylight modelling (sky models, spectral sky images)."""
+
+
 PROJECTIONS = ("fisheye", "equirect", "equirect-hemisphere", "angular", "camera")
+BOOL_WORDS = {"true": True, "yes": True, "1": True, "false": False, "no": False, "0": False}
+AZIMUTH_RANGE = (-360.0, 360.0)   # [deg] every command's sun and view azimuths
+# working copies of an image in a render and its conversion to a file: the spectral values
+# (per direction and in the image), the spectrum -> XYZ products, and six 3-channel arrays
+# (directions, XYZ, linear RGB, display values, the mask and the sun disc) [bytes per value 8]
+MEMORY_SPECTRAL_COPIES = 3
+MEMORY_RGB_COPIES = 6
 
 
 class UserError(Exception):
     """Bad input: reported as one line on stderr with exit code 2."""
 
 
+# internal parameter names that the CLI spells differently
+_ALIASES = {"elevation_deg": "--sun-elevation", "azimuth_deg": "--sun-azimuth",
+            "sun_elevation_deg": "--sun-elevation", "sun_azimuth_deg": "--sun-azimuth",
+            "min_elevation_deg": "--min-elevation", "fov_deg": "--fov", "step_deg": "--step",
+            "lat_deg": "--lat", "lon_deg": "--lon", "view_azimuth_deg": "--view-azimuth",
+            "wavelength_nm": "--wavelength", "time": "--time", "out_dir": "--out"}
+_LEAD = re.compile(r"^([a-z][a-z0-9_]*) = ")
+
+
+def _current_options() -> tuple[set[str], bool]:
+    """The long options of the running command, and whether it takes model options."""
+    try:
+        from typer._click.globals import get_current_context
+    except ImportError:  # pragma: no cover - typer versions that use click itself
+        from click import get_current_context
+    ctx = get_current_context(silent=True)
+    if ctx is None:
+        return set(), False
+    opts = {o for prm in ctx.command.params for o in getattr(prm, "opts", ()) if o.startswith("--")}
+    return opts, bool(ctx.allow_extra_args)
+
+
+_SUN_LEAD = re.compile(r"^sun[ .]elevation_deg(?= \(model | = )")
+
+
+def _name_option(message: str) -> str:
+    """Spell a leading ``name = value`` as the command's option ``--name = value`` (and a
+    model's refusal of the sun's elevation as ``--sun-elevation``)."""
+    if _SUN_LEAD.match(message) and "--sun-elevation" in _current_options()[0]:
+        return _SUN_LEAD.sub("--sun-elevation", message, count=1)
+    m = _LEAD.match(message)
+    if not m:
+        return message
+    name = m.group(1)
+    opts, extra = _current_options()
+    dashed = "--" + name.replace("_", "-")
+    if dashed in opts:
+        opt = dashed
+    elif _ALIASES.get(name) in opts:
+        opt = _ALIASES[name]
+    elif extra and name not in _ALIASES:
+        opt = dashed            # a model option given as --name value
+    else:
+        return message
+    return opt + message[len(name):]
+
+
 def _fail(message: str) -> None:
-    typer.echo(f"error: {message}", err=True)
+    line = " ".join(_name_option(str(message)).split())
+    typer.echo(f"error: {line}", err=True)
     raise typer.Exit(code=2)
 
 
 def _run(func, *args, **kwargs):
-    """Call ``func`` turning ValueError/TypeError/FileNotFoundError into exit code 2."""
+    """Call ``func`` turning bad input (ValueError, TypeError, a missing file) and failed
+    writes (a full disk, a read-only folder) into one line on stderr and exit code 2."""
     try:
         return func(*args, **kwargs)
     except (UserError, ValueError, TypeError, FileNotFoundError, KeyError) as exc:
         msg = exc.args[0] if exc.args else str(exc)
         _fail(str(msg))
+    except MemoryError:
+        _fail("out of memory: try a smaller --size or fewer --wavelengths")
+    except OSError as exc:
+        where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
+        _fail(f"could not write{where}: {exc.strerror or exc}")
+
+
+def _available_memory() -> int:
+    """Memory the process may use [bytes]: MemAvailable of /proc/meminfo, else the free
+    physical pages; the SKYDOME_MEMORY_LIMIT environment variable (bytes) caps it."""
+    import os
+
+    avail = None
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    avail = int(line.split()[1]) * 1024
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    if avail is None:
+        try:
+            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):  # pragma: no cover
+            avail = 2 ** 62
+    cap = os.environ.get("SKYDOME_MEMORY_LIMIT")
+    if cap:
+        try:
+            avail = min(avail, int(float(cap)))
+        except ValueError:
+            raise UserError(f"SKYDOME_MEMORY_LIMIT = {cap!r} is not a number of bytes") from None
+    return avail
+
+
+def image_memory_bytes(n_pixels: int, n_channels: int, held_images: int = 0) -> int:
+    """Estimated peak memory [bytes] of rendering and writing an image of ``n_pixels``
+    pixels with ``n_channels`` values each, while ``held_images`` earlier images of that size
+    are kept: pixels x 8 bytes x (3 copies of the channels + 6 three-channel arrays), plus
+    pixels x channels x 8 bytes per held image."""
+    n, c = int(n_pixels), int(n_channels)
+    return n * 8 * (MEMORY_SPECTRAL_COPIES * c + 3 * MEMORY_RGB_COPIES) + int(held_images) * n * c * 8
+
+
+def _check_memory(option: str, value, n_pixels: int, n_channels: int, held_images: int = 0) -> None:
+    need = image_memory_bytes(n_pixels, n_channels, held_images)
+    avail = _available_memory()
+    if need > avail:
+        what = f"{held_images + 1} images need" if held_images else "the image needs"
+        raise UserError(f"{option} = {value}: {what} about {need / 2 ** 30:.1f} GiB of memory "
+                        f"({n_pixels} pixels x {n_channels} channels x 8 bytes x working copies), more "
+                        f"than the {avail / 2 ** 30:.1f} GiB available; give a smaller size")
+
+
+def _check_azimuth(option: str, value) -> float:
+    from skydome._validate import check_number
+
+    try:
+        return check_number(option, value, *AZIMUTH_RANGE, "deg")
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
 
 
 # -- helpers --------------------------------------------------------------------------------
 def _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method):
     from skydome.sun import Sun
 
+    from skydome._validate import check_number
+
+    if sun_elevation is not None:
+        check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg")
+    if sun_azimuth is not None:
+        _check_azimuth("sun_azimuth", sun_azimuth)
+    if lat is not None:
+        check_number("lat", lat, -90.0, 90.0, "deg")
+    if lon is not None:
+        check_number("lon", lon, -180.0, 180.0, "deg")
     by_angles = sun_elevation is not None or sun_azimuth is not None
     by_place = any(v is not None for v in (lat, lon, time))
     if by_angles and by_place:
@@ -48,7 +244,11 @@ def _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method):
         missing = [n for n, v in (("--lat", lat), ("--lon", lon), ("--time", time)) if v is None]
         if missing:
             raise UserError(f"{', '.join(missing)} missing: --lat, --lon and --time go together")
-        return Sun.from_location(lat, lon, time, method=sun_method)
+        from skydome._validate import check_choice
+        from skydome.sun import parse_time
+
+        check_choice("sun_method", sun_method, ("spa", "preetham1999"))
+        return Sun.from_location(lat, lon, parse_time(time, "time"), method=sun_method)
     return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
                azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
 
@@ -83,7 +283,9 @@ def _parse_model_params(cls, extra: list[str]) -> dict[str, Any]:
                 conv = type(p.choices[0]) if p.choices else str
                 out[name] = conv(value)
             elif p.kind == "bool":
-                out[name] = value.lower() in ("1", "true", "yes", "on")
+                if value.lower() not in BOOL_WORDS:
+                    raise UserError(f"--{key} = {value!r} is not a boolean: give true, false, yes, no, 1 or 0")
+                out[name] = BOOL_WORDS[value.lower()]
             else:
                 out[name] = value
         except ValueError:
@@ -93,30 +295,79 @@ def _parse_model_params(cls, extra: list[str]) -> dict[str, Any]:
 
 
 class _Progress:
-    """A rich progress bar that appears only once a render has run for a second."""
+    """A rich progress bar on stderr that appears only once the work has run for a second.
+
+    Called as ``progress(done, total)`` (a render's chunks) or, as the reporter of
+    :mod:`skydome._progress`, ``progress(stage, done, total)`` (precomputation, table builds);
+    each new stage restarts the bar under its own label."""
 
     def __init__(self, label: str):
         self.label = label
         self.t0 = _time.perf_counter()
         self.bar = None
         self.task = None
+        self.stage = None
 
-    def __call__(self, done: int, total: int) -> None:
+    def __call__(self, *args) -> None:
+        if len(args) == 3:
+            stage, done, total = args
+        else:
+            (done, total), stage = args, self.label
         if self.bar is None:
             if _time.perf_counter() - self.t0 < 1.0 or done >= total:
                 return
-            from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
             from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-            self.bar = Progress(TextColumn(self.label), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-                                TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+            self.bar = Progress(TextColumn("{task.description}"), BarColumn(),
+                                TextColumn("{task.percentage:>3.0f}%"), TimeRemainingColumn(),
+                                console=Console(stderr=True), transient=True)
             self.bar.start()
-            self.task = self.bar.add_task(self.label, total=total)
-        self.bar.update(self.task, completed=done)
+        if stage != self.stage or self.task is None:
+            if self.task is not None:
+                self.bar.remove_task(self.task)
+            self.task = self.bar.add_task(stage, total=total)
+            self.stage = stage
+        self.bar.update(self.task, completed=done, total=total)
 
     def close(self):
         if self.bar is not None:
             self.bar.stop()
+
+
+def _build_model(cls, progress: "_Progress", **kwargs):
+    """Construct a model, showing the progress its set-up reports (precomputed tables...)."""
+    from skydome._progress import reporting
+
+    with reporting(progress):
+        return cls(**kwargs)
+
+
+def _check_date(value: str) -> str:
+    import datetime as dt
+
+    try:
+        dt.date.fromisoformat(value)
+    except (ValueError, TypeError):
+        raise UserError(f"date = {value!r} is not a date: give YYYY-MM-DD, e.g. 2026-06-21") from None
+    if not re.fullmatch(r"\d{4}-\d{2}-\d{2}", value):
+        raise UserError(f"date = {value!r} is not a date: give YYYY-MM-DD, e.g. 2026-06-21")
+    return value
+
+
+def _check_clock(name: str, value: str) -> str:
+    m = re.fullmatch(r"(\d{2}):(\d{2})", value)
+    if not m or int(m.group(1)) > 23 or int(m.group(2)) > 59:
+        raise UserError(f"{name} = {value!r} is not a local time: give HH:MM from 00:00 to 23:59")
+    return value
+
+
+def _check_utc_offset(value: str) -> str:
+    m = re.fullmatch(r"([+-])(\d{2}):(\d{2})", value)
+    if not m or int(m.group(3)) > 59 or int(m.group(2)) * 60 + int(m.group(3)) > 14 * 60:
+        raise UserError(f"utc_offset = {value!r} is not a UTC offset: give +HH:MM or -HH:MM "
+                        "from -14:00 to +14:00, e.g. +02:00")
+    return value
 
 
 # -- commands ----------------------------------------------------------------------------------
@@ -126,7 +377,7 @@ def render(
     model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
     out: str = typer.Option(..., help="Output file: .exr (float, linear), .hdr (Radiance RGBE) or .png (tone mapped)."),
     sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation above the horizon [deg], -90..90 (default 30)."),
-    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
+    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg], -360..360 (default 180)."),
     lat: Optional[float] = typer.Option(None, help="Latitude [deg], -90..90, north positive (with --lon and --time)."),
     lon: Optional[float] = typer.Option(None, help="Longitude [deg], -180..180, east positive."),
     time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset, e.g. 2026-06-21T20:45+02:00."),
@@ -150,7 +401,8 @@ def render(
 
 def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method, projection,
             size, wavelengths, exposure, tonemap, bits, draw_sun):
-    from skydome._validate import check_choice, check_int
+    from skydome._io import check_output_file
+    from skydome._validate import check_choice, check_int, check_number
     from skydome.models import get_model_class
     from skydome.render import make_projection, render as render_sky
     from skydome.render.image import check_output_path
@@ -163,29 +415,35 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     check_choice("tonemap", tonemap, ("clamp", "reinhard", "filmic"))
     check_choice("bits", bits, (8, 16))
     check_int("wavelengths", wavelengths, 3, 401)
-    if exposure is not None and not exposure > 0:
-        raise UserError(f"exposure = {exposure} must be > 0")
+    if exposure is not None:
+        check_number("exposure", exposure, 0.0, None, low_open=True)
     sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
+    n_channels = wavelengths if cls.native == "spectral" else 3
     if projection == "camera":
         if not hasattr(cls, "default_projection"):
             raise UserError(f"projection = 'camera' needs a model with its own camera "
                             f"(e.g. nishita1993); model {model!r} has none")
         from skydome.render.projections import _parse_size
 
-        _parse_size(size)
+        w, h = _parse_size(size)
+        _check_memory("size", size, w * (w if h is None else h), n_channels)
+        check_output_file(out, (".exr", ".hdr", ".png"))
         check_output_path(out)
-        sky = cls(sun=sun, **params)
-        proj = sky.default_projection(size)
+        proj = None
     else:
         proj = make_projection(projection, size)
+        _check_memory("size", size, proj.shape[0] * proj.shape[1], n_channels)
+        check_output_file(out, (".exr", ".hdr", ".png"))
         check_output_path(out)
-        sky = cls(sun=sun, **params)
     wl = wavelength_grid(380.0, 780.0, n=wavelengths)
 
-    # 2. work
+    # 2. work: the time printed includes the model's construction (precomputation)
     progress = _Progress(f"rendering {model}")
     t0 = _time.perf_counter()
     try:
+        sky = _build_model(cls, progress, sun=sun, **params)
+        if proj is None:
+            proj = sky.default_projection(size)
         image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun)
     finally:
         progress.close()
@@ -302,7 +560,7 @@ def plot_luminance(
     model: str = typer.Option(..., help="Model name, optionally name:value for its first option (e.g. cie2003:12)."),
     out: str = typer.Option(..., help="Output figure (.png, .pdf or .svg)."),
     sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation [deg] (default 30)."),
-    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
+    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg], -360..360 (default 180)."),
     lat: Optional[float] = typer.Option(None, help="Latitude [deg] (with --lon and --time)."),
     lon: Optional[float] = typer.Option(None, help="Longitude [deg], east positive."),
     time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset."),
@@ -329,7 +587,7 @@ def plot_compare_cmd(
     models: str = typer.Option(..., help="Comma-separated model specs, e.g. cie2003:12,perez1993,preetham1999."),
     out: str = typer.Option(..., help="Output figure (.png, .pdf or .svg)."),
     sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation [deg] (default 30)."),
-    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
+    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg], -360..360 (default 180)."),
     lat: Optional[float] = typer.Option(None, help="Latitude [deg] (with --lon and --time)."),
     lon: Optional[float] = typer.Option(None, help="Longitude [deg], east positive."),
     time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset."),
@@ -359,7 +617,7 @@ def compare_cmd(
     ctx: typer.Context,
     models: str = typer.Option(..., help="Comma-separated model specs, e.g. single_scattering,kaneda1991,preetham1999:3."),
     sun_elevation: str = typer.Option("5,30,60", help="Comma-separated sun elevations [deg], -90..90."),
-    sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg]."),
+    sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg], -360..360."),
     reference: str = typer.Option("single_scattering", help="Model the others are measured against."),
     size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
@@ -370,16 +628,32 @@ def compare_cmd(
     Options after the list (e.g. --turbidity 3) go to every model that has them.
     """
     def go():
-        from skydome.compare import run_comparison
+        from skydome.apps.compare import run_comparison
         from skydome.models import get_model_class
 
+        from skydome._io import check_output_folder
+        from skydome._validate import check_int, check_number
+
+        from skydome.models import available
+
+        check_output_folder(out)
+        if reference not in available():
+            raise UserError(f"reference = {reference!r} is not a registered model (see skydome models)")
         specs = _split_specs(models)
-        _check_shared(ctx.args, [get_model_class(sp.partition(":")[0]) for sp in specs + [reference]])
-        get_model_class(reference)
+        classes = [get_model_class(sp.partition(":")[0]) for sp in specs + [reference]]
+        _check_shared(ctx.args, classes)
         try:
             elevs = [float(v) for v in sun_elevation.split(",") if v.strip()]
         except ValueError:
             raise UserError(f"sun_elevation = {sun_elevation!r} is not a comma-separated list of numbers") from None
+        if not elevs:
+            raise UserError(f"sun_elevation = {sun_elevation!r} is empty: give at least one sun elevation")
+        for e in elevs:
+            check_number("sun_elevation", e, -90.0, 90.0, "deg")
+        _check_azimuth("sun_azimuth", sun_azimuth)
+        check_int("size", size, 16, 4096)
+        check_int("wavelengths", wavelengths, 3, 401)
+        _check_memory("size", size, size * size, max(wavelengths if c.native == "spectral" else 3 for c in classes))
         progress = _Progress("comparing models")
         try:
             rows = run_comparison(specs, elevs, out, reference=reference, sun_azimuth_deg=sun_azimuth,
@@ -388,7 +662,7 @@ def compare_cmd(
                                   progress=progress)
         finally:
             progress.close()
-        from skydome.compare import table_markdown
+        from skydome.apps.compare import table_markdown
 
         typer.echo(table_markdown(rows, reference))
         typer.echo(f"wrote {out}/grid.png, error_*.png, table.md, table.csv")
@@ -418,16 +692,34 @@ def timelapse_cmd(
     """
     def go():
         from skydome._validate import check_choice
-        from skydome.effects.timelapse import day_times, parse_every, run_timelapse
+        from skydome.apps.timelapse import day_times, parse_every, run_timelapse
         from skydome.models import get_model_class
 
+        from skydome._io import check_output_folder
+        from skydome._validate import check_int, check_number
+
+        check_output_folder(out)
         cls = get_model_class(model)
         params = _parse_model_params(cls, ctx.args)
-        check_choice("projection", projection, PROJECTIONS)
-        times = day_times(date, utc_offset, parse_every(every), start, end)
+        cls._validate_params(dict(params))
+        check_choice("projection", projection, PROJECTIONS[:-1])
+        check_number("lat", lat, -90.0, 90.0, "deg")
+        check_number("lon", lon, -180.0, 180.0, "deg")
+        check_number("min_elevation", min_elevation, -90.0, 90.0, "deg")
+        check_int("size", size, 16, 4096)
+        check_int("wavelengths", wavelengths, 3, 401)
+        times = day_times(_check_date(date), _check_utc_offset(utc_offset), parse_every(every),
+                          _check_clock("start", start), _check_clock("end", end))
+        from skydome.sun import solar_position
+
+        import numpy as np
+
+        el = np.atleast_1d(solar_position(lat, lon, times)[0])
+        _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3,
+                      held_images=max(int(np.sum(el >= min_elevation)) - 1, 0))
         progress = _Progress("timelapse")
         try:
-            frames = run_timelapse(lambda sun: cls(sun=sun, **params), lat, lon, times, out,
+            frames = run_timelapse(lambda sun: _build_model(cls, progress, sun=sun, **params), lat, lon, times, out,
                                    min_elevation_deg=min_elevation, size=size, wavelengths=wavelengths,
                                    projection=projection, progress=progress)
         finally:
@@ -444,7 +736,7 @@ def timelapse_cmd(
 @app.command("polarisation")
 def polarisation_cmd(
     sun_elevation: float = typer.Option(20.0, help="Sun elevation [deg], -90..90."),
-    sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg], 0..360."),
+    sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg], -360..360."),
     method: str = typer.Option("montecarlo", help="montecarlo (multiple scattering, aerosols) or rayleigh_single (analytic)."),
     size: int = typer.Option(48, help="Fisheye size in pixels, 4..1024."),
     samples: int = typer.Option(2000, help="Monte Carlo paths per pixel, 2..10^8."),
@@ -476,21 +768,13 @@ def polarisation_cmd(
         check_number("wavelength", wavelength, 300.0, 1000.0, "nm")
         check_number("turbidity", turbidity, 1.0, 32.0)
         s = Sun(elevation_deg=check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg"),
-                azimuth_deg=check_number("sun_azimuth", sun_azimuth, 0.0, 360.0, "deg"))
-        from skydome.effects.polarisation_maps import plot_polarisation_maps, polarisation_maps, write_map_csv
+                azimuth_deg=_check_azimuth("sun_azimuth", sun_azimuth))
+        from skydome.apps.polarisation import run_polarisation
 
-        kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
-        pmap = polarisation_maps(method, s, size=size, wavelength_nm=wavelength, turbidity=turbidity, **kw)
-        plot_polarisation_maps(pmap, out)
-        if csv is not None:
-            write_map_csv(pmap, csv)
-        sky = pmap.mask & (pmap.dirs[..., 2] > 0)
-        i = np.nanargmax(np.where(sky, pmap.dop, -1.0))
-        typer.echo(f"maximum degree of polarisation {pmap.dop.flat[i]:.3f} at "
-                   f"{np.degrees(np.arccos(np.clip(pmap.dirs.reshape(-1, 3)[i] @ s.direction, -1, 1))):.1f} deg "
-                   f"from the sun; wrote {out}" + (f" and {csv}" if csv else ""))
-    import numpy as np
-
+        dop, angle = run_polarisation(out, s, method=method, csv=csv, size=size, samples=samples, seed=seed,
+                                      wavelength_nm=wavelength, turbidity=turbidity)
+        typer.echo(f"maximum degree of polarisation {dop:.3f} at {angle:.1f} deg from the sun; wrote {out}"
+                   + (f" and {csv}" if csv else ""))
     _run(go)
 
 
@@ -510,15 +794,29 @@ def twilight_cmd(
     Model parameters are given as extra options, e.g. --turbidity 3.
     """
     def go():
-        from skydome.effects.twilight import run_twilight
+        from skydome.apps.twilight import run_twilight
         from skydome.models import get_model_class
 
+        from skydome._io import check_output_folder
+        from skydome._progress import reporting
+        from skydome._validate import check_int
+
+        check_output_folder(out)
         cls = get_model_class(model)
         params = _parse_model_params(cls, ctx.args)
+        cls._validate_params(dict(params))
+        check_int("size", size, 16, 2048)
+        check_int("wavelengths", wavelengths, 3, 401)
+        _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3)
         progress = _Progress("twilight")
         try:
-            res = run_twilight(out, model=model, step_deg=step, size=size, wavelengths=wavelengths,
-                               exposure=exposure, progress=progress, **params)
+            with reporting(progress):
+                res = run_twilight(out, model=model, step_deg=step, size=size, wavelengths=wavelengths,
+                                   exposure=exposure, progress=progress, **params)
+        except ValueError as exc:
+            if "sun elevation" in str(exc) and model in str(exc):
+                raise UserError(f"model = {model!r} does not cover the sun from 0 to -18 deg: {exc}") from None
+            raise
         finally:
             progress.close()
         for d, z, e in zip(res["depression_deg"], res["zenith_luminance"], res["horizontal_illuminance"]):
@@ -533,21 +831,26 @@ def airlight_cmd(
     depth: Optional[str] = typer.Option(None, help="Depth map [m]: .exr (Z, Y or R channel) or .npy; inf = sky."),
     synthetic: bool = typer.Option(False, "--synthetic", help="Use the generated synthetic mountain scene instead of --image/--depth."),
     sun_elevation: float = typer.Option(20.0, help="Sun elevation [deg]."),
-    sun_azimuth: float = typer.Option(120.0, help="Sun azimuth from north towards east [deg]."),
+    sun_azimuth: float = typer.Option(120.0, help="Sun azimuth from north towards east [deg], -360..360."),
     method: str = typer.Option("precomputed", help="precomputed, hillaire2020, preetham1999, hoffman_preetham2002 or dobashi2002."),
     turbidity: float = typer.Option(2.5, help="Turbidity of the air, 2..10 for the Preetham methods, 1..32 otherwise."),
     fov: float = typer.Option(60.0, help="Horizontal field of view of the (pinhole) camera [deg]."),
-    view_azimuth: float = typer.Option(0.0, help="Azimuth the camera looks towards [deg] (horizontal view)."),
+    view_azimuth: float = typer.Option(0.0, help="Azimuth the camera looks towards [deg], -360..360 (horizontal view)."),
     white_balance: str = typer.Option("fixed", help="fixed: true colour relative to a white surface under the unattenuated sun (clear and hazy air on one scale); sun: output in the input's units (white = white card facing the sun)."),
     fill_sky: bool = typer.Option(False, "--fill-sky", help="Replace the sky pixels (depth inf) by the model's sky along their rays (not for dobashi2002)."),
     out: str = typer.Option(..., help="Output .png (sRGB; before/after sheet with --synthetic), .exr or .npy (linear)."),
 ):
     """Aerial perspective / airlight: extinction and in-scattered light over an image with a depth map."""
     def go():
-        from skydome.effects.airlight import airlight_cli
+        from skydome._io import check_output_file
+        from skydome._validate import check_number
+        from skydome.apps.airlight import airlight_cli
         from skydome.sun import Sun
 
-        sun = Sun(elevation_deg=sun_elevation, azimuth_deg=sun_azimuth)
+        check_output_file(out, (".png", ".exr", ".npy"))
+        sun = Sun(elevation_deg=check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg"),
+                  azimuth_deg=_check_azimuth("sun_azimuth", sun_azimuth))
+        _check_azimuth("view_azimuth", view_azimuth)
         airlight_cli(image, depth, out, sun, method=method, turbidity=turbidity, fov_deg=fov,
                      view_azimuth_deg=view_azimuth, synthetic=synthetic, white_balance=white_balance,
                      fill_sky=fill_sky)
@@ -566,55 +869,9 @@ def aureole_cmd(
     """The aureole, Bishop's ring and the blue sun (survey 5.4-5.6): radiance around the sun with
     Lorenz-Mie aerosols, a close-up image and the sun's transmittance at 450 and 650 nm."""
     def go():
-        import os
-        import shutil
-        import tempfile
-        from pathlib import Path
+        from skydome.apps.aureole import run_aureole
 
-        import numpy as np
-
-        from skydome._validate import check_choice, check_int, check_number
-        from skydome.atmosphere import Atmosphere
-        from skydome.effects.aureole import (bishops_ring_atmosphere, plot_radiance_profiles,
-                                             radiance_profile, render_closeup, sun_disc_radiance)
-        from skydome.sun import Sun
-
-        check_choice("aerosol", aerosol, ("earth", "volcanic_ash", "forest_fire_smoke", "bishops_ring"))
-        elev = check_number("sun_elevation", sun_elevation, 1.0, 90.0, "deg")
-        check_number("fov", fov, 2.0, 120.0, "deg")
-        check_int("size", size, 16, 1024)
-        o = Path(out)
-        if not (o.parent if str(o.parent) else Path(".")).is_dir():
-            raise UserError(f"out = {out!r}: folder {str(o.parent)!r} does not exist")
-        sun = Sun(elevation_deg=elev, azimuth_deg=180.0)
-        if aerosol == "earth":
-            atms = [Atmosphere.earth(turbidity=t) for t in (2.0, 4.0, 8.0)]
-            labels = ["turbidity 2", "turbidity 4", "turbidity 8"]
-        elif aerosol == "bishops_ring":
-            atms, labels = [Atmosphere.earth(turbidity=2.0), bishops_ring_atmosphere()], ["clear", "1 um layer"]
-        else:
-            make = getattr(Atmosphere, aerosol)
-            atms, labels = [Atmosphere.earth(turbidity=2.0), make()], ["clear", aerosol.replace("_", " ")]
-        ang = np.concatenate([np.linspace(1.0, 10.0, 19), np.linspace(11.0, 60.0, 25)])
-        wl = np.array([450.0, 550.0, 650.0])
-        prof = radiance_profile(atms, elev, ang, wl)
-        tmp = Path(tempfile.mkdtemp(prefix=".skydome-aureole-", dir=o.parent if str(o.parent) else "."))
-        try:
-            plot_radiance_profiles(ang, [p[:, 1] for p in prof], labels, tmp / "profile.png",
-                                   title=f"radiance at 550 nm against the angle from the sun (sun {elev:g} deg)")
-            render_closeup(atms[-1], sun, fov_deg=fov, size=size).save(tmp / "closeup.png")
-            lines = []
-            for a, lab in zip(atms, labels):
-                t = sun_disc_radiance(a, sun, wl) / sun_disc_radiance(Atmosphere.custom(rayleigh_scattering=0.0), sun, wl)
-                lines.append(f"{lab}: sun transmittance T(450) = {t[0]:.4f}, T(650) = {t[2]:.4f}, "
-                             f"T(450)/T(650) = {t[0] / t[2]:.3f}" + (" (blue sun)" if t[0] > t[2] else ""))
-            (tmp / "sun.txt").write_text("\n".join(lines) + "\n")
-            o.mkdir(exist_ok=True)
-            for f in sorted(tmp.iterdir()):
-                os.replace(f, o / f.name)
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
-        for ln in lines:
+        for ln in run_aureole(out, aerosol=aerosol, sun_elevation_deg=sun_elevation, fov_deg=fov, size=size):
             typer.echo(ln)
         typer.echo(f"wrote {out}/profile.png, closeup.png, sun.txt")
     _run(go)

@@ -47,11 +47,12 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from skydome._validate import as_wavelengths, check_choice, check_int, check_number
+from skydome.camera import Camera
 
 __all__ = ["Camera", "Heightmap", "ScatteringTables", "apply_aerial_perspective",
            "synthetic_mountains", "build_tables", "inscatter_direct", "shadow_volume_top",
@@ -59,73 +60,6 @@ __all__ = ["Camera", "Heightmap", "ScatteringTables", "apply_aerial_perspective"
 
 
 # ---------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Camera:
-    """A pinhole camera in the local East-North-Up frame.
-
-    Parameters
-    ----------
-    fov_deg : float
-        Horizontal field of view [deg], in (0, 170].
-    azimuth_deg, elevation_deg : float
-        View direction (azimuth from north towards east; elevation above the horizon) [deg].
-    altitude_m : float
-        Height of the eye above the ground [m], >= 0.
-    east_m, north_m : float
-        Horizontal position over the heightmap [m].
-    """
-
-    fov_deg: float = 60.0
-    azimuth_deg: float = 0.0
-    elevation_deg: float = 0.0
-    altitude_m: float = 300.0
-    east_m: float = 0.0
-    north_m: float = 0.0
-
-    def __post_init__(self):
-        check_number("fov_deg", self.fov_deg, 0.0, 170.0, "deg", low_open=True)
-        check_number("elevation_deg", self.elevation_deg, -89.0, 89.0, "deg")
-        check_number("azimuth_deg", self.azimuth_deg, -360.0, 720.0, "deg")
-        check_number("altitude_m", self.altitude_m, 0.0, 1e5, "m")
-
-    @classmethod
-    def make(cls, camera: Any) -> "Camera":
-        """A Camera, or (fov_deg, view_direction[, altitude_m]) with view_direction a
-        vector (3,) in ENU."""
-        if isinstance(camera, Camera):
-            return camera
-        if isinstance(camera, (tuple, list)) and len(camera) in (2, 3):
-            from skydome.transport.geometry import angles_from_direction
-
-            d = np.asarray(camera[1], dtype=np.float64)
-            if d.shape != (3,) or not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
-                raise ValueError(f"camera view direction must be a non-zero vector (3,), got {camera[1]!r}")
-            el, az = angles_from_direction(d / np.linalg.norm(d))
-            kw = {} if len(camera) == 2 else {"altitude_m": float(camera[2])}
-            return cls(fov_deg=float(camera[0]), azimuth_deg=float(az), elevation_deg=float(el), **kw)
-        raise TypeError(f"camera must be a Camera or (fov_deg, view_direction), got {type(camera).__name__}")
-
-    def basis(self):
-        """(forward, right, up) unit vectors of the camera in ENU."""
-        from skydome.transport.geometry import direction_from_angles
-
-        f = direction_from_angles(self.elevation_deg, self.azimuth_deg)
-        right = np.array([np.cos(np.radians(self.azimuth_deg)), -np.sin(np.radians(self.azimuth_deg)), 0.0])
-        up = np.cross(right, f)
-        return f, right, up
-
-    def ray_directions(self, width: int, height: int) -> np.ndarray:
-        """Unit ray directions through the pixel centres, shape (height, width, 3); row 0
-        is the top of the image."""
-        f, right, up = self.basis()
-        tx = np.tan(np.radians(self.fov_deg) / 2.0)
-        ty = tx * height / width
-        x = ((np.arange(width) + 0.5) / width * 2.0 - 1.0) * tx
-        y = (1.0 - (np.arange(height) + 0.5) / height * 2.0) * ty
-        d = f + x[None, :, None] * right + y[:, None, None] * up
-        return d / np.linalg.norm(d, axis=-1, keepdims=True)
-
-
 @dataclass(frozen=True, eq=False)
 class Heightmap:
     """Terrain heights on a regular grid: heights_m[j, i] at (x_m[i] east, y_m[j] north)."""

@@ -22,7 +22,7 @@ south), which leaves Q and U unchanged (a rotation by 180 deg). ``test_polarisat
 checks both.
 
 :func:`polarisation_maps` samples a fisheye (north up, east left, looking up),
-:func:`plot_polarisation_maps` draws the degree (perceptual colour map, 0..1) and angle
+:func:`skydome.render.plots.plot_polarisation_maps` draws the degree (perceptual colour map, 0..1) and angle
 (cyclic colour map, with E-vector segments) of polarisation, and :func:`meridian_profile`
 with :func:`find_neutral_points` locate the Arago, Babinet and Brewster neutral points
 along the solar meridian.
@@ -40,8 +40,8 @@ from skydome.effects.polarisation import (angle_of_polarisation, degree_of_polar
                                           rayleigh_single_scattering_stokes)
 
 __all__ = ["METHODS", "DEPOLARISATION_550", "SkyStokes", "polarisation_atmosphere", "sky_stokes",
-           "e_vectors", "PolarisationMap", "polarisation_maps", "plot_polarisation_maps",
-           "MeridianProfile", "meridian_profile", "find_neutral_points", "write_map_csv"]
+           "e_vectors", "PolarisationMap", "polarisation_maps", "MeridianProfile", "meridian_profile",
+           "find_neutral_points"]
 
 METHODS = ("rayleigh_single", "montecarlo")
 
@@ -227,131 +227,6 @@ def _sun_pixel(proj, sun):
     r, c = proj.pixel_from_direction(sun.direction)
     return float(r), float(c)
 
-
-def plot_polarisation_maps(pmap: PolarisationMap, path, title: str | None = None,
-                           segments: int = 16) -> None:
-    """Figure with the degree (viridis, colour bar 0..1) and the angle (cyclic 'twilight',
-    colour bar -90..90 deg) of polarisation of ``pmap``; the degree panel carries E-vector
-    segments on a ``segments`` x ``segments`` grid, of length proportional to the degree.
-    North up, east left; the sun is marked. Written atomically (.png, .pdf or .svg)."""
-    import os
-    import tempfile
-    from pathlib import Path
-
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    from skydome.render.projections import Fisheye
-
-    path = Path(path)
-    n = pmap.mask.shape[0]
-    proj = Fisheye(n)
-    fig, axes = plt.subplots(1, 2, figsize=(10.5, 5.0))
-    ext = (0, n, n, 0)
-    im0 = axes[0].imshow(np.ma.masked_invalid(pmap.dop), cmap="viridis", vmin=0.0, vmax=1.0,
-                         extent=ext, interpolation="nearest")
-    fig.colorbar(im0, ax=axes[0], fraction=0.046, pad=0.04, label="degree of linear polarisation")
-    im1 = axes[1].imshow(np.ma.masked_invalid(pmap.aop), cmap="twilight", vmin=-90.0, vmax=90.0,
-                         extent=ext, interpolation="nearest")
-    fig.colorbar(im1, ax=axes[1], fraction=0.046, pad=0.04,
-                 label="angle of polarisation [deg] from the local vertical")
-    # E-vector segments: sample a coarser grid of directions through the projection
-    k = max(1, n // segments)
-    rows = np.arange(k // 2, n, k)
-    for ax, col_, lw in ((axes[0], "white", 1.0), (axes[1], "black", 0.8)):
-        for r in rows:
-            for c in rows:
-                if not pmap.mask[r, c]:
-                    continue
-                d = pmap.dirs[r, c]
-                e = e_vectors(d, pmap.stokes[r, c])
-                p = float(pmap.dop[r, c])
-                if not np.any(e):
-                    continue
-                eps = 1e-3
-                r1, c1 = proj.pixel_from_direction((d + eps * e) / np.linalg.norm(d + eps * e))
-                r0, c0 = proj.pixel_from_direction((d - eps * e) / np.linalg.norm(d - eps * e))
-                dr, dc = float(r1 - r0), float(c1 - c0)
-                L = np.hypot(dr, dc)
-                if not np.isfinite(L) or L == 0:
-                    continue
-                half = 0.45 * k * (p if ax is axes[0] else 1.0)
-                yc, xc = r + 0.5, c + 0.5
-                ax.plot([xc - half * dc / L, xc + half * dc / L], [yc - half * dr / L, yc + half * dr / L],
-                        color=col_, lw=lw, solid_capstyle="round")
-    sp = _sun_pixel(proj, pmap.sun)
-    for ax in axes:
-        ax.add_patch(plt.Circle((n / 2, n / 2), n / 2, fill=False, color="0.4", lw=0.8))
-        if sp is not None:
-            ax.plot(sp[1], sp[0], marker="o", ms=9, mfc="yellow", mec="black")
-        for lab, (x, y) in {"N": (n / 2, -0.04 * n), "S": (n / 2, 1.04 * n),
-                            "E": (-0.04 * n, n / 2), "W": (1.04 * n, n / 2)}.items():
-            ax.text(x, y, lab, ha="center", va="center", fontsize=10)
-        ax.set_xlim(-0.08 * n, 1.08 * n)
-        ax.set_ylim(1.08 * n, -0.08 * n)
-        ax.set_aspect("equal")
-        ax.axis("off")
-    axes[0].set_title("degree of polarisation (E-vectors)")
-    axes[1].set_title("angle of polarisation")
-    if title is None:
-        title = (f"{pmap.method}: sun elevation {pmap.sun.elevation_deg:g} deg, azimuth "
-                 f"{pmap.sun.azimuth_deg:g} deg, {pmap.wavelength_nm:g} nm (north up, east left)")
-    fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix,
-                               dir=str(path.parent) if str(path.parent) else ".")
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    finally:
-        plt.close(fig)
-
-
-def write_map_csv(pmap: PolarisationMap, path) -> None:
-    """Write the sky-disc pixels of ``pmap`` as CSV (atomically): row, col, elevation and
-    azimuth [deg], I, Q, U, V, their standard errors, degree and angle [deg] of
-    polarisation."""
-    import os
-    import tempfile
-    from pathlib import Path
-
-    from skydome.transport.geometry import angles_from_direction
-
-    path = Path(path)
-    rr, cc = np.nonzero(pmap.mask)
-    el, az = angles_from_direction(pmap.dirs[rr, cc])
-    s, e = pmap.stokes[rr, cc], pmap.stderr[rr, cc]
-    cols = [rr, cc, el, az] + [s[:, i] for i in range(4)] + [e[:, i] for i in range(4)] + \
-        [pmap.dop[rr, cc], pmap.aop[rr, cc]]
-    header = (f"# skydome polarisation map: method {pmap.method}, sun elevation "
-              f"{pmap.sun.elevation_deg:g} deg azimuth {pmap.sun.azimuth_deg:g} deg, "
-              f"{pmap.wavelength_nm:g} nm; Stokes in W m^-2 sr^-1 nm^-1, frame: reference axis "
-              "towards increasing elevation, angle counter-clockwise seen facing the sky\n"
-              "row,col,elevation_deg,azimuth_deg,I,Q,U,V,I_err,Q_err,U_err,V_err,dop,aop_deg\n")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
-                               dir=str(path.parent) if str(path.parent) else ".")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(header)
-            np.savetxt(f, np.column_stack(cols), delimiter=",",
-                       fmt=["%d", "%d"] + ["%.4f"] * 2 + ["%.6e"] * 8 + ["%.5f", "%.3f"])
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-# ---------------------------------------------------------------------------------------
-# Solar meridian and neutral points
-# ---------------------------------------------------------------------------------------
 
 class MeridianProfile(NamedTuple):
     """Polarisation along the solar meridian.

@@ -70,6 +70,11 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     """
     from skydome._validate import as_wavelengths, check_int
 
+    if isinstance(sky, str):
+        raise TypeError(f"sky must be a sky model, got the string {sky!r}: build the model first, "
+                        f"e.g. skydome.model({sky!r}, sun=skydome.Sun(elevation_deg=30, azimuth_deg=180))")
+    if not (callable(getattr(sky, "radiance", None)) or callable(getattr(sky, "xyz", None))):
+        raise TypeError(f"sky must be a sky model (with radiance() or xyz()), got {type(sky).__name__}")
     if not isinstance(projection, Projection):
         raise TypeError(f"projection must be a skydome Projection, got {type(projection).__name__}")
     chunk = check_int("chunk", chunk, 1, None)

@@ -41,13 +41,13 @@ from __future__ import annotations
 import json
 import os
 import struct
-import tempfile
 import zlib
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
+from skydome._io import atomic_write as _atomic_write
 from skydome._validate import check_choice
 
 __all__ = ["SkyImage", "check_output_path", "read_hdr", "read_exr", "read_png16",
@@ -89,21 +89,6 @@ def check_output_path(path) -> Path:
     if p.is_dir():
         raise ValueError(f"output file {str(p)!r} is an existing folder")
     return p
-
-
-def _atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it to ``path``;
-    the temporary file is removed on any failure."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix,
-                               dir=path.parent if str(path.parent) else ".")
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 # --------------------------------------------------------------------------------------

@@ -6,13 +6,10 @@ importing this module is cheap. Figures are written atomically.
 
 from __future__ import annotations
 
-import os
-import tempfile
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["plot_luminance_map", "plot_compare", "meridian_profiles"]
+__all__ = ["plot_luminance_map", "plot_compare", "meridian_profiles", "plot_radiance_profiles",
+           "plot_error_maps", "plot_day_colours", "plot_twilight", "plot_polarisation_maps"]
 
 
 def _pyplot():
@@ -24,17 +21,16 @@ def _pyplot():
     return plt
 
 
-def _save(fig, path) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
+def _save(fig, path, dpi: int = 110) -> None:
+    """Write ``fig`` to ``path`` atomically (format from the suffix) and close it."""
+    from skydome._io import atomic_file
+
+    plt = _pyplot()
     try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        with atomic_file(path) as tmp:
+            fig.savefig(tmp, dpi=dpi)
+    finally:
+        plt.close(fig)
 
 
 def _polar_grid(n_zenith: int = 90, n_azimuth: int = 360):
@@ -84,7 +80,6 @@ def plot_luminance_map(sky, path, *, title: str | None = None, log: bool = True)
     ax.set_title(title or f"{sky.name}: luminance", pad=14)
     fig.tight_layout()
     _save(fig, path)
-    plt.close(fig)
 
 
 def meridian_profiles(sky, n: int = 181):
@@ -135,4 +130,188 @@ def plot_compare(skies, labels, path, *, title: str | None = None, relative: boo
         fig.suptitle(title or f"sun elevation {s.elevation_deg:.1f} deg, azimuth {s.azimuth_deg:.1f} deg")
     fig.tight_layout()
     _save(fig, path)
-    plt.close(fig)
+
+
+def plot_radiance_profiles(angles_deg, profiles, labels, path, *, title: str | None = None,
+                           ylabel: str = "radiance [W m$^{-2}$ sr$^{-1}$ nm$^{-1}$]",
+                           log: bool = True) -> None:
+    """Plot radiance (or any quantity) against the angle from the sun: ``profiles`` is a
+    sequence of (na,) arrays, one per label; written to ``path`` (PNG/PDF/SVG)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for prof, lab in zip(profiles, labels):
+        ax.plot(angles_deg, prof, label=lab)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel("angle from the sun [deg]")
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
+
+
+def plot_error_maps(path, spec, elevs, xyzs, ref_spec, weights) -> None:
+    """log2(L / L_ref) fisheye maps of model ``spec`` against ``ref_spec``, one per sun
+    elevation (``xyzs[(spec, elevation)]`` XYZ images, ``weights`` > 0 on the sky disc)."""
+    plt = _pyplot()
+
+    fig, axes = plt.subplots(1, len(elevs), figsize=(3.2 * len(elevs) + 1.0, 3.4), squeeze=False)
+    im = None
+    for j, e in enumerate(elevs):
+        ax = axes[0, j]
+        ax.set_axis_off()
+        got, ref = xyzs.get((spec, e)), xyzs.get((ref_spec, e))
+        if got is None or ref is None:
+            ax.set_title(f"sun {e:g} deg: n/a", fontsize=9)
+            continue
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(weights > 0, np.log2(got[..., 1] / ref[..., 1]), np.nan)
+        im = ax.imshow(ratio, cmap="RdBu_r", vmin=-2, vmax=2)
+        ax.set_title(f"sun {e:g} deg", fontsize=9)
+    if im is not None:
+        fig.colorbar(im, ax=axes.ravel().tolist(), label="log2(L / L_ref)", shrink=0.85)
+    fig.suptitle(f"{spec} against {ref_spec} (fisheye, north up, east left)", fontsize=10)
+    _save(fig, path, dpi=90)
+
+
+def plot_day_colours(frames, path, display_colour) -> None:
+    """The timelapse figure: colour strips (``display_colour(xyz)`` of the zenith, the horizon
+    under the sun and the sun disc), their luminance, and the sun's elevation against time."""
+    plt = _pyplot()
+
+    ok = [f for f in frames if f.zenith_xyz is not None]
+    hours = np.array([f.time.hour + f.time.minute / 60 + f.time.second / 3600 for f in ok])
+    fig, axes = plt.subplots(3, 1, figsize=(9, 6.5), sharex=True,
+                             gridspec_kw={"height_ratios": [1.2, 2, 1.2]})
+    strip = axes[0]
+    labels = [("zenith", "zenith_xyz"), ("horizon under the sun", "horizon_xyz"), ("sun disc", "sun_xyz")]
+    dt = np.median(np.diff(hours)) if hours.size > 1 else 0.25
+    for row, (label, attr) in enumerate(labels):
+        for h, f in zip(hours, ok):
+            strip.add_patch(plt.Rectangle((h - dt / 2, row), dt, 0.9, color=display_colour(getattr(f, attr))))
+    strip.set_ylim(0, 3)
+    strip.set_yticks([0.45, 1.45, 2.45], [lab for lab, _ in labels])
+    strip.set_title("colour (chromaticity at constant brightness)")
+    lum = axes[1]
+    for label, attr in labels:
+        y = [getattr(f, attr)[1] if getattr(f, attr) is not None else np.nan for f in ok]
+        lum.semilogy(hours, y, label=label)
+    lum.set_ylabel("luminance [cd/m$^2$]")
+    lum.legend(fontsize=8)
+    lum.grid(alpha=0.3, which="both")
+    axes[2].plot(hours, [f.elevation_deg for f in ok], color="k")
+    axes[2].axhline(0, color="0.6", lw=0.8)
+    axes[2].set_ylabel("sun elevation [deg]")
+    axes[2].set_xlabel(f"local time [h] (UTC{ok[0].time.strftime('%z')})" if ok else "local time [h]")
+    axes[2].grid(alpha=0.3)
+    fig.tight_layout()
+    _save(fig, path, dpi=90)
+
+
+def plot_twilight(rows, prof_el, path) -> None:
+    """The twilight figure: zenith luminance and horizontal illuminance against the sun's
+    elevation with published values, and the anti-solar R/B and luminance profiles
+    (``rows``: (depression, zenith luminance, illuminance, luminance profile, R/B profile, _))."""
+    plt = _pyplot()
+
+    deps = np.array([r[0] for r in rows])
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    ax[0].semilogy(-deps, [max(r[1], 1e-12) for r in rows], "o-", label="zenith luminance [cd/m$^2$]")
+    ax[0].semilogy(-deps, [max(r[2], 1e-12) for r in rows], "s-", label="horizontal illuminance [lx]")
+    # published clear-sky horizontal illuminance (AMS Glossary of Meteorology, "civil
+    # twilight", "astronomical twilight") and the natural night sky's zenith luminance
+    # (V = 21.6 mag/arcsec^2, Patat 2003, A&A 400, 1183: 10.8e4 * 10^(-0.4 V) = 2.5e-4 cd/m^2)
+    for x, lo, hi in ((0.0, 410.0, 585.0), (-6.0, 2.0, 3.5)):
+        ax[0].plot([x, x], [lo, hi], "k-", lw=3)
+    ax[0].plot([-12.0, -18.0], [8e-3, 6e-4], "kx", ms=8, label="AMS glossary illuminance [lx]")
+    ax[0].axhline(2.5e-4, color="k", ls=":", lw=1, label="night sky zenith (not modelled)")
+    for x, name in ((-6, "civil"), (-12, "nautical"), (-18, "astronomical")):
+        ax[0].axvline(x, color="0.7", lw=0.8)
+        ax[0].text(x + 0.2, 1e2, name, rotation=90, fontsize=8, color="0.4")
+    ax[0].set_xlabel("sun elevation [deg]")
+    ax[0].legend(fontsize=8)
+    ax[0].grid(alpha=0.3, which="both")
+    for dep, _, _, lum, rb, _ in rows:
+        if dep <= 6:
+            ax[1].plot(prof_el, rb, label=f"sun {-dep + 0.0:g}")
+            ax[2].semilogy(prof_el, np.maximum(lum, 1e-12), label=f"sun {-dep + 0.0:g}")
+    ax[1].set_xlabel("elevation opposite the sun [deg]")
+    ax[1].set_ylabel("R/B (linear sRGB)")
+    ax[1].set_title("Belt of Venus (R/B peak) over the earth's shadow")
+    ax[1].legend(fontsize=7)
+    ax[1].grid(alpha=0.3)
+    ax[2].set_xlabel("elevation opposite the sun [deg]")
+    ax[2].set_ylabel("luminance [cd/m$^2$]")
+    ax[2].grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    _save(fig, path, dpi=90)
+
+
+def plot_polarisation_maps(pmap, path, title: str | None = None,
+                           segments: int = 16) -> None:
+    """Figure with the degree (viridis, colour bar 0..1) and the angle (cyclic 'twilight',
+    colour bar -90..90 deg) of polarisation of ``pmap``; the degree panel carries E-vector
+    segments on a ``segments`` x ``segments`` grid, of length proportional to the degree.
+    North up, east left; the sun is marked. Written atomically (.png, .pdf or .svg)."""
+    from skydome.effects.polarisation_maps import _sun_pixel, e_vectors
+    from skydome.render.projections import Fisheye
+
+    plt = _pyplot()
+
+    n = pmap.mask.shape[0]
+    proj = Fisheye(n)
+    fig, axes = plt.subplots(1, 2, figsize=(10.5, 5.0))
+    ext = (0, n, n, 0)
+    im0 = axes[0].imshow(np.ma.masked_invalid(pmap.dop), cmap="viridis", vmin=0.0, vmax=1.0,
+                         extent=ext, interpolation="nearest")
+    fig.colorbar(im0, ax=axes[0], fraction=0.046, pad=0.04, label="degree of linear polarisation")
+    im1 = axes[1].imshow(np.ma.masked_invalid(pmap.aop), cmap="twilight", vmin=-90.0, vmax=90.0,
+                         extent=ext, interpolation="nearest")
+    fig.colorbar(im1, ax=axes[1], fraction=0.046, pad=0.04,
+                 label="angle of polarisation [deg] from the local vertical")
+    # E-vector segments: sample a coarser grid of directions through the projection
+    k = max(1, n // segments)
+    rows = np.arange(k // 2, n, k)
+    for ax, col_, lw in ((axes[0], "white", 1.0), (axes[1], "black", 0.8)):
+        for r in rows:
+            for c in rows:
+                if not pmap.mask[r, c]:
+                    continue
+                d = pmap.dirs[r, c]
+                e = e_vectors(d, pmap.stokes[r, c])
+                p = float(pmap.dop[r, c])
+                if not np.any(e):
+                    continue
+                eps = 1e-3
+                r1, c1 = proj.pixel_from_direction((d + eps * e) / np.linalg.norm(d + eps * e))
+                r0, c0 = proj.pixel_from_direction((d - eps * e) / np.linalg.norm(d - eps * e))
+                dr, dc = float(r1 - r0), float(c1 - c0)
+                L = np.hypot(dr, dc)
+                if not np.isfinite(L) or L == 0:
+                    continue
+                half = 0.45 * k * (p if ax is axes[0] else 1.0)
+                yc, xc = r + 0.5, c + 0.5
+                ax.plot([xc - half * dc / L, xc + half * dc / L], [yc - half * dr / L, yc + half * dr / L],
+                        color=col_, lw=lw, solid_capstyle="round")
+    sp = _sun_pixel(proj, pmap.sun)
+    for ax in axes:
+        ax.add_patch(plt.Circle((n / 2, n / 2), n / 2, fill=False, color="0.4", lw=0.8))
+        if sp is not None:
+            ax.plot(sp[1], sp[0], marker="o", ms=9, mfc="yellow", mec="black")
+        for lab, (x, y) in {"N": (n / 2, -0.04 * n), "S": (n / 2, 1.04 * n),
+                            "E": (-0.04 * n, n / 2), "W": (1.04 * n, n / 2)}.items():
+            ax.text(x, y, lab, ha="center", va="center", fontsize=10)
+        ax.set_xlim(-0.08 * n, 1.08 * n)
+        ax.set_ylim(1.08 * n, -0.08 * n)
+        ax.set_aspect("equal")
+        ax.axis("off")
+    axes[0].set_title("degree of polarisation (E-vectors)")
+    axes[1].set_title("angle of polarisation")
+    if title is None:
+        title = (f"{pmap.method}: sun elevation {pmap.sun.elevation_deg:g} deg, azimuth "
+                 f"{pmap.sun.azimuth_deg:g} deg, {pmap.wavelength_nm:g} nm (north up, east left)")
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    _save(fig, path, dpi=110)

@@ -40,129 +40,16 @@ References
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 import numpy as np
 
 from skydome._validate import check_choice
+from skydome.camera import _MIN_SIZE, Projection, _as_dirs, _check_size, _parse_size  # noqa: F401 (re-exported)
 
 __all__ = ["Projection", "Equirect", "Fisheye", "AngularMap", "make_projection", "PROJECTION_NAMES"]
 
 PROJECTION_NAMES = ("fisheye", "equirect", "equirect-hemisphere", "angular")
-_MAX_SIZE = 32768
-_MIN_SIZE = 2
-
-
-def _check_size(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer number of pixels, got {value!r}")
-    v = int(value)
-    if not _MIN_SIZE <= v <= _MAX_SIZE:
-        raise ValueError(f"{name} = {v} is out of range [{_MIN_SIZE}, {_MAX_SIZE}] pixels")
-    return v
-
-
-class Projection:
-    """Base class: a mapping between pixels of an (H, W) image and sky directions.
-
-    Subclasses implement :meth:`direction_from_pixel`, :meth:`pixel_from_direction` and
-    :meth:`_jacobian` (solid angle per unit pixel area [sr/pixel^2] at a pixel position)
-    and set ``name``, ``width`` and ``height``.
-    """
-
-    name: str = ""
-    width: int = 0
-    height: int = 0
-    #: Radiance view options giving the same pixel -> direction mapping (None: none does)
-    radiance_view: str | None = None
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """(H, W): image height and width [pixels]."""
-        return (self.height, self.width)
-
-    def _centres(self) -> tuple[np.ndarray, np.ndarray]:
-        rows = np.arange(self.height, dtype=np.float64) + 0.5
-        cols = np.arange(self.width, dtype=np.float64) + 0.5
-        return np.meshgrid(rows, cols, indexing="ij")
-
-    def directions(self) -> tuple[np.ndarray, np.ndarray]:
-        """Directions of the pixel centres.
-
-        Returns
-        -------
-        dirs : numpy.ndarray
-            Shape (H, W, 3), float64 unit vectors (East-North-Up) of the pixel centres.
-            Masked pixels hold the placeholder (0, 0, -1) (nadir); they are never sampled.
-        mask : numpy.ndarray
-            Shape (H, W), bool: True where the pixel centre maps to a direction.
-        """
-        r, c = self._centres()
-        d = self.direction_from_pixel(r, c)
-        mask = np.all(np.isfinite(d), axis=-1)
-        d[~mask] = (0.0, 0.0, -1.0)
-        return d, mask
-
-    def solid_angles(self) -> np.ndarray:
-        """Solid angle of every pixel [sr], shape (H, W); 0 where masked.
-
-        Each unmasked pixel's solid angle is the projection's Jacobian (solid angle per
-        unit pixel area) integrated over the whole pixel with a 4 x 4 midpoint rule
-        (exactly, for ``Equirect``); pixels on the edge of a disc count whole when their
-        centre is inside and not at all otherwise. Their sum approximates 4 pi (full
-        sphere) or 2 pi (hemisphere).
-        """
-        _, mask = self.directions()
-        n = 4
-        offs = (np.arange(n) + 0.5) / n
-        r0, c0 = np.meshgrid(np.arange(self.height, dtype=np.float64),
-                             np.arange(self.width, dtype=np.float64), indexing="ij")
-        acc = np.zeros(self.shape)
-        for dr in offs:
-            for dc in offs:
-                acc += self._jacobian(r0 + dr, c0 + dc)
-        return np.where(mask, acc / (n * n), 0.0)
-
-    def direction_from_pixel(self, row, col) -> np.ndarray:
-        """Unit direction(s) (..., 3) at continuous pixel coordinates; NaN where the
-        position maps to no direction (outside the image or the projection's disc)."""
-        raise NotImplementedError
-
-    def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
-        """Continuous pixel coordinates (row, col) of unit direction(s) (..., 3); pixel
-        centres lie at i + 0.5. NaN where the direction is not in the image."""
-        raise NotImplementedError
-
-    def _jacobian(self, row, col) -> np.ndarray:
-        raise NotImplementedError
-
-    def describe(self) -> dict[str, Any]:
-        """Name, size and orientation convention of the projection."""
-        return {"projection": self.name, "width": self.width, "height": self.height,
-                "convention": self._convention}
-
-    _convention = ""
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}(width={self.width}, height={self.height})"
-
-    def __eq__(self, other) -> bool:
-        return type(self) is type(other) and self.describe() == other.describe()
-
-    def __hash__(self) -> int:
-        return hash((type(self).__name__, self.width, self.height))
-
-
-def _as_dirs(directions) -> np.ndarray:
-    d = np.asarray(directions, dtype=np.float64)
-    if d.ndim == 0 or d.shape[-1] != 3:
-        raise ValueError(f"directions must have shape (..., 3), got {d.shape}")
-    n = np.linalg.norm(d, axis=-1, keepdims=True)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return d / n
-
-
 class Equirect(Projection):
     """Equirectangular (latitude-longitude) map of the full sphere or the upper hemisphere.
 
@@ -333,26 +220,6 @@ class AngularMap(_Polar):
     _convention = ("Debevec angular map looking up: zenith at the centre, radius "
                    "proportional to angle from the zenith, horizon at half radius, nadir on "
                    "the edge circle, north up, east left")
-
-
-_SIZE_RE = re.compile(r"^\s*(\d+)\s*(?:[xX]\s*(\d+)\s*)?$")
-
-
-def _parse_size(size: Any) -> tuple[int, int | None]:
-    if isinstance(size, (int, np.integer)) and not isinstance(size, bool):
-        w, h = int(size), None
-    elif isinstance(size, str) and _SIZE_RE.match(size):
-        m = _SIZE_RE.match(size)
-        w = int(m.group(1))
-        h = None if m.group(2) is None else int(m.group(2))
-    else:
-        raise ValueError(f"size = {size!r} is not an image size: give N or WxH "
-                         f"with whole numbers in [{_MIN_SIZE}, {_MAX_SIZE}] pixels")
-    for v in (w, h):
-        if v is not None and not _MIN_SIZE <= v <= _MAX_SIZE:
-            raise ValueError(f"size = {str(size)!r} is out of range: every side must be in "
-                             f"[{_MIN_SIZE}, {_MAX_SIZE}] pixels")
-    return w, h
 
 
 def make_projection(name: str, size: Any) -> Projection:

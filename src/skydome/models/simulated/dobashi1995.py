@@ -178,6 +178,7 @@ class Dobashi1995(SkyModel):
         return self._tables[key]
 
     def _precompute(self, wl):
+        from skydome._progress import report
         from skydome.sun import Sun
         from skydome.transport.geometry import direction_from_angles
 
@@ -191,10 +192,12 @@ class Dobashi1995(SkyModel):
         basis = np.cos(np.outer(n_all, phi))        # (n, m)
         cls = get_model_class(self.base)
         samples = []
-        for alt in self.sun_grid_deg():
+        grid = self.sun_grid_deg()
+        for k, alt in enumerate(grid):
             sky = cls(sun=Sun(elevation_deg=float(alt), azimuth_deg=0.0), **self.base_params)
             L = np.asarray(sky.radiance(dirs, wl), dtype=np.float64)
             samples.append(np.maximum(np.nan_to_num(L, nan=0.0, posinf=0.0), 0.0))
+            report("dobashi1995: sky table", k + 1, len(grid))
         S = np.stack(samples)                        # (ns, nr, m, nl)
         # cosine-series coefficients by the discrete cosine transform on the cell centres
         coef_full = np.einsum("nm,srml->srnl", basis, S) * (2.0 / m)

@@ -391,7 +391,7 @@ class Nishita1993(SkyModel):
         return out
 
     def default_projection(self, size):
-        """A :class:`skydome.render.camera.Camera` at the model's camera looking at the
+        """A :class:`skydome.camera.Camera` at the model's camera looking at the
         planet's centre with north up, its field of view framing the whole disc with the
         atmosphere (at most 160 deg).
 
@@ -400,8 +400,8 @@ class Nishita1993(SkyModel):
         size : int or str
             ``N`` or ``"WxH"`` [pixels].
         """
-        from skydome.render.camera import Camera
-        from skydome.render.projections import _parse_size
+        from skydome.camera import Camera
+        from skydome.camera import _parse_size
 
         w, h = _parse_size(size)
         h = w if h is None else h

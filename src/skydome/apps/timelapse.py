@@ -20,14 +20,15 @@ from __future__ import annotations
 
 import csv
 import datetime as _dt
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from skydome._io import atomic_folder, check_output_folder
+from skydome.render.plots import plot_day_colours
+from skydome.render.sheets import contact_sheet
 
 __all__ = ["TimelapseFrame", "day_times", "run_timelapse"]
 
@@ -99,10 +100,7 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     check_int("size", size, 16, 4096)
     wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
     proj = make_projection(projection, str(size))
-    out_dir = Path(out_dir)
-    parent = out_dir.parent if str(out_dir.parent) else Path(".")
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist or is not writable")
+    out_dir = check_output_folder(out_dir)
     times = list(times)
     el, az = solar_position(lat_deg, lon_deg, times)
     el, az = np.atleast_1d(el), np.atleast_1d(az)
@@ -110,10 +108,9 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     if not todo:
         raise ValueError(f"the sun never rises above min_elevation_deg = {min_el:g} deg on that day")
 
-    tmp = Path(tempfile.mkdtemp(prefix=".skydome-timelapse-", dir=parent))
     frames: list[TimelapseFrame] = []
     images = []
-    try:
+    with atomic_folder(out_dir) as tmp:
         for n, i in enumerate(todo):
             t = times[i]
             sun = Sun(elevation_deg=float(el[i]), azimuth_deg=float(az[i]))
@@ -139,33 +136,11 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
         k = min(img.auto_exposure() for _, img, _ in images)
         for _, img, name in images:
             img.save(tmp / name, exposure=k)
-        _contact_sheet(images, tmp / "contact_sheet.png", k)
+        contact_sheet([(img.to_srgb(exposure=k), t.strftime("%H:%M")) for t, img, _ in images],
+                      tmp / "contact_sheet.png", cols=8, tile=128)
         _write_csv(frames, tmp / "colours.csv")
-        _colour_plot(frames, tmp / "colours.png")
-        out_dir.mkdir(exist_ok=True)
-        for f in sorted(tmp.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        plot_day_colours(frames, tmp / "colours.png", _display_colour)
     return frames
-
-
-def _contact_sheet(images, path: Path, k: float, tile: int = 128) -> None:
-    from PIL import Image, ImageDraw
-
-    cols = min(8, len(images))
-    rows = (len(images) + cols - 1) // cols
-    label_h = 14
-    sheet = Image.new("RGB", (cols * tile, rows * (tile + label_h)), (16, 16, 16))
-    draw = ImageDraw.Draw(sheet)
-    for n, (t, img, _) in enumerate(images):
-        rgb = (np.clip(img.to_srgb(exposure=k), 0, 1) * 255 + 0.5).astype(np.uint8)
-        im = Image.fromarray(rgb)
-        im.thumbnail((tile, tile))
-        x, y = (n % cols) * tile, (n // cols) * (tile + label_h)
-        sheet.paste(im, (x + (tile - im.width) // 2, y + (tile - im.height) // 2))
-        draw.text((x + 3, y + tile + 1), t.strftime("%H:%M"), fill=(220, 220, 220))
-    sheet.save(path)
 
 
 def _write_csv(frames, path: Path) -> None:
@@ -188,39 +163,3 @@ def _display_colour(xyz) -> np.ndarray:
         return np.array([0.1, 0.1, 0.1])
     rgb = np.maximum(xyz_to_linear_srgb(np.asarray(xyz, dtype=float)), 0.0)
     return np.clip(srgb_encode(rgb / max(rgb.max(), 1e-30)), 0, 1)
-
-
-def _colour_plot(frames, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ok = [f for f in frames if f.zenith_xyz is not None]
-    hours = np.array([f.time.hour + f.time.minute / 60 + f.time.second / 3600 for f in ok])
-    fig, axes = plt.subplots(3, 1, figsize=(9, 6.5), sharex=True,
-                             gridspec_kw={"height_ratios": [1.2, 2, 1.2]})
-    strip = axes[0]
-    labels = [("zenith", "zenith_xyz"), ("horizon under the sun", "horizon_xyz"), ("sun disc", "sun_xyz")]
-    dt = np.median(np.diff(hours)) if hours.size > 1 else 0.25
-    for row, (label, attr) in enumerate(labels):
-        for h, f in zip(hours, ok):
-            strip.add_patch(plt.Rectangle((h - dt / 2, row), dt, 0.9, color=_display_colour(getattr(f, attr))))
-    strip.set_ylim(0, 3)
-    strip.set_yticks([0.45, 1.45, 2.45], [lab for lab, _ in labels])
-    strip.set_title("colour (chromaticity at constant brightness)")
-    lum = axes[1]
-    for label, attr in labels:
-        y = [getattr(f, attr)[1] if getattr(f, attr) is not None else np.nan for f in ok]
-        lum.semilogy(hours, y, label=label)
-    lum.set_ylabel("luminance [cd/m$^2$]")
-    lum.legend(fontsize=8)
-    lum.grid(alpha=0.3, which="both")
-    axes[2].plot(hours, [f.elevation_deg for f in ok], color="k")
-    axes[2].axhline(0, color="0.6", lw=0.8)
-    axes[2].set_ylabel("sun elevation [deg]")
-    axes[2].set_xlabel(f"local time [h] (UTC{ok[0].time.strftime('%z')})" if ok else "local time [h]")
-    axes[2].grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)

@@ -19,15 +19,16 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import shutil
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+
+from skydome._io import atomic_folder, check_output_folder
+from skydome.render.plots import plot_error_maps
+from skydome.render.sheets import contact_sheet
 
 __all__ = ["ComparisonRow", "run_comparison", "sky_errors"]
 
@@ -101,12 +102,7 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
     if reference not in [s.partition(":")[0] for s in specs]:
         specs.insert(0, reference)
     ref_spec = next(s for s in specs if s.partition(":")[0] == reference)
-    out_dir = Path(out_dir)
-    parent = out_dir.parent if out_dir.parent != Path("") else Path(".")
-    if not parent.is_dir():
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' is not writable")
+    out_dir = check_output_folder(out_dir)
     # build every model once up front so that bad specs fail before any work
     for spec in specs:
         try:
@@ -154,19 +150,13 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
         for k, v in err.items():
             setattr(row, k, v)
 
-    tmp = Path(tempfile.mkdtemp(prefix=".skydome-compare-", dir=parent))
-    try:
+    with atomic_folder(out_dir) as tmp:
         _write_grid(tmp / "grid.png", specs, elevs, images, ref_spec)
         for spec in specs:
             if spec != ref_spec:
-                _write_error_image(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
+                plot_error_maps(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
         (tmp / "table.md").write_text(table_markdown(rows, ref_spec))
         (tmp / "table.csv").write_text(table_csv(rows))
-        out_dir.mkdir(exist_ok=True)
-        for f in sorted(tmp.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return rows
 
 
@@ -206,51 +196,16 @@ def table_csv(rows: list[ComparisonRow]) -> str:
 
 def _write_grid(path: Path, specs, elevs, images, ref_spec, tile: int = 192) -> None:
     """Models x elevations, one exposure per column (the reference's automatic one)."""
-    from PIL import Image, ImageDraw
-
-    label_w, label_h = 150, 18
-    sheet = Image.new("RGB", (label_w + tile * len(elevs), label_h + tile * len(specs)), (24, 24, 24))
-    draw = ImageDraw.Draw(sheet)
-    for j, e in enumerate(elevs):
+    ks = {}
+    for e in elevs:
         ref = images.get((ref_spec, e))
-        k = ref.auto_exposure() if ref is not None else None
-        draw.text((label_w + j * tile + 4, 3), f"sun {e:g} deg", fill=(230, 230, 230))
-        for i, spec in enumerate(specs):
-            if j == 0:
-                draw.text((4, label_h + i * tile + tile // 2), spec[:24], fill=(230, 230, 230))
+        ks[e] = ref.auto_exposure() if ref is not None else None
+    tiles = []
+    for spec in specs:
+        for e in elevs:
             img = images.get((spec, e))
-            if img is None:
-                draw.text((label_w + j * tile + 10, label_h + i * tile + tile // 2), "n/a",
-                          fill=(200, 120, 120))
-                continue
-            rgb = img.to_srgb(exposure=k if k is not None else img.auto_exposure())
-            im = Image.fromarray((np.clip(rgb, 0, 1) * 255 + 0.5).astype(np.uint8))
-            im = im.resize((tile, tile), Image.LANCZOS)
-            sheet.paste(im, (label_w + j * tile, label_h + i * tile))
-    sheet.save(path)
-
-
-def _write_error_image(path: Path, spec, elevs, xyzs, ref_spec, weights) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(elevs), figsize=(3.2 * len(elevs) + 1.0, 3.4), squeeze=False)
-    im = None
-    for j, e in enumerate(elevs):
-        ax = axes[0, j]
-        ax.set_axis_off()
-        got, ref = xyzs.get((spec, e)), xyzs.get((ref_spec, e))
-        if got is None or ref is None:
-            ax.set_title(f"sun {e:g} deg: n/a", fontsize=9)
-            continue
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(weights > 0, np.log2(got[..., 1] / ref[..., 1]), np.nan)
-        im = ax.imshow(ratio, cmap="RdBu_r", vmin=-2, vmax=2)
-        ax.set_title(f"sun {e:g} deg", fontsize=9)
-    if im is not None:
-        fig.colorbar(im, ax=axes.ravel().tolist(), label="log2(L / L_ref)", shrink=0.85)
-    fig.suptitle(f"{spec} against {ref_spec} (fisheye, north up, east left)", fontsize=10)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+            rgb = None if img is None else img.to_srgb(exposure=ks[e] if ks[e] is not None else img.auto_exposure())
+            tiles.append((rgb, ()))
+    contact_sheet(tiles, path, cols=len(elevs), tile=tile, upscale=True, background=(24, 24, 24),
+                  column_labels=[f"sun {e:g} deg" for e in elevs], row_labels=list(specs),
+                  text_colours=((230, 230, 230),))

@@ -22,13 +22,14 @@ is not modelled: below -18 deg ``precomputed`` returns 0.
 from __future__ import annotations
 
 import csv
-import os
-import shutil
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from skydome._io import atomic_folder, check_output_folder
+from skydome.render.plots import plot_twilight
+from skydome.render.sheets import contact_sheet, to_uint8
 
 __all__ = ["twilight_models", "zenith_luminance_curve", "horizontal_illuminance",
            "anti_solar_profile", "belt_of_venus", "horizon_views", "run_twilight", "demo_effects"]
@@ -154,12 +155,12 @@ def belt_of_venus(elevations_deg, red_blue, luminance=None) -> dict:
 
 def horizon_views(size: int, sun_azimuth_deg: float = SUN_AZIMUTH_DEG, fov_deg: float = 100.0,
                   centre_elevation_deg: float = 25.0):
-    """Two pinhole cameras (:class:`skydome.render.camera.Camera`) looking at the horizon:
+    """Two pinhole cameras (:class:`skydome.camera.Camera`) looking at the horizon:
     towards the sun (the twilight arch) and away from it (the earth's shadow under the Belt
     of Venus). Each is ``size`` x ``size // 2`` pixels with a horizontal field ``fov_deg``,
     its centre ``centre_elevation_deg`` above the horizon (so the horizon lies near the
     bottom edge), image top towards the zenith."""
-    from skydome.render.camera import Camera
+    from skydome.camera import Camera
     from skydome.transport.geometry import direction_from_angles
 
     cams = []
@@ -201,18 +202,14 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
     check_choice("exposure", exposure, EXPOSURES)
     size = check_int("size", size, 16, 2048)
     wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
-    out_dir = Path(out_dir)
-    parent = out_dir.parent if str(out_dir.parent) else Path(".")
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
-        raise ValueError(f"out = '{out_dir}': folder '{parent}' does not exist or is not writable")
+    out_dir = check_output_folder(out_dir)
     deps = np.arange(0.0, 18.0 + 1e-9, step)
     skies = twilight_models(model, list(deps), **params)
     prof_el = np.arange(0.5, 40.0, 0.5)
     rows, frames, horizons = [], [], []
     cams = horizon_views(max(16, size), skies[0].sun.azimuth_deg)
     k0 = z0 = None
-    tmp = Path(tempfile.mkdtemp(prefix=".skydome-twilight-", dir=parent))
-    try:
+    with atomic_folder(out_dir) as tmp:
         for n, (dep, sky) in enumerate(zip(deps, skies)):
             zen = float(_luminance(sky, np.array([0.0, 0.0, 1.0]), wl))
             eh = horizontal_illuminance(sky, wl)
@@ -235,10 +232,10 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
             rows.append((dep, zen, eh, lum, rb, belt if belt is not None and belt["found"] else None))
             if progress is not None:
                 progress(n + 1, len(deps))
-        _contact_sheet(frames, tmp / "contact_sheet.png")
-        _contact_sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
-                       caption="sun side | anti-sun side")
-        _plot(rows, prof_el, tmp / "twilight.png")
+        _sheet(frames, tmp / "contact_sheet.png", tile=160, cols=5)
+        _sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
+               caption="sun side | anti-sun side")
+        plot_twilight(rows, prof_el, tmp / "twilight.png")
         with open(tmp / "twilight.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["sun_elevation_deg", "zenith_luminance_cd_m2", "horizontal_illuminance_lx",
@@ -249,11 +246,6 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
                                                    "belt_luminance", "shadow_luminance")]
                          if b is not None else [""] * 6)
                 w.writerow([-dep + 0.0, f"{zen:.6g}", f"{eh:.6g}"] + extra)
-        out_dir.mkdir(exist_ok=True)
-        for f in sorted(tmp.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return {"depression_deg": deps, "zenith_luminance": np.array([r[1] for r in rows]),
             "horizontal_illuminance": np.array([r[2] for r in rows])}
 
@@ -261,67 +253,14 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
 def _save_srgb(rgb, path: Path) -> None:
     from PIL import Image
 
-    Image.fromarray((np.clip(rgb, 0.0, 1.0) * 255 + 0.5).astype(np.uint8)).save(path)
+    Image.fromarray(to_uint8(rgb)).save(path)
 
 
-def _contact_sheet(frames, path: Path, tile: int = 160, cols: int = 5, caption: str = "") -> None:
-    from PIL import Image, ImageDraw
-
-    cols = min(cols, max(1, len(frames)))
-    rows = (len(frames) + cols - 1) // cols
-    lab = 28
-    ims = [Image.open(p).convert("RGB") for _, _, p in frames]
-    for im in ims:
-        im.thumbnail((tile, tile))
-    th = max([im.height for im in ims], default=tile)
-    sheet = Image.new("RGB", (cols * tile, max(1, rows) * (th + lab)), (12, 12, 12))
-    draw = ImageDraw.Draw(sheet)
-    for n, ((dep, zen, _), im) in enumerate(zip(frames, ims)):
-        x, y = (n % cols) * tile, (n // cols) * (th + lab)
-        sheet.paste(im, (x, y))
-        draw.text((x + 3, y + th + 1), f"sun {-dep + 0.0:g} deg  {caption}", fill=(220, 220, 220))
-        draw.text((x + 3, y + th + 14), f"zenith {zen:.2g} cd/m2", fill=(170, 170, 170))
-    sheet.save(path)
-
-
-def _plot(rows, prof_el, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    deps = np.array([r[0] for r in rows])
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
-    ax[0].semilogy(-deps, [max(r[1], 1e-12) for r in rows], "o-", label="zenith luminance [cd/m$^2$]")
-    ax[0].semilogy(-deps, [max(r[2], 1e-12) for r in rows], "s-", label="horizontal illuminance [lx]")
-    # published clear-sky horizontal illuminance (AMS Glossary of Meteorology, "civil
-    # twilight", "astronomical twilight") and the natural night sky's zenith luminance
-    # (V = 21.6 mag/arcsec^2, Patat 2003, A&A 400, 1183: 10.8e4 * 10^(-0.4 V) = 2.5e-4 cd/m^2)
-    for x, lo, hi in ((0.0, 410.0, 585.0), (-6.0, 2.0, 3.5)):
-        ax[0].plot([x, x], [lo, hi], "k-", lw=3)
-    ax[0].plot([-12.0, -18.0], [8e-3, 6e-4], "kx", ms=8, label="AMS glossary illuminance [lx]")
-    ax[0].axhline(2.5e-4, color="k", ls=":", lw=1, label="night sky zenith (not modelled)")
-    for x, name in ((-6, "civil"), (-12, "nautical"), (-18, "astronomical")):
-        ax[0].axvline(x, color="0.7", lw=0.8)
-        ax[0].text(x + 0.2, 1e2, name, rotation=90, fontsize=8, color="0.4")
-    ax[0].set_xlabel("sun elevation [deg]")
-    ax[0].legend(fontsize=8)
-    ax[0].grid(alpha=0.3, which="both")
-    for dep, _, _, lum, rb, _ in rows:
-        if dep <= 6:
-            ax[1].plot(prof_el, rb, label=f"sun {-dep + 0.0:g}")
-            ax[2].semilogy(prof_el, np.maximum(lum, 1e-12), label=f"sun {-dep + 0.0:g}")
-    ax[1].set_xlabel("elevation opposite the sun [deg]")
-    ax[1].set_ylabel("R/B (linear sRGB)")
-    ax[1].set_title("Belt of Venus (R/B peak) over the earth's shadow")
-    ax[1].legend(fontsize=7)
-    ax[1].grid(alpha=0.3)
-    ax[2].set_xlabel("elevation opposite the sun [deg]")
-    ax[2].set_ylabel("luminance [cd/m$^2$]")
-    ax[2].grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+def _sheet(frames, path: Path, tile: int, cols: int, caption: str = "") -> None:
+    """Frames (depression, zenith luminance, png) as a contact sheet with both in the label."""
+    if frames:
+        contact_sheet([(p, [f"sun {-dep + 0.0:g} deg  {caption}", f"zenith {zen:.2g} cd/m2"])
+                       for dep, zen, p in frames], path, cols=cols, tile=tile, background=(12, 12, 12))
 
 
 def demo_effects(out_dir) -> list[Path]:

@@ -1,6 +1,6 @@
 """The main job of ``./scripts/demo``: render sample skies into an output folder.
 
-Run as ``python -m skydome.demo --out out``. Every image is rendered through the public API
+Run as ``python -m skydome.apps.demo --out out``. Every image is rendered through the public API
 (the same calls as the README's examples) and a labelled contact sheet ``gallery.png`` ties
 them together.
 """
@@ -101,27 +101,29 @@ def _effects(out_dir: Path) -> list[Path]:
     written: list[Path] = []
     t0 = time.perf_counter()
     # 5.1 the colour of the sky through a day (Vienna, summer solstice, hourly)
-    from skydome.effects.timelapse import day_times, run_timelapse
+    from skydome.apps.timelapse import day_times, run_timelapse
 
     times = day_times("2026-06-21", "+02:00", 60.0)
     run_timelapse(lambda sun: sd.model("single_scattering", sun=sun), 48.21, 16.37, times,
                   eff / "timelapse", size=96, wavelengths=12)
     written.append(eff / "timelapse" / "contact_sheet.png")
     # 5.5 Bishop's ring: a close-up of the sun through a ~1 um volcanic layer
-    from skydome.effects.aureole import bishops_ring_atmosphere, render_closeup
+    from skydome.apps.aureole import render_closeup
+    from skydome.effects.aureole import bishops_ring_atmosphere
 
     img = render_closeup(bishops_ring_atmosphere(), sd.Sun(elevation_deg=45.0, azimuth_deg=180.0),
                          fov_deg=60.0, size=161)
     img.save(eff / "bishops_ring.png")
     written.append(eff / "bishops_ring.png")
     # 5.7 polarisation: single-scattering Rayleigh field (analytic)
-    from skydome.effects.polarisation_maps import plot_polarisation_maps, polarisation_maps
+    from skydome.effects.polarisation_maps import polarisation_maps
+    from skydome.render.plots import plot_polarisation_maps
 
     pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
     plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")
     written.append(eff / "polarisation_rayleigh.png")
     # twilight and aerial perspective, where those modules provide a demo
-    for mod in ("skydome.effects.twilight", "skydome.effects.airlight"):
+    for mod in ("skydome.apps.twilight", "skydome.apps.airlight"):
         try:
             m = importlib.import_module(mod)
         except ImportError:
@@ -148,24 +150,11 @@ def _effects(out_dir: Path) -> list[Path]:
 
 
 def _contact_sheet(tiles, path: Path, tile: int = 256) -> None:
-    """A labelled grid of the rendered PNGs (Pillow only)."""
-    from PIL import Image, ImageDraw
+    """A labelled grid of the rendered PNGs, three across."""
+    from skydome.render.sheets import contact_sheet
 
-    cols = min(3, len(tiles))
-    rows = (len(tiles) + cols - 1) // cols
-    label_h = 18
-    sheet = Image.new("RGB", (cols * tile, rows * (tile + label_h)), (24, 24, 24))
-    draw = ImageDraw.Draw(sheet)
-    for i, (png, label) in enumerate(tiles):
-        im = Image.open(png).convert("RGB")
-        im.thumbnail((tile, tile))
-        x = (i % cols) * tile + (tile - im.width) // 2
-        y = (i // cols) * (tile + label_h)
-        sheet.paste(im, (x, y + (tile - im.height) // 2))
-        draw.text(((i % cols) * tile + 4, y + tile + 3), label, fill=(230, 230, 230))
-    tmp = path.with_name(path.name + ".tmp.png")
-    sheet.save(tmp)
-    tmp.replace(path)
+    contact_sheet(tiles, path, cols=3, tile=tile, line_height=18, background=(24, 24, 24),
+                  text_colours=((230, 230, 230),))
 
 
 def main(argv=None) -> None:
