@@ -168,7 +168,11 @@ function saveView() {
   const cli = ["skydome", "render", "--model", scenes[0].model,
                "--sun-elevation", String(sun.elevation_deg), "--sun-azimuth", String(sun.azimuth_deg)];
   for (const [k, v] of Object.entries(params)) cli.push(`--${k.replaceAll("_", "-")}`, String(v));
-  cli.push("--projection", "fisheye", "--out", "view.exr");
+  // the CLI has no ground pinhole camera: a camera view is reproduced as the whole dome
+  const proj = cam.projection === "camera" ? "fisheye" : cam.projection;
+  const size = proj === "fisheye" ? String(Math.min(cam.width, cam.height)) : `${cam.width}x${cam.height}`;
+  if (scenes[0].wavelengths_nm) cli.push("--wavelengths", String(scenes[0].wavelengths_nm.length));
+  cli.push("--projection", proj, "--size", size, "--no-sun", "--out", "view.exr");
   const json = { skydome_view: 1, models: scenes.map((s) => s.describe), sun, camera: cam,
                  display: display(), split: scenes.length > 1,
                  render_command: cli.join(" ") };
@@ -237,6 +241,17 @@ async function benchmark(model, values, n = 20, w = 1920, h = 1080) {
   return (performance.now() - t0) / n;
 }
 
+// sample([[u, v], ...]): XYZ of the shown frame at fractions (u across, v down) of the view.
+function sample(points) {
+  const xyz = renderer.readXYZ(), { w, h } = renderer.target;
+  return points.map(([u, v]) => {
+    const c = Math.min(w - 1, Math.floor(u * w)), r = Math.min(h - 1, Math.floor(v * h)), i = 4 * (r * w + c);
+    return [xyz[i], xyz[i + 1], xyz[i + 2]];
+  });
+}
+
+const idle = () => !busy && !pending;
+
 async function main() {
   try {
     renderer = new SkyRenderer($("sky"));
@@ -244,7 +259,7 @@ async function main() {
     showError(e.message);
     return;
   }
-  window.skydomeViewer = { renderFloat, benchmark, ready: false };
+  window.skydomeViewer = { renderFloat, benchmark, sample, idle, ready: false };
   try {
     models = await getJSON("/api/models");
   } catch (e) {
