@@ -178,8 +178,9 @@ export class SkyRenderer {
 
   // Block until the GPU has finished (a one-pixel read), for frame timing.
   sync() {
-    const gl = this.gl, px = new Uint8Array(4);
-    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const gl = this.gl, px = new Float32Array(4);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, this.target.fb);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.FLOAT, px);
   }
 }
 

@@ -37,9 +37,11 @@ vec3 equirect_hemisphere(vec2 px, vec2 size) {
 
 // skydome.render.projections.Fisheye (Radiance angular fisheye looking up, north at the
 // top, east on the left): zenith angle = pi * rho, rho in image widths from the centre.
+// On a non-square view the dome is the centred square of side min(width, height).
 vec3 fisheye(vec2 px, vec2 size) {
-    float x = px.x / size.x - 0.5;
-    float y = px.y / size.y - 0.5;
+    float side = min(size.x, size.y);
+    float x = (px.x - 0.5 * size.x) / side;
+    float y = (px.y - 0.5 * size.y) / side;
     float rho = length(vec2(x, y));
     float theta = PI * rho;
     if (theta > 0.5 * PI) return vec3(0.0, 0.0, -1.0);
