@@ -27,6 +27,8 @@ CASES = [
     ("hoffman_preetham2002", (20.0,), {"turbidity": 4.0, "g": 0.6, "phase": "henyey_greenstein"}),
     ("oneil2005", (60.0, 20.0, 5.0, 0.0, -4.0), {}),
     ("oneil2005", (20.0,), {"kr": 0.004, "km": 0.002, "g": -0.9, "samples": 4}),
+    ("hillaire2020", (60.0, 20.0, 5.0, 0.0, -4.0), {}),
+    ("hillaire2020", (20.0,), {"turbidity": 5.0, "observer_altitude_m": 10000.0}),
 ]
 VIEWS = [(m, el, p) for m, els, p in CASES for el in els]
 SUN_AZIMUTH_DEG = 135.0

@@ -34,6 +34,7 @@ VIEWER_MODELS: dict[str, tuple[str, ...]] = {
     "preetham1999": ("turbidity",),
     "hoffman_preetham2002": ("turbidity", "g", "sky_distance_m", "phase"),
     "oneil2005": ("kr", "km", "g", "scale_depth", "outer_ratio", "samples"),
+    "hillaire2020": ("turbidity", "observer_altitude_m"),
 }
 
 #: Request keys that place the sun (by angles, or by place and time).
@@ -176,7 +177,91 @@ def _oneil(sky) -> dict[str, Any]:
             "samples": int(sky.samples)}
 
 
-_BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil}
+def _b64(a: np.ndarray) -> str:
+    import base64
+
+    return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode("ascii")
+
+
+def _layers(tab: np.ndarray, n4: int) -> np.ndarray:
+    """(ny, nx, nl) table -> (n4, ny, nx, 4): texture layers of four wavelengths each
+    (zero-padded), the layout of a WebGL2 RGBA32F 2-D array texture."""
+    ny, nx, nl = tab.shape
+    out = np.zeros((ny, nx, 4 * n4))
+    out[..., :nl] = tab
+    return out.reshape(ny, nx, n4, 4).transpose(2, 0, 1, 3)
+
+
+def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray) -> np.ndarray:
+    """(n_grid, 3): XYZ = sum_g K_g L_g for radiance per unit irradiance L on the table
+    grid, the linear map of Hillaire2020Sky.radiance (values on the grid taken to ``wl``
+    linearly in L lambda^4, times the solar spectrum) followed by SkyModel.xyz's CIE
+    weights."""
+    if grid.shape == wl.shape and np.array_equal(grid, wl):
+        M = np.eye(wl.size)
+    else:
+        idx = np.clip(np.searchsorted(grid, wl) - 1, 0, grid.size - 2)
+        a = (wl - grid[idx]) / (grid[idx + 1] - grid[idx])
+        M = np.zeros((wl.size, grid.size))
+        rows = np.arange(wl.size)
+        M[rows, idx] += (1.0 - a) * grid[idx] ** 4 / wl ** 4
+        M[rows, idx + 1] += a * grid[idx + 1] ** 4 / wl ** 4
+    return (M * solar[:, None]).T @ _xyz_weights(wl)
+
+
+_HILLAIRE_CACHE: dict = {}
+
+
+def _hillaire(sky) -> dict[str, Any]:
+    from skydome.spectra import default_wavelengths, solar_irradiance
+
+    wl = default_wavelengths()
+    key = (round(sky.turbidity, 9), round(sky.observer_altitude_m, 6), sky.n_wavelengths)
+    if key not in _HILLAIRE_CACHE:
+        tb = sky.tables(wl)                   # [Hil20] 4.1 transmittance, 5.5 Psi_ms (eqs. 5-10)
+        p = tb.props
+        nl = tb.grid.size
+        n4 = (nl + 3) // 4
+        nc = int(p.profile_code.size)
+        if nc > 4:
+            raise ValueError(f"the atmosphere has {nc} constituents; the viewer's hillaire2020 "
+                             "shader takes at most 4")
+
+        def per_c(x):
+            out = np.zeros((4, 4 * n4))
+            out[:nc, :nl] = x
+            return out.reshape(4 * n4 * 4).tolist()
+
+        def pad4(x, fill=0.0):
+            out = np.full(4, fill)
+            out[:nc] = x
+            return out.tolist()
+
+        alb = np.zeros(4 * n4)
+        alb[:nl] = p.ground_albedo
+        _HILLAIRE_CACHE.clear()
+        _HILLAIRE_CACHE[key] = {
+            "lut_key": f"hillaire2020/{key}", "grid_nm": tb.grid.tolist(), "ng": n4, "nc": nc,
+            "tlut_size": [int(tb.tlut.shape[1]), int(tb.tlut.shape[0])],
+            "mslut_size": [int(tb.mslut.shape[1]), int(tb.mslut.shape[0])],
+            "tlut_b64": _b64(_layers(tb.tlut, n4)), "mslut_b64": _b64(_layers(tb.mslut, n4)),
+            "R": tb.R, "Rt": tb.Rt, "ts": tb.ts, "codes": pad4(p.profile_code, 0),
+            "p0": pad4(p.profile_p0, 1.0), "p1": pad4(p.profile_p1, 1.0),
+            "phase_codes": pad4(p.phase_code, 3), "phase_params": pad4(p.phase_param),
+            "beta_s": per_c(p.scattering), "beta_e": per_c(p.extinction),
+            "albedo": alb.tolist()}
+    out = dict(_HILLAIRE_CACHE[key])
+    grid = np.asarray(out["grid_nm"])
+    K = np.zeros((4 * out["ng"], 3))
+    K[:grid.size] = _hillaire_weights(grid, wl, solar_irradiance(wl) * sky.sun.irradiance_scale)
+    out.update({"K": K.tolist(), "h0": sky.observer_altitude_m,
+                "sv_size": [sky.skyview_width, sky.skyview_height], "n_steps": sky.view_samples,
+                "use_ms": 1 if sky.multiple_scattering else 0})
+    return out
+
+
+_BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil,
+             "hillaire2020": _hillaire}
 
 
 def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:

@@ -41,6 +41,78 @@ const SETTERS = {
     gl.uniform1i(u("u_samples"), s.samples);
   },
 };
+SETTERS.hillaire2020 = (gl, u, s) => {
+  gl.uniform1i(u("u_skyview"), 3);
+  gl.uniform2i(u("u_sv_size"), ...s.sv_size);
+  gl.uniform1f(u("u_R"), s.R);
+  gl.uniform1f(u("u_h0"), s.h0);
+};
+
+function f32FromBase64(b64) {
+  const bin = atob(b64), bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
+  return new Float32Array(bytes.buffer);
+}
+
+// Per-frame passes that a model needs before its sky pass: hillaire2020 renders its
+// sky-view LUT ([Hil20] 5.3) from the transmittance and multiple-scattering LUTs.
+const PREPASSES = {
+  async hillaire2020(r, s) {
+    const gl = r.gl;
+    if (r.hillaire?.key !== s.lut_key) {
+      const up = (b64, [w, h], unit) => {
+        const tex = gl.createTexture();
+        gl.activeTexture(gl.TEXTURE0 + unit);
+        gl.bindTexture(gl.TEXTURE_2D_ARRAY, tex);
+        gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA32F, w, h, s.ng);
+        gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, 0, w, h, s.ng, gl.RGBA, gl.FLOAT, f32FromBase64(b64));
+        for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, p, gl.NEAREST);
+        return tex;
+      };
+      if (r.hillaire) { gl.deleteTexture(r.hillaire.tlut); gl.deleteTexture(r.hillaire.mslut); }
+      r.hillaire = { key: s.lut_key, tlut: up(s.tlut_b64, s.tlut_size, 1), mslut: up(s.mslut_b64, s.mslut_size, 2) };
+    }
+    const [w, h] = s.sv_size;
+    const key = `hillaire2020_lut/${s.ng}`;
+    if (!r.programs.has(key)) {
+      const text = `#version 300 es\n#define NG ${s.ng}\n${await source("hillaire2020_lut")}`;
+      r.programs.set(key, r._link(text, "hillaire2020_lut"));
+    }
+    const { program, u } = r.programs.get(key);
+    const t = r._ensureAux("skyview", w, h);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, t.fb);
+    gl.viewport(0, 0, w, h);
+    gl.disable(gl.SCISSOR_TEST);
+    gl.useProgram(program);
+    gl.activeTexture(gl.TEXTURE1); gl.bindTexture(gl.TEXTURE_2D_ARRAY, r.hillaire.tlut);
+    gl.activeTexture(gl.TEXTURE2); gl.bindTexture(gl.TEXTURE_2D_ARRAY, r.hillaire.mslut);
+    gl.uniform1i(u("u_tlut"), 1);
+    gl.uniform1i(u("u_mslut"), 2);
+    gl.uniform2i(u("u_tlut_size"), ...s.tlut_size);
+    gl.uniform2i(u("u_mslut_size"), ...s.mslut_size);
+    gl.uniform2i(u("u_sv_size"), w, h);
+    for (const k of ["R", "Rt", "h0", "ts"]) gl.uniform1f(u(`u_${k}`), s[k]);
+    gl.uniform1f(u("u_sz"), s.sun.direction[2]);
+    gl.uniform1i(u("u_n_steps"), s.n_steps);
+    gl.uniform1i(u("u_use_ms"), s.use_ms);
+    gl.uniform1i(u("u_nc"), s.nc);
+    gl.uniform4iv(u("u_codes"), s.codes);
+    gl.uniform4fv(u("u_p0"), s.p0);
+    gl.uniform4fv(u("u_p1"), s.p1);
+    gl.uniform4iv(u("u_phase_codes"), s.phase_codes);
+    gl.uniform4fv(u("u_phase_params"), s.phase_params);
+    gl.uniform4fv(u("u_beta_s"), s.beta_s);
+    gl.uniform4fv(u("u_beta_e"), s.beta_e);
+    gl.uniform4fv(u("u_albedo"), s.albedo);
+    gl.uniform3fv(u("u_K"), s.K.flat());
+    gl.bindVertexArray(r.vao);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    gl.activeTexture(gl.TEXTURE3);
+    gl.bindTexture(gl.TEXTURE_2D, t.tex);
+    gl.activeTexture(gl.TEXTURE0);
+  },
+};
+
 export const MODELS = Object.keys(SETTERS);
 
 export class SkyRenderer {
@@ -102,10 +174,8 @@ export class SkyRenderer {
   }
 
   // float RGBA32F render target of the given size
-  _ensureTarget(w, h) {
+  _makeTarget(w, h) {
     const gl = this.gl;
-    if (this.target && this.target.w === w && this.target.h === h) return this.target;
-    if (this.target) { gl.deleteTexture(this.target.tex); gl.deleteFramebuffer(this.target.fb); }
     const tex = gl.createTexture();
     gl.bindTexture(gl.TEXTURE_2D, tex);
     gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, w, h);
@@ -116,8 +186,22 @@ export class SkyRenderer {
     gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
     const st = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
     if (st !== gl.FRAMEBUFFER_COMPLETE) throw new Error(`float render target incomplete (0x${st.toString(16)})`);
-    this.target = { tex, fb, w, h };
+    return { tex, fb, w, h };
+  }
+
+  _ensureTarget(w, h) {
+    if (this.target && this.target.w === w && this.target.h === h) return this.target;
+    if (this.target) { this.gl.deleteTexture(this.target.tex); this.gl.deleteFramebuffer(this.target.fb); }
+    this.target = this._makeTarget(w, h);
     return this.target;
+  }
+
+  _ensureAux(name, w, h) {
+    this.aux = this.aux || {};
+    const t = this.aux[name];
+    if (t && t.w === w && t.h === h) return t;
+    if (t) { this.gl.deleteTexture(t.tex); this.gl.deleteFramebuffer(t.fb); }
+    return (this.aux[name] = this._makeTarget(w, h));
   }
 
   // Draw the views into the float target. views: [{scene, x0, w}] side by side (split view);
@@ -126,11 +210,13 @@ export class SkyRenderer {
     const gl = this.gl, t = this._ensureTarget(w, h);
     const progs = [];
     for (const v of views) progs.push(await this.program(v.scene.model, v.scene.wavelengths_nm?.length ?? 1));
-    gl.bindFramebuffer(gl.FRAMEBUFFER, t.fb);
-    gl.viewport(0, 0, w, h);
-    gl.enable(gl.SCISSOR_TEST);
     gl.bindVertexArray(this.vao);
-    views.forEach((v, k) => {
+    for (let k = 0; k < views.length; ++k) {
+      const v = views[k], pre = PREPASSES[v.scene.model];
+      if (pre) await pre(this, v.scene);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, t.fb);
+      gl.viewport(0, 0, w, h);
+      gl.enable(gl.SCISSOR_TEST);
       const { program, u } = progs[k];
       gl.useProgram(program);
       gl.scissor(v.x0, 0, v.w, h);
@@ -143,7 +229,7 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
       SETTERS[v.scene.model](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
-    });
+    }
     gl.disable(gl.SCISSOR_TEST);
     return t;
   }
