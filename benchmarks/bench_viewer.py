@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from _viewer import CHROMIUM, CHROMIUM_ARGS, wait_ready  # noqa: E402
 
 MODELS = {"preetham1999": {"turbidity": 2.5}, "hoffman_preetham2002": {"turbidity": 2.5},
-          "oneil2005": {}}
+          "oneil2005": {}, "hillaire2020": {"turbidity": 2.5}}
 
 
 def main() -> None:

@@ -153,7 +153,7 @@ def test_models_route(viewer_url):  # noqa: F811
     status, _, body = _get(viewer_url, "/api/models")
     assert status == 200
     models = json.loads(body)
-    assert set(models) == {"preetham1999", "hoffman_preetham2002", "oneil2005"}
+    assert set(models) == {"preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020"}
     assert [p["name"] for p in models["preetham1999"]["parameters"]] == ["turbidity"]
 
 
