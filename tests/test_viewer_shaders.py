@@ -60,6 +60,28 @@ def gpu_xyz(page, model: str, elevation: float, params: dict) -> np.ndarray:
     return np.asarray(flat, dtype=np.float64).reshape(H, W, 3)
 
 
+def test_hillaire2020_ground_from_10km(browser_page):  # noqa: F811
+    """The whole sphere (equirect) from 10 km: the lower half of the sky-view LUT holds the
+    lit ground and the air in front of it; the shader must match the CPU there too."""
+    import skydome
+    from skydome.render.projections import Equirect
+
+    page, messages = browser_page
+    params = {"observer_altitude_m": 10000.0}
+    sky = skydome.model("hillaire2020", sun=skydome.Sun(elevation_deg=30.0,
+                                                        azimuth_deg=SUN_AZIMUTH_DEG), **params)
+    d, _ = Equirect(W, W // 2).directions()
+    ref = np.asarray(sky.xyz(d), dtype=np.float64)
+    values = {"sun_elevation": 30.0, "sun_azimuth": SUN_AZIMUTH_DEG, **params}
+    flat = page.evaluate("([m, v, w, h]) => window.skydomeViewer.renderFloat(m, v, w, h, 3)",
+                         ["hillaire2020", values, W, W // 2])
+    gpu = np.asarray(flat, dtype=np.float64).reshape(W // 2, W, 3)
+    assert np.max(ref[W // 4:]) > 0.05 * np.max(ref)        # the lower half is not dark
+    value = psnr_db(gpu, ref)
+    print(f"PSNR hillaire2020 10 km, full sphere, sun 30 deg: {value:.1f} dB")
+    assert value >= PSNR_FLOOR_DB
+
+
 def test_psnr_self_check():
     ref = np.linspace(0.0, 1.0, 100)
     assert psnr_db(ref + 0.01, ref) == pytest.approx(40.0)

@@ -161,7 +161,7 @@ function autoWhite() {
 function saveView() {
   const scenes = lastScenes, sun = scenes[0]?.sun;
   if (!sun) return;
-  const cam = { projection: ["camera", "equirect-hemisphere", "fisheye"][+$("projection").value],
+  const cam = { projection: ["camera", "equirect-hemisphere", "fisheye", "equirect"][+$("projection").value],
                 view_azimuth_deg: +$("view-az").value, view_elevation_deg: +$("view-el").value,
                 fov_deg: +$("fov").value, width: $("sky").width, height: $("sky").height };
   const params = modelValues();

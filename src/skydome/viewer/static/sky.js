@@ -227,6 +227,7 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_up"), camera.up);
       gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
+      gl.uniform1i(u("u_shows_ground"), v.scene.model === "hillaire2020" ? 1 : 0);
       SETTERS[v.scene.model](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }

@@ -8,12 +8,13 @@ precision highp int;
 const float PI = 3.14159265358979;
 
 uniform vec4 u_viewport;      // x0, y0, width, height of the view [pixels]
-uniform int u_projection;     // 0: pinhole camera, 1: equirect-hemisphere, 2: fisheye
+uniform int u_projection;     // 0: pinhole camera, 1: equirect-hemisphere, 2: fisheye, 3: equirect
 uniform vec3 u_fwd;           // camera axes (unit, East-North-Up)
 uniform vec3 u_right;
 uniform vec3 u_up;
 uniform float u_tan_half_fov; // tan(horizontal field of view / 2)
 uniform vec3 u_sun;           // unit vector towards the sun
+uniform int u_shows_ground;   // 1: the model renders the ground too (else it is masked)
 
 out vec4 o_xyz;
 
@@ -24,12 +25,12 @@ float clamp1(float x) { return clamp(x, -1.0, 1.0); }
 // half the digits there)
 float angle_between(vec3 a, vec3 b) { return atan(length(cross(a, b)), dot(a, b)); }
 
-// skydome.render.projections.Equirect(hemisphere=True).direction_from_pixel at the pixel
-// centre: row 0 at the zenith, elevation = 90 deg - 90 deg * row / H, azimuth = 360 deg *
-// col / W from north through east.
-vec3 equirect_hemisphere(vec2 px, vec2 size) {
+// skydome.render.projections.Equirect(hemisphere=True / False).direction_from_pixel at the
+// pixel centre: row 0 at the zenith, elevation = 90 deg - span * row / H (span 90 or 180
+// deg), azimuth = 360 deg * col / W from north through east.
+vec3 equirect(vec2 px, vec2 size, float span) {
     float row = size.y - px.y;            // gl_FragCoord counts rows from the bottom
-    float el = 0.5 * PI - 0.5 * PI * row / size.y;
+    float el = 0.5 * PI - span * row / size.y;
     float az = 2.0 * PI * px.x / size.x;
     float ce = cos(el);
     return vec3(ce * sin(az), ce * cos(az), sin(el));
@@ -61,7 +62,8 @@ vec3 sky_xyz(vec3 d);
 void main() {
     vec2 px = gl_FragCoord.xy - u_viewport.xy;
     vec2 size = u_viewport.zw;
-    vec3 d = u_projection == 1 ? equirect_hemisphere(px, size)
+    vec3 d = u_projection == 1 ? equirect(px, size, 0.5 * PI)
+           : u_projection == 3 ? equirect(px, size, PI)
            : u_projection == 2 ? fisheye(px, size) : pinhole(px, size);
-    o_xyz = vec4(max(sky_xyz(d), vec3(0.0)), d.z < 0.0 ? 0.0 : 1.0);
+    o_xyz = vec4(max(sky_xyz(d), vec3(0.0)), (d.z < 0.0 && u_shows_ground == 0) ? 0.0 : 1.0);
 }
