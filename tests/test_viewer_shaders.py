@@ -29,6 +29,7 @@ CASES = [
     ("oneil2005", (20.0,), {"kr": 0.004, "km": 0.002, "g": -0.9, "samples": 4}),
     ("hillaire2020", (60.0, 20.0, 5.0, 0.0, -4.0), {}),
     ("hillaire2020", (20.0,), {"turbidity": 5.0, "observer_altitude_m": 10000.0}),
+    ("precomputed", (60.0, 20.0, 5.0, 0.0, -4.0), {}),
 ]
 VIEWS = [(m, el, p) for m, els, p in CASES for el in els]
 SUN_AZIMUTH_DEG = 135.0
@@ -43,12 +44,23 @@ def psnr_db(test: np.ndarray, ref: np.ndarray) -> float:
     return float("inf") if mse == 0.0 else 10.0 * np.log10(peak * peak / mse)
 
 
-def cpu_xyz(model: str, elevation: float, params: dict) -> np.ndarray:
+def _cpu_model(model: str, elevation: float, params: dict):
     import skydome
+
+    sun = {"sun_elevation": elevation, "sun_azimuth": SUN_AZIMUTH_DEG}
+    if model == "precomputed":
+        # the same tables as the server's (built once per turbidity, viewer sizes)
+        from skydome.viewer.scene import build_model
+
+        return build_model(model, sun, params)
+    return skydome.model(model, sun=skydome.Sun(elevation_deg=elevation,
+                                                azimuth_deg=SUN_AZIMUTH_DEG), **params)
+
+
+def cpu_xyz(model: str, elevation: float, params: dict) -> np.ndarray:
     from skydome.render.projections import Equirect
 
-    sky = skydome.model(model, sun=skydome.Sun(elevation_deg=elevation,
-                                               azimuth_deg=SUN_AZIMUTH_DEG), **params)
+    sky = _cpu_model(model, elevation, params)
     d, _ = Equirect(W, H, hemisphere=True).directions()
     return np.asarray(sky.xyz(d), dtype=np.float64)
 
@@ -80,6 +92,30 @@ def test_hillaire2020_ground_from_10km(browser_page):  # noqa: F811
     value = psnr_db(gpu, ref)
     print(f"PSNR hillaire2020 10 km, full sphere, sun 30 deg: {value:.1f} dB")
     assert value >= PSNR_FLOOR_DB
+
+
+def test_precomputed_from_100km(browser_page):  # noqa: F811
+    """The whole sphere from just below the top of the atmosphere (99 km): every direction
+    that does not meet the ground, against the CPU model with the same tables."""
+    from skydome.render.projections import Equirect
+
+    page, messages = browser_page
+    params = {"observer_altitude_m": 99000.0}
+    for elevation in (20.0, -4.0):
+        sky = _cpu_model("precomputed", elevation, params)
+        d, _ = Equirect(W, W // 2).directions()
+        r, R = sky.atmosphere.planet_radius_m + 99000.0, sky.atmosphere.planet_radius_m
+        mu = d[..., 2]
+        sky_dirs = ~((mu < 0.0) & (r * r * (mu * mu - 1.0) + R * R >= 0.0))
+        assert 0.5 < sky_dirs.mean() < 0.6                     # the horizon dips 10 deg
+        ref = np.asarray(sky.xyz(d), dtype=np.float64)[sky_dirs]
+        values = {"sun_elevation": elevation, "sun_azimuth": SUN_AZIMUTH_DEG, **params}
+        flat = page.evaluate("([m, v, w, h]) => window.skydomeViewer.renderFloat(m, v, w, h, 3)",
+                             ["precomputed", values, W, W // 2])
+        gpu = np.asarray(flat, dtype=np.float64).reshape(W // 2, W, 3)[sky_dirs]
+        value = psnr_db(gpu, ref)
+        print(f"PSNR precomputed 99 km, sun {elevation:g} deg: {value:.1f} dB")
+        assert value >= PSNR_FLOOR_DB
 
 
 def test_psnr_self_check():

@@ -35,7 +35,14 @@ VIEWER_MODELS: dict[str, tuple[str, ...]] = {
     "hoffman_preetham2002": ("turbidity", "g", "sky_distance_m", "phase"),
     "oneil2005": ("kr", "km", "g", "scale_depth", "outer_ratio", "samples"),
     "hillaire2020": ("turbidity", "observer_altitude_m"),
+    "precomputed": ("turbidity", "observer_altitude_m"),
 }
+
+#: Table sizes of the viewer's precomputed model: smaller than the model's defaults so that
+#: a turbidity change bakes in about 10 s on two cores (the sun and the observer altitude
+#: never need a new bake: the tables hold every r and mu_s).
+PRECOMPUTED_VIEWER_SIZES = {"n_wavelengths": 8, "scattering_r_size": 16, "scattering_mu_size": 64,
+                            "scattering_mu_s_size": 16, "scattering_nu_size": 8, "orders": 4}
 
 #: Request keys that place the sun (by angles, or by place and time).
 SUN_KEYS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time")
@@ -110,10 +117,66 @@ def build_model(model: str, sun_kw: Mapping[str, Any], params: Mapping[str, Any]
     import skydome
 
     sun = make_sun(**sun_kw)
+    if model == "precomputed":
+        return _precomputed_model(sun, dict(params))
     if model == "oneil2005" and params.get("samples", 2) > ONEIL_MAX_SAMPLES:
         raise ValueError(f"samples = {params['samples']} is out of range [1, "
                          f"{ONEIL_MAX_SAMPLES}] in the viewer")
     return skydome.model(model, sun=sun, **params)
+
+
+_PRECOMPUTED_MODELS: dict = {}
+_LUTS: dict = {}
+
+
+def _precomputed_model(sun, params: dict):
+    """The precomputed model for ``sun``: tables built once per turbidity (viewer sizes),
+    then :meth:`PrecomputedSky.with_sun` for each sun and observer altitude."""
+    import skydome
+    from skydome.models import get_model_class
+
+    cls = get_model_class("precomputed")
+    pars = {p.name: p for p in cls.parameters}
+    T = pars["turbidity"].validate(params.get("turbidity", pars["turbidity"].default))
+    h = params.get("observer_altitude_m", 0.0)
+    key = round(float(T), 9)
+    if key not in _PRECOMPUTED_MODELS:
+        if len(_PRECOMPUTED_MODELS) >= 2:
+            _PRECOMPUTED_MODELS.clear()
+        _PRECOMPUTED_MODELS[key] = skydome.model("precomputed", sun=sun, turbidity=T,
+                                                 **PRECOMPUTED_VIEWER_SIZES)
+    return _PRECOMPUTED_MODELS[key].with_sun(sun, observer_altitude_m=h)
+
+
+def lut_bytes(key: str, name: str) -> bytes:
+    """The float32 bytes of baked texture ``name`` of bake ``key`` (ValueError if unknown)."""
+    if key not in _LUTS:
+        raise ValueError(f"key = {key!r} is not a baked table set; valid: {', '.join(_LUTS) or 'none'}")
+    tex = _LUTS[key][0]
+    if name not in tex:
+        raise ValueError(f"name = {name!r} is not a texture of {key}; valid: {', '.join(tex)}")
+    return np.ascontiguousarray(tex[name], dtype="<f4").tobytes()
+
+
+def _precomputed(sky) -> dict[str, Any]:
+    from skydome.export.luts import bake_precomputed
+
+    key = f"precomputed/T={sky.turbidity:.9g}"
+    if key not in _LUTS:
+        if len(_LUTS) >= 2:
+            _LUTS.clear()
+        _LUTS[key] = bake_precomputed(sky)
+    tex, desc = _LUTS[key]
+    sz = desc["sizes"]
+    if len(desc["phase_code"]) > 2:
+        raise ValueError("the viewer's precomputed shader takes at most 2 scattering constituents")
+    pc = (desc["phase_code"] + [3])[:2]
+    pp = (desc["phase_param"] + [0.0])[:2]
+    return {"lut_key": key, "textures": {n: v["shape"] for n, v in desc["textures"].items()},
+            "sizes": [sz["r"], sz["mu"], sz["mu_s"], sz["nu"]], "R": desc["planet_radius_m"],
+            "Rt": desc["top_radius_m"], "mu_s_min": desc["mu_s_min"],
+            "h0": sky.observer_altitude_m, "irradiance_scale": sky.sun.irradiance_scale,
+            "nsc": len(desc["phase_code"]), "pc": pc, "pp": pp}
 
 
 def _xyz_weights(wl: np.ndarray) -> np.ndarray:
@@ -261,7 +324,7 @@ def _hillaire(sky) -> dict[str, Any]:
 
 
 _BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil,
-             "hillaire2020": _hillaire}
+             "hillaire2020": _hillaire, "precomputed": _precomputed}
 
 
 def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:

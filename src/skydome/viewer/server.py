@@ -11,7 +11,8 @@ dependency, and every rule below is a few explicit lines that the tests exercise
   (``%252e``), backslash and absolute paths, and symlinks out of the folder cannot reach
   anything else (they are 404);
 * ``GET /api/models`` lists the models and their parameters; ``GET /api/scene?model=...``
-  returns the shader's numbers (:func:`skydome.viewer.scene.shader_scene`); bad
+  returns the shader's numbers (:func:`skydome.viewer.scene.shader_scene`);
+  ``GET /api/lut?key=...&name=...`` one baked table as raw float32; bad
   parameters give 400 with ``{"error": message}``, the CLI's message;
 * every response carries a strict Content-Security-Policy (same origin only, no inline
   script, no external resources), ``X-Content-Type-Options: nosniff``, no caching of the
@@ -145,6 +146,15 @@ class _Handler(BaseHTTPRequestHandler):
             except (ValueError, TypeError) as exc:
                 return self._error(HTTPStatus.BAD_REQUEST, str(exc))
             return self._json(HTTPStatus.OK, out)
+        if path == "/api/lut":
+            extra = sorted(set(q) - {"key", "name"})
+            if extra or "key" not in q or "name" not in q:
+                return self._error(HTTPStatus.BAD_REQUEST, "/api/lut takes key and name")
+            try:
+                body = scene.lut_bytes(q["key"], q["name"])
+            except ValueError as exc:
+                return self._error(HTTPStatus.BAD_REQUEST, str(exc))
+            return self._send(HTTPStatus.OK, body, "application/octet-stream")
         return self._error(HTTPStatus.NOT_FOUND, f"no API route {path[:200]}")
 
 

@@ -48,6 +48,20 @@ SETTERS.hillaire2020 = (gl, u, s) => {
   gl.uniform1f(u("u_h0"), s.h0);
 };
 
+SETTERS.precomputed = (gl, u, s) => {
+  gl.uniform1i(u("u_ms"), 4);
+  gl.uniform1i(u("u_ss0"), 5);
+  gl.uniform1i(u("u_ss1"), s.nsc > 1 ? 6 : 5);
+  gl.uniform4i(u("u_sizes"), ...s.sizes);
+  for (const k of ["R", "Rt", "mu_s_min", "h0", "irradiance_scale"]) gl.uniform1f(u(`u_${k}`), s[k]);
+  gl.uniform1i(u("u_nsc"), s.nsc);
+  gl.uniform2i(u("u_pc"), ...s.pc);
+  gl.uniform2f(u("u_pp"), ...s.pp);
+};
+
+// extra shader sources a model's program includes between common.glsl and its own
+const INCLUDES = { precomputed: ["transport"] };
+
 function f32FromBase64(b64) {
   const bin = atob(b64), bytes = new Uint8Array(bin.length);
   for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
@@ -57,6 +71,32 @@ function f32FromBase64(b64) {
 // Per-frame passes that a model needs before its sky pass: hillaire2020 renders its
 // sky-view LUT ([Hil20] 5.3) from the transmittance and multiple-scattering LUTs.
 const PREPASSES = {
+  // precomputed: upload the baked tables (once per bake) as RGBA32F 3-D textures
+  async precomputed(r, s) {
+    const gl = r.gl;
+    if (r.precomputed?.key !== s.lut_key) {
+      if (r.precomputed) for (const t of r.precomputed.tex) gl.deleteTexture(t);
+      const names = ["multiple_scattering", "single_scattering_0", "single_scattering_1"].filter((n) => n in s.textures);
+      const tex = [];
+      for (const [k, name] of names.entries()) {
+        const resp = await fetch(`/api/lut?${new URLSearchParams({ key: s.lut_key, name })}`);
+        if (!resp.ok) throw new Error(`table ${name}: ${(await resp.json()).error}`);
+        const data = new Float32Array(await resp.arrayBuffer());
+        const [d, h, w] = s.textures[name];
+        const t = gl.createTexture();
+        gl.activeTexture(gl.TEXTURE4 + k);
+        gl.bindTexture(gl.TEXTURE_3D, t);
+        gl.texStorage3D(gl.TEXTURE_3D, 1, gl.RGBA32F, w, h, d);
+        gl.texSubImage3D(gl.TEXTURE_3D, 0, 0, 0, 0, w, h, d, gl.RGBA, gl.FLOAT, data);
+        for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_3D, p, gl.NEAREST);
+        tex.push(t);
+      }
+      r.precomputed = { key: s.lut_key, tex };
+    }
+    r.precomputed.tex.forEach((t, k) => { gl.activeTexture(gl.TEXTURE4 + k); gl.bindTexture(gl.TEXTURE_3D, t); });
+    gl.activeTexture(gl.TEXTURE0);
+  },
+
   async hillaire2020(r, s) {
     const gl = r.gl;
     if (r.hillaire?.key !== s.lut_key) {
@@ -75,7 +115,7 @@ const PREPASSES = {
     const [w, h] = s.sv_size;
     const key = `hillaire2020_lut/${s.ng}`;
     if (!r.programs.has(key)) {
-      const text = `#version 300 es\n#define NG ${s.ng}\n${await source("hillaire2020_lut")}`;
+      const text = `#version 300 es\n#define NG ${s.ng}\nprecision highp float;\nprecision highp int;\nconst float PI = 3.14159265358979;\n${await source("transport")}\n${await source("hillaire2020_lut")}`;
       r.programs.set(key, r._link(text, "hillaire2020_lut"));
     }
     const { program, u } = r.programs.get(key);
@@ -162,7 +202,9 @@ export class SkyRenderer {
   async program(model, nw) {
     const key = `${model}/${nw}`;
     if (!this.programs.has(key)) {
-      const text = `#version 300 es\n#define NW ${nw}\n${await source("common")}\n${await source(model)}\n`;
+      let inc = "";
+      for (const name of INCLUDES[model] || []) inc += `${await source(name)}\n`;
+      const text = `#version 300 es\n#define NW ${nw}\n${await source("common")}\n${inc}${await source(model)}\n`;
       this.programs.set(key, this._link(text, model));
     }
     return this.programs.get(key);
@@ -227,7 +269,7 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_up"), camera.up);
       gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
-      gl.uniform1i(u("u_shows_ground"), v.scene.model === "hillaire2020" ? 1 : 0);
+      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed"].includes(v.scene.model) ? 1 : 0);
       SETTERS[v.scene.model](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }

@@ -18,6 +18,9 @@ uniform int u_shows_ground;   // 1: the model renders the ground too (else it is
 
 out vec4 o_xyz;
 
+// a sky shader sets this for directions it does not render (shown as ground)
+bool g_masked = false;
+
 // skydome._kernels_analytic._clamp1
 float clamp1(float x) { return clamp(x, -1.0, 1.0); }
 
@@ -65,5 +68,6 @@ void main() {
     vec3 d = u_projection == 1 ? equirect(px, size, 0.5 * PI)
            : u_projection == 3 ? equirect(px, size, PI)
            : u_projection == 2 ? fisheye(px, size) : pinhole(px, size);
-    o_xyz = vec4(max(sky_xyz(d), vec3(0.0)), (d.z < 0.0 && u_shows_ground == 0) ? 0.0 : 1.0);
+    vec3 xyz = max(sky_xyz(d), vec3(0.0));
+    o_xyz = vec4(xyz, (g_masked || (d.z < 0.0 && u_shows_ground == 0)) ? 0.0 : 1.0);
 }

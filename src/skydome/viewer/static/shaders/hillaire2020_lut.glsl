@@ -4,7 +4,7 @@
 // eq. 11) that skydome builds (Hillaire2020Sky.tables). Mirrors
 // skydome.models.simulated._kernels_hillaire2020 (skyview_angles, build_skyview, march,
 // _trans_weights, _ms_weights, _bilerp) and skydome.transport._kernels (table_coords,
-// ray_segment, ray_hits_ground, profile_density, phase_value). Wavelengths in groups of
+// ray_segment, ray_hits_ground; profile_density and phase_value in transport.glsl). Wavelengths in groups of
 // four (vec4); the output texel is XYZ = sum_l K_l L_l, K the weights that turn the
 // table grid into CIE XYZ as the CPU model does (skydome.viewer.scene._hillaire).
 // Float32: r^2 - R^2 and Rt^2 - r^2 are carried as h (2R + h) and (Ht - h)(Rt + r).
@@ -12,8 +12,6 @@ precision highp float;
 precision highp int;
 precision highp sampler2DArray;
 
-const float PI = 3.14159265358979;
-const float INV_4PI = 1.0 / (4.0 * PI);
 
 uniform highp sampler2DArray u_tlut;    // [i_r = y, j_mu = x, layer = wavelength group]
 uniform highp sampler2DArray u_mslut;   // [i_h = y, j_mus = x, layer]
@@ -40,24 +38,6 @@ float log1p_(float x) { return x < 1e-4 ? x * (1.0 - 0.5 * x) : log(1.0 + x); }
 float expm1_(float x) { return abs(x) < 1e-3 ? x * (1.0 + 0.5 * x * (1.0 + x / 3.0)) : exp(x) - 1.0; }
 vec4 one_minus_exp_neg(vec4 x) {   // -expm1(-x), accurate for small x
     return mix(1.0 - exp(-x), x * (1.0 - 0.5 * x * (1.0 - x / 3.0)), lessThan(x, vec4(1e-3)));
-}
-
-// skydome.transport._kernels.profile_density ([KRZ06] eq. 7)
-float profile_density(int code, float p0, float p1, float h) {
-    if (code == 0) return exp(-max(h, 0.0) / p0);
-    if (code == 1) return max(0.0, 1.0 - abs(h - p0) / p1);
-    if (code == 2) return h < p0 ? 1.0 : 0.0;
-    if (code == 3) { float x = (h - p0) / p1; return exp(-0.5 * x * x); }
-    return 0.0;
-}
-
-// skydome.transport._kernels.phase_value (Rayleigh, Henyey-Greenstein, Cornette-Shanks, isotropic)
-float phase_value(int code, float param, float c) {
-    if (code == 0) return 3.0 / (16.0 * PI) / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c);
-    if (code == 1) { float g = param, d = 1.0 + g * g - 2.0 * g * c; return (1.0 - g * g) / (d * sqrt(d)) * INV_4PI; }
-    if (code == 2) { float g = param, d = 1.0 + g * g - 2.0 * g * c;
-                     return 3.0 * (1.0 - g * g) / (2.0 * (2.0 + g * g)) * (1.0 + c * c) / (d * sqrt(d)) * INV_4PI; }
-    return INV_4PI;
 }
 
 // r^2 - R^2 = h (2R + h) and the ray's discriminants, without float32 cancellation
