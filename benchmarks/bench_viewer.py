@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from _viewer import CHROMIUM, CHROMIUM_ARGS, wait_ready  # noqa: E402
 
 MODELS = {"preetham1999": {"turbidity": 2.5}, "hoffman_preetham2002": {"turbidity": 2.5},
-          "oneil2005": {}, "hillaire2020": {"turbidity": 2.5}}
+          "oneil2005": {}, "hillaire2020": {"turbidity": 2.5}, "precomputed": {"turbidity": 2.5}}
 
 
 def main() -> None:
@@ -31,6 +31,7 @@ def main() -> None:
     ap.add_argument("--width", type=int, default=1920)
     ap.add_argument("--height", type=int, default=1080)
     ap.add_argument("--gpu", action="store_true")
+    ap.add_argument("--models", default=",".join(MODELS), help="comma-separated subset")
     a = ap.parse_args()
     from playwright.sync_api import sync_playwright
 
@@ -48,7 +49,8 @@ def main() -> None:
                            " const e = g.getExtension('WEBGL_debug_renderer_info');"
                            " return e ? g.getParameter(e.UNMASKED_RENDERER_WEBGL) : g.getParameter(g.RENDERER); }")
         print(f"renderer: {gl}")
-        for model, values in MODELS.items():
+        for model in a.models.split(","):
+            values = MODELS[model]
             t0 = time.perf_counter()
             ms = page.evaluate("([m, v, n, w, h]) => window.skydomeViewer.benchmark(m, v, n, w, h)",
                                [model, {"sun_elevation": 20, **values}, a.frames, a.width, a.height])

@@ -153,7 +153,8 @@ def test_models_route(viewer_url):  # noqa: F811
     status, _, body = _get(viewer_url, "/api/models")
     assert status == 200
     models = json.loads(body)
-    assert set(models) == {"preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020"}
+    assert set(models) == {"preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020",
+                           "precomputed"}
     assert [p["name"] for p in models["preetham1999"]["parameters"]] == ["turbidity"]
 
 
@@ -201,3 +202,11 @@ def test_view_stops_cleanly_on_signal(sig):
         if p.poll() is None:
             p.kill()
             p.wait()
+
+
+def test_lut_route_validates(viewer_url):  # noqa: F811
+    for query, message in (("", "takes key and name"), ("key=x", "takes key and name"),
+                           ("key=x&name=y&z=1", "takes key and name"),
+                           ("key=nosuch&name=multiple_scattering", "not a baked table set")):
+        status, _, body = _get(viewer_url, "/api/lut?" + query)
+        assert status == 400 and message in json.loads(body)["error"], query
