@@ -94,11 +94,16 @@ def test_save_this_view(page, tmp_path):
     _set(page, "#model", "hoffman_preetham2002")
     _set(page, "#sun-el", "12.5")
     downloads = []
-    page.on("download", lambda d: downloads.append(d))
+
+    def handler(d):
+        downloads.append(d)
+
+    page.on("download", handler)
     page.click("#save")
     t0 = time.monotonic()
     while len(downloads) < 2 and time.monotonic() - t0 < 20:
         page.wait_for_timeout(100)
+    page.remove_listener("download", handler)
     names = sorted(d.suggested_filename for d in downloads)
     assert len(names) == 2 and names[0].endswith(".json") and names[1].endswith(".png")
     js = next(d for d in downloads if d.suggested_filename.endswith(".json"))
@@ -111,4 +116,52 @@ def test_save_this_view(page, tmp_path):
     png = next(d for d in downloads if d.suggested_filename.endswith(".png"))
     png.save_as(tmp_path / "view.png")
     assert (tmp_path / "view.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]], messages
+
+
+def test_saved_view_reproduces_on_the_cpu(page, tmp_path):
+    """The JSON of "save this view" carries a `skydome render` command; run it and compare
+    its EXR (linear sRGB, cd/m^2 scale) with the page's own float frame of the same view."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from skydome.render.image import read_exr
+    from skydome.spectra import xyz_to_linear_srgb
+
+    page, messages = page
+    page.evaluate("() => { const c = document.getElementById('sky'); c.width = 128; c.height = 32; }")
+    _set(page, "#model", "preetham1999")
+    _set(page, "#model-b", "")
+    _set(page, "#projection", "1")
+    _set(page, "#sun-el", "25")
+    _set(page, "#sun-az", "150")
+    downloads = []
+
+    def handler(d):
+        downloads.append(d)
+
+    page.on("download", handler)
+    page.click("#save")
+    t0 = time.monotonic()
+    while len(downloads) < 2 and time.monotonic() - t0 < 20:
+        page.wait_for_timeout(100)
+    page.remove_listener("download", handler)
+    js = next(d for d in downloads if d.suggested_filename.endswith(".json"))
+    js.save_as(tmp_path / "view.json")
+    cmd = json.loads((tmp_path / "view.json").read_text())["render_command"].split()
+    assert cmd[:2] == ["skydome", "render"] and "--no-sun" in cmd
+    assert "--projection equirect-hemisphere --size 128x32" in " ".join(cmd)
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root / "src"))
+    r = subprocess.run([sys.executable, "-m", "skydome.cli", *cmd[1:]], cwd=tmp_path, env=env,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    ch = read_exr(tmp_path / "view.exr")
+    cpu = np.stack([ch["R"], ch["G"], ch["B"]], axis=-1).astype(np.float64)
+    pts = [[(c + 0.5) / 128, (rr + 0.5) / 32] for rr in range(0, 32, 4) for c in range(0, 128, 8)]
+    gpu = _linear_srgb(page.evaluate("(p) => window.skydomeViewer.sample(p)", pts))
+    want = np.array([cpu[rr, c] for rr in range(0, 32, 4) for c in range(0, 128, 8)])
+    assert np.max(np.abs(gpu - want)) <= 1e-3 * np.max(want)
     assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]], messages
