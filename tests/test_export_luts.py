@@ -64,5 +64,5 @@ def test_write_precomputed_luts(small_sky, tmp_path):
         npy = np.load(out / f"{name}.npy")
         assert np.array_equal(raw, npy)
         assert np.all(np.isfinite(raw)) and np.all(raw >= 0.0) and np.all(raw[..., 3] == 0.0)
-    assert not [p for p in out.iterdir() if p.name.startswith(".tmp-")]
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]     # no temporary left
     assert len(written) == 7

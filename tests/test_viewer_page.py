@@ -42,6 +42,22 @@ def _linear_srgb(xyz):
     return xyz_to_linear_srgb(np.asarray(xyz, dtype=np.float64))
 
 
+def _save_view(page):
+    """Click "save this view"; return the two downloads (PNG, JSON)."""
+    downloads = []
+
+    def handler(d):
+        downloads.append(d)
+
+    page.on("download", handler)
+    page.click("#save")
+    t0 = time.monotonic()
+    while len(downloads) < 2 and time.monotonic() - t0 < 20:
+        page.wait_for_timeout(100)
+    page.remove_listener("download", handler)
+    return downloads
+
+
 @pytest.fixture(scope="module")
 def page(browser_page):  # noqa: F811
     page, messages = browser_page
@@ -93,17 +109,7 @@ def test_save_this_view(page, tmp_path):
     page, messages = page
     _set(page, "#model", "hoffman_preetham2002")
     _set(page, "#sun-el", "12.5")
-    downloads = []
-
-    def handler(d):
-        downloads.append(d)
-
-    page.on("download", handler)
-    page.click("#save")
-    t0 = time.monotonic()
-    while len(downloads) < 2 and time.monotonic() - t0 < 20:
-        page.wait_for_timeout(100)
-    page.remove_listener("download", handler)
+    downloads = _save_view(page)
     names = sorted(d.suggested_filename for d in downloads)
     assert len(names) == 2 and names[0].endswith(".json") and names[1].endswith(".png")
     js = next(d for d in downloads if d.suggested_filename.endswith(".json"))
@@ -137,17 +143,7 @@ def test_saved_view_reproduces_on_the_cpu(page, tmp_path):
     _set(page, "#projection", "1")
     _set(page, "#sun-el", "25")
     _set(page, "#sun-az", "150")
-    downloads = []
-
-    def handler(d):
-        downloads.append(d)
-
-    page.on("download", handler)
-    page.click("#save")
-    t0 = time.monotonic()
-    while len(downloads) < 2 and time.monotonic() - t0 < 20:
-        page.wait_for_timeout(100)
-    page.remove_listener("download", handler)
+    downloads = _save_view(page)
     js = next(d for d in downloads if d.suggested_filename.endswith(".json"))
     js.save_as(tmp_path / "view.json")
     cmd = json.loads((tmp_path / "view.json").read_text())["render_command"].split()

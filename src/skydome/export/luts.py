@@ -38,6 +38,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -55,15 +56,11 @@ def xyz_weights_for_table(table_wavelengths_nm, wavelengths_nm=None) -> np.ndarr
 
     tw = np.asarray(table_wavelengths_nm, dtype=np.float64)
     wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
-    W = np.zeros((wl.size, tw.size))
+    # the model's table -> output interpolation (linear, end values held), column by column
     if tw.size == 1:
-        W[:, 0] = 1.0
+        W = np.ones((wl.size, 1))
     else:
-        x = np.clip(wl, tw[0], tw[-1])
-        j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
-        f = (x - tw[j]) / (tw[j + 1] - tw[j])
-        W[np.arange(wl.size), j] = 1.0 - f
-        W[np.arange(wl.size), j + 1] += f
+        W = np.stack([np.interp(wl, tw, e) for e in np.eye(tw.size)], axis=1)
     cmf = K_M * np.asarray(integration_weights(wl))                       # (n_out, 3)
     return (W * solar_irradiance(wl)[:, None]).T @ cmf
 
@@ -108,31 +105,34 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     return tex, desc
 
 
+def _npy_bytes(arr: np.ndarray) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.save(buf, arr)
+    return buf.getvalue()
+
+
 def write_precomputed_luts(sky, folder) -> list[str]:
     """Write :func:`bake_precomputed` as ``<name>.bin`` (raw little-endian float32),
     ``<name>.npy`` and ``luts.json`` into ``folder`` (created; files written to temporary
     names and renamed, so no partial file is left). Returns the paths."""
+    from skydome.render.image import _atomic_write
+
     folder = os.fspath(folder)
     tex, desc = bake_precomputed(sky)
     os.makedirs(folder, exist_ok=True)
     written = []
 
     def atomic(path, write):
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                write(f)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        _atomic_write(Path(path), write)
         written.append(path)
 
     for name, a in tex.items():
         arr = np.ascontiguousarray(a, dtype="<f4")
-        atomic(os.path.join(folder, f"{name}.bin"), lambda f, arr=arr: f.write(arr.tobytes()))
-        atomic(os.path.join(folder, f"{name}.npy"), lambda f, arr=arr: np.save(f, arr))
+        atomic(os.path.join(folder, f"{name}.bin"), lambda tmp, arr=arr: arr.tofile(tmp))
+        atomic(os.path.join(folder, f"{name}.npy"),
+               lambda tmp, arr=arr: Path(tmp).write_bytes(_npy_bytes(arr)))
     atomic(os.path.join(folder, "luts.json"),
-           lambda f: f.write(json.dumps(desc, indent=2).encode()))
+           lambda tmp: Path(tmp).write_text(json.dumps(desc, indent=2)))
     return written
