@@ -910,6 +910,11 @@ def _check_figure_path(out: str) -> None:
         raise UserError(f"out = {out!r}: folder {str(p.parent)!r} is not writable")
 
 
+from skydome.viewer.cli import view as _view  # noqa: E402 - `skydome view`, its own module
+
+app.command("view")(_view)
+
+
 def main() -> None:  # console-script entry point
     try:
         app()

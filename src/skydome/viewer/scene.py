@@ -1,0 +1,351 @@
+"""What a viewer shader needs for one model, computed by skydome's own CPU code.
+
+:func:`shader_scene` validates a request (model name, sun, model parameters: the same
+checks and messages as the CLI and the model constructors), builds the model with
+:func:`skydome.model` and returns a JSON-ready dict of the numbers its shader uses.
+Nothing physical is computed in the page that is not also computed here or in the model:
+
+* ``preetham1999``: the Perez coefficients A..E of x, y and Y ([PSS99] Appendix A.2) and
+  the zenith values divided by F(0, theta_s) ([PSS99] eq. 3), as the CPU kernel
+  ``_kernels_analytic.preetham`` takes them.
+* ``hoffman_preetham2002``: beta_R, beta_M and the attenuated sun's irradiance E_sun per
+  wavelength of skydome's default grid ([HP02], [PSS99] A.1, A.3), plus the CIE 1931
+  weights that turn a spectrum on that grid into XYZ (:func:`skydome.spectra.integration_weights`,
+  the map :meth:`SkyModel.xyz` applies).
+* ``oneil2005``: 1 / lambda^4 and the solar irradiance per wavelength, the chapter's
+  constants ([ONe05] 16.2-16.5) and the same CIE weights.
+
+References
+----------
+[PSS99] Preetham, Shirley & Smits, SIGGRAPH 99. [HP02] Hoffman & Preetham, GDC 2002.
+[ONe05] O'Neil, GPU Gems 2, ch. 16.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+import numpy as np
+
+__all__ = ["VIEWER_MODELS", "SUN_KEYS", "parse_request", "shader_scene", "build_model"]
+
+#: Models the viewer renders with a shader, and the model parameters it exposes.
+VIEWER_MODELS: dict[str, tuple[str, ...]] = {
+    "preetham1999": ("turbidity",),
+    "hoffman_preetham2002": ("turbidity", "g", "sky_distance_m", "phase"),
+    "oneil2005": ("kr", "km", "g", "scale_depth", "outer_ratio", "samples"),
+    "hillaire2020": ("turbidity", "observer_altitude_m"),
+    "precomputed": ("turbidity", "observer_altitude_m"),
+}
+
+#: Table sizes of the viewer's precomputed model: smaller than the model's defaults so that
+#: a turbidity change bakes in about 10 s on two cores (the sun and the observer altitude
+#: never need a new bake: the tables hold every r and mu_s).
+PRECOMPUTED_VIEWER_SIZES = {"n_wavelengths": 8, "scattering_r_size": 16, "scattering_mu_size": 64,
+                            "scattering_mu_s_size": 16, "scattering_nu_size": 8, "orders": 4}
+
+#: Request keys that place the sun (by angles, or by place and time).
+SUN_KEYS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time")
+
+#: Largest number of view-ray samples the oneil2005 shader loops over (a shader loop
+#: needs a constant bound).
+ONEIL_MAX_SAMPLES = 16
+
+
+def _number(key: str, text: str, kind: str = "float"):
+    try:
+        return int(text) if kind == "int" else float(text)
+    except (TypeError, ValueError):
+        raise ValueError(f"{key} = {text!r} is not a valid {kind}") from None
+
+
+def parse_request(query: Mapping[str, str]) -> tuple[str, dict[str, Any], dict[str, Any]]:
+    """Split a request's query into (model name, sun keywords, model keywords).
+
+    Every value arrives as text; numbers are converted with a message naming the key.
+    Unknown keys raise ValueError naming the valid ones.
+    """
+    from skydome.models import get_model_class
+
+    model = query.get("model")
+    if model is None:
+        raise ValueError(f"model is missing; valid: {', '.join(VIEWER_MODELS)}")
+    if model not in VIEWER_MODELS:
+        raise ValueError(f"model = {model!r} is not one of {', '.join(VIEWER_MODELS)}")
+    cls = get_model_class(model)
+    pars = {p.name: p for p in cls.parameters if p.name in VIEWER_MODELS[model]}
+    sun: dict[str, Any] = {}
+    params: dict[str, Any] = {}
+    for key, text in query.items():
+        if key == "model":
+            continue
+        if key in SUN_KEYS:
+            sun[key] = text if key == "time" else _number(key, text)
+        elif key in pars:
+            p = pars[key]
+            if p.kind == "choice":
+                params[key] = text
+            else:
+                params[key] = _number(key, text, p.kind)
+        else:
+            valid = ", ".join(("model",) + SUN_KEYS + tuple(pars))
+            raise ValueError(f"unknown parameter {key!r} for model {model!r}; valid: {valid}")
+    return model, sun, params
+
+
+def make_sun(sun_elevation=None, sun_azimuth=None, lat=None, lon=None, time=None):
+    """A :class:`skydome.Sun` from angles [deg] or from place and time (ISO 8601 with an
+    offset), with the CLI's rules: one way or the other, not both (default 30 deg high in
+    the south)."""
+    from skydome.sun import Sun
+
+    by_angles = sun_elevation is not None or sun_azimuth is not None
+    by_place = any(v is not None for v in (lat, lon, time))
+    if by_angles and by_place:
+        raise ValueError("give either sun_elevation/sun_azimuth or lat/lon/time, not both")
+    if by_place:
+        missing = [n for n, v in (("lat", lat), ("lon", lon), ("time", time)) if v is None]
+        if missing:
+            raise ValueError(f"{', '.join(missing)} missing: lat, lon and time go together")
+        return Sun.from_location(lat, lon, time)
+    return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
+               azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
+
+
+def build_model(model: str, sun_kw: Mapping[str, Any], params: Mapping[str, Any]):
+    """The skydome model the page renders (its constructor validates the parameters)."""
+    import skydome
+
+    sun = make_sun(**sun_kw)
+    if model == "precomputed":
+        return _precomputed_model(sun, dict(params))
+    if model == "oneil2005" and params.get("samples", 2) > ONEIL_MAX_SAMPLES:
+        raise ValueError(f"samples = {params['samples']} is out of range [1, "
+                         f"{ONEIL_MAX_SAMPLES}] in the viewer")
+    return skydome.model(model, sun=sun, **params)
+
+
+_PRECOMPUTED_MODELS: dict = {}
+_LUTS: dict = {}
+
+
+def _precomputed_model(sun, params: dict):
+    """The precomputed model for ``sun``: tables built once per turbidity (viewer sizes),
+    then :meth:`PrecomputedSky.with_sun` for each sun and observer altitude."""
+    import skydome
+    from skydome.models import get_model_class
+
+    cls = get_model_class("precomputed")
+    pars = {p.name: p for p in cls.parameters}
+    T = pars["turbidity"].validate(params.get("turbidity", pars["turbidity"].default))
+    h = params.get("observer_altitude_m", 0.0)
+    key = round(float(T), 9)
+    if key not in _PRECOMPUTED_MODELS:
+        if len(_PRECOMPUTED_MODELS) >= 2:
+            _PRECOMPUTED_MODELS.clear()
+        _PRECOMPUTED_MODELS[key] = skydome.model("precomputed", sun=sun, turbidity=T,
+                                                 **PRECOMPUTED_VIEWER_SIZES)
+    return _PRECOMPUTED_MODELS[key].with_sun(sun, observer_altitude_m=h)
+
+
+def lut_bytes(key: str, name: str) -> bytes:
+    """The float32 bytes of baked texture ``name`` of bake ``key`` (ValueError if unknown)."""
+    if key not in _LUTS:
+        raise ValueError(f"key = {key!r} is not a baked table set; valid: {', '.join(_LUTS) or 'none'}")
+    tex = _LUTS[key][0]
+    if name not in tex:
+        raise ValueError(f"name = {name!r} is not a texture of {key}; valid: {', '.join(tex)}")
+    return np.ascontiguousarray(tex[name], dtype="<f4").tobytes()
+
+
+def _precomputed(sky) -> dict[str, Any]:
+    from skydome.export.luts import bake_precomputed
+
+    key = f"precomputed/T={sky.turbidity:.9g}"
+    if key not in _LUTS:
+        if len(_LUTS) >= 2:
+            _LUTS.clear()
+        _LUTS[key] = bake_precomputed(sky)
+    tex, desc = _LUTS[key]
+    sz = desc["sizes"]
+    if len(desc["phase_code"]) > 2:
+        raise ValueError("the viewer's precomputed shader takes at most 2 scattering constituents")
+    pc = (desc["phase_code"] + [3])[:2]
+    pp = (desc["phase_param"] + [0.0])[:2]
+    return {"lut_key": key, "textures": {n: v["shape"] for n, v in desc["textures"].items()},
+            "sizes": [sz["r"], sz["mu"], sz["mu_s"], sz["nu"]], "R": desc["planet_radius_m"],
+            "Rt": desc["top_radius_m"], "mu_s_min": desc["mu_s_min"],
+            "h0": sky.observer_altitude_m, "irradiance_scale": sky.sun.irradiance_scale,
+            "nsc": len(desc["phase_code"]), "pc": pc, "pp": pp}
+
+
+def _xyz_weights(wl: np.ndarray) -> np.ndarray:
+    """(n, 3) weights with XYZ = L @ W: K_m times the CIE 1931 integration weights, the
+    linear map that :meth:`SkyModel.xyz` applies to a spectrum on grid ``wl``."""
+    from skydome.constants import K_M
+    from skydome.spectra import integration_weights
+
+    return K_M * np.asarray(integration_weights(wl))
+
+
+def _sun_block(sky) -> dict[str, Any]:
+    s = sky.sun
+    return {"elevation_deg": float(s.elevation_deg), "azimuth_deg": float(s.azimuth_deg),
+            "direction": [float(v) for v in s.direction]}
+
+
+def _preetham(sky) -> dict[str, Any]:
+    from skydome.models.analytic import preetham1999 as p99
+
+    T = sky.turbidity
+    theta_s = float(np.radians(sky.sun.zenith_deg))
+    coef = p99.perez_coefficients(T)                                   # [PSS99] A.2
+    Yz = float(p99.zenith_luminance(T, theta_s))                        # [PSS99] A.2
+    xz, yz = (float(v) for v in p99.zenith_chromaticity(T, theta_s))    # [PSS99] A.2
+    zval = {"x": xz, "y": yz, "Y": Yz}
+    # F(0, theta_s): the Perez function at the zenith ([PSS99] eq. 3 denominator)
+    zen = [zval[k] / float(p99.perez_function(1.0, theta_s, coef[k])) for k in ("x", "y", "Y")]
+    return {"coef": [[float(v) for v in coef[k]] for k in ("x", "y", "Y")],
+            "zenith": zen, "cos_floor": 1e-6}
+
+
+def _hoffman(sky) -> dict[str, Any]:
+    from skydome.models.analytic import hoffman_preetham2002 as hp
+    from skydome.models.analytic import preetham1999 as p99
+    from skydome.spectra import default_wavelengths
+
+    wl = default_wavelengths()
+    beta_r = p99.rayleigh_coefficient(wl)                               # [PSS99] A.3
+    # the sky view's haze column factor (1200 m / 8803 m), as HoffmanPreetham2002.radiance
+    beta_m = p99.mie_coefficient(wl, sky.turbidity) * (p99.ALPHA_MOLECULES / p99.ALPHA_HAZE)
+    e_sun = p99.sun_radiance(wl, sky.sun, sky.turbidity) * sky.sun.solid_angle_sr
+    return {"wavelengths_nm": wl.tolist(), "beta_r": beta_r.tolist(), "beta_m": beta_m.tolist(),
+            "e_sun": e_sun.tolist(), "xyz_weights": _xyz_weights(wl).tolist(),
+            "g": sky.g, "hp_phase": 1 if sky.phase == "hoffman_preetham" else 0,
+            "shell_m": sky.sky_distance_m, "earth_radius_m": hp.EARTH_RADIUS_M}
+
+
+def _oneil(sky) -> dict[str, Any]:
+    from skydome.spectra import default_wavelengths, solar_irradiance
+
+    if sky.depth_function != "polynomial":
+        raise ValueError("depth_function = 'exact' is not available in the viewer "
+                         "(the shader uses the chapter's polynomial)")
+    wl = default_wavelengths()
+    inv_wl4 = (wl / 1000.0) ** -4.0                                     # [ONe05] v3InvWavelength
+    e_sun = solar_irradiance(wl) * sky.sun.irradiance_scale
+    return {"wavelengths_nm": wl.tolist(), "inv_wl4": inv_wl4.tolist(), "e_sun": e_sun.tolist(),
+            "xyz_weights": _xyz_weights(wl).tolist(), "kr": sky.kr, "km": sky.km, "g": sky.g,
+            "scale_depth": sky.scale_depth, "outer_ratio": sky.outer_ratio,
+            "samples": int(sky.samples)}
+
+
+def _b64(a: np.ndarray) -> str:
+    import base64
+
+    return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode("ascii")
+
+
+def _layers(tab: np.ndarray, n4: int) -> np.ndarray:
+    """(ny, nx, nl) table -> (n4, ny, nx, 4): texture layers of four wavelengths each
+    (zero-padded), the layout of a WebGL2 RGBA32F 2-D array texture."""
+    ny, nx, nl = tab.shape
+    out = np.zeros((ny, nx, 4 * n4))
+    out[..., :nl] = tab
+    return out.reshape(ny, nx, n4, 4).transpose(2, 0, 1, 3)
+
+
+def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray) -> np.ndarray:
+    """(n_grid, 3): XYZ = sum_g K_g L_g for radiance per unit irradiance L on the table
+    grid, the linear map of Hillaire2020Sky.radiance (values on the grid taken to ``wl``
+    linearly in L lambda^4, times the solar spectrum) followed by SkyModel.xyz's CIE
+    weights."""
+    if grid.shape == wl.shape and np.array_equal(grid, wl):
+        M = np.eye(wl.size)
+    else:
+        idx = np.clip(np.searchsorted(grid, wl) - 1, 0, grid.size - 2)
+        a = (wl - grid[idx]) / (grid[idx + 1] - grid[idx])
+        M = np.zeros((wl.size, grid.size))
+        rows = np.arange(wl.size)
+        M[rows, idx] += (1.0 - a) * grid[idx] ** 4 / wl ** 4
+        M[rows, idx + 1] += a * grid[idx + 1] ** 4 / wl ** 4
+    return (M * solar[:, None]).T @ _xyz_weights(wl)
+
+
+_HILLAIRE_CACHE: dict = {}
+
+
+def _hillaire(sky) -> dict[str, Any]:
+    from skydome.spectra import default_wavelengths, solar_irradiance
+
+    wl = default_wavelengths()
+    key = (round(sky.turbidity, 9), round(sky.observer_altitude_m, 6), sky.n_wavelengths)
+    if key not in _HILLAIRE_CACHE:
+        tb = sky.tables(wl)                   # [Hil20] 4.1 transmittance, 5.5 Psi_ms (eqs. 5-10)
+        p = tb.props
+        nl = tb.grid.size
+        n4 = (nl + 3) // 4
+        nc = int(p.profile_code.size)
+        if nc > 4:
+            raise ValueError(f"the atmosphere has {nc} constituents; the viewer's hillaire2020 "
+                             "shader takes at most 4")
+
+        def per_c(x):
+            out = np.zeros((4, 4 * n4))
+            out[:nc, :nl] = x
+            return out.reshape(4 * n4 * 4).tolist()
+
+        def pad4(x, fill=0.0):
+            out = np.full(4, fill)
+            out[:nc] = x
+            return out.tolist()
+
+        alb = np.zeros(4 * n4)
+        alb[:nl] = p.ground_albedo
+        _HILLAIRE_CACHE.clear()
+        _HILLAIRE_CACHE[key] = {
+            "lut_key": f"hillaire2020/{key}", "grid_nm": tb.grid.tolist(), "ng": n4, "nc": nc,
+            "tlut_size": [int(tb.tlut.shape[1]), int(tb.tlut.shape[0])],
+            "mslut_size": [int(tb.mslut.shape[1]), int(tb.mslut.shape[0])],
+            "tlut_b64": _b64(_layers(tb.tlut, n4)), "mslut_b64": _b64(_layers(tb.mslut, n4)),
+            "R": tb.R, "Rt": tb.Rt, "ts": tb.ts, "codes": pad4(p.profile_code, 0),
+            "p0": pad4(p.profile_p0, 1.0), "p1": pad4(p.profile_p1, 1.0),
+            "phase_codes": pad4(p.phase_code, 3), "phase_params": pad4(p.phase_param),
+            "beta_s": per_c(p.scattering), "beta_e": per_c(p.extinction),
+            "albedo": alb.tolist()}
+    out = dict(_HILLAIRE_CACHE[key])
+    grid = np.asarray(out["grid_nm"])
+    K = np.zeros((4 * out["ng"], 3))
+    K[:grid.size] = _hillaire_weights(grid, wl, solar_irradiance(wl) * sky.sun.irradiance_scale)
+    out.update({"K": K.tolist(), "h0": sky.observer_altitude_m,
+                "sv_size": [sky.skyview_width, sky.skyview_height], "n_steps": sky.view_samples,
+                "use_ms": 1 if sky.multiple_scattering else 0})
+    return out
+
+
+_BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil,
+             "hillaire2020": _hillaire, "precomputed": _precomputed}
+
+
+def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:
+    """Validate ``query`` (text values, as from a URL) and return the shader's numbers.
+
+    Raises ValueError or TypeError with the CLI's message on bad input.
+    """
+    model, sun_kw, params = parse_request(query)
+    sky = build_model(model, sun_kw, params)
+    out = {"model": model, "sun": _sun_block(sky), "describe": _jsonable(sky.describe())}
+    out.update(_BUILDERS[model](sky))
+    return out
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (bool, int, float, str)) or obj is None:
+        return obj
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return str(obj)

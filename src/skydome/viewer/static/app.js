@@ -1,0 +1,287 @@
+// The viewer page: controls -> /api/scene (skydome computes the shader's numbers) ->
+// SkyRenderer (WebGL2) -> canvas. window.skydomeViewer exposes the same renderer to tests
+// and to the benchmark (renderFloat, benchmark).
+import { SkyRenderer, cameraAxes } from "./sky.js";
+
+// false-colour stops, the same as ramp() in shaders/display.glsl
+const RAMP = [[0, 0, 0], [0.1, 0.1, 0.8], [0, 0.7, 0.9], [0.1, 0.8, 0.2], [0.95, 0.9, 0.1],
+              [0.9, 0.15, 0.1], [1, 1, 1]];
+
+const $ = (id) => document.getElementById(id);
+let renderer = null, models = {}, lastScenes = [], frameTimes = [];
+
+function showError(msg) { $("error").textContent = msg || ""; }
+
+async function getJSON(url) {
+  const r = await fetch(url);
+  const body = await r.json();
+  if (!r.ok) throw new Error(body.error || `HTTP ${r.status}`);
+  return body;
+}
+
+export function sceneQuery(model, values) {
+  const q = new URLSearchParams({ model });
+  for (const [k, v] of Object.entries(values)) if (v !== undefined && v !== "") q.set(k, String(v));
+  return q;
+}
+
+async function fetchScene(model, values) {
+  return getJSON(`/api/scene?${sceneQuery(model, values)}`);
+}
+
+// -- the controls ----------------------------------------------------------------------
+function paramControls(model) {
+  const box = $("params");
+  box.replaceChildren();
+  for (const p of models[model].parameters) {
+    const label = document.createElement("label");
+    label.textContent = `${p.name}${p.unit ? ` [${p.unit}]` : ""} `;
+    label.title = p.doc;
+    let input;
+    if (p.kind === "choice") {
+      input = document.createElement("select");
+      for (const c of p.choices) input.append(new Option(c, c, c === p.default, c === p.default));
+    } else {
+      input = document.createElement("input");
+      input.type = "number";
+      input.step = p.kind === "int" ? "1" : "any";
+      if (p.low !== null) input.min = p.low;
+      if (p.high !== null) input.max = p.high;
+      input.value = p.default;
+    }
+    input.dataset.param = p.name;
+    input.addEventListener("input", schedule);
+    label.append(input);
+    box.append(label);
+  }
+}
+
+function modelValues() {
+  const out = {};
+  for (const el of $("params").querySelectorAll("[data-param]")) out[el.dataset.param] = el.value;
+  return out;
+}
+
+function sunValues() {
+  if (document.querySelector("input[name=sunmode]:checked").value === "place")
+    return { lat: $("lat").value, lon: $("lon").value, time: $("time").value };
+  return { sun_elevation: $("sun-el").value, sun_azimuth: $("sun-az").value };
+}
+
+function camera() {
+  return cameraAxes(+$("view-az").value, +$("view-el").value, +$("fov").value, +$("projection").value);
+}
+
+function display() {
+  return { mode: +$("mode").value, white: Math.max(+$("white").value, 1e-6),
+           logLo: Math.log10(Math.max(+$("fc-lo").value, 1e-6)),
+           logHi: Math.log10(Math.max(+$("fc-hi").value, 2e-6)) };
+}
+
+function updateOutputs() {
+  for (const id of ["sun-el", "sun-az", "view-az", "view-el", "fov"]) $(`${id}-v`).textContent = $(id).value;
+}
+
+// -- drawing ---------------------------------------------------------------------------
+let pending = false, busy = false;
+function schedule() { pending = true; if (!busy) draw(); }
+
+async function draw() {
+  busy = true;
+  while (pending) {
+    pending = false;
+    updateOutputs();
+    try {
+      const a = $("model").value, b = $("model-b").value;
+      const own = modelValues(), sun = sunValues();
+      const scenes = [await fetchScene(a, { ...sun, ...own })];
+      if (b) scenes.push(await fetchScene(b, { ...sun, ...(b === a ? own : {}) }));
+      lastScenes = scenes;
+      const c = $("sky"), w = c.width, h = c.height, half = Math.floor(w / 2);
+      const views = scenes.length === 1 ? [{ scene: scenes[0], x0: 0, w }]
+        : [{ scene: scenes[0], x0: 0, w: half }, { scene: scenes[1], x0: half, w: w - half }];
+      const t0 = performance.now();
+      await renderer.renderXYZ(views, camera(), w, h);
+      renderer.sync();
+      const ms1 = performance.now() - t0;
+      if ($("auto-exp").checked) autoWhite();
+      await renderer.show(display());
+      frameTimes.push(ms1);
+      if (frameTimes.length > 20) frameTimes.shift();
+      const ms = frameTimes.reduce((s, v) => s + v, 0) / frameTimes.length;
+      $("readout").textContent = `${ms.toFixed(1)} ms/frame sky pass (${w}x${h}, synced)`;
+      $("label-a").textContent = scenes.length > 1 ? scenes[0].model : "";
+      $("label-b").textContent = scenes.length > 1 ? scenes[1].model : "";
+      drawScale();
+      showError("");
+    } catch (e) {
+      showError(e.message);
+    }
+  }
+  busy = false;
+}
+
+function rampColour(t) {
+  const x = Math.min(Math.max(t, 0), 1) * 6, k = Math.min(Math.floor(x), 5), f = x - k;
+  return RAMP[k].map((v, i) => Math.round(255 * (v + (RAMP[k + 1][i] - v) * f)));
+}
+
+function drawScale() {
+  const c = $("scale"), d = display();
+  c.classList.toggle("on", d.mode === 1);
+  if (d.mode !== 1) return;
+  const g = c.getContext("2d"), w = c.width;
+  g.clearRect(0, 0, w, c.height);
+  for (let x = 0; x < w; ++x) {
+    const [r, gg, b] = rampColour(x / (w - 1));
+    g.fillStyle = `rgb(${r},${gg},${b})`;
+    g.fillRect(x, 0, 1, 18);
+  }
+  g.fillStyle = "#ddd";
+  g.font = "11px monospace";
+  const n = Math.max(1, Math.round(d.logHi - d.logLo));
+  for (let i = 0; i <= n; ++i) {
+    const lg = d.logLo + (d.logHi - d.logLo) * i / n, x = (w - 1) * i / n;
+    g.fillRect(x, 18, 1, 5);
+    g.textAlign = i === 0 ? "left" : i === n ? "right" : "center";
+    g.fillText(Number(10 ** lg).toPrecision(2), x, 34);
+  }
+  g.textAlign = "right";
+  g.fillText("cd/m^2", w, 44);
+}
+
+function autoWhite() {
+  // white = 2x the mean luminance of the sky pixels (read back from the float target)
+  const xyz = renderer.readXYZ();
+  let s = 0, n = 0;
+  for (let i = 0; i < xyz.length; i += 4) if (xyz[i + 3] > 0) { s += xyz[i + 1]; n += 1; }
+  if (n && s > 0) $("white").value = (2 * s / n).toPrecision(3);
+}
+
+function saveView() {
+  const scenes = lastScenes, sun = scenes[0]?.sun;
+  if (!sun) return;
+  const cam = { projection: ["camera", "equirect-hemisphere", "fisheye", "equirect"][+$("projection").value],
+                view_azimuth_deg: +$("view-az").value, view_elevation_deg: +$("view-el").value,
+                fov_deg: +$("fov").value, width: $("sky").width, height: $("sky").height };
+  const params = modelValues();
+  const cli = ["skydome", "render", "--model", scenes[0].model,
+               "--sun-elevation", String(sun.elevation_deg), "--sun-azimuth", String(sun.azimuth_deg)];
+  for (const [k, v] of Object.entries(params)) cli.push(`--${k.replaceAll("_", "-")}`, String(v));
+  // the CLI has no ground pinhole camera: a camera view is reproduced as the whole dome
+  const proj = cam.projection === "camera" ? "fisheye" : cam.projection;
+  const size = proj === "fisheye" ? String(Math.min(cam.width, cam.height)) : `${cam.width}x${cam.height}`;
+  if (scenes[0].wavelengths_nm) cli.push("--wavelengths", String(scenes[0].wavelengths_nm.length));
+  cli.push("--projection", proj, "--size", size, "--no-sun", "--out", "view.exr");
+  const json = { skydome_view: 1, models: scenes.map((s) => s.describe), sun, camera: cam,
+                 display: display(), split: scenes.length > 1,
+                 render_command: cli.join(" ") };
+  const stamp = new Date().toISOString().replace(/[:.]/g, "-");
+  const link = (href, name) => { const a = document.createElement("a"); a.href = href; a.download = name; a.click(); };
+  $("sky").toBlob((blob) => {
+    link(URL.createObjectURL(blob), `skydome-view-${stamp}.png`);
+    link(URL.createObjectURL(new Blob([JSON.stringify(json, null, 2)], { type: "application/json" })),
+         `skydome-view-${stamp}.json`);
+  }, "image/png");
+}
+
+// drag: look around; shift-drag: put the sun in the pointed direction
+function pointerDirection(ev) {
+  const c = $("sky"), r = c.getBoundingClientRect();
+  const px = (ev.clientX - r.left) * c.width / r.width, py = (r.bottom - ev.clientY) * c.height / r.height;
+  const cam = camera();
+  if (cam.projection !== 0) return null;
+  const nx = 2 * px / c.width - 1, ny = 2 * py / c.height - 1, asp = c.height / c.width;
+  const d = cam.fwd.map((f, i) => f + nx * cam.tanHalfFov * cam.right[i] + ny * cam.tanHalfFov * asp * cam.up[i]);
+  const n = Math.hypot(...d);
+  return d.map((v) => v / n);
+}
+
+function wireDrag() {
+  const c = $("sky");
+  let last = null;
+  c.addEventListener("pointerdown", (ev) => { last = [ev.clientX, ev.clientY, ev.shiftKey]; c.setPointerCapture(ev.pointerId); });
+  c.addEventListener("pointerup", () => { last = null; });
+  c.addEventListener("pointermove", (ev) => {
+    if (!last) return;
+    if (last[2]) {
+      const d = pointerDirection(ev);
+      if (!d) return;
+      $("sun-el").value = (Math.asin(d[2]) * 180 / Math.PI).toFixed(1);
+      $("sun-az").value = ((Math.atan2(d[0], d[1]) * 180 / Math.PI + 360) % 360).toFixed(1);
+      document.querySelector("input[name=sunmode][value=angles]").checked = true;
+    } else {
+      const k = +$("fov").value / c.getBoundingClientRect().width;
+      $("view-az").value = ((+$("view-az").value - (ev.clientX - last[0]) * k + 360) % 360).toFixed(1);
+      $("view-el").value = Math.min(90, Math.max(-30, +$("view-el").value + (ev.clientY - last[1]) * k)).toFixed(1);
+      last = [ev.clientX, ev.clientY, false];
+    }
+    schedule();
+  });
+}
+
+// -- the test and benchmark interface ----------------------------------------------------
+// renderFloat(model, values, w, h, projection): XYZ per pixel, row 0 at the top, as a plain
+// array of w*h*3 numbers (Y in cd/m^2); projection 1 = skydome's equirect-hemisphere.
+async function renderFloat(model, values, w, h, projection = 1) {
+  const scene = await fetchScene(model, values);
+  await renderer.renderXYZ([{ scene, x0: 0, w }], cameraAxes(180, 15, 90, projection), w, h);
+  const a = renderer.readXYZ(), out = new Array(w * h * 3);
+  for (let i = 0, j = 0; i < a.length; i += 4, j += 3) { out[j] = a[i]; out[j + 1] = a[i + 1]; out[j + 2] = a[i + 2]; }
+  return out;
+}
+
+// benchmark(model, values, n, w, h): mean ms per frame over n synced frames after one warm-up.
+async function benchmark(model, values, n = 20, w = 1920, h = 1080) {
+  const scene = await fetchScene(model, values), cam = cameraAxes(180, 15, 90, 0);
+  await renderer.renderXYZ([{ scene, x0: 0, w }], cam, w, h);
+  renderer.sync();
+  const t0 = performance.now();
+  for (let i = 0; i < n; ++i) { await renderer.renderXYZ([{ scene, x0: 0, w }], cam, w, h); renderer.sync(); }
+  return (performance.now() - t0) / n;
+}
+
+// sample([[u, v], ...]): XYZ of the shown frame at fractions (u across, v down) of the view.
+function sample(points) {
+  const xyz = renderer.readXYZ(), { w, h } = renderer.target;
+  return points.map(([u, v]) => {
+    const c = Math.min(w - 1, Math.floor(u * w)), r = Math.min(h - 1, Math.floor(v * h)), i = 4 * (r * w + c);
+    return [xyz[i], xyz[i + 1], xyz[i + 2]];
+  });
+}
+
+const idle = () => !busy && !pending;
+
+async function main() {
+  try {
+    renderer = new SkyRenderer($("sky"));
+  } catch (e) {
+    showError(e.message);
+    return;
+  }
+  window.skydomeViewer = { renderFloat, benchmark, sample, idle, ready: false };
+  try {
+    models = await getJSON("/api/models");
+  } catch (e) {
+    showError(e.message);
+    return;
+  }
+  for (const name of Object.keys(models)) {
+    $("model").append(new Option(name, name));
+    $("model-b").append(new Option(name, name));
+  }
+  paramControls($("model").value);
+  $("model").addEventListener("change", () => { paramControls($("model").value); schedule(); });
+  for (const id of ["model-b", "sun-el", "sun-az", "lat", "lon", "time", "projection", "view-az",
+                    "view-el", "fov", "mode", "white", "fc-lo", "fc-hi"])
+    $(id).addEventListener("input", schedule);
+  for (const el of document.querySelectorAll("input[name=sunmode]")) el.addEventListener("change", schedule);
+  $("auto-exp").addEventListener("change", schedule);
+  $("save").addEventListener("click", saveView);
+  wireDrag();
+  pending = true;
+  await draw();
+  window.skydomeViewer.ready = true;
+}
+
+main();

@@ -1,0 +1,324 @@
+// WebGL2 sky renderer: compiles each model's shader (common.glsl + <model>.glsl), renders
+// linear XYZ into a float render target and shows it (display.glsl). No framework.
+
+const VERT = `#version 300 es
+in vec2 a_pos;
+void main() { gl_Position = vec4(a_pos, 0.0, 1.0); }`;
+
+const sources = new Map();
+async function source(name) {
+  if (!sources.has(name)) {
+    const r = await fetch(`shaders/${name}.glsl`);
+    if (!r.ok) throw new Error(`shader ${name}: HTTP ${r.status}`);
+    sources.set(name, await r.text());
+  }
+  return sources.get(name);
+}
+
+// uniforms of each model, from the server's scene JSON (skydome.viewer.scene)
+const SETTERS = {
+  preetham1999(gl, u, s) {
+    gl.uniform1fv(u("u_coef"), s.coef.flat());
+    gl.uniform3fv(u("u_zen"), s.zenith);
+    gl.uniform1f(u("u_cos_floor"), s.cos_floor);
+  },
+  hoffman_preetham2002(gl, u, s) {
+    const n = s.wavelengths_nm.length, spec = new Float32Array(4 * n);
+    for (let i = 0; i < n; ++i) spec.set([s.beta_r[i], s.beta_m[i], s.e_sun[i], 0], 4 * i);
+    gl.uniform4fv(u("u_spec"), spec);
+    gl.uniform3fv(u("u_cmf"), s.xyz_weights.flat());
+    gl.uniform1f(u("u_g"), s.g);
+    gl.uniform1i(u("u_hp_phase"), s.hp_phase);
+    gl.uniform1f(u("u_shell_m"), s.shell_m);
+    gl.uniform1f(u("u_earth_radius_m"), s.earth_radius_m);
+  },
+  oneil2005(gl, u, s) {
+    const n = s.wavelengths_nm.length, spec = new Float32Array(4 * n);
+    for (let i = 0; i < n; ++i) spec.set([s.inv_wl4[i], s.e_sun[i], 0, 0], 4 * i);
+    gl.uniform4fv(u("u_spec"), spec);
+    gl.uniform3fv(u("u_cmf"), s.xyz_weights.flat());
+    for (const k of ["kr", "km", "g", "scale_depth", "outer_ratio"]) gl.uniform1f(u(`u_${k}`), s[k]);
+    gl.uniform1i(u("u_samples"), s.samples);
+  },
+};
+SETTERS.hillaire2020 = (gl, u, s) => {
+  gl.uniform1i(u("u_skyview"), 3);
+  gl.uniform2i(u("u_sv_size"), ...s.sv_size);
+  gl.uniform1f(u("u_R"), s.R);
+  gl.uniform1f(u("u_h0"), s.h0);
+};
+
+SETTERS.precomputed = (gl, u, s) => {
+  gl.uniform1i(u("u_ms"), 4);
+  gl.uniform1i(u("u_ss0"), 5);
+  gl.uniform1i(u("u_ss1"), s.nsc > 1 ? 6 : 5);
+  gl.uniform4i(u("u_sizes"), ...s.sizes);
+  for (const k of ["R", "Rt", "mu_s_min", "h0", "irradiance_scale"]) gl.uniform1f(u(`u_${k}`), s[k]);
+  gl.uniform1i(u("u_nsc"), s.nsc);
+  gl.uniform2i(u("u_pc"), ...s.pc);
+  gl.uniform2f(u("u_pp"), ...s.pp);
+};
+
+// extra shader sources a model's program includes between common.glsl and its own
+const INCLUDES = { precomputed: ["transport"] };
+
+function f32FromBase64(b64) {
+  const bin = atob(b64), bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
+  return new Float32Array(bytes.buffer);
+}
+
+// Per-frame passes that a model needs before its sky pass: hillaire2020 renders its
+// sky-view LUT ([Hil20] 5.3) from the transmittance and multiple-scattering LUTs.
+const PREPASSES = {
+  // precomputed: upload the baked tables (once per bake) as RGBA32F 3-D textures
+  async precomputed(r, s) {
+    const gl = r.gl;
+    if (r.precomputed?.key !== s.lut_key) {
+      if (r.precomputed) for (const t of r.precomputed.tex) gl.deleteTexture(t);
+      const names = ["multiple_scattering", "single_scattering_0", "single_scattering_1"].filter((n) => n in s.textures);
+      const tex = [];
+      for (const [k, name] of names.entries()) {
+        const resp = await fetch(`/api/lut?${new URLSearchParams({ key: s.lut_key, name })}`);
+        if (!resp.ok) throw new Error(`table ${name}: ${(await resp.json()).error}`);
+        const data = new Float32Array(await resp.arrayBuffer());
+        const [d, h, w] = s.textures[name];
+        const t = gl.createTexture();
+        gl.activeTexture(gl.TEXTURE4 + k);
+        gl.bindTexture(gl.TEXTURE_3D, t);
+        gl.texStorage3D(gl.TEXTURE_3D, 1, gl.RGBA32F, w, h, d);
+        gl.texSubImage3D(gl.TEXTURE_3D, 0, 0, 0, 0, w, h, d, gl.RGBA, gl.FLOAT, data);
+        for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_3D, p, gl.NEAREST);
+        tex.push(t);
+      }
+      r.precomputed = { key: s.lut_key, tex };
+    }
+    r.precomputed.tex.forEach((t, k) => { gl.activeTexture(gl.TEXTURE4 + k); gl.bindTexture(gl.TEXTURE_3D, t); });
+    gl.activeTexture(gl.TEXTURE0);
+  },
+
+  async hillaire2020(r, s) {
+    const gl = r.gl;
+    if (r.hillaire?.key !== s.lut_key) {
+      const up = (b64, [w, h], unit) => {
+        const tex = gl.createTexture();
+        gl.activeTexture(gl.TEXTURE0 + unit);
+        gl.bindTexture(gl.TEXTURE_2D_ARRAY, tex);
+        gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA32F, w, h, s.ng);
+        gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, 0, w, h, s.ng, gl.RGBA, gl.FLOAT, f32FromBase64(b64));
+        for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, p, gl.NEAREST);
+        return tex;
+      };
+      if (r.hillaire) { gl.deleteTexture(r.hillaire.tlut); gl.deleteTexture(r.hillaire.mslut); }
+      r.hillaire = { key: s.lut_key, tlut: up(s.tlut_b64, s.tlut_size, 1), mslut: up(s.mslut_b64, s.mslut_size, 2) };
+    }
+    const [w, h] = s.sv_size;
+    const key = `hillaire2020_lut/${s.ng}`;
+    if (!r.programs.has(key)) {
+      const text = `#version 300 es\n#define NG ${s.ng}\nprecision highp float;\nprecision highp int;\nconst float PI = 3.14159265358979;\n${await source("transport")}\n${await source("hillaire2020_lut")}`;
+      r.programs.set(key, r._link(text, "hillaire2020_lut"));
+    }
+    const { program, u } = r.programs.get(key);
+    const t = r._ensureAux("skyview", w, h);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, t.fb);
+    gl.viewport(0, 0, w, h);
+    gl.disable(gl.SCISSOR_TEST);
+    gl.useProgram(program);
+    gl.activeTexture(gl.TEXTURE1); gl.bindTexture(gl.TEXTURE_2D_ARRAY, r.hillaire.tlut);
+    gl.activeTexture(gl.TEXTURE2); gl.bindTexture(gl.TEXTURE_2D_ARRAY, r.hillaire.mslut);
+    gl.uniform1i(u("u_tlut"), 1);
+    gl.uniform1i(u("u_mslut"), 2);
+    gl.uniform2i(u("u_tlut_size"), ...s.tlut_size);
+    gl.uniform2i(u("u_mslut_size"), ...s.mslut_size);
+    gl.uniform2i(u("u_sv_size"), w, h);
+    for (const k of ["R", "Rt", "h0", "ts"]) gl.uniform1f(u(`u_${k}`), s[k]);
+    gl.uniform1f(u("u_sz"), s.sun.direction[2]);
+    gl.uniform1i(u("u_n_steps"), s.n_steps);
+    gl.uniform1i(u("u_use_ms"), s.use_ms);
+    gl.uniform1i(u("u_nc"), s.nc);
+    gl.uniform4iv(u("u_codes"), s.codes);
+    gl.uniform4fv(u("u_p0"), s.p0);
+    gl.uniform4fv(u("u_p1"), s.p1);
+    gl.uniform4iv(u("u_phase_codes"), s.phase_codes);
+    gl.uniform4fv(u("u_phase_params"), s.phase_params);
+    gl.uniform4fv(u("u_beta_s"), s.beta_s);
+    gl.uniform4fv(u("u_beta_e"), s.beta_e);
+    gl.uniform4fv(u("u_albedo"), s.albedo);
+    gl.uniform3fv(u("u_K"), s.K.flat());
+    gl.bindVertexArray(r.vao);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    gl.activeTexture(gl.TEXTURE3);
+    gl.bindTexture(gl.TEXTURE_2D, t.tex);
+    gl.activeTexture(gl.TEXTURE0);
+  },
+};
+
+export const MODELS = Object.keys(SETTERS);
+
+export class SkyRenderer {
+  constructor(canvas) {
+    const gl = canvas.getContext("webgl2", { antialias: false, preserveDrawingBuffer: true });
+    if (!gl) throw new Error("WebGL2 is not available in this browser");
+    if (!gl.getExtension("EXT_color_buffer_float"))
+      throw new Error("EXT_color_buffer_float is not available: no float render targets");
+    this.gl = gl;
+    this.canvas = canvas;
+    this.programs = new Map();
+    this.timer = gl.getExtension("EXT_disjoint_timer_query_webgl2");
+    const buf = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
+    this.vao = gl.createVertexArray();
+    gl.bindVertexArray(this.vao);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
+    this.target = null;
+  }
+
+  _compile(type, text, label) {
+    const gl = this.gl, sh = gl.createShader(type);
+    gl.shaderSource(sh, text);
+    gl.compileShader(sh);
+    if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS))
+      throw new Error(`${label}: ${gl.getShaderInfoLog(sh)}`);
+    return sh;
+  }
+
+  _link(fragText, label) {
+    const gl = this.gl, p = gl.createProgram();
+    gl.attachShader(p, this._compile(gl.VERTEX_SHADER, VERT, "vertex"));
+    gl.attachShader(p, this._compile(gl.FRAGMENT_SHADER, fragText, label));
+    gl.bindAttribLocation(p, 0, "a_pos");
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${label}: ${gl.getProgramInfoLog(p)}`);
+    const cache = new Map();
+    const u = (name) => {
+      if (!cache.has(name)) cache.set(name, gl.getUniformLocation(p, name));
+      return cache.get(name);
+    };
+    return { program: p, u };
+  }
+
+  async program(model, nw) {
+    const key = `${model}/${nw}`;
+    if (!this.programs.has(key)) {
+      let inc = "";
+      for (const name of INCLUDES[model] || []) inc += `${await source(name)}\n`;
+      const text = `#version 300 es\n#define NW ${nw}\n${await source("common")}\n${inc}${await source(model)}\n`;
+      this.programs.set(key, this._link(text, model));
+    }
+    return this.programs.get(key);
+  }
+
+  async displayProgram() {
+    if (!this.display) this.display = this._link(`#version 300 es\n${await source("display")}`, "display");
+    return this.display;
+  }
+
+  // float RGBA32F render target of the given size
+  _makeTarget(w, h) {
+    const gl = this.gl;
+    const tex = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, w, h);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    const fb = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+    const st = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
+    if (st !== gl.FRAMEBUFFER_COMPLETE) throw new Error(`float render target incomplete (0x${st.toString(16)})`);
+    return { tex, fb, w, h };
+  }
+
+  _ensureTarget(w, h) {
+    if (this.target && this.target.w === w && this.target.h === h) return this.target;
+    if (this.target) { this.gl.deleteTexture(this.target.tex); this.gl.deleteFramebuffer(this.target.fb); }
+    this.target = this._makeTarget(w, h);
+    return this.target;
+  }
+
+  _ensureAux(name, w, h) {
+    this.aux = this.aux || {};
+    const t = this.aux[name];
+    if (t && t.w === w && t.h === h) return t;
+    if (t) { this.gl.deleteTexture(t.tex); this.gl.deleteFramebuffer(t.fb); }
+    return (this.aux[name] = this._makeTarget(w, h));
+  }
+
+  // Draw the views into the float target. views: [{scene, x0, w}] side by side (split view);
+  // camera: {projection, fwd, right, up, tanHalfFov}.
+  async renderXYZ(views, camera, w, h) {
+    const gl = this.gl, t = this._ensureTarget(w, h);
+    const progs = [];
+    for (const v of views) progs.push(await this.program(v.scene.model, v.scene.wavelengths_nm?.length ?? 1));
+    gl.bindVertexArray(this.vao);
+    for (let k = 0; k < views.length; ++k) {
+      const v = views[k], pre = PREPASSES[v.scene.model];
+      if (pre) await pre(this, v.scene);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, t.fb);
+      gl.viewport(0, 0, w, h);
+      gl.enable(gl.SCISSOR_TEST);
+      const { program, u } = progs[k];
+      gl.useProgram(program);
+      gl.scissor(v.x0, 0, v.w, h);
+      gl.uniform4f(u("u_viewport"), 0, 0, w, h);
+      gl.uniform1i(u("u_projection"), camera.projection);
+      gl.uniform3fv(u("u_fwd"), camera.fwd);
+      gl.uniform3fv(u("u_right"), camera.right);
+      gl.uniform3fv(u("u_up"), camera.up);
+      gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
+      gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
+      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed"].includes(v.scene.model) ? 1 : 0);
+      SETTERS[v.scene.model](gl, u, v.scene);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+    }
+    gl.disable(gl.SCISSOR_TEST);
+    return t;
+  }
+
+  // Read the float target back: Float32Array of w*h*4 (X, Y, Z, mask), row 0 at the top.
+  readXYZ() {
+    const gl = this.gl, { fb, w, h } = this.target;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    const buf = new Float32Array(w * h * 4);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, buf);
+    const out = new Float32Array(w * h * 4);
+    for (let r = 0; r < h; ++r) out.set(buf.subarray((h - 1 - r) * w * 4, (h - r) * w * 4), r * w * 4);
+    return out;
+  }
+
+  // Show the float target on the canvas: mode 0 exposure + sRGB, 1 false colour.
+  async show(display) {
+    const gl = this.gl, { tex, w, h } = this.target, { program, u } = await this.displayProgram();
+    if (this.canvas.width !== w || this.canvas.height !== h) { this.canvas.width = w; this.canvas.height = h; }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.viewport(0, 0, w, h);
+    gl.useProgram(program);
+    gl.activeTexture(gl.TEXTURE0);
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.uniform1i(u("u_xyz"), 0);
+    gl.uniform1i(u("u_mode"), display.mode);
+    gl.uniform1f(u("u_white"), display.white);
+    gl.uniform2f(u("u_log_range"), display.logLo, display.logHi);
+    gl.bindVertexArray(this.vao);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  // Block until the GPU has finished (a one-pixel read), for frame timing.
+  sync() {
+    const gl = this.gl, px = new Float32Array(4);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, this.target.fb);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.FLOAT, px);
+  }
+}
+
+// Camera axes from a view azimuth (from north towards east) and elevation [deg].
+export function cameraAxes(azDeg, elDeg, fovDeg, projection = 0) {
+  const a = azDeg * Math.PI / 180, e = elDeg * Math.PI / 180;
+  const fwd = [Math.cos(e) * Math.sin(a), Math.cos(e) * Math.cos(a), Math.sin(e)];
+  let right = [Math.cos(a), -Math.sin(a), 0];
+  const up = [right[1] * fwd[2] - right[2] * fwd[1], right[2] * fwd[0] - right[0] * fwd[2],
+              right[0] * fwd[1] - right[1] * fwd[0]];
+  return { projection, fwd, right, up, tanHalfFov: Math.tan(0.5 * fovDeg * Math.PI / 180) };
+}

@@ -1,0 +1,68 @@
+"""The LUT bake for real-time renderers (skydome.export.luts)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+
+def test_xyz_weights_give_the_luminous_solar_constant():
+    """Summed over the table wavelengths, the Y weights are the illuminance of the
+    extraterrestrial sun at 1 au: 683 lm/W x integral E_sun y-bar = 133 334 lx, the
+    reference luminous solar constant of Darula, Kittler & Gueymard (2005), Solar Energy
+    79, 559-565 (within 1 %: their spectrum and integration differ from ASTM G173's)."""
+    from skydome.export.luts import xyz_weights_for_table
+
+    for grid in (np.linspace(380.0, 780.0, 8), np.linspace(380.0, 780.0, 20)):
+        K = xyz_weights_for_table(grid)
+        assert K.shape == (grid.size, 3)
+        assert K[:, 1].sum() == pytest.approx(133_334.0, rel=0.01)
+
+
+def test_bruneton_packing():
+    """(r, mu, mu_s, nu, 3) -> 3-D texture with x = i_nu * n_mu_s + i_mu_s, y = mu, z = r
+    ([Bru17] GetScattering's 4-D -> 3-D packing); each cell keeps its own value."""
+    from skydome.export.luts import _bruneton_3d
+
+    n_r, n_mu, n_ms, n_nu = 3, 4, 5, 2
+    idx = np.indices((n_r, n_mu, n_ms, n_nu)).astype(float)
+    code = idx[0] * 1000 + idx[1] * 100 + idx[2] * 10 + idx[3]
+    tab = np.stack([code, -code, 2 * code], axis=-1)
+    tex = _bruneton_3d(tab)
+    assert tex.shape == (n_r, n_mu, n_nu * n_ms, 4) and tex.dtype == np.float32
+    for ir, im, ims, inu in [(0, 0, 0, 0), (2, 3, 4, 1), (1, 2, 3, 0), (0, 1, 4, 1)]:
+        texel = tex[ir, im, inu * n_ms + ims]
+        want = ir * 1000 + im * 100 + ims * 10 + inu
+        assert texel.tolist() == [want, -want, 2 * want, 0.0]
+
+
+@pytest.fixture(scope="module")
+def small_sky():
+    import skydome
+
+    return skydome.model("precomputed", sun=skydome.Sun(elevation_deg=30.0, azimuth_deg=180.0),
+                         n_wavelengths=4, scattering_r_size=4, scattering_mu_size=8,
+                         scattering_mu_s_size=4, scattering_nu_size=2, orders=2,
+                         transmittance_mu_size=16, transmittance_r_size=8,
+                         irradiance_mu_s_size=8, irradiance_r_size=4)
+
+
+def test_write_precomputed_luts(small_sky, tmp_path):
+    from skydome.export.luts import LUT_FORMAT, write_precomputed_luts
+
+    out = tmp_path / "luts"
+    written = write_precomputed_luts(small_sky, out)
+    desc = json.loads((out / "luts.json").read_text())
+    assert desc["format"] == LUT_FORMAT
+    assert desc["sizes"] == {"r": 4, "mu": 8, "mu_s": 4, "nu": 2}
+    assert set(desc["textures"]) == {"multiple_scattering", "single_scattering_0",
+                                     "single_scattering_1"}
+    for name, t in desc["textures"].items():
+        raw = np.fromfile(out / t["file"], dtype="<f4").reshape(t["shape"])
+        npy = np.load(out / f"{name}.npy")
+        assert np.array_equal(raw, npy)
+        assert np.all(np.isfinite(raw)) and np.all(raw >= 0.0) and np.all(raw[..., 3] == 0.0)
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]     # no temporary left
+    assert len(written) == 7
