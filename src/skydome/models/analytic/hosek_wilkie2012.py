@@ -175,7 +175,7 @@ def solar_centre_radiance(turbidity: float, elevation_rad) -> np.ndarray:
 def limb_darkening(mu) -> np.ndarray:
     """Limb-darkening factor per band, (..., 11), at mu = cos of the angle between the
     solar surface normal and the ray ([HW13])."""
-    mu = np.asarray(mu, dtype=np.float64)[..., None]
+    mu = np.asarray(mu, dtype=np.float64)[..., None, None]
     return np.sum(_limb_table() * mu ** np.arange(6), axis=-1)
 
 
