@@ -57,6 +57,9 @@ def test_registered_and_validates():
     m = sd.model("hosek_wilkie2012", sun=sun)
     with pytest.raises(ValueError, match="320"):
         m.radiance([0, 0, 1], [300.0])
+    with pytest.raises(ValueError, match="780"):
+        m.radiance([0, 0, 1], [800.0])
+    assert np.all(m.radiance([0, 0, 1], [721.0, 780.0]) == 0)
     with pytest.raises(TypeError):
         sd.model("hosek_wilkie2012", sun=None)
 

@@ -23,8 +23,9 @@ spectral radiance in W m^-2 sr^-1 nm^-1; luminance in cd m^-2 (683 lm/W times th
 authors' Y channel).
 
 Valid range (the fits): turbidity in [1, 10], ground albedo in [0, 1], sun elevation in
-[0, 90] deg, wavelengths in [320, 720] nm. Anything else raises ValueError. Directions
-below the horizon get zero radiance.
+[0, 90] deg, wavelengths in [320, 720] nm (320-780 nm accepted; zero above 720 nm, as in
+the authors' implementation). Anything else raises ValueError. Directions below the
+horizon get zero radiance.
 
 References
 ----------
@@ -50,12 +51,17 @@ from skydome.models import Parameter, SkyModel, check_sun, register
 
 __all__ = ["HosekWilkie2012", "BANDS_NM", "WAVELENGTH_RANGE", "bezier_weights",
            "cooked_coefficients", "distribution", "solar_centre_radiance",
-           "limb_darkening"]
+           "limb_darkening", "ACCEPTED_RANGE"]
 
 #: Centres of the spectral dataset's bands [nm] ([HW12] section 5: 320-720 nm, 40 nm apart).
 BANDS_NM = np.arange(320.0, 721.0, 40.0)
 #: Wavelength range of the spectral dataset [nm].
 WAVELENGTH_RANGE = (320.0, 720.0)
+#: Wavelengths accepted by the model [nm]: the dataset's range plus 720-780 nm, where the
+#: radiance is zero as in the authors' implementation and Mitsuba's (so that the model runs
+#: in skydome's 380-780 nm colour pipeline; the CIE 1931 x-bar above 720 nm holds 0.2 % of
+#: its integral, y-bar 0.01 %).
+ACCEPTED_RANGE = (320.0, 780.0)
 _CHANNEL_CODES = {"R": 1, "G": 2, "B": 3, "X": 4, "Y": 5, "Z": 6}
 _N_PIECES = 45                                       # [HW13] pieces of the solar function
 #: Luminous efficacy used by the authors to turn their Y channel into luminance [lm/W].
@@ -146,13 +152,15 @@ def distribution(cos_theta, cos_gamma, coef) -> np.ndarray:
 
 
 def _band_weights(w: np.ndarray) -> np.ndarray:
-    """(n, 11) weights of the bands for linear interpolation in wavelength."""
+    """(n, 11) weights of the bands for linear interpolation in wavelength; zero rows above
+    the last band (720 nm)."""
     pos = (w - BANDS_NM[0]) / 40.0
     lo = np.clip(np.floor(pos).astype(int), 0, BANDS_NM.size - 2)
     f = pos - lo
     out = np.zeros((w.size, BANDS_NM.size))
     out[np.arange(w.size), lo] = 1.0 - f
     out[np.arange(w.size), lo + 1] = f
+    out[w > WAVELENGTH_RANGE[1]] = 0.0
     return out
 
 
@@ -267,8 +275,9 @@ class HosekWilkie2012(SkyModel):
 
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
         """Spectral sky radiance [W m^-2 sr^-1 nm^-1], shape (..., n); wavelengths in
-        [320, 720] nm, linear between the dataset's bands; zero below the horizon."""
-        w = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE)
+        [320, 780] nm, linear between the dataset's bands (320-720 nm), zero above 720 nm
+        and below the horizon."""
+        w = as_wavelengths(wavelengths_nm, *ACCEPTED_RANGE)
         return self._eval(directions, "spectral") @ _band_weights(w).T
 
     def xyz(self, directions) -> np.ndarray:
@@ -286,9 +295,9 @@ class HosekWilkie2012(SkyModel):
 
     def sun_radiance(self, wavelengths_nm) -> np.ndarray:
         """Disc-averaged spectral radiance of the sun at the ground [W m^-2 sr^-1 nm^-1],
-        shape (n,), wavelengths in [320, 720] nm (centre radiance times the mean limb
+        shape (n,), wavelengths in [320, 780] nm, zero above 720 nm (centre radiance times the mean limb
         darkening; see Notes of the class)."""
-        w = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE)
+        w = as_wavelengths(wavelengths_nm, *ACCEPTED_RANGE)
         a = _limb_table()
         mean_dark = 2.0 * np.sum(a / (np.arange(6) + 2.0), axis=-1)      # 2 int D(mu) mu dmu
         return _band_weights(w) @ (self._sun_bands() * mean_dark)
@@ -298,7 +307,7 @@ class HosekWilkie2012(SkyModel):
         (..., n): zero outside the disc. As in the authors' implementation the solar
         function is evaluated at each ray's own elevation ([HW13])."""
         d = as_directions(directions)
-        w = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE)
+        w = as_wavelengths(wavelengths_nm, *ACCEPTED_RANGE)
         cos_g = np.clip(d @ self.sun.direction, -1.0, 1.0)
         sin2_g = 1.0 - cos_g * cos_g
         sin_r = np.sin(np.radians(self.sun.angular_radius_deg))
