@@ -176,11 +176,16 @@ def sh_basis(d) -> np.ndarray:
     (..., 3) given in any frame's (x, y, z) ([RH01] eq. 3), shape (..., 9)."""
     d = np.asarray(d, dtype=np.float64)
     x, y, z = d[..., 0], d[..., 1], d[..., 2]
-    return np.stack([np.full_like(x, 0.282095), 0.488603 * y, 0.488603 * z, 0.488603 * x,
-                     1.092548 * x * y, 1.092548 * y * z, 0.315392 * (3.0 * z * z - 1.0),
-                     1.092548 * x * z, 0.546274 * (x * x - y * y)], axis=-1)
+    c = _SH_C
+    return np.stack([np.full_like(x, c[0]), c[1] * y, c[1] * z, c[1] * x,
+                     c[2] * x * y, c[2] * y * z, c[3] * (3.0 * z * z - 1.0),
+                     c[2] * x * z, c[4] * (x * x - y * y)], axis=-1)
 
 
+# [RH01] eq. 3 constants in full precision (printed there as 0.282095, 0.488603, 1.092548,
+# 0.315392, 0.546274)
+_SH_C = (0.5 / np.sqrt(np.pi), np.sqrt(3.0 / (4.0 * np.pi)), 0.5 * np.sqrt(15.0 / np.pi),
+         0.25 * np.sqrt(5.0 / np.pi), 0.25 * np.sqrt(15.0 / np.pi))
 _SH_BAND = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
 _A_HAT = np.array([np.pi, 2.0 * np.pi / 3.0, np.pi / 4.0])         # [RH01] eqs. 7-8
 
