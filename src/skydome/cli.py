@@ -653,6 +653,11 @@ def _check_figure_path(out: str) -> None:
         raise UserError(f"out = {out!r}: folder {str(p.parent)!r} is not writable")
 
 
+from skydome.export.cli import export_app  # noqa: E402  (environment maps, sun lights)
+
+app.add_typer(export_app, name="export")
+
+
 def main() -> None:  # console-script entry point
     try:
         app()

@@ -41,7 +41,8 @@ from skydome.render.projections import Projection
 
 __all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envmap",
            "FACES", "LAYOUTS", "cube_face_direction", "cube_face_from_direction",
-           "sh_basis", "irradiance_sh", "sh_irradiance", "K_M", "HALF_MAX"]
+           "sh_basis", "irradiance_sh", "sh_irradiance", "K_M", "HALF_MAX",
+           "check_envmap_options", "check_map_path"]
 
 #: Luminous efficacy of the maps' photometric scale [lm/W].
 K_M = 683.0
@@ -387,6 +388,23 @@ def _sun_irradiance_rgb(sky) -> tuple[np.ndarray, Any]:
     return np.array(light["rgb_irradiance_W_m2"]), light
 
 
+def check_envmap_options(convention, layout, size, sun="separate", ground="lambertian"):
+    """Validate the options of :func:`render_envmap` before any work; returns
+    (Convention, layout, (width, height))."""
+    from skydome._validate import check_choice
+
+    conv = get_convention(convention)
+    layout = conv.layouts[0] if layout is None else layout
+    check_choice("layout", layout, LAYOUTS)
+    allowed = set(conv.layouts) | (set(_CUBE_LAYOUTS) if "cubemap" in conv.layouts else set())
+    if layout not in allowed:
+        raise ValueError(f"layout = {layout!r} is not available for convention {conv.name!r} "
+                         f"(valid: {', '.join(sorted(allowed))})")
+    check_choice("sun", sun, ("separate", "map"))
+    check_choice("ground", ground, ("lambertian", "black", "model"))
+    return conv, layout, _parse_size(layout, size)
+
+
 def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
                   layout: str | None = None, sun: str = "separate", ground: str = "lambertian",
                   ground_albedo: float | None = None, wavelengths_nm=None,
@@ -417,23 +435,15 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
     progress : callable, optional
         ``progress(done, total)`` over all pixels.
     """
-    from skydome._validate import check_choice, check_number
     from skydome.render import render
 
-    conv = get_convention(convention)
-    layout = conv.layouts[0] if layout is None else layout
-    check_choice("layout", layout, LAYOUTS)
-    allowed = set(conv.layouts) | (set(_CUBE_LAYOUTS) if "cubemap" in conv.layouts else set())
-    if layout not in allowed:
-        raise ValueError(f"layout = {layout!r} is not available for convention {conv.name!r} "
-                         f"(valid: {', '.join(sorted(allowed))})")
-    check_choice("sun", sun, ("separate", "map"))
-    check_choice("ground", ground, ("lambertian", "black", "model"))
+    conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground)
     if ground_albedo is None:
         ground_albedo = next((float(getattr(sky, a)) for a in ("albedo", "ground_albedo")
                               if isinstance(getattr(sky, a, None), (int, float))), 0.2)
+    from skydome._validate import check_number
+
     ground_albedo = check_number("ground_albedo", ground_albedo, 0.0, 1.0)
-    W, H = _parse_size(layout, size)
 
     if layout in _CUBE_LAYOUTS:
         projections = {f: CubeFaceProjection(conv, f, W) for f in FACES}
