@@ -254,7 +254,11 @@ def test_sun_light_json(sky, tmp_path):
     E = np.array(light["spectral_irradiance_W_m2_nm"])
     lux = 683.0 * np.trapezoid(E * cmf_1931(wl)[:, 1], wl)
     assert light["illuminance_lx"] == pytest.approx(lux, rel=2e-3)
-    assert light["targets"]["blender"]["strength_W_m2"] == pytest.approx(lux / 683.0, rel=2e-3)
+    b = light["targets"]["blender"]
+    rgb = b["strength_W_m2"] * np.array(b["color"])
+    np.testing.assert_allclose(rgb, light["rgb_irradiance_W_m2"], rtol=1e-12)
+    # the lamp's illuminance: 683 x Y of its RGB irradiance (Rec. 709 luminance weights)
+    assert 683.0 * (rgb @ [0.2126, 0.7152, 0.0722]) == pytest.approx(lux, rel=5e-3)
     p = write_sun_json(light, tmp_path / "sun.json")
     assert json.loads(p.read_text())["illuminance_lx"] == light["illuminance_lx"]
     with pytest.raises(ValueError, match=".json"):

@@ -5,13 +5,15 @@ convention's axes (and in ENU), the angular radius, the spectral normal irradian
 visible part of the disc at the ground [W m^-2 nm^-1], its RGB (the maps' scale: Rec. 709
 primaries, W m^-2 with 683 lm/W), the normal illuminance [lx], and what each target takes:
 
-* Blender sun lamp: ``strength`` = irradiance [W m^-2] on Blender's scale (the
-  illuminance / 683, with the normalised RGB as ``color``), ``angle`` = the disc's angular
-  diameter; the lamp shines along -direction.
+* Blender sun lamp: ``strength`` [W m^-2] and ``color`` (the RGB irradiance divided by its
+  largest channel) with strength x color = the RGB irradiance, so that the lamp's
+  illuminance is 683 lm/W x Y(strength x color) = ``illuminance_lx``; ``angle`` = the
+  disc's angular diameter; the lamp shines along -direction.
 * Mitsuba 3 ``directional`` emitter: ``irradiance`` (RGB, W m^-2) and ``direction`` = the
   direction the light travels (minus the direction to the sun), in Mitsuba's axes.
-* glTF ``KHR_lights_punctual`` directional light: ``intensity`` in lux and ``color``; the
-  light points along its node's local -Z, which must be turned to -direction.
+* glTF ``KHR_lights_punctual`` directional light: ``intensity`` [lx] and ``color`` with
+  intensity x color = the illuminance per RGB channel (as three.js and most viewers
+  multiply them); the light points along its node's local -Z, turned to -direction.
 
 The irradiance is ``sky.sun_radiance(wl) x sun.solid_angle_sr x visible fraction`` (the
 part of the disc above the horizon, flat circular-segment geometry as skydome.render).
@@ -54,8 +56,8 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | N
     d_enu = np.asarray(sun.direction, dtype=np.float64)
     d_tool = conv.to_tool(d_enu)
     peak = float(rgb.max()) if rgb.max() > 0 else 1.0
-    colour = [float(c) / peak for c in rgb]
-    strength = lux / _K_M
+    colour = [float(c) / peak for c in rgb]            # strength x colour = RGB irradiance
+    strength = peak
     mi = get_convention("mitsuba")
     return {
         "convention": conv.name,
@@ -78,7 +80,7 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | N
                         "direction": [-float(x) for x in mi.to_tool(d_enu)],
                         "irradiance_rgb": [float(c) for c in rgb],
                         "note": "Mitsuba axes: +X east, +Y up, +Z south (convention mitsuba)"},
-            "gltf_KHR_lights_punctual": {"type": "directional", "intensity_lx": lux,
+            "gltf_KHR_lights_punctual": {"type": "directional", "intensity_lx": _K_M * peak,
                                          "color": colour,
                                          "points_along": [-float(x) for x in d_tool],
                                          "note": "the light shines along its node's -Z"},
