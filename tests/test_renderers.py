@@ -59,3 +59,42 @@ def test_mitsuba_planes(sky, expected):
                     "sampler": {"type": "independent", "sample_count": 512}}})
         radiance = np.array(mi.render(scene)).reshape(-1, 3).mean(axis=0)
         np.testing.assert_allclose(radiance * np.pi, expected[name], rtol=3e-2, err_msg=name)
+
+
+def test_blender_planes_and_pole_shadow(sky, expected, tmp_path):
+    """Cycles (CPU) in a subprocess: tests/_blender_check.py loads the map (blender
+    convention, Environment Texture with default mapping) and a sun lamp from sun.json."""
+    import importlib.util
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("bpy (Blender as a Python module) is not installed")
+    from skydome.export.sun import write_sun_json
+    from skydome.render.image import read_exr
+
+    render_envmap(sky, "blender", size="512x256").write(tmp_path / "map.exr")
+    write_sun_json(sun_light(sky, "blender"), tmp_path / "sun.json")
+    script = Path(__file__).with_name("_blender_check.py")
+    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "map.exr"),
+                           str(tmp_path / "sun.json"), str(tmp_path)],
+                          capture_output=True, text=True, timeout=900)
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
+    assert proc.returncode == 0 and lines, proc.stderr[-2000:]
+    result = json.loads(lines[-1][len("RESULT "):])
+    for name, radiance in result["planes"].items():
+        np.testing.assert_allclose(np.array(radiance) * np.pi, expected[name], rtol=3e-2,
+                                   err_msg=name)
+    # the pole's shadow, seen from straight above with north up: the dark pixels' centroid
+    # from the pole's foot must point away from the sun's azimuth
+    ch = read_exr(result["pole_image"])
+    Y = 0.2126 * ch["R"] + 0.7152 * ch["G"] + 0.0722 * ch["B"]
+    rows, cols = np.nonzero(Y < 0.5 * np.median(Y))
+    assert rows.size > 10
+    H, W = Y.shape
+    east, north = cols + 0.5 - W / 2, -(rows + 0.5 - H / 2)
+    shadow_az = np.degrees(np.arctan2(east.mean(), north.mean())) % 360.0
+    want = (sky.sun.azimuth_deg + 180.0) % 360.0
+    assert abs((shadow_az - want + 180.0) % 360.0 - 180.0) < 2.0
