@@ -326,3 +326,13 @@ def test_mitsuba_reads_the_map_in_its_convention(sky):
     wl = wavelength_grid(380.0, 780.0, n=16)
     want = xyz_to_linear_srgb(spectrum_to_xyz(sky.radiance(d, wl), wl)) / 683.0
     np.testing.assert_allclose(np.array(got), want, rtol=3e-2)
+
+
+@pytest.mark.parametrize("proj", [MapProjection("blender", 64, 32), MapProjection("pbrt", 32, 32),
+                                  CubeFaceProjection("unity", "+Y", 16)])
+def test_exact_pixel_solid_angles_match_the_jacobian(proj):
+    """The closed-form pixel solid angles against the base class's 4 x 4 midpoint
+    integration of each projection's Jacobian."""
+    from skydome.render.projections import Projection
+
+    np.testing.assert_allclose(proj.solid_angles(), Projection.solid_angles(proj), rtol=2e-3)

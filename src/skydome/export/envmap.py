@@ -68,7 +68,27 @@ def _jacobian_numeric(proj: Projection, row, col, h: float = 1e-3) -> np.ndarray
     return np.linalg.norm(np.cross(dr, dc), axis=-1) / (4.0 * h * h)
 
 
-class MapProjection(Projection):
+class _Cached:
+    """Directions and solid angles computed once per projection (read-only arrays)."""
+
+    def directions(self):
+        if getattr(self, "_dirs", None) is None:
+            d, m = Projection.directions(self)
+            d.setflags(write=False)
+            m.setflags(write=False)
+            self._dirs = (d, m)
+        return self._dirs
+
+    def solid_angles(self):
+        if getattr(self, "_omega", None) is None:
+            _, m = self.directions()
+            w = np.where(m, self._exact_solid_angles(), 0.0)
+            w.setflags(write=False)
+            self._omega = w
+        return self._omega
+
+
+class MapProjection(_Cached, Projection):
     """A convention's single-image layout (lat-long, equal-area square or fisheye) as a
     skydome :class:`~skydome.render.projections.Projection` (directions in ENU)."""
 
@@ -105,6 +125,16 @@ class MapProjection(Projection):
             return np.full(np.shape(row), 4.0 * np.pi / (self.width * self.height))
         return _jacobian_numeric(self, row, col)
 
+    def _exact_solid_angles(self) -> np.ndarray:
+        if self.layout == "latlong":
+            # a pixel spans 2 pi / W in azimuth and zenith angles pi i / H .. pi (i + 1) / H
+            edges = np.cos(np.pi * np.arange(self.height + 1) / self.height)
+            band = (edges[:-1] - edges[1:]) * (2.0 * np.pi / self.width)
+            return np.repeat(band[:, None], self.width, axis=1)
+        if self.layout == "equiarea":
+            return np.full(self.shape, 4.0 * np.pi / (self.width * self.height))
+        return Projection.solid_angles(self)
+
 
 # -- cube faces [GL46] table 8.19 ------------------------------------------------------------
 def cube_face_direction(face: str, sc, tc) -> np.ndarray:
@@ -132,7 +162,7 @@ def cube_face_from_direction(d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return face, 0.5 * (sc / ma + 1.0), 0.5 * (tc / ma + 1.0)
 
 
-class CubeFaceProjection(Projection):
+class CubeFaceProjection(_Cached, Projection):
     """One N x N face of a cube map whose axes are the convention's (directions in ENU)."""
 
     def __init__(self, convention, face: str, size: int):
@@ -169,6 +199,14 @@ class CubeFaceProjection(Projection):
         sc = 2.0 * col / self.width - 1.0
         tc = 2.0 * row / self.height - 1.0
         return (2.0 / self.width) * (2.0 / self.height) / (1.0 + sc * sc + tc * tc) ** 1.5
+
+    def _exact_solid_angles(self) -> np.ndarray:
+        # solid angle of the face rectangle [0, x] x [0, y] at distance 1: atan(x y /
+        # sqrt(1 + x^2 + y^2)); a pixel is the difference of its four corners
+        e = 2.0 * np.arange(self.width + 1) / self.width - 1.0
+        X, Y = np.meshgrid(e, e, indexing="xy")
+        F = np.arctan2(X * Y, np.sqrt(1.0 + X * X + Y * Y))
+        return F[1:, 1:] - F[1:, :-1] - F[:-1, 1:] + F[:-1, :-1]
 
 
 # -- spherical harmonics [RH01] -----------------------------------------------------------------
