@@ -16,6 +16,14 @@ export_app = typer.Typer(no_args_is_help=True, rich_markup_mode=None,
                               "Unreal, Unity, three.js and Radiance.")
 
 _EXTRA = {"allow_extra_args": True, "ignore_unknown_options": True}
+# options shared by the commands (typer reads these markers as the parameters' defaults)
+_MODEL = typer.Option("precomputed", help="Registered model name (see `skydome models`).")
+_SUN_EL = typer.Option(None, help="Sun elevation [deg], -90..90 (default 30).")
+_SUN_AZ = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180).")
+_LAT = typer.Option(None, help="Latitude [deg] (with --lon and --time).")
+_LON = typer.Option(None, help="Longitude [deg], east positive.")
+_TIME = typer.Option(None, help="ISO 8601 time with UTC offset.")
+_SUN_METHOD = typer.Option("spa", help="Solar position algorithm: spa or preetham1999.")
 
 
 def _sun_path(out: str):
@@ -28,7 +36,7 @@ def _sun_path(out: str):
 @export_app.command("envmap", context_settings=_EXTRA)
 def envmap(
     ctx: typer.Context,
-    model: str = typer.Option("precomputed", help="Registered model name (see `skydome models`)."),
+    model: str = _MODEL,
     out: str = typer.Option(..., help="Output file: .exr (float32, or half with --half) or .hdr."),
     convention: str = typer.Option("skydome", help="skydome, blender, mitsuba, pbrt, unreal, unity, three or radiance."),
     layout: Optional[str] = typer.Option(None, help="latlong, equiarea (pbrt), fisheye (radiance), cubemap (6 faces stacked), faces (6 files) or cross; default the convention's own."),
@@ -38,12 +46,12 @@ def envmap(
     ground: str = typer.Option("lambertian", help="Below the horizon: lambertian (albedo x E_h / pi), black or model."),
     ground_albedo: Optional[float] = typer.Option(None, help="Ground albedo 0..1 (default the model's, else 0.2)."),
     sh: bool = typer.Option(False, "--sh", help="Also write OUT.sh.json: order-2 irradiance SH (9 RGB coefficients)."),
-    sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation [deg], -90..90 (default 30)."),
-    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
-    lat: Optional[float] = typer.Option(None, help="Latitude [deg] (with --lon and --time)."),
-    lon: Optional[float] = typer.Option(None, help="Longitude [deg], east positive."),
-    time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset."),
-    sun_method: str = typer.Option("spa", help="Solar position algorithm: spa or preetham1999."),
+    sun_elevation: Optional[float] = _SUN_EL,
+    sun_azimuth: Optional[float] = _SUN_AZ,
+    lat: Optional[float] = _LAT,
+    lon: Optional[float] = _LON,
+    time: Optional[str] = _TIME,
+    sun_method: str = _SUN_METHOD,
     wavelengths: int = typer.Option(16, help="Wavelengths 380-780 nm for spectral models, 3..401."),
 ):
     """Render a sky into an environment map in a renderer's convention (+ OUT.sun.json)."""
@@ -120,15 +128,15 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
 @export_app.command("sun", context_settings=_EXTRA)
 def sun_cmd(
     ctx: typer.Context,
-    model: str = typer.Option("precomputed", help="Registered model name."),
+    model: str = _MODEL,
     out: str = typer.Option(..., help="Output .json file."),
     convention: str = typer.Option("skydome", help="Axes of the direction: a convention name."),
-    sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation [deg] (default 30)."),
-    sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180)."),
-    lat: Optional[float] = typer.Option(None, help="Latitude [deg] (with --lon and --time)."),
-    lon: Optional[float] = typer.Option(None, help="Longitude [deg], east positive."),
-    time: Optional[str] = typer.Option(None, help="ISO 8601 time with UTC offset."),
-    sun_method: str = typer.Option("spa", help="Solar position algorithm: spa or preetham1999."),
+    sun_elevation: Optional[float] = _SUN_EL,
+    sun_azimuth: Optional[float] = _SUN_AZ,
+    lat: Optional[float] = _LAT,
+    lon: Optional[float] = _LON,
+    time: Optional[str] = _TIME,
+    sun_method: str = _SUN_METHOD,
 ):
     """The sun as a light: direction, angular radius, spectral and RGB irradiance, lx."""
     from skydome.cli import _run
