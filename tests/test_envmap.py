@@ -196,6 +196,21 @@ def test_cube_seams_continuous(sky):
     assert _seam_violations(broken, n, pairs) > n
 
 
+def test_cube_face_axes():
+    """Unity and Unreal look cube maps up with their world direction as it is; three.js
+    negates x for cube textures made from images ([three]): world +X (east) lands on the
+    -X face there, on +X in Unity."""
+    east = np.array([1.0, 0.0, 0.0])
+    r, _ = CubeFaceProjection("unity", "+X", 8).pixel_from_direction(east)
+    assert np.isfinite(r)
+    r, _ = CubeFaceProjection("three", "-X", 8).pixel_from_direction(east)
+    assert np.isfinite(r)
+    up = np.array([0.0, 0.0, 1.0])
+    for conv, face in (("three", "+Y"), ("unity", "+Y"), ("unreal", "+Z"), ("skydome", "+Z")):
+        r, c = CubeFaceProjection(conv, face, 8).pixel_from_direction(up)
+        np.testing.assert_allclose([r, c], [4.0, 4.0])
+
+
 def test_cross_layout_places_faces(sky):
     env = render_envmap(sky, "three", size=16, layout="cross")
     im = env.assembled()

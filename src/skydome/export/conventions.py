@@ -33,7 +33,11 @@ References
    (Z forward, X right).
 .. [three] three.js ``common.glsl.js``, ``equirectUv``: u = atan(z, x) / (2 pi) + 0.5,
    v = asin(y) / pi + 0.5, v up from the bottom row; Y-up, right-handed (the default camera
-   looks down -Z).
+   looks down -Z). Cube textures are looked up with ``vec3(flipEnvMap * d.x, d.yz)``,
+   ``flipEnvMap = -1`` for cube textures made from images (``envmap_fragment.glsl.js``,
+   ``WebGLBackground.js``): their faces follow the left-handed RenderMan table.
+.. [GL46] The OpenGL 4.6 core profile specification, section 8.13, table 8.19 (cube-map
+   face selection; the same table as Direct3D and RenderMan).
 .. [Radiance] G. Ward, ``rpict`` manual: view type ``-vta`` (angular fisheye); Radiance
    scenes are Z-up with +Y north and +X east (``gensky``).
 .. [Clarberg08] P. Clarberg, "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD",
@@ -219,6 +223,16 @@ class Convention:
     reference: str
     _uv: object = None
     _dir: object = None
+    cube_flip_x: bool = False    # the tool looks cube maps up with its x negated
+
+    @property
+    def cube_matrix(self) -> np.ndarray:
+        """3 x 3 matrix taking ENU vectors to the axes in which the tool looks up cube-map
+        faces ([GL46] face table): its own axes, x negated where ``cube_flip_x``."""
+        m = self.matrix
+        if self.cube_flip_x:
+            m = m * np.array([[-1.0], [1.0], [1.0]])
+        return m
 
     @property
     def matrix(self) -> np.ndarray:
@@ -280,7 +294,7 @@ CONVENTIONS: dict[str, Convention] = {c.name: c for c in (
                (_E, _U, _S), ("latlong", "cubemap", "cross"),
                "+X = east; north (-Z) a quarter from the left edge", "-Z",
                "[three] src/renderers/shaders/ShaderChunk/common.glsl.js equirectUv",
-               _uv_three, _dir_three),
+               _uv_three, _dir_three, cube_flip_x=True),
     Convention("radiance", "Radiance angular fisheye (rpict -vta), upper hemisphere", "+Z",
                "right", (_E, _N, _U), ("fisheye",),
                "the zenith; north at the top, east on the left", "+Y",

@@ -163,7 +163,8 @@ def cube_face_from_direction(d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 class CubeFaceProjection(_Cached, Projection):
-    """One N x N face of a cube map whose axes are the convention's (directions in ENU)."""
+    """One N x N face of a cube map in the convention's cube axes (directions in ENU): the
+    tool's axes, except for three.js, which looks cube textures up with x negated."""
 
     def __init__(self, convention, face: str, size: int):
         from skydome.render.projections import _check_size
@@ -182,7 +183,7 @@ class CubeFaceProjection(_Cached, Projection):
         d = cube_face_direction(self.face, 2.0 * col / self.width - 1.0,
                                 2.0 * row / self.height - 1.0)
         d = d / np.linalg.norm(d, axis=-1, keepdims=True)
-        d = self.convention.to_enu(d)
+        d = d @ self.convention.cube_matrix             # cube axes -> ENU
         bad = (row < 0) | (row > self.height) | (col < 0) | (col > self.width)
         d[bad] = np.nan
         return d
@@ -190,7 +191,7 @@ class CubeFaceProjection(_Cached, Projection):
     def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
         from skydome.render.projections import _as_dirs
 
-        face, s, t = cube_face_from_direction(self.convention.to_tool(_as_dirs(directions)))
+        face, s, t = cube_face_from_direction(_as_dirs(directions) @ self.convention.cube_matrix.T)
         mine = face == FACES.index(self.face)
         return (np.where(mine, t * self.height, np.nan), np.where(mine, s * self.width, np.nan))
 
