@@ -913,6 +913,9 @@ def _check_figure_path(out: str) -> None:
 from skydome.viewer.cli import view as _view  # noqa: E402 - `skydome view`, its own module
 
 app.command("view")(_view)
+from skydome.export.cli import export_app  # noqa: E402  (environment maps, sun lights)
+
+app.add_typer(export_app, name="export")
 
 
 def main() -> None:  # console-script entry point

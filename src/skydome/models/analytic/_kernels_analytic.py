@@ -262,3 +262,32 @@ def flat_directions(directions):
     if n_zero:
         raise ValueError("directions contains zero-length vectors")
     return flat, lead
+
+
+# -- Hosek & Wilkie 2012: F(theta, gamma) L_M per channel ([HW12] eq. 9) ----------------------
+@njit(**_OPTS)
+def hosek_wilkie(d, s, cfg, rad):
+    """``cfg`` (C, 9): the cooked coefficients A..I per channel; ``rad`` (C,): L_M.
+    Returns (N, C): zero below the horizon, negatives of the fit clamped to zero."""
+    n = d.shape[0]
+    nc = cfg.shape[0]
+    out = np.empty((n, nc))
+    sx, sy, sz = s[0], s[1], s[2]
+    for i in prange(n):
+        x, y, z = _unit(d, i)
+        if z < 0.0:
+            for c in range(nc):
+                out[i, c] = 0.0
+            continue
+        cg = _clamp1(x * sx + y * sy + z * sz)
+        gamma = math.acos(cg)
+        root_z = math.sqrt(z)
+        for c in range(nc):
+            A, B, C, D, E = cfg[c, 0], cfg[c, 1], cfg[c, 2], cfg[c, 3], cfg[c, 4]
+            F, G, H, I = cfg[c, 5], cfg[c, 6], cfg[c, 7], cfg[c, 8]
+            chi = (1.0 + cg * cg) / (1.0 + H * H - 2.0 * H * cg) ** 1.5       # eq. 9, chi
+            grad = 1.0 + A * math.exp(B / (z + 0.01))
+            ind = C + D * math.exp(E * gamma) + F * cg * cg + G * chi + I * root_z
+            v = grad * ind * rad[c]
+            out[i, c] = v if v > 0.0 else 0.0
+    return out

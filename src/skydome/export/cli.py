@@ -1,0 +1,171 @@
+"""``skydome export``: environment maps and sun lights for renderers and engines.
+
+Every command validates all of its input before any work; a bad value prints one line on
+stderr and exits with code 2, leaving nothing on disk.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from typing import Optional
+
+import typer
+
+export_app = typer.Typer(no_args_is_help=True, rich_markup_mode=None,
+                         help="Environment maps and sun lights for Blender, Mitsuba, pbrt, "
+                              "Unreal, Unity, three.js and Radiance.")
+
+_EXTRA = {"allow_extra_args": True, "ignore_unknown_options": True}
+# options shared by the commands (typer reads these markers as the parameters' defaults)
+_MODEL = typer.Option("precomputed", help="Registered model name (see `skydome models`).")
+_SUN_EL = typer.Option(None, help="Sun elevation [deg], -90..90 (default 30).")
+_SUN_AZ = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180).")
+_LAT = typer.Option(None, help="Latitude [deg] (with --lon and --time).")
+_LON = typer.Option(None, help="Longitude [deg], east positive.")
+_TIME = typer.Option(None, help="ISO 8601 time with UTC offset.")
+_SUN_METHOD = typer.Option("spa", help="Solar position algorithm: spa or preetham1999.")
+
+
+def _sun_path(out: str):
+    from pathlib import Path
+
+    p = Path(out)
+    return p.with_name(p.stem + ".sun.json")
+
+
+@export_app.command("envmap", context_settings=_EXTRA)
+def envmap(
+    ctx: typer.Context,
+    model: str = _MODEL,
+    out: str = typer.Option(..., help="Output file: .exr (float32, or half with --half) or .hdr."),
+    convention: str = typer.Option("skydome", help="skydome, blender, mitsuba, pbrt, unreal, unity, three or radiance."),
+    layout: Optional[str] = typer.Option(None, help="latlong, equiarea (pbrt), fisheye (radiance), cubemap (6 faces stacked), faces (6 files) or cross; default the convention's own."),
+    size: str = typer.Option("2048x1024", help="N or WxH [pixels]; N per face for cube layouts."),
+    half: bool = typer.Option(False, "--half", help="Half-float EXR (the sun must then be separate)."),
+    sun_in_map: bool = typer.Option(False, "--sun-in-map", help="Put the sun into the map (energy-true) instead of OUT.sun.json."),
+    ground: str = typer.Option("lambertian", help="Below the horizon: lambertian (albedo x E_h / pi), black or model."),
+    ground_albedo: Optional[float] = typer.Option(None, help="Ground albedo 0..1 (default the model's, else 0.2)."),
+    sh: bool = typer.Option(False, "--sh", help="Also write OUT.sh.json: order-2 irradiance SH (9 RGB coefficients)."),
+    sun_elevation: Optional[float] = _SUN_EL,
+    sun_azimuth: Optional[float] = _SUN_AZ,
+    lat: Optional[float] = _LAT,
+    lon: Optional[float] = _LON,
+    time: Optional[str] = _TIME,
+    sun_method: str = _SUN_METHOD,
+    wavelengths: int = typer.Option(16, help="Wavelengths 380-780 nm for spectral models, 3..401."),
+):
+    """Render a sky into an environment map in a renderer's convention (+ OUT.sun.json)."""
+    from skydome.cli import _run
+
+    _run(_envmap, ctx.args, model, out, convention, layout, size, half, sun_in_map, ground,
+         ground_albedo, sh, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths)
+
+
+def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, ground, ground_albedo,
+            sh, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths):
+    import json
+
+    from skydome._validate import check_int, check_number
+    from skydome.cli import _make_sun, _parse_model_params, _Progress
+    from skydome.export.envmap import check_envmap_options, check_map_path, render_envmap
+    from skydome.export.sun import sun_light, write_sun_json
+    from skydome.models import get_model_class
+    from skydome.spectra import wavelength_grid
+
+    # 1. validate everything before any work
+    cls = get_model_class(model)
+    params = _parse_model_params(cls, extra)
+    sun_mode = "map" if sun_in_map else "separate"
+    conv, layout, _ = check_envmap_options(convention, layout, size, sun_mode, ground)
+    if half and sun_in_map:
+        raise ValueError("--half cannot hold the sun (half floats end at 65504): drop "
+                         "--sun-in-map or --half")
+    p = check_map_path(out, half)
+    if ground_albedo is not None:
+        check_number("ground_albedo", ground_albedo, 0.0, 1.0)
+    check_int("wavelengths", wavelengths, 3, 401)
+    sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
+    sky = cls(sun=sun, **params)
+
+    # 2. work
+    progress = _Progress(f"exporting {model} ({conv.name}, {layout})")
+    t0 = _time.perf_counter()
+    try:
+        env = render_envmap(sky, conv, size, layout, sun=sun_mode, ground=ground,
+                            ground_albedo=ground_albedo,
+                            wavelengths_nm=wavelength_grid(380.0, 780.0, n=wavelengths),
+                            progress=progress)
+    finally:
+        progress.close()
+    written = env.write(p, half=half)
+    if not sun_in_map:
+        light = sun_light(sky, conv)
+        if light is not None:
+            written.append(write_sun_json(light, _sun_path(out)))
+    if sh:
+        coef = env.irradiance_sh()
+        doc = {"convention": conv.name, "order": 2, "basis": "real SH Y00, Y1-1, Y10, Y11, "
+               "Y2-2, Y2-1, Y20, Y21, Y22 in the convention's x, y, z (Ramamoorthi & "
+               "Hanrahan 2001 eq. 3)", "coefficients_rgb": coef.tolist(),
+               "irradiance": "E(n) = sum A_l L_lm Y_lm(n), A = (pi, 2 pi / 3, pi / 4) [W m^-2]",
+               "includes_sun": bool(sun_in_map)}
+        from pathlib import Path
+
+        from skydome.render.image import _atomic_write
+
+        shp = Path(out).with_name(Path(out).stem + ".sh.json")
+
+        def w(tmp):
+            with open(tmp, "w", encoding="utf-8") as f:
+                json.dump(doc, f, indent=2)
+        _atomic_write(shp, w)
+        written.append(shp)
+    dt = _time.perf_counter() - t0
+    typer.echo(f"wrote {', '.join(str(x) for x in written)} ({model}, {conv.name} {layout}, "
+               f"{dt:.1f} s)")
+
+
+@export_app.command("sun", context_settings=_EXTRA)
+def sun_cmd(
+    ctx: typer.Context,
+    model: str = _MODEL,
+    out: str = typer.Option(..., help="Output .json file."),
+    convention: str = typer.Option("skydome", help="Axes of the direction: a convention name."),
+    sun_elevation: Optional[float] = _SUN_EL,
+    sun_azimuth: Optional[float] = _SUN_AZ,
+    lat: Optional[float] = _LAT,
+    lon: Optional[float] = _LON,
+    time: Optional[str] = _TIME,
+    sun_method: str = _SUN_METHOD,
+):
+    """The sun as a light: direction, angular radius, spectral and RGB irradiance, lx."""
+    from skydome.cli import _run
+
+    _run(_sun, ctx.args, model, out, convention, sun_elevation, sun_azimuth, lat, lon, time,
+         sun_method)
+
+
+def _sun(extra, model, out, convention, sun_elevation, sun_azimuth, lat, lon, time, sun_method):
+    from pathlib import Path
+
+    from skydome.cli import UserError, _make_sun, _parse_model_params
+    from skydome.export.conventions import get_convention
+    from skydome.export.sun import sun_light, write_sun_json
+    from skydome.models import get_model_class
+
+    cls = get_model_class(model)
+    params = _parse_model_params(cls, extra)
+    conv = get_convention(convention)
+    p = Path(out)
+    if p.suffix.lower() != ".json":
+        raise UserError(f"out = {out!r} must end in .json")
+    if not (p.parent if str(p.parent) else Path(".")).is_dir():
+        raise UserError(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
+    sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
+    sky = cls(sun=sun, **params)
+    light = sun_light(sky, conv)
+    if light is None:
+        raise UserError(f"model {model!r} has no sun above the horizon to export "
+                        f"(sun elevation {sun.elevation_deg:.2f} deg)")
+    write_sun_json(light, p)
+    typer.echo(f"wrote {out} ({light['illuminance_lx']:.0f} lx, {conv.name} axes)")

@@ -1,0 +1,539 @@
+"""Environment maps for renderers and engines: lat-long, pbrt-v4 equal-area, Radiance
+fisheye and cube maps in each tool's own convention (:mod:`skydome.export.conventions`),
+float32 or half EXR and Radiance .hdr, order-2 irradiance spherical harmonics.
+
+Units of the maps: linear RGB with Rec. 709 / sRGB primaries (D65 white) in
+W m^-2 sr^-1 on the photometric scale luminance = 683 lm/W x (0.2126 R + 0.7152 G +
+0.0722 B), so that a renderer's white Lambertian plane lit by the map has radiance x pi x 683
+= illuminance in lx, and a sun lamp of "strength" E in W m^-2 (Blender) or irradiance E
+(Mitsuba) matches the map when E = illuminance / 683 (:mod:`skydome.export.sun`). The
+``radiance`` convention's .hdr files use Radiance's own scale instead (179 lm/W).
+
+The sky comes from :func:`skydome.render.render` through a :class:`MapProjection` (the
+convention's pixel layout as a skydome projection), without the sun; the sun is either
+left out (exported as a light) or added energy-true into the pixel that holds its centre
+(``sun="map"``). Below the horizon the map holds, by default, a Lambertian ground of the
+model's albedo lit by the map's own upper hemisphere and the sun
+(``L = albedo E_h / pi``); ``ground="black"`` leaves zero, ``ground="model"`` keeps what the
+model returns there.
+
+References
+----------
+.. [RH01] R. Ramamoorthi, P. Hanrahan, "An Efficient Representation for Irradiance
+   Environment Maps", SIGGRAPH 2001: eqs. 3 (the real SH basis to order 2, constants
+   0.282095, 0.488603, 1.092548, 0.315392, 0.546274), 7-8 (A_0 = pi, A_1 = 2 pi / 3,
+   A_2 = pi / 4) and 10.
+.. [GL46] The OpenGL 4.6 core profile specification, section 8.13 "Cube Map Texture
+   Selection", table 8.19 (major axis and s_c, t_c per face); the same face table as
+   Direct3D and RenderMan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from skydome.export.conventions import Convention, get_convention
+from skydome.render.projections import Projection
+
+__all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envmap",
+           "FACES", "LAYOUTS", "cube_face_direction", "cube_face_from_direction",
+           "sh_basis", "irradiance_sh", "sh_irradiance", "K_M", "HALF_MAX",
+           "check_envmap_options", "check_map_path"]
+
+#: Luminous efficacy of the maps' photometric scale [lm/W].
+K_M = 683.0
+#: Radiance's white efficacy [lm/W] (its .hdr files).
+RADIANCE_EFFICACY = 179.0
+#: Largest finite half float.
+HALF_MAX = 65504.0
+#: Cube faces in file order.
+FACES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+#: Layouts: one image (latlong, equiarea, fisheye), six faces stacked (cubemap), six files
+#: (faces) or a horizontal cross.
+LAYOUTS = ("latlong", "equiarea", "fisheye", "cubemap", "faces", "cross")
+_CUBE_LAYOUTS = ("cubemap", "faces", "cross")
+_NATIVE = {"latlong": "latlong", "equiarea": "equiarea", "fisheye": "fisheye"}
+# the cross: (face, row, column) in a 3 x 4 grid of faces [GL46] table orientation
+_CROSS = (("+Y", 0, 1), ("-X", 1, 0), ("+Z", 1, 1), ("+X", 1, 2), ("-Z", 1, 3), ("-Y", 2, 1))
+
+
+def _jacobian_numeric(proj: Projection, row, col, h: float = 1e-3) -> np.ndarray:
+    """Solid angle per pixel^2 [sr] from central differences of direction_from_pixel."""
+    dr = (proj.direction_from_pixel(row + h, col) - proj.direction_from_pixel(row - h, col))
+    dc = (proj.direction_from_pixel(row, col + h) - proj.direction_from_pixel(row, col - h))
+    return np.linalg.norm(np.cross(dr, dc), axis=-1) / (4.0 * h * h)
+
+
+class _Cached:
+    """Directions and solid angles computed once per projection (read-only arrays)."""
+
+    def directions(self):
+        if getattr(self, "_dirs", None) is None:
+            d, m = Projection.directions(self)
+            d.setflags(write=False)
+            m.setflags(write=False)
+            self._dirs = (d, m)
+        return self._dirs
+
+    def solid_angles(self):
+        if getattr(self, "_omega", None) is None:
+            _, m = self.directions()
+            w = np.where(m, self._exact_solid_angles(), 0.0)
+            w.setflags(write=False)
+            self._omega = w
+        return self._omega
+
+
+class MapProjection(_Cached, Projection):
+    """A convention's single-image layout (lat-long, equal-area square or fisheye) as a
+    skydome :class:`~skydome.render.projections.Projection` (directions in ENU)."""
+
+    def __init__(self, convention, width: int, height: int):
+        from skydome.render.projections import _check_size
+
+        self.convention = get_convention(convention)
+        self.layout = self.convention.layouts[0] if self.convention.layouts[0] in _NATIVE else "latlong"
+        self.width = _check_size("width", width)
+        self.height = _check_size("height", height)
+        self.name = f"{self.convention.name}-{self.layout}"
+        self._convention = f"{self.convention.name}: {self.convention.centre}"
+
+    def direction_from_pixel(self, row, col) -> np.ndarray:
+        row, col = np.broadcast_arrays(np.asarray(row, dtype=np.float64),
+                                       np.asarray(col, dtype=np.float64))
+        d = self.convention.direction_from_uv(col / self.width, row / self.height)
+        bad = (row < 0) | (row > self.height) | (col < 0) | (col > self.width)
+        d[bad] = np.nan
+        return d
+
+    def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
+        from skydome.render.projections import _as_dirs
+
+        u, v = self.convention.uv_from_direction(_as_dirs(directions))
+        return v * self.height, u * self.width
+
+    def _jacobian(self, row, col) -> np.ndarray:
+        if self.layout == "latlong":
+            # every lat-long layout has v = zenith angle / pi: dOmega = sin(theta) dtheta dphi
+            return (np.sin(np.pi * row / self.height) * (np.pi / self.height)
+                    * (2.0 * np.pi / self.width))
+        if self.layout == "equiarea":
+            return np.full(np.shape(row), 4.0 * np.pi / (self.width * self.height))
+        return _jacobian_numeric(self, row, col)
+
+    def _exact_solid_angles(self) -> np.ndarray:
+        if self.layout == "latlong":
+            # a pixel spans 2 pi / W in azimuth and zenith angles pi i / H .. pi (i + 1) / H
+            edges = np.cos(np.pi * np.arange(self.height + 1) / self.height)
+            band = (edges[:-1] - edges[1:]) * (2.0 * np.pi / self.width)
+            return np.repeat(band[:, None], self.width, axis=1)
+        if self.layout == "equiarea":
+            return np.full(self.shape, 4.0 * np.pi / (self.width * self.height))
+        return Projection.solid_angles(self)
+
+
+# -- cube faces [GL46] table 8.19 ------------------------------------------------------------
+def cube_face_direction(face: str, sc, tc) -> np.ndarray:
+    """Direction (..., 3), in the cube's axes, of face coordinates s_c, t_c in [-1, 1]
+    (t_c down from the top row), unnormalised."""
+    sc, tc = np.broadcast_arrays(np.asarray(sc, dtype=np.float64), np.asarray(tc, dtype=np.float64))
+    one = np.ones_like(sc)
+    table = {"+X": (one, -tc, -sc), "-X": (-one, -tc, sc), "+Y": (sc, one, tc),
+             "-Y": (sc, -one, -tc), "+Z": (sc, -tc, one), "-Z": (-sc, -tc, -one)}
+    return np.stack(table[face], axis=-1)
+
+
+def cube_face_from_direction(d) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(face index into FACES, s, t) in [0, 1] of directions (..., 3) in the cube's axes:
+    the major axis picks the face ([GL46] table 8.19)."""
+    d = np.asarray(d, dtype=np.float64)
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+    major = np.where((ax >= ay) & (ax >= az), 0, np.where(ay >= az, 1, 2))
+    face = np.where(major == 0, np.where(x >= 0, 0, 1),
+                    np.where(major == 1, np.where(y >= 0, 2, 3), np.where(z >= 0, 4, 5)))
+    ma = np.choose(major, [ax, ay, az])
+    sc = np.choose(face, [-z, z, x, x, x, -x])
+    tc = np.choose(face, [-y, -y, z, -z, -y, -y])
+    return face, 0.5 * (sc / ma + 1.0), 0.5 * (tc / ma + 1.0)
+
+
+class CubeFaceProjection(_Cached, Projection):
+    """One N x N face of a cube map in the convention's cube axes (directions in ENU): the
+    tool's axes, except for three.js, which looks cube textures up with x negated."""
+
+    def __init__(self, convention, face: str, size: int):
+        from skydome.render.projections import _check_size
+
+        if face not in FACES:
+            raise ValueError(f"face = {face!r} is not one of {', '.join(FACES)}")
+        self.convention = get_convention(convention)
+        self.face = face
+        self.width = self.height = _check_size("size", size)
+        self.name = f"{self.convention.name}-cube{face}"
+        self._convention = f"{self.convention.name} axes, face {face} [GL46]"
+
+    def direction_from_pixel(self, row, col) -> np.ndarray:
+        row, col = np.broadcast_arrays(np.asarray(row, dtype=np.float64),
+                                       np.asarray(col, dtype=np.float64))
+        d = cube_face_direction(self.face, 2.0 * col / self.width - 1.0,
+                                2.0 * row / self.height - 1.0)
+        d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+        d = d @ self.convention.cube_matrix             # cube axes -> ENU
+        bad = (row < 0) | (row > self.height) | (col < 0) | (col > self.width)
+        d[bad] = np.nan
+        return d
+
+    def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
+        from skydome.render.projections import _as_dirs
+
+        face, s, t = cube_face_from_direction(_as_dirs(directions) @ self.convention.cube_matrix.T)
+        mine = face == FACES.index(self.face)
+        return (np.where(mine, t * self.height, np.nan), np.where(mine, s * self.width, np.nan))
+
+    def _jacobian(self, row, col) -> np.ndarray:
+        # dOmega = dA / (1 + sc^2 + tc^2)^(3/2) on the unit cube face (side 2)
+        sc = 2.0 * col / self.width - 1.0
+        tc = 2.0 * row / self.height - 1.0
+        return (2.0 / self.width) * (2.0 / self.height) / (1.0 + sc * sc + tc * tc) ** 1.5
+
+    def _exact_solid_angles(self) -> np.ndarray:
+        # solid angle of the face rectangle [0, x] x [0, y] at distance 1: atan(x y /
+        # sqrt(1 + x^2 + y^2)); a pixel is the difference of its four corners
+        e = 2.0 * np.arange(self.width + 1) / self.width - 1.0
+        X, Y = np.meshgrid(e, e, indexing="xy")
+        F = np.arctan2(X * Y, np.sqrt(1.0 + X * X + Y * Y))
+        return F[1:, 1:] - F[1:, :-1] - F[:-1, 1:] + F[:-1, :-1]
+
+
+# -- spherical harmonics [RH01] -----------------------------------------------------------------
+def sh_basis(d) -> np.ndarray:
+    """Real SH basis Y_00, Y_1-1, Y_10, Y_11, Y_2-2, Y_2-1, Y_20, Y_21, Y_22 at unit vectors
+    (..., 3) given in any frame's (x, y, z) ([RH01] eq. 3), shape (..., 9)."""
+    d = np.asarray(d, dtype=np.float64)
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    c = _SH_C
+    return np.stack([np.full_like(x, c[0]), c[1] * y, c[1] * z, c[1] * x,
+                     c[2] * x * y, c[2] * y * z, c[3] * (3.0 * z * z - 1.0),
+                     c[2] * x * z, c[4] * (x * x - y * y)], axis=-1)
+
+
+# [RH01] eq. 3 constants in full precision (printed there as 0.282095, 0.488603, 1.092548,
+# 0.315392, 0.546274)
+_SH_C = (0.5 / np.sqrt(np.pi), np.sqrt(3.0 / (4.0 * np.pi)), 0.5 * np.sqrt(15.0 / np.pi),
+         0.25 * np.sqrt(5.0 / np.pi), 0.25 * np.sqrt(15.0 / np.pi))
+_SH_BAND = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
+_A_HAT = np.array([np.pi, 2.0 * np.pi / 3.0, np.pi / 4.0])         # [RH01] eqs. 7-8
+
+
+def irradiance_sh(radiance_rgb, directions_tool, solid_angles) -> np.ndarray:
+    """Order-2 SH coefficients L_lm (9, 3) of a radiance map: sum of L Y_lm dOmega over the
+    pixels ([RH01] eq. 10 as a quadrature)."""
+    L = np.asarray(radiance_rgb, dtype=np.float64).reshape(-1, 3)
+    Y = sh_basis(np.asarray(directions_tool).reshape(-1, 3))
+    w = np.asarray(solid_angles, dtype=np.float64).reshape(-1)
+    return Y.T @ (L * w[:, None])
+
+
+def sh_irradiance(coefficients, normals_tool) -> np.ndarray:
+    """Irradiance E(n) = sum_lm A_l L_lm Y_lm(n) (..., 3) [W m^-2] at unit normals in the
+    coefficients' frame ([RH01] eq. 8)."""
+    c = np.asarray(coefficients, dtype=np.float64) * _A_HAT[_SH_BAND][:, None]
+    return sh_basis(normals_tool) @ c
+
+
+# -- the map ----------------------------------------------------------------------------------
+@dataclass
+class EnvironmentMap:
+    """A rendered environment map.
+
+    Attributes
+    ----------
+    images : dict
+        Image name -> (H, W, 3) float64 RGB radiance [W m^-2 sr^-1] (see module units):
+        ``{"map": ...}`` for single-image layouts, ``{"+X": ..., ..., "-Z": ...}`` for cube
+        layouts.
+    projections : dict
+        Image name -> the :class:`~skydome.render.projections.Projection` of its pixels.
+    convention : Convention
+    layout : str
+    metadata : dict
+    """
+
+    images: dict
+    projections: dict
+    convention: Convention
+    layout: str
+    metadata: dict = field(default_factory=dict)
+
+    def directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """ENU directions (n, 3) and solid angles (n,) of every pixel of every image."""
+        ds, ws = [], []
+        for name in self.images:
+            p = self.projections[name]
+            d, m = p.directions()
+            ds.append(d.reshape(-1, 3))
+            ws.append(np.where(m, p.solid_angles(), 0.0).reshape(-1))
+        return np.concatenate(ds), np.concatenate(ws)
+
+    def pixels(self) -> np.ndarray:
+        """Every pixel's RGB (n, 3), in the order of :meth:`directions`."""
+        return np.concatenate([im.reshape(-1, 3) for im in self.images.values()])
+
+    def irradiance_sh(self) -> np.ndarray:
+        """Order-2 irradiance SH (9, 3) of the map, in the convention's axes [RH01]."""
+        d, w = self.directions()
+        return irradiance_sh(self.pixels(), self.convention.to_tool(d), w)
+
+    def assembled(self) -> np.ndarray:
+        """The image as written for single-file layouts: the map, the six faces stacked
+        top to bottom in FACES order (cubemap) or the horizontal cross (zeros off the cross)."""
+        if self.layout in _NATIVE:
+            return self.images["map"]
+        n = self.images["+X"].shape[0]
+        if self.layout == "cubemap":
+            return np.concatenate([self.images[f] for f in FACES], axis=0)
+        out = np.zeros((3 * n, 4 * n, 3))
+        for f, r, c in _CROSS:
+            out[r * n:(r + 1) * n, c * n:(c + 1) * n] = self.images[f]
+        return out
+
+    # -- writing ----------------------------------------------------------------------------
+    def write(self, path, half: bool = False) -> list[Path]:
+        """Write the map (.exr float32 or ``half``, or .hdr) atomically; ``layout="faces"``
+        writes six files ``<stem>_px``, ``_nx``, ``_py``, ``_ny``, ``_pz``, ``_nz``. Returns
+        the paths written."""
+        p = check_map_path(path, half)
+        if self.layout == "faces":
+            names = {"+X": "px", "-X": "nx", "+Y": "py", "-Y": "ny", "+Z": "pz", "-Z": "nz"}
+            targets = [(p.with_name(f"{p.stem}_{names[f]}{p.suffix}"), self.images[f]) for f in FACES]
+        else:
+            targets = [(p, self.assembled())]
+        if half and max(float(np.max(im)) for _, im in targets) > HALF_MAX:
+            raise ValueError(f"the map's largest value {max(float(np.max(im)) for _, im in targets):.4g} "
+                             f"exceeds the half-float range ({HALF_MAX:g}): the sun in the map "
+                             "needs float32 (drop half) or export the sun as a light")
+        from skydome.render.image import _atomic_write
+
+        written = []
+        try:
+            for target, im in targets:
+                if target.suffix.lower() == ".exr":
+                    _atomic_write(target, lambda tmp, im=im: self._write_exr(tmp, im, half))
+                else:
+                    _atomic_write(target, lambda tmp, im=im: self._write_hdr(tmp, im))
+                written.append(target)
+        except BaseException:
+            for w in written:                         # nothing partial: all faces or none
+                w.unlink(missing_ok=True)
+            raise
+        return written
+
+    def _header(self) -> dict[str, str]:
+        import json
+
+        meta = dict(self.metadata)
+        meta["convention"] = self.convention.describe()
+        meta["layout"] = self.layout
+        return {f"skydome:{k}": v if isinstance(v, str) else json.dumps(v, default=str)
+                for k, v in meta.items()}
+
+    def _write_exr(self, tmp: str, im: np.ndarray, half: bool) -> None:
+        import OpenEXR
+
+        from skydome.render.image import _SRGB_CHROMATICITIES
+
+        dtype = np.float16 if half else np.float32
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+                  "chromaticities": _SRGB_CHROMATICITIES,
+                  # RGB (1, 1, 1) is 683 cd m^-2 (the photometric scale of the module docs)
+                  "whiteLuminance": K_M}
+        header.update(self._header())
+        header["units"] = "RGB radiance [W m^-2 sr^-1], luminance = 683 lm/W x Y(RGB)"
+        ch = {c: np.ascontiguousarray(im[..., i].astype(dtype)) for i, c in enumerate("RGB")}
+        with OpenEXR.File(header, ch) as f:
+            f.write(tmp)
+
+    def _write_hdr(self, tmp: str, im: np.ndarray) -> None:
+        from skydome.render.image import rgbe_encode
+
+        H, W = im.shape[:2]
+        scale = K_M / RADIANCE_EFFICACY if self.convention.name == "radiance" else 1.0
+        lines = [b"#?RADIANCE",
+                 b"PRIMARIES= 0.6400 0.3300 0.3000 0.6000 0.1500 0.0600 0.3127 0.3290"]
+        for k, v in self._header().items():
+            text = " ".join(str(v).split())[:996]
+            lines.append(f"{k.replace('skydome:', 'SKYDOME_').upper()}= {text}".encode("ascii", "replace"))
+        if self.convention.name == "radiance":
+            lines.append(b"VIEW= -vta -vp 0 0 0 -vd 0 0 1 -vu 0 1 0 -vh 180 -vv 180")
+        lines.append(b"FORMAT=32-bit_rle_rgbe")
+        head = b"\n".join(lines) + b"\n\n" + f"-Y {H} +X {W}\n".encode()
+        with open(tmp, "wb") as f:
+            f.write(head)
+            f.write(rgbe_encode(np.maximum(im, 0.0) * scale).tobytes())
+
+
+def check_map_path(path, half: bool = False) -> Path:
+    """ValueError unless ``path`` ends in .exr or .hdr in a writable folder (and .exr if
+    ``half``)."""
+    from skydome.render.image import check_output_path
+
+    p = Path(path)
+    if p.suffix.lower() not in (".exr", ".hdr"):
+        raise ValueError(f"output file {str(p)!r} has suffix {p.suffix!r}: an environment map "
+                         "must be .exr or .hdr")
+    if half and p.suffix.lower() != ".exr":
+        raise ValueError(f"half floats need an .exr file, not {str(p)!r}")
+    return check_output_path(p)
+
+
+def _parse_size(layout: str, size) -> tuple[int, int]:
+    """(width, height) of a single image or (N, N) of a cube face from an int or 'WxH'."""
+    if isinstance(size, str):
+        parts = size.lower().split("x")
+        try:
+            vals = [int(s) for s in parts]
+        except ValueError:
+            raise ValueError(f"size = {size!r} must be N or WxH in pixels") from None
+    elif isinstance(size, (tuple, list)):
+        vals = [int(s) for s in size]
+    else:
+        vals = [int(size)]
+    if len(vals) not in (1, 2) or min(vals) < 2 or max(vals) > 32768:
+        raise ValueError(f"size = {size!r} is out of range: N or WxH, each in [2, 32768] pixels")
+    if layout in _CUBE_LAYOUTS:
+        if len(vals) == 2 and vals[0] != vals[1]:
+            raise ValueError(f"size = {size!r}: cube faces are square (give N)")
+        return vals[0], vals[0]
+    if len(vals) == 1:
+        w = vals[0]
+        return w, (w if layout in ("equiarea", "fisheye") else max(2, w // 2))
+    if layout in ("equiarea", "fisheye") and vals[0] != vals[1]:
+        raise ValueError(f"size = {size!r}: the {layout} layout is square (give N)")
+    return vals[0], vals[1]
+
+
+def _sun_irradiance_rgb(sky) -> tuple[np.ndarray, Any]:
+    """RGB irradiance [W m^-2] (module scale) of the visible solar disc, or zeros."""
+    from skydome.export.sun import sun_light
+
+    light = sun_light(sky, "skydome")
+    if light is None:
+        return np.zeros(3), None
+    return np.array(light["rgb_irradiance_W_m2"]), light
+
+
+def check_envmap_options(convention, layout, size, sun="separate", ground="lambertian"):
+    """Validate the options of :func:`render_envmap` before any work; returns
+    (Convention, layout, (width, height))."""
+    from skydome._validate import check_choice
+
+    conv = get_convention(convention)
+    layout = conv.layouts[0] if layout is None else layout
+    check_choice("layout", layout, LAYOUTS)
+    allowed = set(conv.layouts) | (set(_CUBE_LAYOUTS) if "cubemap" in conv.layouts else set())
+    if layout not in allowed:
+        raise ValueError(f"layout = {layout!r} is not available for convention {conv.name!r} "
+                         f"(valid: {', '.join(sorted(allowed))})")
+    check_choice("sun", sun, ("separate", "map"))
+    check_choice("ground", ground, ("lambertian", "black", "model"))
+    return conv, layout, _parse_size(layout, size)
+
+
+def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
+                  layout: str | None = None, sun: str = "separate", ground: str = "lambertian",
+                  ground_albedo: float | None = None, wavelengths_nm=None,
+                  progress: Callable[[int, int], None] | None = None) -> EnvironmentMap:
+    """Render ``sky`` into an environment map in a tool's convention.
+
+    Parameters
+    ----------
+    sky : SkyModel
+    convention : str
+        One of :data:`skydome.export.conventions.CONVENTIONS`.
+    size : int, str or tuple
+        ``N`` or ``"WxH"`` [pixels] for single images (lat-long default height W / 2;
+        equal-area and fisheye square), ``N`` per face for cube layouts.
+    layout : str, optional
+        ``latlong``, ``equiarea``, ``fisheye``, ``cubemap`` (six faces stacked), ``faces``
+        (six files) or ``cross``; default the convention's first layout. It must be one the
+        convention lists (cube layouts: those with ``cubemap``).
+    sun : str
+        ``separate`` (not in the map; see :func:`skydome.export.sun.sun_light`) or ``map``
+        (its irradiance added into the pixel holding its centre, energy-true).
+    ground : str
+        ``lambertian`` (albedo x E_h / pi below the horizon), ``black`` or ``model``.
+    ground_albedo : float, optional
+        In [0, 1]; default the model's ``albedo`` / ``ground_albedo`` if it has one, else 0.2.
+    wavelengths_nm : array_like, optional
+        For spectral models (default: skydome.render's 16 samples 380-780 nm).
+    progress : callable, optional
+        ``progress(done, total)`` over all pixels.
+    """
+    from skydome.render import render
+
+    conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground)
+    if ground_albedo is None:
+        ground_albedo = next((float(getattr(sky, a)) for a in ("albedo", "ground_albedo")
+                              if isinstance(getattr(sky, a, None), (int, float))), 0.2)
+    from skydome._validate import check_number
+
+    ground_albedo = check_number("ground_albedo", ground_albedo, 0.0, 1.0)
+
+    if layout in _CUBE_LAYOUTS:
+        projections = {f: CubeFaceProjection(conv, f, W) for f in FACES}
+    else:
+        projections = {"map": MapProjection(conv, W, H)}
+    total = sum(p.width * p.height for p in projections.values())
+    done = [0]
+
+    images = {}
+    for name, proj in projections.items():
+        base = done[0]
+
+        def prog(k, _n, base=base):
+            if progress is not None:
+                progress(base + k, total)
+        img = render(sky, proj, wavelengths_nm, draw_sun=False, progress=prog)
+        rgb = np.where(img.mask[..., None], img.linear_srgb(), 0.0) / K_M
+        images[name] = np.maximum(rgb, 0.0)            # out-of-gamut negatives clipped
+        done[0] += proj.width * proj.height
+
+    env = EnvironmentMap(images, projections, conv, layout)
+    E_sun, light = _sun_irradiance_rgb(sky)
+    d_all, w_all = env.directions()
+    up = d_all[:, 2] > 0.0
+    E_h = (env.pixels()[up] * (d_all[up, 2] * w_all[up])[:, None]).sum(axis=0)
+    if light is not None:
+        E_h = E_h + E_sun * max(np.sin(np.radians(sky.sun.elevation_deg)), 0.0)
+    if ground != "model":
+        L_ground = ground_albedo * E_h / np.pi if ground == "lambertian" else np.zeros(3)
+        for name, proj in projections.items():
+            d, mask = proj.directions()
+            below = mask & (d[..., 2] < 0.0)
+            images[name][below] = L_ground
+    if sun == "map" and light is not None:
+        s = np.asarray(sky.sun.direction)
+        best = None
+        for name, proj in projections.items():
+            r, c = proj.pixel_from_direction(s)
+            if np.isfinite(r) and np.isfinite(c):
+                best = (name, min(int(r), proj.height - 1), min(int(c), proj.width - 1))
+                break
+        name, r, c = best
+        omega = projections[name].solid_angles()[r, c]
+        images[name][r, c] += E_sun / omega
+    env.metadata = {"model": getattr(sky, "name", type(sky).__name__),
+                    "parameters": sky.describe().get("parameters", {}) if hasattr(sky, "describe") else {},
+                    "sun": "in the map" if sun == "map" else "separate light",
+                    "ground": ground, "ground_albedo": ground_albedo,
+                    "horizontal_irradiance_rgb_W_m2": [float(x) for x in E_h],
+                    "units": "RGB radiance [W m^-2 sr^-1], Rec. 709 primaries, 683 lm/W"}
+    if sky.sun is not None:
+        env.metadata["sun_position"] = {"elevation_deg": sky.sun.elevation_deg,
+                                        "azimuth_deg": sky.sun.azimuth_deg}
+    return env

@@ -1,0 +1,108 @@
+"""The sun as a light for renderers, in the convention of the environment map it goes with.
+
+:func:`sun_light` returns a JSON-ready dictionary: the direction towards the sun in the
+convention's axes (and in ENU), the angular radius, the spectral normal irradiance of the
+visible part of the disc at the ground [W m^-2 nm^-1], its RGB (the maps' scale: Rec. 709
+primaries, W m^-2 with 683 lm/W), the normal illuminance [lx], and what each target takes:
+
+* Blender sun lamp: ``strength`` [W m^-2] and ``color`` (the RGB irradiance divided by its
+  largest channel) with strength x color = the RGB irradiance, so that the lamp's
+  illuminance is 683 lm/W x Y(strength x color) = ``illuminance_lx``; ``angle`` = the
+  disc's angular diameter; the lamp shines along -direction.
+* Mitsuba 3 ``directional`` emitter: ``irradiance`` (RGB, W m^-2) and ``direction`` = the
+  direction the light travels (minus the direction to the sun), in Mitsuba's axes.
+* glTF ``KHR_lights_punctual`` directional light: ``intensity`` [lx] and ``color`` with
+  intensity x color = the illuminance per RGB channel (as three.js and most viewers
+  multiply them); the light points along its node's local -Z, turned to -direction.
+
+The irradiance is ``sky.sun_radiance(wl) x sun.solid_angle_sr x visible fraction`` (the
+part of the disc above the horizon, flat circular-segment geometry as skydome.render).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from skydome.export.conventions import get_convention
+
+__all__ = ["sun_light", "write_sun_json"]
+
+_K_M = 683.0
+
+
+def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | None:
+    """The sun of ``sky`` as a light (see the module docstring); None if the model has no
+    sun with a radiance, or the sun is wholly below the horizon."""
+    from skydome.render import _visible_disc_fraction
+    from skydome.spectra import default_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
+
+    conv = get_convention(convention)
+    sun = getattr(sky, "sun", None)
+    if sun is None or sun.elevation_deg <= -sun.angular_radius_deg:
+        return None
+    wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
+    L = sky.sun_radiance(wl)
+    if L is None:
+        return None
+    L = np.maximum(np.asarray(L, dtype=np.float64).reshape(-1), 0.0)
+    frac = _visible_disc_fraction(sun.elevation_deg, sun.angular_radius_deg)
+    E = L * sun.solid_angle_sr * frac                                   # W m^-2 nm^-1
+    xyz = spectrum_to_xyz(E, wl)                                        # Y = illuminance [lx]
+    rgb = np.maximum(xyz_to_linear_srgb(xyz), 0.0) / _K_M               # W m^-2, map scale
+    lux = float(xyz[1])
+    d_enu = np.asarray(sun.direction, dtype=np.float64)
+    d_tool = conv.to_tool(d_enu)
+    peak = float(rgb.max()) if rgb.max() > 0 else 1.0
+    colour = [float(c) / peak for c in rgb]            # strength x colour = RGB irradiance
+    strength = peak
+    mi = get_convention("mitsuba")
+    return {
+        "convention": conv.name,
+        "direction_to_sun": [float(x) for x in d_tool],
+        "direction_to_sun_enu": [float(x) for x in d_enu],
+        "elevation_deg": float(sun.elevation_deg), "azimuth_deg": float(sun.azimuth_deg),
+        "angular_radius_deg": float(sun.angular_radius_deg),
+        "visible_fraction": float(frac),
+        "wavelengths_nm": [float(w) for w in wl],
+        "spectral_irradiance_W_m2_nm": [float(e) for e in E],
+        "rgb_irradiance_W_m2": [float(c) for c in rgb],
+        "rgb_colour_space": "linear Rec. 709 / sRGB primaries, D65; 683 lm/W",
+        "illuminance_lx": lux,
+        "targets": {
+            "blender": {"type": "SUN", "strength_W_m2": strength, "color": colour,
+                        "angle_deg": 2.0 * float(sun.angular_radius_deg),
+                        "points_along": [-float(x) for x in d_enu],
+                        "note": "Blender axes: +X east, +Y north, +Z up (convention blender)"},
+            "mitsuba": {"type": "directional",
+                        "direction": [-float(x) for x in mi.to_tool(d_enu)],
+                        "irradiance_rgb": [float(c) for c in rgb],
+                        "note": "Mitsuba axes: +X east, +Y up, +Z south (convention mitsuba)"},
+            "gltf_KHR_lights_punctual": {"type": "directional", "intensity_lx": _K_M * peak,
+                                         "color": colour,
+                                         "points_along": [-float(x) for x in d_tool],
+                                         "note": "the light shines along its node's -Z"},
+        },
+        "units": {"spectral_irradiance": "W m^-2 nm^-1", "rgb_irradiance": "W m^-2",
+                  "illuminance": "lx", "angles": "deg"},
+    }
+
+
+def write_sun_json(light: dict, path) -> Path:
+    """Write ``light`` as JSON atomically (.json only); returns the path."""
+    from skydome.render.image import _atomic_write
+
+    p = Path(path)
+    if p.suffix.lower() != ".json":
+        raise ValueError(f"sun light file {str(p)!r} must end in .json")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise ValueError(f"sun light file {str(p)!r}: folder {str(parent)!r} does not exist")
+
+    def write(tmp):
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(light, f, indent=2)
+    _atomic_write(p, write)
+    return p

@@ -1,0 +1,74 @@
+"""`skydome export envmap` and `skydome export sun`: files written, one-line errors with exit
+code 2 and nothing on disk for bad input."""
+
+import json
+
+import numpy as np
+from typer.testing import CliRunner
+
+from skydome.cli import app
+
+runner = CliRunner()
+HW = ("--model", "hosek_wilkie2012", "--turbidity", "3", "--albedo", "0.2")
+
+
+def test_export_envmap_with_sun_json_and_sh(tmp_path):
+    from skydome.render.image import read_exr
+
+    out = tmp_path / "sky.exr"
+    res = runner.invoke(app, ["export", "envmap", *HW, "--lat", "48.21", "--lon", "16.37",
+                              "--time", "2026-06-21T18:00+02:00", "--convention", "blender",
+                              "--size", "64x32", "--half", "--sh", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    ch = read_exr(out)
+    assert ch["R"].shape == (32, 64) and ch["R"].dtype == np.float16
+    sun = json.loads((tmp_path / "sky.sun.json").read_text())
+    assert sun["convention"] == "blender"
+    # 18:00 CEST at Vienna on the solstice: the sun is in the west-north-west
+    assert 270 < sun["azimuth_deg"] < 300 and 20 < sun["elevation_deg"] < 35
+    sh = json.loads((tmp_path / "sky.sh.json").read_text())
+    assert np.array(sh["coefficients_rgb"]).shape == (9, 3)
+
+
+def test_export_envmap_cross(tmp_path):
+    out = tmp_path / "cube.hdr"
+    res = runner.invoke(app, ["export", "envmap", *HW, "--convention", "unity", "--layout",
+                              "cross", "--size", "16", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert out.exists() and (tmp_path / "cube.sun.json").exists()
+
+
+def test_export_bad_input_exit_2_nothing_written(tmp_path):
+    cases = [
+        (["--convention", "maya"], "convention = 'maya' is not one of"),
+        (["--convention", "blender", "--layout", "cross"], "not available for convention"),
+        (["--layout", "spiral"], "layout = 'spiral'"),
+        (["--size", "1x1"], "size"),
+        (["--half", "--sun-in-map"], "--half cannot hold the sun"),
+        (["--turbidity", "12"], "turbidity"),
+    ]
+    for extra, msg in cases:
+        res = runner.invoke(app, ["export", "envmap", "--model", "hosek_wilkie2012", *extra,
+                                  "--out", str(tmp_path / "x.exr")])
+        assert res.exit_code == 2, (extra, res.output)
+        assert msg in res.output, (extra, res.output)
+    res = runner.invoke(app, ["export", "envmap", *HW, "--out", str(tmp_path / "x.png")])
+    assert res.exit_code == 2 and "must be .exr or .hdr" in res.output
+    res = runner.invoke(app, ["export", "sun", *HW, "--out", str(tmp_path / "x.txt")])
+    assert res.exit_code == 2 and ".json" in res.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_export_sun(tmp_path):
+    out = tmp_path / "sun.json"
+    res = runner.invoke(app, ["export", "sun", *HW, "--sun-elevation", "40", "--sun-azimuth",
+                              "200", "--convention", "mitsuba", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    light = json.loads(out.read_text())
+    el, az = np.radians(40.0), np.radians(200.0)
+    # Mitsuba axes: x east, y up, z south
+    np.testing.assert_allclose(light["direction_to_sun"],
+                               [np.cos(el) * np.sin(az), np.sin(el), -np.cos(el) * np.cos(az)],
+                               atol=1e-12)
+    np.testing.assert_allclose(light["targets"]["mitsuba"]["direction"],
+                               -np.array(light["direction_to_sun"]), atol=1e-12)
