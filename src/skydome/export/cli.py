@@ -111,7 +111,7 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
                "includes_sun": bool(sun_in_map)}
         from pathlib import Path
 
-        from skydome.render.image import _atomic_write
+        from skydome._io import atomic_write as _atomic_write
 
         shp = Path(out).with_name(Path(out).stem + ".sh.json")
 

@@ -317,7 +317,7 @@ class EnvironmentMap:
             raise ValueError(f"the map's largest value {max(float(np.max(im)) for _, im in targets):.4g} "
                              f"exceeds the half-float range ({HALF_MAX:g}): the sun in the map "
                              "needs float32 (drop half) or export the sun as a light")
-        from skydome.render.image import _atomic_write
+        from skydome._io import atomic_write as _atomic_write
 
         written = []
         try:
