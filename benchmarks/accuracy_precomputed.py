@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -40,7 +41,7 @@ SETTINGS = {
 
 def main(argv=None):
     ap = argparse.ArgumentParser()
-    ap.add_argument("--refs", default=os.path.join("benchmarks", "_mc_refs.npz"))
+    ap.add_argument("--refs", default=os.path.join(tempfile.gettempdir(), "skydome_mc_refs.npz"))
     ap.add_argument("--samples", type=int, default=4000)
     ap.add_argument("--twilight-samples", type=int, default=100_000)
     ap.add_argument("--settings", default=",".join(SETTINGS))

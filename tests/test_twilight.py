@@ -8,7 +8,9 @@ from skydome.cli import app
 from skydome.apps.twilight import (anti_solar_profile, belt_of_venus, horizon_views,
                                       horizontal_illuminance, twilight_models, zenith_luminance_curve)
 
-SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,
+# 32 mu_s nodes of the sunset-centred mapping give every twilight band at least the cells of
+# the 16 nodes of Bruneton's mapping these tests were written with
+SMALL = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=32, orders=3,
              n_wavelengths=10, remaining_orders="none", sphere_samples=16, scattering_nu_size=8)
 
 
