@@ -20,7 +20,6 @@ import hashlib
 import json
 import os
 import shutil
-import tempfile
 
 import numpy as np
 
@@ -115,31 +114,27 @@ def store(k: str, tables) -> str | None:
     arrays = tables.arrays()
     if sum(a.nbytes for a in arrays.values()) > limit:
         return None
+    from skydome._io import atomic_folder
+
     folder = cache_dir()
-    tmp = None
     path = _path(k)
     try:
         os.makedirs(folder, exist_ok=True)
-        tmp = tempfile.mkdtemp(prefix="." + k[:16] + "-", suffix=".tmp", dir=folder)
-        names, scalars = [], {}
-        for name, a in arrays.items():
-            if a.ndim == 0:
-                scalars[name] = a.item()
-            else:
-                np.save(os.path.join(tmp, name + ".npy"), a, allow_pickle=False)
-                names.append(name)
-        with open(os.path.join(tmp, _META), "w") as f:
-            json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
-                       "scalars": scalars}, f)
         if os.path.isdir(path):
             _remove(path)
-        os.rename(tmp, path)
-        tmp = None
-    except OSError:
+        with atomic_folder(path) as tmp:
+            names, scalars = [], {}
+            for name, a in arrays.items():
+                if a.ndim == 0:
+                    scalars[name] = a.item()
+                else:
+                    np.save(os.path.join(tmp, name + ".npy"), a, allow_pickle=False)
+                    names.append(name)
+            with open(os.path.join(tmp, _META), "w") as f:
+                json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
+                           "scalars": scalars}, f)
+    except (OSError, ValueError):   # ValueError: the cache folder is not writable
         return None
-    finally:
-        if tmp is not None:
-            _remove(tmp)
     _evict(folder, limit, keep=path)
     return path
 

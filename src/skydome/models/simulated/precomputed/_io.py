@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 
 import numpy as np
 
@@ -31,18 +30,11 @@ def meta(model) -> dict:
 
 def save(model, path) -> None:
     """Write the tables and parameters to an ``.npz`` file (atomically)."""
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(suffix=".npz", dir=folder)
-    os.close(fd)
-    try:
-        np.savez(tmp, meta=np.array(json.dumps(meta(model), default=_json_default)),
-                 **model._t.arrays())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    from skydome._io import atomic_write
+
+    atomic_write(path, lambda tmp: np.savez(
+        tmp, meta=np.array(json.dumps(meta(model), default=_json_default)), **model._t.arrays()),
+        suffix=".npz")
 
 
 def load(cls, path, sun=None):

@@ -14,6 +14,8 @@ import time
 
 import numpy as np
 
+from skydome._progress import report
+
 QUADRATURE_SCALE_M = 500.0
 # sun angular radius used for the earth's shadow edge [rad] ([Bru17] demo: 0.2666 deg)
 SUN_ANGULAR_RADIUS_RAD = float(np.radians(0.2666))
@@ -106,6 +108,7 @@ def precompute(props, wl, p):
     # 1. transmittance; 2. single scattering
     col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
     ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
+    report("precomputing tables: scattering orders", 1, p["orders"])
     ms = np.zeros(ss.shape[1:], dtype=np.float32)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
@@ -168,6 +171,7 @@ def precompute(props, wl, p):
                                                 mu_s_min, n_q_ms, QUADRATURE_SCALE_M, delta)
             ms += delta
             tot_prev, tot = tot, delta.sum(axis=axes, dtype=np.float64)
+            report("precomputing tables: scattering orders", order, p["orders"])
         if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
             # the orders beyond N as a geometric series whose ratio f is that of the last two
             # orders' total radiance, per wavelength (the idea of [Hil20] eq. 10):
