@@ -22,16 +22,9 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
            "Projection"]
 
 
-def _visible_disc_fraction(elevation_deg: float, radius_deg: float) -> float:
-    """Fraction of the sun's disc above the horizon (flat circular-segment geometry)."""
-    d = np.clip(-elevation_deg / radius_deg, -1.0, 1.0)  # horizon offset in disc radii
-    # area above the chord at signed distance d: r^2 (acos d - d sqrt(1 - d^2))
-    return float((np.arccos(d) - d * np.sqrt(1.0 - d * d)) / np.pi)
-
-
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
-           chunk: int = 32768) -> SkyImage:
+           chunk: int = 32768, limb_darkening: bool = True) -> SkyImage:
     """Render a sky model into an image.
 
     Parameters
@@ -48,9 +41,15 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     progress : callable, optional
         ``progress(done_pixels, total_pixels)``, called after every chunk.
     draw_sun : bool
-        Draw the solar disc where the model has a sun with a radiance (see Notes).
+        Draw the solar disc where the model has a sun with a radiance (see Notes). If
+        False the image has no disc and ``image.sun_light`` holds the sun as a separate
+        :class:`~skydome.render.sun_disc.SunLight` (direction, angular radius, spectral
+        normal irradiance) for renderers that take it that way.
     chunk : int
         Directions per model call (>= 1), bounding memory use.
+    limb_darkening : bool
+        Give the disc the sun's centre-to-limb darkening (Neckel 2005; default) or, if
+        False, a uniform radiance. Either way its flux is the model's.
 
     Returns
     -------
@@ -59,14 +58,15 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
 
     Notes
     -----
-    The sun: if ``draw_sun``, ``sky.sun`` is set, ``sky.sun_radiance(wl)`` is not None and
-    the sun's elevation exceeds minus its angular radius, every unmasked pixel whose centre
-    lies within the sun's angular radius and at or above the horizon (the ground hides the
-    rest of a setting sun) takes the sun's radiance. If no pixel centre falls inside the
-    disc (a disc smaller than a pixel), the pixel containing the sun's direction becomes
-    ``L_pix + (L_sun - L_pix) * Omega_sun / Omega_pix``, which preserves the pixel's flux;
-    ``Omega_sun`` is the visible part of the disc's solid angle. For XYZ images the sun's
-    spectrum is converted to XYZ.
+    The sun: if ``draw_sun``, ``sky.sun`` is set, the model gives a sun radiance
+    (:func:`~skydome.render.sun_disc.sun_disc_radiance`) and the sun's elevation exceeds
+    minus its angular radius, the disc is drawn by
+    :func:`~skydome.render.sun_disc.draw_sun_disc`: its limb-darkened radiance is
+    distributed over the pixels it covers in proportion to the flux falling into each, so
+    that the drawn flux sum (L - L_sky) Omega_pix equals the model's direct normal
+    irradiance L_sun Omega_sun (times the part of the disc above the horizon) in any
+    projection and for a disc of any size, smaller than a pixel included. The disc
+    replaces the sky it covers. For XYZ images the sun's spectrum is converted to XYZ.
     """
     from skydome._validate import as_wavelengths, check_int
 
@@ -114,8 +114,24 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     if sun is not None:
         sun_info = {"elevation_deg": sun.elevation_deg, "azimuth_deg": sun.azimuth_deg,
                     "angular_radius_deg": sun.angular_radius_deg}
-    if draw_sun and sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
-        _draw_sun(sky, sun, projection, dirs, mask, data, wl, spectral)
+    sun_light = None
+    if sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
+        from skydome.render import sun_disc
+
+        if draw_sun:
+            L_sun = sun_disc.sun_disc_radiance(sky, wl)
+            if L_sun is not None:
+                if L_sun.shape[0] != n_ch:
+                    raise ValueError(f"sun radiance of model {getattr(sky, 'name', sky)!r} has "
+                                     f"shape {L_sun.shape}, expected ({n_ch},)")
+                ch_wl = wl if spectral else sun_disc.XYZ_CHANNEL_WAVELENGTHS_NM
+                sun_disc.draw_sun_disc(data, projection, mask, sun, L_sun, ch_wl,
+                                       limb_darkening=limb_darkening)
+                sun_info["drawn"] = "limb-darkened disc" if limb_darkening else "uniform disc"
+        else:
+            sun_light = sun_disc.sun_light(sky, wl)
+            if sun_light is not None:
+                sun_info["drawn"] = "left out (see the sun light)"
 
     meta = {}
     describe = getattr(sky, "describe", None)
@@ -131,49 +147,9 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     meta["projection"] = projection.describe()
     meta["quantity"] = ("spectral radiance [W m^-2 sr^-1 nm^-1]" if spectral
                         else "CIE 1931 XYZ, Y = luminance [cd m^-2]")
-    return SkyImage(data, "spectral" if spectral else "xyz", wl, mask, projection, meta)
-
-
-def _draw_sun(sky, sun, projection, dirs, mask, data, wl, spectral) -> None:
-    """Paint the solar disc into ``data`` in place (see :func:`render` Notes)."""
-    if spectral:
-        L_sun = sky.sun_radiance(wl)
-        if L_sun is None:
-            return
-        L_sun = np.asarray(L_sun, dtype=np.float64).reshape(-1)
-    else:
-        from skydome.spectra import default_wavelengths, spectrum_to_xyz
-
-        w = default_wavelengths()
-        L = sky.sun_radiance(w)
-        if L is None:
-            return
-        L_sun = spectrum_to_xyz(np.asarray(L, dtype=np.float64).reshape(-1), w)
-    if L_sun.shape[0] != data.shape[-1] or not np.all(np.isfinite(L_sun)):
-        raise ValueError(f"sun_radiance of model {getattr(sky, 'name', sky)!r} has shape "
-                         f"{L_sun.shape} or non-finite values")
-    s = np.asarray(sun.direction, dtype=np.float64)
-    r = np.radians(sun.angular_radius_deg)
-    cos_r = np.cos(r)
-    inside = mask & (dirs @ s >= cos_r) & (dirs[..., 2] >= 0.0)
-    if np.any(inside):
-        data[inside] = L_sun
-        return
-    row, col = projection.pixel_from_direction(s)
-    row, col = float(row), float(col)
-    if not (np.isfinite(row) and np.isfinite(col)):
-        return
-    H, W = projection.shape
-    i = min(max(int(np.floor(row)), 0), H - 1)
-    j = min(max(int(np.floor(col)), 0), W - 1)
-    if not mask[i, j]:
-        return
-    omega_pix = float(projection.solid_angles()[i, j])
-    if omega_pix <= 0.0:
-        return
-    omega_sun = sun.solid_angle_sr * _visible_disc_fraction(sun.elevation_deg, sun.angular_radius_deg)
-    f = min(omega_sun / omega_pix, 1.0)
-    data[i, j] = data[i, j] + (L_sun - data[i, j]) * f
+    image = SkyImage(data, "spectral" if spectral else "xyz", wl, mask, projection, meta)
+    image.sun_light = sun_light
+    return image
 
 
 # ``skydome.render`` names both this subpackage and the function above. Once the subpackage

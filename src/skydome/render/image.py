@@ -182,6 +182,8 @@ class SkyImage:
         self.mask = mask
         self.projection = projection
         self.metadata = dict(metadata or {})
+        #: the sun as a separate light when it was left out of the image (render(draw_sun=False))
+        self.sun_light = None
 
     @property
     def shape(self) -> tuple[int, int]:
