@@ -158,3 +158,59 @@ def test_sun_light_export(tmp_path):
     # the sun below the horizon: no light
     assert render(sd.model("single_scattering", sun=Sun(-5.0, 0.0)), Fisheye(16), wl,
                   draw_sun=False).sun_light is None
+
+
+# ------------------------------------------------------------------------------------------
+# The ground below the horizon
+# ------------------------------------------------------------------------------------------
+
+def _quadrature_Eh(sky, wl, n_theta=90, n_phi=180):
+    # midpoint rule in zenith angle and azimuth (a different rule from the renderer's
+    # Gauss-Legendre one) + the sun's beam on the horizontal
+    th = (np.arange(n_theta) + 0.5) * (np.pi / 2) / n_theta
+    ph = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    d = np.stack([np.sin(T) * np.sin(P), np.sin(T) * np.cos(P), np.cos(T)], -1).reshape(-1, 3)
+    L = sky.radiance(d, wl).reshape(n_theta, n_phi, -1)
+    dA = (np.pi / 2 / n_theta) * (2 * np.pi / n_phi)
+    E_sky = np.einsum("ijc,ij->c", L, np.cos(T) * np.sin(T)) * dA
+    E_sun = sky.sun_radiance(wl) * sky.sun.solid_angle_sr * np.sin(np.radians(sky.sun.elevation_deg))
+    return E_sky + E_sun
+
+
+def test_ground_radiance_is_albedo_times_irradiance_over_pi():
+    # a ground-level observer looking at the nadir sees rho E_h / pi; preetham1999 gives
+    # nothing below the horizon, so the renderer's Lambertian ground (albedo 0.2) shows
+    from skydome.spectra import spectrum_to_xyz
+
+    sun = Sun(elevation_deg=35.0, azimuth_deg=160.0)
+    sky = sd.model("preetham1999", sun=sun, turbidity=3.0)
+    p = Equirect(64)
+    im = render(sky, p, draw_sun=False)
+    w = np.linspace(380.0, 780.0, 81)
+    expect_Y = 0.2 * float(spectrum_to_xyz(_quadrature_Eh(sky, w), w)[1]) / np.pi
+    nadir = im.luminance()[-1, 0]
+    assert nadir == pytest.approx(expect_Y, rel=0.01)
+    assert "Lambertian" in im.metadata["ground"]
+    # black, and a constant albedo (linear in the albedo)
+    blk = render(sky, p, draw_sun=False, ground="black")
+    assert np.all(blk.luminance()[-4:] == 0.0)
+    half = render(sky, p, draw_sun=False, ground=0.5)
+    assert half.luminance()[-1, 0] == pytest.approx(nadir * 2.5, rel=1e-9)
+    # the sky is untouched
+    assert np.array_equal(blk.data[:16], im.data[:16])
+    with pytest.raises(ValueError, match="ground"):
+        render(sky, p, ground=1.5)
+    with pytest.raises(ValueError, match="ground"):
+        render(sky, p, ground="grass")
+
+
+def test_ground_of_a_model_that_traces_it_is_kept():
+    sun = Sun(elevation_deg=35.0, azimuth_deg=160.0)
+    sky = sd.model("single_scattering", sun=sun)
+    wl = [450.0, 550.0, 650.0]
+    p = Equirect(32)
+    im = render(sky, p, wl, draw_sun=False)
+    d, _ = p.directions()
+    assert np.allclose(im.data[-1, 3], sky.radiance(d[-1, 3], wl))
+    assert "own ground" in im.metadata["ground"]

@@ -24,7 +24,7 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
 
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
-           chunk: int = 32768, limb_darkening: bool = True) -> SkyImage:
+           chunk: int = 32768, limb_darkening: bool = True, ground="model") -> SkyImage:
     """Render a sky model into an image.
 
     Parameters
@@ -50,6 +50,11 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     limb_darkening : bool
         Give the disc the sun's centre-to-limb darkening (Neckel 2005; default) or, if
         False, a uniform radiance. Either way its flux is the model's.
+    ground : {"model", "black"} or float
+        What the pixels below the horizon show (:mod:`skydome.render.ground`): "model"
+        (default) the model's own ground where it traces ground-hit rays, else a
+        Lambertian ground of the model's albedo (0.2 without one) lit by its sky and sun;
+        "black"; or an albedo in [0, 1] for a Lambertian ground on every model.
 
     Returns
     -------
@@ -73,6 +78,9 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     if not isinstance(projection, Projection):
         raise TypeError(f"projection must be a skydome Projection, got {type(projection).__name__}")
     chunk = check_int("chunk", chunk, 1, None)
+    from skydome.render.ground import apply_ground, check_ground
+
+    ground = check_ground(ground)
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be callable or None, got {progress!r}")
     native = getattr(sky, "native", "spectral")
@@ -108,6 +116,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
             progress(min(start + chunk, total), total)
     data = np.zeros((H, W, n_ch), dtype=np.float64)
     data[mask] = values
+    ground_info = apply_ground(sky, data, dirs, mask, wl, ground)
 
     sun = getattr(sky, "sun", None)
     sun_info = None
@@ -144,6 +153,8 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
         meta["model"] = getattr(sky, "name", type(sky).__name__)
     if sun_info is not None:
         meta["sun"] = sun_info
+    if ground_info is not None:
+        meta["ground"] = ground_info
     meta["projection"] = projection.describe()
     meta["quantity"] = ("spectral radiance [W m^-2 sr^-1 nm^-1]" if spectral
                         else "CIE 1931 XYZ, Y = luminance [cd m^-2]")
