@@ -199,7 +199,7 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     progress = _Progress(f"rendering {model}")
     t0 = _time.perf_counter()
     try:
-        image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun)
+        image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun, output="xyz")
     finally:
         progress.close()
     image.save(out, exposure=exposure, tonemap=tonemap, bits=bits, ev100=ev100)

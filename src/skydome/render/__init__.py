@@ -24,7 +24,8 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
 
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
-           chunk: int = 32768, limb_darkening: bool = True, ground="model") -> SkyImage:
+           chunk: int = 32768, limb_darkening: bool = True, ground="model",
+           output: str = "native") -> SkyImage:
     """Render a sky model into an image.
 
     Parameters
@@ -55,6 +56,15 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
         (default) the model's own ground where it traces ground-hit rays, else a
         Lambertian ground of the model's albedo (0.2 without one) lit by its sky and sun;
         "black"; or an albedo in [0, 1] for a Lambertian ground on every model.
+    output : {"native", "xyz"}
+        "native" (default): a spectral image for spectral models, XYZ for the others.
+        "xyz": an XYZ image for every model, by the fused path: each chunk of the model's
+        spectra goes straight to XYZ through one (n_model_wavelengths x 3) matrix (for
+        models with a wavelength table, e.g. ``precomputed``, the table -> ``wavelengths_nm``
+        resampling, the solar spectrum and the CMF integration weights of
+        ``wavelengths_nm`` in one), so no spectral image is ever held: the same XYZ as
+        ``render(...).xyz()`` to rounding, in a fraction of the time and memory. What
+        PNG, HDR and EXR files need.
 
     Returns
     -------
@@ -83,8 +93,12 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     ground = check_ground(ground)
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be callable or None, got {progress!r}")
+    from skydome._validate import check_choice
+
+    check_choice("output", output, ("native", "xyz"))
     native = getattr(sky, "native", "spectral")
     spectral = native == "spectral"
+    fused = spectral and output == "xyz"
     if spectral:
         if wavelengths_nm is None:
             from skydome.spectra import wavelength_grid
@@ -99,24 +113,32 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
 
     dirs, mask = projection.directions()
     H, W = projection.shape
-    sel = dirs[mask]
-    total = sel.shape[0]
-    values = np.empty((total, n_ch), dtype=np.float64)
+    if fused:
+        sample, to_xyz = _fused_sampler(sky, wl)
+        n_ch = 3
+    idx = np.flatnonzero(mask)
+    flat_dirs = dirs.reshape(-1, 3)
+    total = idx.size
+    data = np.zeros((H, W, n_ch), dtype=np.float64)
+    flat_data = data.reshape(-1, n_ch)
     for start in range(0, total, chunk):
-        d = sel[start:start + chunk]
-        v = sky.radiance(d, wl) if spectral else sky.xyz(d)
-        v = np.asarray(v, dtype=np.float64)
+        rows = idx[start:start + chunk]
+        d = flat_dirs[rows]
+        if fused:
+            v = np.asarray(sample(d), dtype=np.float64) @ to_xyz
+        else:
+            v = np.asarray(sky.radiance(d, wl) if spectral else sky.xyz(d), dtype=np.float64)
         if v.shape != (d.shape[0], n_ch):
             raise ValueError(f"model {getattr(sky, 'name', sky)!r} returned shape {v.shape}, "
                              f"expected {(d.shape[0], n_ch)}")
         if not np.all(np.isfinite(v)):
             raise ValueError(f"model {getattr(sky, 'name', sky)!r} returned NaN or infinite values")
-        values[start:start + d.shape[0]] = v
+        flat_data[rows] = v
         if progress is not None:
             progress(min(start + chunk, total), total)
-    data = np.zeros((H, W, n_ch), dtype=np.float64)
-    data[mask] = values
-    ground_info = apply_ground(sky, data, dirs, mask, wl, ground)
+    if fused:
+        spectral = False
+    ground_info = apply_ground(sky, data, dirs, mask, wl if spectral else None, ground)
 
     sun = getattr(sky, "sun", None)
     sun_info = None
@@ -129,6 +151,8 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
 
         if draw_sun:
             L_sun = sun_disc.sun_disc_radiance(sky, wl)
+            if L_sun is not None and fused:
+                L_sun = L_sun @ _xyz_weights(wl)
             if L_sun is not None:
                 if L_sun.shape[0] != n_ch:
                     raise ValueError(f"sun radiance of model {getattr(sky, 'name', sky)!r} has "
@@ -138,7 +162,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
                                        limb_darkening=limb_darkening)
                 sun_info["drawn"] = "limb-darkened disc" if limb_darkening else "uniform disc"
         else:
-            sun_light = sun_disc.sun_light(sky, wl)
+            sun_light = sun_disc.sun_light(sky, wl if spectral or fused else None)
             if sun_light is not None:
                 sun_info["drawn"] = "left out (see the sun light)"
 
@@ -158,9 +182,39 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     meta["projection"] = projection.describe()
     meta["quantity"] = ("spectral radiance [W m^-2 sr^-1 nm^-1]" if spectral
                         else "CIE 1931 XYZ, Y = luminance [cd m^-2]")
-    image = SkyImage(data, "spectral" if spectral else "xyz", wl, mask, projection, meta)
+    if fused:
+        meta["spectral_sampling"] = {"wavelengths_nm": [float(w) for w in wl],
+                                     "path": "fused spectrum -> XYZ"}
+    image = SkyImage(data, "spectral" if spectral else "xyz", wl if spectral else None, mask,
+                     projection, meta)
     image.sun_light = sun_light
     return image
+
+
+def _xyz_weights(wl) -> np.ndarray:
+    """(n_wl x 3) matrix: XYZ = L @ M, 683 lm/W times the CMF integration weights."""
+    from skydome.constants import K_M
+    from skydome.spectra import integration_weights
+
+    return K_M * np.asarray(integration_weights(wl))
+
+
+def _fused_sampler(sky, wl):
+    """(sample(d) -> (n, n_model), M (n_model x 3)) with XYZ = sample(d) @ M.
+
+    Models with a wavelength table (``radiance_table`` per unit solar irradiance on the
+    table wavelengths and the linear ``_to_wavelengths`` resampling) are sampled on their
+    table and the resampling folded into M: it is linear, so its matrix is its image of the
+    identity. Other spectral models are sampled at ``wl``."""
+    M = _xyz_weights(wl)
+    table = getattr(sky, "radiance_table", None)
+    resample = getattr(sky, "_to_wavelengths", None)
+    n_t = getattr(sky, "n_wavelengths", None)
+    if callable(table) and callable(resample) and isinstance(n_t, (int, np.integer)):
+        R = np.asarray(resample(np.eye(int(n_t)), wl), dtype=np.float64)  # (n_table, n_wl)
+        if R.shape == (int(n_t), wl.size) and np.all(R >= 0.0):
+            return table, R @ M
+    return (lambda d: sky.radiance(d, wl)), M
 
 
 # ``skydome.render`` names both this subpackage and the function above. Once the subpackage
