@@ -24,7 +24,7 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
 
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
-           chunk: int = 32768, limb_darkening: bool = True, ground="model",
+           chunk: int = 262144, limb_darkening: bool = True, ground="model",
            output: str = "native") -> SkyImage:
     """Render a sky model into an image.
 
