@@ -206,11 +206,25 @@ def test_ground_radiance_is_albedo_times_irradiance_over_pi():
 
 
 def test_ground_of_a_model_that_traces_it_is_kept():
+    # precomputed lights its ground with sun and sky itself: its values are kept
     sun = Sun(elevation_deg=35.0, azimuth_deg=160.0)
-    sky = sd.model("single_scattering", sun=sun)
+    sky = sd.model("precomputed", sun=sun, scattering_r_size=8, scattering_mu_size=32,
+                   scattering_mu_s_size=8, orders=2, n_wavelengths=6)
     wl = [450.0, 550.0, 650.0]
     p = Equirect(32)
     im = render(sky, p, wl, draw_sun=False)
     d, _ = p.directions()
     assert np.allclose(im.data[-1, 3], sky.radiance(d[-1, 3], wl))
-    assert "own ground" in im.metadata["ground"]
+    assert im.metadata["ground"] == "the model's own ground-hit rays"
+
+
+def test_sun_only_ground_gets_its_skylight():
+    # single_scattering's own ground is lit by the sun alone; the map adds rho E_sky / pi,
+    # so that the nadir of a ground-level observer is rho (E_sky + E_sun) / pi
+    sun = Sun(elevation_deg=35.0, azimuth_deg=160.0)
+    sky = sd.model("single_scattering", sun=sun)
+    wl = [450.0, 550.0, 650.0]
+    im = render(sky, Equirect(32), wl, draw_sun=False)
+    rho = sky.atmosphere.ground_albedo(np.asarray(wl))
+    assert im.data[-1, 0] == pytest.approx(rho * _quadrature_Eh(sky, wl) / np.pi, rel=0.01)
+    assert "skylight" in im.metadata["ground"]
