@@ -58,7 +58,7 @@ def test_disc_flux_equals_direct_irradiance_every_projection(n, elev, radius):
     sky = BlackSkySun(sun)
     E_n = sky.level * 2.0 * np.pi * (1.0 - np.cos(np.radians(radius)))
     for p in _projections(sun, n):
-        im = render(sky, p, WL)
+        im = render(sky, p, WL, ground="black")  # the sun's flux alone
         flux = np.einsum("hwc,hw->c", im.data, p.solid_angles())
         assert flux == pytest.approx([E_n] * 3, rel=0.01), (p, elev, radius)
         # the light is where the sun is: within the disc plus one pixel
@@ -75,7 +75,7 @@ def test_disc_flux_is_the_visible_part_at_the_horizon():
     sun = Sun(elevation_deg=0.1, azimuth_deg=250.0)
     sky = BlackSkySun(sun)
     p = Equirect(2048)
-    im = render(sky, p, WL)
+    im = render(sky, p, WL, ground="black")
     flux = np.einsum("hwc,hw->c", im.data, p.solid_angles())
     light = render(sky, p, WL, draw_sun=False).sun_light
     assert 0.5 < light.visible_fraction < 0.8

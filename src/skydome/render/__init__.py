@@ -141,7 +141,8 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     ground_info = None
     if not np.any(np.asarray(getattr(projection, "position", (0.0, 0.0, 0.0))) != 0.0):
         # an observer on the ground (a camera away from the origin sees no "horizon")
-        ground_info = apply_ground(sky, data, dirs, mask, wl if spectral else None, ground)
+        ground_info = apply_ground(sky, data, dirs, mask, wl, ground,
+                                   to_xyz=_xyz_weights(wl) if fused else None)
 
     sun = getattr(sky, "sun", None)
     sun_info = None

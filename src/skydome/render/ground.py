@@ -91,9 +91,13 @@ def _albedo(sky, wl, ground) -> np.ndarray | float:
     return v if wl is not None else float(np.ravel(v)[0])
 
 
-def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, ground) -> str | None:
+def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, ground,
+                 to_xyz=None) -> str | None:
     """Fill the pixels below the horizon of ``data`` in place; returns a description for
-    the image metadata (None if no pixel lies below the horizon)."""
+    the image metadata (None if no pixel lies below the horizon). ``wl``: the spectral
+    channels (None: XYZ); ``to_xyz``: an (n_wl x 3) matrix when ``data`` holds XYZ of
+    spectra sampled at ``wl`` (the fused render path)."""
+    conv = (lambda v: v) if to_xyz is None else (lambda v: np.asarray(v) @ to_xyz)
     below = mask & (dirs[..., 2] < 0.0)
     if not np.any(below):
         return None
@@ -104,12 +108,12 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
         if (getattr(sky, "name", "") in SUN_ONLY_GROUND
                 and float(getattr(sky, "observer_altitude_m", 0.0) or 0.0) == 0.0):
             rho = _albedo(sky, wl, ground)
-            data[below] += np.maximum(np.asarray(rho) * horizontal_irradiance(
-                sky, wl, include_sun=False) / np.pi, 0.0)
+            data[below] += np.maximum(conv(np.asarray(rho) * horizontal_irradiance(
+                sky, wl, include_sun=False) / np.pi), 0.0)
             return "the model's own ground (lit by its sun) plus its skylight, rho E_sky / pi"
         return "the model's own ground-hit rays"
     rho = _albedo(sky, wl, ground)
-    L = np.asarray(rho) * horizontal_irradiance(sky, wl) / np.pi
+    L = conv(np.asarray(rho) * horizontal_irradiance(sky, wl) / np.pi)
     data[below] = np.maximum(L, 0.0)
     return (f"Lambertian, albedo {np.round(np.ravel(rho), 4).tolist()}, lit by the model's "
             "sky and sun (observer on the ground)")
