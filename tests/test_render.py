@@ -268,11 +268,13 @@ def test_sun_disc_large_pixels_flux_preserving():
 
 
 def test_sun_disc_resolved():
-    # a 5 deg sun on a 0.7 deg/pixel fisheye: the pixels inside cover its solid angle
+    # a 5 deg sun on a 0.7 deg/pixel fisheye: the pixels more than half covered by the
+    # (uniform) disc, value > (c + L_sun) / 2, cover its solid angle; a pixel whose centre
+    # lies outside a convex disc is at most half covered, so they lie within 5 deg
     sun = Sun(elevation_deg=40.0, azimuth_deg=100.0, angular_radius_deg=5.0)
     p = Fisheye(256)
-    im = render(ConstantSpectral(sun=sun, c=0.01, sun_level=50.0), p)
-    disc = im.data[..., 0] == 50.0
+    im = render(ConstantSpectral(sun=sun, c=0.01, sun_level=50.0), p, limb_darkening=False)
+    disc = im.data[..., 0] > 0.5 * (0.01 + 50.0)
     assert disc.sum() > 100
     assert (p.solid_angles()[disc]).sum() == pytest.approx(sun.solid_angle_sr, rel=0.03)
     d, _ = p.directions()
@@ -513,3 +515,28 @@ def test_package_level_render_after_subpackage_import():
 
     im = sd.render(ConstantSpectral(c=0.02), sd.Fisheye(8))
     assert isinstance(im, SkyImage) and im.data.shape == (8, 8, 16)
+
+
+def test_fused_xyz_path_equals_spectral_then_xyz():
+    # output="xyz" folds the spectrum -> XYZ step into one matrix: the same XYZ as the
+    # spectral image converted afterwards (CIE 1931 integration of the same spectra)
+    import skydome as sd
+
+    sun = Sun(elevation_deg=20.0, azimuth_deg=120.0)
+    wl = np.linspace(380.0, 780.0, 12)
+    for sky in (sd.model("single_scattering", sun=sun),
+                sd.model("precomputed", sun=sun, scattering_r_size=8, scattering_mu_size=32,
+                         scattering_mu_s_size=8, orders=2, n_wavelengths=6)):
+        p = Equirect(48)
+        a = render(sky, p, wl, draw_sun=False)
+        b = render(sky, p, wl, output="xyz", draw_sun=False)
+        assert a.kind == "spectral" and b.kind == "xyz" and b.wavelengths_nm is None
+        assert np.allclose(b.data, a.xyz(), rtol=1e-9, atol=1e-12 * a.xyz().max())
+        # with the sun (limb darkening per XYZ channel instead of per wavelength): the
+        # image's luminance flux is the same to 0.5 %
+        om = p.solid_angles()
+        fa = (render(sky, p, wl).luminance() * om).sum()
+        fb = (render(sky, p, wl, output="xyz").luminance() * om).sum()
+        assert fb == pytest.approx(fa, rel=0.005)
+    with pytest.raises(ValueError, match="output"):
+        render(sky, p, wl, output="rgb")

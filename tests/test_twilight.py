@@ -106,3 +106,28 @@ def test_cli_twilight(tmp_path):
     assert res.exit_code == 2 and "step = 20" in res.output
     res = CliRunner().invoke(app, ["twilight", "--exposure", "fixed", "--out", str(tmp_path / "y")])
     assert res.exit_code == 2 and "exposure = 'fixed'" in res.output
+
+
+@pytest.mark.parametrize("exposure", ["one", "ramp"])
+def test_twilight_frames_darken_frame_by_frame(tmp_path, exposure):
+    # one exposure (or the 80 % ramp) for the whole sequence: the sky's luminance falls
+    # with the sun's depression, so every frame is darker than the one before
+    from PIL import Image
+
+    from skydome.effects.twilight import run_twilight
+    from skydome.spectra import srgb_decode
+
+    run_twilight(tmp_path / "tw", step_deg=3.0, size=24, wavelengths=6, exposure=exposure,
+                 scattering_r_size=8, scattering_mu_size=32, scattering_mu_s_size=8, orders=2)
+    frames = sorted((tmp_path / "tw").glob("frame_sun_minus_*.png"))
+    assert len(frames) >= 4
+    lin = [srgb_decode(np.asarray(Image.open(f), dtype=float) / 255.0) for f in frames]
+    mean = [a.mean() for a in lin]
+    if exposure == "ramp":
+        # the ramp follows the log-average luminance (the automatic exposure's statistic):
+        # the frames' log-average display value falls frame by frame
+        logavg = [np.exp(np.mean(np.log(a[a > 0] + 1e-6))) for a in lin]
+        assert np.all(np.diff(logavg) < 0), logavg
+        assert np.all(np.diff(mean)[:3] < 0), mean
+    else:  # deep twilight may round to black at the first frame's exposure
+        assert np.all(np.diff(mean) <= 0) and np.all(np.diff(mean)[:3] < 0), mean

@@ -386,9 +386,11 @@ def render(
     size: str = typer.Option("512", help="Image size in pixels: N (square / width) or WxH."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm for spectral models, 3..401."),
     exposure: Optional[float] = typer.Option(None, help="PNG only: exposure multiplier on luminance in cd/m^2 (default automatic)."),
-    tonemap: str = typer.Option("filmic", help="PNG only: clamp, reinhard or filmic (ACES-like)."),
+    tonemap: str = typer.Option("hue-preserving", help="PNG only: hue-preserving (default: keeps hue, compresses the gamut), filmic (per-channel ACES fit), reinhard or clamp."),
     bits: int = typer.Option(8, help="PNG only: 8 or 16 bits per channel."),
     no_sun: bool = typer.Option(False, "--no-sun", help="Do not draw the sun disc."),
+    ev100: Optional[float] = typer.Option(None, help="PNG only: exposure value at ISO 100, -20..30 (instead of --exposure)."),
+    sun_light: Optional[str] = typer.Option(None, help="Leave the sun out of the image and write it as a light (direction, angular radius, spectral irradiance) to this .json file."),
 ):
     """Render a sky model into an image file.
 
@@ -396,11 +398,11 @@ def render(
     (see `skydome models` for each model's options, units and ranges).
     """
     _run(_render, ctx.args, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method,
-         projection, size, wavelengths, exposure, tonemap, bits, not no_sun)
+         projection, size, wavelengths, exposure, tonemap, bits, not no_sun, ev100, sun_light)
 
 
 def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method, projection,
-            size, wavelengths, exposure, tonemap, bits, draw_sun):
+            size, wavelengths, exposure, tonemap, bits, draw_sun, ev100=None, sun_light=None):
     from skydome._io import check_output_file
     from skydome._validate import check_choice, check_int, check_number
     from skydome.models import get_model_class
@@ -412,8 +414,15 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     check_choice("projection", projection, PROJECTIONS)
-    check_choice("tonemap", tonemap, ("clamp", "reinhard", "filmic"))
+    check_choice("tonemap", tonemap, ("hue-preserving", "filmic", "reinhard", "clamp"))
     check_choice("bits", bits, (8, 16))
+    if ev100 is not None and exposure is not None:
+        raise UserError("give --exposure or --ev100, not both")
+    if ev100 is not None:
+        check_number("ev100", ev100, -20.0, 30.0)
+    if sun_light is not None:
+        check_output_file(sun_light, (".json",), name="--sun-light")
+        draw_sun = False
     check_int("wavelengths", wavelengths, 3, 401)
     if exposure is not None:
         check_number("exposure", exposure, 0.0, None, low_open=True)
@@ -444,10 +453,15 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
         sky = _build_model(cls, progress, sun=sun, **params)
         if proj is None:
             proj = sky.default_projection(size)
-        image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun)
+        image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun, output="xyz")
     finally:
         progress.close()
-    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits)
+    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits, ev100=ev100)
+    if sun_light is not None:
+        if image.sun_light is None:
+            typer.echo("no sun light written: the model has no sun above the horizon", err=True)
+        else:
+            image.sun_light.write_json(sun_light)
     dt = _time.perf_counter() - t0
     typer.echo(f"wrote {out} ({proj.shape[1]}x{proj.shape[0]}, {model}, sun elevation "
                f"{sun.elevation_deg:.2f} deg azimuth {sun.azimuth_deg:.2f} deg, {dt:.1f} s)")
@@ -785,7 +799,7 @@ def twilight_cmd(
     step: float = typer.Option(2.0, help="Step in sun depression [deg], 0.25..9; the sequence runs 0..-18 deg."),
     size: int = typer.Option(192, help="Fisheye frame size in pixels, 16..2048."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
-    exposure: str = typer.Option("auto", help="auto: each fisheye/horizon pair at its own automatic exposure; ramp: exposure makes up 80 % of the fall in log zenith luminance (frames darken visibly, by 10^1.4 over 0..-18 deg)."),
+    exposure: str = typer.Option("ramp", help="ramp (default): exposure makes up 80 % of the fall in log zenith luminance (frames darken frame by frame, by 10^1.4 over 0..-18 deg); one: the first frame's exposure for all; auto: each frame its own (not faithful)."),
     out: str = typer.Option(..., help="Output folder: fisheye and horizon frames, contact_sheet.png, horizon_sheet.png, twilight.png, twilight.csv."),
 ):
     """Twilight: the sky for the sun from 0 to -18 deg, zenith luminance and illuminance against depression,

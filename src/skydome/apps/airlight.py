@@ -78,6 +78,13 @@ def _write(path, img):
             OpenEXR.File(h, chans).write(tmp)
 
 
+def _display_gain(x) -> float:
+    """Display exposure of a linear image (a daylight-balanced camera with automatic
+    exposure): the 99th percentile of its luminance (Rec. 709 weights) maps to 0.85."""
+    y = np.asarray(x) @ np.array([0.2126, 0.7152, 0.0722])
+    return 0.85 / max(float(np.percentile(y, 99.0)), 1e-12)
+
+
 def _side_by_side(before, after, path, labels):
     from skydome.render.sheets import contact_sheet
     from skydome.spectra import srgb_encode
@@ -103,7 +110,10 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
         res = apply_airlight(img, dep, sun, method=method, turbidity=turbidity, fov_deg=fov_deg,
                              view_azimuth_deg=view_azimuth_deg, view_elevation_deg=2.0,
                              white_balance=white_balance, fill_sky=fill_sky)
-        _side_by_side(img, [res], o, ["scene without air", f"{method}, turbidity {turbidity:g}"]) \
+        # PNG: each panel at a display exposure (99th luminance percentile at 0.85), as a
+        # camera with automatic exposure; the linear result is written unscaled otherwise
+        _side_by_side(_display_gain(img) * img, [_display_gain(res) * res], o,
+                      ["scene without air (own exposure)", f"{method}, turbidity {turbidity:g} (own exposure)"]) \
             if o.suffix.lower() == ".png" else _write(o, res)
         return res
     if image is None or depth is None:
@@ -133,14 +143,8 @@ def demo_effects(out_dir):
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     path = Path(out_dir) / "airlight_mountains.png"
 
-    def gain(x):
-        # display exposure per panel (a daylight-balanced camera with auto exposure):
-        # the 99th percentile of the luminance at 0.85
-        y = x @ np.array([0.2126, 0.7152, 0.0722])
-        return 0.85 / max(float(np.percentile(y, 99.0)), 1e-12)
-
-    g_clear = gain(clear)
-    _side_by_side(g_clear * img, [g_clear * clear, gain(hazy) * hazy], path,
+    g_clear = _display_gain(clear)
+    _side_by_side(g_clear * img, [g_clear * clear, _display_gain(hazy) * hazy], path,
                   ["no air (sky pixels black), exposure of the next", "clear air (turbidity 2), sky from the model",
                    "haze (turbidity 8), sky from the model"])
     return [path]

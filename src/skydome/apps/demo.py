@@ -65,7 +65,7 @@ def run(out_dir: Path, only: list[str] | None = None) -> list[Path]:
         t0 = time.perf_counter()
         sky = sd.model(name, sun=_sun(sun_spec), **params)
         proj = sky.default_projection(int(size)) if proj_name == "camera" else make_projection(proj_name, size)
-        image = sd.render(sky, proj, wl)
+        image = sd.render(sky, proj, wl, output="xyz")
         png = out_dir / f"{stem}.png"
         exposure = None
         if proj_name == "camera":

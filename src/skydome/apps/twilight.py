@@ -171,11 +171,11 @@ def horizon_views(size: int, sun_azimuth_deg: float = SUN_AZIMUTH_DEG, fov_deg: 
     return cams
 
 
-EXPOSURES = ("auto", "ramp")
+EXPOSURES = ("ramp", "one", "auto")
 
 
 def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, size: int = 192,
-                 wavelengths: int = 16, exposure: str = "auto", progress: Callable | None = None,
+                 wavelengths: int = 16, exposure: str = "ramp", progress: Callable | None = None,
                  **params) -> dict:
     """Render the twilight sequence 0..-18 deg into ``out_dir`` (written atomically):
     ``frame_sun_minus_DDD.png`` fisheyes and ``horizon_sun_minus_DDD.png`` horizon views
@@ -185,12 +185,15 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
     profiles) and ``twilight.csv``.
 
     Exposure (the sky dims by 10^7 from 0 to -18 deg): each fisheye and its horizon view
-    share one exposure multiplier k [m^2/cd]. ``exposure="auto"``: k is the fisheye's
-    automatic exposure (Reinhard's key 0.18 on the log-average sky luminance), so every
-    pair looks about equally bright and the sheets label each frame with its zenith
-    luminance. ``exposure="ramp"``: k = k_0 (L_z0 / L_z)^0.8, with k_0 and L_z0 the first
-    frame's auto exposure and zenith luminance: the exposure makes up 80 % of the fall in log
-    luminance, so the frames darken visibly (by 10^1.4 over 10^7) and stay readable."""
+    share one exposure multiplier k [m^2/cd]. ``exposure="ramp"`` (default): k = k_0
+    (A_0 / A)^0.8, with A the log-average sky luminance (the statistic of the automatic
+    exposure) and k_0, A_0 the first frame's: the exposure makes up 80 % of the fall in
+    log luminance, so the frames darken frame by frame (by 10^1.4 over 10^7) and stay
+    readable. ``exposure="one"``: the
+    first frame's k for every frame (true relative brightness; deep twilight is black).
+    ``exposure="auto"``: k is each fisheye's own automatic exposure (Reinhard's key 0.18 on
+    the log-average sky luminance), so every pair looks about equally bright (-12 deg
+    looks like day): not a faithful sequence, kept for inspecting colours."""
     from skydome._validate import check_int, check_number
     from skydome.render import render
     from skydome.render.projections import Fisheye
@@ -208,7 +211,7 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
     prof_el = np.arange(0.5, 40.0, 0.5)
     rows, frames, horizons = [], [], []
     cams = horizon_views(max(16, size), skies[0].sun.azimuth_deg)
-    k0 = z0 = None
+    k0 = None
     with atomic_folder(out_dir) as tmp:
         for n, (dep, sky) in enumerate(zip(deps, skies)):
             zen = float(_luminance(sky, np.array([0.0, 0.0, 1.0]), wl))
@@ -218,10 +221,11 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
             tag = f"sun_minus_{int(round(dep * 10)):03d}.png"   # tenths of a degree
             if zen > 0:
                 k = img.auto_exposure()
-                if exposure == "ramp":
+                if exposure != "auto":
                     if k0 is None:
-                        k0, z0 = k, zen
-                    k = k0 * (z0 / zen) ** 0.8
+                        k0 = k
+                    # auto exposure is inversely proportional to the log-average luminance
+                    k = k0 * (k / k0) ** (0.8 if exposure == "ramp" else 0.0)
                 img.save(tmp / f"frame_{tag}", exposure=k)
                 frames.append((dep, zen, tmp / f"frame_{tag}"))
                 halves = [render(sky, c, wl, draw_sun=False).to_srgb(exposure=k) for c in cams]

@@ -22,16 +22,10 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
            "Projection"]
 
 
-def _visible_disc_fraction(elevation_deg: float, radius_deg: float) -> float:
-    """Fraction of the sun's disc above the horizon (flat circular-segment geometry)."""
-    d = np.clip(-elevation_deg / radius_deg, -1.0, 1.0)  # horizon offset in disc radii
-    # area above the chord at signed distance d: r^2 (acos d - d sqrt(1 - d^2))
-    return float((np.arccos(d) - d * np.sqrt(1.0 - d * d)) / np.pi)
-
-
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
-           chunk: int = 32768) -> SkyImage:
+           chunk: int = 262144, limb_darkening: bool = True, ground="model",
+           output: str = "native") -> SkyImage:
     """Render a sky model into an image.
 
     Parameters
@@ -48,9 +42,29 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     progress : callable, optional
         ``progress(done_pixels, total_pixels)``, called after every chunk.
     draw_sun : bool
-        Draw the solar disc where the model has a sun with a radiance (see Notes).
+        Draw the solar disc where the model has a sun with a radiance (see Notes). If
+        False the image has no disc and ``image.sun_light`` holds the sun as a separate
+        :class:`~skydome.render.sun_disc.SunLight` (direction, angular radius, spectral
+        normal irradiance) for renderers that take it that way.
     chunk : int
         Directions per model call (>= 1), bounding memory use.
+    limb_darkening : bool
+        Give the disc the sun's centre-to-limb darkening (Neckel 2005; default) or, if
+        False, a uniform radiance. Either way its flux is the model's.
+    ground : {"model", "black"} or float
+        What the pixels below the horizon show (:mod:`skydome.render.ground`): "model"
+        (default) the model's own ground where it traces ground-hit rays, else a
+        Lambertian ground of the model's albedo (0.2 without one) lit by its sky and sun;
+        "black"; or an albedo in [0, 1] for a Lambertian ground on every model.
+    output : {"native", "xyz"}
+        "native" (default): a spectral image for spectral models, XYZ for the others.
+        "xyz": an XYZ image for every model, by the fused path: each chunk of the model's
+        spectra goes straight to XYZ through one (n_model_wavelengths x 3) matrix (for
+        models with a wavelength table, e.g. ``precomputed``, the table -> ``wavelengths_nm``
+        resampling, the solar spectrum and the CMF integration weights of
+        ``wavelengths_nm`` in one), so no spectral image is ever held: the same XYZ as
+        ``render(...).xyz()`` to rounding, in a fraction of the time and memory. What
+        PNG, HDR and EXR files need.
 
     Returns
     -------
@@ -59,14 +73,15 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
 
     Notes
     -----
-    The sun: if ``draw_sun``, ``sky.sun`` is set, ``sky.sun_radiance(wl)`` is not None and
-    the sun's elevation exceeds minus its angular radius, every unmasked pixel whose centre
-    lies within the sun's angular radius and at or above the horizon (the ground hides the
-    rest of a setting sun) takes the sun's radiance. If no pixel centre falls inside the
-    disc (a disc smaller than a pixel), the pixel containing the sun's direction becomes
-    ``L_pix + (L_sun - L_pix) * Omega_sun / Omega_pix``, which preserves the pixel's flux;
-    ``Omega_sun`` is the visible part of the disc's solid angle. For XYZ images the sun's
-    spectrum is converted to XYZ.
+    The sun: if ``draw_sun``, ``sky.sun`` is set, the model gives a sun radiance
+    (:func:`~skydome.render.sun_disc.sun_disc_radiance`) and the sun's elevation exceeds
+    minus its angular radius, the disc is drawn by
+    :func:`~skydome.render.sun_disc.draw_sun_disc`: its limb-darkened radiance is
+    distributed over the pixels it covers in proportion to the flux falling into each, so
+    that the drawn flux sum (L - L_sky) Omega_pix equals the model's direct normal
+    irradiance L_sun Omega_sun (times the part of the disc above the horizon) in any
+    projection and for a disc of any size, smaller than a pixel included. The disc
+    replaces the sky it covers. For XYZ images the sun's spectrum is converted to XYZ.
     """
     from skydome._validate import as_wavelengths, check_int
 
@@ -78,10 +93,17 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     if not isinstance(projection, Projection):
         raise TypeError(f"projection must be a skydome Projection, got {type(projection).__name__}")
     chunk = check_int("chunk", chunk, 1, None)
+    from skydome.render.ground import apply_ground, check_ground
+
+    ground = check_ground(ground)
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be callable or None, got {progress!r}")
+    from skydome._validate import check_choice
+
+    check_choice("output", output, ("native", "xyz"))
     native = getattr(sky, "native", "spectral")
     spectral = native == "spectral"
+    fused = spectral and output == "xyz"
     if spectral:
         if wavelengths_nm is None:
             from skydome.spectra import wavelength_grid
@@ -96,31 +118,62 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
 
     dirs, mask = projection.directions()
     H, W = projection.shape
-    sel = dirs[mask]
-    total = sel.shape[0]
-    values = np.empty((total, n_ch), dtype=np.float64)
+    if fused:
+        sample, to_xyz = _fused_sampler(sky, wl)
+        n_ch = 3
+    idx = np.flatnonzero(mask)
+    flat_dirs = dirs.reshape(-1, 3)
+    total = idx.size
+    data = np.zeros((H, W, n_ch), dtype=np.float64)
+    flat_data = data.reshape(-1, n_ch)
     for start in range(0, total, chunk):
-        d = sel[start:start + chunk]
-        v = sky.radiance(d, wl) if spectral else sky.xyz(d)
-        v = np.asarray(v, dtype=np.float64)
+        rows = idx[start:start + chunk]
+        d = flat_dirs[rows]
+        if fused:
+            v = np.asarray(sample(d), dtype=np.float64) @ to_xyz
+        else:
+            v = np.asarray(sky.radiance(d, wl) if spectral else sky.xyz(d), dtype=np.float64)
         if v.shape != (d.shape[0], n_ch):
             raise ValueError(f"model {getattr(sky, 'name', sky)!r} returned shape {v.shape}, "
                              f"expected {(d.shape[0], n_ch)}")
         if not np.all(np.isfinite(v)):
             raise ValueError(f"model {getattr(sky, 'name', sky)!r} returned NaN or infinite values")
-        values[start:start + d.shape[0]] = v
+        flat_data[rows] = v
         if progress is not None:
             progress(min(start + chunk, total), total)
-    data = np.zeros((H, W, n_ch), dtype=np.float64)
-    data[mask] = values
+    if fused:
+        spectral = False
+    ground_info = None
+    if not np.any(np.asarray(getattr(projection, "position", (0.0, 0.0, 0.0))) != 0.0):
+        # an observer on the ground (a camera away from the origin sees no "horizon")
+        ground_info = apply_ground(sky, data, dirs, mask, wl, ground,
+                                   to_xyz=_xyz_weights(wl) if fused else None)
 
     sun = getattr(sky, "sun", None)
     sun_info = None
     if sun is not None:
         sun_info = {"elevation_deg": sun.elevation_deg, "azimuth_deg": sun.azimuth_deg,
                     "angular_radius_deg": sun.angular_radius_deg}
-    if draw_sun and sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
-        _draw_sun(sky, sun, projection, dirs, mask, data, wl, spectral)
+    sun_light = None
+    if sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
+        from skydome.render import sun_disc
+
+        if draw_sun:
+            L_sun = sun_disc.sun_disc_radiance(sky, wl)
+            if L_sun is not None and fused:
+                L_sun = L_sun @ _xyz_weights(wl)
+            if L_sun is not None:
+                if L_sun.shape[0] != n_ch:
+                    raise ValueError(f"sun radiance of model {getattr(sky, 'name', sky)!r} has "
+                                     f"shape {L_sun.shape}, expected ({n_ch},)")
+                ch_wl = wl if spectral else sun_disc.XYZ_CHANNEL_WAVELENGTHS_NM
+                sun_disc.draw_sun_disc(data, projection, mask, sun, L_sun, ch_wl,
+                                       limb_darkening=limb_darkening)
+                sun_info["drawn"] = "limb-darkened disc" if limb_darkening else "uniform disc"
+        else:
+            sun_light = sun_disc.sun_light(sky, wl if spectral or fused else None)
+            if sun_light is not None:
+                sun_info["drawn"] = "left out (see the sun light)"
 
     meta = {}
     describe = getattr(sky, "describe", None)
@@ -133,52 +186,44 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
         meta["model"] = getattr(sky, "name", type(sky).__name__)
     if sun_info is not None:
         meta["sun"] = sun_info
+    if ground_info is not None:
+        meta["ground"] = ground_info
     meta["projection"] = projection.describe()
     meta["quantity"] = ("spectral radiance [W m^-2 sr^-1 nm^-1]" if spectral
                         else "CIE 1931 XYZ, Y = luminance [cd m^-2]")
-    return SkyImage(data, "spectral" if spectral else "xyz", wl, mask, projection, meta)
+    if fused:
+        meta["spectral_sampling"] = {"wavelengths_nm": [float(w) for w in wl],
+                                     "path": "fused spectrum -> XYZ"}
+    image = SkyImage(data, "spectral" if spectral else "xyz", wl if spectral else None, mask,
+                     projection, meta)
+    image.sun_light = sun_light
+    return image
 
 
-def _draw_sun(sky, sun, projection, dirs, mask, data, wl, spectral) -> None:
-    """Paint the solar disc into ``data`` in place (see :func:`render` Notes)."""
-    if spectral:
-        L_sun = sky.sun_radiance(wl)
-        if L_sun is None:
-            return
-        L_sun = np.asarray(L_sun, dtype=np.float64).reshape(-1)
-    else:
-        from skydome.spectra import default_wavelengths, spectrum_to_xyz
+def _xyz_weights(wl) -> np.ndarray:
+    """(n_wl x 3) matrix: XYZ = L @ M, 683 lm/W times the CMF integration weights."""
+    from skydome.constants import K_M
+    from skydome.spectra import integration_weights
 
-        w = default_wavelengths()
-        L = sky.sun_radiance(w)
-        if L is None:
-            return
-        L_sun = spectrum_to_xyz(np.asarray(L, dtype=np.float64).reshape(-1), w)
-    if L_sun.shape[0] != data.shape[-1] or not np.all(np.isfinite(L_sun)):
-        raise ValueError(f"sun_radiance of model {getattr(sky, 'name', sky)!r} has shape "
-                         f"{L_sun.shape} or non-finite values")
-    s = np.asarray(sun.direction, dtype=np.float64)
-    r = np.radians(sun.angular_radius_deg)
-    cos_r = np.cos(r)
-    inside = mask & (dirs @ s >= cos_r) & (dirs[..., 2] >= 0.0)
-    if np.any(inside):
-        data[inside] = L_sun
-        return
-    row, col = projection.pixel_from_direction(s)
-    row, col = float(row), float(col)
-    if not (np.isfinite(row) and np.isfinite(col)):
-        return
-    H, W = projection.shape
-    i = min(max(int(np.floor(row)), 0), H - 1)
-    j = min(max(int(np.floor(col)), 0), W - 1)
-    if not mask[i, j]:
-        return
-    omega_pix = float(projection.solid_angles()[i, j])
-    if omega_pix <= 0.0:
-        return
-    omega_sun = sun.solid_angle_sr * _visible_disc_fraction(sun.elevation_deg, sun.angular_radius_deg)
-    f = min(omega_sun / omega_pix, 1.0)
-    data[i, j] = data[i, j] + (L_sun - data[i, j]) * f
+    return K_M * np.asarray(integration_weights(wl))
+
+
+def _fused_sampler(sky, wl):
+    """(sample(d) -> (n, n_model), M (n_model x 3)) with XYZ = sample(d) @ M.
+
+    Models with a wavelength table (``radiance_table`` per unit solar irradiance on the
+    table wavelengths and the linear ``_to_wavelengths`` resampling) are sampled on their
+    table and the resampling folded into M: it is linear, so its matrix is its image of the
+    identity. Other spectral models are sampled at ``wl``."""
+    M = _xyz_weights(wl)
+    table = getattr(sky, "radiance_table", None)
+    resample = getattr(sky, "_to_wavelengths", None)
+    n_t = getattr(sky, "n_wavelengths", None)
+    if callable(table) and callable(resample) and isinstance(n_t, (int, np.integer)):
+        R = np.asarray(resample(np.eye(int(n_t)), wl), dtype=np.float64)  # (n_table, n_wl)
+        if R.shape == (int(n_t), wl.size) and np.all(R >= 0.0):
+            return table, R @ M
+    return (lambda d: sky.radiance(d, wl)), M
 
 
 # ``skydome.render`` names both this subpackage and the function above. Once the subpackage

@@ -54,7 +54,9 @@ __all__ = ["SkyImage", "check_output_path", "read_hdr", "read_exr", "read_png16"
            "tonemap_curve", "SUFFIXES", "WHITE_EFFICACY"]
 
 SUFFIXES = (".exr", ".hdr", ".png")
-TONEMAPS = ("clamp", "reinhard", "filmic")
+TONEMAPS = ("clamp", "reinhard", "filmic", "hue-preserving")
+#: Default display transform (skydome.render.display): hue-preserving, gamut compressed.
+DEFAULT_TONEMAP = "hue-preserving"
 #: Radiance's luminous efficacy of equal-energy white [lm/W] (WHTEFFICACY, color.h).
 WHITE_EFFICACY = 179.0
 #: Pixels brighter than this [cd m^-2] (the sun's disc) are left out of auto exposure.
@@ -64,6 +66,10 @@ KEY = 0.18
 _DELTA = 1.0e-6  # [Rei02] eq. 1 small delta [cd m^-2] against log(0)
 
 UNITS = "cd/m^2, linear Rec.709/sRGB primaries (D65)"
+#: .hdr files follow Radiance's convention, not cd/m^2 (see the module docstring)
+HDR_UNITS = ("Radiance convention: radiance per channel in W sr^-1 m^-2 with 179 lm/W "
+             "(WHTEFFICACY), i.e. value = linear Rec.709/sRGB RGB in cd/m^2 / 179; luminance "
+             "= 179 x (0.2126 R + 0.7152 G + 0.0722 B); scene-referred, no exposure applied")
 _SRGB_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
 
 
@@ -102,7 +108,7 @@ def tonemap_curve(x, tonemap: str = "filmic") -> np.ndarray:
     ``filmic``: the ACES fit of [Nar15], x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14),
     clipped to 1 (it tends to 1.033).
     """
-    check_choice("tonemap", tonemap, TONEMAPS)
+    check_choice("tonemap", tonemap, TONEMAPS[:3])
     x = np.maximum(np.asarray(x, dtype=np.float64), 0.0)
     if tonemap == "clamp":
         y = x
@@ -167,6 +173,8 @@ class SkyImage:
         self.mask = mask
         self.projection = projection
         self.metadata = dict(metadata or {})
+        #: the sun as a separate light when it was left out of the image (render(draw_sun=False))
+        self.sun_light = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -217,38 +225,59 @@ class SkyImage:
         log_avg = float(np.exp(np.mean(np.log(_DELTA + Y))))  # [Rei02] eq. 1
         return KEY / log_avg
 
-    def to_srgb(self, exposure: float | None = None, tonemap: str = "filmic") -> np.ndarray:
+    def exposure_multiplier(self, exposure: float | None = None, ev100: float | None = None) -> float:
+        """The exposure multiplier k [m^2/cd]: ``exposure`` if given (> 0), else from
+        ``ev100`` (k = 1 / (1.2 x 2^EV100), :mod:`skydome.render.display`), else
+        :meth:`auto_exposure`."""
+        if exposure is not None and ev100 is not None:
+            raise ValueError("give exposure or ev100, not both")
+        if exposure is not None:
+            from skydome._validate import check_number
+
+            return check_number("exposure", exposure, 0.0, None, low_open=True)
+        if ev100 is not None:
+            from skydome.render.display import ev100_to_exposure
+
+            return ev100_to_exposure(ev100)
+        return self.auto_exposure()
+
+    def to_srgb(self, exposure: float | None = None, tonemap: str = DEFAULT_TONEMAP,
+                ev100: float | None = None) -> np.ndarray:
         """Display values: float (H, W, 3) in [0, 1], sRGB encoded.
 
         Parameters
         ----------
         exposure : float, optional
             Multiplier k [m^2/cd] on the linear sRGB values in cd m^-2 (> 0); None:
-            :meth:`auto_exposure`.
-        tonemap : {"clamp", "reinhard", "filmic"}
-            See :func:`tonemap_curve` (applied per channel to k * RGB after clipping
-            out-of-gamut negatives to 0). Masked pixels are black.
+            from ``ev100`` or :meth:`auto_exposure`.
+        tonemap : {"hue-preserving", "filmic", "reinhard", "clamp"}
+            Display transform (:func:`skydome.render.display.display_transform`):
+            the default keeps hue and compresses the gamut; the others act per channel
+            (:func:`tonemap_curve`, after clipping out-of-gamut negatives to 0). Masked
+            pixels are black.
+        ev100 : float, optional
+            Exposure value at ISO 100 (alternative to ``exposure``).
         """
         check_choice("tonemap", tonemap, TONEMAPS)
-        if exposure is None:
-            k = self.auto_exposure()
-        else:
-            from skydome._validate import check_number
-
-            k = check_number("exposure", exposure, 0.0, None, low_open=True)
+        k = self.exposure_multiplier(exposure, ev100)
+        from skydome.render.display import display_transform
         from skydome.spectra import srgb_encode
 
-        rgb = np.maximum(self.linear_srgb(), 0.0) * k
-        out = np.clip(srgb_encode(tonemap_curve(rgb, tonemap)), 0.0, 1.0)
+        rgb = self.linear_srgb() * k
+        if tonemap != "hue-preserving":
+            rgb = np.maximum(rgb, 0.0)
+        out = np.clip(srgb_encode(display_transform(rgb, tonemap)), 0.0, 1.0)
         out[~self.mask] = 0.0
         return out
 
     # -- writing ------------------------------------------------------------------------
-    def save(self, path, exposure: float | None = None, tonemap: str = "filmic", bits: int = 8) -> Path:
+    def save(self, path, exposure: float | None = None, tonemap: str = DEFAULT_TONEMAP,
+             bits: int = 8, ev100: float | None = None) -> Path:
         """Write the image; the format follows the suffix (.exr, .hdr, .png).
 
-        ``exposure``, ``tonemap`` and ``bits`` (8 or 16) apply to PNG only. The write is
-        atomic. Returns the path written.
+        ``exposure`` (or ``ev100``), ``tonemap`` and ``bits`` (8 or 16) apply to PNG
+        only; the PNG records them, says it is display-referred and carries an sRGB
+        chunk. The write is atomic. Returns the path written.
         """
         p = check_output_path(path)
         check_choice("tonemap", tonemap, TONEMAPS)
@@ -259,8 +288,16 @@ class SkyImage:
         elif suffix == ".hdr":
             _atomic_write(p, self._write_hdr)
         else:
-            display = self.to_srgb(exposure, tonemap)
-            _atomic_write(p, lambda tmp: self._write_png(tmp, display, bits))
+            k = self.exposure_multiplier(exposure, ev100)
+            display = self.to_srgb(k, tonemap)
+            from skydome.render.display import exposure_to_ev100
+
+            info = {"colour": "display-referred sRGB (IEC 61966-2-1), not radiometric",
+                    "exposure_m2_per_cd": float(k), "ev100": round(exposure_to_ev100(k), 4),
+                    "exposure_mode": ("explicit" if exposure is not None else
+                                      "ev100" if ev100 is not None else "auto (key 0.18)"),
+                    "display_transform": tonemap}
+            _atomic_write(p, lambda tmp: self._write_png(tmp, display, bits, info))
         return p
 
     def _header_text(self) -> dict[str, str]:
@@ -299,6 +336,8 @@ class SkyImage:
         for key, value in self._header_text().items():
             if key == "software":
                 continue
+            if key == "units":
+                value = HDR_UNITS
             if key == "wavelengths_nm":
                 w = self.wavelengths_nm
                 value = f"{w.size} samples {w[0]:g} .. {w[-1]:g} nm"
@@ -316,14 +355,18 @@ class SkyImage:
             f.write(head)
             f.write(body)
 
-    def _write_png(self, tmp: str, display: np.ndarray, bits: int) -> None:
-        text = {"Software": _software(), "Description": json.dumps(
-            {k: v for k, v in self._header_text().items()}, default=_json_default)}
+    def _write_png(self, tmp: str, display: np.ndarray, bits: int, info: dict | None = None) -> None:
+        head = self._header_text()
+        head["units"] = "display-referred sRGB code values (scene luminance in cd/m^2 x exposure)"
+        head.update({k: v if isinstance(v, str) else json.dumps(v) for k, v in (info or {}).items()})
+        text = {"Software": _software(), "Description": json.dumps(head, default=_json_default)}
+        text.update({k: str(v) for k, v in (info or {}).items()})
         if bits == 8:
             from PIL import Image
             from PIL.PngImagePlugin import PngInfo
 
             info = PngInfo()
+            info.add(b"sRGB", b"\x00")  # rendering intent 0 (perceptual) [PNG] 11.3.3.5
             for k, v in text.items():
                 info.add_text(k, v)
             im = Image.fromarray(np.round(display * 255.0).astype(np.uint8), mode="RGB")

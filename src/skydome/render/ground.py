@@ -1,0 +1,119 @@
+"""The ground below the horizon of an environment map.
+
+A Lambertian ground of albedo rho, lit by the model's sky and sun, has the radiance
+
+    L_ground = rho E_h / pi,   E_h = int_(upper hemisphere) L_sky cos(theta) dOmega
+                                     + E_n,sun x sin(sun elevation) x (visible part of the disc)
+
+for an observer standing on it (no air between the eye and the ground). E_h is computed
+by Gauss-Legendre quadrature in cos(theta) (32 nodes) times the midpoint rule in azimuth
+(64 nodes) over the model's own sky.
+
+``ground="model"`` (the default of :func:`skydome.render.render`): models that trace
+ground-hit rays themselves (the physically based ones: their radiance below the horizon
+is the ground seen through the air in front of it) keep their values. Two of them light
+their ground with the transmitted sun only (:data:`SUN_ONLY_GROUND`: measured, the nadir
+of a ground-level observer at sun 40 deg is rho E_sun sin(el) / pi to 1e-6, while
+``precomputed``, ``nishita1996`` and ``montecarlo`` give rho E_h / pi within 2 %); for a
+ground-level observer of those, the skylight term rho E_sky / pi is added. For the other
+models (the analytic ones give nothing below the horizon) the ground is the Lambertian
+one above. ``ground="black"``: nothing below the horizon.
+``ground=<albedo in [0, 1]>``: the Lambertian ground of that albedo for every model.
+
+The albedo of ``"model"`` is the model's ``atmosphere.ground_albedo`` where it has one,
+else 0.2, the default ground reflectance of Radiance's ``gensky`` (``-g 0.2``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["DEFAULT_ALBEDO", "check_ground", "horizontal_irradiance", "apply_ground"]
+
+#: Ground albedo for models without one (Radiance gensky's default ground reflectance).
+DEFAULT_ALBEDO = 0.2
+#: Models whose own ground is lit by the transmitted sun only (no skylight on the ground).
+SUN_ONLY_GROUND = ("single_scattering", "hillaire2020")
+
+
+def check_ground(ground):
+    """Validate ``ground``: "model", "black" or an albedo in [0, 1]."""
+    if isinstance(ground, str):
+        if ground not in ("model", "black"):
+            raise ValueError(f"ground = {ground!r} must be 'model', 'black' or an albedo in [0, 1]")
+        return ground
+    if isinstance(ground, bool) or not isinstance(ground, (int, float, np.floating, np.integer)):
+        raise TypeError(f"ground must be 'model', 'black' or an albedo in [0, 1], got {ground!r}")
+    g = float(ground)
+    if not 0.0 <= g <= 1.0:
+        raise ValueError(f"ground = {g} is out of range [0, 1] (an albedo)")
+    return g
+
+
+def _sky_values(sky, dirs, wl):
+    if wl is not None:
+        return np.asarray(sky.radiance(dirs, wl), dtype=np.float64)
+    return np.asarray(sky.xyz(dirs), dtype=np.float64)
+
+
+def horizontal_irradiance(sky, wavelengths_nm=None, n_mu: int = 32, n_phi: int = 64,
+                          include_sun: bool = True) -> np.ndarray:
+    """Irradiance on a horizontal plane from the model's sky and (``include_sun``) sun:
+    spectral [W m^-2 nm^-1] at ``wavelengths_nm``, or XYZ (Y = illuminance [lx]) if None."""
+    from skydome.render.sun_disc import XYZ_CHANNEL_WAVELENGTHS_NM, _visible_fraction, sun_disc_radiance
+
+    x, w = np.polynomial.legendre.leggauss(n_mu)
+    mu, wmu = 0.5 * (x + 1.0), 0.5 * w                      # cos(theta) on (0, 1)
+    phi = (np.arange(n_phi) + 0.5) * 2.0 * np.pi / n_phi
+    M, P = np.meshgrid(mu, phi, indexing="ij")
+    s = np.sqrt(1.0 - M * M)
+    d = np.stack([s * np.sin(P), s * np.cos(P), M], axis=-1).reshape(-1, 3)
+    L = _sky_values(sky, d, wavelengths_nm).reshape(n_mu, n_phi, -1)
+    E = np.einsum("ijc,i,ij->c", L, wmu, M) * (2.0 * np.pi / n_phi)
+    sun = getattr(sky, "sun", None)
+    if include_sun and sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
+        Ls = sun_disc_radiance(sky, wavelengths_nm)
+        if Ls is not None:
+            ch = XYZ_CHANNEL_WAVELENGTHS_NM if wavelengths_nm is None else wavelengths_nm
+            vis = _visible_fraction(sun.elevation_deg, sun.angular_radius_deg, ch)
+            E = E + Ls * sun.solid_angle_sr * vis * max(np.sin(np.radians(sun.elevation_deg)), 0.0)
+    return E
+
+
+def _albedo(sky, wl, ground) -> np.ndarray | float:
+    if ground != "model":
+        return float(ground)
+    a = getattr(getattr(sky, "atmosphere", None), "ground_albedo", None)
+    if a is None:
+        return DEFAULT_ALBEDO
+    w = np.asarray(wl if wl is not None else (555.0,), dtype=np.float64)
+    v = np.asarray(a(w) if callable(a) else a, dtype=np.float64)
+    return v if wl is not None else float(np.ravel(v)[0])
+
+
+def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, ground,
+                 to_xyz=None) -> str | None:
+    """Fill the pixels below the horizon of ``data`` in place; returns a description for
+    the image metadata (None if no pixel lies below the horizon). ``wl``: the spectral
+    channels (None: XYZ); ``to_xyz``: an (n_wl x 3) matrix when ``data`` holds XYZ of
+    spectra sampled at ``wl`` (the fused render path)."""
+    conv = (lambda v: v) if to_xyz is None else (lambda v: np.asarray(v) @ to_xyz)
+    below = mask & (dirs[..., 2] < 0.0)
+    if not np.any(below):
+        return None
+    if ground == "black":
+        data[below] = 0.0
+        return "black"
+    if ground == "model" and np.any(data[below] > 0.0):
+        if (getattr(sky, "name", "") in SUN_ONLY_GROUND
+                and float(getattr(sky, "observer_altitude_m", 0.0) or 0.0) == 0.0):
+            rho = _albedo(sky, wl, ground)
+            data[below] += np.maximum(conv(np.asarray(rho) * horizontal_irradiance(
+                sky, wl, include_sun=False) / np.pi), 0.0)
+            return "the model's own ground (lit by its sun) plus its skylight, rho E_sky / pi"
+        return "the model's own ground-hit rays"
+    rho = _albedo(sky, wl, ground)
+    L = conv(np.asarray(rho) * horizontal_irradiance(sky, wl) / np.pi)
+    data[below] = np.maximum(L, 0.0)
+    return (f"Lambertian, albedo {np.round(np.ravel(rho), 4).tolist()}, lit by the model's "
+            "sky and sun (observer on the ground)")
