@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Site", "Weather", "read_weather", "sample_weather_path", "WEATHER_LIMITS"]
+__all__ = ["Site", "Weather", "read_weather", "sample_weather_path", "write_wea", "WEATHER_LIMITS"]
 
 #: Plausible ranges of the quantities read [unit]; values outside them mean a unit mix-up
 #: (e.g. illuminance in an irradiance column) or a corrupt record. Irradiance limits: the

@@ -262,3 +262,42 @@ def flat_directions(directions):
     if n_zero:
         raise ValueError("directions contains zero-length vectors")
     return flat, lead
+
+
+# -- Perez 1993 over many suns and sky patches at once ([PSM93] eq. 1) --------------------------
+@njit(**_OPTS)
+def perez1993_patch_means(nodes, weights, offsets, suns, coef, cz_min):
+    """Patch means of the relative luminance lv for many skies in one call.
+
+    ``nodes`` (M, 3) unit vectors and ``weights`` (M,) [sr] of the quadrature nodes, patch k
+    owning nodes offsets[k]:offsets[k + 1]; ``suns`` (H, 3) unit vectors towards the sun and
+    ``coef`` (H, 5) the (a, b, c, d, e) of each sky. Negative lv is clipped to 0 per node.
+    Returns the patch means (H, P) and the hemispherical integral of lv cos(zeta) dOmega
+    (H,) [sr] taken with the same nodes (gendaymtx's CalcRelHorzIllum for one node a patch).
+    Parallel over skies."""
+    n_sky = suns.shape[0]
+    n_patch = offsets.shape[0] - 1
+    means = np.empty((n_sky, n_patch))
+    horiz = np.empty(n_sky)
+    for h in prange(n_sky):
+        sx, sy, sz = suns[h, 0], suns[h, 1], suns[h, 2]
+        a, b, c, dd, e = coef[h, 0], coef[h, 1], coef[h, 2], coef[h, 3], coef[h, 4]
+        tot = 0.0
+        for k in range(n_patch):
+            acc = 0.0
+            wsum = 0.0
+            for m in range(offsets[k], offsets[k + 1]):
+                x, y, z = nodes[m, 0], nodes[m, 1], nodes[m, 2]
+                cg = _clamp1(x * sx + y * sy + z * sz)
+                cz = max(z, cz_min)
+                gamma = math.acos(cg)
+                lv = (1.0 + a * math.exp(b / cz)) * (1.0 + c * math.exp(dd * gamma) + e * cg * cg)
+                if lv < 0.0:
+                    lv = 0.0
+                w = weights[m]
+                acc += w * lv
+                wsum += w
+                tot += w * lv * z
+            means[h, k] = acc / wsum
+        horiz[h] = tot
+    return means, horiz
