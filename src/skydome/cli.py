@@ -653,6 +653,11 @@ def _check_figure_path(out: str) -> None:
         raise UserError(f"out = {out!r}: folder {str(p.parent)!r} is not writable")
 
 
+from skydome.daylighting.cli import register as _register_daylighting  # noqa: E402
+
+_register_daylighting(app)
+
+
 def main() -> None:  # console-script entry point
     try:
         app()

@@ -113,7 +113,7 @@ def parse_sun_option(sun: str) -> tuple[str, int, float]:
 def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza",
                      order: int = DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
-                     sky_color=GENDAYMTX_SKY_COLOR, chunk_hours: int = 2048) -> SkyMatrix:
+                     sky_color=GENDAYMTX_SKY_COLOR) -> SkyMatrix:
     """Perez (1993) sky matrix of many hours in one vectorised pass.
 
     Parameters
@@ -139,8 +139,6 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         Ground albedo per hour or one value, in [0, 1] (default 0.2, gendaymtx's -g).
     sky_color : 3 floats
         RGB tint of the sky patches (``rgb`` only; default gendaymtx's).
-    chunk_hours : int
-        Hours per kernel call (memory bound: chunk x patches x 8 bytes per array).
 
     Returns
     -------
@@ -156,7 +154,6 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     order = check_int("order", order, 0, 16)
     mode, nsuns, disc_deg = parse_sun_option(sun)
     check_choice("components", components, ("rgb", "luminance"))
-    chunk_hours = check_int("chunk_hours", chunk_hours, 1, None)
     dni = np.atleast_1d(np.asarray(dni, dtype=np.float64))
     dhi = np.atleast_1d(np.asarray(dhi, dtype=np.float64))
     sd = np.asarray(sun_directions, dtype=np.float64).reshape(-1, 3)
@@ -206,45 +203,20 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     nodes, weights, offsets = ps.nodes(order)
     npatch = len(ps)
     sky = np.zeros((n, npatch, ncomp))
-    sun_mat = np.zeros((n, ncomp)) if mode == "separate" else None
-    centres = ps.centres[1:]
-    dom = ps.solid_angle_sr[1:]
     sun_sa = math.pi * math.radians(SUN_ANGLE_DEG / 2.0) ** 2
     fixed_sa = math.pi * math.radians(disc_deg / 2.0) ** 2 if mode == "disc" else 0.0
-    idx_day = np.nonzero(day)[0]
-    for start in range(0, idx_day.size, chunk_hours):
-        hh = idx_day[start:start + chunk_hours]
-        means, horiz = K.perez1993_patch_means(nodes, weights, offsets,
-                                               np.ascontiguousarray(s_dist[hh]),
-                                               np.ascontiguousarray(coef[hh]), COS_ZETA_MIN)
-        zero = horiz <= 1e-6  # gendaymtx: a zero sky is made uniform, normalised by pi
-        if np.any(zero):
-            means[zero] = 1.0
-            horiz[zero] = math.pi
-        scale = e_diff[hh] / horiz * out_scale  # [PSM93]: the sky integrates to Dh
-        vals = means * scale[:, None]
-        sky[hh, 1:, :] = vals[:, :, None] * sky_tint[None, None, :]
-        # ground: rho (Dh + Dn sin a) / pi
-        g = e_diff[hh] + np.where(alt[hh] > 0.0, e_dir[hh] * np.sin(alt[hh]), 0.0)
-        sky[hh, 0, :] = (rho[hh] * g / math.pi * out_scale)[:, None] * grey[None, :]
-        if mode in ("spread", "disc"):
-            lit = e_dir[hh] > 1e-4
-            h2 = hh[lit]
-            if h2.size:
-                dots = sd[h2] @ centres.T  # (h, p)
-                near = np.argpartition(-dots, nsuns - 1, axis=1)[:, :nsuns] if nsuns < dots.shape[
-                    1] else np.argsort(-dots, axis=1)
-                nd = np.take_along_axis(dots, near, axis=1)
-                wt = 1.0 / (1.002 - nd)  # gendaymtx AddDirect: weight by proximity
-                wt /= wt.sum(axis=1, keepdims=True)
-                sa = fixed_sa if mode == "disc" else dom[near]
-                add = wt * (e_dir[h2] * out_scale)[:, None] / sa
-                rows = np.repeat(h2, near.shape[1])
-                cols = near.reshape(-1) + 1
-                np.add.at(sky, (rows, cols), add.reshape(-1)[:, None] * grey[None, :])
-        elif mode == "separate":
-            up = alt[hh] > -math.radians(SUN_ANGLE_DEG / 2.0)
-            sun_mat[hh] = (np.where(up, e_dir[hh], 0.0) * out_scale / sun_sa)[:, None] * grey
+    from skydome.daylighting import _kernels as DK
+
+    DK.fill_perez_sky(sky, np.nonzero(day)[0].astype(np.int64), nodes, weights, offsets,
+                      np.ascontiguousarray(ps.centres[1:]), ps.solid_angle_sr[1:],
+                      np.ascontiguousarray(s_dist), np.ascontiguousarray(sd),
+                      np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),
+                      np.ascontiguousarray(sky_tint * np.ones(ncomp)), grey, out_scale,
+                      nsuns if mode in ("spread", "disc") else 0, fixed_sa, COS_ZETA_MIN)
+    sun_mat = None
+    if mode == "separate":
+        up = day & (alt > -math.radians(SUN_ANGLE_DEG / 2.0))  # gendaymtx -D: sun in the sky
+        sun_mat = (np.where(up, e_dir, 0.0) * out_scale / sun_sa)[:, None] * grey[None, :]
     return SkyMatrix(ps, sky, components, sun_mat, sd.copy(),
                      sun_sa if mode == "separate" else fixed_sa)
 

@@ -265,39 +265,49 @@ def flat_directions(directions):
 
 
 # -- Perez 1993 over many suns and sky patches at once ([PSM93] eq. 1) --------------------------
-@njit(**_OPTS)
-def perez1993_patch_means(nodes, weights, offsets, suns, coef, cz_min):
-    """Patch means of the relative luminance lv for many skies in one call.
+@njit(cache=True, fastmath=True)
+def perez1993_patch_row(nodes, weights, offsets, s, coef, cz_min, means):
+    """Patch means of the relative luminance lv of one sky into ``means`` (P,).
 
     ``nodes`` (M, 3) unit vectors and ``weights`` (M,) [sr] of the quadrature nodes, patch k
-    owning nodes offsets[k]:offsets[k + 1]; ``suns`` (H, 3) unit vectors towards the sun and
-    ``coef`` (H, 5) the (a, b, c, d, e) of each sky. Negative lv is clipped to 0 per node.
-    Returns the patch means (H, P) and the hemispherical integral of lv cos(zeta) dOmega
-    (H,) [sr] taken with the same nodes (gendaymtx's CalcRelHorzIllum for one node a patch).
-    Parallel over skies."""
+    owning nodes offsets[k]:offsets[k + 1]; ``s`` (3,) the unit vector towards the sun and
+    ``coef`` (5,) the (a, b, c, d, e). Negative lv is clipped to 0 per node. Returns the
+    hemispherical integral of lv cos(zeta) dOmega [sr] taken with the same nodes (gendaymtx's
+    CalcRelHorzIllum for one node a patch)."""
+    sx, sy, sz = s[0], s[1], s[2]
+    a, b, c, dd, e = coef[0], coef[1], coef[2], coef[3], coef[4]
+    tot = 0.0
+    z_last = 2.0
+    grad = 0.0
+    for k in range(offsets.shape[0] - 1):
+        acc = 0.0
+        wsum = 0.0
+        for m in range(offsets[k], offsets[k + 1]):
+            x, y, z = nodes[m, 0], nodes[m, 1], nodes[m, 2]
+            if z != z_last:  # nodes come in runs of equal altitude: one gradation per run
+                z_last = z
+                grad = 1.0 + a * math.exp(b / max(z, cz_min))
+            cg = _clamp1(x * sx + y * sy + z * sz)
+            gamma = math.acos(cg)
+            lv = grad * (1.0 + c * math.exp(dd * gamma) + e * cg * cg)
+            if lv < 0.0:
+                lv = 0.0
+            w = weights[m]
+            acc += w * lv
+            wsum += w
+            tot += w * lv * z
+        means[k] = acc / wsum
+    return tot
+
+
+@njit(**_OPTS)
+def perez1993_patch_means(nodes, weights, offsets, suns, coef, cz_min):
+    """:func:`perez1993_patch_row` for many skies (``suns`` (H, 3), ``coef`` (H, 5)) in
+    parallel: returns the patch means (H, P) and the horizontal integrals (H,) [sr]."""
     n_sky = suns.shape[0]
-    n_patch = offsets.shape[0] - 1
-    means = np.empty((n_sky, n_patch))
+    means = np.empty((n_sky, offsets.shape[0] - 1))
     horiz = np.empty(n_sky)
     for h in prange(n_sky):
-        sx, sy, sz = suns[h, 0], suns[h, 1], suns[h, 2]
-        a, b, c, dd, e = coef[h, 0], coef[h, 1], coef[h, 2], coef[h, 3], coef[h, 4]
-        tot = 0.0
-        for k in range(n_patch):
-            acc = 0.0
-            wsum = 0.0
-            for m in range(offsets[k], offsets[k + 1]):
-                x, y, z = nodes[m, 0], nodes[m, 1], nodes[m, 2]
-                cg = _clamp1(x * sx + y * sy + z * sz)
-                cz = max(z, cz_min)
-                gamma = math.acos(cg)
-                lv = (1.0 + a * math.exp(b / cz)) * (1.0 + c * math.exp(dd * gamma) + e * cg * cg)
-                if lv < 0.0:
-                    lv = 0.0
-                w = weights[m]
-                acc += w * lv
-                wsum += w
-                tot += w * lv * z
-            means[h, k] = acc / wsum
-        horiz[h] = tot
+        horiz[h] = perez1993_patch_row(nodes, weights, offsets, suns[h], coef[h], cz_min,
+                                       means[h])
     return means, horiz

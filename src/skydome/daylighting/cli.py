@@ -1,0 +1,152 @@
+"""Daylighting commands of the ``skydome`` CLI: ``weather info`` and ``skymatrix``.
+
+``register(app)`` adds them to the main typer app. Heavy modules (pvlib, numba kernels) are
+imported inside the commands only.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+weather_app = typer.Typer(no_args_is_help=True, help="Hourly weather files (EPW, TMY3).")
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+def _guard(func, *args, **kwargs):
+    try:
+        return func(*args, **kwargs)
+    except (ValueError, TypeError, FileNotFoundError, KeyError) as exc:
+        msg = exc.args[0] if exc.args else str(exc)
+        _fail(str(msg).splitlines()[0] if str(msg) else type(exc).__name__)
+
+
+@weather_app.command("info")
+def weather_info(path: str = typer.Argument(..., help="EPW or TMY3 file")):
+    """Site, period and what the weather file holds."""
+    from skydome.daylighting.weather import read_weather
+
+    w = _guard(read_weather, path)
+    s = w.summary()
+    typer.echo(f"site: {s['site']}  lat {s['latitude_deg']:.3f} deg N, lon "
+               f"{s['longitude_deg']:.3f} deg E, UTC{s['utc_offset_h']:+g} h, "
+               f"{s['elevation_m']:g} m")
+    typer.echo(f"format: {s['format'].upper()}, {s['records']} records, {s['first']} .. "
+               f"{s['last']} (local standard time), step {s['step']}")
+    typer.echo(f"holds: {', '.join(s['quantities'])}")
+    typer.echo(f"daylight hours (sun above the horizon at the midpoint): {s['daylight_hours']}")
+    typer.echo(f"annual sums: GHI {s['annual_ghi_kwh_m2']:.1f}, DNI {s['annual_dni_kwh_m2']:.1f}, "
+               f"DHI {s['annual_dhi_kwh_m2']:.1f} kWh/m^2")
+
+
+def _sun_scene(m, hours_minute, alt_ok) -> str:
+    """gendaymtx -D style scene: one light + source per hour with the sun in the sky."""
+    from skydome.daylighting.skymatrix import SUN_ANGLE_DEG
+
+    out = []
+    for k in range(m.sky.shape[0]):
+        if not alt_ok[k]:
+            continue
+        r = m.sun[k]
+        d = m.sun_directions[k]
+        i = int(hours_minute[k])
+        rgb = " ".join(f"{v:.6e}" for v in (list(r) * 3 if r.size == 1 else r))
+        out.append(f"\nvoid light solar{i}\n0\n0\n3 {rgb}\n\nsolar{i} source sun{i}\n0\n0\n"
+                   f"4 {d[0]:.6f} {d[1]:.6f} {d[2]:.6f} {SUN_ANGLE_DEG:.4f}\n")
+    return "".join(out)
+
+
+def skymatrix_cmd(
+    weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
+    out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
+    patches: str = typer.Option("tregenza", "--patches", help="tregenza | reinhart:MF"),
+    model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
+    components: str = typer.Option("rgb", "--components", help="rgb | luminance"),
+    sun: str = typer.Option("spread", "--sun",
+                            help="spread | spread:N | disc:ANGLE | separate | none"),
+    order: int = typer.Option(3, "--order", help="quadrature order per patch (0 = centre)"),
+    fmt: str = typer.Option("float", "--format", help="ascii | float | double"),
+    albedo: str = typer.Option("0.2", "--albedo", help="ground reflectance, or 'weather'"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
+):
+    """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible."""
+    import numpy as np
+
+    from skydome.daylighting.patches import patches as make_patches
+    from skydome.daylighting.radiance_io import FORMATS, atomic_write_bytes, write_matrix
+    from skydome.daylighting.skymatrix import parse_sun_option, perez_sky_matrix_from_weather
+
+    # -- validate everything before any work -------------------------------------------------
+    ps = _guard(make_patches, patches)
+    mode = _guard(parse_sun_option, sun)[0]
+    if model != "perez1993":
+        _fail(f"model = {model!r} is not available for sky matrices (choices: perez1993)")
+    if components not in ("rgb", "luminance"):
+        _fail(f"components = {components!r} is unknown (choices: rgb, luminance)")
+    if fmt not in FORMATS:
+        _fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
+    if not 0 <= order <= 16:
+        _fail(f"order = {order} is out of range [0, 16]")
+    rho: Optional[float] = None
+    if albedo != "weather":
+        try:
+            rho = float(albedo)
+        except ValueError:
+            _fail(f"albedo = {albedo!r} must be a number in [0, 1] or 'weather'")
+        if not 0.0 <= rho <= 1.0:
+            _fail(f"albedo = {albedo!r} is out of range [0, 1]")
+    out_p = Path(out)
+    targets = [out_p]
+    if mode == "separate":
+        stem = out_p.with_suffix("")
+        targets += [Path(f"{stem}.sun{out_p.suffix or '.mtx'}"), Path(f"{stem}.suns.rad")]
+    for t in targets:
+        if t.exists() and not overwrite:
+            _fail(f"out = {str(t)!r} exists (use --overwrite)")
+        if not t.parent.is_dir():
+            _fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
+    from skydome.daylighting.weather import read_weather
+
+    w = _guard(read_weather, weather)
+    if rho is None:
+        rho_v = w.albedo if w.albedo is not None else np.full(len(w), 0.2)
+        rho_v = np.where(np.isfinite(rho_v), rho_v, 0.2)
+    else:
+        rho_v = rho
+    m = _guard(perez_sky_matrix_from_weather, w, patches=ps, order=order, sun=sun,
+               components=components, ground_reflectance=rho_v)
+    info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
+            f"--model {model} --components {components} --sun {sun} --order {order}",
+            f"LATLONG= {w.site.latitude_deg:.8f} {w.site.longitude_deg:.8f}"]
+    written = []
+    try:
+        write_matrix(out_p, m.radiance_layout() if out_p.suffix.lower() != ".npy" else m.sky,
+                     fmt=fmt, info=info, overwrite=overwrite)
+        written.append(out_p)
+        if mode == "separate":
+            write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,
+                         info=info + ["sun matrix: radiance of the 0.533 deg solar disc"],
+                         overwrite=overwrite)
+            written.append(targets[1])
+            minute = 24 * 60 * (w.day_of_year - 1) + (w.hour * 60.0 + 0.5).astype(int)
+            up = m.sun_directions[:, 2] > -np.sin(np.radians(0.2665))
+            atomic_write_bytes(targets[2], _sun_scene(m, minute, up).encode())
+            written.append(targets[2])
+    except BaseException:
+        for t in written:
+            t.unlink(missing_ok=True)
+        raise
+    typer.echo(f"wrote {', '.join(str(t) for t in written)}: {len(ps)} patches x {len(w)} hours "
+               f"x {m.sky.shape[2]} components")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the daylighting commands to ``app``."""
+    app.add_typer(weather_app, name="weather")
+    app.command("skymatrix")(skymatrix_cmd)
