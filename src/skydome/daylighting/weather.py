@@ -193,6 +193,26 @@ def _detect_format(path: Path) -> str:
                      "(expected a .epw or a TMY3 .csv)")
 
 
+def _check_records(path: Path, fmt: str) -> None:
+    """Every data line must have the format's number of fields (TMY3: as many as its column
+    header [WM08]; EPW: at least the 35 of its data dictionary); a short last line is a
+    truncated file."""
+    skip = 2 if fmt == "tmy3" else 8
+    with path.open("r", errors="replace") as f:
+        lines = f.read().splitlines()
+    if len(lines) <= skip:
+        raise ValueError(f"weather = {str(path)!r}: truncated, no data records")
+    need = len(lines[1].split(",")) if fmt == "tmy3" else 35
+    for k, ln in enumerate(lines[skip:], start=skip + 1):
+        if not ln.strip():
+            continue
+        n = len(ln.split(","))
+        if n < need:
+            where = "last" if k == len(lines) else f"line {k}"
+            raise ValueError(f"weather = {str(path)!r}: truncated record ({where}: {n} of "
+                             f"{need} fields)")
+
+
 def read_weather(path, *, year: int = 2021) -> Weather:
     """Read an hourly EPW or TMY3 weather file and compute the sun at each hour's midpoint.
 
@@ -224,6 +244,7 @@ def read_weather(path, *, year: int = 2021) -> Weather:
     if not p.is_file():
         raise ValueError(f"weather = {str(path)!r} is not a file")
     fmt = _detect_format(p)
+    _check_records(p, fmt)
     import warnings
 
     from pvlib import iotools
@@ -258,7 +279,7 @@ def read_weather(path, *, year: int = 2021) -> Weather:
                          f"{site.longitude_deg:g} deg out of range")
 
     # -- time: records must step by exactly one hour ----------------------------------------
-    end = data.index  # tz-aware, end of each hour (local standard time)
+    end = data.index  # tz-aware, local standard time
     t_end = np.asarray(end.tz_localize(None).values, dtype="datetime64[s]")
     step = np.diff(t_end).astype(np.int64)
     if np.any(step != 3600):
@@ -271,7 +292,9 @@ def read_weather(path, *, year: int = 2021) -> Weather:
         if n % 24 != 0:
             raise ValueError(f"weather = {str(path)!r}: truncated, {n} hourly records "
                              "(a year has 8760; a partial file must hold whole days)")
-    t_mid = t_end - np.timedelta64(1800, "s")
+    # pvlib labels a TMY3 record with the end of its hour and an EPW record (hour field 1..24)
+    # with the start of it (hour - 1); both mean the same interval [WM08] [EPW].
+    t_mid = t_end + np.timedelta64(1800 if fmt == "epw" else -1800, "s")
 
     # -- quantities ----------------------------------------------------------------------------
     values: dict[str, np.ndarray | None] = {}
@@ -324,7 +347,7 @@ def read_weather(path, *, year: int = 2021) -> Weather:
         month=np.asarray(mid_index.month, dtype=np.int64),
         day=np.asarray(mid_index.day, dtype=np.int64),
         hour=np.asarray(hour, dtype=np.float64),
-        day_of_year=np.asarray(mid_index.dayofyear, dtype=np.int64),
+        day_of_year=np.asarray(mid_index.day_of_year, dtype=np.int64),
         dni=values["dni"], dhi=values["dhi"],
         ghi=values["ghi"] if values.get("ghi") is not None else np.full(n, np.nan),
         dni_illuminance=values.get("dni_illuminance"),
