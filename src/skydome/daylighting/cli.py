@@ -70,7 +70,9 @@ def skymatrix_cmd(
     components: str = typer.Option("rgb", "--components", help="rgb | luminance"),
     sun: str = typer.Option("spread", "--sun",
                             help="spread | spread:N | disc:ANGLE | separate | none"),
-    order: int = typer.Option(3, "--order", help="quadrature order per patch (0 = centre)"),
+    order: int = typer.Option(4, "--order", help="quadrature order per patch (0 = centre)"),
+    sun_position: str = typer.Option("spa", "--sun-position",
+                                     help="spa | radiance (gendaymtx's approximate sun)"),
     fmt: str = typer.Option("float", "--format", help="ascii | float | double"),
     albedo: str = typer.Option("0.2", "--albedo", help="ground reflectance, or 'weather'"),
     overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
@@ -91,6 +93,8 @@ def skymatrix_cmd(
         _fail(f"components = {components!r} is unknown (choices: rgb, luminance)")
     if fmt not in FORMATS:
         _fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
+    if sun_position not in ("spa", "radiance"):
+        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
     if not 0 <= order <= 16:
         _fail(f"order = {order} is out of range [0, 16]")
     rho: Optional[float] = None
@@ -119,10 +123,12 @@ def skymatrix_cmd(
         rho_v = np.where(np.isfinite(rho_v), rho_v, 0.2)
     else:
         rho_v = rho
-    m = _guard(perez_sky_matrix_from_weather, w, patches=ps, order=order, sun=sun,
+    m = _guard(perez_sky_matrix_from_weather, w, sun_position=sun_position, patches=ps,
+               order=order, sun=sun,
                components=components, ground_reflectance=rho_v)
     info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
-            f"--model {model} --components {components} --sun {sun} --order {order}",
+            f"--model {model} --components {components} --sun {sun} --order {order} "
+            f"--sun-position {sun_position}",
             f"LATLONG= {w.site.latitude_deg:.8f} {w.site.longitude_deg:.8f}"]
     written = []
     try:

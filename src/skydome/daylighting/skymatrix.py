@@ -53,7 +53,7 @@ WHITE_EFFICACY = 179.0
 #: Full angle of the solar disc in gendaymtx (SUN_ANG_DEG) [deg].
 SUN_ANGLE_DEG = 0.533
 #: Default quadrature order per patch (q x q Gauss-Legendre nodes; see patches).
-DEFAULT_ORDER = 3
+DEFAULT_ORDER = 4
 _NSUNPATCH = 4
 
 
@@ -129,7 +129,10 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     order : int
         Quadrature order per patch, 0..16: 0 = gendaymtx's point sample at each patch centre,
         q >= 1 = q x q Gauss-Legendre nodes (see :mod:`skydome.daylighting.patches`).
-        Default 3: patch means within 0.1 % of order 8 for every sky of the sample year.
+        Default 4: over every hour of the sample year (Greensboro TMY3) the patch means are
+        within 0.93 % of order 8 for Tregenza (99th percentile 0.07 %) and within 0.22 % for
+        MF:4; point sampling (order 0) errs by up to 41 % (Tregenza) and 10 % (MF:4), in the
+        circumsolar patches.
     sun : str
         "spread" (default, gendaymtx), "spread:N", "disc:ANGLE", "separate" or "none".
     components : {"rgb", "luminance"}
@@ -221,12 +224,18 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                      sun_sa if mode == "separate" else fixed_sa)
 
 
-def perez_sky_matrix_from_weather(weather, **kwargs) -> SkyMatrix:
+def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) -> SkyMatrix:
     """:func:`perez_sky_matrix` of every hour of a :class:`~skydome.daylighting.weather.Weather`
-    (its sun at the hours' midpoints, its dew point where the file has one)."""
+    (its sun at the hours' midpoints, its dew point where the file has one).
+
+    ``sun_position``: "spa" (NREL SPA, default) or "radiance" (Radiance's approximate
+    formulas, to reproduce gendaymtx; up to 0.9 deg off)."""
+    from skydome._validate import check_choice
+
+    check_choice("sun_position", sun_position, ("spa", "radiance"))
+    sd = weather.sun_directions if sun_position == "spa" else weather.radiance_sun_directions()
     kw = dict(kwargs)
     if "dew_point_c" not in kw and weather.dew_point_c is not None:
         td = np.where(np.isfinite(weather.dew_point_c), weather.dew_point_c, 11.0)
         kw["dew_point_c"] = td
-    return perez_sky_matrix(weather.dni, weather.dhi, weather.sun_directions,
-                            weather.day_of_year, **kw)
+    return perez_sky_matrix(weather.dni, weather.dhi, sd, weather.day_of_year, **kw)
