@@ -293,13 +293,13 @@ def read_weather(path, *, year: int = 2021) -> Weather:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             if fmt == "epw":
-                data, meta = iotools.read_epw(str(p), coerce_year=year)
+                data, meta = iotools.read_epw(str(p))
                 names = _EPW_COLUMNS
                 site = Site(str(meta.get("city", "")).strip(), float(meta["latitude"]),
                             float(meta["longitude"]), float(meta["TZ"]),
                             float(meta["altitude"]))
             else:
-                data, meta = iotools.read_tmy3(str(p), coerce_year=year, map_variables=True)
+                data, meta = iotools.read_tmy3(str(p), map_variables=True)
                 names = _TMY3_COLUMNS
                 site = Site(str(meta.get("Name", "")).strip().strip('"'),
                             float(meta["latitude"]), float(meta["longitude"]),
@@ -318,9 +318,27 @@ def read_weather(path, *, year: int = 2021) -> Weather:
         raise ValueError(f"weather = {str(path)!r}: latitude {site.latitude_deg:g} / longitude "
                          f"{site.longitude_deg:g} deg out of range")
 
-    # -- time: records must step by exactly one hour ----------------------------------------
-    end = data.index  # tz-aware, local standard time
-    t_end = np.asarray(end.tz_localize(None).values, dtype="datetime64[s]")
+    # -- time: the end of each record's hour from its own date and hour fields (TMY3 "MM/DD",
+    # "HH:00" with HH 1..24 [WM08]; EPW month, day, hour 1..24 [EPW]), placed in ``year``;
+    # records must step by exactly one hour.
+    try:
+        if fmt == "tmy3":
+            md = [str(v).split("/") for v in data["Date (MM/DD/YYYY)"]]
+            months = np.array([int(x[0]) for x in md])
+            days = np.array([int(x[1]) for x in md])
+            hours = np.array([int(str(v).split(":")[0]) for v in data["Time (HH:MM)"]])
+        else:
+            months = np.asarray(data["month"], dtype=np.int64)
+            days = np.asarray(data["day"], dtype=np.int64)
+            hours = np.asarray(data["hour"], dtype=np.int64)
+        day0 = np.array([np.datetime64(f"{year:04d}-{m:02d}-{d:02d}") for m, d in zip(months, days)])
+    except (ValueError, KeyError, IndexError):
+        raise ValueError(f"weather = {str(path)!r}: bad date or hour field") from None
+    if np.any(hours < 1) or np.any(hours > 24):
+        k = int(np.argmax((hours < 1) | (hours > 24)))
+        raise ValueError(f"weather = {str(path)!r}: hour {hours[k]} of record {k + 1} is out of "
+                         "range [1, 24]")
+    t_end = day0.astype("datetime64[s]") + hours.astype("timedelta64[h]")
     step = np.diff(t_end).astype(np.int64)
     if np.any(step != 3600):
         k = int(np.argmax(step != 3600))
@@ -332,9 +350,7 @@ def read_weather(path, *, year: int = 2021) -> Weather:
         if n % 24 != 0:
             raise ValueError(f"weather = {str(path)!r}: truncated, {n} hourly records "
                              "(a year has 8760; a partial file must hold whole days)")
-    # pvlib labels a TMY3 record with the end of its hour and an EPW record (hour field 1..24)
-    # with the start of it (hour - 1); both mean the same interval [WM08] [EPW].
-    t_mid = t_end + np.timedelta64(1800 if fmt == "epw" else -1800, "s")
+    t_mid = t_end - np.timedelta64(1800, "s")  # the hour's midpoint
 
     # -- quantities ----------------------------------------------------------------------------
     values: dict[str, np.ndarray | None] = {}
@@ -374,10 +390,13 @@ def read_weather(path, *, year: int = 2021) -> Weather:
                              "(wrong units?)")
 
     # -- the sun at the hour's midpoint (pvlib SPA, true zenith) -----------------------------
+    import datetime
+
     import pandas as pd
     from pvlib import solarposition
 
-    idx = pd.DatetimeIndex(t_mid).tz_localize(end.tz)
+    tz = datetime.timezone(datetime.timedelta(hours=site.utc_offset_h))
+    idx = pd.DatetimeIndex(t_mid).tz_localize(tz)
     sp = solarposition.get_solarposition(idx, site.latitude_deg, site.longitude_deg,
                                          altitude=site.elevation_m, method="nrel_numpy")
     mid_index = pd.DatetimeIndex(t_mid)
