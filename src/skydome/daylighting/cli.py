@@ -125,15 +125,16 @@ def skymatrix_cmd(
         rho_v = rho
     m = _guard(perez_sky_matrix_from_weather, w, sun_position=sun_position, patches=ps,
                order=order, sun=sun,
-               components=components, ground_reflectance=rho_v)
+               components=components, ground_reflectance=rho_v,
+               dtype=np.float32 if fmt == "float" else np.float64)
     info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
             f"--model {model} --components {components} --sun {sun} --order {order} "
             f"--sun-position {sun_position}",
             f"LATLONG= {w.site.latitude_deg:.8f} {w.site.longitude_deg:.8f}"]
     written = []
     try:
-        write_matrix(out_p, m.radiance_layout() if out_p.suffix.lower() != ".npy" else m.sky,
-                     fmt=fmt, info=info, overwrite=overwrite)
+        write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
+                     transpose=out_p.suffix.lower() != ".npy")
         written.append(out_p)
         if mode == "separate":
             write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,

@@ -30,24 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_matrix", "read_matrix", "atomic_write_bytes", "FORMATS"]
+__all__ = ["write_matrix", "read_matrix", "atomic_write_bytes", "atomic_write_stream", "FORMATS"]
 
 FORMATS = ("ascii", "float", "double")
 
 
 def atomic_write_bytes(path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file beside it and a rename."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write_stream(path, [data])
 
 
 def _umask() -> int:
@@ -65,15 +55,18 @@ def _header(nrows: int, ncols: int, ncomp: int, fmt: str, info: list[str]) -> by
     return ("\n".join(lines) + "\n\n").encode()
 
 
-def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = False) -> None:
-    """Write a Radiance matrix file atomically.
+def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = False,
+                 transpose: bool = False) -> None:
+    """Write a Radiance matrix file atomically, streaming it in blocks of rows.
 
     Parameters
     ----------
     path : str or Path
         Target file; a ``.npy`` suffix writes NumPy's format instead (the array as given).
     matrix : array_like
-        (nrows, ncols, ncomp) or (nrows, ncols) (one component) in file order (rows first).
+        (nrows, ncols, ncomp) or (nrows, ncols) (one component) in file order (rows first);
+        with ``transpose`` (ncols, nrows, ncomp), e.g. a sky matrix held as (hours, patches,
+        components), written without a transposed copy in memory.
     fmt : {"ascii", "float", "double"}
         Data format (ascii with 7 significant digits; float/double in native byte order).
     info : sequence of str
@@ -84,18 +77,23 @@ def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = Fa
     from skydome._validate import check_choice
 
     check_choice("fmt", fmt, FORMATS)
-    m = np.asarray(matrix, dtype=np.float64)
+    m = np.asarray(matrix)
     if m.ndim == 2:
         m = m[:, :, None]
     if m.ndim != 3:
         raise ValueError(f"matrix has shape {m.shape}; expected (nrows, ncols[, ncomp])")
-    if not np.all(np.isfinite(m)):
-        raise ValueError("matrix holds nan or inf values")
     path = Path(path)
     if path.exists() and not overwrite:
         raise ValueError(f"out = {str(path)!r} exists (pass overwrite to replace it)")
     if not path.parent.is_dir():
         raise ValueError(f"out = {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    if transpose:
+        m = np.swapaxes(m, 0, 1)  # a view
+    nrows, ncols, ncomp = m.shape
+    block = max(1, (1 << 22) // max(1, ncols * ncomp))  # about 4 M values per block
+    for r0 in range(0, nrows, block):
+        if not np.all(np.isfinite(m[r0:r0 + block])):
+            raise ValueError("matrix holds nan or inf values")
     if path.suffix.lower() == ".npy":
         import io
 
@@ -103,15 +101,36 @@ def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = Fa
         np.save(buf, np.asarray(matrix, dtype=np.float64))
         atomic_write_bytes(path, buf.getvalue())
         return
-    nrows, ncols, ncomp = m.shape
     head = _header(nrows, ncols, ncomp, fmt, list(info))
-    if fmt == "ascii":
-        body = _ascii_body(m)
-    elif fmt == "float":
-        body = np.ascontiguousarray(m, dtype=np.float32).tobytes()
-    else:
-        body = np.ascontiguousarray(m, dtype=np.float64).tobytes()
-    atomic_write_bytes(path, head + body)
+    dtype = {"float": np.float32, "double": np.float64}.get(fmt)
+
+    def blocks():
+        yield head
+        for r0 in range(0, nrows, block):
+            part = m[r0:r0 + block]
+            if fmt == "ascii":
+                yield _ascii_body(np.asarray(part, dtype=np.float64))
+            else:
+                yield np.ascontiguousarray(part, dtype=dtype).data
+
+    atomic_write_stream(path, blocks())
+
+
+def atomic_write_stream(path, chunks) -> None:
+    """Write the byte chunks of an iterable to ``path`` through a temporary file and a
+    rename; nothing is left behind if it fails."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            for c in chunks:
+                f.write(c)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 def _ascii_body(m: np.ndarray) -> bytes:

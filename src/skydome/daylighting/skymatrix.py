@@ -113,7 +113,7 @@ def parse_sun_option(sun: str) -> tuple[str, int, float]:
 def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza",
                      order: int = DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
-                     sky_color=GENDAYMTX_SKY_COLOR) -> SkyMatrix:
+                     sky_color=GENDAYMTX_SKY_COLOR, dtype=np.float64) -> SkyMatrix:
     """Perez (1993) sky matrix of many hours in one vectorised pass.
 
     Parameters
@@ -142,6 +142,9 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         Ground albedo per hour or one value, in [0, 1] (default 0.2, gendaymtx's -g).
     sky_color : 3 floats
         RGB tint of the sky patches (``rgb`` only; default gendaymtx's).
+    dtype : numpy.float64 or numpy.float32
+        Storage of the matrix (computed in float64 either way); float32 halves the memory
+        of an annual MF:4 RGB matrix (485 MB -> 242 MB) and is what a "float" file holds.
 
     Returns
     -------
@@ -205,7 +208,10 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
 
     nodes, weights, offsets = ps.nodes(order)
     npatch = len(ps)
-    sky = np.zeros((n, npatch, ncomp))
+    dtype = np.dtype(dtype)
+    if dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
+        raise ValueError(f"dtype = {dtype} must be float64 or float32")
+    sky = np.zeros((n, npatch, ncomp), dtype=dtype)
     sun_sa = math.pi * math.radians(SUN_ANGLE_DEG / 2.0) ** 2
     fixed_sa = math.pi * math.radians(disc_deg / 2.0) ** 2 if mode == "disc" else 0.0
     from skydome.daylighting import _kernels as DK
