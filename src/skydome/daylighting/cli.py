@@ -153,7 +153,40 @@ def skymatrix_cmd(
                f"x {m.sky.shape[2]} components")
 
 
+def illuminance_cmd(
+    weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
+    plane: list[str] = typer.Option(..., "--plane",
+                                    help="horizontal | vertical:AZ | tilted:TILT:AZ (repeat)"),
+    out: str = typer.Option(..., "--out", help="output .csv"),
+    model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
+    albedo: float = typer.Option(0.2, "--albedo", help="ground reflectance"),
+    sun_position: str = typer.Option("spa", "--sun-position", help="spa | radiance"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace an existing output"),
+):
+    """Hourly sky, sun and ground illuminance and irradiance on planes."""
+    from skydome.daylighting.series import parse_plane, plane_series, write_series_csv
+    from skydome.daylighting.weather import read_weather
+
+    planes = [_guard(parse_plane, p) for p in plane]
+    if model != "perez1993":
+        _fail(f"model = {model!r} is not available for illuminance series (choices: perez1993)")
+    if not 0.0 <= albedo <= 1.0:
+        _fail(f"albedo = {albedo:g} is out of range [0, 1]")
+    if sun_position not in ("spa", "radiance"):
+        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    out_p = Path(out)
+    if out_p.exists() and not overwrite:
+        _fail(f"out = {out!r} exists (use --overwrite)")
+    if not out_p.parent.is_dir():
+        _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    w = _guard(read_weather, weather)
+    res = _guard(plane_series, w, planes, ground_reflectance=albedo, sun_position=sun_position)
+    _guard(write_series_csv, out_p, res, overwrite=overwrite)
+    typer.echo(f"wrote {out}: {len(w)} hours x {len(planes)} planes")
+
+
 def register(app: typer.Typer) -> None:
     """Add the daylighting commands to ``app``."""
     app.add_typer(weather_app, name="weather")
     app.command("skymatrix")(skymatrix_cmd)
+    app.command("illuminance")(illuminance_cmd)
