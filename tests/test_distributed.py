@@ -103,3 +103,24 @@ def test_interrupted_run_resumes_without_recomputing(days, tmp_path):
         client.close()
         cluster.close()
     _check_same_as_serial(days, chunks, assemble_chunks(tmp_path, keys))
+
+
+@pytest.mark.slow
+def test_cli_skymatrix_on_local_dask_cluster_equals_in_process(tmp_path):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+    from skydome.daylighting.radiance_io import read_matrix
+
+    lines = sample_weather_path().read_text().splitlines(keepends=True)
+    w = tmp_path / "d.csv"
+    w.write_text("".join(lines[:2 + 48]))
+    base = ["skymatrix", "--weather", str(w), "--patches", "reinhart:2", "--format", "double"]
+    r1 = CliRunner().invoke(app, base + ["--out", str(tmp_path / "a.mtx")])
+    r2 = CliRunner().invoke(app, base + ["--out", str(tmp_path / "b.mtx"), "--workers", "2",
+                                         "--chunk-hours", "12"])
+    assert r1.exit_code == 0 and r2.exit_code == 0, r2.output
+    a, _ = read_matrix(tmp_path / "a.mtx")
+    b, _ = read_matrix(tmp_path / "b.mtx")
+    np.testing.assert_allclose(b, a, rtol=1e-13, atol=1e-12)
+    assert not (tmp_path / "b.mtx.chunks").exists()

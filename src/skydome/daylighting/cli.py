@@ -76,8 +76,16 @@ def skymatrix_cmd(
     fmt: str = typer.Option("float", "--format", help="ascii | float | double"),
     albedo: str = typer.Option("0.2", "--albedo", help="ground reflectance, or 'weather'"),
     overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler",
+                                            help="run on a Dask cluster (tcp://HOST:8786)"),
+    workers: int = typer.Option(0, "--workers",
+                                help="run on a local Dask cluster of N processes (0: in process)"),
+    chunk_hours: int = typer.Option(730, "--chunk-hours", help="hours per Dask chunk"),
 ):
-    """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible."""
+    """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible.
+
+    With --scheduler or --workers the hours are computed as chunks on Dask, kept in
+    OUT.chunks/ until the matrix is written: an interrupted run, rerun, reuses them."""
     import numpy as np
 
     from skydome.daylighting.patches import patches as make_patches
@@ -97,6 +105,11 @@ def skymatrix_cmd(
         _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
     if not 0 <= order <= 16:
         _fail(f"order = {order} is out of range [0, 16]")
+    if workers < 0 or chunk_hours < 1:
+        _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
+    distributed = scheduler is not None or workers > 0
+    if distributed and mode == "separate":
+        _fail("--sun separate is not available with --scheduler/--workers yet")
     rho: Optional[float] = None
     if albedo != "weather":
         try:
@@ -123,10 +136,30 @@ def skymatrix_cmd(
         rho_v = np.where(np.isfinite(rho_v), rho_v, 0.2)
     else:
         rho_v = rho
-    m = _guard(perez_sky_matrix_from_weather, w, sun_position=sun_position, patches=ps,
-               order=order, sun=sun,
-               components=components, ground_reflectance=rho_v,
-               dtype=np.float32 if fmt == "float" else np.float64)
+    dtype = np.float32 if fmt == "float" else np.float64
+    chunk_dir = None
+    if distributed:
+        import shutil
+
+        from skydome.distributed import distributed_sky_matrix
+
+        chunk_dir = Path(f"{out_p}.chunks")
+        sky, rep = _guard(distributed_sky_matrix, w, chunk_dir, chunk_hours=chunk_hours,
+                          scheduler=scheduler, n_workers=max(workers, 1), progress=True,
+                          sun_position=sun_position, ground_reflectance=rho_v, patches=ps.name,
+                          order=order, sun=sun, components=components, dtype=dtype)
+        typer.echo(f"chunks: {len(rep.computed)} computed, {len(rep.verified)} reused",
+                   err=True)
+
+        class _M:  # the parts of a SkyMatrix the writer needs
+            pass
+
+        m = _M()
+        m.sky = sky
+    else:
+        m = _guard(perez_sky_matrix_from_weather, w, sun_position=sun_position, patches=ps,
+                   order=order, sun=sun, components=components, ground_reflectance=rho_v,
+                   dtype=dtype)
     info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
             f"--model {model} --components {components} --sun {sun} --order {order} "
             f"--sun-position {sun_position}",
@@ -149,6 +182,8 @@ def skymatrix_cmd(
         for t in written:
             t.unlink(missing_ok=True)
         raise
+    if chunk_dir is not None:
+        shutil.rmtree(chunk_dir, ignore_errors=True)
     typer.echo(f"wrote {', '.join(str(t) for t in written)}: {len(ps)} patches x {len(w)} hours "
                f"x {m.sky.shape[2]} components")
 
