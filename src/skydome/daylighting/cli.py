@@ -220,8 +220,65 @@ def illuminance_cmd(
     typer.echo(f"wrote {out}: {len(w)} hours x {len(planes)} planes")
 
 
+export_app = typer.Typer(no_args_is_help=True, help="Scene exports for other renderers.")
+
+
+def _value(text: str):
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    return text
+
+
+@export_app.command("radiance")
+def export_radiance_cmd(
+    out: str = typer.Option(..., "--out", help="output .rad (with .dat and .cal beside it)"),
+    model: str = typer.Option("perez1993", "--model", help="any skydome model"),
+    dni: Optional[float] = typer.Option(None, "--dni", help="direct normal irradiance [W/m^2]"),
+    dhi: Optional[float] = typer.Option(None, "--dhi",
+                                        help="diffuse horizontal irradiance [W/m^2]"),
+    sun_elevation: Optional[float] = typer.Option(None, "--sun-elevation", help="[deg]"),
+    sun_azimuth: Optional[float] = typer.Option(None, "--sun-azimuth",
+                                                help="[deg from north towards east]"),
+    lat: Optional[float] = typer.Option(None, "--lat", help="latitude [deg N]"),
+    lon: Optional[float] = typer.Option(None, "--lon", help="longitude [deg E]"),
+    time: Optional[str] = typer.Option(None, "--time", help="ISO time with UTC offset"),
+    param: list[str] = typer.Option([], "--param", help="model parameter NAME=VALUE (repeat)"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
+):
+    """A Radiance sky for one time: the model's sky as a brightdata pattern, its sun as a
+    light source."""
+    import skydome as sd
+    from skydome.daylighting.scene import write_radiance_sky
+
+    params = {}
+    for item in param:
+        if "=" not in item:
+            _fail(f"param = {item!r} must be NAME=VALUE")
+        k, _, v = item.partition("=")
+        params[k.strip()] = _value(v.strip())
+    if dni is not None:
+        params["dni"] = dni
+    if dhi is not None:
+        params["dhi"] = dhi
+    by_place = any(v is not None for v in (lat, lon, time))
+    if by_place:
+        if None in (lat, lon, time) or sun_elevation is not None or sun_azimuth is not None:
+            _fail("give --lat, --lon and --time together, or --sun-elevation/--sun-azimuth")
+        sun = _guard(sd.Sun.from_location, lat, lon, time)
+    else:
+        sun = _guard(sd.Sun, elevation_deg=30.0 if sun_elevation is None else sun_elevation,
+                     azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
+    m = _guard(sd.model, model, sun=sun, **params)
+    files = _guard(write_radiance_sky, m, out, overwrite=overwrite)
+    typer.echo(f"wrote {', '.join(str(f) for f in files)}")
+
+
 def register(app: typer.Typer) -> None:
     """Add the daylighting commands to ``app``."""
     app.add_typer(weather_app, name="weather")
     app.command("skymatrix")(skymatrix_cmd)
     app.command("illuminance")(illuminance_cmd)
+    app.add_typer(export_app, name="export")
