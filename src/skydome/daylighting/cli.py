@@ -15,16 +15,17 @@ weather_app = typer.Typer(no_args_is_help=True, help="Hourly weather files (EPW,
 
 
 def _fail(message: str) -> None:
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
+    """One line on stderr, exit code 2 (the main CLI's convention)."""
+    from skydome.cli import _fail as fail
+
+    fail(message)
 
 
 def _guard(func, *args, **kwargs):
-    try:
-        return func(*args, **kwargs)
-    except (ValueError, TypeError, FileNotFoundError, KeyError) as exc:
-        msg = exc.args[0] if exc.args else str(exc)
-        _fail(str(msg).splitlines()[0] if str(msg) else type(exc).__name__)
+    """Call ``func``; bad input becomes one line on stderr and exit code 2."""
+    from skydome.cli import _run
+
+    return _run(func, *args, **kwargs)
 
 
 @weather_app.command("info")
