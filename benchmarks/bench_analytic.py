@@ -27,7 +27,7 @@ CASES = [
     ("cie1994_clear", {}),
     ("cie1994_intermediate", {}),
     ("cie2003", {"sky_type": 12}),
-    ("asrc_cie", {"sky_clearness": 3.0, "sky_brightness": 0.2}),
+    ("asrc_cie", {"epsilon": 3.0, "delta": 0.2}),
     ("perez1993", {"dni": 650.0, "dhi": 120.0}),
     ("preetham1999", {"turbidity": 3.0}),
     ("hoffman_preetham2002", {"turbidity": 3.0}),

@@ -5,7 +5,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ORDER = [
-    "atmosphere", "spectra", "sun", "transport", "rendering",
+    "atmosphere", "spectra", "sun", "transport", "rendering", "illuminance",
     "cie", "perez", "preetham",
     "klassen_kaneda", "nishita1993", "nishita1996_dobashi1995", "oneil_dobashi2002",
     "montecarlo", "precomputed", "hillaire2020", "validation",

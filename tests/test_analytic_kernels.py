@@ -53,9 +53,9 @@ SUNS = [sd.Sun(elevation_deg=e, azimuth_deg=a) for e, a in ((3.0, 20.0), (35.0, 
     ("cie2003", {"sky_type": 7}),
     ("cie2003", {"sky_type": 12}),
     ("cie2003", {"sky_type": 15}),
-    ("asrc_cie", {"sky_clearness": 1.1, "sky_brightness": 0.2}),   # intermediate + overcast
-    ("asrc_cie", {"sky_clearness": 2.0, "sky_brightness": 0.2}),   # turbid + intermediate
-    ("asrc_cie", {"sky_clearness": 4.5, "sky_brightness": 0.2}),   # clear + turbid
+    ("asrc_cie", {"epsilon": 1.1, "delta": 0.2}),   # intermediate + overcast
+    ("asrc_cie", {"epsilon": 2.0, "delta": 0.2}),   # turbid + intermediate
+    ("asrc_cie", {"epsilon": 4.5, "delta": 0.2}),   # clear + turbid
 ])
 def test_cie_family_kernel_matches_numpy(name, params, sun):
     sky = sd.model(name, sun=sun, **params)

@@ -56,7 +56,7 @@ def test_clearness_brightness_against_gendaylit(el, az, dni, dhi):
     eps_ref, delta_ref = _gendaylit_eps_delta(el, az, dni, dhi)
     dist = 1.0 / math.sqrt(_spencer_eccentricity(0))
     m = skydome.model("asrc_cie", sun=Sun(el, az, distance_au=dist),
-                      direct_normal_irradiance=dni, diffuse_horizontal_irradiance=dhi)
+                      dni=dni, dhi=dhi)
     assert m.sky_clearness == pytest.approx(eps_ref, abs=6e-5)
     if not (1.065 < eps_ref < 2.8):  # gendaylit raises Delta to >= 0.2 in that range
         assert m.sky_brightness == pytest.approx(delta_ref, abs=6e-5)
@@ -94,7 +94,7 @@ def test_pure_components_against_gensky(eps, delta, flag):
         dirs = dirs_all[dirs_all @ sun.direction < math.cos(math.radians(1.0))]
         ref = radiance_sky_luminance(["gensky", "-ang", str(el), str(radiance_azimuth(az)),
                                       flag], np.vstack([ZEN, dirs]))
-        m = skydome.model("asrc_cie", sun=sun, sky_clearness=eps, sky_brightness=delta)
+        m = skydome.model("asrc_cie", sun=sun, epsilon=eps, delta=delta)
         np.testing.assert_allclose(m.relative_luminance(dirs), ref[1:] / ref[0], rtol=5e-3)
 
 
@@ -105,7 +105,7 @@ def test_turbid_component_is_cie2003_type13():
     d = hemisphere_directions(300, seed=12)
     for el, az in ((15.0, 0.0), (40.0, 120.0), (70.0, 250.0)):
         sun = Sun(el, az)
-        m = skydome.model("asrc_cie", sun=sun, sky_clearness=3.0, sky_brightness=0.2)
+        m = skydome.model("asrc_cie", sun=sun, epsilon=3.0, delta=0.2)
         t13 = skydome.model("cie2003", sun=sun, sky_type=13)
         np.testing.assert_allclose(m.relative_luminance(d), t13.relative_luminance(d),
                                    rtol=5e-4)
@@ -121,7 +121,7 @@ def test_mixture_against_independent_components():
                                     "+i"], np.vstack([ZEN, dirs]))
     t13 = skydome.model("cie2003", sun=sun, sky_type=13).relative_luminance(dirs)
     expected = 0.5 * t13 + 0.5 * ref_i[1:] / ref_i[0]
-    m = skydome.model("asrc_cie", sun=sun, sky_clearness=2.1, sky_brightness=0.2)
+    m = skydome.model("asrc_cie", sun=sun, epsilon=2.1, delta=0.2)
     np.testing.assert_allclose(m.relative_luminance(dirs), expected, rtol=5e-3)
 
 
@@ -129,12 +129,12 @@ def test_scaling_and_limits():
     """Zenith = Lz; overcast case E_h = 7 pi Lz / 9 (closed form of eq. 13); zero below
     the horizon; no NaN or negative value, including at the horizon and at the sun."""
     sun = Sun(25.0, 60.0)
-    m = skydome.model("asrc_cie", sun=sun, sky_clearness=1.0, sky_brightness=0.0,
+    m = skydome.model("asrc_cie", sun=sun, epsilon=1.0, delta=0.0,
                       zenith_luminance=3000.0)
     assert m.diffuse_horizontal_illuminance == pytest.approx(7 * math.pi / 9 * 3000.0,
                                                              rel=1e-9)
     for eps in (1.0, 1.1, 1.5, 2.5, 4.0, 7.0):
-        mm = skydome.model("asrc_cie", sun=sun, sky_clearness=eps, sky_brightness=0.15,
+        mm = skydome.model("asrc_cie", sun=sun, epsilon=eps, delta=0.15,
                            diffuse_horizontal_illuminance=20000.0)
         assert float(mm.relative_luminance(ZEN[0])) == pytest.approx(1.0, rel=1e-12)
         d = np.vstack([sun.direction, direction_from_angles(np.array([0.0, -5.0]), 10.0),
@@ -146,26 +146,26 @@ def test_scaling_and_limits():
 
 def test_errors():
     sun = Sun(30.0, 0.0)
-    with pytest.raises(ValueError, match="sky_clearness"):
+    with pytest.raises(ValueError, match="epsilon"):
         skydome.model("asrc_cie", sun=sun)
     with pytest.raises(ValueError, match="together"):
-        skydome.model("asrc_cie", sun=sun, sky_clearness=2.0)
+        skydome.model("asrc_cie", sun=sun, epsilon=2.0)
     with pytest.raises(ValueError, match="not both"):
-        skydome.model("asrc_cie", sun=sun, sky_clearness=2.0, sky_brightness=0.1,
-                      direct_normal_irradiance=100.0, diffuse_horizontal_irradiance=50.0)
-    with pytest.raises(ValueError, match="sky_clearness = 0.5"):
-        skydome.model("asrc_cie", sun=sun, sky_clearness=0.5, sky_brightness=0.1)
-    with pytest.raises(ValueError, match="diffuse_horizontal_irradiance = 0"):
-        skydome.model("asrc_cie", sun=sun, direct_normal_irradiance=100.0,
-                      diffuse_horizontal_irradiance=0.0)
+        skydome.model("asrc_cie", sun=sun, epsilon=2.0, delta=0.1,
+                      dni=100.0, dhi=50.0)
+    with pytest.raises(ValueError, match="epsilon = 0.5"):
+        skydome.model("asrc_cie", sun=sun, epsilon=0.5, delta=0.1)
+    with pytest.raises(ValueError, match="dhi = 0"):
+        skydome.model("asrc_cie", sun=sun, dni=100.0,
+                      dhi=0.0)
     with pytest.raises(ValueError, match="elevation_deg"):
-        skydome.model("asrc_cie", sun=Sun(-3.0, 0.0), sky_clearness=2.0, sky_brightness=0.1)
+        skydome.model("asrc_cie", sun=Sun(-3.0, 0.0), epsilon=2.0, delta=0.1)
 
 
 def test_describe_round_trip():
     sun = Sun(40.0, 200.0)
-    m = skydome.model("asrc_cie", sun=sun, direct_normal_irradiance=600.0,
-                      diffuse_horizontal_irradiance=120.0,
+    m = skydome.model("asrc_cie", sun=sun, dni=600.0,
+                      dhi=120.0,
                       diffuse_horizontal_illuminance=15000.0)
     m2 = skydome.model("asrc_cie", sun=sun, **m.describe()["parameters"])
     assert m2.weights == m.weights

@@ -59,8 +59,8 @@ def test_uniform_fog_transmittance_is_beer_lambert():
     foggy = _sky(fog_density=0.004, fog_height_m=50.0, fog_profile="uniform")
     v = [0.0, 1.0, 0.0]
     for d in (10.0, 300.0, 1000.0):
-        t0, _ = clear.fog(d, v, WL)
-        t1, _ = foggy.fog(d, v, WL)
+        t0, _ = clear.aerial_perspective(v, d, WL)
+        t1, _ = foggy.aerial_perspective(v, d, WL)
         np.testing.assert_allclose(t1 / t0, math.exp(-0.004 * d), rtol=1e-6)
 
 
@@ -109,7 +109,7 @@ def test_fog_makes_the_horizon_whiter():
     i450, i650 = 7, 27
     assert l1[i450] / l1[i650] < l0[i450] / l0[i650]
     # and the fog's in-scattering saturates with distance at a grey-ish level
-    t, lin = foggy.fog(np.array([10.0, 100.0, 2000.0]), [0.0, 1.0, 0.0], WL)
+    t, lin = foggy.aerial_perspective([0.0, 1.0, 0.0], np.array([10.0, 100.0, 2000.0]), WL)
     assert np.all(np.diff(t[:, 3]) < 0) and np.all(np.diff(lin[:, 3]) > 0)
 
 
@@ -117,11 +117,11 @@ def test_fog_object_radiance_and_long_path_limit():
     """L = L0 T + L_in, and an endless path gives the sky radiance."""
     sky = _sky(fog_density=0.001)
     d = np.array([0.2, 0.4, 0.6])
-    _, lin = sky.fog(1e9, d, WL)
+    _, lin = sky.aerial_perspective(d, 1e9, WL)
     np.testing.assert_allclose(lin, sky.radiance(d, WL), rtol=1e-12)
     L0 = np.full(WL.size, 0.1)
-    t, tot = sky.fog(500.0, d, WL, object_radiance=L0)
-    _, lin5 = sky.fog(500.0, d, WL)
+    t, tot = sky.aerial_perspective(d, 500.0, WL, object_radiance=L0)
+    _, lin5 = sky.aerial_perspective(d, 500.0, WL)
     np.testing.assert_allclose(tot, L0 * t + lin5)
 
 
@@ -165,6 +165,6 @@ def test_no_nan_or_negative(elev, az, fog, fh, prof, x, y, z):
     assert np.all(np.isfinite(L)) and np.all(L >= 0)
     s = sky.sun_radiance(WL[::3])
     assert np.all(np.isfinite(s)) and np.all(s >= 0)
-    t, lin = sky.fog(np.array([0.0, 50.0, 1e4]), [x, y, z], WL[::3])
+    t, lin = sky.aerial_perspective([x, y, z], np.array([0.0, 50.0, 1e4]), WL[::3])
     assert np.all(np.isfinite(t)) and np.all((t >= 0) & (t <= 1))
     assert np.all(np.isfinite(lin)) and np.all(lin >= 0)

@@ -36,7 +36,7 @@ def test_horizontal_fog_is_beer_lambert_exactly():
     from survey eq. 8 and beta_haze = k550 (lambda/550)^-alpha as given."""
     sky = _sky(haze_extinction_m=2e-4, angstrom_alpha=1.3)
     for d in (10.0, 1000.0, 25_000.0):
-        t, _ = sky.fog(d, [0.0, 1.0, 0.0], WL)
+        t, _ = sky.aerial_perspective([0.0, 1.0, 0.0], d, WL)
         k = _beta_rayleigh(WL) + 2e-4 * (WL / 550.0) ** -1.3
         np.testing.assert_allclose(t, np.exp(-k * d), rtol=1e-12)
 
@@ -53,7 +53,7 @@ def test_slant_path_through_both_layers_is_beer_lambert():
     expected = np.exp(-((br + bh) * h1 + br * (h2 - h1)) / u)
     np.testing.assert_allclose(sky.transmittance(d, WL), expected, rtol=1e-12)
     # an object inside the haze layer, 2 km along the same ray
-    t, _ = sky.fog(2000.0, d, WL)
+    t, _ = sky.aerial_perspective(d, 2000.0, WL)
     np.testing.assert_allclose(t, np.exp(-(br + bh) * 2000.0), rtol=1e-12)
 
 
@@ -107,15 +107,15 @@ def test_fog_adds_up_to_the_sky_and_object_radiance():
     """L = L0 T + L_in; for a very long path L_in tends to the sky radiance."""
     sky = _sky(elev=35.0)
     d = np.array([0.3, 0.5, 0.81])
-    t, lin = sky.fog(1e9, d, WL)
+    t, lin = sky.aerial_perspective(d, 1e9, WL)
     np.testing.assert_allclose(lin, sky.radiance(d, WL), rtol=1e-12)
     L0 = np.full(WL.size, 0.05)
-    t2, tot = sky.fog(3000.0, [1.0, 0.0, 0.0], WL, object_radiance=L0)
-    _, lin2 = sky.fog(3000.0, [1.0, 0.0, 0.0], WL)
+    t2, tot = sky.aerial_perspective([1.0, 0.0, 0.0], 3000.0, WL, object_radiance=L0)
+    _, lin2 = sky.aerial_perspective([1.0, 0.0, 0.0], 3000.0, WL)
     np.testing.assert_allclose(tot, L0 * t2 + lin2)
     # fog grows with distance: more in-scattering, less transmittance
-    ts, ls = sky.fog(np.array([100.0, 1000.0, 10_000.0])[:, None] * np.ones((1, 1)),
-                     [[1.0, 0.0, 0.0]], WL)
+    ts, ls = sky.aerial_perspective([[1.0, 0.0, 0.0]],
+                     np.array([100.0, 1000.0, 10_000.0])[:, None] * np.ones((1, 1)), WL)
     assert np.all(np.diff(ts[:, 0], axis=0) < 0) and np.all(np.diff(ls[:, 0], axis=0) > 0)
 
 
@@ -172,7 +172,7 @@ def test_validation():
     with pytest.raises(ValueError, match="turbidity"):
         _sky(turbidity=50.0)
     with pytest.raises(ValueError, match="distance_m"):
-        _sky().fog(-1.0, [1, 0, 0], WL)
+        _sky().aerial_perspective([1, 0, 0], -1.0, WL)
     with pytest.raises(TypeError):
         _sky(foo=1)
 
@@ -189,6 +189,6 @@ def test_no_nan_or_negative(elev, az, turb, h1, x, y, z, airmass):
     assert np.all(np.isfinite(L)) and np.all(L >= 0)
     s = sky.sun_radiance(WL)
     assert np.all(np.isfinite(s)) and np.all(s >= 0)
-    t, lin = sky.fog(np.array([0.0, 10.0, 1e5]), [x, y, z] if z != 0 or x or y else [1, 0, 0], WL)
+    t, lin = sky.aerial_perspective([x, y, z] if z != 0 or x or y else [1, 0, 0], np.array([0.0, 10.0, 1e5]), WL)
     assert np.all(np.isfinite(t)) and np.all((t >= 0) & (t <= 1))
     assert np.all(np.isfinite(lin)) and np.all(lin >= 0)

@@ -40,7 +40,8 @@ _LAZY = {
 __all__ = sorted(_LAZY) + ["__version__"]
 
 
-_SUBMODULES = {"models", "spectra", "atmosphere", "transport", "render", "sun", "effects", "data"}
+_SUBMODULES = {"models", "spectra", "atmosphere", "transport", "render", "sun", "effects", "data",
+               "illuminance"}
 
 
 def __getattr__(name: str):

@@ -8,6 +8,7 @@ the value it was given and the valid range, e.g.
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Any
 
 import numpy as np
@@ -63,12 +64,37 @@ def check_choice(name: str, value: Any, choices) -> Any:
     return value
 
 
+def check_real(name: str, value: Any) -> None:
+    """TypeError naming ``name`` unless ``value`` is real numeric data (not complex, not
+    strings or objects). Cheap for float arrays: only the dtype is looked at."""
+    if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+        return
+    raw = np.asarray(value)
+    if np.iscomplexobj(raw):
+        raise TypeError(f"{name} must be real, got complex values")
+    if raw.dtype.kind not in "biuf":
+        try:
+            raw.astype(np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be an array of numbers, got dtype {raw.dtype}") from None
+
+
 def as_directions(directions: Any, name: str = "directions") -> np.ndarray:
     """Validate an array of direction vectors of shape (..., 3) and normalise them.
 
-    Raises ValueError for a wrong last axis, non-finite entries or zero-length vectors.
+    Raises TypeError for complex or non-numeric input, ValueError for a wrong last axis,
+    NaN or infinite entries or zero-length vectors.
     """
-    d = np.asarray(directions, dtype=np.float64)
+    raw = np.asarray(directions)
+    if np.iscomplexobj(raw):
+        raise TypeError(f"{name} must be real unit vectors (..., 3), got complex values")
+    if raw.dtype.kind not in "biuf":
+        try:
+            raw = raw.astype(np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be an array of numbers of shape (..., 3), "
+                            f"got dtype {raw.dtype}") from None
+    d = np.asarray(raw, dtype=np.float64)
     if d.ndim == 0 or d.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3), got {d.shape}")
     if not np.all(np.isfinite(d)):
@@ -79,9 +105,33 @@ def as_directions(directions: Any, name: str = "directions") -> np.ndarray:
     return d / norm
 
 
+#: Wavelength arrays returned by :func:`as_wavelengths`, by id: (weak reference, min, max).
+#: They are read-only copies, so a live entry still describes the array's contents.
+_CHECKED_WAVELENGTHS: dict[int, tuple[Any, float, float]] = {}
+
+
+def _forget(key: int):
+    def callback(_ref):
+        _CHECKED_WAVELENGTHS.pop(key, None)
+    return callback
+
+
 def as_wavelengths(wavelengths_nm: Any, low: float = 200.0, high: float = 4000.0,
                    name: str = "wavelengths_nm") -> np.ndarray:
-    """Validate a 1-D array of wavelengths in nm within [low, high]."""
+    """Validate a 1-D array of wavelengths in nm within [low, high].
+
+    Returns a read-only float64 copy and remembers it: passing that array down again
+    (render -> model -> helpers) costs a look-up and two comparisons instead of a scan,
+    so wavelengths are validated once per render.
+    """
+    entry = _CHECKED_WAVELENGTHS.get(id(wavelengths_nm))
+    if entry is not None and entry[0]() is wavelengths_nm and not wavelengths_nm.flags.writeable:
+        _, w_min, w_max = entry
+        if w_min < low or w_max > high:
+            raise ValueError(f"{name} = [{w_min:g} .. {w_max:g}] nm is out of range "
+                             f"[{low:g}, {high:g}] nm")
+        return wavelengths_nm
+    check_real(name, wavelengths_nm)
     w = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
     if w.ndim != 1 or w.size == 0:
         raise ValueError(f"{name} must be a non-empty 1-D array, got shape {w.shape}")
@@ -89,7 +139,11 @@ def as_wavelengths(wavelengths_nm: Any, low: float = 200.0, high: float = 4000.0
         raise ValueError(f"{name} contains NaN or infinite values")
     if w.min() < low or w.max() > high:
         raise ValueError(f"{name} = [{w.min():g} .. {w.max():g}] nm is out of range [{low:g}, {high:g}] nm")
-    return w
+    out = np.array(w, dtype=np.float64)
+    out.flags.writeable = False
+    key = id(out)
+    _CHECKED_WAVELENGTHS[key] = (weakref.ref(out, _forget(key)), float(out.min()), float(out.max()))
+    return out
 
 
 def safe_sqrt(x):

@@ -23,28 +23,23 @@ H_MIE = 1200.0
 # Mean Earth radius used by Bruneton 2017 and Nishita 1993 [m].
 EARTH_RADIUS = 6360.0e3
 
-# Top of the atmosphere above the ground [m] (Bruneton 2017 demo uses 60 km, Hillaire 100 km).
-ATMOSPHERE_THICKNESS = 60.0e3
-
 # Boltzmann constant [J/K] (CODATA 2018, exact).
 K_BOLTZMANN = 1.380649e-23
-
-# Loschmidt constant at 273.15 K, 101325 Pa [m^-3] (CODATA 2018).
-LOSCHMIDT = 2.686780111e25
-
-# Standard temperature and pressure of the US Standard Atmosphere 1976 at sea level.
-T_STANDARD = 288.15  # [K]
-P_STANDARD = 101325.0  # [Pa]
-
-# Rayleigh depolarisation factor of air (Penndorf 1957; Bates 1984 gives 0.0279 at 550 nm).
-RAYLEIGH_DEPOLARISATION = 0.0279
 
 # Mean apparent angular radius of the Sun [deg] (IAU nominal solar radius 695 700 km
 # at 1 au = 149 597 870.7 km gives 0.2665 deg; Radiance uses 0.2665 for its 0.533 deg disc).
 SUN_ANGULAR_RADIUS_DEG = 0.2665
 
-# Total solar irradiance at 1 au [W/m^2] (Kopp & Lean 2011).
-SOLAR_CONSTANT = 1361.0
+# Solar radius NREL's SPA uses for the sun's upper limb at sunrise and sunset [deg]
+# (Reda & Andreas 2004, eq. 42 and A.4: 0.26667 deg). Kept apart from the disc radius above.
+SPA_SUN_RADIUS_DEG = 0.26667
+
+# Total solar irradiance at 1 au [W/m^2], one name per source:
+# Gueymard 2018 (Solar Energy 168, 2-9: 1361.1 +- 0.5), the library's default;
+SOLAR_CONSTANT_GUEYMARD2018 = 1361.1
+# the World Radiation Centre value that Perez et al. 1990 fitted their clearness and
+# brightness bins with (1367; also Radiance's gendaylit).
+SOLAR_CONSTANT_WRC = 1367.0
 
 # Dobson unit [molecules m^-2].
 DOBSON_UNIT = 2.6867e20

@@ -50,6 +50,7 @@ from .data import load_table
 __all__ = [
     "wavelength_grid",
     "default_wavelengths",
+    "resample",
     "cmf_1931",
     "daylight_basis",
     "solar_irradiance",
@@ -192,10 +193,41 @@ def _table(name: str) -> tuple[np.ndarray, np.ndarray]:
     return values[:, 0], values[:, 1:]
 
 
+def resample(wavelengths_nm, table_nm, values, outside: str = "zero") -> np.ndarray:
+    """A tabulated spectral quantity at other wavelengths: linear interpolation in
+    wavelength, the one resampling convention of the library.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like
+        Where to evaluate [nm], any shape.
+    table_nm : array_like
+        The table's wavelengths (n,) [nm], increasing.
+    values : array_like
+        (n,) or (n, k): one or k columns tabulated at ``table_nm``.
+    outside : {"zero", "hold"}
+        Beyond the table: 0 (a quantity that vanishes there: colour-matching functions,
+        daylight basis, absorption bands) or the end values held (a smooth quantity such
+        as a cross section or a refractive index, whose table simply ends).
+
+    Returns
+    -------
+    numpy.ndarray
+        shape(wavelengths_nm) (+ (k,) for 2-D ``values``).
+    """
+    check_choice("outside", outside, ("zero", "hold"))
+    x = np.asarray(wavelengths_nm, dtype=np.float64)
+    xp = np.asarray(table_nm, dtype=np.float64)
+    fp = np.asarray(values, dtype=np.float64)
+    kw = {"left": 0.0, "right": 0.0} if outside == "zero" else {}
+    if fp.ndim == 1:
+        return np.interp(x, xp, fp, **kw)
+    return np.stack([np.interp(x, xp, fp[:, j], **kw) for j in range(fp.shape[1])], axis=-1)
+
+
 def _interp_columns(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
-    """Linear interpolation of every column of ``fp``; 0 outside ``xp``."""
-    return np.stack([np.interp(x, xp, fp[:, j], left=0.0, right=0.0)
-                     for j in range(fp.shape[1])], axis=-1)
+    """Every column of ``fp`` at ``x``, 0 outside ``xp`` (:func:`resample`)."""
+    return resample(x, xp, fp, "zero")
 
 
 def cmf_1931(wavelengths_nm) -> np.ndarray:

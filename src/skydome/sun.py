@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from skydome._validate import check_choice, check_number
-from skydome.constants import SUN_ANGULAR_RADIUS_DEG
+from skydome.constants import SOLAR_CONSTANT_GUEYMARD2018, SPA_SUN_RADIUS_DEG, SUN_ANGULAR_RADIUS_DEG
 
 __all__ = [
     "Sun",
@@ -42,6 +42,7 @@ __all__ = [
     "extraterrestrial_irradiance",
     "SOLAR_POSITION_METHODS",
     "SOLAR_CONSTANT_W_M2",
+    "eccentricity_correction_spencer1971",
 ]
 
 #: Solar position algorithms understood by :func:`solar_position`.
@@ -49,7 +50,7 @@ SOLAR_POSITION_METHODS = ("spa", "preetham1999")
 
 #: Total solar irradiance at 1 au [W/m^2]: 1361.1 +- 0.5 W/m^2 [Gue18], consistent with
 #: the 1360.8 +- 0.5 W/m^2 of SORCE/TIM at solar minimum [KL11].
-SOLAR_CONSTANT_W_M2 = 1361.1
+SOLAR_CONSTANT_W_M2 = SOLAR_CONSTANT_GUEYMARD2018
 
 _TIME_EXAMPLE = "e.g. '2026-06-21T20:45+02:00' or '2026-06-21T18:45Z'"
 
@@ -277,15 +278,21 @@ def _refraction_deg(elev_deg, pressure_pa, temperature_c, atmos_refract=0.5667):
     with np.errstate(invalid="ignore", divide="ignore"):
         de = (p_mbar / 1010.0) * (283.0 / (273.0 + temperature_c)) * 1.02 / (
             60.0 * np.tan(np.radians(e0 + 10.3 / (e0 + 5.11))))
-    return np.where(e0 >= -(0.26667 + atmos_refract), de, 0.0)
+    return np.where(e0 >= -(SPA_SUN_RADIUS_DEG + atmos_refract), de, 0.0)
 
 
 # -- distance and irradiance -----------------------------------------------------------------
-def _spencer_inverse_square(day_of_year):
-    """(r0/r)^2 from Spencer's Fourier series [Spe71]; day_of_year 1..366."""
+def eccentricity_correction_spencer1971(day_of_year) -> np.ndarray:
+    """Earth-sun distance factor E0 = (r0 / r)^2 [-] from Spencer's Fourier series [Spe71].
+
+    ``day_of_year`` 1..366 (day 0 gives the value of day 365: the series is periodic).
+    The one home of this series; Perez 1993 and the extraterrestrial irradiance use it."""
     g = 2.0 * np.pi * (np.asarray(day_of_year, dtype=np.float64) - 1.0) / 365.0  # day angle
     return (1.000110 + 0.034221 * np.cos(g) + 0.001280 * np.sin(g)
-            + 0.000719 * np.cos(2.0 * g) + 0.000077 * np.sin(2.0 * g))
+            + 0.000719 * np.cos(2.0 * g) + 0.000077 * np.sin(2.0 * g))  # [Spe71]
+
+
+_spencer_inverse_square = eccentricity_correction_spencer1971
 
 
 def earth_sun_distance(time: Any, method: str = "spa", delta_t_s: float | None = None):

@@ -175,10 +175,10 @@ def ozone_cross_section(wavelength_nm) -> np.ndarray:
     means from 360-830 nm, placed at the bin centres; linear interpolation; the end values
     are held beyond the table -- below 365 nm this underestimates the Huggins band)."""
     from skydome.data import load_table
+    from skydome.spectra import resample
 
     _, t = load_table("ozone_cross_section_233k")
-    wl = np.asarray(wavelength_nm, dtype=np.float64)
-    return np.interp(wl, t[:, 0] + 5.0, t[:, 1])
+    return resample(wavelength_nm, t[:, 0] + 5.0, t[:, 1], "hold")
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,12 +6,46 @@ A model is a small class deriving from :class:`SkyModel`. It declares
 * ``reference``: the citation;
 * ``native``: ``"spectral"``, ``"xyz"`` or ``"luminance"``, the quantity it computes;
 * ``parameters``: a tuple of :class:`Parameter` (name, unit, default, valid range, meaning);
+  shared ones come from here (:data:`ATMOSPHERE`, :data:`TURBIDITY`,
+  :data:`OBSERVER_ALTITUDE_M`, :data:`ATMOSPHERE_PARAMETERS`) so each has one range;
+* ``sun_elevation_range_deg`` and ``sun_outside_range``: the sun elevations where it applies
+  and what happens outside them (``"raise"`` or ``"black"``; a model that extends itself to
+  every elevation, twilight included, declares [-90, 90]);
 
 and implements the native method: ``radiance(directions, wavelengths_nm)`` (spectral,
 W m^-2 sr^-1 nm^-1, wavelength axis last), ``xyz(directions)`` (CIE XYZ with Y in cd m^-2)
 or ``luminance(directions)`` (cd m^-2). The base class derives the others where that is
 physically meaningful. Directions are unit vectors (..., 3) in the East-North-Up frame and
-name the direction the light arrives *from*.
+name the direction the light arrives *from*; complex or non-numeric directions are refused
+for every model by the base class.
+
+Construction
+------------
+``SkyModel.__init__(sun, **params)`` does the common work once: ``sun`` must be a
+:class:`skydome.Sun`; every keyword must be declared (TypeError listing the valid ones) and
+valid (:meth:`Parameter.validate`: floats, ints, choices and strict booleans, each error
+naming the parameter, its value and its range); the sun must lie in
+``sun_elevation_range_deg`` (ValueError naming ``sun.elevation_deg``, the model and the
+range) unless the model is declared black outside it (then ``self._black`` is True); the
+atmosphere is resolved where the model declares ``atmosphere`` and ``turbidity``. It then
+calls the model's own ``_setup(p, given)`` with the validated parameters. Models whose
+constructor takes more than the sun and keywords call ``self._begin(sun, params)``.
+
+The sun
+-------
+``sun_radiance(wavelengths_nm)`` [W m^-2 sr^-1 nm^-1] (spectral models; None without a
+sun), ``sun_luminance()`` [cd m^-2] (every model; None without a sun: luminance-only models
+such as ``perez1993``, ``asrc_cie`` and the CIE skies given ``dni_illuminance`` return the
+disc's mean luminance, spectral models derive it from ``sun_radiance``) and
+``direct_normal_illuminance()`` [lx]. A renderer draws the disc of a luminance-only model
+with ``sun_luminance()`` over ``sun.solid_angle_sr`` (D65 chromaticity, as the sky);
+:mod:`skydome.illuminance` uses ``direct_normal_illuminance()``.
+
+Aerial perspective
+------------------
+Models that have it implement one signature, ``aerial_perspective(directions, distance_m,
+wavelengths_nm, ...) -> (transmittance, in-scattered radiance)``, both of shape
+(..., n_wavelengths); model-specific options follow as keywords.
 
 Models register themselves with :func:`register`; the registry discovers every module in
 ``skydome.models.analytic`` and ``skydome.models.simulated`` on first use, so adding a
@@ -20,6 +54,7 @@ model needs no edit here. Model modules must not import numba at module level.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
@@ -27,10 +62,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from skydome._validate import as_directions, check_choice, check_int, check_number
+from skydome._validate import as_directions, check_choice, check_int, check_number, check_real
 
 __all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
-           "resolve_atmosphere"]
+           "resolve_atmosphere", "ATMOSPHERE", "TURBIDITY", "OBSERVER_ALTITUDE_M",
+           "ATMOSPHERE_PARAMETERS"]
+
+
+class ParameterTypeError(TypeError, ValueError):
+    """A parameter of the wrong type (e.g. ``"yes"`` for a boolean). A TypeError; also a
+    ValueError, which some models raised for bad booleans before the protocol was
+    enforced in one place."""
 
 
 @dataclass(frozen=True)
@@ -50,9 +92,12 @@ class Parameter:
     doc : str
         One line of meaning.
     kind : str
-        "float", "int", "choice", "object" (validated by the model itself).
+        "float", "int", "choice", "bool" (True or False only, strictly) or "object"
+        (validated by the model itself).
     choices : tuple
         Allowed values for kind "choice".
+    low_open : bool
+        True where ``low`` itself is excluded (a range "(low, high]").
     """
 
     name: str
@@ -63,33 +108,64 @@ class Parameter:
     doc: str = ""
     kind: str = "float"
     choices: tuple = field(default_factory=tuple)
+    low_open: bool = False
 
     def validate(self, value: Any) -> Any:
         """Check ``value`` against this parameter's type and range; return it converted."""
         if value is None:
             return None
         if self.kind == "float":
-            return check_number(self.name, value, self.low, self.high, self.unit)
+            return check_number(self.name, value, self.low, self.high, self.unit,
+                                low_open=self.low_open)
         if self.kind == "int":
             lo = None if self.low is None else int(self.low)
             hi = None if self.high is None else int(self.high)
             return check_int(self.name, value, lo, hi)
         if self.kind == "choice":
             return check_choice(self.name, value, self.choices)
+        if self.kind == "bool":
+            if not isinstance(value, (bool, np.bool_)):
+                raise ParameterTypeError(f"{self.name} must be True or False, got {value!r} "
+                                f"({type(value).__name__})")
+            return bool(value)
         return value
 
     def range_text(self) -> str:
         if self.kind == "choice":
             return " | ".join(map(str, self.choices))
+        if self.kind == "bool":
+            return "True | False"
         if self.kind in ("float", "int"):
             lo = "-inf" if self.low is None else f"{self.low:g}"
             hi = "inf" if self.high is None else f"{self.high:g}"
-            return f"[{lo}, {hi}]"
+            return f"{'(' if self.low_open else '['}{lo}, {hi}]"
         return ""
+
+
+def _guard_directions(method):
+    """Wrap a model's ``radiance``/``xyz``/``luminance`` so that complex or non-numeric
+    directions are refused (TypeError naming ``directions``) whatever path the model takes
+    to its kernels; NaN, shape and zero-length checks stay with the model's own validation
+    (:func:`skydome._validate.as_directions` or its kernel twin)."""
+
+    @functools.wraps(method)
+    def checked(self, directions, *args, **kwargs):
+        check_real("directions", directions)
+        return method(self, directions, *args, **kwargs)
+
+    checked._guards_directions = True
+    return checked
 
 
 class SkyModel:
     """Base class of every sky model (see the module docstring for the protocol)."""
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        for meth in ("radiance", "xyz", "luminance"):
+            f = cls.__dict__.get(meth)
+            if callable(f) and not getattr(f, "_guards_directions", False):
+                setattr(cls, meth, _guard_directions(f))
 
     name: ClassVar[str] = ""
     reference: ClassVar[str] = ""
@@ -98,6 +174,55 @@ class SkyModel:
     summary: ClassVar[str] = ""
 
     sun = None  # a skydome.Sun where the model has one
+
+    #: Sun elevations [deg] (inclusive) where the model applies.
+    sun_elevation_range_deg: ClassVar[tuple[float, float]] = (-90.0, 90.0)
+    #: What happens with the sun outside that range: "raise" (ValueError naming
+    #: ``sun.elevation_deg``, the model and the range) or "black" (the model is built and
+    #: its sky is black, luminance 0 everywhere). A model that supports every elevation by
+    #: a documented extension (twilight) declares the full range [-90, 90].
+    sun_outside_range: ClassVar[str] = "raise"
+
+    # -- the common constructor --------------------------------------------------------
+    def __init__(self, sun=None, **params):
+        """Validate ``sun`` and the keyword parameters against the declarations, resolve
+        the atmosphere, then call the model's own :meth:`_setup`."""
+        p = self._begin(sun, params)
+        self._setup(p, params)
+
+    def _setup(self, p: dict[str, Any], given: dict[str, Any]) -> None:
+        """The model's own set-up, after the common checks; ``p`` holds every declared
+        parameter (validated, defaults filled, ``atmosphere`` resolved), ``given`` the
+        caller's keywords. The default stores ``p`` as attributes."""
+        for k, v in p.items():
+            setattr(self, k, v)
+
+    def _begin(self, sun, params: dict[str, Any]) -> dict[str, Any]:
+        """The common constructor work, once for every model: the sun is a
+        :class:`skydome.Sun`; every keyword is declared and valid; the sun is inside the
+        declared range (or the model is marked black); the atmosphere is resolved where
+        the model declares one. Sets ``self.sun`` and ``self._black``."""
+        check_sun(sun)
+        p = self._validate_params(params)
+        self.sun = sun
+        self._black = not self.sun_in_range(sun.elevation_deg)
+        if self._black and self.sun_outside_range == "raise":
+            raise ValueError(self._sun_range_message(sun.elevation_deg))
+        if "atmosphere" in p and "turbidity" in p:
+            p["atmosphere"] = resolve_atmosphere(p, params)
+        return p
+
+    @classmethod
+    def sun_in_range(cls, elevation_deg: float) -> bool:
+        """Whether the model applies with the sun at ``elevation_deg`` [deg]."""
+        lo, hi = cls.sun_elevation_range_deg
+        return lo <= float(elevation_deg) <= hi
+
+    @classmethod
+    def _sun_range_message(cls, elevation_deg: float) -> str:
+        lo, hi = cls.sun_elevation_range_deg
+        return (f"sun.elevation_deg = {float(elevation_deg):g} deg is out of range "
+                f"[{lo:g}, {hi:g}] deg for model {cls.name!r}")
 
     # -- helpers for subclasses -------------------------------------------------------
     @classmethod
@@ -156,6 +281,34 @@ class SkyModel:
         [W m^-2 sr^-1 nm^-1], shape (n_wavelengths,); None if the model has no sun."""
         return None
 
+    def sun_luminance(self) -> float | None:
+        """Mean luminance of the solar disc seen by the observer [cd m^-2]; None if the
+        model has no sun.
+
+        Spectral and XYZ models derive it from :meth:`sun_radiance` (683 lm/W x the
+        integral with y-bar over the default grid); luminance-only models that carry a sun
+        (Perez 1993, ASRC-CIE, the CIE skies given a direct normal illuminance) override
+        it. Renders paint the disc with this value where a model has no spectral sun."""
+        from skydome.spectra import default_wavelengths, luminance_from_spectrum
+
+        if self.native == "luminance":
+            return None
+        wl = default_wavelengths()
+        ls = self.sun_radiance(wl)
+        if ls is None:
+            return None
+        return float(luminance_from_spectrum(np.asarray(ls, dtype=np.float64).reshape(-1), wl))
+
+    def direct_normal_illuminance(self) -> float:
+        """Illuminance of the sun's disc on a plane facing it [lx]: :meth:`sun_luminance`
+        times the disc's solid angle; 0 for a model without a sun. (The whole disc: the
+        part below the horizon is not removed; :mod:`skydome.illuminance` counts the sun
+        only while its centre is above the horizon.)"""
+        lum = self.sun_luminance()
+        if lum is None or self.sun is None:
+            return 0.0
+        return float(lum) * float(self.sun.solid_angle_sr)
+
     def describe(self) -> dict[str, Any]:
         """The model's name, reference, native quantity and parameter values."""
         values = {p.name: getattr(self, p.name, None) for p in self.parameters}
@@ -170,8 +323,49 @@ class SkyModel:
     def _directions(directions) -> np.ndarray:
         return as_directions(directions)
 
+    @staticmethod
+    def _aerial_inputs(directions, distance_m, wavelengths_nm):
+        """The checked inputs of ``aerial_perspective``: flat unit directions (k, 3), flat
+        distances (k,) [m], wavelengths (n,) [nm] and the broadcast shape (...)."""
+        from skydome._validate import as_wavelengths
+
+        d = as_directions(directions)
+        wl = as_wavelengths(wavelengths_nm)
+        dist = np.asarray(distance_m, dtype=np.float64)
+        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
+            raise ValueError(f"distance_m = {dist.min() if dist.size else dist} m is out of "
+                             "range [0, inf) m")
+        shape = np.broadcast_shapes(d.shape[:-1], dist.shape)
+        flat = np.broadcast_to(d, shape + (3,)).reshape(-1, 3)
+        return flat, np.broadcast_to(dist, shape).reshape(-1), wl, shape
+
+    @staticmethod
+    def _aerial_outputs(t, L, shape, object_radiance=None):
+        """(transmittance, radiance) reshaped to ``shape`` + (n,); with ``object_radiance``
+        the radiance reaching the eye, ``L_0 T + L_in``."""
+        n = t.shape[-1]
+        t = t.reshape(shape + (n,))
+        L = L.reshape(shape + (n,))
+        if object_radiance is not None:
+            L = np.asarray(object_radiance, dtype=np.float64) * t + L
+        return t, L
+
 
 # -- shared by the physically based models ---------------------------------------------------
+# One declaration per shared parameter, with the range that is enforced. The observer must
+# also be inside the atmosphere (below ``Atmosphere.top_altitude_m``, 100 km for
+# ``Atmosphere.earth``), which :func:`resolve_atmosphere` checks against the atmosphere
+# actually used.
+ATMOSPHERE = Parameter("atmosphere", "", None,
+                       doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
+                       kind="object")
+TURBIDITY = Parameter("turbidity", "", 2.5, 1.0, 32.0,
+                      "Preetham turbidity when no atmosphere is given")
+OBSERVER_ALTITUDE_M = Parameter("observer_altitude_m", "m", 0.0, 0.0, 99_999.0,
+                                "observer altitude above the ground (inside the atmosphere)")
+#: The declarations every model built on an Atmosphere takes, in this order.
+ATMOSPHERE_PARAMETERS = (ATMOSPHERE, TURBIDITY, OBSERVER_ALTITUDE_M)
+
 def check_sun(sun) -> None:
     """TypeError unless ``sun`` is a :class:`skydome.Sun`."""
     from skydome.sun import Sun

@@ -10,11 +10,30 @@ from __future__ import annotations
 import numpy as np
 
 
+def _real_degrees(name: str, value) -> np.ndarray:
+    raw = np.asarray(value)
+    if np.iscomplexobj(raw) or raw.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be a real number or array of real numbers, "
+                        f"got dtype {raw.dtype}")
+    a = raw.astype(np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return a
+
+
 def direction_from_angles(elevation_deg, azimuth_deg) -> np.ndarray:
-    """Unit vector(s) (..., 3) for elevation above the horizon and azimuth from north
-    towards east, both in degrees."""
-    el = np.radians(np.asarray(elevation_deg, dtype=np.float64))
-    az = np.radians(np.asarray(azimuth_deg, dtype=np.float64))
+    """Unit vector(s) (..., 3) for elevation above the horizon [deg] in [-90, 90] and
+    azimuth from north towards east [deg] (any finite value), broadcast together.
+
+    Raises TypeError for complex or non-numeric input and ValueError naming the argument
+    for NaN, infinite or out-of-range values."""
+    el_deg = _real_degrees("elevation_deg", elevation_deg)
+    az_deg = _real_degrees("azimuth_deg", azimuth_deg)
+    if np.any(np.abs(el_deg) > 90.0):
+        bad = el_deg[np.abs(el_deg) > 90.0].flat[0]
+        raise ValueError(f"elevation_deg = {bad:g} deg is out of range [-90, 90] deg")
+    el = np.radians(el_deg)
+    az = np.radians(az_deg)
     el, az = np.broadcast_arrays(el, az)
     c = np.cos(el)
     return np.stack([c * np.sin(az), c * np.cos(az), np.sin(el)], axis=-1)

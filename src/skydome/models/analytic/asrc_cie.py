@@ -37,17 +37,17 @@ import math
 
 import numpy as np
 
-from skydome._validate import check_number
+from skydome.constants import SOLAR_CONSTANT_WRC
 from skydome.models import Parameter, register
-from skydome.models.analytic.cie import (CIE1994Clear, CIE1994Intermediate, CIE1994Overcast,
-                                         _CIEBase)
+from skydome.models.analytic.cie import (DNI_ILLUMINANCE_PARAM, CIE1994Clear,
+                                         CIE1994Intermediate, CIE1994Overcast, _CIEBase)
 
 __all__ = ["ASRCCIE", "sky_clearness", "sky_brightness", "asrc_weights",
            "SOLAR_CONSTANT_W_M2", "PEREZ_KAPPA"]
 
 #: Solar constant [W m^-2] used for the sky brightness (as in Perez et al. 1990 and
 #: Radiance's gendaylit).
-SOLAR_CONSTANT_W_M2 = 1367.0
+SOLAR_CONSTANT_W_M2 = SOLAR_CONSTANT_WRC   # [PISMS90] fitted with 1367 W m^-2
 #: kappa of the sky clearness for the zenith angle in radians [PISMS90].
 PEREZ_KAPPA = 1.041
 
@@ -55,8 +55,10 @@ PEREZ_KAPPA = 1.041
 def relative_air_mass(zenith_deg: float) -> float:
     """Relative optical air mass, Kasten (1966): 1/(cos Z + 0.15 (93.885 - Z)^-1.253),
     Z in degrees (the form used by Perez et al. 1990 and gendaylit)."""
+    from skydome.atmosphere.airmass import kasten1966
+
     z = min(max(zenith_deg, 0.0), 93.0)
-    return 1.0 / (math.cos(math.radians(z)) + 0.15 * (93.885 - z) ** -1.253)
+    return float(kasten1966(z))
 
 
 def sky_clearness(direct_normal_irradiance: float, diffuse_horizontal_irradiance: float,
@@ -103,7 +105,7 @@ class _TurbidClear(_CIEBase):
     parameters = ()
 
     def __init__(self, sun):
-        self._setup(sun, {})
+        self._begin_cie(sun, {})
         zs = math.radians(sun.zenith_deg)
         self._norm = float(self._f(zs, math.cos(zs)) * (1.0 - math.exp(-0.32)))
 
@@ -134,15 +136,19 @@ class ASRCCIE(_CIEBase):
     sun : skydome.Sun
         The sun, elevation in [0, 90] deg; its ``distance_au`` sets the extraterrestrial
         irradiance used for the sky brightness.
-    sky_clearness : float, optional
-        Perez sky clearness epsilon, >= 1 (give it with ``sky_brightness``).
-    sky_brightness : float, optional
+    epsilon : float, optional
+        Perez sky clearness epsilon, [1, 1000] (give it with ``delta``).
+    delta : float, optional
         Perez sky brightness Delta, [0, 5].
-    direct_normal_irradiance : float, optional
-        Direct normal irradiance [W m^-2], [0, 1500]; with ``diffuse_horizontal_irradiance``
-        it gives epsilon and Delta (alternative to sky_clearness/sky_brightness).
-    diffuse_horizontal_irradiance : float, optional
+    dni : float, optional
+        Direct normal irradiance [W m^-2], [0, 1500]; with ``dhi`` it gives epsilon and
+        Delta (alternative to epsilon/delta). The names are pvlib's and Perez 1993's.
+    dhi : float, optional
         Diffuse horizontal irradiance [W m^-2], (0, 1000].
+    dni_illuminance : float, optional
+        Direct normal illuminance of the sun [lx], [0, 135000]. Default: with ``dni``,
+        ``dni`` times the Perez et al. 1990 direct luminous efficacy (W = 2 cm); without
+        it the model has no sun (:meth:`sun_luminance` returns None).
     zenith_luminance : float, optional
         Zenith luminance [cd m^-2]; default 1000 cd m^-2 (a relative scale) unless
         ``diffuse_horizontal_illuminance`` is given.
@@ -164,47 +170,47 @@ class ASRCCIE(_CIEBase):
                  "271-289 (ASRC-CIE); Littlefair (1994), Solar Energy 53(4), 315-322")
     summary = "ASRC-CIE: CIE clear/turbid/intermediate/overcast skies mixed by Perez epsilon, Delta"
     parameters = (
-        Parameter("sky_clearness", "", None, 1.0, 1.0e3, "Perez sky clearness epsilon"),
-        Parameter("sky_brightness", "", None, 0.0, 5.0, "Perez sky brightness Delta"),
-        Parameter("direct_normal_irradiance", "W/m^2", None, 0.0, 1500.0,
-                  "direct normal irradiance (with diffuse_horizontal_irradiance)"),
-        Parameter("diffuse_horizontal_irradiance", "W/m^2", None, 0.0, 1000.0,
-                  "diffuse horizontal irradiance (with direct_normal_irradiance)"),
+        Parameter("epsilon", "", None, 1.0, 1.0e3, "Perez sky clearness (with delta)"),
+        Parameter("delta", "", None, 0.0, 5.0, "Perez sky brightness (with epsilon)"),
+        Parameter("dni", "W/m^2", None, 0.0, 1500.0, "direct normal irradiance (with dhi)"),
+        Parameter("dhi", "W/m^2", None, 0.0, 1000.0,
+                  "diffuse horizontal irradiance (with dni)", low_open=True),
         Parameter("zenith_luminance", "cd/m^2", None, 0.0, 1.0e6,
                   "luminance of the zenith; default 1000 (relative scale)"),
         Parameter("diffuse_horizontal_illuminance", "lx", None, 0.0, 2.0e5,
                   "illuminance of the sky on a horizontal plane; alternative to zenith_luminance"),
+        DNI_ILLUMINANCE_PARAM,
     )
 
     DEFAULT_ZENITH_LUMINANCE = 1000.0
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
-        eps, dlt = self.sky_clearness, self.sky_brightness
-        dni, dhi = self.direct_normal_irradiance, self.diffuse_horizontal_irradiance
+        self._begin_cie(sun, params)
+        eps, dlt = self.epsilon, self.delta
+        dni, dhi = self.dni, self.dhi
         have_perez = eps is not None or dlt is not None
         have_irr = dni is not None or dhi is not None
         if have_perez and have_irr:
-            raise ValueError("asrc_cie: give sky_clearness and sky_brightness, or "
-                             "direct_normal_irradiance and diffuse_horizontal_irradiance, "
-                             "not both")
+            raise ValueError("asrc_cie: give epsilon and delta, or dni and dhi, not both")
         if have_irr:
             if dni is None or dhi is None:
-                raise ValueError("asrc_cie: direct_normal_irradiance and "
-                                 "diffuse_horizontal_irradiance must be given together")
-            check_number("diffuse_horizontal_irradiance", dhi, 0.0, 1000.0, "W/m^2",
-                         low_open=True)
+                raise ValueError("asrc_cie: dni and dhi must be given together")
             zen = self.sun.zenith_deg
             eps = sky_clearness(dni, dhi, zen)               # [PISMS90] eq. for epsilon
             dlt = sky_brightness(dhi, zen, self.sun.distance_au)  # [PISMS90] Delta
         elif have_perez:
             if eps is None or dlt is None:
-                raise ValueError("asrc_cie: sky_clearness and sky_brightness must be "
-                                 "given together")
+                raise ValueError("asrc_cie: epsilon and delta must be given together")
         else:
-            raise ValueError("asrc_cie needs sky_clearness and sky_brightness, or "
-                             "direct_normal_irradiance and diffuse_horizontal_irradiance")
+            raise ValueError("asrc_cie needs epsilon and delta, or dni and dhi")
+        # epsilon and Delta actually used (given or from dni/dhi), as Perez 1993's
         self.sky_clearness, self.sky_brightness = float(eps), float(dlt)
+        if self.dni_illuminance is None and dni is not None and self.sun.elevation_deg > 0.0:
+            from skydome.models.analytic.perez1993 import perez1990_luminous_efficacy
+
+            k_dir = float(perez1990_luminous_efficacy(self.sky_clearness, self.sky_brightness,
+                                                      self.sun.zenith_deg, 2.0).direct)
+            self.dni_illuminance = max(float(dni) * k_dir, 0.0)   # [PISMS90] direct efficacy
         self.weights = asrc_weights(self.sky_clearness, self.sky_brightness)
         s = self.sun
         self._components = []
@@ -222,8 +228,9 @@ class ASRCCIE(_CIEBase):
         # Report the Perez parameters (resolved) rather than the irradiances, so that the
         # parameters round-trip through model(**params).
         p = out["parameters"]
-        p["direct_normal_irradiance"] = None
-        p["diffuse_horizontal_irradiance"] = None
+        p["epsilon"], p["delta"] = self.sky_clearness, self.sky_brightness
+        p["dni"] = None
+        p["dhi"] = None
         out["weights"] = dict(self.weights)
         return out
 

@@ -41,11 +41,10 @@ References
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 
 import numpy as np
 
-from skydome._validate import check_number, clamp_cosine
+from skydome._validate import clamp_cosine
 from skydome.models import Parameter, SkyModel, register
 
 __all__ = ["CIE1994Overcast", "CIE1994Clear", "CIE1994Intermediate", "CIE2003",
@@ -65,6 +64,11 @@ _LZ_PARAM = Parameter(
 _EH_PARAM = Parameter(
     "diffuse_horizontal_illuminance", "lx", None, 0.0, 2.0e5,
     "illuminance of the sky (no sun) on a horizontal plane; alternative to zenith_luminance")
+#: The sun of a CIE sky: the standards describe the sky alone, so a user who wants the
+#: solar disc (renders, illuminance on planes) gives its direct normal illuminance.
+DNI_ILLUMINANCE_PARAM = Parameter(
+    "dni_illuminance", "lx", None, 0.0, 135000.0,
+    "direct normal illuminance of the sun; None: no sun (the sky alone)")
 _TURB_PARAM = Parameter(
     "turbidity", "", 2.45, 1.5, 20.0,
     "Linke turbidity used only by the default zenith luminance formula (gensky -t)")
@@ -103,24 +107,10 @@ def zenith_luminance_intermediate(elevation_deg: float, turbidity: float = 2.45)
 
 
 # -- numerical hemisphere integral -----------------------------------------------------------
-@lru_cache(maxsize=8)
-def _hemisphere_nodes(n_mu: int, n_phi: int):
-    """Gauss-Legendre nodes in mu = cos(theta) on [0, 1] times a periodic trapezoid rule in
-    azimuth psi (relative to the sun) on [0, 2 pi). Returns (mu, psi, weights) of shape
-    (n_mu * n_phi,); sum(weights * g) ~ int g d(omega) over the upper hemisphere."""
-    x, w = np.polynomial.legendre.leggauss(n_mu)
-    mu = 0.5 * (x + 1.0)
-    wmu = 0.5 * w
-    psi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
-    wpsi = np.full(n_phi, 2.0 * np.pi / n_phi)
-    M, P = np.meshgrid(mu, psi, indexing="ij")
-    W = np.outer(wmu, wpsi)
-    return M.ravel(), P.ravel(), W.ravel()
-
-
 def hemisphere_illuminance(relative_luminance, n_mu: int = 256, n_phi: int = 512) -> float:
     """Horizontal illuminance int L(d) cos(theta) d(omega) over the upper hemisphere of a
-    luminance function ``relative_luminance(directions)``, numerically.
+    luminance function ``relative_luminance(directions)``, numerically (for any model,
+    use :func:`skydome.illuminance.sky_illuminance`).
 
     ``relative_luminance`` must accept the keyword ``_aligned=True``, meaning that the
     directions it gets are in a frame whose azimuth origin (+y) is the solar azimuth (the
@@ -129,13 +119,16 @@ def hemisphere_illuminance(relative_luminance, n_mu: int = 256, n_phi: int = 512
     the defaults the relative error is about 2e-7 for the sharpest sky (CIE 2003 type 15;
     tests compare with a 4x finer grid and with the closed form 7 pi / 9 of eq. 13).
     """
-    mu, psi, w = _hemisphere_nodes(n_mu, n_phi)
-    s = np.sqrt(np.maximum(1.0 - mu * mu, 0.0))
-    # Directions in a frame whose azimuth origin (+y) is the solar azimuth; the luminance
+    from skydome.illuminance import sky_quadrature
+
+    # The horizontal plane's nodes of skydome.illuminance (Gauss-Legendre in the zenith
+    # angle, midpoint rule in azimuth starting half a step from azimuth 0), read as
+    # directions in a frame whose azimuth origin (+y) is the solar azimuth; the luminance
     # function is told so (``_aligned=True``) and uses the sun at azimuth 0 with the same
-    # elevation. The illuminance does not depend on the solar azimuth.
-    d_local = np.stack([s * np.sin(psi), s * np.cos(psi), mu], axis=-1)
-    return float(np.sum(w * relative_luminance(d_local, _aligned=True) * mu))
+    # elevation. The illuminance does not depend on the solar azimuth. The weights
+    # include cos(theta).
+    d_local, w = sky_quadrature((0.0, 0.0, 1.0), n_mu, n_phi)
+    return float(np.sum(w * relative_luminance(d_local, _aligned=True)))
 
 
 def _check_scaling(name: str, lz, eh) -> None:
@@ -150,18 +143,10 @@ class _CIEBase(SkyModel):
     """Shared machinery: scaling by Lz or E_h, zero below the horizon."""
 
     native = "luminance"
-    _needs_sun_above_horizon = True
+    sun_elevation_range_deg = (0.0, 90.0)
 
-    def _setup(self, sun, kwargs):
-        from skydome.sun import Sun
-
-        if not isinstance(sun, Sun):
-            raise TypeError(f"model {self.name!r} needs sun=skydome.Sun(...), got {sun!r}")
-        params = self._validate_params(kwargs)
-        if self._needs_sun_above_horizon:
-            check_number(f"sun.elevation_deg (model {self.name})", sun.elevation_deg,
-                         0.0, 90.0, "deg")
-        self.sun = sun
+    def _begin_cie(self, sun, kwargs):
+        params = self._begin(sun, kwargs)
         for k, v in params.items():
             setattr(self, k, v)
         self._sun_dir = np.asarray(sun.direction, dtype=np.float64)
@@ -170,6 +155,17 @@ class _CIEBase(SkyModel):
         self._sun_dir_aligned = np.array([0.0, math.cos(h), math.sin(h)])
         self._finish_params()
         return params
+
+    def sun_luminance(self) -> float | None:
+        """Mean luminance of the solar disc [cd m^-2]: ``dni_illuminance`` spread over the
+        disc's solid angle; None without ``dni_illuminance`` (the CIE skies describe the sky
+        only), 0 with the sun below the horizon."""
+        e = getattr(self, "dni_illuminance", None)
+        if e is None:
+            return None
+        if self.sun.elevation_deg < 0.0:
+            return 0.0
+        return float(e) / float(self.sun.solid_angle_sr)
 
     def _resolve_scale(self, default_lz: float) -> None:
         lz, eh = self.zenith_luminance, self.diffuse_horizontal_illuminance
@@ -252,11 +248,11 @@ class CIE1994Overcast(_CIEBase):
     reference = ("Moon & Spencer (1942), Illuminating Engineering 37, 707-726; "
                  "CIE 110-1994 standard overcast sky")
     summary = "CIE standard overcast sky, L = Lz (1 + 2 cos theta) / 3"
-    parameters = (_LZ_PARAM, _EH_PARAM)
-    _needs_sun_above_horizon = False
+    parameters = (_LZ_PARAM, _EH_PARAM, DNI_ILLUMINANCE_PARAM)
+    sun_elevation_range_deg = (-90.0, 90.0)   # black below -0.82 deg (default Lz = 0)
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         self._resolve_scale(zenith_luminance_overcast(self.sun.elevation_deg))
 
     def _illuminance_per_zenith_luminance(self) -> float:
@@ -308,10 +304,10 @@ class CIE1994Clear(_CIEBase):
     reference = ("Kittler (1967); CIE 110-1994 standard clear sky (survey eq. 14); "
                  "zenith luminance of Karayel et al. (1984) as in Radiance gensky")
     summary = "CIE standard clear sky (Kittler), gensky +s"
-    parameters = (_LZ_PARAM, _EH_PARAM, _TURB_PARAM)
+    parameters = (_LZ_PARAM, _EH_PARAM, _TURB_PARAM, DNI_ILLUMINANCE_PARAM)
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         zs = math.radians(self.sun.zenith_deg)
         # Denominator of eq. 14: f(theta_s) phi(0)
         self._norm = float(_clear_indicatrix(zs, math.cos(zs)) * (1.0 - math.exp(-0.32)))
@@ -363,10 +359,10 @@ class CIE1994Intermediate(_CIEBase):
     name = "cie1994_intermediate"
     reference = "CIE 110-1994 intermediate sky, as implemented by Radiance gensky +i"
     summary = "CIE intermediate sky (Radiance gensky +i)"
-    parameters = (_LZ_PARAM, _EH_PARAM, _TURB_PARAM)
+    parameters = (_LZ_PARAM, _EH_PARAM, _TURB_PARAM, DNI_ILLUMINANCE_PARAM)
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         self._zt = math.radians(self.sun.zenith_deg)
         self._norm = float(self._g(np.array(0.0), self._zt, np.array(self._zt)))
         self._resolve_scale(zenith_luminance_intermediate(self.sun.elevation_deg,
@@ -468,13 +464,13 @@ class CIE2003(_CIEBase):
     parameters = (
         Parameter("sky_type", "", 12, 1, 15, "CIE standard general sky type 1..15",
                   kind="int"),
-        _LZ_PARAM, _EH_PARAM)
+        _LZ_PARAM, _EH_PARAM, DNI_ILLUMINANCE_PARAM)
 
     #: Default zenith luminance [cd m^-2] when no scale is given (relative scale).
     DEFAULT_ZENITH_LUMINANCE = 1000.0
 
     def __init__(self, sun=None, **params):
-        self._setup(sun, params)
+        self._begin_cie(sun, params)
         self.a, self.b, self.c, self.d, self.e = cie2003_parameters(self.sky_type)
         zs = math.radians(self.sun.zenith_deg)
         self._norm = float(_indicatrix(self.c, self.d, self.e, zs, math.cos(zs))

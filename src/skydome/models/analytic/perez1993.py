@@ -38,6 +38,7 @@ from typing import NamedTuple
 import numpy as np
 
 from skydome._validate import check_choice, check_number, clamp_cosine
+from skydome.constants import SOLAR_CONSTANT_WRC
 from skydome.models import Parameter, SkyModel, register
 
 __all__ = [
@@ -57,9 +58,9 @@ __all__ = [
 ]
 
 # Extraterrestrial normal irradiance at 1 au used by [PISMS90] and by Radiance's gendaylit
-# [W m^-2]. (The project's SOLAR_CONSTANT, 1361 W m^-2 after Kopp & Lean 2011, is not used here:
-# the model's epsilon/Delta bins were fitted with 1367 W m^-2.)
-SOLAR_CONSTANT_PEREZ = 1367.0
+# [W m^-2]. (The library's default, SOLAR_CONSTANT_GUEYMARD2018 = 1361.1 W m^-2, is not used
+# here: the model's epsilon/Delta bins were fitted with the WRC's 1367 W m^-2.)
+SOLAR_CONSTANT_PEREZ = SOLAR_CONSTANT_WRC
 # Extraterrestrial normal illuminance used by gendaylit to start the -L iteration [lx].
 SOLAR_ILLUMINANCE_CONSTANT = 127500.0
 # Radiance's luminous efficacy of "white" light, WHTEFFICACY in color.h [lm W^-1].
@@ -121,10 +122,9 @@ def air_mass(sun_zenith_deg, model: str = "kastenyoung1989"):
     """
     check_choice("air_mass", model, ("kastenyoung1989", "kasten1966"))
     z = np.clip(np.asarray(sun_zenith_deg, dtype=np.float64), 0.0, 90.0)
-    cz = np.cos(np.radians(z))
-    if model == "kastenyoung1989":
-        return 1.0 / (cz + 0.50572 * (96.07995 - z) ** -1.6364)  # [KY89] eq. 3
-    return 1.0 / (cz + 0.15 * (93.885 - z) ** -1.253)  # [K66]
+    from skydome.atmosphere.airmass import MODELS
+
+    return MODELS[model](z)  # [KY89] eq. 3 or [K66]
 
 
 def eccentricity_correction(day_of_year):
@@ -132,9 +132,9 @@ def eccentricity_correction(day_of_year):
 
     ``day_of_year`` 1..366; day 0 gives the same value as day 365 (the series is periodic).
     """
-    g = 2.0 * np.pi * (np.asarray(day_of_year, dtype=np.float64) - 1.0) / 365.0
-    return (1.000110 + 0.034221 * np.cos(g) + 0.001280 * np.sin(g)
-            + 0.000719 * np.cos(2.0 * g) + 0.000077 * np.sin(2.0 * g))  # [S71]
+    from skydome.sun import eccentricity_correction_spencer1971
+
+    return eccentricity_correction_spencer1971(day_of_year)  # [S71]
 
 
 def precipitable_water_from_dew_point(dew_point_c):
@@ -305,18 +305,15 @@ def _horizontal_integral(sun_zenith_rad: float, coefficients, method: str) -> fl
         cg = cz_sun * np.cos(th) + sz * np.sin(th) * np.cos(ph)
         lv = perez1993_relative_luminance(np.cos(th), cg, coefficients)
         return float(np.sum(lv * np.cos(th)) * (2.0 * np.pi / 145.0))
-    # Gauss-Legendre in mu = cos(zeta) on [0, 1] times the periodic trapezoid rule in the
-    # azimuth relative to the sun (even in phi, so [0, pi] doubled).
-    mu, wmu = np.polynomial.legendre.leggauss(128)
-    mu = 0.5 * (mu + 1.0)
-    wmu = 0.5 * wmu
-    nphi = 256
-    ph = (np.arange(nphi) + 0.5) * np.pi / nphi
-    wph = 2.0 * np.pi / nphi
-    st = np.sqrt(1.0 - mu * mu)
-    cg = cz_sun * mu[:, None] + sz * st[:, None] * np.cos(ph)[None, :]
-    lv = np.maximum(perez1993_relative_luminance(mu[:, None], cg, coefficients), 0.0)
-    return float(np.sum(lv * (mu * wmu)[:, None]) * wph)
+    # The horizontal plane's nodes of skydome.illuminance (Gauss-Legendre in the zenith
+    # angle, 128 nodes, times the midpoint rule over 256 azimuths relative to the sun);
+    # the weights include cos(zeta).
+    from skydome.illuminance import sky_quadrature
+
+    d, w = sky_quadrature((0.0, 0.0, 1.0), 128, 256)
+    cg = cz_sun * d[:, 2] + sz * d[:, 1]          # the sun at azimuth 0 (+y)
+    lv = np.maximum(perez1993_relative_luminance(d[:, 2], cg, coefficients), 0.0)
+    return float(np.sum(lv * w))
 
 
 @register
@@ -353,7 +350,7 @@ class Perez1993(SkyModel):
         ``relative`` returns lv / lv(zenith) (dimensionless, 1 at the zenith).
     normalization : {"quadrature", "gendaylit"}
         How the hemispherical integral of L cos(zeta) is taken: an accurate 128 x 256
-        Gauss-Legendre/trapezoid quadrature, or gendaylit's sum over the 145 Tregenza patch
+        quadrature (:func:`skydome.illuminance.sky_quadrature`), or gendaylit's sum over the 145 Tregenza patch
         centres, sum lv cos(theta) 2 pi / 145 (see docs: up to a few per cent different).
     invalid : {"raise", "black"}
         For inputs where the fitted coefficients give no meaningful sky (b > 0, i.e. a
@@ -411,12 +408,10 @@ class Perez1993(SkyModel):
                   kind="choice", choices=("raise", "black")),
     )
 
-    def __init__(self, sun=None, **params):
-        from skydome.sun import Sun
+    sun_elevation_range_deg = (0.0, 90.0)
+    sun_outside_range = "black"    # gendaylit's "error sky"
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, got {sun!r}")
-        p = self._validate_params(params)
+    def _setup(self, p, params):
         pairs = {"epsilon/delta": ("epsilon", "delta"), "dni/dhi": ("dni", "dhi"),
                  "dni_illuminance/dhi_illuminance": ("dni_illuminance", "dhi_illuminance")}
         given = []
@@ -429,14 +424,13 @@ class Perez1993(SkyModel):
         if len(given) != 1:
             raise ValueError("give exactly one of epsilon/delta, dni/dhi or "
                              f"dni_illuminance/dhi_illuminance (got {', '.join(given) or 'none'})")
-        self.sun = sun
         for k, v in p.items():
             setattr(self, k, v)
         self.input_mode = given[0]
-        self._setup()
+        self._sky_parameters()
 
     # -- set-up: sky parameters, coefficients, scale ----------------------------------------
-    def _setup(self) -> None:
+    def _sky_parameters(self) -> None:
         self.precipitable_water_cm = float(precipitable_water_from_dew_point(self.dew_point_c))
         self._black = self.sun.elevation_deg < 0.0
         z_deg = min(max(self.sun.zenith_deg, 0.0), 90.0)

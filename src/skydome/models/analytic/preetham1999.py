@@ -256,11 +256,15 @@ def relative_air_mass(sun_zenith_deg) -> np.ndarray:
     z = np.asarray(sun_zenith_deg, dtype=np.float64)
     if np.any((z < 0.0) | (z > 90.0)):
         raise ValueError("sun_zenith_deg is out of range [0, 90] deg")
-    return 1.0 / (np.cos(np.radians(z)) + 0.15 * (93.885 - z) ** -1.253)
+    from skydome.atmosphere.airmass import kasten1966
+
+    return kasten1966(z)
 
 
 def _interp_table(w, x, y):
-    return np.interp(w, x, y, left=0.0, right=0.0)
+    from skydome.spectra import resample
+
+    return resample(w, x, y, "zero")
 
 
 def sun_transmittance(wavelengths_nm, sun_zenith_deg: float, turbidity: float, *,
@@ -436,7 +440,9 @@ def mie_coefficient(wavelengths_nm, turbidity: float) -> np.ndarray:
     w = np.asarray(wavelengths_nm, dtype=np.float64)
     as_wavelengths(w.ravel())
     wt, K = _spectra_table()
-    k = np.interp(w, wt, K)
+    from skydome.spectra import resample
+
+    k = resample(w, wt, K, "hold")
     lam = w * 1e-9
     return 0.434 * _mie_c_si(T) * np.pi * (2.0 * np.pi / lam) ** (_JUNGE_V - 2.0) * k
 
@@ -521,16 +527,10 @@ class Preetham1999(SkyModel):
                   "atmospheric turbidity T = (t_molecules + t_haze) / t_molecules"),
     )
 
-    def __init__(self, sun=None, **params):
-        from skydome.sun import Sun
+    sun_elevation_range_deg = (0.0, 90.0)   # the fit has no twilight
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, got {sun!r}")
-        vals = self._validate_params(params)
-        if sun.elevation_deg < 0.0:
-            raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
-                             f"[0, 90] deg for model 'preetham1999' (the fit has no twilight)")
-        self.sun = sun
+    def _setup(self, vals, given):
+        sun = self.sun
         for k, v in vals.items():
             setattr(self, k, v)
         T = self.turbidity
@@ -597,10 +597,10 @@ class Preetham1999(SkyModel):
         wavelengths in [380, 780] nm. See :func:`sun_radiance`."""
         return sun_radiance(wavelengths_nm, self.sun, self.turbidity)
 
-    def aerial_perspective(self, view_direction, distance_m, wavelengths_nm, **kwargs):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, **kwargs):
         """Extinction and in-scattered radiance along a view ray; see
         :func:`aerial_perspective` (this model's sun and turbidity)."""
-        return aerial_perspective(view_direction, distance_m, wavelengths_nm, sun=self.sun,
+        return aerial_perspective(directions, distance_m, wavelengths_nm, sun=self.sun,
                                   turbidity=self.turbidity, sky=self, **kwargs)
 
 
@@ -637,7 +637,7 @@ def _sky_grid(n_theta: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]:
     return d.reshape(-1, 3), dom.reshape(-1)
 
 
-def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbidity: float,
+def aerial_perspective(directions, distance_m, wavelengths_nm, *, sun, turbidity: float,
                        observer_altitude_m: float = 0.0, include_skylight: bool = True,
                        sky=None, n_quadrature: int = 32, sky_samples: int = 16):
     """Transmittance and in-scattered radiance between the eye and an object
@@ -657,10 +657,10 @@ def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbi
 
     Parameters
     ----------
-    view_direction : array_like
+    directions : array_like
         Unit vector(s) (..., 3) from the eye towards the object (East-North-Up).
     distance_m : array_like
-        Eye-object distance s [m], >= 0, broadcast against ``view_direction[..., 0]``.
+        Eye-object distance s [m], >= 0, broadcast against ``directions[..., 0]``.
     wavelengths_nm : array_like
         1-D strictly increasing wavelengths [nm] in [380, 780].
     sun : skydome.Sun
@@ -695,7 +695,7 @@ def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbi
     optical depths). The haze concentration c is converted to SI as in :func:`_mie_c_si`.
     The sun's radiance seen from each point is that at the eye (the paper's assumption).
     """
-    d = as_directions(view_direction, "view_direction")
+    d = as_directions(directions, "directions")
     s = np.asarray(distance_m, dtype=np.float64)
     if not np.all(np.isfinite(s)) or np.any(s < 0.0):
         raise ValueError("distance_m is out of range [0, inf) m (got a negative or "

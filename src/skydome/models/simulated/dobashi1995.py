@@ -35,11 +35,11 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths, check_int, check_number
 from skydome.models import Parameter, SkyModel, get_model_class, register
 
-__all__ = ["Dobashi1995Sky"]
+__all__ = ["Dobashi1995", "Dobashi1995Sky"]
 
 
 @register
-class Dobashi1995Sky(SkyModel):
+class Dobashi1995(SkyModel):
     """Cosine-series (basis function) representation of another model's sky [DNKY95].
 
     Parameters
@@ -65,7 +65,9 @@ class Dobashi1995Sky(SkyModel):
     azimuth_samples : int
         Samples per ring over [0, 180] deg relative to the sun ([4, 720], default 64).
     min_sun_elevation_deg : float
-        Lowest precomputed sun altitude [deg], [-20, 80] (default 0).
+        Lowest precomputed sun altitude [deg], [-20, 80] (default 0), and the lowest sun
+        the model accepts. It may not lie below the base model's valid sun range (e.g. 0 deg
+        for ``preetham1999``): that fails at construction, naming this parameter.
     ring_interpolation : {"cubic", "linear"}
         Interpolation of the intensity between rings in elevation: cubic Hermite with
         finite-difference slopes over four rings (default; a deviation from the paper, which
@@ -106,6 +108,10 @@ class Dobashi1995Sky(SkyModel):
     #: Azimuths of the evaluation grid over [0, 180] deg from the sun (0.25 deg steps).
     GRID_AZIMUTHS = 721
 
+    #: With the default ``min_sun_elevation_deg`` = 0; that parameter lowers it (to -20 deg
+    #: at most, and not below the base model's own range).
+    sun_elevation_range_deg = (0.0, 90.0)
+
     def __init__(self, sun, base: str = "nishita1996", **params):
         from skydome.sun import Sun
 
@@ -126,6 +132,10 @@ class Dobashi1995Sky(SkyModel):
         mine["base"] = base
         p = self._validate_params(mine)
         lo = p["min_sun_elevation_deg"]
+        base_lo = cls.sun_elevation_range_deg[0] if cls.sun_outside_range == "raise" else -90.0
+        if lo < base_lo:
+            raise ValueError(f"min_sun_elevation_deg = {lo:g} deg is out of range "
+                             f"[{base_lo:g}, 90] deg for base = {base!r} (its valid sun range)")
         check_number("sun.elevation_deg", sun.elevation_deg, lo, 90.0, "deg")
         self.sun = sun
         self.base = base
@@ -339,3 +349,7 @@ class Dobashi1995Sky(SkyModel):
         out["parameters"]["base_params"] = {k: (v.describe() if hasattr(v, "describe") else v)
                                             for k, v in self.base_params.items()}
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Dobashi1995Sky = Dobashi1995

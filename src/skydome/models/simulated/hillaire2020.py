@@ -24,9 +24,9 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_choice
-from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
+from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
-__all__ = ["Hillaire2020Sky"]
+__all__ = ["Hillaire2020", "Hillaire2020Sky"]
 
 
 def _bool(name, value):
@@ -96,7 +96,7 @@ class _Tables:
 
 
 @register
-class Hillaire2020Sky(SkyModel):
+class Hillaire2020(SkyModel):
     """Hillaire's (2020) LUT-based sky with the isotropic multiple-scattering transfer
     table, run per wavelength.
 
@@ -143,15 +143,12 @@ class Hillaire2020Sky(SkyModel):
     native = "spectral"
     summary = "LUT-based sky with Hillaire's fast multiple-scattering approximation."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
-        Parameter("observer_altitude_m", "m", 0.0, 0.0, 99_999.0, "observer altitude above the ground"),
+        *ATMOSPHERE_PARAMETERS,
         Parameter("n_wavelengths", "", 16, 2, 1000, "wavelengths the tables are built at", kind="int"),
         Parameter("multiple_scattering", "", True, doc="add the multiple-scattering term",
-                  kind="object"),
+                  kind="bool"),
         Parameter("use_skyview", "", True, doc="radiance through the sky-view LUT (else ray march)",
-                  kind="object"),
+                  kind="bool"),
         Parameter("transmittance_width", "", 256, 4, 4096, "transmittance LUT mu size", kind="int"),
         Parameter("transmittance_height", "", 64, 4, 4096, "transmittance LUT r size", kind="int"),
         Parameter("ms_size", "", 32, 2, 1024, "multiple-scattering LUT size (square)", kind="int"),
@@ -166,14 +163,10 @@ class Hillaire2020Sky(SkyModel):
         Parameter("ap_samples", "", 8, 2, 1024, "segments per froxel ray piece", kind="int"),
     )
 
-    def __init__(self, sun, **params):
+    sun_elevation_range_deg = (-10.0, 90.0)
 
-        check_sun(sun)
-        p = self._validate_params(params)
-        if not -10.0 <= sun.elevation_deg <= 90.0:
-            raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
-                             f"[-10, 90] deg for hillaire2020")
-        atm = resolve_atmosphere(p, params)
+    def _setup(self, p, given):
+        atm = p["atmosphere"]
         sq = int(round(np.sqrt(p["ms_directions"])))
         if sq * sq != p["ms_directions"]:
             raise ValueError(f"ms_directions = {p['ms_directions']} is not a square number "
@@ -181,9 +174,6 @@ class Hillaire2020Sky(SkyModel):
         if p["skyview_height"] % 2:
             raise ValueError(f"skyview_height = {p['skyview_height']} is not even "
                              f"(range [4, 4096], even)")
-        p["multiple_scattering"] = _bool("multiple_scattering", p["multiple_scattering"])
-        p["use_skyview"] = _bool("use_skyview", p["use_skyview"])
-        self.sun = sun
         self.atmosphere = atm
         for k, v in p.items():
             if k != "atmosphere":
@@ -281,17 +271,17 @@ class Hillaire2020Sky(SkyModel):
         t = self.transmittance(self.sun.direction, wl)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
-    def aerial_perspective(self, view_direction, distance_m, wavelengths_nm, *,
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, *,
                            use_volume: bool = True):
         """Transmittance and in-scattered radiance between the observer and an object
         ([Hil20] sec. 5.4).
 
         Parameters
         ----------
-        view_direction : array_like (..., 3)
+        directions : array_like (..., 3)
             Unit vector(s) from the eye towards the object (East-North-Up).
         distance_m : array_like
-            Eye-object distance [m] >= 0, broadcast against ``view_direction[..., 0]``.
+            Eye-object distance [m] >= 0, broadcast against ``directions[..., 0]``.
         wavelengths_nm : array_like
             Wavelengths [nm].
         use_volume : bool
@@ -308,7 +298,7 @@ class Hillaire2020Sky(SkyModel):
         """
         from skydome.models.simulated import _kernels_hillaire2020 as K
 
-        d = as_directions(view_direction, "view_direction")
+        d = as_directions(directions, "directions")
         s = np.asarray(distance_m, dtype=np.float64)
         if not np.all(np.isfinite(s)) or np.any(s < 0.0):
             raise ValueError("distance_m is out of range [0, inf) m (got a negative or "
@@ -343,3 +333,7 @@ class Hillaire2020Sky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Hillaire2020Sky = Hillaire2020

@@ -13,7 +13,7 @@ The radiance arriving at the eye on the ground from direction v is
 molecules, aerosols, ozone (absorbing only) and, when enabled, fog; tau_view is the optical
 depth from the eye to the point t and tau_sun the optical depth from that point to the
 sun (zero radiance contribution from points in the earth's shadow). ``t_max`` is the top
-of the atmosphere for the sky, or an object's distance for :meth:`Kaneda1991Sky.fog`.
+of the atmosphere for the sky, or an object's distance for :meth:`Kaneda1991.fog`.
 
 Sample placement: the view ray is sampled where it crosses spherical shells whose
 altitudes divide each exponential profile into intervals of equal density decrement
@@ -42,9 +42,9 @@ import math
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import ATMOSPHERE, TURBIDITY, Parameter, SkyModel, register
 
-__all__ = ["Kaneda1991Sky", "phase_hazy", "phase_murky"]
+__all__ = ["Kaneda1991", "Kaneda1991Sky", "phase_hazy", "phase_murky"]
 
 _INV_4PI = 1.0 / (4.0 * math.pi)
 
@@ -123,7 +123,7 @@ def _shell_altitudes(props, top, n_shells, fog):
 
 
 @register
-class Kaneda1991Sky(SkyModel):
+class Kaneda1991(SkyModel):
     """Kaneda et al. (1991): single scattering over a spherical earth, with optional fog.
 
     Parameters
@@ -161,9 +161,8 @@ class Kaneda1991Sky(SkyModel):
     native = "spectral"
     summary = "Spherical earth, exponential air and aerosols, single scattering, fog layer."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
+        ATMOSPHERE,
+        TURBIDITY,
         Parameter("mie_phase", "", "atmosphere", kind="choice", choices=("atmosphere", "hazy", "murky"),
                   doc="aerosol phase function"),
         Parameter("fog_density", "m^-1", 0.0, 0.0, 0.1, "fog extinction at the ground (0: no fog)"),
@@ -177,20 +176,9 @@ class Kaneda1991Sky(SkyModel):
     )
 
     def __init__(self, sun, **params):
-        from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
-
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
+        # (the common checks of the protocol; ``_setup`` is this model's table builder)
+        p = self._begin(sun, params)
         atm = p["atmosphere"]
-        if atm is None:
-            atm = Atmosphere.earth(turbidity=p["turbidity"])
-        elif not isinstance(atm, Atmosphere):
-            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
-        elif "turbidity" in params:
-            raise ValueError("give either atmosphere or turbidity, not both")
-        self.sun = sun
         self.atmosphere = atm
         for k, v in p.items():
             if k != "atmosphere":
@@ -303,16 +291,16 @@ class Kaneda1991Sky(SkyModel):
                              float(self.fog_height_m), s["beta_e"], t)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
-    def fog(self, distance_m, view_direction, wavelengths_nm, object_radiance=None):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
         """Transmittance and in-scattered radiance between the eye (on the ground) and an
-        object at ``distance_m`` along ``view_direction`` (air, aerosols, ozone and fog).
+        object at ``distance_m`` along ``directions`` (air, aerosols, ozone and fog).
 
         Parameters
         ----------
-        distance_m : float or array_like (...)
-            Distance to the object [m], >= 0.
-        view_direction : array_like (..., 3)
+        directions : array_like (..., 3)
             Unit vectors from the eye towards the object (z < 0 is treated as horizontal).
+        distance_m : float or array_like (...)
+            Distance to the object [m], >= 0; broadcast with the directions.
         wavelengths_nm : array_like (n,)
         object_radiance : array_like (..., n), optional
             Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
@@ -324,23 +312,15 @@ class Kaneda1991Sky(SkyModel):
             In-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance`` is
             given, the radiance reaching the eye, ``L_0 T + L_in``.
         """
-        d = as_directions(view_direction)
-        wl = as_wavelengths(wavelengths_nm)
-        dist = np.asarray(distance_m, dtype=np.float64)
-        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
-            raise ValueError(f"distance_m = {dist.min() if dist.size else dist} m is out of "
-                             "range [0, inf) m")
-        shape = np.broadcast_shapes(d.shape[:-1], dist.shape)
-        dd = np.broadcast_to(d, shape + (3,)).reshape(-1, 3)
-        dist_f = np.broadcast_to(dist, shape).reshape(-1)
+        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
         t, L = self._trace(dd, dist_f, wl)
-        t = t.reshape(shape + (wl.size,))
-        L = L.reshape(shape + (wl.size,))
-        if object_radiance is not None:
-            L = np.asarray(object_radiance, dtype=np.float64) * t + L
-        return t, L
+        return self._aerial_outputs(t, L, shape, object_radiance)
 
     def describe(self):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Kaneda1991Sky = Kaneda1991

@@ -48,10 +48,10 @@ import math
 
 import numpy as np
 
-from skydome._validate import as_directions, as_wavelengths, check_number
+from skydome._validate import as_directions, as_wavelengths
 from skydome.models import Parameter, SkyModel, register
 
-__all__ = ["Klassen1987Sky", "refraction_saemundsson_deg", "refraction_bennett_deg",
+__all__ = ["Klassen1987", "Klassen1987Sky", "refraction_saemundsson_deg", "refraction_bennett_deg",
            "kasten_young_airmass"]
 
 
@@ -81,8 +81,10 @@ def kasten_young_airmass(elevation_deg):
     """Relative optical air mass for a (apparent) elevation [deg] >= 0 ([KY89]):
     ``m = 1 / (sin h + 0.50572 (h + 6.07995)^-1.6364)``; 1 at the zenith, 38.09 at the
     horizon."""
+    from skydome.atmosphere.airmass import kastenyoung1989
+
     h = np.asarray(elevation_deg, dtype=np.float64)
-    return 1.0 / (np.sin(np.radians(h)) + 0.50572 * (h + 6.07995) ** -1.6364)
+    return kastenyoung1989(90.0 - h)
 
 
 def _hg(cos_theta, g):
@@ -97,7 +99,7 @@ def _rayleigh_phase(cos_theta):
 
 
 @register
-class Klassen1987Sky(SkyModel):
+class Klassen1987(SkyModel):
     """Klassen's (1987) two-layer flat-earth atmosphere: sky, sun and fog colour.
 
     Parameters
@@ -153,13 +155,10 @@ class Klassen1987Sky(SkyModel):
                   doc="air mass of the sun path"),
     )
 
-    def __init__(self, sun, **params):
-        from skydome.sun import Sun
+    sun_elevation_range_deg = (0.0, 90.0)
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
-        check_number("sun.elevation_deg", sun.elevation_deg, 0.0, 90.0, "deg")
+    def _setup(self, p, params):
+        sun = self.sun
         if p["haze_layer_height_m"] > p["air_layer_height_m"]:
             raise ValueError(f"haze_layer_height_m = {p['haze_layer_height_m']:g} m is out of range "
                              f"[0, {p['air_layer_height_m']:g}] m (at most air_layer_height_m)")
@@ -304,17 +303,17 @@ class Klassen1987Sky(SkyModel):
         return (solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr
                 * np.exp(-self.sun_airmass * tau))
 
-    def fog(self, distance_m, view_direction, wavelengths_nm, object_radiance=None):
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
         """Transmittance and in-scattered radiance between the eye (on the ground) and an
-        object at ``distance_m`` along ``view_direction`` (closed form per layer).
+        object at ``distance_m`` along ``directions`` (closed form per layer).
 
         Parameters
         ----------
-        distance_m : float or array_like (...)
-            Distance to the object [m], >= 0.
-        view_direction : array_like (..., 3)
+        directions : array_like (..., 3)
             Unit vectors from the eye towards the object (z < 0 is taken as the horizontal
             direction of the same azimuth: the eye is on the flat ground).
+        distance_m : float or array_like (...)
+            Distance to the object [m], >= 0; broadcast with the directions.
         wavelengths_nm : array_like (n,)
         object_radiance : array_like (..., n), optional
             Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
@@ -326,21 +325,14 @@ class Klassen1987Sky(SkyModel):
             The in-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance``
             is given, the radiance reaching the eye, ``L_0 T + L_in``.
         """
-        d = as_directions(view_direction)
-        wl = as_wavelengths(wavelengths_nm)
-        dist = np.asarray(distance_m, dtype=np.float64)
-        if not np.all(np.isfinite(dist)) or np.any(dist < 0):
-            raise ValueError(f"distance_m = {dist.min() if dist.size else dist} m is out of "
-                             "range [0, inf) m")
-        shape = np.broadcast_shapes(d.shape[:-1], dist.shape)
         from skydome.models.simulated.kaneda1991 import _horizon_clamp
 
-        dd = _horizon_clamp(np.broadcast_to(d, shape + (3,)).reshape(-1, 3))
-        dist_f = np.broadcast_to(dist, shape).reshape(-1)
+        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
+        dd = _horizon_clamp(dd)
         nu = np.clip(dd @ self.apparent_sun_direction, -1.0, 1.0)
         t, L = self._path(dd[:, 2], nu, dist_f, wl)
-        t = t.reshape(shape + (wl.size,))
-        L = L.reshape(shape + (wl.size,))
-        if object_radiance is not None:
-            L = np.asarray(object_radiance, dtype=np.float64) * t + L
-        return t, L
+        return self._aerial_outputs(t, L, shape, object_radiance)
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+Klassen1987Sky = Klassen1987

@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
+from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
-__all__ = ["MonteCarloSky", "degree_of_polarisation", "angle_of_polarisation", "stokes_frame"]
+__all__ = ["MonteCarlo", "MonteCarloSky", "degree_of_polarisation", "angle_of_polarisation", "stokes_frame"]
 
 
 def degree_of_polarisation(stokes) -> np.ndarray:
@@ -60,7 +60,7 @@ def stokes_frame(directions) -> tuple[np.ndarray, np.ndarray]:
 
 
 @register
-class MonteCarloSky(SkyModel):
+class MonteCarlo(SkyModel):
     """Monte Carlo sky: every order of scattering, with standard errors, optionally polarised.
 
     Parameters
@@ -107,28 +107,16 @@ class MonteCarloSky(SkyModel):
     native = "spectral"
     summary = "Polarised multiple-scattering Monte Carlo reference with standard errors."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
-        Parameter("observer_altitude_m", "m", 0.0, 0.0, 999_999.0, "observer altitude above the ground"),
+        *ATMOSPHERE_PARAMETERS,
         Parameter("samples", "", 256, 2, 100_000_000, "paths per direction per wavelength", kind="int"),
         Parameter("seed", "", 0, 0, 2 ** 63 - 1, "seed of the random streams", kind="int"),
-        Parameter("polarised", "", False, doc="carry Stokes vectors (I, Q, U, V)", kind="object"),
+        Parameter("polarised", "", False, doc="carry Stokes vectors (I, Q, U, V)", kind="bool"),
         Parameter("max_order", "", None, 1, 100_000, "highest scattering order (None: unbounded)",
                   kind="int"),
     )
 
-    def __init__(self, sun, **params):
-
-        check_sun(sun)
-        if isinstance(params.get("polarised"), (np.bool_,)):
-            params["polarised"] = bool(params["polarised"])
-        if "polarised" in params and not isinstance(params["polarised"], bool):
-            raise TypeError(f"polarised must be True or False, not {params['polarised']!r}")
-        p = self._validate_params(params)
-        atm = resolve_atmosphere(p, params)
-        self.sun = sun
-        self.atmosphere = atm
+    def _setup(self, p, given):
+        self.atmosphere = p["atmosphere"]
         self.turbidity = p["turbidity"]
         self.observer_altitude_m = p["observer_altitude_m"]
         self.samples = p["samples"]
@@ -231,3 +219,7 @@ class MonteCarloSky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+MonteCarloSky = MonteCarlo

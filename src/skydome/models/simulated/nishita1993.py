@@ -18,7 +18,7 @@ import re
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_int, check_number
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import ATMOSPHERE, TURBIDITY, Parameter, SkyModel, register
 
 __all__ = ["Nishita1993", "parse_length"]
 
@@ -137,9 +137,8 @@ class Nishita1993(SkyModel):
     native = "spectral"
     summary = "The earth seen from space or the air: single scattering, sea colour, shadow."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
+        ATMOSPHERE,
+        TURBIDITY,
         Parameter("camera_altitude_m", "m", 36e6, 0.0, _MAX_ALTITUDE_M,
                   "camera altitude above the sub-camera point"),
         Parameter("camera_altitude", "", None, doc="camera altitude with unit, e.g. 36000km or 400km "
@@ -167,33 +166,13 @@ class Nishita1993(SkyModel):
     _SPACING_LINEAR = 0.5
     _QUAD_SCALE_M = 500.0
 
-    def __init__(self, sun, **params):
-        from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
-
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
+    def _setup(self, p, params):
+        sun = self.sun
         atm = p["atmosphere"]
-        if atm is None:
-            atm = Atmosphere.earth(turbidity=p["turbidity"])
-        elif not isinstance(atm, Atmosphere):
-            raise TypeError(f"atmosphere must be a skydome.Atmosphere, not {type(atm).__name__}")
-        elif "turbidity" in params:
-            raise ValueError("give either atmosphere or turbidity, not both")
         if p["camera_altitude"] is not None:
             if "camera_altitude_m" in params:
                 raise ValueError("give either camera_altitude or camera_altitude_m, not both")
             p["camera_altitude_m"] = parse_length("camera_altitude", p["camera_altitude"])
-        for name in ("light_exact", "sun_disc"):
-            v = p[name]
-            if isinstance(v, str):
-                if v.lower() not in ("1", "0", "true", "false", "yes", "no", "on", "off"):
-                    raise ValueError(f"{name} = {v!r} is not a boolean")
-                v = v.lower() in ("1", "true", "yes", "on")
-            if not isinstance(v, (bool, np.bool_)):
-                raise TypeError(f"{name} must be a boolean, got {v!r}")
-            p[name] = bool(v)
         if p["surface"] == "texture":
             if p["texture"] is None:
                 raise ValueError("surface = 'texture' needs texture (an image path or an array)")
@@ -279,8 +258,9 @@ class Nishita1993(SkyModel):
         else:
             albedo = np.zeros(wl.size)
         _, sea = load_table("seawater_optical_properties")
-        a_w = np.interp(wl, sea[:, 0], sea[:, 1])
-        b_w = np.interp(wl, sea[:, 0], sea[:, 2])
+        from skydome.spectra import resample
+
+        a_w, b_w = resample(wl, sea[:, 0], sea[:, 1:3], "hold").T
         entry = {"props": props, "e_sun": e_sun, "albedo": np.ascontiguousarray(albedo),
                  "water_c": np.ascontiguousarray(a_w + b_w), "water_b": np.ascontiguousarray(b_w),
                  "basis": np.ascontiguousarray(_texture_basis(wl))}

@@ -26,9 +26,9 @@ same density scale depth (the chapter's shaders have one ``fScaleDepth``).
 Physical units. The in-scattering integral is dimensionless (K per thickness times length in
 thickness) and F / (4 pi) is a phase function per steradian, so I_v = I_s x (a number per
 steradian): with I_s the spectral solar irradiance [W m^-2 nm^-1] the result is spectral
-radiance [W m^-2 sr^-1 nm^-1]. :meth:`ONeil2005Sky.radiance` evaluates the chapter's formulas
+radiance [W m^-2 sr^-1 nm^-1]. :meth:`ONeil2005.radiance` evaluates the chapter's formulas
 at any wavelength (1 / lambda^4 is defined everywhere) with I_s = the ASTM G173 solar
-spectrum; :meth:`ONeil2005Sky.shader_rgb` is the chapter's own three-channel result (white
+spectrum; :meth:`ONeil2005.shader_rgb` is the chapter's own three-channel result (white
 I_s = ESun = 20 at 650, 570 and 475 nm, before its HDR exposure), in its display units.
 
 References
@@ -49,7 +49,7 @@ import numpy as np
 from skydome._validate import as_directions, as_wavelengths, check_number
 from skydome.models import Parameter, SkyModel, register
 
-__all__ = ["ONeil2005Sky", "scale_polynomial", "exact_scale", "scale_polynomial_error",
+__all__ = ["ONeil2005", "ONeil2005Sky", "scale_polynomial", "exact_scale", "scale_polynomial_error",
            "parameters_from_atmosphere", "CHAPTER_WAVELENGTHS_NM"]
 
 # [ONe05] demo (sec. 16.5 shaders' v3InvWavelength): wavelengths of the red, green and blue channels [nm]
@@ -156,7 +156,7 @@ def _phase(cos_theta, g):
 
 
 @register
-class ONeil2005Sky(SkyModel):
+class ONeil2005(SkyModel):
     """O'Neil's GPU single scattering (GPU Gems 2, ch. 16) with the chapter's constants.
 
     Parameters
@@ -217,13 +217,10 @@ class ONeil2005Sky(SkyModel):
 
     _DERIVED = ("kr", "km", "g", "scale_depth", "outer_ratio")
 
-    def __init__(self, sun, **params):
+    def _setup(self, p, params):
         from skydome.atmosphere import Atmosphere
-        from skydome.sun import Sun
 
-        if not isinstance(sun, Sun):
-            raise TypeError(f"sun must be a skydome.Sun, not {type(sun).__name__}")
-        p = self._validate_params(params)
+        sun = self.sun
         atm = p["atmosphere"]
         if atm is not None:
             if not isinstance(atm, Atmosphere):
@@ -335,3 +332,7 @@ class ONeil2005Sky(SkyModel):
         if self.atmosphere is not None:
             out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+ONeil2005Sky = ONeil2005

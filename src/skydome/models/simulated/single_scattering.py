@@ -12,13 +12,13 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
+from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 
-__all__ = ["SingleScatteringSky"]
+__all__ = ["SingleScattering", "SingleScatteringSky"]
 
 
 @register
-class SingleScatteringSky(SkyModel):
+class SingleScattering(SkyModel):
     """Single scattering of sunlight (Rayleigh + aerosols + ozone), integrated numerically.
 
     Parameters
@@ -48,25 +48,18 @@ class SingleScatteringSky(SkyModel):
     native = "spectral"
     summary = "Brute-force single scattering in a spherical atmosphere (the reference)."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
-        Parameter("observer_altitude_m", "m", 0.0, 0.0, 99_999.0, "observer altitude above the ground"),
+        *ATMOSPHERE_PARAMETERS,
         Parameter("view_samples", "", None, 2, 4096,
                   "quadrature nodes per view-ray piece (default 16; 64 with the sun below the horizon)",
                   kind="int"),
         Parameter("light_samples", "", 128, 2, 4096, "quadrature nodes per light-path column",
                   kind="int"),
-        Parameter("light_exact", "", False, doc="integrate light paths directly (slow)", kind="object"),
+        Parameter("light_exact", "", False, doc="integrate light paths directly (slow)", kind="bool"),
     )
 
-    def __init__(self, sun, **params):
-
-        check_sun(sun)
-        p = self._validate_params(params)
-        atm = resolve_atmosphere(p, params)
-        self.sun = sun
-        self.atmosphere = atm
+    def _setup(self, p, given):
+        sun = self.sun
+        self.atmosphere = p["atmosphere"]
         self.turbidity = p["turbidity"]
         self.observer_altitude_m = p["observer_altitude_m"]
         # twilight rays are lit only beyond the earth's shadow, where the light path's
@@ -116,3 +109,7 @@ class SingleScatteringSky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
+
+
+#: The earlier name (class names follow the registry names, without a "Sky" suffix).
+SingleScatteringSky = SingleScattering
