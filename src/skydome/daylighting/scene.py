@@ -12,7 +12,7 @@
 
 The sky is any skydome model's ``luminance(directions)`` (spectral models through their
 luminance: the export is achromatic). The sun's light is the direct normal illuminance
-(``direct_illuminance`` or the sun disc's luminance x its solid angle) spread over a
+(``direct_normal_illuminance()``) spread over a
 0.533 deg disc, as gendaylit and gendaymtx -D do.
 
 Reference: G. Ward, Radiance 5.4 reference manual: ``brightdata``, data file format,
@@ -41,22 +41,11 @@ sd_sky(v) = if(Dz, if(v, v, 0), 0);
 
 
 def sun_direct_illuminance(model) -> float:
-    """Direct normal illuminance of the model's sun [lx] (0 if it has none)."""
+    """Direct normal illuminance of the model's sun [lx] (0 if it has none or it is below
+    the horizon): :meth:`SkyModel.direct_normal_illuminance`."""
     if getattr(model, "sun", None) is None or model.sun.elevation_deg <= 0.0:
         return 0.0
-    v = getattr(model, "direct_illuminance", None)
-    if v is not None and math.isfinite(float(v)):
-        return max(float(v), 0.0)
-    if hasattr(model, "sun_luminance"):
-        return max(float(model.sun_luminance()) * float(model.sun.solid_angle_sr), 0.0)
-    from skydome.spectra import default_wavelengths, spectrum_to_xyz
-
-    wl = default_wavelengths()
-    s = model.sun_radiance(wl)
-    if s is None:
-        return 0.0
-    return max(float(spectrum_to_xyz(np.asarray(s), wl)[..., 1]) * model.sun.solid_angle_sr,
-               0.0)
+    return max(float(model.direct_normal_illuminance()), 0.0)
 
 
 def write_radiance_sky(model, path, *, zenith_step_deg: float = 0.25,
