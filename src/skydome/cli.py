@@ -930,6 +930,9 @@ app.command("view")(_view)
 from skydome.export.cli import export_app  # noqa: E402  (environment maps, sun lights)
 
 app.add_typer(export_app, name="export")
+from skydome.daylighting.cli import register as _register_daylighting  # noqa: E402
+
+_register_daylighting(app)
 
 
 def main() -> None:  # console-script entry point

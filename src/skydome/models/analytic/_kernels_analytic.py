@@ -291,3 +291,50 @@ def hosek_wilkie(d, s, cfg, rad):
             v = grad * ind * rad[c]
             out[i, c] = v if v > 0.0 else 0.0
     return out
+# -- Perez 1993 over many suns and sky patches at once ([PSM93] eq. 1) --------------------------
+@njit(cache=True, fastmath=True)
+def perez1993_patch_row(nodes, weights, offsets, s, coef, cz_min, means):
+    """Patch means of the relative luminance lv of one sky into ``means`` (P,).
+
+    ``nodes`` (M, 3) unit vectors and ``weights`` (M,) [sr] of the quadrature nodes, patch k
+    owning nodes offsets[k]:offsets[k + 1]; ``s`` (3,) the unit vector towards the sun and
+    ``coef`` (5,) the (a, b, c, d, e). Negative lv is clipped to 0 per node. Returns the
+    hemispherical integral of lv cos(zeta) dOmega [sr] taken with the same nodes (gendaymtx's
+    CalcRelHorzIllum for one node a patch)."""
+    sx, sy, sz = s[0], s[1], s[2]
+    a, b, c, dd, e = coef[0], coef[1], coef[2], coef[3], coef[4]
+    tot = 0.0
+    z_last = 2.0
+    grad = 0.0
+    for k in range(offsets.shape[0] - 1):
+        acc = 0.0
+        wsum = 0.0
+        for m in range(offsets[k], offsets[k + 1]):
+            x, y, z = nodes[m, 0], nodes[m, 1], nodes[m, 2]
+            if z != z_last:  # nodes come in runs of equal altitude: one gradation per run
+                z_last = z
+                grad = 1.0 + a * math.exp(b / max(z, cz_min))
+            cg = _clamp1(x * sx + y * sy + z * sz)
+            gamma = math.acos(cg)
+            lv = grad * (1.0 + c * math.exp(dd * gamma) + e * cg * cg)
+            if lv < 0.0:
+                lv = 0.0
+            w = weights[m]
+            acc += w * lv
+            wsum += w
+            tot += w * lv * z
+        means[k] = acc / wsum
+    return tot
+
+
+@njit(**_OPTS)
+def perez1993_patch_means(nodes, weights, offsets, suns, coef, cz_min):
+    """:func:`perez1993_patch_row` for many skies (``suns`` (H, 3), ``coef`` (H, 5)) in
+    parallel: returns the patch means (H, P) and the horizontal integrals (H,) [sr]."""
+    n_sky = suns.shape[0]
+    means = np.empty((n_sky, offsets.shape[0] - 1))
+    horiz = np.empty(n_sky)
+    for h in prange(n_sky):
+        horiz[h] = perez1993_patch_row(nodes, weights, offsets, suns[h], coef[h], cz_min,
+                                       means[h])
+    return means, horiz

@@ -52,6 +52,9 @@ __all__ = [
     "air_mass",
     "eccentricity_correction",
     "precipitable_water_from_dew_point",
+    "PerezSkyParameters",
+    "perez1993_sky_parameters",
+    "perez1993_coefficients_many",
 ]
 
 # Extraterrestrial normal irradiance at 1 au used by [PISMS90] and by Radiance's gendaylit
@@ -543,3 +546,78 @@ class Perez1993(SkyModel):
         if self._black or self.scaling == "relative":
             return 0.0
         return float(self.direct_illuminance / self.sun.solid_angle_sr)
+
+
+# -- many suns and weather states at once ---------------------------------------------------
+class PerezSkyParameters(NamedTuple):
+    """Per-sky inputs of [PSM93] for many hours (arrays of one shape)."""
+
+    sun_zenith_deg: np.ndarray  # zenith used by the distribution (clamped to [3, 90] deg)
+    epsilon: np.ndarray  # sky clearness [-]
+    delta: np.ndarray  # sky brightness [-]
+    bin: np.ndarray  # 0-based clearness bin
+    diffuse_illuminance: np.ndarray  # horizontal [lx]
+    direct_illuminance: np.ndarray  # normal [lx]
+
+
+def perez1993_sky_parameters(dni, dhi, sun_zenith_deg, day_of_year, dew_point_c=11.0,
+                             air_mass_model: str = "kasten1966") -> PerezSkyParameters:
+    """Sky clearness, brightness and illuminances of many hours from DNI and DHI.
+
+    The conventions are gendaymtx's (Radiance 5.4): the solar zenith angle is clamped to
+    [3, 90] deg (the fit does not reach the zenith; a sun below the horizon counts as on it),
+    epsilon to [1, 11.9] and Delta to [0.01, 0.6]; the air mass is Kasten 1966 [K66] and the
+    extraterrestrial irradiance 1367 W m^-2 times Spencer's eccentricity correction [S71].
+
+    Parameters
+    ----------
+    dni, dhi : array_like
+        Direct normal and diffuse horizontal irradiance [W m^-2], >= 0.
+    sun_zenith_deg : array_like
+        True solar zenith angle [deg].
+    day_of_year : array_like
+        1..366.
+    dew_point_c : array_like
+        Surface dew point [deg C] (gendaymtx's default 11 deg C for .wea input).
+    air_mass_model : {"kasten1966", "kastenyoung1989"}
+
+    Returns
+    -------
+    PerezSkyParameters
+        Broadcast arrays; illuminances from the [PISMS90] efficacies (eqs. 7-8, Table 4).
+    """
+    dni, dhi, z, doy, td = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (
+        dni, dhi, sun_zenith_deg, day_of_year, dew_point_c)))
+    for name, v in (("dni", dni), ("dhi", dhi)):
+        if np.any(~np.isfinite(v)) or np.any(v < 0.0):
+            raise ValueError(f"{name} must be finite and >= 0 W/m^2 (min {np.nanmin(v):g})")
+    zc = np.clip(z, 3.0, 90.0)  # gendaymtx ComputeSky: 3 deg <= Z <= 90 deg
+    m = air_mass(zc, air_mass_model)
+    i0 = SOLAR_CONSTANT_PEREZ * eccentricity_correction(doy)
+    delta = np.clip(dhi * m / i0, DELTA_MIN, DELTA_MAX)  # [PISMS90] eq. 2
+    eps = np.clip(sky_clearness(dni, dhi, zc), 1.0, 11.9)  # [PISMS90] eq. 1
+    w = precipitable_water_from_dew_point(td)  # [PISMS90] eq. 3
+    eff = perez1990_luminous_efficacy(eps, delta, zc, w)
+    return PerezSkyParameters(zc, eps, delta, _bin_index(eps), dhi * eff.diffuse,
+                              dni * eff.direct)
+
+
+def perez1993_coefficients_many(sun_zenith_rad, epsilon, delta,
+                                delta_floor: bool = True) -> np.ndarray:
+    """(..., 5) coefficients a..e of [PSM93] eq. 2 for arrays of skies (vectorised
+    :func:`perez1993_coefficients`, same formulas, same Delta floor)."""
+    z, eps, dl = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (
+        sun_zenith_rad, epsilon, delta)))
+    k = _bin_index(eps)
+    if delta_floor:
+        dl = np.where((eps > 1.065) & (eps < 2.8) & (dl < 0.2), 0.2, dl)
+    x = _luminance_table()[k]  # (..., 5, 4)
+    zz = z[..., None]
+    out = x[..., 0] + x[..., 1] * zz + dl[..., None] * (x[..., 2] + x[..., 3] * zz)  # eq. 2
+    first = k == 0  # [PSM93] Table 1, first bin: special forms of c and d
+    if np.any(first):
+        xf, zf, df = x[first], z[first], dl[first]
+        out[first, 2] = np.exp((df * (xf[:, 2, 0] + xf[:, 2, 1] * zf)) ** xf[:, 2, 2]) - xf[:, 2, 3]
+        out[first, 3] = (-np.exp(df * (xf[:, 3, 0] + xf[:, 3, 1] * zf)) + xf[:, 3, 2]
+                         + df * xf[:, 3, 3])
+    return out

@@ -1,0 +1,76 @@
+"""numba kernels of the sky matrices (private; validated and broadcast by skymatrix.py).
+
+One call fills every hour of a sky matrix: the Perez patch means of
+:func:`skydome.models.analytic._kernels_analytic.perez1993_patch_row`, the normalisation to
+the diffuse horizontal illuminance, the sky tint, the ground patch and gendaymtx's sun
+spreading, in parallel over hours. Units and conventions: see skymatrix.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skydome.models.analytic._kernels_analytic import perez1993_patch_row
+
+MAX_SUN_PATCHES = 4
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def fill_perez_sky(out, hours, nodes, weights, offsets, centres, dom, s_dist, s_true, coef,
+                   e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min):
+    """Fill ``out[hours[i]]`` (P + 1, C) for each listed hour.
+
+    s_dist (H, 3): sun vector of the distribution (zenith clamped); s_true (H, 3): the true
+    sun (ground term, nearest patches); coef (H, 5); e_diff, e_dir (H,) [lx]; rho (H,);
+    tint, grey (C,); nsuns 0 = no sun in the matrix; fixed_sa > 0 replaces the patches'
+    solid angles for the sun (gendaymtx -5)."""
+    n_patch = offsets.shape[0] - 1
+    ncomp = out.shape[2]
+    for i in prange(hours.shape[0]):
+        h = hours[i]
+        means = np.empty(n_patch)
+        horiz = perez1993_patch_row(nodes, weights, offsets, s_dist[h], coef[h], cz_min, means)
+        if horiz <= 1e-6:  # gendaymtx: a zero sky is made uniform, normalised by pi
+            for k in range(n_patch):
+                means[k] = 1.0
+            horiz = math.pi
+        scale = e_diff[h] / horiz * out_scale  # the sky's horizontal illuminance is Dh
+        for k in range(n_patch):
+            v = means[k] * scale
+            for c in range(ncomp):
+                out[h, k + 1, c] = v * tint[c]
+        sz = s_true[h, 2]
+        g = e_diff[h]
+        if sz > 0.0:
+            g += e_dir[h] * sz
+        g *= rho[h] / math.pi * out_scale  # ground: rho (Dh + Dn sin a) / pi
+        for c in range(ncomp):
+            out[h, 0, c] = g * grey[c]
+        if nsuns == 0 or e_dir[h] <= 1e-4:
+            continue
+        # gendaymtx AddDirect: the nsuns patches nearest the sun, weight 1 / (1.002 - cos)
+        near = np.full(MAX_SUN_PATCHES, -1)
+        ndot = np.full(MAX_SUN_PATCHES, -2.0)
+        sx, sy, szz = s_true[h, 0], s_true[h, 1], s_true[h, 2]
+        for k in range(n_patch):
+            d = centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * szz
+            for j in range(nsuns):
+                if d > ndot[j]:
+                    for jj in range(nsuns - 1, j, -1):
+                        ndot[jj] = ndot[jj - 1]
+                        near[jj] = near[jj - 1]
+                    ndot[j] = d
+                    near[j] = k
+                    break
+        wtot = 0.0
+        for j in range(nsuns):
+            wtot += 1.0 / (1.002 - ndot[j])
+        for j in range(nsuns):
+            k = near[j]
+            sa = fixed_sa if fixed_sa > 0.0 else dom[k]
+            v = (1.0 / (1.002 - ndot[j])) * e_dir[h] * out_scale / (wtot * sa)
+            for c in range(ncomp):
+                out[h, k + 1, c] += v * grey[c]

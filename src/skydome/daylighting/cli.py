@@ -1,0 +1,284 @@
+"""Daylighting commands of the ``skydome`` CLI: ``weather info`` and ``skymatrix``.
+
+``register(app)`` adds them to the main typer app. Heavy modules (pvlib, numba kernels) are
+imported inside the commands only.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+weather_app = typer.Typer(no_args_is_help=True, help="Hourly weather files (EPW, TMY3).")
+
+
+def _fail(message: str) -> None:
+    """One line on stderr, exit code 2 (the main CLI's convention)."""
+    from skydome.cli import _fail as fail
+
+    fail(message)
+
+
+def _guard(func, *args, **kwargs):
+    """Call ``func``; bad input becomes one line on stderr and exit code 2."""
+    from skydome.cli import _run
+
+    return _run(func, *args, **kwargs)
+
+
+@weather_app.command("info")
+def weather_info(path: str = typer.Argument(..., help="EPW or TMY3 file")):
+    """Site, period and what the weather file holds."""
+    from skydome.daylighting.weather import read_weather
+
+    w = _guard(read_weather, path)
+    s = w.summary()
+    typer.echo(f"site: {s['site']}  lat {s['latitude_deg']:.3f} deg N, lon "
+               f"{s['longitude_deg']:.3f} deg E, UTC{s['utc_offset_h']:+g} h, "
+               f"{s['elevation_m']:g} m")
+    typer.echo(f"format: {s['format'].upper()}, {s['records']} records, {s['first']} .. "
+               f"{s['last']} (local standard time), step {s['step']}")
+    typer.echo(f"holds: {', '.join(s['quantities'])}")
+    typer.echo(f"daylight hours (sun above the horizon at the midpoint): {s['daylight_hours']}")
+    typer.echo(f"annual sums: GHI {s['annual_ghi_kwh_m2']:.1f}, DNI {s['annual_dni_kwh_m2']:.1f}, "
+               f"DHI {s['annual_dhi_kwh_m2']:.1f} kWh/m^2")
+
+
+def _sun_scene(m, hours_minute, alt_ok) -> str:
+    """gendaymtx -D style scene: one light + source per hour with the sun in the sky."""
+    from skydome.daylighting.skymatrix import SUN_ANGLE_DEG
+
+    out = []
+    for k in range(m.sky.shape[0]):
+        if not alt_ok[k]:
+            continue
+        r = m.sun[k]
+        d = m.sun_directions[k]
+        i = int(hours_minute[k])
+        rgb = " ".join(f"{v:.6e}" for v in (list(r) * 3 if r.size == 1 else r))
+        out.append(f"\nvoid light solar{i}\n0\n0\n3 {rgb}\n\nsolar{i} source sun{i}\n0\n0\n"
+                   f"4 {d[0]:.6f} {d[1]:.6f} {d[2]:.6f} {SUN_ANGLE_DEG:.4f}\n")
+    return "".join(out)
+
+
+def skymatrix_cmd(
+    weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
+    out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
+    patches: str = typer.Option("tregenza", "--patches", help="tregenza | reinhart:MF"),
+    model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
+    components: str = typer.Option("rgb", "--components", help="rgb | luminance"),
+    sun: str = typer.Option("spread", "--sun",
+                            help="spread | spread:N | disc:ANGLE | separate | none"),
+    order: int = typer.Option(4, "--order", help="quadrature order per patch (0 = centre)"),
+    sun_position: str = typer.Option("spa", "--sun-position",
+                                     help="spa | radiance (gendaymtx's approximate sun)"),
+    fmt: str = typer.Option("float", "--format", help="ascii | float | double"),
+    albedo: str = typer.Option("0.2", "--albedo", help="ground reflectance, or 'weather'"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler",
+                                            help="run on a Dask cluster (tcp://HOST:8786)"),
+    workers: int = typer.Option(0, "--workers",
+                                help="run on a local Dask cluster of N processes (0: in process)"),
+    chunk_hours: int = typer.Option(730, "--chunk-hours", help="hours per Dask chunk"),
+):
+    """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible.
+
+    With --scheduler or --workers the hours are computed as chunks on Dask, kept in
+    OUT.chunks/ until the matrix is written: an interrupted run, rerun, reuses them."""
+    import numpy as np
+
+    from skydome.daylighting.patches import patches as make_patches
+    from skydome.daylighting.radiance_io import FORMATS, atomic_write_bytes, write_matrix
+    from skydome.daylighting.skymatrix import parse_sun_option, perez_sky_matrix_from_weather
+
+    # -- validate everything before any work -------------------------------------------------
+    ps = _guard(make_patches, patches)
+    mode = _guard(parse_sun_option, sun)[0]
+    if model != "perez1993":
+        _fail(f"model = {model!r} is not available for sky matrices (choices: perez1993)")
+    if components not in ("rgb", "luminance"):
+        _fail(f"components = {components!r} is unknown (choices: rgb, luminance)")
+    if fmt not in FORMATS:
+        _fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
+    if sun_position not in ("spa", "radiance"):
+        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    if not 0 <= order <= 16:
+        _fail(f"order = {order} is out of range [0, 16]")
+    if workers < 0 or chunk_hours < 1:
+        _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
+    distributed = scheduler is not None or workers > 0
+    if distributed and mode == "separate":
+        _fail("--sun separate is not available with --scheduler/--workers yet")
+    rho: Optional[float] = None
+    if albedo != "weather":
+        try:
+            rho = float(albedo)
+        except ValueError:
+            _fail(f"albedo = {albedo!r} must be a number in [0, 1] or 'weather'")
+        if not 0.0 <= rho <= 1.0:
+            _fail(f"albedo = {albedo!r} is out of range [0, 1]")
+    out_p = Path(out)
+    targets = [out_p]
+    if mode == "separate":
+        stem = out_p.with_suffix("")
+        targets += [Path(f"{stem}.sun{out_p.suffix or '.mtx'}"), Path(f"{stem}.suns.rad")]
+    for t in targets:
+        if t.exists() and not overwrite:
+            _fail(f"out = {str(t)!r} exists (use --overwrite)")
+        if not t.parent.is_dir():
+            _fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
+    from skydome.daylighting.weather import read_weather
+
+    w = _guard(read_weather, weather)
+    if rho is None:
+        rho_v = w.albedo if w.albedo is not None else np.full(len(w), 0.2)
+        rho_v = np.where(np.isfinite(rho_v), rho_v, 0.2)
+    else:
+        rho_v = rho
+    dtype = np.float32 if fmt == "float" else np.float64
+    chunk_dir = None
+    if distributed:
+        import shutil
+
+        from skydome.distributed import distributed_sky_matrix
+
+        chunk_dir = Path(f"{out_p}.chunks")
+        sky, rep = _guard(distributed_sky_matrix, w, chunk_dir, chunk_hours=chunk_hours,
+                          scheduler=scheduler, n_workers=max(workers, 1), progress=True,
+                          sun_position=sun_position, ground_reflectance=rho_v, patches=ps.name,
+                          order=order, sun=sun, components=components, dtype=dtype)
+        typer.echo(f"chunks: {len(rep.computed)} computed, {len(rep.verified)} reused",
+                   err=True)
+
+        class _M:  # the parts of a SkyMatrix the writer needs
+            pass
+
+        m = _M()
+        m.sky = sky
+    else:
+        m = _guard(perez_sky_matrix_from_weather, w, sun_position=sun_position, patches=ps,
+                   order=order, sun=sun, components=components, ground_reflectance=rho_v,
+                   dtype=dtype)
+    info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
+            f"--model {model} --components {components} --sun {sun} --order {order} "
+            f"--sun-position {sun_position}",
+            f"LATLONG= {w.site.latitude_deg:.8f} {w.site.longitude_deg:.8f}"]
+    written = []
+    try:
+        write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
+                     transpose=out_p.suffix.lower() != ".npy")
+        written.append(out_p)
+        if mode == "separate":
+            write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,
+                         info=info + ["sun matrix: radiance of the 0.533 deg solar disc"],
+                         overwrite=overwrite)
+            written.append(targets[1])
+            minute = 24 * 60 * (w.day_of_year - 1) + (w.hour * 60.0 + 0.5).astype(int)
+            up = m.sun_directions[:, 2] > -np.sin(np.radians(0.2665))
+            atomic_write_bytes(targets[2], _sun_scene(m, minute, up).encode())
+            written.append(targets[2])
+    except BaseException:
+        for t in written:
+            t.unlink(missing_ok=True)
+        raise
+    if chunk_dir is not None:
+        shutil.rmtree(chunk_dir, ignore_errors=True)
+    typer.echo(f"wrote {', '.join(str(t) for t in written)}: {len(ps)} patches x {len(w)} hours "
+               f"x {m.sky.shape[2]} components")
+
+
+def illuminance_cmd(
+    weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
+    plane: list[str] = typer.Option(..., "--plane",
+                                    help="horizontal | vertical:AZ | tilted:TILT:AZ (repeat)"),
+    out: str = typer.Option(..., "--out", help="output .csv"),
+    model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
+    albedo: float = typer.Option(0.2, "--albedo", help="ground reflectance"),
+    sun_position: str = typer.Option("spa", "--sun-position", help="spa | radiance"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace an existing output"),
+):
+    """Hourly sky, sun and ground illuminance and irradiance on planes."""
+    from skydome.daylighting.series import parse_plane, plane_series, write_series_csv
+    from skydome.daylighting.weather import read_weather
+
+    planes = [_guard(parse_plane, p) for p in plane]
+    if model != "perez1993":
+        _fail(f"model = {model!r} is not available for illuminance series (choices: perez1993)")
+    if not 0.0 <= albedo <= 1.0:
+        _fail(f"albedo = {albedo:g} is out of range [0, 1]")
+    if sun_position not in ("spa", "radiance"):
+        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    out_p = Path(out)
+    if out_p.exists() and not overwrite:
+        _fail(f"out = {out!r} exists (use --overwrite)")
+    if not out_p.parent.is_dir():
+        _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    w = _guard(read_weather, weather)
+    res = _guard(plane_series, w, planes, ground_reflectance=albedo, sun_position=sun_position)
+    _guard(write_series_csv, out_p, res, overwrite=overwrite)
+    typer.echo(f"wrote {out}: {len(w)} hours x {len(planes)} planes")
+
+
+def _value(text: str):
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    return text
+
+
+def export_radiance_cmd(
+    out: str = typer.Option(..., "--out", help="output .rad (with .dat and .cal beside it)"),
+    model: str = typer.Option("perez1993", "--model", help="any skydome model"),
+    dni: Optional[float] = typer.Option(None, "--dni", help="direct normal irradiance [W/m^2]"),
+    dhi: Optional[float] = typer.Option(None, "--dhi",
+                                        help="diffuse horizontal irradiance [W/m^2]"),
+    sun_elevation: Optional[float] = typer.Option(None, "--sun-elevation", help="[deg]"),
+    sun_azimuth: Optional[float] = typer.Option(None, "--sun-azimuth",
+                                                help="[deg from north towards east]"),
+    lat: Optional[float] = typer.Option(None, "--lat", help="latitude [deg N]"),
+    lon: Optional[float] = typer.Option(None, "--lon", help="longitude [deg E]"),
+    time: Optional[str] = typer.Option(None, "--time", help="ISO time with UTC offset"),
+    param: list[str] = typer.Option([], "--param", help="model parameter NAME=VALUE (repeat)"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
+):
+    """A Radiance sky for one time: the model's sky as a brightdata pattern, its sun as a
+    light source."""
+    import skydome as sd
+    from skydome.daylighting.scene import write_radiance_sky
+
+    params = {}
+    for item in param:
+        if "=" not in item:
+            _fail(f"param = {item!r} must be NAME=VALUE")
+        k, _, v = item.partition("=")
+        params[k.strip()] = _value(v.strip())
+    if dni is not None:
+        params["dni"] = dni
+    if dhi is not None:
+        params["dhi"] = dhi
+    by_place = any(v is not None for v in (lat, lon, time))
+    if by_place:
+        if None in (lat, lon, time) or sun_elevation is not None or sun_azimuth is not None:
+            _fail("give --lat, --lon and --time together, or --sun-elevation/--sun-azimuth")
+        sun = _guard(sd.Sun.from_location, lat, lon, time)
+    else:
+        sun = _guard(sd.Sun, elevation_deg=30.0 if sun_elevation is None else sun_elevation,
+                     azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
+    m = _guard(sd.model, model, sun=sun, **params)
+    files = _guard(write_radiance_sky, m, out, overwrite=overwrite)
+    typer.echo(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the daylighting commands to ``app``."""
+    app.add_typer(weather_app, name="weather")
+    app.command("skymatrix")(skymatrix_cmd)
+    app.command("illuminance")(illuminance_cmd)
+    # `skydome export radiance` joins the export group of skydome.export.cli
+    from skydome.export.cli import export_app
+
+    export_app.command("radiance")(export_radiance_cmd)

@@ -1,0 +1,216 @@
+"""Tregenza and Reinhart sky patches with Radiance's geometry and order.
+
+Reinhart's subdivision MF:n of Tregenza's 145 patches [T87] [R09]: 7 n rows of equal altitude
+width alpha = 90 deg / (7 n + 0.5) from the horizon up, with n x (30, 30, 24, 24, 18, 12, 6)
+patches per original band, and a zenith cap of half a row's width. The order is that of
+Radiance's reinhart.cal and gendaymtx: patch 0 is the ground (the whole lower hemisphere),
+then row by row from the horizon up, in each row from north (the first patch is centred on
+azimuth 0) towards east, and last the zenith cap. MF:1 is Tregenza's 145 patches (146 with
+the ground); MF:n has 144 n^2 + 2.
+
+Patch values are means over each patch, integrated with a tensor Gauss-Legendre rule of order
+q in sin(altitude) (in which the solid angle element is uniform: dOmega = d(sin a) d(phi)) and
+in azimuth; the zenith cap uses q Gauss-Legendre nodes in sin(altitude) times 6 q equally
+spaced azimuths (periodic trapezoid rule). Order q integrates a patch mean of a polynomial in
+sin(altitude) of degree <= 2 q - 1 exactly. ``order=0`` takes gendaymtx's single point per
+patch (altitude and azimuth at the patch's centre, the zenith for the cap) with the patch's
+solid angle as weight: point sampling, as Radiance does.
+
+References
+----------
+.. [T87] P. R. Tregenza, "Subdivision of the sky hemisphere for luminance measurements",
+   Lighting Research & Technology 19(1) 13-14 (1987).
+.. [R09] C. F. Reinhart, "Tutorial on the use of Daysim simulations for sustainable design"
+   (2006-2010); G. Ward, Radiance ``reinhart.cal`` and ``gendaymtx.c`` (rh_init), Radiance 5.4.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+__all__ = ["PatchSet", "patches", "TREGENZA_BAND_COUNTS"]
+
+#: Patches per Tregenza band from the horizon up (the zenith cap not counted) [T87].
+TREGENZA_BAND_COUNTS = (30, 30, 24, 24, 18, 12, 6)
+MAX_MF = 12
+
+
+@dataclass(frozen=True, eq=False)
+class PatchSet:
+    """A sky subdivision: ground patch 0, sky patches 1..n-1 (Radiance's order).
+
+    Attributes (sky patches are entries 1..n-1; entry 0 is the ground)
+    ----------
+    name : str
+        "tregenza" or "reinhart:MF".
+    mf : int
+        Reinhart subdivision (1 = Tregenza).
+    altitude_low_rad, altitude_high_rad : numpy.ndarray
+        Altitude bounds [rad] (ground: -pi/2, 0).
+    azimuth_centre_rad, azimuth_half_width_rad : numpy.ndarray
+        Azimuth of the centre (from north towards east) and half width [rad] (cap: 0, pi).
+    centre_altitude_rad : numpy.ndarray
+        gendaymtx's centre altitude (row's mid altitude; pi/2 for the cap; -pi/2 ground).
+    solid_angle_sr : numpy.ndarray
+        2 pi (sin a_hi - sin a_lo) / n_row [sr] (ground 2 pi).
+    """
+
+    name: str
+    mf: int
+    altitude_low_rad: np.ndarray
+    altitude_high_rad: np.ndarray
+    azimuth_centre_rad: np.ndarray
+    azimuth_half_width_rad: np.ndarray
+    centre_altitude_rad: np.ndarray
+    solid_angle_sr: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.solid_angle_sr.shape[0])
+
+    @property
+    def n_sky(self) -> int:
+        """Number of sky patches (without the ground)."""
+        return len(self) - 1
+
+    @property
+    def centres(self) -> np.ndarray:
+        """gendaymtx's patch directions (n, 3), ENU unit vectors; the ground's is (0, 0, -1)."""
+        return _vector(self.centre_altitude_rad, self.azimuth_centre_rad)
+
+    def nodes(self, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Quadrature nodes over the sky patches (computed once per set and order, cached).
+
+        Returns
+        -------
+        directions : numpy.ndarray
+            (n_nodes, 3) ENU unit vectors, patch after patch.
+        weights : numpy.ndarray
+            (n_nodes,) [sr]; each patch's weights sum to its solid angle.
+        offsets : numpy.ndarray
+            (n_sky + 1,) int: sky patch k (patch index k + 1) owns nodes offsets[k]:offsets[k+1].
+        """
+        return _nodes(self.name, int(order))
+
+    def patch_of(self, directions) -> np.ndarray:
+        """Index of the patch that holds each direction (..., 3) (0 below the horizon),
+        as reinhart.cal's ``rbin``."""
+        d = np.asarray(directions, dtype=np.float64)
+        alt = np.degrees(np.arcsin(np.clip(d[..., 2], -1.0, 1.0)))
+        azi = np.degrees(np.arctan2(d[..., 0], d[..., 1])) % 360.0
+        alpha = 90.0 / (7 * self.mf + 0.5)
+        row = np.floor(alt / alpha).astype(np.int64)
+        counts = _row_counts(self.mf)
+        first = np.concatenate([[1], 1 + np.cumsum(counts)])  # first index of each row
+        rowc = np.clip(row, 0, len(counts) - 1)
+        nrow = counts[rowc]
+        inc = 360.0 / nrow
+        col = np.floor((azi + 0.5 * inc) / inc).astype(np.int64) % nrow
+        idx = first[rowc] + col
+        idx = np.where(row >= len(counts), len(self) - 1, idx)
+        return np.where(alt < 0.0, 0, idx)
+
+
+def _vector(alt, azi) -> np.ndarray:
+    alt, azi = np.broadcast_arrays(alt, azi)
+    ca = np.cos(alt)
+    return np.stack([ca * np.sin(azi), ca * np.cos(azi), np.sin(alt)], axis=-1)
+
+
+def _row_counts(mf: int) -> np.ndarray:
+    return np.repeat(np.asarray(TREGENZA_BAND_COUNTS) * mf, mf)
+
+
+def patches(spec: str = "tregenza") -> PatchSet:
+    """The patch set named by ``spec``: "tregenza" (= "reinhart:1"), "reinhart:MF" with MF in
+    1..12 (also "mf:MF")."""
+    if not isinstance(spec, str):
+        raise TypeError(f"patches must be a string such as 'tregenza' or 'reinhart:4', got "
+                        f"{spec!r}")
+    s = spec.strip().lower()
+    if s in ("tregenza", "reinhart", "reinhart:1", "mf:1"):
+        return _patches(1)
+    for prefix in ("reinhart:", "mf:"):
+        if s.startswith(prefix):
+            tail = s[len(prefix):]
+            if tail.isdigit() and 1 <= int(tail) <= MAX_MF:
+                return _patches(int(tail))
+    raise ValueError(f"patches = {spec!r} is unknown; use 'tregenza' or 'reinhart:MF' with MF "
+                     f"in [1, {MAX_MF}]")
+
+
+@lru_cache(maxsize=None)
+def _patches(mf: int) -> PatchSet:
+    alpha = (math.pi / 2.0) / (7 * mf + 0.5)  # gendaymtx rh_init: row width
+    counts = _row_counts(mf)
+    alo, ahi, azc, azh, calt, dom = [-math.pi / 2], [0.0], [0.0], [math.pi], [-math.pi / 2], [
+        2.0 * math.pi]
+    for i, n in enumerate(counts):
+        lo, hi = alpha * i, alpha * (i + 1)
+        w = 2.0 * math.pi * (math.sin(hi) - math.sin(lo)) / n
+        for j in range(n):
+            alo.append(lo)
+            ahi.append(hi)
+            azc.append(2.0 * math.pi * j / n)
+            azh.append(math.pi / n)
+            calt.append(alpha * (i + 0.5))
+            dom.append(w)
+    alo.append(math.pi / 2 - 0.5 * alpha)  # zenith cap
+    ahi.append(math.pi / 2)
+    azc.append(0.0)
+    azh.append(math.pi)
+    calt.append(math.pi / 2)
+    dom.append(2.0 * math.pi * (1.0 - math.cos(0.5 * alpha)))
+    arr = [np.asarray(v, dtype=np.float64) for v in (alo, ahi, azc, azh, calt, dom)]
+    for a in arr:
+        a.setflags(write=False)
+    name = "tregenza" if mf == 1 else f"reinhart:{mf}"
+    return PatchSet(name, mf, *arr)
+
+
+@lru_cache(maxsize=32)
+def _nodes(name: str, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ps = patches(name)
+    if order < 0 or order > 16:
+        raise ValueError(f"order = {order} is out of range [0, 16]")
+    sl = slice(1, None)
+    if order == 0:
+        d = ps.centres[sl]
+        w = ps.solid_angle_sr[sl].copy()
+        offsets = np.arange(ps.n_sky + 1)
+    else:
+        x, wx = np.polynomial.legendre.leggauss(order)
+        u, wu = 0.5 * (x + 1.0), 0.5 * wx  # on [0, 1]
+        slo = np.sin(ps.altitude_low_rad[sl])
+        shi = np.sin(ps.altitude_high_rad[sl])
+        n = ps.n_sky
+        ring = slice(0, n - 1)
+        # ring patches: q x q tensor rule in (sin a, phi)
+        s = slo[ring, None] + (shi - slo)[ring, None] * u[None, :]  # (p, q)
+        ws = (shi - slo)[ring, None] * wu[None, :]
+        h = ps.azimuth_half_width_rad[sl][ring]
+        phi = ps.azimuth_centre_rad[sl][ring, None] + h[:, None] * x[None, :]  # (p, q)
+        wp = h[:, None] * wx[None, :]
+        alt = np.arcsin(s)
+        dr = _vector(alt[:, :, None], phi[:, None, :]).reshape(n - 1, order * order, 3)
+        wr = (ws[:, :, None] * wp[:, None, :]).reshape(n - 1, order * order)
+        # zenith cap: q nodes in sin a times 6 q azimuths (periodic trapezoid)
+        m = 6 * order
+        sc = slo[-1] + (shi[-1] - slo[-1]) * u
+        wsc = (shi[-1] - slo[-1]) * wu
+        phic = 2.0 * math.pi * (np.arange(m) + 0.5) / m
+        dc = _vector(np.arcsin(sc)[:, None], phic[None, :]).reshape(1, order * m, 3)
+        wc = (wsc[:, None] * np.full(m, 2.0 * math.pi / m)[None, :]).reshape(1, order * m)
+        d = np.concatenate([dr.reshape(-1, 3), dc.reshape(-1, 3)])
+        w = np.concatenate([wr.reshape(-1), wc.reshape(-1)])
+        offsets = np.concatenate([np.arange(n) * order * order,
+                                  [(n - 1) * order * order + order * m]])
+    d = np.ascontiguousarray(d)
+    w = np.ascontiguousarray(w)
+    offsets = np.ascontiguousarray(offsets, dtype=np.int64)
+    for a in (d, w, offsets):
+        a.setflags(write=False)
+    return d, w, offsets

@@ -1,0 +1,191 @@
+"""Radiance matrix files (the format of rmtxop, dctimestep, gendaymtx) and .npy.
+
+A Radiance matrix file is an information header, a blank line, then the data [RMTX]::
+
+    #?RADIANCE
+    <command line or comment lines>
+    NROWS=146
+    NCOLS=8760
+    NCOMP=3
+    FORMAT=ascii          (or float / double; binary files also carry BigEndian=0|1)
+
+    <data>
+
+The data is row-major: for each row, each column, NCOMP components. A sky matrix has one row
+per sky patch and one column per time step (gendaymtx's layout); skydome holds it in memory as
+(n_hours, n_patches, n_components) and transposes on writing.
+
+References
+----------
+.. [RMTX] G. Ward, "rmtxop", "dctimestep" and "gendaymtx" manual pages, Radiance 5.4
+   (matrix file header: NROWS, NCOLS, NCOMP, FORMAT).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["write_matrix", "read_matrix", "atomic_write_bytes", "atomic_write_stream", "FORMATS"]
+
+FORMATS = ("ascii", "float", "double")
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file beside it and a rename."""
+    atomic_write_stream(path, [data])
+
+
+def _umask() -> int:
+    m = os.umask(0)
+    os.umask(m)
+    return m
+
+
+def _header(nrows: int, ncols: int, ncomp: int, fmt: str, info: list[str]) -> bytes:
+    lines = ["#?RADIANCE"] + [s.replace("\n", " ") for s in info]
+    lines += [f"NROWS={nrows}", f"NCOLS={ncols}", f"NCOMP={ncomp}"]
+    if fmt != "ascii":
+        lines.append(f"BigEndian={int(sys.byteorder == 'big')}")
+    lines.append(f"FORMAT={fmt}")
+    return ("\n".join(lines) + "\n\n").encode()
+
+
+def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = False,
+                 transpose: bool = False) -> None:
+    """Write a Radiance matrix file atomically, streaming it in blocks of rows.
+
+    Parameters
+    ----------
+    path : str or Path
+        Target file; a ``.npy`` suffix writes NumPy's format instead (the array as given).
+    matrix : array_like
+        (nrows, ncols, ncomp) or (nrows, ncols) (one component) in file order (rows first);
+        with ``transpose`` (ncols, nrows, ncomp), e.g. a sky matrix held as (hours, patches,
+        components), written without a transposed copy in memory.
+    fmt : {"ascii", "float", "double"}
+        Data format (ascii with 7 significant digits; float/double in native byte order).
+    info : sequence of str
+        Header lines (e.g. the command line that made the matrix).
+    overwrite : bool
+        Refuse an existing ``path`` unless True.
+    """
+    from skydome._validate import check_choice
+
+    check_choice("fmt", fmt, FORMATS)
+    m = np.asarray(matrix)
+    if m.ndim == 2:
+        m = m[:, :, None]
+    if m.ndim != 3:
+        raise ValueError(f"matrix has shape {m.shape}; expected (nrows, ncols[, ncomp])")
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise ValueError(f"out = {str(path)!r} exists (pass overwrite to replace it)")
+    if not path.parent.is_dir():
+        raise ValueError(f"out = {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    if transpose:
+        m = np.swapaxes(m, 0, 1)  # a view
+    nrows, ncols, ncomp = m.shape
+    block = max(1, (1 << 22) // max(1, ncols * ncomp))  # about 4 M values per block
+    for r0 in range(0, nrows, block):
+        if not np.all(np.isfinite(m[r0:r0 + block])):
+            raise ValueError("matrix holds nan or inf values")
+    if path.suffix.lower() == ".npy":
+        import io
+
+        buf = io.BytesIO()
+        np.save(buf, np.asarray(matrix, dtype=np.float64))
+        atomic_write_bytes(path, buf.getvalue())
+        return
+    head = _header(nrows, ncols, ncomp, fmt, list(info))
+    dtype = {"float": np.float32, "double": np.float64}.get(fmt)
+
+    def blocks():
+        yield head
+        for r0 in range(0, nrows, block):
+            part = m[r0:r0 + block]
+            if fmt == "ascii":
+                yield _ascii_body(np.asarray(part, dtype=np.float64))
+            else:
+                yield np.ascontiguousarray(part, dtype=dtype).data
+
+    atomic_write_stream(path, blocks())
+
+
+def atomic_write_stream(path, chunks) -> None:
+    """Write the byte chunks of an iterable to ``path`` through a temporary file and a
+    rename; nothing is left behind if it fails."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            for c in chunks:
+                f.write(c)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _ascii_body(m: np.ndarray) -> bytes:
+    """One line per (row, column) with NCOMP values; a blank line after each row."""
+    nrows, ncols, ncomp = m.shape
+    out = []
+    flat = m.reshape(nrows, ncols * ncomp)
+    fmt_row = " ".join(["%.7g"] * ncomp)
+    for r in range(nrows):
+        vals = flat[r].reshape(ncols, ncomp)
+        out.append("\n".join(fmt_row % tuple(v) for v in vals))
+        out.append("\n\n")
+    return "".join(out).encode()
+
+
+def read_matrix(path) -> tuple[np.ndarray, dict]:
+    """Read a Radiance matrix file (or a .npy file).
+
+    Returns
+    -------
+    matrix : numpy.ndarray
+        (nrows, ncols, ncomp) float64.
+    header : dict
+        The header's variables (NROWS, NCOLS, NCOMP, FORMAT, BigEndian, ...) as strings,
+        plus ``"lines"``: every header line.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".npy":
+        return np.load(path), {}
+    raw = path.read_bytes()
+    end = raw.find(b"\n\n")
+    if not raw.startswith(b"#?RADIANCE") or end < 0:
+        raise ValueError(f"{str(path)!r} is not a Radiance matrix file (no #?RADIANCE header)")
+    lines = raw[:end].decode(errors="replace").splitlines()
+    header: dict = {"lines": lines}
+    for ln in lines[1:]:
+        if "=" in ln:
+            k, _, v = ln.partition("=")
+            header[k.strip()] = v.strip()
+    try:
+        nrows, ncols = int(header["NROWS"]), int(header["NCOLS"])
+        ncomp = int(header.get("NCOMP", "1"))
+    except (KeyError, ValueError):
+        raise ValueError(f"{str(path)!r}: header lacks NROWS/NCOLS") from None
+    fmt = header.get("FORMAT", "ascii")
+    body = raw[end + 2:]
+    if fmt == "ascii":
+        data = np.array(body.split(), dtype=np.float64)
+    elif fmt in ("float", "double"):
+        big = header.get("BigEndian", str(int(sys.byteorder == "big"))) == "1"
+        dt = np.dtype(np.float32 if fmt == "float" else np.float64).newbyteorder(
+            ">" if big else "<")
+        data = np.frombuffer(body, dtype=dt).astype(np.float64)
+    else:
+        raise ValueError(f"{str(path)!r}: FORMAT={fmt} is not supported (ascii, float, double)")
+    if data.size != nrows * ncols * ncomp:
+        raise ValueError(f"{str(path)!r}: {data.size} values for {nrows} x {ncols} x {ncomp}")
+    return data.reshape(nrows, ncols, ncomp), header

@@ -1,0 +1,114 @@
+"""Radiance matrix files: round trips, Radiance's rmtxop reading skydome's files, and the
+skymatrix command's outputs and refusals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skydome.daylighting.radiance_io import read_matrix, write_matrix
+from skydome.daylighting.weather import sample_weather_path
+
+
+@pytest.mark.parametrize("fmt", ["ascii", "float", "double"])
+def test_round_trip(tmp_path, fmt):
+    rng = np.random.default_rng(1)
+    m = rng.uniform(0, 1e4, (5, 7, 3))
+    write_matrix(tmp_path / "m.mtx", m, fmt=fmt, info=["test"])
+    r, head = read_matrix(tmp_path / "m.mtx")
+    assert head["NROWS"] == "5" and head["NCOLS"] == "7" and head["FORMAT"] == fmt
+    np.testing.assert_allclose(r, m, rtol={"ascii": 1e-6, "float": 1e-7, "double": 0}[fmt])
+
+
+@pytest.mark.parametrize("fmt", ["ascii", "float", "double"])
+def test_rmtxop_reads_our_files(tmp_path, fmt):
+    """rmtxop (Radiance) converts our file to ascii with the same numbers, and transposes it
+    as a 5 x 7 matrix should be."""
+    from _radiance import run_radiance
+
+    m = np.arange(5 * 7 * 3, dtype=float).reshape(5, 7, 3) * 1.5 + 0.25
+    write_matrix(tmp_path / "m.mtx", m, fmt=fmt)
+    out = run_radiance("rmtxop", ["-fa", "-t", "m.mtx"], cwd=tmp_path)
+    (tmp_path / "t.mtx").write_text(out)
+    t, head = read_matrix(tmp_path / "t.mtx")
+    assert (head["NROWS"], head["NCOLS"]) == ("7", "5")
+    np.testing.assert_allclose(t, np.swapaxes(m, 0, 1), rtol=1e-6)
+
+
+def test_refuses_existing_and_nan(tmp_path):
+    p = tmp_path / "m.mtx"
+    write_matrix(p, np.ones((2, 2, 3)))
+    before = p.read_bytes()
+    with pytest.raises(ValueError, match="exists"):
+        write_matrix(p, np.zeros((2, 2, 3)))
+    assert p.read_bytes() == before
+    with pytest.raises(ValueError, match="nan"):
+        write_matrix(tmp_path / "n.mtx", np.full((2, 2, 3), np.nan))
+    assert not (tmp_path / "n.mtx").exists()
+
+
+def _cli(args):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    return CliRunner().invoke(app, args)
+
+
+def _days_tmy3(tmp_path, ndays=2):
+    lines = sample_weather_path().read_text().splitlines(keepends=True)
+    p = tmp_path / "two_days.csv"
+    p.write_text("".join(lines[:2 + 24 * ndays]))
+    return p
+
+
+def test_cli_skymatrix_separate_sun(tmp_path):
+    w = _days_tmy3(tmp_path)
+    out = tmp_path / "annual.mtx"
+    r = _cli(["skymatrix", "--weather", str(w), "--patches", "reinhart:2", "--sun", "separate",
+              "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    sky, head = read_matrix(out)
+    assert sky.shape == (578, 48, 3)
+    sun, _ = read_matrix(tmp_path / "annual.sun.mtx")
+    assert sun.shape == (1, 48, 3)
+    scene = (tmp_path / "annual.suns.rad").read_text()
+    # one sun per hour with the sun in the sky (as gendaymtx -D, black where no direct light)
+    from skydome.daylighting.weather import read_weather
+
+    wd = read_weather(w)
+    in_sky = wd.sun_directions[:, 2] > -np.sin(np.radians(0.2665))
+    assert scene.count(" source sun") == int(np.count_nonzero(in_sky)) > 10
+    assert np.all(sun[0, ~in_sky] == 0) and np.count_nonzero(sun[0, :, 0] > 0) > 10
+    assert np.all(sky >= 0) and np.all(np.isfinite(sky))
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--patches", "klems"], "patches = 'klems' is unknown"),
+    (["--sun", "blur"], "sun = 'blur' is unknown"),
+    (["--format", "xml"], "format = 'xml'"),
+    (["--albedo", "2"], "albedo"),
+    (["--model", "hosek"], "model = 'hosek'"),
+])
+def test_cli_skymatrix_bad_input(tmp_path, args, message):
+    w = _days_tmy3(tmp_path)
+    out = tmp_path / "x.mtx"
+    r = _cli(["skymatrix", "--weather", str(w), "--out", str(out), *args])
+    assert r.exit_code == 2
+    assert message in r.output
+    assert list(tmp_path.iterdir()) == [w]  # nothing partial on disk
+
+
+def test_cli_skymatrix_bad_weather_and_existing_output(tmp_path):
+    lines = sample_weather_path().read_text().splitlines(keepends=True)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("".join(lines[:2] + lines[2:50:2]))  # 2-hour steps
+    r = _cli(["skymatrix", "--weather", str(bad), "--out", str(tmp_path / "a.mtx")])
+    assert r.exit_code == 2 and "time step" in r.output
+    assert not (tmp_path / "a.mtx").exists()
+    w = _days_tmy3(tmp_path)
+    (tmp_path / "a.mtx").write_text("keep")
+    r = _cli(["skymatrix", "--weather", str(w), "--out", str(tmp_path / "a.mtx")])
+    assert r.exit_code == 2 and "exists" in r.output
+    assert (tmp_path / "a.mtx").read_text() == "keep"
+    assert r.output.count("\n") == 1
