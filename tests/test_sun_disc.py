@@ -17,7 +17,7 @@ import pytest
 
 import skydome as sd
 from skydome.render import AngularMap, Equirect, Fisheye, render
-from skydome.render.camera import Camera
+from skydome.camera import Camera
 from skydome.render.sun_disc import limb_darkening, limb_darkening_mean
 from skydome.sun import Sun
 

@@ -114,7 +114,7 @@ def test_twilight_frames_darken_frame_by_frame(tmp_path, exposure):
     # with the sun's depression, so every frame is darker than the one before
     from PIL import Image
 
-    from skydome.effects.twilight import run_twilight
+    from skydome.apps.twilight import run_twilight
     from skydome.spectra import srgb_decode
 
     run_twilight(tmp_path / "tw", step_deg=3.0, size=24, wavelengths=6, exposure=exposure,
