@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -57,6 +58,9 @@ def test_write_precomputed_luts(small_sky, tmp_path):
     desc = json.loads((out / "luts.json").read_text())
     assert desc["format"] == LUT_FORMAT
     assert desc["sizes"] == {"r": 4, "mu": 8, "mu_s": 4, "nu": 2}
+    # the mu_s axis is the model's zenith-angle mapping (table format 2), not [Bru17]'s
+    assert desc["table_format"] == "skydome.precomputed/2"
+    assert "asinh((theta - 92 deg)/6 deg)" in desc["mappings"]["mu_s"]
     assert set(desc["textures"]) == {"multiple_scattering", "single_scattering_0",
                                      "single_scattering_1"}
     for name, t in desc["textures"].items():
@@ -66,3 +70,19 @@ def test_write_precomputed_luts(small_sky, tmp_path):
         assert np.all(np.isfinite(raw)) and np.all(raw >= 0.0) and np.all(raw[..., 3] == 0.0)
     assert not [p for p in out.iterdir() if p.name.startswith(".")]     # no temporary left
     assert len(written) == 7
+
+
+def test_bake_refuses_other_table_format(tmp_path):
+    """A textures.json of another table format (format 1 had [Bru17]'s mu_s axis) is refused
+    before anything is read or written."""
+    from skydome.export.luts import write_precomputed_luts
+
+    class OldTables:
+        def export_textures(self, folder):
+            (Path(folder) / "textures.json").write_text(json.dumps(
+                {"format": "skydome.precomputed/1", "textures": {}}))
+
+    out = tmp_path / "luts"
+    with pytest.raises(ValueError, match="skydome.precomputed/1"):
+        write_precomputed_luts(OldTables(), out)
+    assert not out.exists()

@@ -25,7 +25,16 @@ Textures (float32, C order, RGBA with A = 0, i.e. (z, y, x, 4)):
   function, same shape; multiply by the constituent's phase function P_k(nu) [sr^-1].
 
 The axis mappings are those of the model's ``textures.json`` (copied into the
-description).
+description, with its ``table_format``): r, mu and nu are [Bru17]'s, mu_s is the model's own
+zenith-angle mapping (``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s
+distance-to-the-top mapping:
+
+    x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)),
+    u(theta) = asinh((theta - 92 deg) / 6 deg),
+
+theta_s = acos(mu_s), theta_max = acos(mu_s_min), 0 at mu_s_min (clamped below), 1 at
+the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet radius.
+Bake format 2 (``LUT_FORMAT``) is the one with this mu_s axis; format 1 had [Bru17]'s.
 
 References
 ----------
@@ -45,7 +54,11 @@ import numpy as np
 
 __all__ = ["xyz_weights_for_table", "bake_precomputed", "write_precomputed_luts", "LUT_FORMAT"]
 
-LUT_FORMAT = "skydome.luts.bruneton-xyz/1"
+#: version 2: the mu_s axis is the model's zenith-angle mapping (table format
+#: skydome.precomputed/2), no longer [Bru17]'s
+LUT_FORMAT = "skydome.luts.bruneton-xyz/2"
+#: the model's table format whose axes this bake describes
+TABLE_FORMAT = "skydome.precomputed/2"
 
 
 def xyz_weights_for_table(table_wavelengths_nm, wavelengths_nm=None) -> np.ndarray:
@@ -81,6 +94,9 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
             src = json.load(f)
         arrays = {name: np.load(os.path.join(tmp, t["file"]))
                   for name, t in src["textures"].items()}
+    if src.get("format") != TABLE_FORMAT:
+        raise ValueError(f"textures.json format = {src.get('format')!r} is not supported; "
+                         f"valid: {TABLE_FORMAT!r} (the mu_s mapping this bake describes)")
     K = xyz_weights_for_table(src["wavelengths_nm"])
     ss = arrays["single_scattering"].astype(np.float64)       # (k, r, mu, mu_s, nu, l)
     ms = arrays["multiple_scattering"].astype(np.float64)     # (r, mu, mu_s, nu, l)
@@ -96,7 +112,8 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         "layout": "float32 (r, mu, nu * mu_s, 4): x = i_nu * n_mu_s + i_mu_s, y = i_mu, "
                   "z = i_r; RGBA = X, Y, Z, 0",
         "phase_code": src["phase_code"], "phase_param": src["phase_param"],
-        "phase_codes": src["phase_codes"], "mappings": src["mappings"],
+        "phase_codes": src["phase_codes"], "table_format": src["format"],
+        "mappings": src["mappings"],
         "table_wavelengths_nm": src["wavelengths_nm"],
         "xyz_weights": K.tolist(),
         "textures": {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}

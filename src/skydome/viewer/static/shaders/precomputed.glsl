@@ -1,9 +1,10 @@
 // precomputed: Bruneton (2017) table look-ups ([Bru17] GetScattering with the 4-D -> 3-D
 // packing; [BN08] eqs. 1-9 for what the tables hold) over the tables skydome bakes
 // (skydome.export.luts.bake_precomputed: XYZ per table cell, Bruneton's layout). Mirrors
-// _kernels_precomputed.render_observer for rays that do not hit the ground, with the
-// table's own (r, mu_s) slice (geom = 0), and its mappings r_index, mu_index, mu_s_unit,
-// _split. Float32: r^2 - R^2 is carried as h (2R + h).
+// precomputed._render.render_observer for rays that do not hit the ground, with the
+// table's own (r, mu_s) slice (_lookup.sky_lookup_acc), and the mappings of
+// precomputed._mapping: r_index, mu_index, mu_s_unit, _split. Float32: r^2 - R^2 is
+// carried as h (2R + h).
 precision highp sampler3D;
 uniform highp sampler3D u_ms;     // orders 2..N, XYZ
 uniform highp sampler3D u_ss0;    // single scattering of constituent 0 (no phase), XYZ
@@ -23,17 +24,24 @@ void split_(float f, int n, out int i, out float t) {
 
 float rho2_(float h) { return h * (2.0 * u_R + h); }
 
-// distance_to_top from the ground (r = R): -R mu + sqrt(H^2 + R^2 mu^2)
-float distance_to_top_ground(float mu, float H) {
-    return max(-u_R * mu + sqrt(max(H * H + u_R * u_R * mu * mu, 0.0)), 0.0);
+// the mu_s mapping's knee (_mapping.MU_S_CENTRE, MU_S_WIDTH): 92 deg and 6 deg [rad]
+const float MU_S_CENTRE = 1.6057029118347832;
+const float MU_S_WIDTH = 0.10471975511965978;
+
+// _mu_s_u: u(theta) = asinh((theta - 92 deg) / 6 deg)
+float mu_s_u(float th) {
+    return asinh((th - MU_S_CENTRE) / MU_S_WIDTH);
 }
 
-// mu_s_unit: [Bru17] mu_s mapping to [0, 1] (0 at mu_s_min, 1 at the zenith)
-float mu_s_unit(float mu_s, float H) {
-    float d_min = u_Rt - u_R, d_max = H;
-    float a = (distance_to_top_ground(mu_s, H) - d_min) / (d_max - d_min);
-    float A = (distance_to_top_ground(u_mu_s_min, H) - d_min) / (d_max - d_min);
-    return max(1.0 - a / A, 0.0) / (1.0 + a);
+// mu_s_unit: mu_s mapping to [0, 1] (0 at mu_s_min, clamped below; 1 at the zenith):
+// x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)), theta_s = acos(mu_s),
+// theta_max = acos(mu_s_min) (skydome's mapping, not [Bru17]'s; independent of R)
+float mu_s_unit(float mu_s, float mu_s_min) {
+    float th = acos(clamp1(mu_s));
+    float th_max = acos(clamp1(mu_s_min));
+    float top = mu_s_u(th_max);
+    float x = (top - mu_s_u(min(th, th_max))) / (top - mu_s_u(0.0));
+    return clamp(x, 0.0, 1.0);
 }
 
 // mu_index for a ray that does not hit the ground: the upper half of the mu axis
@@ -82,7 +90,7 @@ vec3 sky_xyz(vec3 d) {
     float a, b, c, e;
     split_(sqrt(max(rho2_(h), 0.0)) / H * float(u_sizes.x - 1), u_sizes.x, ir, a);   // r_index
     mu_index_sky(r, h, mu, H, u_sizes.y, im, b);
-    split_(mu_s_unit(mu_s, H) * float(u_sizes.z - 1), u_sizes.z, ims, c);
+    split_(mu_s_unit(mu_s, u_mu_s_min) * float(u_sizes.z - 1), u_sizes.z, ims, c);
     split_((nu + 1.0) * 0.5 * float(u_sizes.w - 1), u_sizes.w, inu, e);
     vec3 acc = quad(u_ms, ir, a, im, b, ims, c, inu, e);
     acc += phase_value(u_pc.x, u_pp.x, nu) * quad(u_ss0, ir, a, im, b, ims, c, inu, e);
