@@ -127,7 +127,8 @@ def test_bad_parameters_400(viewer_url, query, message):  # noqa: F811
 
 
 def test_api_message_is_the_cli_message(viewer_url):  # noqa: F811
-    """The same bad value through `skydome render` and through the API."""
+    """The same bad value through `skydome render` and through the API: the same message,
+    naming the API's parameter there and the command-line option (``--turbidity``) here."""
     status, _, body = _get(viewer_url, "/api/scene?model=preetham1999&turbidity=20&sun_elevation=20")
     assert status == 400
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
@@ -135,7 +136,7 @@ def test_api_message_is_the_cli_message(viewer_url):  # noqa: F811
                         "--turbidity", "20", "--sun-elevation", "20", "--out", "never.exr"],
                        capture_output=True, text=True, env=env, cwd=ROOT / "tests", timeout=120)
     assert r.returncode == 2
-    assert r.stderr.strip() == "error: " + json.loads(body)["error"]
+    assert r.stderr.strip() == "error: --" + json.loads(body)["error"]
     assert not (ROOT / "tests" / "never.exr").exists()
 
 
