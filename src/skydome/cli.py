@@ -819,6 +819,10 @@ def twilight_cmd(
         cls = get_model_class(model)
         params = _parse_model_params(cls, ctx.args)
         cls._validate_params(dict(params))
+        lo, hi = cls.sun_elevation_range_deg
+        if not (lo <= -18.0 and hi >= 0.0) and cls.sun_outside_range == "raise":
+            raise UserError(f"--model = {model!r} does not cover the sun from 0 to -18 deg "
+                            f"(its range is [{lo:g}, {hi:g}] deg)")
         check_int("size", size, 16, 2048)
         check_int("wavelengths", wavelengths, 3, 401)
         _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3)
@@ -827,10 +831,6 @@ def twilight_cmd(
             with reporting(progress):
                 res = run_twilight(out, model=model, step_deg=step, size=size, wavelengths=wavelengths,
                                    exposure=exposure, progress=progress, **params)
-        except ValueError as exc:
-            if "sun elevation" in str(exc) and model in str(exc):
-                raise UserError(f"model = {model!r} does not cover the sun from 0 to -18 deg: {exc}") from None
-            raise
         finally:
             progress.close()
         for d, z, e in zip(res["depression_deg"], res["zenith_luminance"], res["horizontal_illuminance"]):

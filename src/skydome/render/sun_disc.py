@@ -158,8 +158,9 @@ def sun_disc_radiance(sky, wavelengths_nm=None) -> np.ndarray | None:
             if Ls is not None:
                 L = spectrum_to_xyz(np.asarray(Ls, dtype=np.float64).reshape(-1), w)
     lum = getattr(sky, "sun_luminance", None)
-    if L is None and wavelengths_nm is None and callable(lum):
-        Y = float(lum())
+    Y = lum() if (L is None and wavelengths_nm is None and callable(lum)) else None
+    if Y is not None:   # None: a luminance-only model without a sun (CIE skies with no DNI)
+        Y = float(Y)
         x, y = 0.31271, 0.32902  # CIE D65, as SkyModel.xyz for luminance-only models
         L = np.array([Y * x / y, Y, Y * (1.0 - x - y) / y])
     if L is None:

@@ -47,7 +47,7 @@ import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
 from skydome.data import load_table
-from skydome.models import Parameter, SkyModel, check_sun, register
+from skydome.models import Parameter, SkyModel, register
 
 __all__ = ["HosekWilkie2012", "BANDS_NM", "WAVELENGTH_RANGE", "bezier_weights",
            "cooked_coefficients", "distribution", "solar_centre_radiance",
@@ -231,16 +231,11 @@ class HosekWilkie2012(SkyModel):
         Parameter("albedo", "", 0.2, 0.0, 1.0, "ground albedo (grey)"),
     )
 
-    def __init__(self, sun=None, **params):
-        check_sun(sun)
-        vals = self._validate_params(params)
-        if not 0.0 <= sun.elevation_deg <= 90.0:
-            raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
-                             f"[0, 90] deg for model 'hosek_wilkie2012' (the fit has no twilight)")
-        self.sun = sun
-        for k, v in vals.items():
-            setattr(self, k, v)
-        self._elev = np.radians(sun.elevation_deg)
+    sun_elevation_range_deg = (0.0, 90.0)   # the fit has no twilight
+
+    def _setup(self, vals, given):
+        super()._setup(vals, given)
+        self._elev = np.radians(self.sun.elevation_deg)
         self._cooked: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
     def _channels(self, which: str) -> tuple[np.ndarray, np.ndarray]:
