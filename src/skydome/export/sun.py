@@ -36,20 +36,19 @@ _K_M = 683.0
 def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | None:
     """The sun of ``sky`` as a light (see the module docstring); None if the model has no
     sun with a radiance, or the sun is wholly below the horizon."""
-    from skydome.render import _visible_disc_fraction
+    from skydome.render.sun_disc import sun_light as render_sun_light
     from skydome.spectra import default_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
 
     conv = get_convention(convention)
     sun = getattr(sky, "sun", None)
-    if sun is None or sun.elevation_deg <= -sun.angular_radius_deg:
-        return None
     wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
-    L = sky.sun_radiance(wl)
-    if L is None:
+    # the render layer's sun light: the limb-darkened disc's spectral normal irradiance,
+    # times the part of its flux above the horizon (per wavelength)
+    base = render_sun_light(sky, wl)
+    if base is None or getattr(sky, "native", "spectral") == "luminance":
         return None
-    L = np.maximum(np.asarray(L, dtype=np.float64).reshape(-1), 0.0)
-    frac = _visible_disc_fraction(sun.elevation_deg, sun.angular_radius_deg)
-    E = L * sun.solid_angle_sr * frac                                   # W m^-2 nm^-1
+    E = np.asarray(base.irradiance, dtype=np.float64)                 # W m^-2 nm^-1
+    frac = base.visible_fraction
     xyz = spectrum_to_xyz(E, wl)                                        # Y = illuminance [lx]
     rgb = np.maximum(xyz_to_linear_srgb(xyz), 0.0) / _K_M               # W m^-2, map scale
     lux = float(xyz[1])
@@ -92,17 +91,9 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | N
 
 def write_sun_json(light: dict, path) -> Path:
     """Write ``light`` as JSON atomically (.json only); returns the path."""
-    from skydome.render.image import _atomic_write
+    from skydome._io import atomic_file, check_output_file
 
-    p = Path(path)
-    if p.suffix.lower() != ".json":
-        raise ValueError(f"sun light file {str(p)!r} must end in .json")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ValueError(f"sun light file {str(p)!r}: folder {str(parent)!r} does not exist")
-
-    def write(tmp):
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(light, f, indent=2)
-    _atomic_write(p, write)
+    p = check_output_file(path, (".json",), name="sun light file")
+    with atomic_file(p) as tmp, open(tmp, "w", encoding="utf-8") as f:
+        json.dump(light, f, indent=2)
     return p
