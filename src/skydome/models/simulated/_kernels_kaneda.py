@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.transport._geometry import distance_to_sphere_far, ray_hits_ground, safe_sqrt
-from skydome.transport._medium import UNIFORM, densities, profile_density
+from skydome.transport._medium import UNIFORM, densities, density
 from skydome.transport._tables import lookup_column
 
 
@@ -95,13 +95,9 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
     (the fog last when fog_code >= 0); table: column table of the first nc_a constituents.
     """
     R = m.R
-    Rt = m.Rt
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
     beta_e = m.extinction
     n = dirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = beta_e.shape[1]
     ns = shells.shape[0]
     # largest extinction per constituent (used to size the pieces)
@@ -127,7 +123,7 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
         for c in range(nc):
             for l in range(nl):
                 acc[i, c, l] = 0.0
-        t_top = distance_to_sphere_far(R, mu, Rt)
+        t_top = distance_to_sphere_far(R, mu, m.Rt)
         t_max = min(t_top, t_end[i])
         # integrand at t = 0
         densities(m, 0.0, rho_a)
@@ -150,7 +146,7 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
             hm = math.sqrt(R * R + 2.0 * R * mu * 0.5 * (t_a + t_k) + 0.25 * (t_a + t_k) ** 2) - R
             dtau = 0.0
             for c in range(nc):
-                dtau += bmax[c] * max(profile_density(codes[c], p0s[c], p1s[c], hm), rho_a[c])
+                dtau += bmax[c] * max(density(m, c, hm), rho_a[c])
             dtau *= (t_k - t_a)
             n_pc = min(max(int(math.ceil(dtau / max_dtau)), 1), max_sub)
             h = (t_k - t_a) / n_pc
