@@ -83,20 +83,6 @@ def build_column_table(codes, p0s, p1s, R, Rt, n_r, n_mu, n, ts):
 
 
 @njit(cache=True)
-def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts, out):
-    """Fill ``out[c]`` with the column from (r, mu_s) towards the sun; returns False when
-    the sun is hidden by the planet (earth shadow: the light ray hits the ground)."""
-    if ray_hits_ground(r, mu_s, R):
-        return False
-    if light_exact:
-        for c in range(codes.shape[0]):
-            out[c] = column_quadrature(codes[c], p0s[c], p1s[c], r, mu_s, R, Rt, n_light, ts)
-        return True
-    lookup_columns(table, r, mu_s, R, Rt, out)
-    return True
-
-
-@njit(cache=True)
 def light_columns(table, m, r, mu_s, light_exact, n_light, ts, out):
     """Fill ``out[c]`` with the column of every constituent of the medium m from (r, mu_s)
     towards the sun [m]; returns False when the sun is hidden by the planet (earth
