@@ -5,7 +5,7 @@ API (so the same script runs on any version of the code): the figures of the tab
 Each workload is run once to compile or load the numba kernels, then timed as the best
 of ``--repeat`` runs. Sizes are kept small so that a before/after comparison on a shared
 2-core machine takes a few minutes. Run it with each version of the code on the path,
-alternately, in the same shell session:
+alternately, one after the other in the same shell:
 
     PYTHONPATH=<old>/src python benchmarks/bench_kernel_core.py
     PYTHONPATH=src python benchmarks/bench_kernel_core.py
