@@ -5,7 +5,7 @@ API (so the same script runs on any version of the code): the figures of the tab
 Each workload is run once to compile or load the numba kernels, then timed as the best
 of ``--repeat`` runs. Sizes are kept small so that a before/after comparison on a shared
 2-core machine takes a few minutes. Run it with each version of the code on the path,
-alternately, in the same shell session:
+alternately, one after the other in the same shell:
 
     PYTHONPATH=<old>/src python benchmarks/bench_kernel_core.py
     PYTHONPATH=src python benchmarks/bench_kernel_core.py
@@ -63,7 +63,6 @@ def main() -> None:
     n96 = model("nishita1996", orders=1)
     n96m = model("nishita1996", orders=3, sky_directions=14, lattice_size=7)
     kan = model("kaneda1991")
-    mc = model("montecarlo", samples=32)
     hil = model("hillaire2020")
     hil_m = model("hillaire2020", use_skyview=False)
 
@@ -84,7 +83,9 @@ def main() -> None:
         ("nishita1996 orders=3 precompute", n96_multiple, 0),
         ("nishita1996 orders=3 1024 rays", lambda: n96m.radiance(d1k, wl), 1024),
         ("kaneda1991 1024 rays", lambda: kan.radiance(d1k, wl), 1024),
-        ("montecarlo 32 paths x 64 rays", lambda: mc.radiance(d1k[::16], wl), 64),
+        # a new model per run: the model keeps its last result
+        ("montecarlo 32 paths x 64 rays",
+         lambda: model("montecarlo", samples=32).radiance(d1k[::16], wl), 64),
         ("hillaire2020 tables", hillaire_tables, 0),
         ("hillaire2020 sky view 4096 rays", lambda: hil.radiance(d4k, wl), 4096),
         ("hillaire2020 ray march 1024 rays", lambda: hil_m.radiance(d1k, wl), 1024),

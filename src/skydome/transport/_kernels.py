@@ -83,20 +83,6 @@ def build_column_table(codes, p0s, p1s, R, Rt, n_r, n_mu, n, ts):
 
 
 @njit(cache=True)
-def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts, out):
-    """Fill ``out[c]`` with the column from (r, mu_s) towards the sun; returns False when
-    the sun is hidden by the planet (earth shadow: the light ray hits the ground)."""
-    if ray_hits_ground(r, mu_s, R):
-        return False
-    if light_exact:
-        for c in range(codes.shape[0]):
-            out[c] = column_quadrature(codes[c], p0s[c], p1s[c], r, mu_s, R, Rt, n_light, ts)
-        return True
-    lookup_columns(table, r, mu_s, R, Rt, out)
-    return True
-
-
-@njit(cache=True)
 def light_columns(table, m, r, mu_s, light_exact, n_light, ts, out):
     """Fill ``out[c]`` with the column of every constituent of the medium m from (r, mu_s)
     towards the sun [m]; returns False when the sun is hidden by the planet (earth
@@ -212,21 +198,37 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     """Accumulate w.acc[c, l] = int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt over the pieces
     between the break points, and w.dcol the view column to t1; returns (t_prev, rho at
     t_prev already in w.rho_prev) as the distance of the last node."""
-    nc = m.profile_code.shape[0]
-    nl = w.tau.shape[0]
-    R = m.R
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
-    beta_e = m.extinction
+    w_acc = w.acc
+    w_brk = w.brk
+    w_dcol = w.dcol
+    w_ebuf = w.ebuf
+    w_ibuf = w.ibuf
+    w_rho = w.rho
+    w_rho_mid = w.rho_mid
+    w_rho_prev = w.rho_prev
+    w_scat = w.scat
+    w_scol = w.scol
+    w_tau = w.tau
+    m_R = m.R
+    m_extinction = m.extinction
+    m_profile_code = m.profile_code
+    m_profile_p0 = m.profile_p0
+    m_profile_p1 = m.profile_p1
+    nc = m_profile_code.shape[0]
+    nl = w_tau.shape[0]
+    R = m_R
+    codes = m_profile_code
+    p0s = m_profile_p0
+    p1s = m_profile_p1
+    beta_e = m_extinction
     tmin = lowest_point(r0, mu, t0, t1)
     t_prev = t0
     r_prev = math.sqrt(r0 * r0 + 2.0 * r0 * mu * t0 + t0 * t0)
     for c in range(nc):
-        w.rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
+        w_rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
     for q in range(nbrk - 1):
-        a = w.brk[q]
-        b = w.brk[q + 1]
+        a = w_brk[q]
+        b = w_brk[q + 1]
         dense_at_b = b <= tmin      # before the lowest point the density grows with t
         length = b - a
         if length <= 0.0:
@@ -242,26 +244,26 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
             rm = radius_along_above(r0, mu, tm, R)
             h = t - t_prev
             for c in range(nc):
-                w.rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                w.rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                w.dcol[c] += simpson(w.rho_prev[c], w.rho_mid[c], w.rho[c], h)
-                w.rho_prev[c] = w.rho[c]
+                w_rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                w_rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
+                w_dcol[c] += simpson(w_rho_prev[c], w_rho_mid[c], w_rho[c], h)
+                w_rho_prev[c] = w_rho[c]
             t_prev = t
             mu_s = (r0 * sun[2] + t * nu) / rr
-            if not light_columns(table, m, rr, mu_s, light_exact, n_light, ts, w.scol):
+            if not light_columns(table, m, rr, mu_s, light_exact, n_light, ts, w_scol):
                 continue
             for l in range(nl):
-                w.tau[l] = 0.0
+                w_tau[l] = 0.0
             for c in range(nc):
-                col = w.dcol[c] + w.scol[c]
+                col = w_dcol[c] + w_scol[c]
                 for l in range(nl):
-                    w.tau[l] -= beta_e[c, l] * col
-            exp_neg_array(w.tau, w.ebuf, w.ibuf)
+                    w_tau[l] -= beta_e[c, l] * col
+            exp_neg_array(w_tau, w_ebuf, w_ibuf)
             for c in range(nc):
-                wr = wt * w.rho[c] * w.scat[c]
+                wr = wt * w_rho[c] * w_scat[c]
                 if wr > 0.0:
                     for l in range(nl):
-                        w.acc[c, l] += wr * w.ebuf[l]
+                        w_acc[c, l] += wr * w_ebuf[l]
     return t_prev
 
 
@@ -270,51 +272,70 @@ def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, 
                  out, w):
     """Add the Lambertian reflection of the attenuated direct sun at the ground point t1,
     finishing the view optical depth exactly there."""
-    nc = m.profile_code.shape[0]
+    w_dcol = w.dcol
+    w_rho = w.rho
+    w_rho_mid = w.rho_mid
+    w_rho_prev = w.rho_prev
+    w_scol = w.scol
+    m_R = m.R
+    m_albedo = m.albedo
+    m_extinction = m.extinction
+    m_profile_code = m.profile_code
+    m_profile_p0 = m.profile_p0
+    m_profile_p1 = m.profile_p1
+    nc = m_profile_code.shape[0]
     nl = e_sun.shape[0]
-    R = m.R
+    R = m_R
     t = t1
     tm = 0.5 * (t_prev + t)
     rm = radius_along_above(r0, mu, tm, R)
     h = t - t_prev
     for c in range(nc):
-        w.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], 0.0)
-        w.rho_mid[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], rm - R)
-        w.dcol[c] += simpson(w.rho_prev[c], w.rho_mid[c], w.rho[c], h)
+        w_rho[c] = profile_density(m_profile_code[c], m_profile_p0[c], m_profile_p1[c], 0.0)
+        w_rho_mid[c] = profile_density(m_profile_code[c], m_profile_p0[c], m_profile_p1[c], rm - R)
+        w_dcol[c] += simpson(w_rho_prev[c], w_rho_mid[c], w_rho[c], h)
     mu_s = (r0 * sun[2] + t * nu) / R
     if mu_s > 0.0:
-        light_columns(table, m, R * (1.0 + 1e-12), mu_s, light_exact, n_light, ts, w.scol)
+        light_columns(table, m, R * (1.0 + 1e-12), mu_s, light_exact, n_light, ts, w_scol)
         for l in range(nl):
             s = 0.0
             for c in range(nc):
-                s += m.extinction[c, l] * (w.dcol[c] + w.scol[c])
-            out[i, l] += m.albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+                s += m_extinction[c, l] * (w_dcol[c] + w_scol[c])
+            out[i, l] += m_albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
 
 
 @njit(cache=True, fastmath=True)
 def _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w):
     """One ray of :func:`single_scattering` (work arrays w passed in, reset here)."""
-    nc = m.profile_code.shape[0]
+    w_acc = w.acc
+    w_brk = w.brk
+    w_dcol = w.dcol
+    w_phs = w.phs
+    m_R = m.R
+    m_Rt = m.Rt
+    m_profile_code = m.profile_code
+    m_scattering = m.scattering
+    nc = m_profile_code.shape[0]
     nl = e_sun.shape[0]
     mu = dirs[i, 2]
     nu = dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2]   # cos of the scattering angle
     for l in range(nl):
         out[i, l] = 0.0
         for c in range(nc):
-            w.acc[c, l] = 0.0
+            w_acc[c, l] = 0.0
     for c in range(nc):
-        w.dcol[c] = 0.0
-    t0, t1, hits_ground = ray_segment(r0, mu, m.R, m.Rt)
+        w_dcol[c] = 0.0
+    t0, t1, hits_ground = ray_segment(r0, mu, m_R, m_Rt)
     if t1 < t0 or (t1 == t0 and not hits_ground):
         return
-    nbrk = view_break_points(r0, mu, sun[2], nu, m.R, t0, t1, w.brk)
+    nbrk = view_break_points(r0, mu, sun[2], nu, m_R, t0, t1, w_brk)
     t_prev = _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light,
                                 t0, t1, nbrk, w)
     # phase functions and scattering coefficients
     for c in range(nc):
-        phase_fill(m, c, nu, w.phs)
+        phase_fill(m, c, nu, w_phs)
         for l in range(nl):
-            out[i, l] += e_sun[l] * m.scattering[c, l] * w.phs[l] * w.acc[c, l]
+            out[i, l] += e_sun[l] * m_scattering[c, l] * w_phs[l] * w_acc[c, l]
     if hits_ground:
         _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
                      out, w)

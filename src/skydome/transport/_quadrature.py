@@ -47,6 +47,15 @@ def geometric_edge(k, dv, ts):
 
 
 @njit(cache=True)
+def piece_bounds(piece, t0, tmin, t1):
+    """(a, b, dense_at_b) of piece 0 (from the start t0 to the lowest point tmin, densest at
+    its end b) or piece 1 (from tmin to the end t1, densest at its start a) of a ray."""
+    if piece == 0:
+        return t0, tmin, True
+    return tmin, t1, False
+
+
+@njit(cache=True)
 def column_quadrature(code, p0, p1, r, mu, R, Rt, n, ts, ground=True):
     """Column density of one profile from (r, mu) to the end of the ray [m]: the integral
     of the relative density along the ray ([KRZ06] eq. 12 without beta).
@@ -60,17 +69,14 @@ def column_quadrature(code, p0, p1, r, mu, R, Rt, n, ts, ground=True):
     tmin = lowest_point(r, mu, t0, t1)
     total = 0.0
     for piece in range(2):
-        if piece == 0:
-            a, b = t0, tmin            # dense end at b
-        else:
-            a, b = tmin, t1            # dense end at a
+        a, b, dense_at_b = piece_bounds(piece, t0, tmin, t1)
         length = b - a
         if length <= 0.0:
             continue
         dv = geometric_step(length, n, ts)
         for k in range(n):
             u, w = geometric_node(k, dv, ts)
-            t = b - u if piece == 0 else a + u
+            t = b - u if dense_at_b else a + u
             total += w * profile_density(code, p0, p1, radius_along(r, mu, t) - R)
     return total
 

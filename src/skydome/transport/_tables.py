@@ -118,23 +118,26 @@ def mu_from_r_mu_unit(r, x, ground, R, Rt):
 
 
 @njit(cache=True)
-def mu_s_unit_from_mu_s(mu_s, R, Rt, mu_s_min):
-    """[Bru17] mu_s mapping to [0, 1] (0 at mu_s_min, 1 at the zenith)."""
+def _mu_s_scale(R, Rt, mu_s_min):
+    """(H, d_min, d_max, A) of the mu_s mapping: d_min = Rt - R, d_max = H, A the unit
+    distance a at mu_s_min."""
     H = math.sqrt(Rt * Rt - R * R)
     d_min = Rt - R
-    d_max = H
+    return H, d_min, H, (distance_to_top(R, mu_s_min, Rt) - d_min) / (H - d_min)
+
+
+@njit(cache=True)
+def mu_s_unit_from_mu_s(mu_s, R, Rt, mu_s_min):
+    """[Bru17] mu_s mapping to [0, 1] (0 at mu_s_min, 1 at the zenith)."""
+    H, d_min, d_max, A = _mu_s_scale(R, Rt, mu_s_min)
     a = (distance_to_top(R, mu_s, Rt) - d_min) / (d_max - d_min)
-    A = (distance_to_top(R, mu_s_min, Rt) - d_min) / (d_max - d_min)
     return max(1.0 - a / A, 0.0) / (1.0 + a)
 
 
 @njit(cache=True)
 def mu_s_from_mu_s_unit(x, R, Rt, mu_s_min):
     """Inverse of :func:`mu_s_unit_from_mu_s`."""
-    H = math.sqrt(Rt * Rt - R * R)
-    d_min = Rt - R
-    d_max = H
-    A = (distance_to_top(R, mu_s_min, Rt) - d_min) / (d_max - d_min)
+    H, d_min, d_max, A = _mu_s_scale(R, Rt, mu_s_min)
     a = (A - x * A) / (1.0 + x * A)
     d = d_min + min(a, A) * (d_max - d_min)
     if d == 0.0:

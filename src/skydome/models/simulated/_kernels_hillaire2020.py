@@ -38,7 +38,8 @@ from skydome.transport._geometry import (clamp_cosine, radius_along_above, ray_h
                                         ray_segment, safe_sqrt)
 from skydome.transport._medium import profile_density
 from skydome.transport._phase import INV_4PI, phase_fill
-from skydome.transport._quadrature import geometric_edge, geometric_node, geometric_step, medium_columns
+from skydome.transport._quadrature import (geometric_edge, geometric_node, geometric_step,
+                                           medium_columns, piece_bounds)
 from skydome.transport._tables import (bilerp_last, irradiance_cell, lookup_rmu,
                                        r_mu_from_transmittance_unit, transmittance_cell)
 
@@ -78,13 +79,9 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
     integrand of f_ms, eq. 8 before the isotropic phase). ``phs[c, l]`` holds P_c(nu).
     """
     R = m.R
-    Rt = m.Rt
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
     beta_s = m.scattering
     beta_e = m.extinction
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = beta_e.shape[1]
     n_r = tlut.shape[0]
     n_mu = tlut.shape[1]
@@ -94,7 +91,7 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
         L[l] = 0.0
         T[l] = 1.0
         F[l] = 0.0
-    t0, t1, hits = ray_segment(r0, mu, R, Rt)
+    t0, t1, hits = ray_segment(r0, mu, R, m.Rt)
     if t1 < t0 or (t1 == t0 and not hits):
         return
     if t_stop > 0.0 and t_stop < t1:
@@ -102,29 +99,24 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
         hits = False
     tmin = min(max(-r0 * mu, t0), t1)    # lowest point of the ray
     for piece in range(2):
-        if piece == 0:
-            a, b = t0, tmin                # dense end at b
-        else:
-            a, b = tmin, t1                # dense end at a
+        a, b, dense_at_b = piece_bounds(piece, t0, tmin, t1)
         length = b - a
         if length <= 0.0:
             continue
         dv = geometric_step(length, n_steps, ts)
         for kk in range(n_steps):
             # segments in increasing t
-            k = n_steps - 1 - kk if piece == 0 else kk
-            ua = geometric_edge(k, dv, ts)
-            ub = geometric_edge(k + 1, dv, ts)
+            k = n_steps - 1 - kk if dense_at_b else kk
+            dt = geometric_edge(k + 1, dv, ts) - geometric_edge(k, dv, ts)
             us, _w = geometric_node(k, dv, ts)
-            dt = ub - ua
-            t = b - us if piece == 0 else a + us
+            t = b - us if dense_at_b else a + us
             r = radius_along_above(r0, mu, t, R)
             for c in range(nc):
-                rho[c] = profile_density(codes[c], p0s[c], p1s[c], r - R)
+                rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], r - R)
             mu_s = clamp_cosine((r0 * sz + t * nu) / r)
             lit = not ray_hits_ground(r, mu_s, R)        # earth shadow
-            ti, tj, ta, tb = transmittance_cell(r, mu_s, R, Rt, n_r, n_mu)
-            mi, mj, ma, mb = irradiance_cell(r, mu_s, R, Rt, n_h, n_m)
+            ti, tj, ta, tb = transmittance_cell(r, mu_s, R, m.Rt, n_r, n_mu)
+            mi, mj, ma, mb = irradiance_cell(r, mu_s, R, m.Rt, n_h, n_m)
             for l in range(nl):
                 se = 0.0
                 ss = 0.0
@@ -152,7 +144,7 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
     if hits and ground:
         mu_g = (r0 * sz + t1 * nu) / R
         if mu_g > 0.0:
-            ti, tj, ta, tb = transmittance_cell(R, min(mu_g, 1.0), R, Rt, n_r, n_mu)
+            ti, tj, ta, tb = transmittance_cell(R, min(mu_g, 1.0), R, m.Rt, n_r, n_mu)
             for l in range(nl):
                 L[l] += m.albedo[l] / math.pi * bilerp_last(tlut, ti, tj, ta, tb, l) * mu_g * T[l]
 

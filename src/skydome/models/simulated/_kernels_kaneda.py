@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.transport._geometry import distance_to_sphere_far, ray_hits_ground, safe_sqrt
-from skydome.transport._medium import UNIFORM, densities, profile_density
+from skydome.transport._medium import UNIFORM, profile_density
 from skydome.transport._tables import lookup_column
 
 
@@ -64,11 +64,8 @@ def fog_column(code, hf, r, mu, R, Rt, n, ts):
 
 
 @njit(cache=True)
-def _light(table, nc_a, fog_code, fog_h, m, r, mu_s, nl, out_tau):
+def _light(table, nc_a, fog_code, fog_h, R, Rt, beta_e, r, mu_s, nl, out_tau):
     """Optical depth to the sun from (r, mu_s) per wavelength; False when in shadow."""
-    R = m.R
-    Rt = m.Rt
-    beta_e = m.extinction
     if ray_hits_ground(r, mu_s, R):
         return False
     fcol = fog_column(fog_code, fog_h, r, mu_s, R, Rt, 0, 0.0)
@@ -84,6 +81,14 @@ def _light(table, nc_a, fog_code, fog_h, m, r, mu_s, nl, out_tau):
     return True
 
 
+@njit(cache=True)
+def _dens(codes, p0s, p1s, h, rho):
+    """rho[c] = relative density of every profile at altitude h [m] (the record's arrays
+    passed one by one in the hot loop)."""
+    for c in range(codes.shape[0]):
+        rho[c] = profile_density(codes[c], p0s[c], p1s[c], h)
+
+
 @njit(parallel=True, cache=True, fastmath=True)
 def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_dtau, max_sub, acc,
                 trans):
@@ -96,10 +101,10 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
     """
     R = m.R
     Rt = m.Rt
+    beta_e = m.extinction
     codes = m.profile_code
     p0s = m.profile_p0
     p1s = m.profile_p1
-    beta_e = m.extinction
     n = dirs.shape[0]
     nc = codes.shape[0]
     nl = beta_e.shape[1]
@@ -130,8 +135,8 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
         t_top = distance_to_sphere_far(R, mu, Rt)
         t_max = min(t_top, t_end[i])
         # integrand at t = 0
-        densities(m, 0.0, rho_a)
-        lit_a = _light(table, nc_a, fog_code, fog_h, m, R, sun[2], nl, ts_a)
+        _dens(codes, p0s, p1s, 0.0, rho_a)
+        lit_a = _light(table, nc_a, fog_code, fog_h, R, Rt, beta_e, R, sun[2], nl, ts_a)
         for c in range(nc):
             for l in range(nl):
                 g_a[c, l] = rho_a[c] * math.exp(-ts_a[l]) if lit_a else 0.0
@@ -165,18 +170,18 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
                 rm = math.sqrt(R * R + 2.0 * R * mu * tm + tm * tm)
                 rq3 = math.sqrt(R * R + 2.0 * R * mu * tq3 + tq3 * tq3)
                 rb = math.sqrt(R * R + 2.0 * R * mu * tb + tb * tb)
-                densities(m, rq - R, rho_q)
-                densities(m, rm - R, rho_m)
-                densities(m, rq3 - R, rho_q3)
-                densities(m, rb - R, rho_b)
+                _dens(codes, p0s, p1s, rq - R, rho_q)
+                _dens(codes, p0s, p1s, rm - R, rho_m)
+                _dens(codes, p0s, p1s, rq3 - R, rho_q3)
+                _dens(codes, p0s, p1s, rb - R, rho_b)
                 # view columns at the midpoint and the end (Simpson on each half)
                 for c in range(nc):
                     col_m[c] = col[c] + hh / 12.0 * (rho_a[c] + 4.0 * rho_q[c] + rho_m[c])
                     col[c] = col_m[c] + hh / 12.0 * (rho_m[c] + 4.0 * rho_q3[c] + rho_b[c])
-                lit_m = _light(table, nc_a, fog_code, fog_h, m, rm, (R * sun[2] + tm * nu) / rm,
-                               nl, ts_m)
-                lit_b = _light(table, nc_a, fog_code, fog_h, m, rb, (R * sun[2] + tb * nu) / rb,
-                               nl, ts_b)
+                lit_m = _light(table, nc_a, fog_code, fog_h, R, Rt, beta_e, rm,
+                               (R * sun[2] + tm * nu) / rm, nl, ts_m)
+                lit_b = _light(table, nc_a, fog_code, fog_h, R, Rt, beta_e, rb,
+                               (R * sun[2] + tb * nu) / rb, nl, ts_b)
                 for l in range(nl):
                     sv_m = 0.0
                     sv_b = 0.0
@@ -215,7 +220,7 @@ def sun_transmittance(m, mu_s, table, nc_a, fog_code, fog_h, out):
     """Transmittance from the ground towards the sun (0 when below the horizon)."""
     nl = m.extinction.shape[1]
     tau = np.empty(nl)
-    if not _light(table, nc_a, fog_code, fog_h, m, m.R, mu_s, nl, tau):
+    if not _light(table, nc_a, fog_code, fog_h, m.R, m.Rt, m.extinction, m.R, mu_s, nl, tau):
         for l in range(nl):
             out[l] = 0.0
         return

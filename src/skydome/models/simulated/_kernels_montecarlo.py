@@ -44,12 +44,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._geometry import radius_along, radius_along_above, ray_segment, safe_sqrt
-from skydome.transport._kernels import light_columns
+from skydome.transport._geometry import (radius_along, radius_along_above, ray_hits_ground,
+                                        ray_segment, safe_sqrt)
+from skydome.transport._tables import lookup_columns
 from skydome.transport._medium import EXPONENTIAL, UNIFORM, profile_density
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, RAYLEIGH, TABULATED,
-                                      phase_of, phase_value, rayleigh_gamma, rayleigh_rho,
-                                      sample_henyey_greenstein, sample_tabulated)
+                                      phase_value, rayleigh_gamma, rayleigh_rho,
+                                      sample_henyey_greenstein, sample_tabulated, tabulated_phase)
 from skydome.transport._quadrature import geometric_edge, geometric_step
 
 RR_ORDER = 4          # Russian roulette from this scattering order on
@@ -132,13 +133,49 @@ def sample_cos(code, g, rho, state):
     return 2.0 * _rand(state) - 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _phase_at(codes, params, table, c, l, cth):
+    """Phase function of constituent c at wavelength l [sr^-1] (transport._phase's phase
+    function of the record, on three of its arrays so that the hot loop does not pass the
+    whole record)."""
+    code = codes[c]
+    if code == TABULATED:
+        return tabulated_phase(table, c, l, cth)
+    return phase_value(code, params[c], cth)
+
+
+@njit(cache=True, inline="always")
+def _light(table, R, Rt, r, mu_s, out):
+    """Columns to the sun from the table (the look-up of transport._kernels' light
+    columns); False in the earth's shadow."""
+    if ray_hits_ground(r, mu_s, R):
+        return False
+    lookup_columns(table, r, mu_s, R, Rt, out)
+    return True
+
+
+@njit(cache=True, inline="always")
 def _rho(m, c):
     """Depolarisation ratio of constituent c (Rayleigh), 0 otherwise."""
     return rayleigh_rho(m.phase_param[c]) if m.phase_code[c] == RAYLEIGH else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _rho_at(codes, params, c):
+    """:func:`_rho` on the record's arrays."""
+    return rayleigh_rho(params[c]) if codes[c] == RAYLEIGH else 0.0
+
+
+@njit(cache=True, inline="always")
+def _sample_at(codes, params, cdf, c, l, state):
+    """:func:`sample_phase` on the record's arrays."""
+    code = codes[c]
+    if code == TABULATED:
+        return sample_tabulated(cdf, c, l, _rand(state))
+    return sample_cos(code, params[c], _rho_at(codes, params, c), state)
+
+
+@njit(cache=True, inline="always")
 def sample_phase(m, c, l, state):
     """Cosine of the scattering angle drawn from constituent c's phase function at
     wavelength l (a tabulated one by inverting its cumulative distribution)."""
@@ -205,7 +242,7 @@ def _plane_frames(k_out, k_in, a_cur, tmp, a_in):
     return (c * c - s * s) / h, 2.0 * c * s / h
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _segment_majorant(m, ext_l, r, mu, t_end):
     """sum_c beta_e,c max rho_c over the altitudes the segment [0, t_end] spans."""
     R = m.R
@@ -236,21 +273,25 @@ def _segment_majorant(m, ext_l, r, mu, t_end):
     return mj * (1.0 + 1e-9)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
     """Cumulative optical depth along the camera ray at nodes t_k in [t0, t1]: the ray is
     split at its lowest point and each piece gets N_CAMERA nodes at the cell edges of the
     geometric rule of ``transport._quadrature`` (spaced geometrically away from the dense
     end); each interval is integrated by Simpson's rule. Returns the number of nodes
     (node_tau[0] = 0)."""
-    R = m.R
+    m_R = m.R
+    m_profile_code = m.profile_code
+    m_profile_p0 = m.profile_p0
+    m_profile_p1 = m.profile_p1
+    R = m_R
     node_t[0] = t0
     node_tau[0] = 0.0
     nn = 1
     if t1 <= t0:
         return nn
     tmin = min(max(-r * mu, t0), t1)
-    nc = m.profile_code.shape[0]
+    nc = m_profile_code.shape[0]
     for piece in range(2):
         if piece == 0:
             a, b = t0, tmin
@@ -276,8 +317,8 @@ def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
                 rr = radius_along_above(r, mu, tt, R)
                 for c in range(nc):
                     if ext_l[c] > 0.0:
-                        sacc += wq * ext_l[c] * profile_density(m.profile_code[c], m.profile_p0[c],
-                                                                m.profile_p1[c], rr - R)
+                        sacc += wq * ext_l[c] * profile_density(m_profile_code[c], m_profile_p0[c],
+                                                                m_profile_p1[c], rr - R)
             node_t[nn] = t
             node_tau[nn] = node_tau[nn - 1] + (t - tp) / 6.0 * sacc
             nn += 1
@@ -317,7 +358,9 @@ def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44, tmp):
 
 
 class _Path(NamedTuple):
-    """State and work arrays of the paths of one (direction, wavelength)."""
+    """State and work arrays of the paths of one (direction, wavelength). The steps that
+    take it are inlined (``inline="always"``): called, each would pass and reference-count
+    its 18 arrays, which made the tracer three times slower."""
 
     A: np.ndarray          # (4, 4) Stokes matrix to the camera frame
     est: np.ndarray        # (4,) estimate of the current sample
@@ -339,7 +382,7 @@ class _Path(NamedTuple):
     node_tau: np.ndarray   # (2 N_CAMERA + 1,) cumulative optical depth there
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _new_path(m, l, seed, i):
     nc = m.profile_code.shape[0]
     state = np.empty(1, dtype=np.uint64)
@@ -354,200 +397,279 @@ def _new_path(m, l, seed, i):
     return pt
 
 
-@njit(cache=True)
-def _local_scattering(pt, m, rr):
+@njit(cache=True, inline="always")
+def _local_scattering(codes, p0s, p1s, R, ext_l, sca_l, mus_c, rr):
     """(mu_t, mu_s): local extinction and scattering coefficients at radius rr [m^-1];
-    per constituent scattering in pt.mus_c."""
+    per constituent scattering in mus_c (arrays of the record and of the path passed one
+    by one: this runs at every tentative collision)."""
     mut = 0.0
     mus = 0.0
-    for c in range(m.profile_code.shape[0]):
-        d = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], rr - m.R)
-        mut += pt.ext_l[c] * d
-        pt.mus_c[c] = pt.sca_l[c] * d
-        mus += pt.mus_c[c]
+    for c in range(codes.shape[0]):
+        d = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+        mut += ext_l[c] * d
+        mus_c[c] = sca_l[c] * d
+        mus += mus_c[c]
     return mut, mus
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _forced_collision(pt, m, cam_r0, cam_mu, n_nodes, tau_cam):
     """The camera ray's first collision, forced inside the air by inverting its tabulated
     optical depth: tau* = -ln(1 - xi (1 - T)). Returns (ok, t, mu_t of the interval, mu_s)."""
+    m_R = m.R
+    m_profile_code = m.profile_code
+    m_profile_p0 = m.profile_p0
+    m_profile_p1 = m.profile_p1
+    p_mus_c = pt.mus_c
+    p_node_t = pt.node_t
+    p_node_tau = pt.node_tau
+    p_sca_l = pt.sca_l
+    p_state = pt.state
     w0 = -math.expm1(-tau_cam)
-    target = -math.log1p(-_rand(pt.state) * w0)
+    target = -math.log1p(-_rand(p_state) * w0)
     lo = 0
     hi = n_nodes - 1
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        if pt.node_tau[mid] <= target:
+        if p_node_tau[mid] <= target:
             lo = mid
         else:
             hi = mid
-    dtau = pt.node_tau[hi] - pt.node_tau[lo]
+    dtau = p_node_tau[hi] - p_node_tau[lo]
     if dtau <= 0.0:
         return False, 0.0, 0.0, 0.0          # (measure zero: xi at the very end)
-    mut = dtau / (pt.node_t[hi] - pt.node_t[lo])     # extinction of the interval
-    t = pt.node_t[lo] + (target - pt.node_tau[lo]) / mut
+    mut = dtau / (p_node_t[hi] - p_node_t[lo])     # extinction of the interval
+    t = p_node_t[lo] + (target - p_node_tau[lo]) / mut
     rr = radius_along(cam_r0, cam_mu, t)
     mus = 0.0
-    for c in range(m.profile_code.shape[0]):
-        pt.mus_c[c] = pt.sca_l[c] * profile_density(m.profile_code[c], m.profile_p0[c],
-                                                    m.profile_p1[c], rr - m.R)
-        mus += pt.mus_c[c]
+    for c in range(m_profile_code.shape[0]):
+        p_mus_c[c] = p_sca_l[c] * profile_density(m_profile_code[c], m_profile_p0[c],
+                                                    m_profile_p1[c], rr - m_R)
+        mus += p_mus_c[c]
     return True, t, mut, mus
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _delta_track(pt, m, r, mu, t0, t_end):
     """Delta tracking (Woodcock) along [0, t_end] against the segment's majorant.
     Returns (collided, t, mu_t, mu_s) at the real collision."""
-    mbar = _segment_majorant(m, pt.ext_l, r, mu, t_end)
+    p_ext_l = pt.ext_l
+    p_sca_l = pt.sca_l
+    p_mus_c = pt.mus_c
+    p_state = pt.state
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    R = m.R
+    mbar = _segment_majorant(m, p_ext_l, r, mu, t_end)
     t = 0.0
     mut = 0.0
     mus = 0.0
     if t_end > t0 and mbar > 0.0:
         while True:
-            t -= math.log(1.0 - _rand(pt.state)) / mbar
+            t -= math.log(1.0 - _rand(p_state)) / mbar
             if t >= t_end:
                 break
-            mut, mus = _local_scattering(pt, m, radius_along(r, mu, t))
-            if _rand(pt.state) * mbar < mut:
+            mut, mus = _local_scattering(codes, p0s, p1s, R, p_ext_l, p_sca_l, p_mus_c,
+                                         radius_along(r, mu, t))
+            if _rand(p_state) * mbar < mut:
                 return True, t, mut, mus
     return False, t, mut, mus
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _next_event_sun(pt, m, l, sun, cos_alpha, table, rloc, mus, scale, polarised):
     """Next-event estimation towards the sun disc from the vertex: pt.est += scale x
     transmittance x phase-weighted mixture / mu_s (with the Stokes rotation when polarised)."""
-    nc = m.profile_code.shape[0]
-    _sun_sample(sun, cos_alpha, pt.state, pt.ws)
-    mu_s = (pt.pos[0] * pt.ws[0] + pt.pos[1] * pt.ws[1] + pt.pos[2] * pt.ws[2]) / rloc
-    if not light_columns(table, m, rloc, mu_s, False, 0, 1.0, pt.scol):
+    m_R = m.R
+    m_Rt = m.Rt
+    m_phase_code = m.phase_code
+    m_phase_param = m.phase_param
+    m_phase_table = m.phase_table
+    m_profile_code = m.profile_code
+    p_A = pt.A
+    p_a_cur = pt.a_cur
+    p_a_new = pt.a_new
+    p_est = pt.est
+    p_ext_l = pt.ext_l
+    p_k_in = pt.k_in
+    p_k_out = pt.k_out
+    p_mus_c = pt.mus_c
+    p_pos = pt.pos
+    p_scol = pt.scol
+    p_state = pt.state
+    p_tmp = pt.tmp
+    p_w = pt.w
+    p_ws = pt.ws
+    nc = m_profile_code.shape[0]
+    _sun_sample(sun, cos_alpha, p_state, p_ws)
+    mu_s = (p_pos[0] * p_ws[0] + p_pos[1] * p_ws[1] + p_pos[2] * p_ws[2]) / rloc
+    if not _light(table, m_R, m_Rt, rloc, mu_s, p_scol):
         return
     tau = 0.0
     for c in range(nc):
-        tau += pt.ext_l[c] * pt.scol[c]
+        tau += p_ext_l[c] * p_scol[c]
     tr = math.exp(-tau)
-    cth = pt.ws[0] * pt.w[0] + pt.ws[1] * pt.w[1] + pt.ws[2] * pt.w[2]
+    cth = p_ws[0] * p_w[0] + p_ws[1] * p_w[1] + p_ws[2] * p_w[2]
     if polarised:
         for j in range(3):
-            pt.k_in[j] = -pt.ws[j]
-        c2, s2r = _plane_frames(pt.k_out, pt.k_in, pt.a_cur, pt.tmp, pt.a_new)
+            p_k_in[j] = -p_ws[j]
+        c2, s2r = _plane_frames(p_k_out, p_k_in, p_a_cur, p_tmp, p_a_new)
         v0 = 0.0
         v1 = 0.0
         for c in range(nc):
-            if pt.mus_c[c] > 0.0:
-                p = phase_of(m, c, l, cth) * pt.mus_c[c]
-                f12, _f22, _f33, _f44 = matrix_ratios(m.phase_code[c], _rho(m, c), cth)
+            if p_mus_c[c] > 0.0:
+                p = _phase_at(m_phase_code, m_phase_param, m_phase_table, c, l, cth) * p_mus_c[c]
+                f12, _f22, _f33, _f44 = matrix_ratios(m_phase_code[c], _rho_at(m_phase_code, m_phase_param, c), cth)
                 v0 += p
                 v1 += p * f12
         # L(phi) (v0, v1, 0, 0)
-        _mat_apply(pt.A, v0, c2 * v1, -s2r * v1, 0.0, pt.est, scale / mus * tr, True)
+        _mat_apply(p_A, v0, c2 * v1, -s2r * v1, 0.0, p_est, scale / mus * tr, True)
     else:
         p = 0.0
         for c in range(nc):
-            if pt.mus_c[c] > 0.0:
-                p += phase_of(m, c, l, cth) * pt.mus_c[c]
-        pt.est[0] += scale * p / mus * tr
+            if p_mus_c[c] > 0.0:
+                p += _phase_at(m_phase_code, m_phase_param, m_phase_table, c, l, cth) * p_mus_c[c]
+        p_est[0] += scale * p / mus * tr
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _scatter(pt, m, l, mus, polarised):
     """Continue the path: choose a constituent with probability mu_s,c / mu_s, sample its
     phase function, rotate the direction (and the Stokes matrix and frame)."""
-    nc = m.profile_code.shape[0]
-    u = _rand(pt.state) * mus
+    m_phase_cdf = m.phase_cdf
+    m_phase_code = m.phase_code
+    m_phase_param = m.phase_param
+    m_profile_code = m.profile_code
+    p_A = pt.A
+    p_a_cur = pt.a_cur
+    p_a_new = pt.a_new
+    p_k_in = pt.k_in
+    p_k_out = pt.k_out
+    p_mus_c = pt.mus_c
+    p_state = pt.state
+    p_tmp = pt.tmp
+    p_w = pt.w
+    p_wn = pt.wn
+    nc = m_profile_code.shape[0]
+    u = _rand(p_state) * mus
     cc = nc - 1
     acc = 0.0
     for c in range(nc):
-        acc += pt.mus_c[c]
+        acc += p_mus_c[c]
         if u < acc:
             cc = c
             break
-    while pt.mus_c[cc] <= 0.0 and cc > 0:
+    while p_mus_c[cc] <= 0.0 and cc > 0:
         cc -= 1
-    cth = sample_phase(m, cc, l, pt.state)
-    rotate_about(pt.w, cth, TWO_PI * _rand(pt.state), pt.wn)
+    cth = _sample_at(m_phase_code, m_phase_param, m_phase_cdf, cc, l, p_state)
+    rotate_about(p_w, cth, TWO_PI * _rand(p_state), p_wn)
     if polarised:
         for j in range(3):
-            pt.k_in[j] = -pt.wn[j]
-        c2, s2r = _plane_frames(pt.k_out, pt.k_in, pt.a_cur, pt.tmp, pt.a_new)
-        f12, f22, f33, f44 = matrix_ratios(m.phase_code[cc], _rho(m, cc), cth)
-        _mat_rot_scatter(pt.A, c2, s2r, f12, f22, f33, f44, pt.tmp)
+            p_k_in[j] = -p_wn[j]
+        c2, s2r = _plane_frames(p_k_out, p_k_in, p_a_cur, p_tmp, p_a_new)
+        f12, f22, f33, f44 = matrix_ratios(m_phase_code[cc], _rho_at(m_phase_code, m_phase_param, cc), cth)
+        _mat_rot_scatter(p_A, c2, s2r, f12, f22, f33, f44, p_tmp)
         for j in range(3):
-            pt.a_cur[j] = pt.a_new[j]
+            p_a_cur[j] = p_a_new[j]
     for j in range(3):
-        pt.w[j] = pt.wn[j]
+        p_w[j] = p_wn[j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ground_vertex(pt, m, sun, cos_alpha, table, t_end, scale, polarised):
     """Move the vertex to the ground point (just above it; normal in pt.tmp) and add the
     next-event estimate of the sunlit Lambertian ground, scale x albedo / pi E mu_s T
     (``scale`` includes the albedo, E_sun and the path weight)."""
-    R = m.R
+    m_R = m.R
+    m_Rt = m.Rt
+    m_profile_code = m.profile_code
+    p_A = pt.A
+    p_est = pt.est
+    p_ext_l = pt.ext_l
+    p_pos = pt.pos
+    p_scol = pt.scol
+    p_state = pt.state
+    p_tmp = pt.tmp
+    p_w = pt.w
+    p_ws = pt.ws
+    R = m_R
     for j in range(3):
-        pt.pos[j] += t_end * pt.w[j]
-    rg = math.sqrt(pt.pos[0] * pt.pos[0] + pt.pos[1] * pt.pos[1] + pt.pos[2] * pt.pos[2])
+        p_pos[j] += t_end * p_w[j]
+    rg = math.sqrt(p_pos[0] * p_pos[0] + p_pos[1] * p_pos[1] + p_pos[2] * p_pos[2])
     for j in range(3):
-        pt.pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
-        pt.tmp[j] = pt.pos[j] / (R * (1.0 + 1e-12))  # normal
+        p_pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
+        p_tmp[j] = p_pos[j] / (R * (1.0 + 1e-12))  # normal
     if scale <= 0.0:
         return
-    _sun_sample(sun, cos_alpha, pt.state, pt.ws)
-    mu_s = pt.tmp[0] * pt.ws[0] + pt.tmp[1] * pt.ws[1] + pt.tmp[2] * pt.ws[2]
-    if mu_s > 0.0 and light_columns(table, m, R * (1.0 + 1e-12), mu_s, False, 0, 1.0, pt.scol):
+    _sun_sample(sun, cos_alpha, p_state, p_ws)
+    mu_s = p_tmp[0] * p_ws[0] + p_tmp[1] * p_ws[1] + p_tmp[2] * p_ws[2]
+    if mu_s > 0.0 and _light(table, R, m_Rt, R * (1.0 + 1e-12), mu_s, p_scol):
         tau = 0.0
-        for c in range(m.profile_code.shape[0]):
-            tau += pt.ext_l[c] * pt.scol[c]
+        for c in range(m_profile_code.shape[0]):
+            tau += p_ext_l[c] * p_scol[c]
         # reflected light is unpolarised: only A's first column matters
-        _mat_apply(pt.A, 1.0, 0.0, 0.0, 0.0, pt.est, scale / math.pi * mu_s * math.exp(-tau),
+        _mat_apply(p_A, 1.0, 0.0, 0.0, 0.0, p_est, scale / math.pi * mu_s * math.exp(-tau),
                    polarised)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ground_bounce(pt):
     """Continue from the ground: a cosine-weighted direction about the normal pt.tmp; the
     Stokes matrix depolarised (first column kept) and a new frame."""
-    u1 = _rand(pt.state)
-    rotate_about(pt.tmp, math.sqrt(u1), TWO_PI * _rand(pt.state), pt.w)
+    p_A = pt.A
+    p_a_cur = pt.a_cur
+    p_state = pt.state
+    p_tmp = pt.tmp
+    p_w = pt.w
+    u1 = _rand(p_state)
+    rotate_about(p_tmp, math.sqrt(u1), TWO_PI * _rand(p_state), p_w)
     for j in range(4):          # depolarise: keep the first column
-        pt.A[j, 1] = 0.0
-        pt.A[j, 2] = 0.0
-        pt.A[j, 3] = 0.0
+        p_A[j, 1] = 0.0
+        p_A[j, 2] = 0.0
+        p_A[j, 3] = 0.0
     # new frame: any axis perpendicular to the new ray
-    _cross(pt.tmp, pt.w, pt.a_cur)
-    nn = math.sqrt(pt.a_cur[0] ** 2 + pt.a_cur[1] ** 2 + pt.a_cur[2] ** 2)
+    _cross(p_tmp, p_w, p_a_cur)
+    nn = math.sqrt(p_a_cur[0] ** 2 + p_a_cur[1] ** 2 + p_a_cur[2] ** 2)
     if nn < 1e-12:
-        rotate_about(pt.w, 0.0, 0.0, pt.a_cur)
+        rotate_about(p_w, 0.0, 0.0, p_a_cur)
     else:
         for j in range(3):
-            pt.a_cur[j] /= nn
+            p_a_cur[j] /= nn
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table,
                  polarised, max_order, n_nodes, tau_cam, t_cam, c_t1):
     """One path of one camera branch, its estimates added to pt.est. Branch 0: the camera
     ray's first collision, forced inside the air (weight 1 - T); branch 1: the camera ray
     reaches the ground without collision (weight T)."""
+    m_R = m.R
+    m_Rt = m.Rt
+    m_albedo = m.albedo
+    p_A = pt.A
+    p_a_cur = pt.a_cur
+    p_k_out = pt.k_out
+    p_pos = pt.pos
+    p_state = pt.state
+    p_w = pt.w
     esun = e_sun[l]
-    alb = m.albedo[l]
+    alb = m_albedo[l]
     for j in range(4):
         for k in range(4):
-            pt.A[j, k] = 1.0 if j == k else 0.0
-    pt.pos[0], pt.pos[1], pt.pos[2] = 0.0, 0.0, r0
+            p_A[j, k] = 1.0 if j == k else 0.0
+    p_pos[0], p_pos[1], p_pos[2] = 0.0, 0.0, r0
     for j in range(3):
-        pt.w[j] = dirs[i, j]
-        pt.a_cur[j] = zen_ref[i, j]
+        p_w[j] = dirs[i, j]
+        p_a_cur[j] = zen_ref[i, j]
     weight = 1.0
     w0 = 1.0
     order = 0
     first = True
     while True:
-        r = math.sqrt(pt.pos[0] * pt.pos[0] + pt.pos[1] * pt.pos[1] + pt.pos[2] * pt.pos[2])
-        mu = (pt.pos[0] * pt.w[0] + pt.pos[1] * pt.w[1] + pt.pos[2] * pt.w[2]) / r
-        t0, t_end, hits_ground = ray_segment(r, mu, m.R, m.Rt)
+        r = math.sqrt(p_pos[0] * p_pos[0] + p_pos[1] * p_pos[1] + p_pos[2] * p_pos[2])
+        mu = (p_pos[0] * p_w[0] + p_pos[1] * p_w[1] + p_pos[2] * p_w[2]) / r
+        t0, t_end, hits_ground = ray_segment(r, mu, m_R, m_Rt)
         if first:
             first = False
             mus = 0.0
@@ -570,13 +692,13 @@ def _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, 
         order += 1
         if collided:
             for j in range(3):
-                pt.pos[j] += t * pt.w[j]
+                p_pos[j] += t * p_w[j]
             if mus <= 0.0:
                 break                               # pure absorber
             weight *= mus / mut                     # local single-scattering albedo
-            rloc = math.sqrt(pt.pos[0] * pt.pos[0] + pt.pos[1] * pt.pos[1] + pt.pos[2] * pt.pos[2])
+            rloc = math.sqrt(p_pos[0] * p_pos[0] + p_pos[1] * p_pos[1] + p_pos[2] * p_pos[2])
             for j in range(3):
-                pt.k_out[j] = -pt.w[j]
+                p_k_out[j] = -p_w[j]
             _next_event_sun(pt, m, l, sun, cos_alpha, table, rloc, mus, w0 * weight * esun,
                             polarised)
             if max_order >= 0 and order >= max_order:
@@ -594,7 +716,7 @@ def _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, 
         # -- Russian roulette ---------------------------------------------------------------
         if order >= RR_ORDER:
             q = min(0.95, weight)
-            if q <= 0.0 or _rand(pt.state) >= q:
+            if q <= 0.0 or _rand(p_state) >= q:
                 break
             weight /= q      # A stays normalised (A[0, 0] = 1 at the camera)
 
@@ -604,18 +726,22 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
                polarised, max_order, mean, err):
     """Mean and standard error of n_samples paths for direction i at wavelength l."""
     pt = _new_path(m, l, seed, i)
+    p_est = pt.est
+    p_ext_l = pt.ext_l
+    p_node_t = pt.node_t
+    p_node_tau = pt.node_tau
     s1 = np.zeros(4)
     s2 = np.zeros(4)
     # -- the camera ray: cumulative optical depth for the forced first collision ----------
     cam_mu = dirs[i, 2]
     c_t0, c_t1, cam_ground = ray_segment(r0, cam_mu, m.R, m.Rt)
-    n_nodes = _camera_columns(m, pt.ext_l, r0, cam_mu, c_t0, c_t1, pt.node_t, pt.node_tau)
-    tau_cam = pt.node_tau[n_nodes - 1]
+    n_nodes = _camera_columns(m, p_ext_l, r0, cam_mu, c_t0, c_t1, p_node_t, p_node_tau)
+    tau_cam = p_node_tau[n_nodes - 1]
     t_cam = math.exp(-tau_cam)
     nv = 4 if polarised else 1
     for _s in range(n_samples):
         for j in range(4):
-            pt.est[j] = 0.0
+            p_est[j] = 0.0
         for branch in range(2):
             if branch == 0 and tau_cam <= 0.0:
                 continue
@@ -624,8 +750,8 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
             _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table,
                          polarised, max_order, n_nodes, tau_cam, t_cam, c_t1)
         for j in range(nv):
-            s1[j] += pt.est[j]
-            s2[j] += pt.est[j] * pt.est[j]
+            s1[j] += p_est[j]
+            s2[j] += p_est[j] * p_est[j]
     n = float(n_samples)
     for j in range(nv):
         mn = s1[j] / n

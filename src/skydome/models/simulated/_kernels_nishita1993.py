@@ -249,55 +249,73 @@ def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
     """Single scattering along the view ray into wk.res ([NSTN93] eqs. 1-3, trapezoidal
     rule at the sample points), the view column in wk.dcol; returns (count of sample
     points, hits the ground)."""
-    nc = m.profile_code.shape[0]
+    m_R = m.R
+    m_Rt = m.Rt
+    m_extinction = m.extinction
+    m_profile_code = m.profile_code
+    m_profile_p0 = m.profile_p0
+    m_profile_p1 = m.profile_p1
+    m_scattering = m.scattering
+    wk_acc = wk.acc
+    wk_dcol = wk.dcol
+    wk_f_prev = wk.f_prev
+    wk_phs = wk.phs
+    wk_res = wk.res
+    wk_rho = wk.rho
+    wk_rho_prev = wk.rho_prev
+    wk_scol = wk.scol
+    wk_t_nodes = wk.t_nodes
+    lt_sph_r = lt.sph_r
+    lt_substeps = lt.substeps
+    nc = m_profile_code.shape[0]
     nl = e_sun.shape[0]
-    R = m.R
+    R = m_R
     for l in range(nl):
-        wk.res[l] = 0.0
+        wk_res[l] = 0.0
     mu = d[2]
     nu = d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]       # cos of the scattering angle
-    n_pts, hits = _nodes(r0, mu, R, m.Rt, lt.sph_r, lt.substeps, wk.t_nodes)
+    n_pts, hits = _nodes(r0, mu, R, m_Rt, lt_sph_r, lt_substeps, wk_t_nodes)
     if n_pts < 2:
         return n_pts, hits
     for c in range(nc):
-        wk.dcol[c] = 0.0
+        wk_dcol[c] = 0.0
         for l in range(nl):
-            wk.acc[c, l] = 0.0
-    t_prev = wk.t_nodes[0]
+            wk_acc[c, l] = 0.0
+    t_prev = wk_t_nodes[0]
     first = True
-    substeps = lt.substeps
+    substeps = lt_substeps
     for q in range(n_pts - 1):
-        ta = wk.t_nodes[q]
-        tb = wk.t_nodes[q + 1]
+        ta = wk_t_nodes[q]
+        tb = wk_t_nodes[q + 1]
         for s in range(0 if first else 1, substeps + 1):
             t = ta + (tb - ta) * s / substeps
             rr = radius_along_above(r0, mu, t, R)
             h = t - t_prev
             for c in range(nc):
-                wk.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
+                wk_rho[c] = profile_density(m_profile_code[c], m_profile_p0[c], m_profile_p1[c],
                                             rr - R)
                 if not first:
-                    wk.dcol[c] += 0.5 * h * (wk.rho_prev[c] + wk.rho[c])      # [NSTN93] eq. 2
+                    wk_dcol[c] += 0.5 * h * (wk_rho_prev[c] + wk_rho[c])      # [NSTN93] eq. 2
             mu_s = (r0 * sun[2] + t * nu) / rr
-            lit = sun_columns(lt, m, rr, mu_s, wk.scol)
+            lit = sun_columns(lt, m, rr, mu_s, wk_scol)
             for l in range(nl):
                 tau = 0.0
                 for c in range(nc):
-                    tau += m.extinction[c, l] * (wk.dcol[c] + wk.scol[c])
+                    tau += m_extinction[c, l] * (wk_dcol[c] + wk_scol[c])
                 e = math.exp(-tau) if lit else 0.0
                 for c in range(nc):
-                    f = wk.rho[c] * e
+                    f = wk_rho[c] * e
                     if not first:
-                        wk.acc[c, l] += 0.5 * h * (wk.f_prev[c, l] + f)        # [NSTN93] eq. 1
-                    wk.f_prev[c, l] = f
+                        wk_acc[c, l] += 0.5 * h * (wk_f_prev[c, l] + f)        # [NSTN93] eq. 1
+                    wk_f_prev[c, l] = f
             for c in range(nc):
-                wk.rho_prev[c] = wk.rho[c]
+                wk_rho_prev[c] = wk_rho[c]
             t_prev = t
             first = False
     for c in range(nc):
-        phase_fill(m, c, nu, wk.phs)
+        phase_fill(m, c, nu, wk_phs)
         for l in range(nl):
-            wk.res[l] += e_sun[l] * m.scattering[c, l] * wk.phs[l] * wk.acc[c, l]
+            wk_res[l] += e_sun[l] * m_scattering[c, l] * wk_phs[l] * wk_acc[c, l]
     return n_pts, hits
 
 
@@ -334,9 +352,19 @@ def _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct):
     """Add the light leaving a smooth ocean surface, attenuated towards the camera: Fresnel
     reflection of the skylight plus the light scattered once in the water and refracted
     out ([NSTN93] sec. 5)."""
-    nc = m.profile_code.shape[0]
+    m_extinction = m.extinction
+    m_profile_code = m.profile_code
+    wk_dcol = wk.dcol
+    wk_res = wk.res
+    wk_scol = wk.scol
+    sf_e_sky = sf.e_sky
+    sf_mu_grid = sf.mu_grid
+    sf_n_water = sf.n_water
+    sf_water_b = sf.water_b
+    sf_water_c = sf.water_c
+    nc = m_profile_code.shape[0]
     nl = e_sun.shape[0]
-    n = sf.n_water
+    n = sf_n_water
     r_v = fresnel(mu_v, n)
     r_s = fresnel(mu_s, n) if mu_s > 0.0 else 1.0
     mv_w = safe_sqrt(1.0 - (1.0 - mu_v * mu_v) / (n * n))   # refracted cosines
@@ -364,13 +392,13 @@ def _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct):
     p_w = (1.0 + 0.835 * cos_psi * cos_psi) / (4.0 * math.pi * (1.0 + 0.835 / 3.0))
     mbar = 0.842
     for l in range(nl):
-        e_dir = e_sun[l] * _sun_transmittance(m, wk.scol, l, direct) * max(mu_s, 0.0)
-        e_dif = _interp_irradiance(sf.mu_grid, sf.e_sky, mu_s, l)
-        cw = sf.water_c[l]
-        up = sf.water_b[l] * (p_w * e_dir * (1.0 - r_s) / (cw * (ms_w + mv_w))
+        e_dir = e_sun[l] * _sun_transmittance(m, wk_scol, l, direct) * max(mu_s, 0.0)
+        e_dif = _interp_irradiance(sf_mu_grid, sf_e_sky, mu_s, l)
+        cw = sf_water_c[l]
+        up = sf_water_b[l] * (p_w * e_dir * (1.0 - r_s) / (cw * (ms_w + mv_w))
                               + e_dif * (1.0 - 0.066) / (4.0 * math.pi) / (cw * (mbar + mv_w)))
         l_surf = r_v * e_dif / math.pi + (1.0 - r_v) / (n * n) * up
-        wk.res[l] += l_surf * _view_transmittance(m.extinction, wk.dcol, l, nc)
+        wk_res[l] += l_surf * _view_transmittance(m_extinction, wk_dcol, l, nc)
 
 
 @njit(cache=True, fastmath=True)
@@ -378,7 +406,18 @@ def _surface(d, r0, sun, m, e_sun, lt, sf, wk, t):
     """Add the light of the surface point at distance t along the view ray, attenuated
     towards the camera ([NSTN93] sec. 5): ocean, or Lambertian (albedo or texture) lit by
     the attenuated sun and the skylight table."""
-    nc = m.profile_code.shape[0]
+    m_R = m.R
+    m_extinction = m.extinction
+    m_profile_code = m.profile_code
+    wk_dcol = wk.dcol
+    wk_res = wk.res
+    wk_scol = wk.scol
+    sf_albedo = sf.albedo
+    sf_code = sf.code
+    sf_e_sky = sf.e_sky
+    sf_mu_grid = sf.mu_grid
+    sf_tex_basis = sf.tex_basis
+    nc = m_profile_code.shape[0]
     nl = e_sun.shape[0]
     # the surface point seen, its normal and the sun there
     px = t * d[0]
@@ -390,23 +429,23 @@ def _surface(d, r0, sun, m, e_sun, lt, sf, wk, t):
     nz = pz / pn
     mu_s = nx * sun[0] + ny * sun[1] + nz * sun[2]
     mu_v = -(nx * d[0] + ny * d[1] + nz * d[2])             # cos of the viewing angle there
-    direct = sun_columns(lt, m, m.R * (1.0 + 1e-12), mu_s, wk.scol) and mu_s > 0.0
-    if sf.code == SURFACE_OCEAN:
+    direct = sun_columns(lt, m, m_R * (1.0 + 1e-12), mu_s, wk_scol) and mu_s > 0.0
+    if sf_code == SURFACE_OCEAN:
         _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct)
         return
     tr = 0.0
     tg = 0.0
     tb = 0.0
-    if sf.code == SURFACE_TEXTURE:
+    if sf_code == SURFACE_TEXTURE:
         tr, tg, tb = _texture_rgb(sf, nx, ny, nz)
     for l in range(nl):
-        if sf.code == SURFACE_TEXTURE:
-            a = tr * sf.tex_basis[0, l] + tg * sf.tex_basis[1, l] + tb * sf.tex_basis[2, l]
+        if sf_code == SURFACE_TEXTURE:
+            a = tr * sf_tex_basis[0, l] + tg * sf_tex_basis[1, l] + tb * sf_tex_basis[2, l]
         else:
-            a = sf.albedo[l]
-        e_tot = (e_sun[l] * _sun_transmittance(m, wk.scol, l, direct) * max(mu_s, 0.0)
-                 + _interp_irradiance(sf.mu_grid, sf.e_sky, mu_s, l))
-        wk.res[l] += a / math.pi * e_tot * _view_transmittance(m.extinction, wk.dcol, l, nc)
+            a = sf_albedo[l]
+        e_tot = (e_sun[l] * _sun_transmittance(m, wk_scol, l, direct) * max(mu_s, 0.0)
+                 + _interp_irradiance(sf_mu_grid, sf_e_sky, mu_s, l))
+        wk_res[l] += a / math.pi * e_tot * _view_transmittance(m_extinction, wk_dcol, l, nc)
 
 
 @njit(cache=True, fastmath=True)
