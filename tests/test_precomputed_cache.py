@@ -2,7 +2,7 @@
 invalidation by every atmosphere field and table setting, recovery from corrupt files,
 the size limit (least recently used files go first) and clearing.
 
-The cache folder is the per-test temporary folder set by ``conftest.py``."""
+The cache folder is a per-test temporary folder set by ``conftest.py``."""
 
 import dataclasses
 import os

@@ -374,7 +374,7 @@ def _check_utc_offset(value: str) -> str:
 @app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
 def render(
     ctx: typer.Context,
-    model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
+    model: str = typer.Option("precomputed", help="Registered model name (see `skydome models`); the default is the accurate multiple-scattering sky."),
     out: str = typer.Option(..., help="Output file: .exr (float, linear), .hdr (Radiance RGBE) or .png (tone mapped)."),
     sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation above the horizon [deg], -90..90 (default 30)."),
     sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg], -360..360 (default 180)."),
@@ -632,7 +632,7 @@ def compare_cmd(
     models: str = typer.Option(..., help="Comma-separated model specs, e.g. single_scattering,kaneda1991,preetham1999:3."),
     sun_elevation: str = typer.Option("5,30,60", help="Comma-separated sun elevations [deg], -90..90."),
     sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg], -360..360."),
-    reference: str = typer.Option("single_scattering", help="Model the others are measured against."),
+    reference: str = typer.Option("precomputed", help="Model the others are measured against (default: the accurate multiple-scattering sky)."),
     size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder (created if missing): grid.png, error_*.png, table.md, table.csv."),
@@ -694,7 +694,7 @@ def timelapse_cmd(
     start: str = typer.Option("00:00", help="First local time HH:MM."),
     end: str = typer.Option("23:59", help="Last local time HH:MM."),
     min_elevation: float = typer.Option(-6.0, help="Render only while the sun is above this elevation [deg]."),
-    model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
+    model: str = typer.Option("precomputed", help="Registered model name (see `skydome models`); the default is the accurate multiple-scattering sky."),
     projection: str = typer.Option("fisheye", help="fisheye, equirect, equirect-hemisphere or angular."),
     size: int = typer.Option(256, help="Frame size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
