@@ -2,7 +2,7 @@
 invalidation by every atmosphere field and table setting, recovery from corrupt files,
 the size limit (least recently used files go first) and clearing.
 
-The cache folder is the per-test temporary folder set by ``conftest.py``."""
+The cache folder is a per-test temporary folder set by ``conftest.py``."""
 
 import dataclasses
 import os
@@ -175,3 +175,21 @@ def test_unwritable_cache_folder_still_builds(tmp_path, monkeypatch):
     monkeypatch.setenv("SKYDOME_CACHE_DIR", str(blocker / "sub"))
     m = tiny()
     assert not m.from_cache and np.all(np.isfinite(m._t.multiple_scattering))
+
+
+def test_cli_cache_info_and_clear():
+    """`skydome cache info` counts the table sets on disk and `skydome cache clear` empties
+    the folder (checked on the folder itself, not through the command's own output)."""
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    tiny()
+    assert len(files()) == 1
+    runner = CliRunner()
+    res = runner.invoke(app, ["cache", "info"])
+    assert res.exit_code == 0, res.output
+    assert "1 table sets" in res.output and _cache.cache_dir() in res.output
+    res = runner.invoke(app, ["cache", "clear"])
+    assert res.exit_code == 0, res.output
+    assert files() == []

@@ -374,7 +374,7 @@ def _check_utc_offset(value: str) -> str:
 @app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
 def render(
     ctx: typer.Context,
-    model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
+    model: str = typer.Option("precomputed", help="Registered model name (see `skydome models`); the default is the accurate multiple-scattering sky."),
     out: str = typer.Option(..., help="Output file: .exr (float, linear), .hdr (Radiance RGBE) or .png (tone mapped)."),
     sun_elevation: Optional[float] = typer.Option(None, help="Sun elevation above the horizon [deg], -90..90 (default 30)."),
     sun_azimuth: Optional[float] = typer.Option(None, help="Sun azimuth from north towards east [deg], -360..360 (default 180)."),
@@ -529,6 +529,33 @@ def models():
         typer.echo("")
 
 
+cache_app = typer.Typer(no_args_is_help=True,
+                        help="The on-disk cache of the precomputed model's tables.")
+app.add_typer(cache_app, name="cache")
+
+
+@cache_app.command("info")
+def cache_info():
+    """Where the cache is, its entries, their total size and the size limit."""
+    from skydome.models.simulated.precomputed import _cache
+
+    entries = _cache._entries(_cache.cache_dir())
+    total = sum(size for _, size, _ in entries)
+    typer.echo(f"folder   {_cache.cache_dir()}")
+    typer.echo(f"entries  {len(entries)} table sets, {total / 2**20:.1f} MiB")
+    typer.echo(f"limit    {_run(_cache.limit_bytes) / 2**20:.0f} MiB "
+               "(SKYDOME_CACHE_LIMIT_BYTES; least recently used sets go first)")
+
+
+@cache_app.command("clear")
+def cache_clear():
+    """Remove every cached table set (the next run precomputes again)."""
+    from skydome.models.simulated.precomputed import clear_cache
+
+    freed = _run(clear_cache)
+    typer.echo(f"cleared {freed / 2**20:.1f} MiB")
+
+
 plot_app = typer.Typer(no_args_is_help=True, help="Figures: luminance maps and model comparisons.")
 app.add_typer(plot_app, name="plot")
 
@@ -632,7 +659,7 @@ def compare_cmd(
     models: str = typer.Option(..., help="Comma-separated model specs, e.g. single_scattering,kaneda1991,preetham1999:3."),
     sun_elevation: str = typer.Option("5,30,60", help="Comma-separated sun elevations [deg], -90..90."),
     sun_azimuth: float = typer.Option(180.0, help="Sun azimuth from north towards east [deg], -360..360."),
-    reference: str = typer.Option("single_scattering", help="Model the others are measured against."),
+    reference: str = typer.Option("precomputed", help="Model the others are measured against (default: the accurate multiple-scattering sky)."),
     size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder (created if missing): grid.png, error_*.png, table.md, table.csv."),
@@ -694,7 +721,7 @@ def timelapse_cmd(
     start: str = typer.Option("00:00", help="First local time HH:MM."),
     end: str = typer.Option("23:59", help="Last local time HH:MM."),
     min_elevation: float = typer.Option(-6.0, help="Render only while the sun is above this elevation [deg]."),
-    model: str = typer.Option("single_scattering", help="Registered model name (see `skydome models`)."),
+    model: str = typer.Option("precomputed", help="Registered model name (see `skydome models`); the default is the accurate multiple-scattering sky."),
     projection: str = typer.Option("fisheye", help="fisheye, equirect, equirect-hemisphere or angular."),
     size: int = typer.Option(256, help="Frame size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),

@@ -67,7 +67,7 @@ def sky_errors(xyz, xyz_ref, weights, has_colour: bool = True) -> dict:
 
 
 def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_dir, *,
-                   reference: str = "single_scattering", sun_azimuth_deg: float = 180.0,
+                   reference: str = "precomputed", sun_azimuth_deg: float = 180.0,
                    size: int = 128, wavelengths: int = 16,
                    build: Callable | None = None, progress: Callable | None = None) -> list[ComparisonRow]:
     """Render and compare; write the report into ``out_dir`` (created if missing).

@@ -13,29 +13,29 @@ from pathlib import Path
 
 # (file stem, model, model params, sun spec, projection, size, label)
 JOBS = [
-    ("noon_fisheye", "single_scattering", {}, {"elevation_deg": 60.0, "azimuth_deg": 180.0},
-     "fisheye", "512", "single scattering, sun 60 deg"),
-    ("morning_fisheye", "single_scattering", {}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
-     "fisheye", "512", "single scattering, sun 30 deg SE"),
-    ("sunset_fisheye", "single_scattering", {}, {"elevation_deg": 2.0, "azimuth_deg": 270.0},
-     "fisheye", "512", "single scattering, sun 2 deg W"),
-    ("hazy_fisheye", "single_scattering", {"turbidity": 8.0}, {"elevation_deg": 30.0, "azimuth_deg": 180.0},
-     "fisheye", "512", "single scattering, turbidity 8"),
+    ("noon_fisheye", "precomputed", {}, {"elevation_deg": 60.0, "azimuth_deg": 180.0},
+     "fisheye", "512", "precomputed (default), sun 60 deg"),
+    ("morning_fisheye", "precomputed", {}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
+     "fisheye", "512", "precomputed (default), sun 30 deg SE"),
+    ("sunset_fisheye", "precomputed", {}, {"elevation_deg": 2.0, "azimuth_deg": 270.0},
+     "fisheye", "512", "precomputed (default), sun 2 deg W"),
+    ("hazy_fisheye", "precomputed", {"turbidity": 8.0}, {"elevation_deg": 30.0, "azimuth_deg": 180.0},
+     "fisheye", "512", "precomputed (default), turbidity 8"),
+    ("single_scattering_fisheye", "single_scattering", {}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
+     "fisheye", "512", "single scattering only, sun 30 deg SE"),
     ("preetham_fisheye", "preetham1999", {"turbidity": 3.0}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
      "fisheye", "512", "Preetham 1999, T 3, sun 30 deg SE"),
     ("perez_fisheye", "perez1993", {"dni": 650.0, "dhi": 120.0}, {"elevation_deg": 40.0, "azimuth_deg": 180.0},
      "fisheye", "512", "Perez 1993, DNI 650 DHI 120 W/m2 (luminance)"),
     ("cie2003_type12_fisheye", "cie2003", {"sky_type": 12}, {"elevation_deg": 40.0, "azimuth_deg": 180.0},
      "fisheye", "512", "CIE 2003 type 12 (luminance)"),
-    ("precomputed_fisheye", "precomputed", {}, {"elevation_deg": 30.0, "azimuth_deg": 135.0},
-     "fisheye", "512", "precomputed (Bruneton), 4 orders, sun 30 deg"),
     ("precomputed_twilight_fisheye", "precomputed", {}, {"elevation_deg": -4.0, "azimuth_deg": 270.0},
      "fisheye", "512", "precomputed, sun -4 deg W (civil twilight)"),
     ("hillaire_fisheye", "hillaire2020", {}, {"elevation_deg": 10.0, "azimuth_deg": 90.0},
      "fisheye", "512", "Hillaire 2020, sun 10 deg E"),
     ("earth_from_space", "nishita1993", {"camera_altitude_m": 36e6}, {"elevation_deg": 30.0, "azimuth_deg": 180.0},
      "camera", "384", "Nishita 1993, earth from 36000 km"),
-    ("vienna_sunset_equirect", "single_scattering", {},
+    ("vienna_sunset_equirect", "precomputed", {},
      {"location": (48.21, 16.37, "2026-06-21T20:45+02:00")}, "equirect", "1024x512",
      "Vienna 2026-06-21 20:45, equirect"),
 ]
@@ -104,7 +104,7 @@ def _effects(out_dir: Path) -> list[Path]:
     from skydome.apps.timelapse import day_times, run_timelapse
 
     times = day_times("2026-06-21", "+02:00", 60.0)
-    run_timelapse(lambda sun: sd.model("single_scattering", sun=sun), 48.21, 16.37, times,
+    run_timelapse(lambda sun: sd.model("precomputed", sun=sun), 48.21, 16.37, times,
                   eff / "timelapse", size=96, wavelengths=12)
     written.append(eff / "timelapse" / "contact_sheet.png")
     # 5.5 Bishop's ring: a close-up of the sun through a ~1 um volcanic layer

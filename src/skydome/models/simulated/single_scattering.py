@@ -1,4 +1,4 @@
-"""``single_scattering``: the brute-force single-scattering reference sky.
+"""``single_scattering``: brute-force single scattering (no multiple scattering) in a spherical atmosphere.
 
 Survey eqs. 15-16 integrated numerically in a spherical-shell atmosphere with any
 :class:`skydome.atmosphere.Atmosphere` (Rayleigh, aerosols with their phase function,
@@ -46,7 +46,8 @@ class SingleScattering(SkyModel):
     reference = ("Kment, Rauter & Zotti, Modelling of Daylight for Computer Graphics, eqs. 12, "
                  "15-16; Nishita et al. 1993, SIGGRAPH, eqs. 1-3 (numerical integration)")
     native = "spectral"
-    summary = "Brute-force single scattering in a spherical atmosphere (the reference)."
+    summary = ("Brute-force single scattering in a spherical atmosphere: first order only, so "
+               "too dark away from the sun and at the horizon (use precomputed for the sky).")
     parameters = (
         *ATMOSPHERE_PARAMETERS,
         Parameter("view_samples", "", None, 2, 4096,
