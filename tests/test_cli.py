@@ -41,8 +41,9 @@ def test_sun_command():
 
 def test_render_small_png_and_exr(tmp_path):
     png = tmp_path / "sky.png"
-    res = _run("render", "--sun-elevation", "30", "--sun-azimuth", "135", "--projection", "fisheye",
-               "--size", "48", "--wavelengths", "8", "--out", str(png))
+    # the file path of the CLI (the default model's accuracy is tested in test_precomputed)
+    res = _run("render", "--model", "single_scattering", "--sun-elevation", "30", "--sun-azimuth", "135",
+               "--projection", "fisheye", "--size", "48", "--wavelengths", "8", "--out", str(png))
     assert res.exit_code == 0, res.output
     assert png.exists()
     from PIL import Image
@@ -55,9 +56,9 @@ def test_render_small_png_and_exr(tmp_path):
 
 def test_render_model_option_and_location(tmp_path):
     out = tmp_path / "sunset.exr"
-    res = _run("render", "--lat", "48.21", "--lon", "16.37", "--time", "2026-06-21T20:45+02:00",
-               "--projection", "equirect", "--size", "32x16", "--wavelengths", "6",
-               "--turbidity", "3", "--out", str(out))
+    res = _run("render", "--model", "single_scattering", "--lat", "48.21", "--lon", "16.37",
+               "--time", "2026-06-21T20:45+02:00", "--projection", "equirect", "--size", "32x16",
+               "--wavelengths", "6", "--turbidity", "3", "--out", str(out))
     assert res.exit_code == 0, res.output
     assert out.exists()
 

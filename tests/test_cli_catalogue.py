@@ -74,7 +74,7 @@ CASES = [
     ("render", ["--turbidity", "hazy"], "--turbidity", "'hazy'"),
     ("render", ["--turbidity"], "--turbidity", "needs a value"),
     ("render", ["--observer-altitude-m", "-5000"], "--observer-altitude-m", "-5000"),
-    ("render", ["--view-samples", "2.5"], "--view-samples", "'2.5'"),
+    ("render", ["--model", "single_scattering", "--view-samples", "2.5"], "--view-samples", "'2.5'"),
     ("render", ["--bogus-flag", "3"], "--bogus-flag", "no option"),
     ("render", ["--model", "nishita1993", "--sun-disc", "maybe"], "--sun-disc", "'maybe'"),
     ("render", ["--model", "nishita1993", "--sun-disc", "on"], "--sun-disc", "'on'"),

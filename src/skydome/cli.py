@@ -560,10 +560,10 @@ plot_app = typer.Typer(no_args_is_help=True, help="Figures: luminance maps and m
 app.add_typer(plot_app, name="plot")
 
 
-def _model_spec(spec: str, shared: list[str], sun):
+def _model_spec(spec: str, shared: list[str], sun, check_only: bool = False):
     """Build a model from 'name' or 'name:value' (value for the model's first option) or
     'name:key=value,key=value', with shared '--key value' options applied where the model
-    has that option."""
+    has that option; ``check_only``: validate those parameters and build nothing."""
     from skydome.models import get_model_class
 
     name, _, rest = spec.partition(":")
@@ -583,6 +583,9 @@ def _model_spec(spec: str, shared: list[str], sun):
     for key, value in pairs:
         if key.lstrip("-").replace("-", "_") in names:
             params.update(_parse_model_params(cls, [key, value]))
+    if check_only:
+        cls._validate_params(dict(params))
+        return None
     return cls(sun=sun, **params)
 
 
@@ -683,6 +686,8 @@ def compare_cmd(
         specs = _split_specs(models)
         classes = [get_model_class(sp.partition(":")[0]) for sp in specs + [reference]]
         _check_shared(ctx.args, classes)
+        for sp in specs + [reference]:   # every model's options, before any model is built
+            _model_spec(sp, ctx.args, None, check_only=True)
         try:
             elevs = [float(v) for v in sun_elevation.split(",") if v.strip()]
         except ValueError:
