@@ -29,17 +29,15 @@ def main() -> None:
     from skydome.models.simulated.hillaire2020 import _Tables
     from skydome.models.simulated import _kernels_hillaire2020 as K
 
-    p = sky.atmosphere.optical_properties(wl)
-    R, Rt = float(p.planet_radius_m), float(p.top_radius_m)
+    from skydome.transport._medium import medium_from_properties
+
+    m = medium_from_properties(sky.atmosphere.optical_properties(wl))
     t = time.perf_counter()
-    tlut = K.build_transmittance(p.profile_code, p.profile_p0, p.profile_p1, p.extinction, R, Rt,
-                                 64, 256, 64, 500.0)
+    tlut = K.build_transmittance(m, 64, 256, 64, 500.0)
     t_trans = time.perf_counter() - t
     orders = np.zeros((2, 32, 32, wl.size))
     t = time.perf_counter()
-    K.build_multiple_scattering(p.profile_code, p.profile_p0, p.profile_p1, p.scattering,
-                                p.extinction, p.ground_albedo, tlut, R, Rt, 32, 32, 8, 10, 500.0,
-                                orders)
+    K.build_multiple_scattering(m, tlut, 32, 32, 8, 10, 500.0, orders)
     t_ms = time.perf_counter() - t
     tb = _Tables(sky, wl)
     t = time.perf_counter()

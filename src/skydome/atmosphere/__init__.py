@@ -26,12 +26,17 @@ from skydome.atmosphere.profiles import (DensityProfile, ExponentialProfile, Gau
                                          TentProfile, UniformProfile)
 from skydome.constants import DOBSON_UNIT, EARTH_RADIUS, H_MIE, H_RAYLEIGH, N_S_SURVEY
 
-__all__ = ["Atmosphere", "Constituent", "OpticalProperties", "SpectralCoefficient",
+__all__ = ["Atmosphere", "Constituent", "OpticalProperties", "SpectralCoefficient", "TabulatedPhase",
            "ExponentialProfile", "TentProfile", "UniformProfile", "GaussianLayerProfile",
            "ozone_cross_section"]
 
-# phase-function codes shared with the kernels (transport/_kernels.py)
-PHASE_CODES = {"rayleigh": 0, "henyey_greenstein": 1, "cornette_shanks": 2, "isotropic": 3}
+# phase-function codes shared with the kernels (transport/_phase.py)
+PHASE_CODES = {"rayleigh": 0, "henyey_greenstein": 1, "cornette_shanks": 2, "isotropic": 3,
+               "tabulated": 4}
+
+#: nodes of the kernels' tabulated phase functions: uniform in scattering angle over
+#: [0, 180] deg, 0.125 deg apart (the grid of skydome.atmosphere.mie.MieAerosol)
+PHASE_TABLE_ANGLES = 1441
 
 
 # ---------------------------------------------------------------------------------------------
@@ -102,6 +107,105 @@ class SpectralCoefficient:
 
 
 # ---------------------------------------------------------------------------------------------
+class TabulatedPhase:
+    """A phase function given as a table in scattering angle, per wavelength [sr^-1].
+
+    Build it from measured values (``theta_deg`` (na,), ``values`` (na,) for a grey phase
+    function or (na, nw) at ``wavelengths_nm`` (nw,)) or from a function of wavelength
+    (:meth:`from_function`, e.g. Lorenz-Mie from :class:`skydome.atmosphere.mie.MieAerosol`).
+    The kernels see it on a uniform grid of scattering angle (:meth:`on_grid`): linear
+    interpolation in angle, and in wavelength between measured wavelengths (the end
+    values held beyond them).
+
+    Parameters
+    ----------
+    theta_deg : array_like (na,)
+        Scattering angles [deg], strictly increasing, from 0 to 180.
+    values : array_like (na,) or (na, nw)
+        Phase function values, finite and non-negative.
+    wavelengths_nm : array_like (nw,), optional
+        Wavelengths of the columns of ``values`` [nm], strictly increasing.
+    normalise : bool
+        Scale each wavelength's table to 1 over the sphere (trapezoidal rule in angle on
+        the kernels' grid); default True, so that measured relative values may be given.
+    """
+
+    def __init__(self, theta_deg, values, wavelengths_nm=None, *, normalise: bool = True,
+                 description: str = "table"):
+        th = np.asarray(theta_deg, dtype=np.float64)
+        v = np.asarray(values, dtype=np.float64)
+        if th.ndim != 1 or th.size < 2:
+            raise ValueError(f"theta_deg must be 1-D with at least 2 angles, got shape {th.shape}")
+        if not np.all(np.isfinite(th)) or abs(th[0]) > 1e-9 or abs(th[-1] - 180.0) > 1e-9 \
+                or np.any(np.diff(th) <= 0):
+            raise ValueError("theta_deg must increase strictly from 0 to 180 deg")
+        if v.ndim == 1:
+            v = v[:, None]
+        if v.ndim != 2 or v.shape[0] != th.size:
+            raise ValueError(f"values shape {np.shape(values)} does not match theta_deg shape {th.shape}")
+        if not np.all(np.isfinite(v)) or np.any(v < 0):
+            raise ValueError("values must be finite and non-negative")
+        if wavelengths_nm is None:
+            if v.shape[1] != 1:
+                raise ValueError("wavelengths_nm is required for a table with several columns")
+            wl = None
+        else:
+            wl = as_wavelengths(wavelengths_nm, 1.0, 1e5, name="phase table wavelengths_nm").reshape(-1)
+            if wl.size != v.shape[1]:
+                raise ValueError(f"values has {v.shape[1]} columns for {wl.size} wavelengths")
+            if np.any(np.diff(wl) <= 0):
+                raise ValueError("phase table wavelengths_nm must be strictly increasing")
+        self._theta, self._values, self._wl = th.copy(), v.copy(), wl
+        self._func = None
+        self.normalise = bool(normalise)
+        self.description = description
+
+    @classmethod
+    def from_function(cls, func: Callable[[np.ndarray], tuple], description: str = "function",
+                      *, normalise: bool = False) -> "TabulatedPhase":
+        """A phase function computed per wavelength grid: ``func(wavelengths_nm (nl,))``
+        returns ``(theta_deg (na,), values (na, nl))``."""
+        obj = cls.__new__(cls)
+        obj._theta = obj._values = obj._wl = None
+        obj._func = func
+        obj.normalise = bool(normalise)
+        obj.description = description
+        return obj
+
+    def _raw(self, wl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self._func is not None:
+            th, v = self._func(wl)
+            return np.asarray(th, dtype=np.float64), np.asarray(v, dtype=np.float64).reshape(len(th), wl.size)
+        if self._wl is None:
+            return self._theta, np.repeat(self._values, wl.size, axis=1)
+        cols = np.stack([np.interp(wl, self._wl, row) for row in self._values])
+        return self._theta, cols
+
+    def on_grid(self, wavelengths_nm, n_angles: int = PHASE_TABLE_ANGLES) -> np.ndarray:
+        """Values [sr^-1] on the kernels' grid, theta_k = 180 k / (n_angles - 1) deg, at the
+        given wavelengths: shape (n_angles, nl)."""
+        wl = np.asarray(wavelengths_nm, dtype=np.float64).reshape(-1)
+        th, v = self._raw(wl)
+        grid = np.linspace(0.0, 180.0, n_angles)
+        if th.size == n_angles and np.allclose(th, grid, rtol=0, atol=1e-9):
+            out = np.array(v, dtype=np.float64)
+        else:
+            out = np.stack([np.interp(grid, th, v[:, j]) for j in range(wl.size)], axis=-1)
+        if not np.all(np.isfinite(out)) or np.any(out < 0):
+            raise ValueError(f"phase table {self.description} gave NaN or negative values")
+        if self.normalise:
+            t = np.radians(grid)
+            norm = 2.0 * np.pi * np.trapezoid(out * np.sin(t)[:, None], t, axis=0)
+            if np.any(norm <= 0):
+                raise ValueError(f"phase table {self.description} integrates to zero")
+            out = out / norm
+        return out
+
+    def __repr__(self) -> str:
+        return f"TabulatedPhase({self.description})"
+
+
+# ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Constituent:
     """One scattering and/or absorbing component of the atmosphere.
@@ -116,12 +220,15 @@ class Constituent:
         Absorption coefficient at reference density [m^-1].
     profile : DensityProfile
         Density relative to the reference density as a function of altitude.
-    phase : {"rayleigh", "henyey_greenstein", "cornette_shanks", "isotropic"}
-        Phase function of the scattering.
+    phase : {"rayleigh", "henyey_greenstein", "cornette_shanks", "isotropic", "tabulated"}
+        Phase function of the scattering; "tabulated" takes ``phase_table``.
     g : float
         Asymmetry parameter of HG / Cornette-Shanks, in (-1, 1).
     depolarisation : float
         Depolarisation ratio for the Rayleigh phase function, in [0, 0.5].
+    phase_table : TabulatedPhase, optional
+        The tabulated phase function (Lorenz-Mie or measured), required with
+        ``phase="tabulated"``.
     """
 
     name: str
@@ -131,6 +238,7 @@ class Constituent:
     phase: str = "rayleigh"
     g: float = 0.0
     depolarisation: float = 0.0
+    phase_table: Any = None
 
     def __post_init__(self):
         object.__setattr__(self, "scattering", SpectralCoefficient.make(self.scattering, f"{self.name}.scattering"))
@@ -142,6 +250,11 @@ class Constituent:
                                                    low_open=True, high_open=True))
         object.__setattr__(self, "depolarisation",
                            check_number(f"{self.name}.depolarisation", self.depolarisation, 0.0, 0.5))
+        if self.phase_table is not None and not isinstance(self.phase_table, TabulatedPhase):
+            raise TypeError(f"{self.name}.phase_table must be a TabulatedPhase, "
+                            f"got {type(self.phase_table).__name__}")
+        if self.phase == "tabulated" and self.phase_table is None:
+            raise ValueError(f"{self.name}.phase = 'tabulated' needs a phase_table")
 
     def phase_param(self) -> float:
         """The kernel's phase parameter: g for HG/CS; rho/(2 - rho) for Rayleigh."""
@@ -167,6 +280,7 @@ class OpticalProperties(NamedTuple):
     phase_code: np.ndarray       # (nc,) int64
     phase_param: np.ndarray      # (nc,)
     ground_albedo: np.ndarray    # (nl,)
+    phase_table: np.ndarray | None = None   # (nc, na, nl) [sr^-1] where any is tabulated
 
 
 # ---------------------------------------------------------------------------------------------
@@ -436,8 +550,14 @@ class Atmosphere:
         albedo = self.ground_albedo(wl)
         if np.any(albedo > 1.0):
             raise ValueError(f"ground_albedo = {albedo.max():g} is out of range [0, 1]")
+        table = None
+        if np.any(ph == PHASE_CODES["tabulated"]):
+            table = np.zeros((nc, PHASE_TABLE_ANGLES, nl))
+            for i, c in enumerate(self.constituents):
+                if c.phase == "tabulated":
+                    table[i] = c.phase_table.on_grid(wl, PHASE_TABLE_ANGLES)
         return OpticalProperties(wl, self.planet_radius_m, self.top_radius_m, code, p0, p1, sca, ext,
-                                 ph, pp, albedo)
+                                 ph, pp, albedo, table)
 
     def extinction(self, altitude_m, wavelengths_nm) -> np.ndarray:
         """Total extinction coefficient [m^-1] at altitudes (...) and wavelengths: (..., nl)."""
@@ -461,5 +581,7 @@ class Atmosphere:
                 "ground_albedo": self.ground_albedo.description,
                 "constituents": [{"name": c.name, "scattering": c.scattering.description,
                                   "absorption": c.absorption.description,
-                                  "profile": repr(c.profile), "phase": c.phase, "g": c.g}
+                                  "profile": repr(c.profile), "phase": c.phase, "g": c.g,
+                                  **({"phase_table": c.phase_table.description}
+                                     if c.phase_table is not None else {})}
                                  for c in self.constituents]}

@@ -337,17 +337,33 @@ class MieAerosol:
 @dataclass(frozen=True, eq=False)
 class MieConstituent(Constituent):
     """A :class:`~skydome.atmosphere.Constituent` whose coefficients come from Lorenz-Mie
-    theory; ``phase``/``g`` are the kernels' analytic stand-in (g = the Mie asymmetry
-    parameter at 550 nm) and ``aerosol`` gives the true tabulated phase function."""
+    theory. ``aerosol`` gives the true phase function, which the kernels use as a
+    :class:`~skydome.atmosphere.TabulatedPhase` when ``phase`` is "tabulated" (the
+    default of :func:`mie_constituent`); ``g`` is the Mie asymmetry parameter at 550 nm,
+    the parameter of an analytic stand-in ("henyey_greenstein", "cornette_shanks")."""
 
     aerosol: Any = None
     number_density_m3: float = 0.0
+
+    def __post_init__(self):
+        if self.phase_table is None and isinstance(self.aerosol, MieAerosol):
+            object.__setattr__(self, "phase_table", mie_phase_table(self.aerosol))
+        super().__post_init__()
+
+
+def mie_phase_table(aerosol: "MieAerosol"):
+    """The aerosol's Lorenz-Mie phase function as a :class:`~skydome.atmosphere.TabulatedPhase`
+    (computed per wavelength grid, normalised by construction, [BH83] eq. 3.16)."""
+    from skydome.atmosphere import TabulatedPhase
+
+    return TabulatedPhase.from_function(aerosol.phase_table, f"Lorenz-Mie {aerosol!r}",
+                                        normalise=False)
 
 
 def mie_constituent(aerosol: MieAerosol, profile: DensityProfile, *,
                     number_density_m3: float | None = None,
                     optical_depth_550: float | None = None,
-                    top_altitude_m: float = 100e3, kernel_phase: str = "henyey_greenstein",
+                    top_altitude_m: float = 100e3, kernel_phase: str = "tabulated",
                     name: str = "mie_aerosol") -> MieConstituent:
     """Build a Mie constituent from an aerosol population and a density profile.
 
@@ -363,8 +379,10 @@ def mie_constituent(aerosol: MieAerosol, profile: DensityProfile, *,
         layer at 550 nm, in (0, 20]; N = tau / (<C_ext(550)> column(profile)).
     top_altitude_m : float
         Top of the atmosphere [m] (for the column of ``profile``).
-    kernel_phase : {"henyey_greenstein", "cornette_shanks"}
-        Analytic phase for the transport kernels, with g = Mie g at 550 nm.
+    kernel_phase : {"tabulated", "henyey_greenstein", "cornette_shanks"}
+        Phase function the transport kernels use: the tabulated Lorenz-Mie phase function
+        (default), or an analytic stand-in with g = Mie g at 550 nm (faster to tabulate,
+        but it misses the diffraction peak and the rainbow/glory structure).
     name : str
     """
     if not isinstance(aerosol, MieAerosol):

@@ -8,12 +8,14 @@ factors per constituent c:
     L(d, lambda) = E_sun(lambda) sum_c P_c(theta, lambda) beta_s,c(lambda)
                    integral rho_c(t) exp(-tau(O, P_t) - tau(P_t, sun)) dt.
 
-The integral does not depend on the phase function, so it is computed once per constituent
-with the transport kernel (:mod:`skydome.transport._kernels`, isotropic phase, 4 pi p = 1)
-and then multiplied by the constituent's phase function: the tabulated Mie phase
-(:class:`skydome.atmosphere.mie.MieAerosol`) for :class:`~skydome.atmosphere.mie.MieConstituent`
-s, the analytic phase (Rayleigh / Henyey-Greenstein / Cornette-Shanks, [KRZ06] eqs. 3,
-10, 11) for the others. This is exact for single scattering; multiple scattering is left
+The transport kernel (:mod:`skydome.transport._kernels`) evaluates each constituent's own
+phase function inside the integral: the tabulated Lorenz-Mie phase
+(:class:`skydome.atmosphere.mie.MieAerosol`, as a
+:class:`~skydome.atmosphere.TabulatedPhase`) for
+:class:`~skydome.atmosphere.mie.MieConstituent` s, whatever analytic stand-in they were
+built with, and the constituent's phase (Rayleigh / Henyey-Greenstein / Cornette-Shanks,
+[KRZ06] eqs. 3, 10, 11, or tabulated) for the others. This is exact for single
+scattering; multiple scattering is left
 out (it adds a smooth background of a few per cent of the aureole within 10 deg of the
 sun for the optical depths used here), and the sun is a point (valid beyond ~1 deg from
 the centre of the disc: the disc's 0.27 deg radius smooths the phase function only
@@ -43,23 +45,6 @@ from skydome._validate import as_directions, as_wavelengths, check_int, check_nu
 __all__ = ["single_scattering_true_phase", "almucantar_directions", "radiance_profile",
            "sun_disc_radiance", "bishops_ring_atmosphere", "ring_analysis",
            "diffraction_ring_radius_deg", "render_closeup", "plot_radiance_profiles"]
-
-INV_4PI = 1.0 / (4.0 * np.pi)
-
-
-def _analytic_phase(code: int, param: float, c: np.ndarray) -> np.ndarray:
-    """The kernels' analytic phase functions [sr^-1] ([KRZ06] eqs. 3, 10, 11 over 4 pi)."""
-    if code == 0:       # Rayleigh with depolarisation parameter
-        return 3.0 / (16.0 * np.pi) * 1.0 / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c)
-    if code in (1, 2):
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        hg = (1.0 - g * g) / (d * np.sqrt(d)) * INV_4PI
-        if code == 1:
-            return hg
-        return 3.0 / (2.0 * (2.0 + g * g)) * (1.0 + c * c) * hg
-    return np.full(np.shape(c), INV_4PI)
-
 
 def _sun(sun_or_elevation):
     from skydome.sun import Sun
@@ -98,9 +83,11 @@ def single_scattering_true_phase(atmosphere, directions, sun, wavelengths_nm, *,
         Names of the constituents whose scattering is counted (all by default); the
         extinction of every constituent is always applied.
     """
-    from skydome.atmosphere.mie import MieConstituent
+    from skydome.atmosphere import PHASE_CODES, PHASE_TABLE_ANGLES
+    from skydome.atmosphere.mie import MieConstituent, mie_phase_table
     from skydome.spectra import solar_irradiance
     from skydome.transport import _kernels as K
+    from skydome.transport._medium import medium_from_properties
     from skydome.transport.single import SingleScattering
 
     sun = _sun(sun)
@@ -115,30 +102,25 @@ def single_scattering_true_phase(atmosphere, directions, sun, wavelengths_nm, *,
         for n in constituents:
             if n not in names:
                 raise ValueError(f"constituents: no constituent named {n!r}; have {names}")
-    s = sun.direction
-    e_sun = np.ascontiguousarray(solar_irradiance(wl) * sun.irradiance_scale)
-    flat = np.ascontiguousarray(d.reshape(-1, 3))
-    cos_t = np.clip(flat @ s, -1.0, 1.0)
-    total = np.zeros((flat.shape[0], wl.size))
-    iso = np.full(len(names), 3, dtype=np.int64)
-    zero_albedo = np.zeros(wl.size)
+    # only the chosen constituents scatter; every Mie constituent with its Lorenz-Mie phase
+    # table; a black ground
+    beta_s = p.scattering.copy()
+    codes = p.phase_code.copy()
+    table = (np.zeros((len(names), PHASE_TABLE_ANGLES, wl.size)) if p.phase_table is None
+             else p.phase_table.copy())
     for ci, c in enumerate(atmosphere.constituents):
         if constituents is not None and c.name not in constituents:
-            continue
-        if not np.any(p.scattering[ci] > 0):
-            continue
-        beta_s = np.zeros_like(p.scattering)
-        beta_s[ci] = p.scattering[ci]
-        out = np.empty((flat.shape[0], wl.size))
-        K.single_scattering(flat, ss.r0, s, float(p.planet_radius_m), float(p.top_radius_m),
-                            p.profile_code, p.profile_p0, p.profile_p1, beta_s, p.extinction,
-                            iso, p.phase_param, zero_albedo, e_sun, ss.table.table,
-                            ss.view_samples, ss.scale_m, False, ss.light_samples, out)
-        if isinstance(c, MieConstituent) and c.aerosol is not None:
-            phase = c.aerosol.phase_function(cos_t, wl)                 # (n, nl) tabulated Mie
-        else:
-            phase = _analytic_phase(int(p.phase_code[ci]), float(p.phase_param[ci]), cos_t)[:, None]
-        total += out * 4.0 * np.pi * phase                              # kernel used p = 1/(4 pi)
+            beta_s[ci] = 0.0
+        if isinstance(c, MieConstituent) and c.aerosol is not None and c.phase != "tabulated":
+            codes[ci] = PHASE_CODES["tabulated"]
+            table[ci] = mie_phase_table(c.aerosol).on_grid(wl, PHASE_TABLE_ANGLES)
+    medium = medium_from_properties(p._replace(scattering=beta_s, phase_code=codes, phase_table=table,
+                                               ground_albedo=np.zeros(wl.size)))
+    e_sun = np.ascontiguousarray(solar_irradiance(wl) * sun.irradiance_scale)
+    flat = np.ascontiguousarray(d.reshape(-1, 3))
+    total = np.empty((flat.shape[0], wl.size))
+    K.single_scattering(flat, ss.r0, sun.direction, medium, e_sun, ss.table.table,
+                        ss.view_samples, ss.scale_m, False, ss.light_samples, total)
     np.maximum(total, 0.0, out=total)
     return total.reshape(d.shape[:-1] + (wl.size,))
 

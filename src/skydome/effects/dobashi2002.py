@@ -200,18 +200,18 @@ def shadow_volume_top(heightmap: Heightmap, sun_direction) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------------
-def _phase(constituent, cos_theta):
-    """Normalised phase function [sr^-1] of a constituent."""
-    from skydome.atmosphere.aerosols import cornette_shanks, henyey_greenstein
-    from skydome.atmosphere.rayleigh import rayleigh_phase_normalised
+def _phases(atmosphere, wl, cos_theta):
+    """Phase function of every constituent at wavelengths wl [sr^-1], shape
+    (..., nc, nl), from the kernels' core (:mod:`skydome.transport._phase`; tabulated
+    phase functions such as Lorenz-Mie included)."""
+    from skydome.transport._medium import medium_from_properties
+    from skydome.transport._phase import phase_values_many
 
-    if constituent.phase == "rayleigh":
-        return rayleigh_phase_normalised(cos_theta, constituent.depolarisation)
-    if constituent.phase == "henyey_greenstein":
-        return henyey_greenstein(cos_theta, constituent.g)
-    if constituent.phase == "cornette_shanks":
-        return cornette_shanks(cos_theta, constituent.g)
-    return np.full(np.shape(cos_theta), 1.0 / (4.0 * np.pi))
+    m = medium_from_properties(atmosphere.optical_properties(wl))
+    c = np.ascontiguousarray(np.asarray(cos_theta, dtype=np.float64).reshape(-1))
+    out = np.empty((c.size, m.phase_code.size, wl.size))
+    phase_values_many(m, c, out)
+    return out.reshape(np.shape(cos_theta) + out.shape[1:])
 
 
 def _ray_altitude(t, mu, r0, R):
@@ -457,8 +457,8 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
                               n_distance, n_angle if mus.max() > mus.min() else 1)
         t_pix = np.where(finite, depth, 0.0)
         cos_theta = dirs @ sun.direction
-        phase = np.stack([_phase(c, cos_theta) for c in atmosphere.constituents], axis=-1)  # (H,W,nc)
-        weight = phase[..., :, None] * tables.scattering[None, None]                        # (H,W,nc,nl)
+        phase = _phases(atmosphere, wl, cos_theta)                                        # (H,W,nc,nl)
+        weight = phase * tables.scattering[None, None]                                     # (H,W,nc,nl)
         D = tables.columns(t_pix, mu)
         out_T = np.exp(-np.einsum("hwc,cl->hwl", D, tables.extinction))                    # eq. (3)
         if not shafts:

@@ -22,53 +22,24 @@ same few nodes.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
-# profile codes (mirror of skydome.atmosphere.profiles.PROFILE_CODES)
-EXPONENTIAL, TENT, UNIFORM, GAUSSIAN = 0, 1, 2, 3
-# phase codes (mirror of skydome.atmosphere.PHASE_CODES)
-RAYLEIGH, HENYEY_GREENSTEIN, CORNETTE_SHANKS, ISOTROPIC = 0, 1, 2, 3
-
-INV_4PI = 1.0 / (4.0 * math.pi)
-
-
-@njit(cache=True, fastmath=False)
-def profile_density(code, p0, p1, h):
-    """Density relative to the reference density at altitude h [m] ([KRZ06] eq. 7)."""
-    if code == EXPONENTIAL:
-        return math.exp(-max(h, 0.0) / p0)
-    if code == TENT:
-        return max(0.0, 1.0 - abs(h - p0) / p1)
-    if code == UNIFORM:
-        return 1.0 if h < p0 else 0.0
-    if code == GAUSSIAN:
-        x = (h - p0) / p1
-        return math.exp(-0.5 * x * x)
-    return 0.0
-
-
-@njit(cache=True)
-def phase_value(code, param, cos_theta):
-    """Phase function normalised over the sphere [sr^-1] for scattering angle theta.
-
-    Rayleigh: 3/(16 pi) 1/(1+2g)((1+3g) + (1-g) cos^2) with g = rho/(2-rho) ([KRZ06] eq. 3
-    over 4 pi, Chandrasekhar's depolarised form, Hansen & Travis 1974 eq. 2.15); Henyey-Greenstein ([KRZ06] eq. 10 / 4 pi);
-    Cornette-Shanks ([KRZ06] eq. 11 / 4 pi); isotropic 1/(4 pi).
-    """
-    c = cos_theta
-    if code == RAYLEIGH:
-        return 3.0 / (16.0 * math.pi) * 1.0 / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c)
-    if code == HENYEY_GREENSTEIN:
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        return (1.0 - g * g) / (d * math.sqrt(d)) * INV_4PI
-    if code == CORNETTE_SHANKS:
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        return 3.0 * (1.0 - g * g) / (2.0 * (2.0 + g * g)) * (1.0 + c * c) / (d * math.sqrt(d)) * INV_4PI
-    return INV_4PI
+from skydome.transport._geometry import (distance_to_sphere_far, lowest_point,  # noqa: F401
+                                        radius_along_above, ray_hits_ground, ray_segment,
+                                        safe_sqrt, shadow_crossings)
+from skydome.transport._medium import (EXPONENTIAL, GAUSSIAN, TENT, UNIFORM,  # noqa: F401
+                                      profile_density)
+from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4PI,  # noqa: F401
+                                     ISOTROPIC, RAYLEIGH, phase_fill, phase_value)
+from skydome.transport._quadrature import (column_quadrature, geometric_node,  # noqa: F401
+                                          geometric_step, medium_columns, simpson)
+from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
+from skydome.transport._tables import lookup_columns
+from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
+from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
 
 
 @njit(cache=True, fastmath=True)
@@ -94,106 +65,7 @@ def exp_neg_array(x, out, ibuf):
         out[l] *= fbuf[l]
 
 
-@njit(cache=True)
-def distance_to_sphere_far(r, mu, radius):
-    """Distance along the ray to the far intersection with a sphere (r <= radius)."""
-    disc = r * r * (mu * mu - 1.0) + radius * radius
-    return -r * mu + math.sqrt(max(disc, 0.0))
-
-
-@njit(cache=True)
-def ray_hits_ground(r, mu, R):
-    """True where the ray from (r, mu) intersects the ground sphere in front of it."""
-    return mu < 0.0 and r * r * (mu * mu - 1.0) + R * R >= 0.0
-
-
-@njit(cache=True)
-def ray_segment(r, mu, R, Rt, ground=True):
-    """(t_start, t_end, hits_ground) of the part of the ray inside the atmosphere.
-
-    t_start > 0 when the origin lies above the top of the atmosphere; t_end < 0 when the
-    ray misses the atmosphere. With ``ground`` False the planet is transparent (used for
-    the grazing rays of the column table).
-    """
-    disc_t = r * r * (mu * mu - 1.0) + Rt * Rt
-    if disc_t < 0.0:
-        return 0.0, -1.0, False
-    sq = math.sqrt(disc_t)
-    t_near = -r * mu - sq
-    t_far = -r * mu + sq
-    if t_far <= 0.0:
-        return 0.0, -1.0, False
-    t0 = max(t_near, 0.0)
-    disc_g = r * r * (mu * mu - 1.0) + R * R
-    if ground and mu < 0.0 and disc_g >= 0.0:
-        # an observer on (or, by rounding, just below) the ground looking down sees the
-        # ground at its feet: t_ground = 0
-        tg = max(-r * mu - math.sqrt(disc_g), 0.0)
-        return t0, max(tg, t0), True
-    return t0, t_far, False
-
-
-@njit(cache=True)
-def column_quadrature(code, p0, p1, r, mu, R, Rt, n, ts, ground=True):
-    """Column density of one profile from (r, mu) to the end of the ray [m]:
-    integral of the relative density along the ray ([KRZ06] eq. 12 without beta).
-
-    The ray ends at the top of the atmosphere or at the ground (where it hits it).
-    ``n`` midpoint nodes per piece (see the module docstring), scale ``ts`` [m].
-    """
-    t0, t1, _ = ray_segment(r, mu, R, Rt, ground)
-    if t1 <= t0:
-        return 0.0
-    tmin = min(max(-r * mu, t0), t1)   # lowest point of the ray
-    total = 0.0
-    for piece in range(2):
-        if piece == 0:
-            a, b = t0, tmin            # dense end at b
-        else:
-            a, b = tmin, t1            # dense end at a
-        length = b - a
-        if length <= 0.0:
-            continue
-        vmax = math.log1p(length / ts)
-        dv = vmax / n
-        for k in range(n):
-            u = ts * math.expm1((k + 0.5) * dv)
-            w = (u + ts) * dv
-            t = b - u if piece == 0 else a + u
-            rr = math.sqrt(max(r * r + 2.0 * r * mu * t + t * t, 0.0))
-            total += w * profile_density(code, p0, p1, rr - R)
-    return total
-
-
 # -- column-density table (Bruneton 2017 transmittance parametrisation) --------------------------
-@njit(cache=True)
-def table_coords(r, mu, R, Rt):
-    """(x_r, x_mu) in [0, 1]^2 of Bruneton's (2017) transmittance texture mapping
-    (GetTransmittanceTextureUvFromRMu, without the texel-centre offset)."""
-    H = math.sqrt(Rt * Rt - R * R)
-    rho = math.sqrt(max(r * r - R * R, 0.0))
-    d = distance_to_sphere_far(r, mu, Rt)
-    d_min = Rt - r
-    d_max = rho + H
-    x_mu = 0.0 if d_max <= d_min else (d - d_min) / (d_max - d_min)
-    return rho / H, min(max(x_mu, 0.0), 1.0)
-
-
-@njit(cache=True)
-def table_rmu(x_r, x_mu, R, Rt):
-    """Inverse of :func:`table_coords` (GetRMuFromTransmittanceTextureUv)."""
-    H = math.sqrt(Rt * Rt - R * R)
-    rho = H * x_r
-    r = math.sqrt(rho * rho + R * R)
-    d_min = Rt - r
-    d_max = rho + H
-    d = d_min + x_mu * (d_max - d_min)
-    if d == 0.0:
-        return r, 1.0
-    mu = (H * H - rho * rho - d * d) / (2.0 * r * d)
-    return r, min(max(mu, -1.0), 1.0)
-
-
 @njit(parallel=True, cache=True)
 def build_column_table(codes, p0s, p1s, R, Rt, n_r, n_mu, n, ts):
     """Column densities to the top of the atmosphere, shape (n_c, n_r, n_mu), on the grid
@@ -211,22 +83,6 @@ def build_column_table(codes, p0s, p1s, R, Rt, n_r, n_mu, n, ts):
 
 
 @njit(cache=True)
-def table_lookup(table, c, r, mu, R, Rt):
-    """Bilinear interpolation of constituent c's column to the top from (r, mu)."""
-    n_r = table.shape[1]
-    n_mu = table.shape[2]
-    x_r, x_mu = table_coords(r, mu, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(int(fr), n_r - 2)
-    j = min(int(fm), n_mu - 2)
-    a = fr - i
-    b = fm - j
-    return ((1 - a) * ((1 - b) * table[c, i, j] + b * table[c, i, j + 1])
-            + a * ((1 - b) * table[c, i + 1, j] + b * table[c, i + 1, j + 1]))
-
-
-@njit(cache=True)
 def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts, out):
     """Fill ``out[c]`` with the column from (r, mu_s) towards the sun; returns False when
     the sun is hidden by the planet (earth shadow: the light ray hits the ground)."""
@@ -236,237 +92,250 @@ def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, light_exact, n_light, ts
         for c in range(codes.shape[0]):
             out[c] = column_quadrature(codes[c], p0s[c], p1s[c], r, mu_s, R, Rt, n_light, ts)
         return True
-    # bilinear interpolation, the coordinates shared by every constituent
-    n_r = table.shape[1]
-    n_mu = table.shape[2]
-    x_r, x_mu = table_coords(r, mu_s, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(int(fr), n_r - 2)
-    j = min(int(fm), n_mu - 2)
-    a = fr - i
-    b = fm - j
-    w00 = (1 - a) * (1 - b)
-    w01 = (1 - a) * b
-    w10 = a * (1 - b)
-    w11 = a * b
-    for c in range(codes.shape[0]):
-        out[c] = (w00 * table[c, i, j] + w01 * table[c, i, j + 1]
-                  + w10 * table[c, i + 1, j] + w11 * table[c, i + 1, j + 1])
+    lookup_columns(table, r, mu_s, R, Rt, out)
     return True
 
 
 @njit(cache=True)
-def shadow_crossings(r0, mu, sz, nu, R):
-    """Distances t along the ray from (0, 0, r0) with direction d (d_z = mu, d . s = nu)
-    where it crosses the boundary of the planet's shadow (the cylinder of radius R about
-    the axis through the centre along the sun direction s, on the night side: p . s < 0).
+def light_columns(table, m, r, mu_s, light_exact, n_light, ts, out):
+    """Fill ``out[c]`` with the column of every constituent of the medium m from (r, mu_s)
+    towards the sun [m]; returns False when the sun is hidden by the planet (earth
+    shadow: the light ray hits the ground)."""
+    if ray_hits_ground(r, mu_s, m.R):
+        return False
+    if light_exact:
+        medium_columns(m, r, mu_s, n_light, ts, True, out)
+        return True
+    lookup_columns(table, r, mu_s, m.R, m.Rt, out)
+    return True
 
-    With o_perp, d_perp the parts perpendicular to s: |o_perp + t d_perp|^2 = R^2, i.e.
-    a t^2 + 2 b t + c = 0, a = 1 - nu^2, b = r0 (mu - sz nu), c = r0^2 (1 - sz^2) - R^2.
-    Returns (count, t1, t2) of the valid crossings (t > 0, night side).
-    """
-    a = 1.0 - nu * nu
-    if a <= 1e-14:
-        return 0, 0.0, 0.0
-    b = r0 * (mu - sz * nu)
-    c = r0 * r0 * (1.0 - sz * sz) - R * R
-    disc = b * b - a * c
-    if disc <= 0.0:
-        return 0, 0.0, 0.0
-    sq = math.sqrt(disc)
-    n = 0
-    out1 = 0.0
-    out2 = 0.0
-    for sign in (-1.0, 1.0):
-        t = (-b + sign * sq) / a
-        if t > 0.0 and r0 * sz + t * nu < 0.0:
-            if n == 0:
-                out1 = t
-            else:
-                out2 = t
-            n += 1
-    return n, out1, out2
+
+@njit(cache=True)
+def _sort_small(brk, n):
+    """Insertion sort of the first n entries of brk in place (the few break points)."""
+    for q in range(1, n):
+        x = brk[q]
+        j = q - 1
+        while j >= 0 and brk[j] > x:
+            brk[j + 1] = brk[j]
+            j -= 1
+        brk[j + 1] = x
+
+
+@njit(cache=True)
+def view_break_points(r0, mu, sz, nu, R, t0, t1, brk):
+    """Break points of the view ray in brk (sorted), and their count: its ends, its lowest
+    point and where it crosses the boundary of the earth's shadow (the integrand jumps
+    there); each piece gets its own nodes."""
+    tmin = lowest_point(r0, mu, t0, t1)
+    brk[0] = t0
+    nbrk = 1
+    if t0 < tmin < t1:
+        brk[nbrk] = tmin
+        nbrk += 1
+    nsh, sh1, sh2 = shadow_crossings(r0, mu, sz, nu, R)
+    if nsh > 0 and t0 < sh1 < t1:
+        brk[nbrk] = sh1
+        nbrk += 1
+    if nsh > 1 and t0 < sh2 < t1:
+        brk[nbrk] = sh2
+        nbrk += 1
+    brk[nbrk] = t1
+    nbrk += 1
+    _sort_small(brk, nbrk)
+    return nbrk
+
+
+class _SingleWork(NamedTuple):
+    """Work arrays of one thread of :func:`single_scattering` (allocated once per block)."""
+
+    acc: np.ndarray        # (nc, nl) integral of rho_c exp(-tau) along the ray
+    tau: np.ndarray        # (nl,) -optical depth of the current node
+    dcol: np.ndarray       # (nc,) view-ray column from the observer
+    scol: np.ndarray       # (nc,) light-path column
+    rho_prev: np.ndarray   # (nc,) densities at the previous node
+    rho_mid: np.ndarray    # (nc,) ... at the midpoint
+    rho: np.ndarray        # (nc,) ... at the node
+    ebuf: np.ndarray       # (nl,) exp(tau)
+    ibuf: np.ndarray       # (nl,) int64 scratch of exp_neg_array
+    scat: np.ndarray       # (nc,) 1 where the constituent scatters
+    brk: np.ndarray        # (6,) break points
+    phs: np.ndarray        # (nl,) phase function per wavelength
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def single_scattering(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                      phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
-                      out):
+def single_scattering(dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out):
     """Single-scattered radiance arriving at an observer at distance r0 from the centre
     (on the +z axis) from each direction ``dirs[i]`` ([NSTN93] eqs. 1-3, [KRZ06] eqs. 15-16):
 
-    L(lambda) = E_sun sum_c beta_s,c P_c(theta) int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt
+    L(lambda) = E_sun sum_c beta_s,c P_c(theta, lambda) int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt
                 + ground term,
 
-    with the view-ray optical depth tau(0,t) accumulated by Simpson's rule between the
-    quadrature nodes, tau_sun from the column table (or exact quadrature when
-    ``light_exact``), zero sunlight where the light ray hits the planet (earth shadow),
-    and, where the view ray hits the ground, the Lambertian reflection of the attenuated
-    direct sun: albedo / pi E_sun T_sun cos(theta_s) T(0, t_ground).
+    in the medium m (:class:`skydome.transport._medium.Medium`), with the view-ray optical
+    depth tau(0,t) accumulated by Simpson's rule between the quadrature nodes, tau_sun from
+    the column table (or exact quadrature when ``light_exact``), zero sunlight where the
+    light ray hits the planet (earth shadow), and, where the view ray hits the ground, the
+    Lambertian reflection of the attenuated direct sun:
+    albedo / pi E_sun T_sun cos(theta_s) T(0, t_ground).
     """
     n = dirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
     block = 64
     n_blocks = (n + block - 1) // block
     for ib in prange(n_blocks):
-        acc = np.zeros((nc, nl))
-        tau = np.zeros(nl)
-        dcol = np.zeros(nc)
-        scol = np.zeros(nc)
-        rho_prev = np.zeros(nc)
-        rho_mid = np.zeros(nc)
-        rho = np.zeros(nc)
-        ebuf = np.zeros(nl)
-        ibuf = np.zeros(nl, dtype=np.int64)
-        scat = np.zeros(nc)       # 1 for constituents that scatter (ozone only absorbs)
-        brk = np.zeros(6)
-        for c in range(nc):
-            for l in range(nl):
-                if beta_s[c, l] > 0.0:
-                    scat[c] = 1.0
-        for i in range(ib * block, min(n, (ib + 1) * block)):
-            _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                        phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light,
-                        out, acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat, brk)
+        _ray_block(ib * block, min(n, (ib + 1) * block), dirs, r0, sun, m, e_sun, table,
+                   n_view, ts, light_exact, n_light, out)
 
 
 @njit(cache=True, fastmath=True)
-def _single_ray(i, dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                phase_params, albedo, e_sun, table, n_view, ts, light_exact, n_light, out,
-                acc, tau, dcol, scol, rho_prev, rho_mid, rho, ebuf, ibuf, scat, brk):
-    """One ray of :func:`single_scattering` (work arrays passed in, reset here)."""
-    nc = codes.shape[0]
+def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out):
+    """Rays i0..i1-1 of :func:`single_scattering` with one set of work arrays (made here,
+    in a serial function: writes into the arrays of a NamedTuple built directly in a
+    prange body were lost under numba 0.68's parfor lowering)."""
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
-    if True:
-        dx = dirs[i, 0]
-        dy = dirs[i, 1]
-        dz = dirs[i, 2]
-        mu = dz
-        nu = dx * sun[0] + dy * sun[1] + dz * sun[2]    # cos of the scattering angle
+    w = _SingleWork(np.zeros((nc, nl)), np.zeros(nl), np.zeros(nc), np.zeros(nc),
+                    np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nl),
+                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl))
+    for c in range(nc):
         for l in range(nl):
-            out[i, l] = 0.0
-            for c in range(nc):
-                acc[c, l] = 0.0
-        for c in range(nc):
-            dcol[c] = 0.0
-        t0, t1, hits_ground = ray_segment(r0, mu, R, Rt)
-        if t1 < t0 or (t1 == t0 and not hits_ground):
-            return
-        tmin = min(max(-r0 * mu, t0), t1)
-        # break points: the lowest point of the ray and where it crosses the boundary of
-        # the earth's shadow (the integrand jumps there); each piece gets n_view nodes
-        brk[0] = t0
-        nbrk = 1
-        if t0 < tmin < t1:
-            brk[nbrk] = tmin
-            nbrk += 1
-        nsh, sh1, sh2 = shadow_crossings(r0, mu, sun[2], nu, R)
-        if nsh > 0 and t0 < sh1 < t1:
-            brk[nbrk] = sh1
-            nbrk += 1
-        if nsh > 1 and t0 < sh2 < t1:
-            brk[nbrk] = sh2
-            nbrk += 1
-        brk[nbrk] = t1
-        nbrk += 1
-        for q in range(1, nbrk):            # insertion sort of the few break points
-            x = brk[q]
-            j = q - 1
-            while j >= 0 and brk[j] > x:
-                brk[j + 1] = brk[j]
-                j -= 1
-            brk[j + 1] = x
-        t_prev = t0
-        r_prev = math.sqrt(r0 * r0 + 2.0 * r0 * mu * t0 + t0 * t0)
-        for c in range(nc):
-            rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
-        for q in range(nbrk - 1):
-            a = brk[q]
-            b = brk[q + 1]
-            dense_at_b = b <= tmin      # before the lowest point the density grows with t
-            length = b - a
-            if length <= 0.0:
-                continue
-            vmax = math.log1p(length / ts)
-            dv = vmax / n_view
-            for kk in range(n_view):
-                # nodes in increasing t
-                k = n_view - 1 - kk if dense_at_b else kk
-                u = ts * math.expm1((k + 0.5) * dv)
-                w = (u + ts) * dv
-                t = b - u if dense_at_b else a + u
-                rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
-                tm = 0.5 * (t_prev + t)
-                rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
-                h = t - t_prev
-                for c in range(nc):
-                    rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                    rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                    dcol[c] += h / 6.0 * (rho_prev[c] + 4.0 * rho_mid[c] + rho[c])   # Simpson
-                    rho_prev[c] = rho[c]
-                t_prev = t
-                mu_s = (r0 * sun[2] + t * nu) / rr
-                if not sun_columns(table, codes, p0s, p1s, rr, mu_s, R, Rt, light_exact, n_light,
-                                   ts, scol):
-                    continue
-                for l in range(nl):
-                    tau[l] = 0.0
-                for c in range(nc):
-                    col = dcol[c] + scol[c]
-                    for l in range(nl):
-                        tau[l] -= beta_e[c, l] * col
-                exp_neg_array(tau, ebuf, ibuf)
-                for c in range(nc):
-                    wr = w * rho[c] * scat[c]
-                    if wr > 0.0:
-                        for l in range(nl):
-                            acc[c, l] += wr * ebuf[l]
-        # phase functions and scattering coefficients
-        for c in range(nc):
-            p = phase_value(phase_codes[c], phase_params[c], nu)
-            for l in range(nl):
-                out[i, l] += e_sun[l] * beta_s[c, l] * p * acc[c, l]
-        if hits_ground:
-            # finish the view optical depth exactly at the ground point
-            t = t1
+            if m.scattering[c, l] > 0.0:
+                w.scat[c] = 1.0       # 1 for constituents that scatter (ozone only absorbs)
+    for i in range(i0, i1):
+        _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w)
+
+
+@njit(cache=True, fastmath=True)
+def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light, t0, t1,
+                       nbrk, w):
+    """Accumulate w.acc[c, l] = int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt over the pieces
+    between the break points, and w.dcol the view column to t1; returns (t_prev, rho at
+    t_prev already in w.rho_prev) as the distance of the last node."""
+    nc = m.profile_code.shape[0]
+    nl = w.tau.shape[0]
+    R = m.R
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
+    tmin = lowest_point(r0, mu, t0, t1)
+    t_prev = t0
+    r_prev = math.sqrt(r0 * r0 + 2.0 * r0 * mu * t0 + t0 * t0)
+    for c in range(nc):
+        w.rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], r_prev - R)
+    for q in range(nbrk - 1):
+        a = w.brk[q]
+        b = w.brk[q + 1]
+        dense_at_b = b <= tmin      # before the lowest point the density grows with t
+        length = b - a
+        if length <= 0.0:
+            continue
+        dv = geometric_step(length, n_view, ts)
+        for kk in range(n_view):
+            # nodes in increasing t
+            k = n_view - 1 - kk if dense_at_b else kk
+            u, wt = geometric_node(k, dv, ts)
+            t = b - u if dense_at_b else a + u
+            rr = radius_along_above(r0, mu, t, R)
             tm = 0.5 * (t_prev + t)
-            rm = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * tm + tm * tm, R * R))
+            rm = radius_along_above(r0, mu, tm, R)
             h = t - t_prev
             for c in range(nc):
-                rho[c] = profile_density(codes[c], p0s[c], p1s[c], 0.0)
-                rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                dcol[c] += h / 6.0 * (rho_prev[c] + 4.0 * rho_mid[c] + rho[c])
-            mu_s = (r0 * sun[2] + t * nu) / R
-            if mu_s > 0.0:
-                sun_columns(table, codes, p0s, p1s, R * (1.0 + 1e-12), mu_s, R, Rt, light_exact,
-                            n_light, ts, scol)
+                w.rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                w.rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
+                w.dcol[c] += simpson(w.rho_prev[c], w.rho_mid[c], w.rho[c], h)
+                w.rho_prev[c] = w.rho[c]
+            t_prev = t
+            mu_s = (r0 * sun[2] + t * nu) / rr
+            if not light_columns(table, m, rr, mu_s, light_exact, n_light, ts, w.scol):
+                continue
+            for l in range(nl):
+                w.tau[l] = 0.0
+            for c in range(nc):
+                col = w.dcol[c] + w.scol[c]
                 for l in range(nl):
-                    s = 0.0
-                    for c in range(nc):
-                        s += beta_e[c, l] * (dcol[c] + scol[c])
-                    out[i, l] += albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+                    w.tau[l] -= beta_e[c, l] * col
+            exp_neg_array(w.tau, w.ebuf, w.ibuf)
+            for c in range(nc):
+                wr = wt * w.rho[c] * w.scat[c]
+                if wr > 0.0:
+                    for l in range(nl):
+                        w.acc[c, l] += wr * w.ebuf[l]
+    return t_prev
+
+
+@njit(cache=True, fastmath=True)
+def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
+                 out, w):
+    """Add the Lambertian reflection of the attenuated direct sun at the ground point t1,
+    finishing the view optical depth exactly there."""
+    nc = m.profile_code.shape[0]
+    nl = e_sun.shape[0]
+    R = m.R
+    t = t1
+    tm = 0.5 * (t_prev + t)
+    rm = radius_along_above(r0, mu, tm, R)
+    h = t - t_prev
+    for c in range(nc):
+        w.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], 0.0)
+        w.rho_mid[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], rm - R)
+        w.dcol[c] += simpson(w.rho_prev[c], w.rho_mid[c], w.rho[c], h)
+    mu_s = (r0 * sun[2] + t * nu) / R
+    if mu_s > 0.0:
+        light_columns(table, m, R * (1.0 + 1e-12), mu_s, light_exact, n_light, ts, w.scol)
+        for l in range(nl):
+            s = 0.0
+            for c in range(nc):
+                s += m.extinction[c, l] * (w.dcol[c] + w.scol[c])
+            out[i, l] += m.albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+
+
+@njit(cache=True, fastmath=True)
+def _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w):
+    """One ray of :func:`single_scattering` (work arrays w passed in, reset here)."""
+    nc = m.profile_code.shape[0]
+    nl = e_sun.shape[0]
+    mu = dirs[i, 2]
+    nu = dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2]   # cos of the scattering angle
+    for l in range(nl):
+        out[i, l] = 0.0
+        for c in range(nc):
+            w.acc[c, l] = 0.0
+    for c in range(nc):
+        w.dcol[c] = 0.0
+    t0, t1, hits_ground = ray_segment(r0, mu, m.R, m.Rt)
+    if t1 < t0 or (t1 == t0 and not hits_ground):
+        return
+    nbrk = view_break_points(r0, mu, sun[2], nu, m.R, t0, t1, w.brk)
+    t_prev = _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light,
+                                t0, t1, nbrk, w)
+    # phase functions and scattering coefficients
+    for c in range(nc):
+        phase_fill(m, c, nu, w.phs)
+        for l in range(nl):
+            out[i, l] += e_sun[l] * m.scattering[c, l] * w.phs[l] * w.acc[c, l]
+    if hits_ground:
+        _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
+                     out, w)
 
 
 @njit(parallel=True, cache=True)
-def transmittance_to_top(r, mu, table, codes, p0s, p1s, R, Rt, beta_e, light_exact, n_light, ts,
-                         out):
-    """Transmittance from (r[i], mu[i]) to the top of the atmosphere, (n, nl); 0 where the
-    ray hits the ground."""
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+def transmittance_to_top(r, mu, table, m, light_exact, n_light, ts, out):
+    """Transmittance from (r[i], mu[i]) to the top of the atmosphere of the medium m,
+    (n, nl); 0 where the ray hits the ground."""
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     for i in prange(r.shape[0]):
         col = np.zeros(nc)
-        if not sun_columns(table, codes, p0s, p1s, r[i], mu[i], R, Rt, light_exact, n_light, ts,
-                           col):
+        if not light_columns(table, m, r[i], mu[i], light_exact, n_light, ts, col):
             for l in range(nl):
                 out[i, l] = 0.0
             continue
         for l in range(nl):
             s = 0.0
             for c in range(nc):
-                s += beta_e[c, l] * col[c]
+                s += m.extinction[c, l] * col[c]
             out[i, l] = math.exp(-s)
 
 

@@ -56,6 +56,7 @@ class SingleScattering:
     def __init__(self, atmosphere, wavelengths_nm, observer_altitude_m: float = 0.0,
                  view_samples: int = 16, light_samples: int = 128, light_exact: bool = False,
                  table_size=(256, 512), quadrature_scale_m: float = 500.0):
+        from skydome.transport._medium import medium_from_properties
         from skydome.transport.optical_depth import ColumnTable
 
         self.wavelengths_nm = as_wavelengths(wavelengths_nm)
@@ -68,6 +69,7 @@ class SingleScattering:
         self.scale_m = check_number("quadrature_scale_m", quadrature_scale_m, 1.0, 1e6, "m")
         self.atmosphere = atmosphere
         self.props = atmosphere.optical_properties(self.wavelengths_nm)
+        self.medium = medium_from_properties(self.props)
         n_r, n_mu = table_size
         self.table = ColumnTable.cached(self.props, n_r, n_mu, self.light_samples, self.scale_m)
 
@@ -95,9 +97,7 @@ class SingleScattering:
         p = self.props
         flat = np.ascontiguousarray(d.reshape(-1, 3))
         out = np.empty((flat.shape[0], p.wavelengths_nm.size))
-        K.single_scattering(flat, self.r0, s, float(p.planet_radius_m), float(p.top_radius_m),
-                            p.profile_code, p.profile_p0, p.profile_p1, p.scattering, p.extinction,
-                            p.phase_code, p.phase_param, p.ground_albedo, e_sun, self.table.table,
+        K.single_scattering(flat, self.r0, s, self.medium, e_sun, self.table.table,
                             self.view_samples, self.scale_m, self.light_exact, self.light_samples,
                             out)
         np.maximum(out, 0.0, out=out)
@@ -113,8 +113,6 @@ class SingleScattering:
         p = self.props
         r = np.full(mu.shape, self.r0)
         out = np.empty((mu.size, p.wavelengths_nm.size))
-        K.transmittance_to_top(r, mu, self.table.table, p.profile_code, p.profile_p0,
-                               p.profile_p1, float(p.planet_radius_m), float(p.top_radius_m),
-                               p.extinction, self.light_exact, self.light_samples, self.scale_m,
-                               out)
+        K.transmittance_to_top(r, mu, self.table.table, self.medium, self.light_exact,
+                               self.light_samples, self.scale_m, out)
         return out.reshape(d.shape[:-1] + (p.wavelengths_nm.size,))

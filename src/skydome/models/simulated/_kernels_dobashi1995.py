@@ -19,6 +19,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from skydome.transport._geometry import clamp_cosine
+
 #: Below this many rays the serial kernel is used (measured on a busy 2-core machine: at
 #: 32768 rays the parallel launch was slower than one thread; at 262144 about even).
 PARALLEL_MIN_RAYS = 131072
@@ -87,10 +89,10 @@ def _elevation_cphi(d, i, sin_az, cos_az):
     """Elevation [deg] of ray i and cos(phi), phi = its azimuth - the solar azimuth (azimuth
     from north (+y) towards east (+x))."""
     x, y, z = d[i, 0], d[i, 1], d[i, 2]
-    elev = math.asin(min(max(z, -1.0), 1.0)) * (180.0 / math.pi)
+    elev = math.asin(clamp_cosine(z)) * (180.0 / math.pi)
     hh = math.sqrt(x * x + y * y)
     if hh > 0.0:
-        return elev, min(max((y * cos_az + x * sin_az) / hh, -1.0), 1.0)
+        return elev, clamp_cosine((y * cos_az + x * sin_az) / hh)
     return elev, cos_az              # atan2(0, 0) = 0, as the reference
 
 

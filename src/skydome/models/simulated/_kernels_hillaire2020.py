@@ -34,54 +34,36 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._kernels import (column_quadrature, phase_value, profile_density,
-                                        ray_hits_ground, ray_segment, table_coords, table_rmu)
-
-INV_4PI = 1.0 / (4.0 * math.pi)
-
-
-# -- table look-ups --------------------------------------------------------------------------
-@njit(cache=True, fastmath=True)
-def _trans_weights(r, mu, R, Rt, n_r, n_mu):
-    """Bilinear cell (i, j) and weights (a, b) of the transmittance table at (r, mu)."""
-    x_r, x_mu = table_coords(r, mu, R, Rt)
-    fr = x_r * (n_r - 1)
-    fm = x_mu * (n_mu - 1)
-    i = min(max(int(fr), 0), n_r - 2)
-    j = min(max(int(fm), 0), n_mu - 2)
-    return i, j, min(max(fr - i, 0.0), 1.0), min(max(fm - j, 0.0), 1.0)
-
-
-@njit(cache=True, fastmath=True)
-def _bilerp(tab, i, j, a, b, l):
-    return ((1.0 - a) * ((1.0 - b) * tab[i, j, l] + b * tab[i, j + 1, l])
-            + a * ((1.0 - b) * tab[i + 1, j, l] + b * tab[i + 1, j + 1, l]))
-
-
-@njit(cache=True, fastmath=True)
-def _ms_weights(r, mu_s, R, Rt, n_h, n_m):
-    """Bilinear cell and weights of the multiple-scattering table at (r, mu_s)."""
-    fy = min(max((r - R) / (Rt - R), 0.0), 1.0) * (n_h - 1)
-    fx = min(max(0.5 * mu_s + 0.5, 0.0), 1.0) * (n_m - 1)
-    i = min(int(fy), n_h - 2)
-    j = min(int(fx), n_m - 2)
-    return i, j, fy - i, fx - j
+from skydome.transport._geometry import (clamp_cosine, radius_along_above, ray_hits_ground,
+                                        ray_segment, safe_sqrt)
+from skydome.transport._medium import profile_density
+from skydome.transport._phase import INV_4PI, phase_fill
+from skydome.transport._quadrature import geometric_edge, geometric_node, geometric_step, medium_columns
+from skydome.transport._tables import (bilerp_last, irradiance_cell, lookup_rmu,
+                                       r_mu_from_transmittance_unit, transmittance_cell)
 
 
 # -- the ray march ---------------------------------------------------------------------------
+@njit(cache=True)
+def fill_phases(m, nu, phs):
+    """phs[c, l] = phase function of every constituent at cosine nu [sr^-1]."""
+    for c in range(m.profile_code.shape[0]):
+        phase_fill(m, c, nu, phs[c])
+
+
 @njit(cache=True, fastmath=True)
-def march(r0, mu, nu, sz, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, isotropic,
-          albedo, tlut, mslut, use_ms, ground, n_steps, ts, L, T, F, rho):
+def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground, n_steps, ts,
+          L, T, F, rho):
     """Integrate in-scattered radiance along one ray ([Hil20] eq. 1 with eq. 11's source).
 
     The ray from (r0, mu) is marched to the top of the atmosphere, the ground, or
     ``t_stop`` [m] (when ``t_stop`` > 0). Segment boundaries: the ray is split at its
     lowest point and each piece divided geometrically away from the dense end (``n_steps``
-    segments per piece, scale ``ts``), the medium sampled at the middle of each segment in
-    the log variable. On each segment the source S is held constant and integrated
-    against the transmittance analytically, int_0^dt S exp(-sigma_t s) ds =
-    S (1 - exp(-sigma_t dt)) / sigma_t (the paper's energy-conserving step, after
-    Hillaire 2015). The source is
+    segments per piece, scale ``ts``, the rule of ``transport._quadrature``), the medium
+    sampled at the middle of each segment in the log variable. On each segment the source
+    S is held constant and integrated against the transmittance analytically,
+    int_0^dt S exp(-sigma_t s) ds = S (1 - exp(-sigma_t dt)) / sigma_t (the paper's
+    energy-conserving step, after Hillaire 2015). The source is
 
         S = T_sun(x) sum_c beta_s,c rho_c P_c(nu) + Psi_ms(x) sigma_s(x)
 
@@ -93,8 +75,15 @@ def march(r0, mu, nu, sz, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, i
 
     Outputs (length n_lambda, overwritten): ``L`` radiance per unit irradiance, ``T``
     transmittance along the marched ray, ``F`` the integral of sigma_s T dt (the
-    integrand of f_ms, eq. 8 before the isotropic phase). ``phs`` holds P_c(nu).
+    integrand of f_ms, eq. 8 before the isotropic phase). ``phs[c, l]`` holds P_c(nu).
     """
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_s = m.scattering
+    beta_e = m.extinction
     nc = codes.shape[0]
     nl = beta_e.shape[1]
     n_r = tlut.shape[0]
@@ -120,23 +109,22 @@ def march(r0, mu, nu, sz, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, i
         length = b - a
         if length <= 0.0:
             continue
-        dv = math.log1p(length / ts) / n_steps
+        dv = geometric_step(length, n_steps, ts)
         for kk in range(n_steps):
             # segments in increasing t
             k = n_steps - 1 - kk if piece == 0 else kk
-            ua = ts * math.expm1(k * dv)
-            ub = ts * math.expm1((k + 1) * dv)
-            us = ts * math.expm1((k + 0.5) * dv)
+            ua = geometric_edge(k, dv, ts)
+            ub = geometric_edge(k + 1, dv, ts)
+            us, _w = geometric_node(k, dv, ts)
             dt = ub - ua
             t = b - us if piece == 0 else a + us
-            r = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
+            r = radius_along_above(r0, mu, t, R)
             for c in range(nc):
                 rho[c] = profile_density(codes[c], p0s[c], p1s[c], r - R)
-            mu_s = (r0 * sz + t * nu) / r
-            mu_s = min(max(mu_s, -1.0), 1.0)
+            mu_s = clamp_cosine((r0 * sz + t * nu) / r)
             lit = not ray_hits_ground(r, mu_s, R)        # earth shadow
-            ti, tj, ta, tb = _trans_weights(r, mu_s, R, Rt, n_r, n_mu)
-            mi, mj, ma, mb = _ms_weights(r, mu_s, R, Rt, n_h, n_m)
+            ti, tj, ta, tb = transmittance_cell(r, mu_s, R, Rt, n_r, n_mu)
+            mi, mj, ma, mb = irradiance_cell(r, mu_s, R, Rt, n_h, n_m)
             for l in range(nl):
                 se = 0.0
                 ss = 0.0
@@ -145,14 +133,14 @@ def march(r0, mu, nu, sz, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, i
                     se += beta_e[c, l] * rho[c]
                     sc = beta_s[c, l] * rho[c]
                     ss += sc
-                    ps += sc * phs[c]
+                    ps += sc * phs[c, l]
                 if isotropic:
                     ps = ss * INV_4PI
                 s_src = 0.0
                 if lit:
-                    s_src = _bilerp(tlut, ti, tj, ta, tb, l) * ps
+                    s_src = bilerp_last(tlut, ti, tj, ta, tb, l) * ps
                 if use_ms:
-                    s_src += _bilerp(mslut, mi, mj, ma, mb, l) * ss     # [Hil20] eq. 11
+                    s_src += bilerp_last(mslut, mi, mj, ma, mb, l) * ss     # [Hil20] eq. 11
                 x = se * dt
                 if x > 1e-6:
                     integ = -math.expm1(-x) / se
@@ -164,38 +152,36 @@ def march(r0, mu, nu, sz, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, i
     if hits and ground:
         mu_g = (r0 * sz + t1 * nu) / R
         if mu_g > 0.0:
-            ti, tj, ta, tb = _trans_weights(R, min(mu_g, 1.0), R, Rt, n_r, n_mu)
+            ti, tj, ta, tb = transmittance_cell(R, min(mu_g, 1.0), R, Rt, n_r, n_mu)
             for l in range(nl):
-                L[l] += albedo[l] / math.pi * _bilerp(tlut, ti, tj, ta, tb, l) * mu_g * T[l]
+                L[l] += m.albedo[l] / math.pi * bilerp_last(tlut, ti, tj, ta, tb, l) * mu_g * T[l]
 
 
 # -- table builders --------------------------------------------------------------------------
 @njit(parallel=True, cache=True)
-def build_transmittance(codes, p0s, p1s, beta_e, R, Rt, n_r, n_mu, n, ts):
+def build_transmittance(m, n_r, n_mu, n, ts):
     """Transmittance to the top of the atmosphere (n_r, n_mu, n_lambda) on the grid
     x_r = i/(n_r-1), x_mu = j/(n_mu-1) of Bruneton's mapping ([Hil20] sec. 4.1); the
     optical depth of each constituent by quadrature (``n`` nodes per piece)."""
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     out = np.empty((n_r, n_mu, nl))
     for idx in prange(n_r * n_mu):
         i = idx // n_mu
         j = idx % n_mu
-        r, mu = table_rmu(i / (n_r - 1.0), j / (n_mu - 1.0), R, Rt)
+        r, mu = r_mu_from_transmittance_unit(i / (n_r - 1.0), j / (n_mu - 1.0), m.R, m.Rt)
         col = np.empty(nc)
-        for c in range(nc):
-            col[c] = column_quadrature(codes[c], p0s[c], p1s[c], r, mu, R, Rt, n, ts, False)
+        medium_columns(m, r, mu, n, ts, False, col)
         for l in range(nl):
             s = 0.0
             for c in range(nc):
-                s += beta_e[c, l] * col[c]
+                s += m.extinction[c, l] * col[c]
             out[i, j, l] = math.exp(-s)
     return out
 
 
 @njit(parallel=True, cache=True)
-def build_multiple_scattering(codes, p0s, p1s, beta_s, beta_e, albedo, tlut, R, Rt, n_h, n_m,
-                              sqrt_dirs, n_steps, ts, order_out):
+def build_multiple_scattering(m, tlut, n_h, n_m, sqrt_dirs, n_steps, ts, order_out):
     """The multiple-scattering transfer table Psi_ms (n_h, n_m, n_lambda) ([Hil20] sec. 5.5).
 
     Texel (i, j): altitude h = i/(n_h-1) (top - ground), sun cosine mu_s = 2 j/(n_m-1) - 1.
@@ -210,8 +196,10 @@ def build_multiple_scattering(codes, p0s, p1s, beta_s, beta_e, albedo, tlut, R, 
     The sphere integrals are midpoint sums on a stratified grid, equal weights 4pi/N.
     ``order_out`` (2, n_h, n_m, n_lambda) receives L_2 and f_ms.
     """
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+    R = m.R
+    Rt = m.Rt
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     out = np.empty((n_h, n_m, nl))
     dummy = np.zeros((2, 2, nl))
     nd = sqrt_dirs * sqrt_dirs
@@ -222,14 +210,12 @@ def build_multiple_scattering(codes, p0s, p1s, beta_s, beta_e, albedo, tlut, R, 
         h = min(max(h, 1.0), Rt - R - 1.0)
         r0 = R + h
         mu_s = 2.0 * j / (n_m - 1.0) - 1.0
-        sun_y = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        sun_y = safe_sqrt(1.0 - mu_s * mu_s)
         L = np.empty(nl)
         T = np.empty(nl)
         F = np.empty(nl)
         rho = np.empty(nc)
-        phs = np.empty(nc)
-        for c in range(nc):
-            phs[c] = INV_4PI
+        phs = np.full((nc, nl), INV_4PI)
         l2 = np.zeros(nl)
         fms = np.zeros(nl)
         for k in range(nd):
@@ -237,11 +223,11 @@ def build_multiple_scattering(codes, p0s, p1s, beta_s, beta_e, albedo, tlut, R, 
             b = (k % sqrt_dirs + 0.5) / sqrt_dirs
             phi = 2.0 * math.pi * a
             cz = 1.0 - 2.0 * b                     # uniform in cos(zenith)
-            sz_ = math.sqrt(max(1.0 - cz * cz, 0.0))
+            sz_ = safe_sqrt(1.0 - cz * cz)
             dy = sz_ * math.sin(phi)
             nu = dy * sun_y + cz * mu_s
-            march(r0, cz, nu, mu_s, -1.0, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, True,
-                  albedo, tlut, dummy, False, True, n_steps, ts, L, T, F, rho)
+            march(r0, cz, nu, mu_s, -1.0, m, phs, True, tlut, dummy, False, True, n_steps, ts,
+                  L, T, F, rho)
             for l in range(nl):
                 l2[l] += L[l]
                 fms[l] += F[l]
@@ -264,7 +250,7 @@ def skyview_angles(row, col, H, W, R, r0):
     cos(phi) = 1 - 2 x^2, x = col/(W-1) (dense towards the sun).
     """
     hh = H // 2
-    cos_beta = math.sqrt(max(r0 * r0 - R * R, 0.0)) / r0
+    cos_beta = safe_sqrt(r0 * r0 - R * R) / r0
     beta = math.acos(min(cos_beta, 1.0))
     zh = math.pi - beta
     if row < hh:
@@ -279,30 +265,28 @@ def skyview_angles(row, col, H, W, R, r0):
 
 
 @njit(parallel=True, cache=True)
-def build_skyview(r0, sz, H, W, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                  phase_params, albedo, tlut, mslut, use_ms, n_steps, ts):
+def build_skyview(r0, sz, H, W, m, tlut, mslut, use_ms, n_steps, ts):
     """Sky-view table (H, W, n_lambda) of radiance per unit irradiance seen from r0 with
     the sun at zenith cosine ``sz`` ([Hil20] sec. 5.3). The ground (lit, Lambertian) is
     included in the lower half."""
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     out = np.empty((H, W, nl))
-    sx = math.sqrt(max(1.0 - sz * sz, 0.0))
+    sx = safe_sqrt(1.0 - sz * sz)
     for idx in prange(H * W):
         row = idx // W
         col = idx % W
-        mu, cphi = skyview_angles(row, col, H, W, R, r0)
-        st = math.sqrt(max(1.0 - mu * mu, 0.0))
+        mu, cphi = skyview_angles(row, col, H, W, m.R, r0)
+        st = safe_sqrt(1.0 - mu * mu)
         nu = st * cphi * sx + mu * sz
         L = np.empty(nl)
         T = np.empty(nl)
         F = np.empty(nl)
         rho = np.empty(nc)
-        phs = np.empty(nc)
-        for c in range(nc):
-            phs[c] = phase_value(phase_codes[c], phase_params[c], nu)
-        march(r0, mu, nu, sz, -1.0, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, False, albedo,
-              tlut, mslut, use_ms, True, n_steps, ts, L, T, F, rho)
+        phs = np.empty((nc, nl))
+        fill_phases(m, nu, phs)
+        march(r0, mu, nu, sz, -1.0, m, phs, False, tlut, mslut, use_ms, True, n_steps, ts, L, T,
+              F, rho)
         for l in range(nl):
             out[row, col, l] = L[l]
     return out
@@ -315,7 +299,7 @@ def _rel_azimuth_cos(dx, dy, sx, sy):
     ns = math.sqrt(sx * sx + sy * sy)
     if nd < 1e-12 or ns < 1e-12:
         return 1.0
-    return min(max((dx * sx + dy * sy) / (nd * ns), -1.0), 1.0)
+    return clamp_cosine((dx * sx + dy * sy) / (nd * ns))
 
 
 @njit(parallel=True, cache=True)
@@ -327,25 +311,25 @@ def lookup_skyview(dirs, sun, r0, R, sv, out):
     W = sv.shape[1]
     nl = sv.shape[2]
     hh = H // 2
-    cos_beta = math.sqrt(max(r0 * r0 - R * R, 0.0)) / r0
+    cos_beta = safe_sqrt(r0 * r0 - R * R) / r0
     beta = math.acos(min(cos_beta, 1.0))
     zh = math.pi - beta
     for i in prange(dirs.shape[0]):
-        mu = min(max(dirs[i, 2], -1.0), 1.0)
+        mu = clamp_cosine(dirs[i, 2])
         theta = math.acos(mu)
         if not ray_hits_ground(r0, mu, R):
-            c = 1.0 - math.sqrt(max(1.0 - theta / zh, 0.0))
+            c = 1.0 - safe_sqrt(1.0 - theta / zh)
             fr = min(max(c, 0.0), 1.0) * (hh - 1)
             base = 0
         else:
-            c = math.sqrt(max((theta - zh) / beta, 0.0)) if beta > 0.0 else 0.0
+            c = safe_sqrt((theta - zh) / beta) if beta > 0.0 else 0.0
             fr = min(max(c, 0.0), 1.0) * (hh - 1)
             base = hh
         ir = min(int(fr), hh - 2)
         a = fr - ir
         ir += base
         cphi = _rel_azimuth_cos(dirs[i, 0], dirs[i, 1], sun[0], sun[1])
-        fx = math.sqrt(max(0.5 - 0.5 * cphi, 0.0)) * (W - 1)
+        fx = safe_sqrt(0.5 - 0.5 * cphi) * (W - 1)
         jc = min(int(fx), W - 2)
         b = fx - jc
         for l in range(nl):
@@ -354,15 +338,14 @@ def lookup_skyview(dirs, sun, r0, R, sv, out):
 
 
 @njit(parallel=True, cache=True)
-def march_directions(dirs, sun, r0, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                     phase_params, albedo, tlut, mslut, use_ms, ground, n_steps, ts, out_l,
+def march_directions(dirs, sun, r0, t_stop, m, tlut, mslut, use_ms, ground, n_steps, ts, out_l,
                      out_t):
     """Per-direction ray march (no sky-view table): radiance per unit irradiance and
     transmittance, (n, n_lambda) each. ``t_stop[i]`` > 0 ends ray i there (aerial
     perspective); otherwise the ray runs to the top of the atmosphere or the ground."""
     n = dirs.shape[0]
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     block = 64
     nb = (n + block - 1) // block
     for ib in prange(nb):
@@ -370,14 +353,13 @@ def march_directions(dirs, sun, r0, t_stop, R, Rt, codes, p0s, p1s, beta_s, beta
         T = np.empty(nl)
         F = np.empty(nl)
         rho = np.empty(nc)
-        phs = np.empty(nc)
+        phs = np.empty((nc, nl))
         for i in range(ib * block, min(n, (ib + 1) * block)):
             mu = dirs[i, 2]
             nu = dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2]
-            for c in range(nc):
-                phs[c] = phase_value(phase_codes[c], phase_params[c], nu)
-            march(r0, mu, nu, sun[2], t_stop[i], R, Rt, codes, p0s, p1s, beta_s, beta_e, phs,
-                  False, albedo, tlut, mslut, use_ms, ground, n_steps, ts, L, T, F, rho)
+            fill_phases(m, nu, phs)
+            march(r0, mu, nu, sun[2], t_stop[i], m, phs, False, tlut, mslut, use_ms, ground,
+                  n_steps, ts, L, T, F, rho)
             for l in range(nl):
                 out_l[i, l] = L[l]
                 out_t[i, l] = T[l]
@@ -392,26 +374,25 @@ def ap_direction(row, col, n_v, n_u, sun_x, sun_z):
     elev = 0.5 * math.pi * s * abs(s)
     x = col / (n_u - 1.0)
     cphi = 1.0 - 2.0 * x * x
-    sphi = math.sqrt(max(1.0 - cphi * cphi, 0.0))
+    sphi = safe_sqrt(1.0 - cphi * cphi)
     ce = math.cos(elev)
     return ce * cphi, ce * sphi, math.sin(elev)
 
 
 @njit(parallel=True, cache=True)
-def build_aerial_perspective(r0, sz, n_v, n_u, n_s, km_per_slice, R, Rt, codes, p0s, p1s,
-                             beta_s, beta_e, phase_codes, phase_params, albedo, tlut, mslut,
-                             use_ms, n_steps, ts):
+def build_aerial_perspective(r0, sz, n_v, n_u, n_s, km_per_slice, m, tlut, mslut, use_ms,
+                             n_steps, ts):
     """Aerial-perspective volume ([Hil20] sec. 5.4): in-scattered radiance per unit
     irradiance and transmittance (n_v, n_u, n_s, n_lambda) from the observer to the depth
     of each slice, depth_k = km_per_slice n_s ((k + 0.5)/n_s)^2 km (the reference
     implementation's squared slice distribution). Each froxel is marched on its own; a
     froxel below the ground ends at the ground (no ground reflection: the object hides
     it)."""
-    nc = codes.shape[0]
-    nl = beta_e.shape[1]
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
     out_l = np.empty((n_v, n_u, n_s, nl))
     out_t = np.empty((n_v, n_u, n_s, nl))
-    sx = math.sqrt(max(1.0 - sz * sz, 0.0))
+    sx = safe_sqrt(1.0 - sz * sz)
     for idx in prange(n_v * n_u * n_s):
         row = idx // (n_u * n_s)
         col = (idx // n_s) % n_u
@@ -423,11 +404,10 @@ def build_aerial_perspective(r0, sz, n_v, n_u, n_s, km_per_slice, R, Rt, codes, 
         T = np.empty(nl)
         F = np.empty(nl)
         rho = np.empty(nc)
-        phs = np.empty(nc)
-        for c in range(nc):
-            phs[c] = phase_value(phase_codes[c], phase_params[c], nu)
-        march(r0, dz, nu, sz, depth, R, Rt, codes, p0s, p1s, beta_s, beta_e, phs, False, albedo,
-              tlut, mslut, use_ms, False, n_steps, ts, L, T, F, rho)
+        phs = np.empty((nc, nl))
+        fill_phases(m, nu, phs)
+        march(r0, dz, nu, sz, depth, m, phs, False, tlut, mslut, use_ms, False, n_steps, ts, L,
+              T, F, rho)
         for l in range(nl):
             out_l[row, col, k, l] = L[l]
             out_t[row, col, k, l] = T[l]
@@ -445,7 +425,7 @@ def lookup_aerial_perspective(dirs, dist, sun, km_per_slice, vol_l, vol_t, out_l
     n_s = vol_l.shape[2]
     nl = vol_l.shape[3]
     for i in prange(dirs.shape[0]):
-        dz = min(max(dirs[i, 2], -1.0), 1.0)
+        dz = clamp_cosine(dirs[i, 2])
         elev = math.asin(dz)
         s = elev / (0.5 * math.pi)
         ss = math.sqrt(abs(s))
@@ -455,7 +435,7 @@ def lookup_aerial_perspective(dirs, dist, sun, km_per_slice, vol_l, vol_t, out_l
         ir = min(max(int(fr), 0), n_v - 2)
         a = min(max(fr - ir, 0.0), 1.0)
         cphi = _rel_azimuth_cos(dirs[i, 0], dirs[i, 1], sun[0], sun[1])
-        fx = math.sqrt(max(0.5 - 0.5 * cphi, 0.0)) * (n_u - 1)
+        fx = safe_sqrt(0.5 - 0.5 * cphi) * (n_u - 1)
         jc = min(int(fx), n_u - 2)
         b = fx - jc
         sl = dist[i] / (km_per_slice * 1000.0)
@@ -488,14 +468,10 @@ def lookup_aerial_perspective(dirs, dist, sun, km_per_slice, vol_l, vol_t, out_l
 def lookup_transmittance(r, mu, tlut, R, Rt, out):
     """Transmittance to the top from (r[i], mu[i]) by the table; 0 where the ray hits
     the ground."""
-    n_r = tlut.shape[0]
-    n_mu = tlut.shape[1]
     nl = tlut.shape[2]
     for i in prange(r.shape[0]):
         if ray_hits_ground(r[i], mu[i], R):
             for l in range(nl):
                 out[i, l] = 0.0
             continue
-        ti, tj, ta, tb = _trans_weights(r[i], mu[i], R, Rt, n_r, n_mu)
-        for l in range(nl):
-            out[i, l] = _bilerp(tlut, ti, tj, ta, tb, l)
+        lookup_rmu(tlut, r[i], mu[i], R, Rt, 1.0, out[i])

@@ -17,10 +17,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._kernels import (distance_to_sphere_far,
-                                        profile_density, ray_hits_ground, table_lookup)
-
-UNIFORM = 2
+from skydome.transport._geometry import distance_to_sphere_far, ray_hits_ground, safe_sqrt
+from skydome.transport._medium import UNIFORM, densities, profile_density
+from skydome.transport._tables import lookup_column
 
 
 @njit(cache=True)
@@ -58,22 +57,25 @@ def fog_column(code, hf, r, mu, R, Rt, n, ts):
     up = math.sqrt(0.5 * math.pi * x) * erfcx(math.sqrt(0.5 * x) * abs(mu))
     if mu >= 0.0:
         return H * math.exp(-(r - R) / H) * up
-    r_low = r * math.sqrt(max(1.0 - mu * mu, 0.0))
+    r_low = r * safe_sqrt(1.0 - mu * mu)
     x0 = r_low / H
     return H * (2.0 * math.sqrt(0.5 * math.pi * x0) * math.exp((R - r_low) / H)
                 - math.exp(-(r - R) / H) * up)
 
 
 @njit(cache=True)
-def _light(table, nc_a, fog_code, fog_h, R, Rt, r, mu_s, beta_e, nl, out_tau):
+def _light(table, nc_a, fog_code, fog_h, m, r, mu_s, nl, out_tau):
     """Optical depth to the sun from (r, mu_s) per wavelength; False when in shadow."""
+    R = m.R
+    Rt = m.Rt
+    beta_e = m.extinction
     if ray_hits_ground(r, mu_s, R):
         return False
     fcol = fog_column(fog_code, fog_h, r, mu_s, R, Rt, 0, 0.0)
     for l in range(nl):
         out_tau[l] = 0.0
     for c in range(nc_a):
-        col = table_lookup(table, c, r, mu_s, R, Rt)
+        col = lookup_column(table, c, r, mu_s, R, Rt)
         for l in range(nl):
             out_tau[l] += beta_e[c, l] * col
     if fog_code >= 0:
@@ -82,23 +84,22 @@ def _light(table, nc_a, fog_code, fog_h, R, Rt, r, mu_s, beta_e, nl, out_tau):
     return True
 
 
-@njit(cache=True)
-def _density(codes, p0s, p1s, h, rho):
-    for c in range(codes.shape[0]):
-        rho[c] = profile_density(codes[c], p0s[c], p1s[c], h)
-
-
 @njit(parallel=True, cache=True, fastmath=True)
-def kaneda_rays(dirs, t_end, sun, R, Rt, shells, codes, p0s, p1s, beta_e, table, nc_a, fog_code,
-                fog_h, max_dtau, max_sub, acc, trans):
+def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_dtau, max_sub, acc,
+                trans):
     """For every ray i: ``acc[i, c, l]`` = integral over the view ray of rho_c(t)
     exp(-tau_view(t) - tau_sun(t)) dt [m] and ``trans[i, l]`` = exp(-tau_view(t_max)).
 
     dirs (n, 3) with dirs[i, 2] >= 0; t_end (n,) path length limit (inf: to the top);
-    shells: ascending altitudes [m] from 0 to Rt - R; codes/p0s/p1s: profiles of every
-    constituent (the fog last when fog_code >= 0); beta_e (nc, nl) extinction at reference
-    density; table: column table of the first nc_a constituents.
+    shells: ascending altitudes [m] from 0 to Rt - R; the medium m holds every constituent
+    (the fog last when fog_code >= 0); table: column table of the first nc_a constituents.
     """
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
     n = dirs.shape[0]
     nc = codes.shape[0]
     nl = beta_e.shape[1]
@@ -129,8 +130,8 @@ def kaneda_rays(dirs, t_end, sun, R, Rt, shells, codes, p0s, p1s, beta_e, table,
         t_top = distance_to_sphere_far(R, mu, Rt)
         t_max = min(t_top, t_end[i])
         # integrand at t = 0
-        _density(codes, p0s, p1s, 0.0, rho_a)
-        lit_a = _light(table, nc_a, fog_code, fog_h, R, Rt, R, sun[2], beta_e, nl, ts_a)
+        densities(m, 0.0, rho_a)
+        lit_a = _light(table, nc_a, fog_code, fog_h, m, R, sun[2], nl, ts_a)
         for c in range(nc):
             for l in range(nl):
                 g_a[c, l] = rho_a[c] * math.exp(-ts_a[l]) if lit_a else 0.0
@@ -139,7 +140,7 @@ def kaneda_rays(dirs, t_end, sun, R, Rt, shells, codes, p0s, p1s, beta_e, table,
             if t_a >= t_max:
                 break
             rk = R + shells[k]
-            t_k = -R * mu + math.sqrt(max(R * R * mu * mu + rk * rk - R * R, 0.0))   # shell crossing
+            t_k = -R * mu + safe_sqrt(R * R * mu * mu + rk * rk - R * R)   # shell crossing
             if k == ns - 1:
                 t_k = t_top
             t_k = min(t_k, t_max)
@@ -151,11 +152,11 @@ def kaneda_rays(dirs, t_end, sun, R, Rt, shells, codes, p0s, p1s, beta_e, table,
             for c in range(nc):
                 dtau += bmax[c] * max(profile_density(codes[c], p0s[c], p1s[c], hm), rho_a[c])
             dtau *= (t_k - t_a)
-            m = min(max(int(math.ceil(dtau / max_dtau)), 1), max_sub)
-            h = (t_k - t_a) / m
-            for j in range(m):
+            n_pc = min(max(int(math.ceil(dtau / max_dtau)), 1), max_sub)
+            h = (t_k - t_a) / n_pc
+            for j in range(n_pc):
                 ta = t_a + j * h
-                tb = ta + h if j < m - 1 else t_k
+                tb = ta + h if j < n_pc - 1 else t_k
                 hh = tb - ta
                 tq = ta + 0.25 * hh
                 tm = ta + 0.5 * hh
@@ -164,18 +165,18 @@ def kaneda_rays(dirs, t_end, sun, R, Rt, shells, codes, p0s, p1s, beta_e, table,
                 rm = math.sqrt(R * R + 2.0 * R * mu * tm + tm * tm)
                 rq3 = math.sqrt(R * R + 2.0 * R * mu * tq3 + tq3 * tq3)
                 rb = math.sqrt(R * R + 2.0 * R * mu * tb + tb * tb)
-                _density(codes, p0s, p1s, rq - R, rho_q)
-                _density(codes, p0s, p1s, rm - R, rho_m)
-                _density(codes, p0s, p1s, rq3 - R, rho_q3)
-                _density(codes, p0s, p1s, rb - R, rho_b)
+                densities(m, rq - R, rho_q)
+                densities(m, rm - R, rho_m)
+                densities(m, rq3 - R, rho_q3)
+                densities(m, rb - R, rho_b)
                 # view columns at the midpoint and the end (Simpson on each half)
                 for c in range(nc):
                     col_m[c] = col[c] + hh / 12.0 * (rho_a[c] + 4.0 * rho_q[c] + rho_m[c])
                     col[c] = col_m[c] + hh / 12.0 * (rho_m[c] + 4.0 * rho_q3[c] + rho_b[c])
-                lit_m = _light(table, nc_a, fog_code, fog_h, R, Rt, rm,
-                               (R * sun[2] + tm * nu) / rm, beta_e, nl, ts_m)
-                lit_b = _light(table, nc_a, fog_code, fog_h, R, Rt, rb,
-                               (R * sun[2] + tb * nu) / rb, beta_e, nl, ts_b)
+                lit_m = _light(table, nc_a, fog_code, fog_h, m, rm, (R * sun[2] + tm * nu) / rm,
+                               nl, ts_m)
+                lit_b = _light(table, nc_a, fog_code, fog_h, m, rb, (R * sun[2] + tb * nu) / rb,
+                               nl, ts_b)
                 for l in range(nl):
                     sv_m = 0.0
                     sv_b = 0.0
@@ -210,11 +211,11 @@ def kaneda_rays(dirs, t_end, sun, R, Rt, shells, codes, p0s, p1s, beta_e, table,
 
 
 @njit(cache=True)
-def sun_transmittance(R, Rt, mu_s, table, nc_a, fog_code, fog_h, beta_e, out):
+def sun_transmittance(m, mu_s, table, nc_a, fog_code, fog_h, out):
     """Transmittance from the ground towards the sun (0 when below the horizon)."""
-    nl = beta_e.shape[1]
+    nl = m.extinction.shape[1]
     tau = np.empty(nl)
-    if not _light(table, nc_a, fog_code, fog_h, R, Rt, R, mu_s, beta_e, nl, tau):
+    if not _light(table, nc_a, fog_code, fog_h, m, m.R, mu_s, nl, tau):
         for l in range(nl):
             out[l] = 0.0
         return

@@ -22,15 +22,16 @@ Estimator (per direction, per wavelength, per path):
   ``single_scattering``; zero where the ray hits the planet);
 * the continuation direction is sampled from the phase function of one constituent chosen
   with probability beta_s,c rho_c / mu_s (HG analytically, Cornette-Shanks by rejection from
-  HG, Rayleigh by rejection from the uniform sphere), the Lambertian ground by cosine
-  sampling;
+  HG, Rayleigh by rejection from the uniform sphere, a tabulated phase function by
+  inverting its cumulative distribution), the Lambertian ground by cosine sampling;
 * Russian roulette after ``RR_ORDER`` scattering orders.
 
 Polarisation (Stokes vector (I, Q, U, V)): the path carries the 4x4 matrix A that maps a
 Stokes vector of the current backward segment (in its reference frame) to the camera's
 frame. At a scattering vertex A <- A L(phi) F(Theta) / F11(Theta) with L the rotation from the
 scattering-plane frame to the current frame and F the scattering matrix in the scattering
-plane (Hansen & Travis 1974, eq. 2.15 for Rayleigh with depolarisation). Frames are kept as
+plane (Hansen & Travis 1974, eq. 2.15 for Rayleigh with depolarisation; HG, isotropic and
+tabulated phase functions depolarise, F = F11 diag(1, 0, 0, 0)). Frames are kept as
 a unit vector ``a`` (parallel axis) perpendicular to the propagation direction k; the
 perpendicular axis is b = k x a.
 """
@@ -38,14 +39,19 @@ perpendicular axis is b = k x a.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._kernels import profile_density, ray_segment, sun_columns
+from skydome.transport._geometry import radius_along, radius_along_above, ray_segment, safe_sqrt
+from skydome.transport._kernels import light_columns
+from skydome.transport._medium import EXPONENTIAL, UNIFORM, profile_density
+from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, RAYLEIGH, TABULATED,
+                                      phase_of, phase_value, rayleigh_gamma, rayleigh_rho,
+                                      sample_henyey_greenstein, sample_tabulated)
+from skydome.transport._quadrature import geometric_edge, geometric_step
 
-RAYLEIGH, HENYEY_GREENSTEIN, CORNETTE_SHANKS, ISOTROPIC = 0, 1, 2, 3
-EXPONENTIAL, TENT, UNIFORM, GAUSSIAN = 0, 1, 2, 3
 RR_ORDER = 4          # Russian roulette from this scattering order on
 N_CAMERA = 128        # optical-depth nodes per piece of the camera ray
 SCALE_M = 500.0       # node spacing scale [m] (as the transport quadrature)
@@ -77,21 +83,12 @@ def _rand(state):
     return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-# -- phase functions and scattering matrices --------------------------------------------------
+# -- phase functions and scattering matrices (the phase functions live in transport._phase) --
 @njit(cache=True)
 def phase(code, g, rho, c):
-    """Normalised phase function [sr^-1]. Rayleigh with depolarisation factor rho:
-    3/(8 pi) [(1 + rho) + (1 - rho) c^2] / (2 + rho) (Chandrasekhar 1950; Hansen & Travis
-    1974 eq. 2.15, element P11); HG ([KRZ06] eq. 10); Cornette-Shanks ([KRZ06] eq. 11)."""
-    if code == RAYLEIGH:
-        return 3.0 / (8.0 * math.pi) * ((1.0 + rho) + (1.0 - rho) * c * c) / (2.0 + rho)
-    if code == HENYEY_GREENSTEIN:
-        d = 1.0 + g * g - 2.0 * g * c
-        return (1.0 - g * g) / (d * math.sqrt(d)) * INV_4PI
-    if code == CORNETTE_SHANKS:
-        d = 1.0 + g * g - 2.0 * g * c
-        return 3.0 * (1.0 - g * g) / (2.0 * (2.0 + g * g)) * (1.0 + c * c) / (d * math.sqrt(d)) * INV_4PI
-    return INV_4PI
+    """Normalised phase function [sr^-1] of an analytic code with asymmetry g (HG, CS) or
+    depolarisation ratio rho (Rayleigh): :func:`skydome.transport._phase.phase_value`."""
+    return phase_value(code, rayleigh_gamma(rho) if code == RAYLEIGH else g, c)
 
 
 @njit(cache=True)
@@ -102,7 +99,8 @@ def matrix_ratios(code, rho, c):
     Delta' = (1 - 2 rho)/(1 - rho)):  F11 = Delta 3/4 (1 + c^2) + 1 - Delta,
     F12 = -Delta 3/4 (1 - c^2), F22 = Delta 3/4 (1 + c^2), F33 = Delta 3/2 c,
     F44 = Delta Delta' 3/2 c.  Cornette-Shanks: the Rayleigh shape with rho = 0 (its
-    (1 + c^2) factor is the Rayleigh one).  HG and isotropic: depolarising, F = F11 diag(1,0,0,0).
+    (1 + c^2) factor is the Rayleigh one).  HG, isotropic and tabulated: depolarising,
+    F = F11 diag(1,0,0,0).
     """
     if code == RAYLEIGH:
         delta = (1.0 - rho) / (1.0 + 0.5 * rho)
@@ -118,16 +116,10 @@ def matrix_ratios(code, rho, c):
 
 @njit(cache=True)
 def sample_cos(code, g, rho, state):
-    """Cosine of the scattering angle drawn from the phase function."""
+    """Cosine of the scattering angle drawn from an analytic phase function."""
     if code == HENYEY_GREENSTEIN or code == CORNETTE_SHANKS:
         while True:
-            u = _rand(state)
-            if abs(g) < 1e-6:
-                c = 2.0 * u - 1.0
-            else:
-                s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u)
-                c = (1.0 + g * g - s * s) / (2.0 * g)        # HG inversion
-            c = min(max(c, -1.0), 1.0)
+            c = sample_henyey_greenstein(g, _rand(state))     # HG inversion
             if code == HENYEY_GREENSTEIN:
                 return c
             if _rand(state) * 2.0 <= 1.0 + c * c:            # CS = HG (1 + c^2) x const
@@ -141,9 +133,25 @@ def sample_cos(code, g, rho, state):
 
 
 @njit(cache=True)
+def _rho(m, c):
+    """Depolarisation ratio of constituent c (Rayleigh), 0 otherwise."""
+    return rayleigh_rho(m.phase_param[c]) if m.phase_code[c] == RAYLEIGH else 0.0
+
+
+@njit(cache=True)
+def sample_phase(m, c, l, state):
+    """Cosine of the scattering angle drawn from constituent c's phase function at
+    wavelength l (a tabulated one by inverting its cumulative distribution)."""
+    code = m.phase_code[c]
+    if code == TABULATED:
+        return sample_tabulated(m.phase_cdf, c, l, _rand(state))
+    return sample_cos(code, m.phase_param[c], _rho(m, c), state)
+
+
+@njit(cache=True)
 def rotate_about(w, c, phi, out):
     """out = unit vector at angle acos(c) from w with azimuth phi about w."""
-    s = math.sqrt(max(1.0 - c * c, 0.0))
+    s = safe_sqrt(1.0 - c * c)
     # orthonormal basis (Duff et al. 2017)
     sign = 1.0 if w[2] >= 0.0 else -1.0
     a = -1.0 / (sign + w[2])
@@ -198,14 +206,18 @@ def _plane_frames(k_out, k_in, a_cur, tmp, a_in):
 
 
 @njit(cache=True)
-def _segment_majorant(codes, p0s, p1s, ext_l, r, mu, t_end, R):
+def _segment_majorant(m, ext_l, r, mu, t_end):
     """sum_c beta_e,c max rho_c over the altitudes the segment [0, t_end] spans."""
-    r_end = math.sqrt(max(r * r + 2.0 * r * mu * t_end + t_end * t_end, 0.0))
+    R = m.R
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    r_end = radius_along(r, mu, t_end)
     t_low = min(max(-r * mu, 0.0), t_end)
-    r_low = math.sqrt(max(r * r + 2.0 * r * mu * t_low + t_low * t_low, 0.0))
+    r_low = radius_along(r, mu, t_low)
     h_lo = max(r_low - R, 0.0)
     h_hi = max(max(r, r_end) - R, h_lo)
-    m = 0.0
+    mj = 0.0
     for c in range(codes.shape[0]):
         if ext_l[c] <= 0.0:
             continue
@@ -220,23 +232,25 @@ def _segment_majorant(codes, p0s, p1s, ext_l, r, mu, t_end, R):
             else:
                 d = max(profile_density(code, p0s[c], p1s[c], h_lo),
                         profile_density(code, p0s[c], p1s[c], h_hi))
-        m += ext_l[c] * d
-    return m * (1.0 + 1e-9)
+        mj += ext_l[c] * d
+    return mj * (1.0 + 1e-9)
 
 
 @njit(cache=True)
-def _camera_columns(codes, p0s, p1s, ext_l, r, mu, R, t0, t1, node_t, node_tau):
+def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
     """Cumulative optical depth along the camera ray at nodes t_k in [t0, t1]: the ray is
-    split at its lowest point and each piece gets N_CAMERA nodes spaced geometrically away
-    from the dense end (the rule of ``transport._kernels.column_quadrature``); each interval
-    is integrated by Simpson's rule. Returns the number of nodes (node_tau[0] = 0)."""
+    split at its lowest point and each piece gets N_CAMERA nodes at the cell edges of the
+    geometric rule of ``transport._quadrature`` (spaced geometrically away from the dense
+    end); each interval is integrated by Simpson's rule. Returns the number of nodes
+    (node_tau[0] = 0)."""
+    R = m.R
     node_t[0] = t0
     node_tau[0] = 0.0
     nn = 1
     if t1 <= t0:
         return nn
     tmin = min(max(-r * mu, t0), t1)
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     for piece in range(2):
         if piece == 0:
             a, b = t0, tmin
@@ -245,13 +259,12 @@ def _camera_columns(codes, p0s, p1s, ext_l, r, mu, R, t0, t1, node_t, node_tau):
         length = b - a
         if length <= 0.0:
             continue
-        vmax = math.log1p(length / SCALE_M)
-        dv = vmax / N_CAMERA
+        dv = geometric_step(length, N_CAMERA, SCALE_M)
         for kk in range(1, N_CAMERA + 1):
             if piece == 0:
-                t = b - SCALE_M * math.expm1((N_CAMERA - kk) * dv)
+                t = b - geometric_edge(N_CAMERA - kk, dv, SCALE_M)
             else:
-                t = a + SCALE_M * math.expm1(kk * dv)
+                t = a + geometric_edge(kk, dv, SCALE_M)
             if kk == N_CAMERA:
                 t = b
             tp = node_t[nn - 1]
@@ -260,10 +273,11 @@ def _camera_columns(codes, p0s, p1s, ext_l, r, mu, R, t0, t1, node_t, node_tau):
             for q in range(3):
                 tt = tp if q == 0 else (tm if q == 1 else t)
                 wq = 1.0 if q != 1 else 4.0
-                rr = math.sqrt(max(r * r + 2.0 * r * mu * tt + tt * tt, R * R))
+                rr = radius_along_above(r, mu, tt, R)
                 for c in range(nc):
                     if ext_l[c] > 0.0:
-                        sacc += wq * ext_l[c] * profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                        sacc += wq * ext_l[c] * profile_density(m.profile_code[c], m.profile_p0[c],
+                                                                m.profile_p1[c], rr - R)
             node_t[nn] = t
             node_tau[nn] = node_tau[nn - 1] + (t - tp) / 6.0 * sacc
             nn += 1
@@ -302,265 +316,342 @@ def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44, tmp):
         A[j, 3] = a3 * f44
 
 
+class _Path(NamedTuple):
+    """State and work arrays of the paths of one (direction, wavelength)."""
+
+    A: np.ndarray          # (4, 4) Stokes matrix to the camera frame
+    est: np.ndarray        # (4,) estimate of the current sample
+    pos: np.ndarray        # (3,) vertex [m]
+    w: np.ndarray          # (3,) backward direction
+    wn: np.ndarray         # (3,) next direction
+    k_out: np.ndarray      # (3,) propagation direction leaving the vertex (towards the camera)
+    k_in: np.ndarray       # (3,) propagation direction arriving at the vertex
+    a_cur: np.ndarray      # (3,) parallel axis of the current frame
+    a_new: np.ndarray      # (3,)
+    tmp: np.ndarray        # (3,)
+    ws: np.ndarray         # (3,) sampled direction to the sun
+    scol: np.ndarray       # (nc,) light-path columns
+    ext_l: np.ndarray      # (nc,) extinction at this wavelength [m^-1]
+    sca_l: np.ndarray      # (nc,) scattering at this wavelength [m^-1]
+    mus_c: np.ndarray      # (nc,) local scattering coefficients at the vertex [m^-1]
+    state: np.ndarray      # (1,) uint64 random stream
+    node_t: np.ndarray     # (2 N_CAMERA + 1,) camera-ray nodes [m]
+    node_tau: np.ndarray   # (2 N_CAMERA + 1,) cumulative optical depth there
+
+
 @njit(cache=True)
-def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, R, Rt, codes, p0s, p1s, beta_s, beta_e,
-               phase_codes, phase_g, phase_rho, albedo, e_sun, table, n_samples, seed, polarised,
-               max_order, mean, err):
-    nc = codes.shape[0]
+def _new_path(m, l, seed, i):
+    nc = m.profile_code.shape[0]
     state = np.empty(1, dtype=np.uint64)
     state[0] = _stream_seed(seed, i, l)
-    A = np.empty((4, 4))
-    est = np.zeros(4)
+    pt = _Path(np.empty((4, 4)), np.zeros(4), np.empty(3), np.empty(3), np.empty(3), np.empty(3),
+               np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(nc),
+               np.empty(nc), np.empty(nc), np.empty(nc), state, np.empty(2 * N_CAMERA + 1),
+               np.empty(2 * N_CAMERA + 1))
+    for c in range(nc):
+        pt.ext_l[c] = m.extinction[c, l]
+        pt.sca_l[c] = m.scattering[c, l]
+    return pt
+
+
+@njit(cache=True)
+def _local_scattering(pt, m, rr):
+    """(mu_t, mu_s): local extinction and scattering coefficients at radius rr [m^-1];
+    per constituent scattering in pt.mus_c."""
+    mut = 0.0
+    mus = 0.0
+    for c in range(m.profile_code.shape[0]):
+        d = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c], rr - m.R)
+        mut += pt.ext_l[c] * d
+        pt.mus_c[c] = pt.sca_l[c] * d
+        mus += pt.mus_c[c]
+    return mut, mus
+
+
+@njit(cache=True)
+def _forced_collision(pt, m, cam_r0, cam_mu, n_nodes, tau_cam):
+    """The camera ray's first collision, forced inside the air by inverting its tabulated
+    optical depth: tau* = -ln(1 - xi (1 - T)). Returns (ok, t, mu_t of the interval, mu_s)."""
+    w0 = -math.expm1(-tau_cam)
+    target = -math.log1p(-_rand(pt.state) * w0)
+    lo = 0
+    hi = n_nodes - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if pt.node_tau[mid] <= target:
+            lo = mid
+        else:
+            hi = mid
+    dtau = pt.node_tau[hi] - pt.node_tau[lo]
+    if dtau <= 0.0:
+        return False, 0.0, 0.0, 0.0          # (measure zero: xi at the very end)
+    mut = dtau / (pt.node_t[hi] - pt.node_t[lo])     # extinction of the interval
+    t = pt.node_t[lo] + (target - pt.node_tau[lo]) / mut
+    rr = radius_along(cam_r0, cam_mu, t)
+    mus = 0.0
+    for c in range(m.profile_code.shape[0]):
+        pt.mus_c[c] = pt.sca_l[c] * profile_density(m.profile_code[c], m.profile_p0[c],
+                                                    m.profile_p1[c], rr - m.R)
+        mus += pt.mus_c[c]
+    return True, t, mut, mus
+
+
+@njit(cache=True)
+def _delta_track(pt, m, r, mu, t0, t_end):
+    """Delta tracking (Woodcock) along [0, t_end] against the segment's majorant.
+    Returns (collided, t, mu_t, mu_s) at the real collision."""
+    mbar = _segment_majorant(m, pt.ext_l, r, mu, t_end)
+    t = 0.0
+    mut = 0.0
+    mus = 0.0
+    if t_end > t0 and mbar > 0.0:
+        while True:
+            t -= math.log(1.0 - _rand(pt.state)) / mbar
+            if t >= t_end:
+                break
+            mut, mus = _local_scattering(pt, m, radius_along(r, mu, t))
+            if _rand(pt.state) * mbar < mut:
+                return True, t, mut, mus
+    return False, t, mut, mus
+
+
+@njit(cache=True)
+def _next_event_sun(pt, m, l, sun, cos_alpha, table, rloc, mus, scale, polarised):
+    """Next-event estimation towards the sun disc from the vertex: pt.est += scale x
+    transmittance x phase-weighted mixture / mu_s (with the Stokes rotation when polarised)."""
+    nc = m.profile_code.shape[0]
+    _sun_sample(sun, cos_alpha, pt.state, pt.ws)
+    mu_s = (pt.pos[0] * pt.ws[0] + pt.pos[1] * pt.ws[1] + pt.pos[2] * pt.ws[2]) / rloc
+    if not light_columns(table, m, rloc, mu_s, False, 0, 1.0, pt.scol):
+        return
+    tau = 0.0
+    for c in range(nc):
+        tau += pt.ext_l[c] * pt.scol[c]
+    tr = math.exp(-tau)
+    cth = pt.ws[0] * pt.w[0] + pt.ws[1] * pt.w[1] + pt.ws[2] * pt.w[2]
+    if polarised:
+        for j in range(3):
+            pt.k_in[j] = -pt.ws[j]
+        c2, s2r = _plane_frames(pt.k_out, pt.k_in, pt.a_cur, pt.tmp, pt.a_new)
+        v0 = 0.0
+        v1 = 0.0
+        for c in range(nc):
+            if pt.mus_c[c] > 0.0:
+                p = phase_of(m, c, l, cth) * pt.mus_c[c]
+                f12, _f22, _f33, _f44 = matrix_ratios(m.phase_code[c], _rho(m, c), cth)
+                v0 += p
+                v1 += p * f12
+        # L(phi) (v0, v1, 0, 0)
+        _mat_apply(pt.A, v0, c2 * v1, -s2r * v1, 0.0, pt.est, scale / mus * tr, True)
+    else:
+        p = 0.0
+        for c in range(nc):
+            if pt.mus_c[c] > 0.0:
+                p += phase_of(m, c, l, cth) * pt.mus_c[c]
+        pt.est[0] += scale * p / mus * tr
+
+
+@njit(cache=True)
+def _scatter(pt, m, l, mus, polarised):
+    """Continue the path: choose a constituent with probability mu_s,c / mu_s, sample its
+    phase function, rotate the direction (and the Stokes matrix and frame)."""
+    nc = m.profile_code.shape[0]
+    u = _rand(pt.state) * mus
+    cc = nc - 1
+    acc = 0.0
+    for c in range(nc):
+        acc += pt.mus_c[c]
+        if u < acc:
+            cc = c
+            break
+    while pt.mus_c[cc] <= 0.0 and cc > 0:
+        cc -= 1
+    cth = sample_phase(m, cc, l, pt.state)
+    rotate_about(pt.w, cth, TWO_PI * _rand(pt.state), pt.wn)
+    if polarised:
+        for j in range(3):
+            pt.k_in[j] = -pt.wn[j]
+        c2, s2r = _plane_frames(pt.k_out, pt.k_in, pt.a_cur, pt.tmp, pt.a_new)
+        f12, f22, f33, f44 = matrix_ratios(m.phase_code[cc], _rho(m, cc), cth)
+        _mat_rot_scatter(pt.A, c2, s2r, f12, f22, f33, f44, pt.tmp)
+        for j in range(3):
+            pt.a_cur[j] = pt.a_new[j]
+    for j in range(3):
+        pt.w[j] = pt.wn[j]
+
+
+@njit(cache=True)
+def _ground_vertex(pt, m, sun, cos_alpha, table, t_end, scale, polarised):
+    """Move the vertex to the ground point (just above it; normal in pt.tmp) and add the
+    next-event estimate of the sunlit Lambertian ground, scale x albedo / pi E mu_s T
+    (``scale`` includes the albedo, E_sun and the path weight)."""
+    R = m.R
+    for j in range(3):
+        pt.pos[j] += t_end * pt.w[j]
+    rg = math.sqrt(pt.pos[0] * pt.pos[0] + pt.pos[1] * pt.pos[1] + pt.pos[2] * pt.pos[2])
+    for j in range(3):
+        pt.pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
+        pt.tmp[j] = pt.pos[j] / (R * (1.0 + 1e-12))  # normal
+    if scale <= 0.0:
+        return
+    _sun_sample(sun, cos_alpha, pt.state, pt.ws)
+    mu_s = pt.tmp[0] * pt.ws[0] + pt.tmp[1] * pt.ws[1] + pt.tmp[2] * pt.ws[2]
+    if mu_s > 0.0 and light_columns(table, m, R * (1.0 + 1e-12), mu_s, False, 0, 1.0, pt.scol):
+        tau = 0.0
+        for c in range(m.profile_code.shape[0]):
+            tau += pt.ext_l[c] * pt.scol[c]
+        # reflected light is unpolarised: only A's first column matters
+        _mat_apply(pt.A, 1.0, 0.0, 0.0, 0.0, pt.est, scale / math.pi * mu_s * math.exp(-tau),
+                   polarised)
+
+
+@njit(cache=True)
+def _ground_bounce(pt):
+    """Continue from the ground: a cosine-weighted direction about the normal pt.tmp; the
+    Stokes matrix depolarised (first column kept) and a new frame."""
+    u1 = _rand(pt.state)
+    rotate_about(pt.tmp, math.sqrt(u1), TWO_PI * _rand(pt.state), pt.w)
+    for j in range(4):          # depolarise: keep the first column
+        pt.A[j, 1] = 0.0
+        pt.A[j, 2] = 0.0
+        pt.A[j, 3] = 0.0
+    # new frame: any axis perpendicular to the new ray
+    _cross(pt.tmp, pt.w, pt.a_cur)
+    nn = math.sqrt(pt.a_cur[0] ** 2 + pt.a_cur[1] ** 2 + pt.a_cur[2] ** 2)
+    if nn < 1e-12:
+        rotate_about(pt.w, 0.0, 0.0, pt.a_cur)
+    else:
+        for j in range(3):
+            pt.a_cur[j] /= nn
+
+
+@njit(cache=True)
+def _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table,
+                 polarised, max_order, n_nodes, tau_cam, t_cam, c_t1):
+    """One path of one camera branch, its estimates added to pt.est. Branch 0: the camera
+    ray's first collision, forced inside the air (weight 1 - T); branch 1: the camera ray
+    reaches the ground without collision (weight T)."""
+    esun = e_sun[l]
+    alb = m.albedo[l]
+    for j in range(4):
+        for k in range(4):
+            pt.A[j, k] = 1.0 if j == k else 0.0
+    pt.pos[0], pt.pos[1], pt.pos[2] = 0.0, 0.0, r0
+    for j in range(3):
+        pt.w[j] = dirs[i, j]
+        pt.a_cur[j] = zen_ref[i, j]
+    weight = 1.0
+    w0 = 1.0
+    order = 0
+    first = True
+    while True:
+        r = math.sqrt(pt.pos[0] * pt.pos[0] + pt.pos[1] * pt.pos[1] + pt.pos[2] * pt.pos[2])
+        mu = (pt.pos[0] * pt.w[0] + pt.pos[1] * pt.w[1] + pt.pos[2] * pt.w[2]) / r
+        t0, t_end, hits_ground = ray_segment(r, mu, m.R, m.Rt)
+        if first:
+            first = False
+            mus = 0.0
+            mut = 0.0
+            t = 0.0
+            if branch == 1:
+                collided = False
+                t_end = c_t1
+                w0 = t_cam
+            else:
+                collided = True
+                w0 = -math.expm1(-tau_cam)
+                ok, t, mut, mus = _forced_collision(pt, m, r0, dirs[i, 2], n_nodes, tau_cam)
+                if not ok:
+                    break
+        else:
+            collided, t, mut, mus = _delta_track(pt, m, r, mu, t0, t_end)
+        if not collided and not hits_ground:
+            break                                   # leaves the atmosphere
+        order += 1
+        if collided:
+            for j in range(3):
+                pt.pos[j] += t * pt.w[j]
+            if mus <= 0.0:
+                break                               # pure absorber
+            weight *= mus / mut                     # local single-scattering albedo
+            rloc = math.sqrt(pt.pos[0] * pt.pos[0] + pt.pos[1] * pt.pos[1] + pt.pos[2] * pt.pos[2])
+            for j in range(3):
+                pt.k_out[j] = -pt.w[j]
+            _next_event_sun(pt, m, l, sun, cos_alpha, table, rloc, mus, w0 * weight * esun,
+                            polarised)
+            if max_order >= 0 and order >= max_order:
+                break
+            _scatter(pt, m, l, mus, polarised)
+        else:
+            _ground_vertex(pt, m, sun, cos_alpha, table, t_end,
+                           w0 * weight * alb * esun if alb > 0.0 else 0.0, polarised)
+            if alb <= 0.0:
+                break
+            if max_order >= 0 and order >= max_order:
+                break
+            weight *= alb
+            _ground_bounce(pt)
+        # -- Russian roulette ---------------------------------------------------------------
+        if order >= RR_ORDER:
+            q = min(0.95, weight)
+            if q <= 0.0 or _rand(pt.state) >= q:
+                break
+            weight /= q      # A stays normalised (A[0, 0] = 1 at the camera)
+
+
+@njit(cache=True)
+def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed,
+               polarised, max_order, mean, err):
+    """Mean and standard error of n_samples paths for direction i at wavelength l."""
+    pt = _new_path(m, l, seed, i)
     s1 = np.zeros(4)
     s2 = np.zeros(4)
-    pos = np.empty(3)
-    w = np.empty(3)
-    wn = np.empty(3)
-    k_out = np.empty(3)
-    k_in = np.empty(3)
-    a_cur = np.empty(3)
-    a_new = np.empty(3)
-    tmp = np.empty(3)
-    ws = np.empty(3)
-    node_t = np.empty(2 * N_CAMERA + 1)
-    node_tau = np.empty(2 * N_CAMERA + 1)
-    scol = np.empty(nc)
-    ext_l = np.empty(nc)
-    sca_l = np.empty(nc)
-    mus_c = np.empty(nc)
-    for c in range(nc):
-        ext_l[c] = beta_e[c, l]
-        sca_l[c] = beta_s[c, l]
-    esun = e_sun[l]
-    alb = albedo[l]
     # -- the camera ray: cumulative optical depth for the forced first collision ----------
-    cam_r0 = r0
     cam_mu = dirs[i, 2]
-    c_t0, c_t1, cam_ground = ray_segment(cam_r0, cam_mu, R, Rt)
-    n_nodes = _camera_columns(codes, p0s, p1s, ext_l, cam_r0, cam_mu, R, c_t0, c_t1, node_t,
-                              node_tau)
-    tau_cam = node_tau[n_nodes - 1]
+    c_t0, c_t1, cam_ground = ray_segment(r0, cam_mu, m.R, m.Rt)
+    n_nodes = _camera_columns(m, pt.ext_l, r0, cam_mu, c_t0, c_t1, pt.node_t, pt.node_tau)
+    tau_cam = pt.node_tau[n_nodes - 1]
     t_cam = math.exp(-tau_cam)
+    nv = 4 if polarised else 1
     for _s in range(n_samples):
         for j in range(4):
-            est[j] = 0.0
+            pt.est[j] = 0.0
         for branch in range(2):
-            # branch 0: the camera ray's first collision, forced inside the air (weight 1 - T);
-            # branch 1: the camera ray reaches the ground without collision (weight T)
             if branch == 0 and tau_cam <= 0.0:
                 continue
             if branch == 1 and not cam_ground:
                 continue
-            for j in range(4):
-                for m in range(4):
-                    A[j, m] = 1.0 if j == m else 0.0
-            pos[0], pos[1], pos[2] = 0.0, 0.0, r0
-            for j in range(3):
-                w[j] = dirs[i, j]
-                a_cur[j] = zen_ref[i, j]
-            weight = 1.0
-            w0 = 1.0
-            order = 0
-            first = True
-            while True:
-                r = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
-                mu = (pos[0] * w[0] + pos[1] * w[1] + pos[2] * w[2]) / r
-                t0, t_end, hits_ground = ray_segment(r, mu, R, Rt)
-                if first:
-                    first = False
-                    mus = 0.0
-                    if branch == 1:
-                        collided = False
-                        t_end = c_t1
-                        w0 = t_cam
-                    else:
-                        # invert the tabulated optical depth: tau* = -ln(1 - xi (1 - T))
-                        collided = True
-                        w0 = -math.expm1(-tau_cam)
-                        target = -math.log1p(-_rand(state) * w0)
-                        lo = 0
-                        hi = n_nodes - 1
-                        while hi - lo > 1:
-                            mid = (lo + hi) // 2
-                            if node_tau[mid] <= target:
-                                lo = mid
-                            else:
-                                hi = mid
-                        dtau = node_tau[hi] - node_tau[lo]
-                        if dtau <= 0.0:
-                            break                   # (measure zero: xi at the very end)
-                        mut = dtau / (node_t[hi] - node_t[lo])     # extinction of the interval
-                        t = node_t[lo] + (target - node_tau[lo]) / mut
-                        rr = math.sqrt(max(cam_r0 * cam_r0 + 2.0 * cam_r0 * cam_mu * t + t * t, 0.0))
-                        for c in range(nc):
-                            mus_c[c] = sca_l[c] * profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                            mus += mus_c[c]
-                else:
-                    # -- delta tracking along [0, t_end] --------------------------------------
-                    mbar = _segment_majorant(codes, p0s, p1s, ext_l, r, mu, t_end, R)
-                    t = 0.0
-                    collided = False
-                    mut = 0.0
-                    mus = 0.0
-                    if t_end > t0 and mbar > 0.0:
-                        while True:
-                            t -= math.log(1.0 - _rand(state)) / mbar
-                            if t >= t_end:
-                                break
-                            rr = math.sqrt(max(r * r + 2.0 * r * mu * t + t * t, 0.0))
-                            mut = 0.0
-                            mus = 0.0
-                            for c in range(nc):
-                                d = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                                mut += ext_l[c] * d
-                                mus_c[c] = sca_l[c] * d
-                                mus += mus_c[c]
-                            if _rand(state) * mbar < mut:
-                                collided = True
-                                break
-                if not collided and not hits_ground:
-                    break                                   # leaves the atmosphere
-                order += 1
-                if collided:
-                    for j in range(3):
-                        pos[j] += t * w[j]
-                    if mus <= 0.0:
-                        break                               # pure absorber
-                    weight *= mus / mut                     # local single-scattering albedo
-                    rloc = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
-                    for j in range(3):
-                        k_out[j] = -w[j]
-                    # -- next-event estimation towards the sun disc ---------------------------
-                    _sun_sample(sun, cos_alpha, state, ws)
-                    mu_s = (pos[0] * ws[0] + pos[1] * ws[1] + pos[2] * ws[2]) / rloc
-                    if sun_columns(table, codes, p0s, p1s, rloc, mu_s, R, Rt, False, 0, 1.0, scol):
-                        tau = 0.0
-                        for c in range(nc):
-                            tau += ext_l[c] * scol[c]
-                        tr = math.exp(-tau)
-                        cth = ws[0] * w[0] + ws[1] * w[1] + ws[2] * w[2]
-                        if polarised:
-                            for j in range(3):
-                                k_in[j] = -ws[j]
-                            c2, s2r = _plane_frames(k_out, k_in, a_cur, tmp, a_new)
-                            v0 = 0.0
-                            v1 = 0.0
-                            for c in range(nc):
-                                if mus_c[c] > 0.0:
-                                    p = phase(phase_codes[c], phase_g[c], phase_rho[c], cth) * mus_c[c]
-                                    f12, _f22, _f33, _f44 = matrix_ratios(phase_codes[c], phase_rho[c], cth)
-                                    v0 += p
-                                    v1 += p * f12
-                            # L(phi) (v0, v1, 0, 0)
-                            _mat_apply(A, v0, c2 * v1, -s2r * v1, 0.0, est,
-                                       w0 * weight / mus * esun * tr, True)
-                        else:
-                            p = 0.0
-                            for c in range(nc):
-                                if mus_c[c] > 0.0:
-                                    p += phase(phase_codes[c], phase_g[c], phase_rho[c], cth) * mus_c[c]
-                            est[0] += w0 * weight * p / mus * esun * tr
-                    if max_order >= 0 and order >= max_order:
-                        break
-                    # -- continue: choose a constituent, sample its phase function ------------
-                    u = _rand(state) * mus
-                    cc = nc - 1
-                    acc = 0.0
-                    for c in range(nc):
-                        acc += mus_c[c]
-                        if u < acc:
-                            cc = c
-                            break
-                    while mus_c[cc] <= 0.0 and cc > 0:
-                        cc -= 1
-                    cth = sample_cos(phase_codes[cc], phase_g[cc], phase_rho[cc], state)
-                    rotate_about(w, cth, TWO_PI * _rand(state), wn)
-                    if polarised:
-                        for j in range(3):
-                            k_in[j] = -wn[j]
-                        c2, s2r = _plane_frames(k_out, k_in, a_cur, tmp, a_new)
-                        f12, f22, f33, f44 = matrix_ratios(phase_codes[cc], phase_rho[cc], cth)
-                        _mat_rot_scatter(A, c2, s2r, f12, f22, f33, f44, tmp)
-                        for j in range(3):
-                            a_cur[j] = a_new[j]
-                    for j in range(3):
-                        w[j] = wn[j]
-                else:
-                    # -- Lambertian ground ----------------------------------------------------
-                    for j in range(3):
-                        pos[j] += t_end * w[j]
-                    rg = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
-                    for j in range(3):
-                        pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
-                        tmp[j] = pos[j] / (R * (1.0 + 1e-12))  # normal
-                    if alb <= 0.0:
-                        break
-                    _sun_sample(sun, cos_alpha, state, ws)
-                    mu_s = tmp[0] * ws[0] + tmp[1] * ws[1] + tmp[2] * ws[2]
-                    if mu_s > 0.0 and sun_columns(table, codes, p0s, p1s, R * (1.0 + 1e-12), mu_s, R,
-                                                  Rt, False, 0, 1.0, scol):
-                        tau = 0.0
-                        for c in range(nc):
-                            tau += ext_l[c] * scol[c]
-                        # reflected light is unpolarised: only A's first column matters
-                        _mat_apply(A, 1.0, 0.0, 0.0, 0.0, est,
-                                   w0 * weight * alb / math.pi * esun * mu_s * math.exp(-tau),
-                                   polarised)
-                    if max_order >= 0 and order >= max_order:
-                        break
-                    weight *= alb
-                    # cosine-weighted hemisphere about the normal
-                    u1 = _rand(state)
-                    rotate_about(tmp, math.sqrt(u1), TWO_PI * _rand(state), w)
-                    for j in range(4):          # depolarise: keep the first column
-                        A[j, 1] = 0.0
-                        A[j, 2] = 0.0
-                        A[j, 3] = 0.0
-                    # new frame: any axis perpendicular to the new ray
-                    _cross(tmp, w, a_cur)
-                    nn = math.sqrt(a_cur[0] ** 2 + a_cur[1] ** 2 + a_cur[2] ** 2)
-                    if nn < 1e-12:
-                        rotate_about(w, 0.0, 0.0, a_cur)
-                    else:
-                        for j in range(3):
-                            a_cur[j] /= nn
-                # -- Russian roulette -----------------------------------------------------------
-                if order >= RR_ORDER:
-                    q = min(0.95, weight)
-                    if q <= 0.0 or _rand(state) >= q:
-                        break
-                    weight /= q      # A stays normalised (A[0, 0] = 1 at the camera)
-        nv = 4 if polarised else 1
+            _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table,
+                         polarised, max_order, n_nodes, tau_cam, t_cam, c_t1)
         for j in range(nv):
-            s1[j] += est[j]
-            s2[j] += est[j] * est[j]
+            s1[j] += pt.est[j]
+            s2[j] += pt.est[j] * pt.est[j]
     n = float(n_samples)
-    nv = 4 if polarised else 1
     for j in range(nv):
-        m = s1[j] / n
-        mean[i, l, j] = m
-        var = (s2[j] / n - m * m) * n / (n - 1.0) if n > 1 else 0.0
-        err[i, l, j] = math.sqrt(max(var, 0.0) / n)
+        mn = s1[j] / n
+        mean[i, l, j] = mn
+        var = (s2[j] / n - mn * mn) * n / (n - 1.0) if n > 1 else 0.0
+        err[i, l, j] = safe_sqrt(var / n)
 
 
 @njit(parallel=True, cache=True)
-def trace(dirs, zen_ref, r0, sun, cos_alpha, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-          phase_g, phase_rho, albedo, e_sun, table, n_samples, seed, polarised, max_order,
-          mean, err):
-    """Monte Carlo radiance (Stokes vector) from each direction, ``mean`` and its standard
-    error ``err``, both (n, nl, 4) (only component 0 when not ``polarised``).
+def trace(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, polarised,
+          max_order, mean, err):
+    """Monte Carlo radiance (Stokes vector) from each direction through the medium m,
+    ``mean`` and its standard error ``err``, both (n, nl, 4) (only component 0 when not
+    ``polarised``).
 
     ``dirs`` (n, 3) unit vectors the light arrives from; ``zen_ref`` (n, 3) the parallel axis
     of each camera ray's Stokes frame; ``sun`` (3,) unit vector to the sun's centre;
-    ``cos_alpha`` cosine of the sun's angular radius; ``max_order`` < 0 for no limit.
+    ``cos_alpha`` cosine of the sun's angular radius; ``table`` the light-path column table;
+    ``max_order`` < 0 for no limit.
     """
     n = dirs.shape[0]
     nl = e_sun.shape[0]
     for idx in prange(n * nl):
         i = idx // nl
         l = idx % nl
-        _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, R, Rt, codes, p0s, p1s, beta_s, beta_e,
-                   phase_codes, phase_g, phase_rho, albedo, e_sun, table, n_samples, seed,
+        _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed,
                    polarised, max_order, mean, err)
 
 

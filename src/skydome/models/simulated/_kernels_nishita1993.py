@@ -29,12 +29,15 @@ rule ([NSTN93] eqs. 1-3).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._kernels import (column_quadrature, phase_value, profile_density,
-                                        ray_hits_ground)
+from skydome.transport._geometry import clamp_cosine, radius_along_above, ray_hits_ground, safe_sqrt
+from skydome.transport._medium import profile_density
+from skydome.transport._phase import phase_fill
+from skydome.transport._quadrature import column_quadrature, medium_columns
 
 SURFACE_ALBEDO, SURFACE_OCEAN, SURFACE_TEXTURE = 0, 1, 2
 
@@ -64,15 +67,57 @@ def _lattice_mu(r, R, j, n_j, side):
     if side == 0:
         return x * x
     c = R + (r - R) * x
-    return -math.sqrt(max(r * r - c * c, 0.0)) / r
+    return -safe_sqrt(r * r - c * c) / r
+
+
+class LightTable(NamedTuple):
+    """The optical-depth table and the view-ray sampling of one model ([NSTN93] sec. 4)."""
+
+    sph_r: np.ndarray      # (n_s,) radii of the spheres [m]
+    table: np.ndarray      # (n_c, 2, n_s, n_j) log(column + 1 m), see build_table
+    H: float               # spacing scale height of the spheres [m]
+    top: float             # Rt - R [m]
+    w: float               # linear weight of the sphere spacing
+    n_in: int              # inner nodes (unused by the look-up, kept for the record)
+    exact: bool            # integrate every light path instead of the table
+    n_light: int           # quadrature nodes of an exact light path
+    ts: float              # geometric node scale [m]
+    substeps: int          # view-ray pieces between sphere crossings
+
+
+class Surface(NamedTuple):
+    """The surface seen where a view ray hits the ground ([NSTN93] sec. 5)."""
+
+    code: int              # SURFACE_ALBEDO, SURFACE_OCEAN or SURFACE_TEXTURE
+    albedo: np.ndarray     # (nl,) Lambertian albedo
+    mu_grid: np.ndarray    # (n_mu,) sun cosines of the skylight table
+    e_sky: np.ndarray      # (n_mu, nl) diffuse sky irradiance [W m^-2 nm^-1]
+    water_c: np.ndarray    # (nl,) attenuation coefficient of the water [m^-1]
+    water_b: np.ndarray    # (nl,) scattering coefficient of the water [m^-1]
+    n_water: float         # refractive index of the water
+    tex: np.ndarray        # (th, tw, 3) texture albedo (latitude x longitude)
+    tex_basis: np.ndarray  # (3, nl) spectra of the texture's R, G, B
+    rot: np.ndarray        # (3, 3) local ENU -> earth-fixed
+
+
+class _Work(NamedTuple):
+    res: np.ndarray        # (nl,) radiance of the ray
+    t_nodes: np.ndarray    # (2 n_s + 4,) sample distances
+    acc: np.ndarray        # (nc, nl) in-scattering integrals
+    dcol: np.ndarray       # (nc,) view column
+    scol: np.ndarray       # (nc,) light column
+    rho: np.ndarray        # (nc,) densities at the node
+    rho_prev: np.ndarray   # (nc,) ... at the previous node
+    f_prev: np.ndarray     # (nc, nl) integrand at the previous node
+    phs: np.ndarray        # (nl,) phase function
 
 
 @njit(parallel=True, cache=True)
-def build_table(codes, p0s, p1s, R, Rt, sph_r, n_j, n_light, ts):
+def build_table(m, sph_r, n_j, n_light, ts):
     """log(column + 1 m) to the sun (column: relative density integrated [m]) at every
     lattice point, shape (n_c, 2, n_s, n_j): side 0 on the sun's side of the plane through
     the centre normal to the sunlight, side 1 behind it (see :func:`_lattice_mu`)."""
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     n_s = sph_r.shape[0]
     out = np.zeros((nc, 2, n_s, n_j))
     for idx in prange(n_s * n_j):
@@ -80,9 +125,10 @@ def build_table(codes, p0s, p1s, R, Rt, sph_r, n_j, n_light, ts):
         j = idx % n_j
         r = sph_r[i]
         for side in range(2):
-            mu = _lattice_mu(r, R, j, n_j, side)
+            mu = _lattice_mu(r, m.R, j, n_j, side)
             for k in range(nc):
-                col = column_quadrature(codes[k], p0s[k], p1s[k], r, mu, R, Rt, n_light, ts, False)
+                col = column_quadrature(m.profile_code[k], m.profile_p0[k], m.profile_p1[k], r,
+                                        mu, m.R, m.Rt, n_light, ts, False)
                 out[k, side, i, j] = math.log(col + 1.0)
     return out
 
@@ -99,7 +145,7 @@ def table_columns(table, r, mu_s, R, H, top, w, n_in, out):
         fj = math.sqrt(mu_s) * (n_j - 1)
     else:
         side = 1
-        c = r * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        c = r * safe_sqrt(1.0 - mu_s * mu_s)
         fj = (n_j - 1.0) if r - R <= 0.0 else (c - R) / (r - R) * (n_j - 1)
     i = min(max(int(fi), 0), n_s - 2)
     j = min(max(int(fj), 0), n_j - 2)
@@ -112,17 +158,14 @@ def table_columns(table, r, mu_s, R, H, top, w, n_in, out):
 
 
 @njit(cache=True)
-def sun_columns(table, codes, p0s, p1s, r, mu_s, R, Rt, H, top, w, n_in, exact, n_light, ts,
-                out):
+def sun_columns(lt, m, r, mu_s, out):
     """Columns from (r, mu_s) to the sun into ``out``; False in the earth's shadow."""
-    if ray_hits_ground(r, mu_s, R):
+    if ray_hits_ground(r, mu_s, m.R):
         return False
-    if exact:
-        for k in range(codes.shape[0]):
-            out[k] = column_quadrature(codes[k], p0s[k], p1s[k], r, mu_s, R, Rt, n_light, ts,
-                                       True)
+    if lt.exact:
+        medium_columns(m, r, mu_s, lt.n_light, lt.ts, True, out)
     else:
-        table_columns(table, r, mu_s, R, H, top, w, n_in, out)
+        table_columns(lt.table, r, mu_s, m.R, lt.H, lt.top, lt.w, lt.n_in, out)
     return True
 
 
@@ -202,61 +245,142 @@ def _nodes(r0, mu, R, Rt, sph_r, substeps, t_nodes):
 
 
 @njit(cache=True, fastmath=True)
-def _ray(d, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params, e_sun,
-         sph_r, table, H, top, w, n_in, exact, n_light, ts, substeps, surface, albedo, mu_grid,
-         e_sky, water_c, water_b, n_water, tex, tex_basis, rot, res, t_nodes, acc, dcol, scol,
-         rho, rho_prev, f_prev):
-    nc = codes.shape[0]
+def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
+    """Single scattering along the view ray into wk.res ([NSTN93] eqs. 1-3, trapezoidal
+    rule at the sample points), the view column in wk.dcol; returns (count of sample
+    points, hits the ground)."""
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
+    R = m.R
     for l in range(nl):
-        res[l] = 0.0
+        wk.res[l] = 0.0
     mu = d[2]
     nu = d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]       # cos of the scattering angle
-    m, hits = _nodes(r0, mu, R, Rt, sph_r, substeps, t_nodes)
-    if m < 2:
-        return
+    n_pts, hits = _nodes(r0, mu, R, m.Rt, lt.sph_r, lt.substeps, wk.t_nodes)
+    if n_pts < 2:
+        return n_pts, hits
     for c in range(nc):
-        dcol[c] = 0.0
+        wk.dcol[c] = 0.0
         for l in range(nl):
-            acc[c, l] = 0.0
-    t_prev = t_nodes[0]
+            wk.acc[c, l] = 0.0
+    t_prev = wk.t_nodes[0]
     first = True
-    for q in range(m - 1):
-        ta = t_nodes[q]
-        tb = t_nodes[q + 1]
+    substeps = lt.substeps
+    for q in range(n_pts - 1):
+        ta = wk.t_nodes[q]
+        tb = wk.t_nodes[q + 1]
         for s in range(0 if first else 1, substeps + 1):
             t = ta + (tb - ta) * s / substeps
-            rr = math.sqrt(max(r0 * r0 + 2.0 * r0 * mu * t + t * t, R * R))
+            rr = radius_along_above(r0, mu, t, R)
             h = t - t_prev
             for c in range(nc):
-                rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
+                wk.rho[c] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
+                                            rr - R)
                 if not first:
-                    dcol[c] += 0.5 * h * (rho_prev[c] + rho[c])          # [NSTN93] eq. 2
+                    wk.dcol[c] += 0.5 * h * (wk.rho_prev[c] + wk.rho[c])      # [NSTN93] eq. 2
             mu_s = (r0 * sun[2] + t * nu) / rr
-            lit = sun_columns(table, codes, p0s, p1s, rr, mu_s, R, Rt, H, top, w, n_in, exact,
-                              n_light, ts, scol)
+            lit = sun_columns(lt, m, rr, mu_s, wk.scol)
             for l in range(nl):
                 tau = 0.0
                 for c in range(nc):
-                    tau += beta_e[c, l] * (dcol[c] + scol[c])
+                    tau += m.extinction[c, l] * (wk.dcol[c] + wk.scol[c])
                 e = math.exp(-tau) if lit else 0.0
                 for c in range(nc):
-                    f = rho[c] * e
+                    f = wk.rho[c] * e
                     if not first:
-                        acc[c, l] += 0.5 * h * (f_prev[c, l] + f)            # [NSTN93] eq. 1
-                    f_prev[c, l] = f
+                        wk.acc[c, l] += 0.5 * h * (wk.f_prev[c, l] + f)        # [NSTN93] eq. 1
+                    wk.f_prev[c, l] = f
             for c in range(nc):
-                rho_prev[c] = rho[c]
+                wk.rho_prev[c] = wk.rho[c]
             t_prev = t
             first = False
     for c in range(nc):
-        p = phase_value(phase_codes[c], phase_params[c], nu)
+        phase_fill(m, c, nu, wk.phs)
         for l in range(nl):
-            res[l] += e_sun[l] * beta_s[c, l] * p * acc[c, l]
-    if not hits:
-        return
-    # the surface point seen, its normal and the sun there ([NSTN93] sec. 5)
-    t = t_nodes[m - 1]
+            wk.res[l] += e_sun[l] * m.scattering[c, l] * wk.phs[l] * wk.acc[c, l]
+    return n_pts, hits
+
+
+@njit(cache=True)
+def _texture_rgb(sf, nx, ny, nz):
+    """Texture albedo (r, g, b) at the surface normal n (latitude / longitude of the point;
+    sf.rot: local ENU -> earth-fixed)."""
+    rot = sf.rot
+    ex = rot[0, 0] * nx + rot[0, 1] * ny + rot[0, 2] * nz
+    ey = rot[1, 0] * nx + rot[1, 1] * ny + rot[1, 2] * nz
+    ez = rot[2, 0] * nx + rot[2, 1] * ny + rot[2, 2] * nz
+    lat = math.asin(clamp_cosine(ez))
+    lon = math.atan2(ey, ex)
+    th = sf.tex.shape[0]
+    tw = sf.tex.shape[1]
+    row = min(max(int((0.5 - lat / math.pi) * th), 0), th - 1)
+    col = int((lon / (2.0 * math.pi) + 0.5) * tw) % tw
+    return sf.tex[row, col, 0], sf.tex[row, col, 1], sf.tex[row, col, 2]
+
+
+@njit(cache=True)
+def _sun_transmittance(m, scol, l, direct):
+    """exp(-tau) of the light column scol at wavelength l; 0 when not ``direct``."""
+    if not direct:
+        return 0.0
+    tau = 0.0
+    for c in range(m.profile_code.shape[0]):
+        tau += m.extinction[c, l] * scol[c]
+    return math.exp(-tau)
+
+
+@njit(cache=True, fastmath=True)
+def _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct):
+    """Add the light leaving a smooth ocean surface, attenuated towards the camera: Fresnel
+    reflection of the skylight plus the light scattered once in the water and refracted
+    out ([NSTN93] sec. 5)."""
+    nc = m.profile_code.shape[0]
+    nl = e_sun.shape[0]
+    n = sf.n_water
+    r_v = fresnel(mu_v, n)
+    r_s = fresnel(mu_s, n) if mu_s > 0.0 else 1.0
+    mv_w = safe_sqrt(1.0 - (1.0 - mu_v * mu_v) / (n * n))   # refracted cosines
+    ms_w = safe_sqrt(1.0 - (1.0 - mu_s * mu_s) / (n * n))
+    # scattering angle in the water between the refracted sunbeam (going down) and the
+    # refracted view ray (going up): directions in the local frame
+    sv = safe_sqrt(1.0 - mv_w * mv_w)
+    ss = safe_sqrt(1.0 - ms_w * ms_w)
+    # horizontal unit vectors of the view ray (towards the camera) and of the sun
+    vhx = -d[0] + mu_v * nx
+    vhy = -d[1] + mu_v * ny
+    vhz = -d[2] + mu_v * nz
+    shx = sun[0] - mu_s * nx
+    shy = sun[1] - mu_s * ny
+    shz = sun[2] - mu_s * nz
+    vn = math.sqrt(vhx * vhx + vhy * vhy + vhz * vhz)
+    sn = math.sqrt(shx * shx + shy * shy + shz * shz)
+    cphi = 0.0
+    if vn > 1e-12 and sn > 1e-12:
+        cphi = (vhx * shx + vhy * shy + vhz * shz) / (vn * sn)
+    # propagation directions in the water: the refracted sunbeam going down, away from
+    # the sun, k_s = -ss s_h - ms_w n; the refracted view ray going up towards the
+    # camera, k_v = sv v_h + mv_w n; the scattering angle psi between them
+    cos_psi = -(ss * sv * cphi) - ms_w * mv_w
+    p_w = (1.0 + 0.835 * cos_psi * cos_psi) / (4.0 * math.pi * (1.0 + 0.835 / 3.0))
+    mbar = 0.842
+    for l in range(nl):
+        e_dir = e_sun[l] * _sun_transmittance(m, wk.scol, l, direct) * max(mu_s, 0.0)
+        e_dif = _interp_irradiance(sf.mu_grid, sf.e_sky, mu_s, l)
+        cw = sf.water_c[l]
+        up = sf.water_b[l] * (p_w * e_dir * (1.0 - r_s) / (cw * (ms_w + mv_w))
+                              + e_dif * (1.0 - 0.066) / (4.0 * math.pi) / (cw * (mbar + mv_w)))
+        l_surf = r_v * e_dif / math.pi + (1.0 - r_v) / (n * n) * up
+        wk.res[l] += l_surf * _view_transmittance(m.extinction, wk.dcol, l, nc)
+
+
+@njit(cache=True, fastmath=True)
+def _surface(d, r0, sun, m, e_sun, lt, sf, wk, t):
+    """Add the light of the surface point at distance t along the view ray, attenuated
+    towards the camera ([NSTN93] sec. 5): ocean, or Lambertian (albedo or texture) lit by
+    the attenuated sun and the skylight table."""
+    nc = m.profile_code.shape[0]
+    nl = e_sun.shape[0]
+    # the surface point seen, its normal and the sun there
     px = t * d[0]
     py = t * d[1]
     pz = r0 + t * d[2]
@@ -266,81 +390,31 @@ def _ray(d, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_
     nz = pz / pn
     mu_s = nx * sun[0] + ny * sun[1] + nz * sun[2]
     mu_v = -(nx * d[0] + ny * d[1] + nz * d[2])             # cos of the viewing angle there
-    direct = sun_columns(table, codes, p0s, p1s, R * (1.0 + 1e-12), mu_s, R, Rt, H, top, w, n_in,
-                         exact, n_light, ts, scol) and mu_s > 0.0
-    # texture albedo: latitude / longitude of the point (rot: local ENU -> earth-fixed)
+    direct = sun_columns(lt, m, m.R * (1.0 + 1e-12), mu_s, wk.scol) and mu_s > 0.0
+    if sf.code == SURFACE_OCEAN:
+        _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct)
+        return
     tr = 0.0
     tg = 0.0
-    tb_ = 0.0
-    if surface == SURFACE_TEXTURE:
-        ex = rot[0, 0] * nx + rot[0, 1] * ny + rot[0, 2] * nz
-        ey = rot[1, 0] * nx + rot[1, 1] * ny + rot[1, 2] * nz
-        ez = rot[2, 0] * nx + rot[2, 1] * ny + rot[2, 2] * nz
-        lat = math.asin(min(max(ez, -1.0), 1.0))
-        lon = math.atan2(ey, ex)
-        th = tex.shape[0]
-        tw = tex.shape[1]
-        row = min(max(int((0.5 - lat / math.pi) * th), 0), th - 1)
-        col = int((lon / (2.0 * math.pi) + 0.5) * tw) % tw
-        tr = tex[row, col, 0]
-        tg = tex[row, col, 1]
-        tb_ = tex[row, col, 2]
-    if surface == SURFACE_OCEAN:
-        n = n_water
-        r_v = fresnel(mu_v, n)
-        r_s = fresnel(mu_s, n) if mu_s > 0.0 else 1.0
-        mv_w = math.sqrt(max(1.0 - (1.0 - mu_v * mu_v) / (n * n), 0.0))   # refracted cosines
-        ms_w = math.sqrt(max(1.0 - (1.0 - mu_s * mu_s) / (n * n), 0.0))
-        # scattering angle in the water between the refracted sunbeam (going down) and the
-        # refracted view ray (going up): directions in the local frame
-        sv = math.sqrt(max(1.0 - mv_w * mv_w, 0.0))
-        ss = math.sqrt(max(1.0 - ms_w * ms_w, 0.0))
-        # horizontal unit vectors of the view ray (towards the camera) and of the sun
-        vhx = -d[0] + mu_v * nx
-        vhy = -d[1] + mu_v * ny
-        vhz = -d[2] + mu_v * nz
-        shx = sun[0] - mu_s * nx
-        shy = sun[1] - mu_s * ny
-        shz = sun[2] - mu_s * nz
-        vn = math.sqrt(vhx * vhx + vhy * vhy + vhz * vhz)
-        sn = math.sqrt(shx * shx + shy * shy + shz * shz)
-        cphi = 0.0
-        if vn > 1e-12 and sn > 1e-12:
-            cphi = (vhx * shx + vhy * shy + vhz * shz) / (vn * sn)
-        # propagation directions in the water: the refracted sunbeam going down, away from
-        # the sun, k_s = -ss s_h - ms_w n; the refracted view ray going up towards the
-        # camera, k_v = sv v_h + mv_w n; the scattering angle psi between them
-        cos_psi = -(ss * sv * cphi) - ms_w * mv_w
-        p_w = (1.0 + 0.835 * cos_psi * cos_psi) / (4.0 * math.pi * (1.0 + 0.835 / 3.0))
-        mbar = 0.842
-        for l in range(nl):
-            t_sun = 0.0
-            if direct:
-                tau = 0.0
-                for c in range(nc):
-                    tau += beta_e[c, l] * scol[c]
-                t_sun = math.exp(-tau)
-            e_dir = e_sun[l] * t_sun * max(mu_s, 0.0)
-            e_dif = _interp_irradiance(mu_grid, e_sky, mu_s, l)
-            cw = water_c[l]
-            up = water_b[l] * (p_w * e_dir * (1.0 - r_s) / (cw * (ms_w + mv_w))
-                               + e_dif * (1.0 - 0.066) / (4.0 * math.pi) / (cw * (mbar + mv_w)))
-            l_surf = r_v * e_dif / math.pi + (1.0 - r_v) / (n * n) * up
-            res[l] += l_surf * _view_transmittance(beta_e, dcol, l, nc)
-        return
+    tb = 0.0
+    if sf.code == SURFACE_TEXTURE:
+        tr, tg, tb = _texture_rgb(sf, nx, ny, nz)
     for l in range(nl):
-        t_sun = 0.0
-        if direct:
-            tau = 0.0
-            for c in range(nc):
-                tau += beta_e[c, l] * scol[c]
-            t_sun = math.exp(-tau)
-        if surface == SURFACE_TEXTURE:
-            a = tr * tex_basis[0, l] + tg * tex_basis[1, l] + tb_ * tex_basis[2, l]
+        if sf.code == SURFACE_TEXTURE:
+            a = tr * sf.tex_basis[0, l] + tg * sf.tex_basis[1, l] + tb * sf.tex_basis[2, l]
         else:
-            a = albedo[l]
-        e_tot = e_sun[l] * t_sun * max(mu_s, 0.0) + _interp_irradiance(mu_grid, e_sky, mu_s, l)
-        res[l] += a / math.pi * e_tot * _view_transmittance(beta_e, dcol, l, nc)
+            a = sf.albedo[l]
+        e_tot = (e_sun[l] * _sun_transmittance(m, wk.scol, l, direct) * max(mu_s, 0.0)
+                 + _interp_irradiance(sf.mu_grid, sf.e_sky, mu_s, l))
+        wk.res[l] += a / math.pi * e_tot * _view_transmittance(m.extinction, wk.dcol, l, nc)
+
+
+@njit(cache=True, fastmath=True)
+def _ray(d, r0, sun, m, e_sun, lt, sf, wk):
+    """Radiance of one view ray into wk.res: in-scattering, then the surface it hits."""
+    n_pts, hits = _in_scattering(d, r0, sun, m, e_sun, lt, wk)
+    if n_pts >= 2 and hits:
+        _surface(d, r0, sun, m, e_sun, lt, sf, wk, wk.t_nodes[n_pts - 1])
 
 
 @njit(cache=True)
@@ -351,35 +425,32 @@ def _view_transmittance(beta_e, dcol, l, nc):
     return math.exp(-tau)
 
 
-@njit(parallel=True, cache=True)
-def render_rays(dirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params,
-                e_sun, sph_r, table, H, top, w, n_in, exact, n_light, ts, substeps, surface,
-                albedo, mu_grid, e_sky, water_c, water_b, n_water, tex, tex_basis, rot, out):
-    """Radiance [W m^-2 sr^-1 nm^-1] reaching the camera at (0, 0, r0) from each of
-    ``dirs`` (n, 3): single scattering along the view ray ([NSTN93] eqs. 1-3) plus the
-    attenuated light of the surface point it hits (sec. 5)."""
-    n = dirs.shape[0]
-    nc = codes.shape[0]
+@njit(cache=True)
+def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, lt, sf, out):
+    """Rays i0..i1-1 of :func:`render_rays` with one set of work arrays (made here, in a
+    serial function, see transport._kernels._ray_block)."""
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
-    n_nodes = 2 * sph_r.shape[0] + 4
+    wk = _Work(np.zeros(nl), np.empty(2 * lt.sph_r.shape[0] + 4), np.zeros((nc, nl)),
+               np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros((nc, nl)),
+               np.zeros(nl))
+    for i in range(i0, i1):
+        _ray(dirs[i], r0, sun, m, e_sun, lt, sf, wk)
+        for l in range(nl):
+            out[i, l] = max(wk.res[l], 0.0)
+
+
+@njit(parallel=True, cache=True)
+def render_rays(dirs, r0, sun, m, e_sun, lt, sf, out):
+    """Radiance [W m^-2 sr^-1 nm^-1] reaching the camera at (0, 0, r0) from each of
+    ``dirs`` (n, 3) through the medium m: single scattering along the view ray ([NSTN93]
+    eqs. 1-3, light paths from the table lt) plus the attenuated light of the surface sf
+    at the point it hits (sec. 5)."""
+    n = dirs.shape[0]
     block = 64
     n_blocks = (n + block - 1) // block
     for ib in prange(n_blocks):
-        t_nodes = np.empty(n_nodes)
-        acc = np.zeros((nc, nl))
-        f_prev = np.zeros((nc, nl))
-        dcol = np.zeros(nc)
-        scol = np.zeros(nc)
-        rho = np.zeros(nc)
-        rho_prev = np.zeros(nc)
-        res = np.zeros(nl)
-        for i in range(ib * block, min(n, (ib + 1) * block)):
-            _ray(dirs[i], r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                 phase_params, e_sun, sph_r, table, H, top, w, n_in, exact, n_light, ts, substeps,
-                 surface, albedo, mu_grid, e_sky, water_c, water_b, n_water, tex, tex_basis, rot,
-                 res, t_nodes, acc, dcol, scol, rho, rho_prev, f_prev)
-            for l in range(nl):
-                out[i, l] = max(res[l], 0.0)
+        _ray_block(ib * block, min(n, (ib + 1) * block), dirs, r0, sun, m, e_sun, lt, sf, out)
 
 
 @njit(parallel=True, cache=True)

@@ -22,14 +22,57 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.transport._kernels import phase_value, profile_density
+from skydome.transport._geometry import ray_segment_xyz, safe_sqrt
+from skydome.transport._medium import profile_density
+from skydome.transport._phase import TABULATED, phase_fill, phase_of
+from skydome.transport._quadrature import geometric_node, geometric_step, simpson
+
+
+@njit(cache=True)
+def n_phase_wavelengths(m):
+    """1 when no constituent's phase function depends on the wavelength, else nl: the
+    wavelength axis of the phase-cell weights."""
+    for c in range(m.phase_code.shape[0]):
+        if m.phase_code[c] == TABULATED:
+            return m.extinction.shape[1]
+    return 1
+
+
+@njit(parallel=True, cache=True)
+def phase_cell_weights(m, cosm, dw, owner, K):
+    """Phase integrals over the sky-sphere cells ([NDKY96] sec. 4): W[c, lw, j, k] =
+    int_cell_j P_c(w . d_k) dw over the fine grid (cosines cosm (nf, K), solid angles dw,
+    cell of each fine direction ``owner``), normalised so that sum_j W = 1 (energy
+    conservation); lw indexes the wavelengths of spectral (tabulated) phase functions."""
+    nc = m.profile_code.shape[0]
+    nlw = n_phase_wavelengths(m)
+    nf = cosm.shape[0]
+    W = np.zeros((nc, nlw, K, K))
+    for ck in prange(nc * nlw):
+        c = ck // nlw
+        lw = ck % nlw
+        for f in range(nf):
+            j = owner[f]
+            for k in range(K):
+                W[c, lw, j, k] += phase_of(m, c, lw, cosm[f, k]) * dw[f]
+        for k in range(K):
+            tot = 0.0
+            for j in range(K):
+                tot += W[c, lw, j, k]
+            for j in range(K):
+                W[c, lw, j, k] /= tot
+    return W
 
 
 # -- cylindrical optical-depth table -----------------------------------------------------------
 @njit(cache=True)
-def _line_column(codes, p0s, p1s, R, rc, za, zb, n_sub, col):
+def _line_column(m, rc, za, zb, n_sub, col):
     """Add the column densities between z = za and z = zb (za < zb) along the line at
     distance rc from the axis to ``col`` (Simpson's rule with n_sub intervals)."""
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    R = m.R
     nc = codes.shape[0]
     h = (zb - za) / n_sub
     for k in range(n_sub + 1):
@@ -41,7 +84,7 @@ def _line_column(codes, p0s, p1s, R, rc, za, zb, n_sub, col):
 
 
 @njit(parallel=True, cache=True)
-def build_cylinder_table(codes, p0s, p1s, R, Rt, n_lo, n_hi, n_u, n_sub):
+def build_cylinder_table(m, n_lo, n_hi, n_u, n_sub):
     """Columns to the sun on the cylindrical grid ([NDKY96] fig. 3).
 
     lower part (rc < R, lines that start on the sunlit ground): rc_i = R (1 - (1 - s)^3),
@@ -50,7 +93,9 @@ def build_cylinder_table(codes, p0s, p1s, R, Rt, n_lo, n_hi, n_u, n_sub):
     u = sign(w) (Rt - rc) w^2 with w = 2 j / (n_u - 1) - 1, where u = sign(z) (r - rc).
     Returns (lower (nc, n_lo, n_u), upper (nc, n_hi, n_u)).
     """
-    nc = codes.shape[0]
+    R = m.R
+    Rt = m.Rt
+    nc = m.profile_code.shape[0]
     lo = np.zeros((nc, n_lo, n_u))
     hi = np.zeros((nc, n_hi, n_u))
     H = Rt - R
@@ -63,7 +108,7 @@ def build_cylinder_table(codes, p0s, p1s, R, Rt, n_lo, n_hi, n_u, n_sub):
             for j in range(n_u):
                 w = j / (n_u - 1.0)
                 r = R + H * w * w
-                zs[j] = math.sqrt(max(r * r - rc * rc, 0.0))
+                zs[j] = safe_sqrt(r * r - rc * rc)
         else:
             s = (i - n_lo) / (n_hi - 1.0)
             rc = R + H * s * s
@@ -71,14 +116,14 @@ def build_cylinder_table(codes, p0s, p1s, R, Rt, n_lo, n_hi, n_u, n_sub):
                 w = 2.0 * j / (n_u - 1.0) - 1.0
                 u = (Rt - rc) * w * w
                 r = rc + u
-                z = math.sqrt(max(r * r - rc * rc, 0.0))
+                z = safe_sqrt(r * r - rc * rc)
                 zs[j] = z if w >= 0 else -z
         # accumulate from the top (largest z) downwards
         for c in range(nc):
             col[c] = 0.0
         for j in range(n_u - 1, -1, -1):
             if j < n_u - 1:
-                _line_column(codes, p0s, p1s, R, rc, zs[j], zs[j + 1], n_sub, col)
+                _line_column(m, rc, zs[j], zs[j + 1], n_sub, col)
             for c in range(nc):
                 if i < n_lo:
                     lo[c, i, j] = col[c]
@@ -150,37 +195,22 @@ def cylinder_lookup(lo, hi, R, Rt, px, py, pz, sx, sy, sz, out):
 
 # -- rays -----------------------------------------------------------------------------------------
 @njit(cache=True)
-def _segment(px, py, pz, dx, dy, dz, R, Rt):
-    """(t0, t1, hits_ground) of the ray from p along unit d inside the atmosphere."""
-    r2 = px * px + py * py + pz * pz
-    b = px * dx + py * dy + pz * dz
-    disc_t = b * b - r2 + Rt * Rt
-    if disc_t < 0.0:
-        return 0.0, -1.0, False
-    sq = math.sqrt(disc_t)
-    t_far = -b + sq
-    if t_far <= 0.0:
-        return 0.0, -1.0, False
-    t0 = max(-b - sq, 0.0)
-    disc_g = b * b - r2 + R * R
-    if b < 0.0 and disc_g >= 0.0:
-        tg = max(-b - math.sqrt(disc_g), 0.0)
-        return t0, max(tg, t0), True
-    return t0, t_far, False
-
-
-@njit(cache=True)
-def ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
-              pos, wts, rho, trans, t_end):
-    """Quadrature nodes along the ray from p along d: positions pos (m, 3), weights wts [m],
-    relative densities rho (m, nc) and the transmittance from p to each node trans (m, nl)
-    (optical depth by Simpson's rule between nodes). The ray is split at its lowest point;
-    each piece has n midpoint nodes spaced geometrically from its dense end (scale ts).
-    Returns (m, hits_ground); t_end[0] = distance to the end, and trans[m] holds the
-    transmittance to the end point."""
+def ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end):
+    """Quadrature nodes along the ray from p along d through the medium m: positions pos
+    (m, 3), weights wts [m], relative densities rho (m, nc) and the transmittance from p to
+    each node trans (m, nl) (optical depth by Simpson's rule between nodes). The ray is
+    split at its lowest point; each piece has n midpoint nodes spaced geometrically from
+    its dense end (scale ts, the rule of ``transport._quadrature``). Returns (m,
+    hits_ground); t_end[0] = distance to the end, and trans[m] holds the transmittance to
+    the end point."""
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
+    R = m.R
     nc = codes.shape[0]
     nl = beta_e.shape[1]
-    t0, t1, hits = _segment(px, py, pz, dx, dy, dz, R, Rt)
+    t0, t1, hits = ray_segment_xyz(px, py, pz, dx, dy, dz, R, m.Rt)
     t_end[0] = t1
     if t1 < t0 or (t1 == t0 and not hits):
         for l in range(nl):
@@ -192,7 +222,7 @@ def ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
     cnt = 0
     b = px * dx + py * dy + pz * dz
     tmin = min(max(-b, t0), t1)
-    m = 0
+    k_out = 0
     t_prev = t0
     dcol = np.zeros(nc)
     rho_prev = np.zeros(nc)
@@ -208,15 +238,14 @@ def ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
             length = b_ - a_
             if length <= 0.0:
                 continue
-            dv = math.log1p(length / ts) / n
+            dv = geometric_step(length, n, ts)
             cnt = n
         else:
             cnt = 1
         for kk in range(cnt):
             if piece < 2:
                 k = n - 1 - kk if piece == 0 else kk
-                u = ts * math.expm1((k + 0.5) * dv)
-                w = (u + ts) * dv
+                u, w = geometric_node(k, dv, ts)
                 t = b_ - u if piece == 0 else a_ + u
             else:
                 t = t1
@@ -231,38 +260,43 @@ def ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
             for c in range(nc):
                 rc_ = profile_density(codes[c], p0s[c], p1s[c], rr - R)
                 rmid = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                dcol[c] += hh / 6.0 * (rho_prev[c] + 4.0 * rmid + rc_)
+                dcol[c] += simpson(rho_prev[c], rmid, rc_, hh)
                 rho_prev[c] = rc_
-                rho[m, c] = rc_
+                rho[k_out, c] = rc_
             t_prev = t
-            pos[m, 0] = qx
-            pos[m, 1] = qy
-            pos[m, 2] = qz
-            wts[m] = w
+            pos[k_out, 0] = qx
+            pos[k_out, 1] = qy
+            pos[k_out, 2] = qz
+            wts[k_out] = w
             for l in range(nl):
                 s = 0.0
                 for c in range(nc):
                     s += beta_e[c, l] * dcol[c]
-                trans[m, l] = math.exp(-s)
-            m += 1
-    return m - 1, hits
+                trans[k_out, l] = math.exp(-s)
+            k_out += 1
+    return k_out - 1, hits
 
 
 @njit(cache=True)
-def single_along(px, py, pz, dx, dy, dz, sx, sy, sz, R, Rt, codes, p0s, p1s, beta_s, beta_e,
-                 phase_codes, phase_params, albedo, e_sun, lo, hi, n, ts, out,
-                 pos, wts, rho, trans, t_end, col):
+def single_along(px, py, pz, dx, dy, dz, sx, sy, sz, m, e_sun, lo, hi, n, ts, out,
+                 pos, wts, rho, trans, t_end, col, phs):
     """Single-scattered radiance arriving at p from direction d ([NDKY96] eq. 1; survey
     eqs. 15-16) with the sun columns from the cylindrical table, plus the sunlit ground
-    (Lambertian) where the ray hits it. Writes out (nl,)."""
-    nc = codes.shape[0]
+    (Lambertian) where the ray hits it. Writes out (nl,); phs (nc, nl) is work space for
+    the phase functions."""
+    R = m.R
+    Rt = m.Rt
+    beta_e = m.extinction
+    beta_s = m.scattering
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
     for l in range(nl):
         out[l] = 0.0
-    m, hits = ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
-                        pos, wts, rho, trans, t_end)
+    n_pts, hits = ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end)
     nu = dx * sx + dy * sy + dz * sz
-    for k in range(m):
+    for c in range(nc):
+        phase_fill(m, c, nu, phs[c])
+    for k in range(n_pts):
         if not cylinder_lookup(lo, hi, R, Rt, pos[k, 0], pos[k, 1], pos[k, 2], sx, sy, sz, col):
             continue
         for l in range(nl):
@@ -272,12 +306,12 @@ def single_along(px, py, pz, dx, dy, dz, sx, sy, sz, R, Rt, codes, p0s, p1s, bet
             ts_ = math.exp(-s) * trans[k, l] * wts[k]
             acc = 0.0
             for c in range(nc):
-                acc += beta_s[c, l] * rho[k, c] * phase_value(phase_codes[c], phase_params[c], nu)
+                acc += beta_s[c, l] * rho[k, c] * phs[c, l]
             out[l] += e_sun[l] * acc * ts_
     if hits:
-        gx = pos[m, 0]
-        gy = pos[m, 1]
-        gz = pos[m, 2]
+        gx = pos[n_pts, 0]
+        gy = pos[n_pts, 1]
+        gz = pos[n_pts, 2]
         rg = math.sqrt(gx * gx + gy * gy + gz * gz)
         mu_s = (gx * sx + gy * sy + gz * sz) / rg
         if mu_s > 0.0:
@@ -287,8 +321,8 @@ def single_along(px, py, pz, dx, dy, dz, sx, sy, sz, R, Rt, codes, p0s, p1s, bet
                 s = 0.0
                 for c in range(nc):
                     s += beta_e[c, l] * col[c]
-                out[l] += albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s) * trans[m, l]
-    return m, hits
+                out[l] += m.albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s) * trans[n_pts, l]
+    return n_pts, hits
 
 
 # -- lattice --------------------------------------------------------------------------------------
@@ -354,13 +388,12 @@ def ground_interp(g, fx, fy, out):
 
 
 @njit(parallel=True, cache=True)
-def lattice_single(nodes, dirs, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                   phase_params, albedo, e_sun, lo, hi, n, ts, out):
+def lattice_single(nodes, dirs, sun, m, e_sun, lo, hi, n, ts, out):
     """Order 1 on the lattice: out[p, k, :] = single-scattered light (and sunlit ground)
     arriving at lattice node p from sky-sphere direction k."""
     npt = nodes.shape[0]
     K = dirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
     for idx in prange(npt * K):
         p = idx // K
@@ -372,10 +405,10 @@ def lattice_single(nodes, dirs, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, pha
         t_end = np.zeros(1)
         col = np.zeros(nc)
         res = np.zeros(nl)
+        phs = np.zeros((nc, nl))
         single_along(nodes[p, 0], nodes[p, 1], nodes[p, 2], dirs[k, 0], dirs[k, 1], dirs[k, 2],
-                     sun[0], sun[1], sun[2], R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes,
-                     phase_params, albedo, e_sun, lo, hi, n, ts, res, pos, wts, rho, trans, t_end,
-                     col)
+                     sun[0], sun[1], sun[2], m, e_sun, lo, hi, n, ts, res, pos, wts, rho, trans,
+                     t_end, col, phs)
         for l in range(nl):
             out[p, k, l] = res[l]
 
@@ -383,26 +416,29 @@ def lattice_single(nodes, dirs, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, pha
 @njit(parallel=True, cache=True)
 def lattice_source(I, rho_nodes, beta_s, W, J):
     """Scattered light leaving each lattice node towards -d_k per metre [NDKY96] eq. 6:
-    J[p, k, l] = sum_c beta_s[c, l] rho_c(p) sum_j I[p, j, l] W[c, j, k]."""
+    J[p, k, l] = sum_c beta_s[c, l] rho_c(p) sum_j I[p, j, l] W[c, lw, j, k] (lw = l for
+    spectral phase functions, else 0)."""
     npt = I.shape[0]
     K = I.shape[1]
     nl = I.shape[2]
     nc = beta_s.shape[0]
+    spectral = W.shape[1] > 1
     for p in prange(npt):
         for k in range(K):
             for l in range(nl):
+                lw = l if spectral else 0
                 s = 0.0
                 for c in range(nc):
                     acc = 0.0
                     for j in range(K):
-                        acc += I[p, j, l] * W[c, j, k]
+                        acc += I[p, j, l] * W[c, lw, j, k]
                     s += beta_s[c, l] * rho_nodes[p, c] * acc
                 J[p, k, l] = s
 
 
 @njit(cache=True)
-def gather_along(px, py, pz, dx, dy, dz, k, Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, n,
-                 ts, out, pos, wts, rho, trans, t_end, tmp):
+def gather_along(px, py, pz, dx, dy, dz, k, Jf, G, m, D, Htop, n, ts, out, pos, wts, rho, trans,
+                 t_end, tmp):
     """Light of the next order arriving at p from direction d: the source Jf[..., k, :]
     (interpolated on the lattice) integrated along the ray with its transmittance, plus the
     ground's Lambertian reflection G of the previous order's irradiance where it hits."""
@@ -411,27 +447,27 @@ def gather_along(px, py, pz, dx, dy, dz, k, Jf, G, R, Rt, D, Htop, codes, p0s, p
     nh = Jf.shape[2]
     for l in range(nl):
         out[l] = 0.0
-    m, hits = ray_nodes(px, py, pz, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
-                        pos, wts, rho, trans, t_end)
-    for q in range(m):
+    R = m.R
+    n_pts, hits = ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end)
+    for q in range(n_pts):
         fx, fy, fh = lattice_coords(pos[q, 0], pos[q, 1], pos[q, 2], R, D, Htop, nx, nh)
         lattice_interp(Jf, fx, fy, fh, k, tmp)
         for l in range(nl):
             out[l] += wts[q] * trans[q, l] * tmp[l]
     if hits:
-        fx, fy, fh = lattice_coords(pos[m, 0], pos[m, 1], pos[m, 2], R, D, Htop, nx, nh)
+        fx, fy, fh = lattice_coords(pos[n_pts, 0], pos[n_pts, 1], pos[n_pts, 2], R, D, Htop, nx, nh)
         ground_interp(G, fx, fy, tmp)
         for l in range(nl):
-            out[l] += trans[m, l] * tmp[l]
+            out[l] += trans[n_pts, l] * tmp[l]
 
 
 @njit(parallel=True, cache=True)
-def lattice_gather(nodes, dirs, Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, n, ts, out):
+def lattice_gather(nodes, dirs, Jf, G, m, D, Htop, n, ts, out):
     """Order n on the lattice from the order n-1 source Jf (nx, ny, nh, K, nl) and ground
     radiance G (nx, ny, nl): out[p, k, :]."""
     npt = nodes.shape[0]
     K = dirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = Jf.shape[4]
     for idx in prange(npt * K):
         p = idx // K
@@ -444,19 +480,17 @@ def lattice_gather(nodes, dirs, Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, 
         tmp = np.zeros(nl)
         res = np.zeros(nl)
         gather_along(nodes[p, 0], nodes[p, 1], nodes[p, 2], dirs[k, 0], dirs[k, 1], dirs[k, 2], k,
-                     Jf, G, R, Rt, D, Htop, codes, p0s, p1s, beta_e, n, ts, res, pos, wts, rho,
-                     trans, t_end, tmp)
+                     Jf, G, m, D, Htop, n, ts, res, pos, wts, rho, trans, t_end, tmp)
         for l in range(nl):
             out[p, k, l] = res[l]
 
 
 # -- the observer's view rays ---------------------------------------------------------------------
 @njit(parallel=True, cache=True)
-def view_single(vdirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params,
-                albedo, e_sun, lo, hi, n, ts, out):
+def view_single(vdirs, r0, sun, m, e_sun, lo, hi, n, ts, out):
     """Order 1 towards the observer at (0, 0, r0) for every view direction."""
     nv = vdirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
     for i in prange(nv):
         pos = np.zeros((2 * n + 1, 3))
@@ -466,24 +500,27 @@ def view_single(vdirs, r0, sun, R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_co
         t_end = np.zeros(1)
         col = np.zeros(nc)
         res = np.zeros(nl)
+        phs = np.zeros((nc, nl))
         single_along(0.0, 0.0, r0, vdirs[i, 0], vdirs[i, 1], vdirs[i, 2], sun[0], sun[1], sun[2],
-                     R, Rt, codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params, albedo,
-                     e_sun, lo, hi, n, ts, res, pos, wts, rho, trans, t_end, col)
+                     m, e_sun, lo, hi, n, ts, res, pos, wts, rho, trans, t_end, col, phs)
         for l in range(nl):
             out[i, l] = res[l]
 
 
 @njit(parallel=True, cache=True)
-def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, R, Rt, D, Htop,
-                       codes, p0s, p1s, beta_s, beta_e, phase_codes, phase_params, n, ts, out):
+def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, m, D, Htop, n, ts,
+                       out):
     """Orders 2..N towards the observer: out[o, i] is order o + 2 from the lattice light
     I_all[o] (nx, ny, nh, K, nl) of order o + 1 and the ground radiance G_all[o]; the phase
     function of each constituent is integrated over each sky-sphere cell around the view
     direction (cells = fine_owner of the fine grid). The cell integrals and the nodes along
     the view ray are the same for every order, so they are computed once per ray (9x faster
     than one pass per order at 6 orders; same sums to 1e-13)."""
+    R = m.R
+    beta_s = m.scattering
     nv = vdirs.shape[0]
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
+    nlw = n_phase_wavelengths(m)
     n_o = I_all.shape[0]
     nl = I_all.shape[5]
     K = I_all.shape[4]
@@ -494,16 +531,17 @@ def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, 
         dx = vdirs[i, 0]
         dy = vdirs[i, 1]
         dz = vdirs[i, 2]
-        W = np.zeros((nc, K))
+        W = np.zeros((nc, nlw, K))
         for c in range(nc):
-            tot = 0.0
-            for f in range(nf):
-                cs = fine_dirs[f, 0] * dx + fine_dirs[f, 1] * dy + fine_dirs[f, 2] * dz
-                v = phase_value(phase_codes[c], phase_params[c], cs) * fine_dw[f]
-                W[c, fine_owner[f]] += v
-                tot += v
-            for j in range(K):
-                W[c, j] /= tot          # normalise: sum_j W = 1 (energy conservation)
+            for lw in range(nlw):
+                tot = 0.0
+                for f in range(nf):
+                    cs = fine_dirs[f, 0] * dx + fine_dirs[f, 1] * dy + fine_dirs[f, 2] * dz
+                    v = phase_of(m, c, lw, cs) * fine_dw[f]
+                    W[c, lw, fine_owner[f]] += v
+                    tot += v
+                for j in range(K):
+                    W[c, lw, j] /= tot          # normalise: sum_j W = 1 (energy conservation)
         pos = np.zeros((2 * n + 1, 3))
         wts = np.zeros(2 * n + 1)
         rho = np.zeros((2 * n + 1, nc))
@@ -514,15 +552,14 @@ def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, 
         for o in range(n_o):
             for l in range(nl):
                 out[o, i, l] = 0.0
-        m, hits = ray_nodes(0.0, 0.0, r0, dx, dy, dz, R, Rt, codes, p0s, p1s, beta_e, n, ts,
-                            pos, wts, rho, trans, t_end)
-        for q in range(m):
+        n_pts, hits = ray_nodes(0.0, 0.0, r0, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end)
+        for q in range(n_pts):
             fx, fy, fh = lattice_coords(pos[q, 0], pos[q, 1], pos[q, 2], R, D, Htop, nx, nh)
             for j in range(K):
                 for l in range(nl):
                     s = 0.0
                     for c in range(nc):
-                        s += beta_s[c, l] * rho[q, c] * W[c, j]
+                        s += beta_s[c, l] * rho[q, c] * W[c, l if nlw > 1 else 0, j]
                     sw[j, l] = wts[q] * trans[q, l] * s
             for o in range(n_o):
                 I = I_all[o]
@@ -531,8 +568,8 @@ def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, 
                     for l in range(nl):
                         out[o, i, l] += sw[j, l] * tmp[l]
         if hits:
-            fx, fy, fh = lattice_coords(pos[m, 0], pos[m, 1], pos[m, 2], R, D, Htop, nx, nh)
+            fx, fy, fh = lattice_coords(pos[n_pts, 0], pos[n_pts, 1], pos[n_pts, 2], R, D, Htop, nx, nh)
             for o in range(n_o):
                 ground_interp(G_all[o], fx, fy, tmp)
                 for l in range(nl):
-                    out[o, i, l] += trans[m, l] * tmp[l]
+                    out[o, i, l] += trans[n_pts, l] * tmp[l]

@@ -38,6 +38,7 @@ class _Tables:
 
     def __init__(self, model, grid):
         from skydome.models.simulated import _kernels_hillaire2020 as K
+        from skydome.transport._medium import medium_from_properties
 
         m = model
         self.grid = grid
@@ -48,16 +49,14 @@ class _Tables:
         self.r0 = self.R + m.observer_altitude_m
         self.ts = 500.0
         # [Hil20] sec. 4.1: transmittance LUT
-        self.tlut = K.build_transmittance(p.profile_code, p.profile_p0, p.profile_p1, p.extinction,
-                                          self.R, self.Rt, m.transmittance_height,
+        self.medium = medium_from_properties(p)
+        self.tlut = K.build_transmittance(self.medium, m.transmittance_height,
                                           m.transmittance_width, 64, self.ts)
         # [Hil20] sec. 5.5: multiple-scattering LUT (eqs. 5-10)
         self.orders = np.zeros((2, m.ms_size, m.ms_size, grid.size))
         sq = int(round(np.sqrt(m.ms_directions)))
-        self.mslut = K.build_multiple_scattering(
-            p.profile_code, p.profile_p0, p.profile_p1, p.scattering, p.extinction,
-            p.ground_albedo, self.tlut, self.R, self.Rt, m.ms_size, m.ms_size, sq,
-            m.ms_samples, self.ts, self.orders)
+        self.mslut = K.build_multiple_scattering(self.medium, self.tlut, m.ms_size, m.ms_size, sq,
+                                                 m.ms_samples, self.ts, self.orders)
         if not m.multiple_scattering:
             self.mslut = np.zeros_like(self.mslut)
         self._sv = None
@@ -65,10 +64,7 @@ class _Tables:
         self._model = model
 
     def _args(self):
-        p = self.props
-        return (self.R, self.Rt, p.profile_code, p.profile_p0, p.profile_p1, p.scattering,
-                p.extinction, p.phase_code, p.phase_param, p.ground_albedo, self.tlut, self.mslut,
-                self._model.multiple_scattering)
+        return self.medium, self.tlut, self.mslut, self._model.multiple_scattering
 
     @property
     def skyview(self):
@@ -247,12 +243,8 @@ class Hillaire2020Sky(SkyModel):
         else:
             trans = np.empty_like(out)
             stop = np.full(flat.shape[0], -1.0)
-            p = tb.props
-            K.march_directions(flat, sun, tb.r0, stop, tb.R, tb.Rt, p.profile_code, p.profile_p0,
-                               p.profile_p1, p.scattering, p.extinction, p.phase_code,
-                               p.phase_param, p.ground_albedo, tb.tlut, tb.mslut,
-                               self.multiple_scattering, True, self.view_samples, tb.ts, out,
-                               trans)
+            K.march_directions(flat, sun, tb.r0, stop, *tb._args(), True, self.view_samples,
+                               tb.ts, out, trans)
         out = self._to_request(out, tb.grid, wl) * self._solar(wl)
         np.maximum(out, 0.0, out=out)
         out[~np.isfinite(out)] = 0.0
@@ -327,12 +319,9 @@ class Hillaire2020Sky(SkyModel):
             vl, vt = tb.aerial
             K.lookup_aerial_perspective(flat, dist, sun, self.ap_km_per_slice, vl, vt, L, T)
         else:
-            p = tb.props
             stop = np.where(dist > 0.0, dist, 1e-9)
-            K.march_directions(flat, sun, tb.r0, stop, tb.R, tb.Rt, p.profile_code, p.profile_p0,
-                               p.profile_p1, p.scattering, p.extinction, p.phase_code,
-                               p.phase_param, p.ground_albedo, tb.tlut, tb.mslut,
-                               self.multiple_scattering, False, self.view_samples, tb.ts, L, T)
+            K.march_directions(flat, sun, tb.r0, stop, *tb._args(), False, self.view_samples,
+                               tb.ts, L, T)
         L = np.maximum(self._to_request(L, tb.grid, wl) * self._solar(wl), 0.0)
         if not np.array_equal(tb.grid, wl):
             T = np.stack([np.interp(wl, tb.grid, row) for row in T])

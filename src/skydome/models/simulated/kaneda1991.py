@@ -64,21 +64,6 @@ def phase_murky(cos_theta):
     return (1.0 + 50.0 * ((1.0 + c) * 0.5) ** 32) / (4.0 * math.pi * (1.0 + 50.0 / 33.0))
 
 
-def _phase(code, param, c):
-    """Numpy mirror of the transport kernels' phase functions (phase codes of
-    skydome.atmosphere.PHASE_CODES), normalised over the sphere [sr^-1]."""
-    if code == 0:   # Rayleigh with depolarisation, [KRZ06] eq. 3
-        return 3.0 / (16.0 * math.pi) / (1.0 + 2.0 * param) * ((1.0 + 3.0 * param) + (1.0 - param) * c * c)
-    if code in (1, 2):
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        hg = (1.0 - g * g) / (d * np.sqrt(d)) * _INV_4PI            # [KRZ06] eq. 10
-        if code == 1:
-            return hg
-        return 3.0 / (2.0 * (2.0 + g * g)) * (1.0 + c * c) * hg      # [KRZ06] eq. 11
-    return np.full_like(c, _INV_4PI)
-
-
 def _horizon_clamp(d):
     """Directions below the horizon replaced by the horizontal direction of the same
     azimuth (straight down: north)."""
@@ -204,6 +189,7 @@ class Kaneda1991Sky(SkyModel):
 
     def _setup(self, wl):
         """Optical properties (+ fog row), shells and column table for a wavelength grid."""
+        from skydome.transport._medium import medium_from_properties, phase_cdf_table
         from skydome.transport.optical_depth import ColumnTable
 
         key = tuple(np.round(wl, 9))
@@ -229,27 +215,43 @@ class Kaneda1991Sky(SkyModel):
             beta_e = np.vstack([beta_e, row])
         top = props.top_radius_m - props.planet_radius_m
         shells = _shell_altitudes(props, top, self.shells, fog)
-        setup = dict(props=props, table=table.table, nc_a=nc_a, codes=np.ascontiguousarray(codes),
-                     p0s=np.ascontiguousarray(p0s, dtype=np.float64),
-                     p1s=np.ascontiguousarray(p1s, dtype=np.float64),
-                     beta_s=np.ascontiguousarray(beta_s), beta_e=np.ascontiguousarray(beta_e),
-                     fog_code=fog_code, shells=shells)
+        base = medium_from_properties(props)
+        n_fog = codes.size - nc_a
+        table_ph = base.phase_table
+        if n_fog:
+            table_ph = np.concatenate([table_ph, np.zeros((n_fog,) + table_ph.shape[1:])])
+        medium = base._replace(
+            profile_code=np.ascontiguousarray(codes, dtype=np.int64),
+            profile_p0=np.ascontiguousarray(p0s, dtype=np.float64),
+            profile_p1=np.ascontiguousarray(p1s, dtype=np.float64),
+            scattering=np.ascontiguousarray(beta_s), extinction=np.ascontiguousarray(beta_e),
+            phase_code=np.ascontiguousarray(np.append(base.phase_code, [3] * n_fog), dtype=np.int64),
+            phase_param=np.ascontiguousarray(np.append(base.phase_param, [0.0] * n_fog)),
+            phase_table=np.ascontiguousarray(table_ph),
+            phase_cdf=np.ascontiguousarray(phase_cdf_table(table_ph)))
+        setup = dict(props=props, table=table.table, nc_a=nc_a, medium=medium,
+                     beta_s=medium.scattering, fog_code=fog_code, shells=shells)
         self._cache[key] = setup
         return setup
 
     def _phases(self, setup, nu):
-        """Phase function of every constituent at scattering-angle cosines nu, (n, nc)."""
-        props = setup["props"]
-        out = []
-        for code, param in zip(props.phase_code, props.phase_param):
-            if code in (1, 2) and self.mie_phase != "atmosphere":
-                out.append(phase_hazy(nu) if self.mie_phase == "hazy" else phase_murky(nu))
-            else:
-                out.append(_phase(int(code), float(param), nu))
+        """Phase function of every constituent at scattering-angle cosines nu, (n, nc, nl)
+        (the atmosphere's own, tabulated included, from the kernels' core; the NMN87
+        approximations where chosen)."""
+        from skydome.transport._phase import phase_values_many
+
+        m = setup["medium"]
+        nu = np.ascontiguousarray(nu, dtype=np.float64)
+        out = np.empty((nu.size, m.phase_code.size, m.extinction.shape[1]))
+        phase_values_many(m, nu, out)
+        if self.mie_phase != "atmosphere":
+            for c, code in enumerate(setup["props"].phase_code):
+                if code in (1, 2, 4):
+                    out[:, c, :] = (phase_hazy(nu) if self.mie_phase == "hazy" else phase_murky(nu))[:, None]
         if setup["fog_code"] >= 0:
-            out.append({"murky": phase_murky, "hazy": phase_hazy}.get(
-                self.fog_phase, lambda c: np.full_like(c, _INV_4PI))(nu))
-        return np.stack(out, axis=-1)
+            out[:, -1, :] = {"murky": phase_murky, "hazy": phase_hazy}.get(
+                self.fog_phase, lambda c: np.full_like(c, _INV_4PI))(nu)[:, None]
+        return out
 
     def _solar(self, wl):
         from skydome.spectra import solar_irradiance
@@ -261,21 +263,18 @@ class Kaneda1991Sky(SkyModel):
         from skydome.models.simulated import _kernels_kaneda as KK
 
         s = self._setup(wl)
-        props = s["props"]
         # the eye is on the ground: directions below the horizon are taken as horizontal
         d = np.ascontiguousarray(_horizon_clamp(dirs))
         n = d.shape[0]
-        nc = s["codes"].size
+        nc = s["medium"].profile_code.size
         acc = np.empty((n, nc, wl.size))
         trans = np.empty((n, wl.size))
         KK.kaneda_rays(d, np.ascontiguousarray(t_end, dtype=np.float64), self.sun.direction,
-                       float(props.planet_radius_m), float(props.top_radius_m), s["shells"],
-                       s["codes"], s["p0s"], s["p1s"], s["beta_e"], s["table"], s["nc_a"],
-                       s["fog_code"], float(self.fog_height_m), float(self.max_dtau), 4096, acc,
-                       trans)
+                       s["medium"], s["shells"], s["table"], s["nc_a"], s["fog_code"],
+                       float(self.fog_height_m), float(self.max_dtau), 4096, acc, trans)
         nu = np.clip(d @ self.sun.direction, -1.0, 1.0)
-        ph = self._phases(s, nu)                                     # (n, nc)
-        L = self._solar(wl) * np.einsum("nc,cl,ncl->nl", ph, s["beta_s"], acc)
+        ph = self._phases(s, nu)                                     # (n, nc, nl)
+        L = self._solar(wl) * np.einsum("ncl,cl,ncl->nl", ph, s["beta_s"], acc)
         return trans, np.maximum(L, 0.0)
 
     # -- public API -----------------------------------------------------------------------
@@ -296,11 +295,9 @@ class Kaneda1991Sky(SkyModel):
 
         wl = as_wavelengths(wavelengths_nm)
         s = self._setup(wl)
-        props = s["props"]
         t = np.empty(wl.size)
-        KK.sun_transmittance(float(props.planet_radius_m), float(props.top_radius_m),
-                             float(self.sun.direction[2]), s["table"], s["nc_a"], s["fog_code"],
-                             float(self.fog_height_m), s["beta_e"], t)
+        KK.sun_transmittance(s["medium"], float(self.sun.direction[2]), s["table"], s["nc_a"],
+                             s["fog_code"], float(self.fog_height_m), t)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
     def fog(self, distance_m, view_direction, wavelengths_nm, object_radiance=None):

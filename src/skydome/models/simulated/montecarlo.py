@@ -145,29 +145,23 @@ class MonteCarloSky(SkyModel):
             return self._last[1]
         from skydome.models.simulated import _kernels_montecarlo as K
         from skydome.spectra import solar_irradiance
+        from skydome.transport._medium import medium_from_properties
         from skydome.transport.optical_depth import DEFAULT_QUADRATURE_SCALE_M, ColumnTable
 
         props = self.atmosphere.optical_properties(wl)
         table = ColumnTable.cached(props, 256, 512, 128, DEFAULT_QUADRATURE_SCALE_M)
-        codes = props.phase_code
-        pp = props.phase_param
-        # Rayleigh: the Atmosphere's parameter is rho/(2 - rho); the kernels take rho
-        rho = np.where(codes == 0, 2.0 * pp / (1.0 + pp), 0.0)
-        g = np.where(codes == 0, 0.0, pp)
         e_sun = solar_irradiance(wl) * self.sun.irradiance_scale
         zen_ref, _ = stokes_frame(d)
         n, nl = d.shape[0], wl.size
         mean = np.zeros((n, nl, 4))
         err = np.zeros((n, nl, 4))
-        R = float(props.planet_radius_m)
-        K.trace(np.ascontiguousarray(d), np.ascontiguousarray(zen_ref), R + self.observer_altitude_m,
+        medium = medium_from_properties(props)
+        K.trace(np.ascontiguousarray(d), np.ascontiguousarray(zen_ref), medium.R + self.observer_altitude_m,
                 np.ascontiguousarray(self.sun.direction, dtype=np.float64),
-                float(np.cos(np.radians(self.sun.angular_radius_deg))), R,
-                float(props.top_radius_m), props.profile_code, props.profile_p0, props.profile_p1,
-                np.ascontiguousarray(props.scattering), np.ascontiguousarray(props.extinction),
-                codes, np.ascontiguousarray(g), np.ascontiguousarray(rho), props.ground_albedo,
-                e_sun, table.table, int(self.samples), int(self.seed), self.polarised,
-                -1 if self.max_order is None else int(self.max_order), mean, err)
+                float(np.cos(np.radians(self.sun.angular_radius_deg))), medium,
+                np.ascontiguousarray(e_sun, dtype=np.float64), table.table, int(self.samples),
+                int(self.seed), self.polarised, -1 if self.max_order is None else int(self.max_order),
+                mean, err)
         mean[..., 0] = np.maximum(mean[..., 0], 0.0)
         self._last = (key, (mean, err))
         return mean, err

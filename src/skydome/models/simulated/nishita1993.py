@@ -301,10 +301,15 @@ class Nishita1993(SkyModel):
         self._codes = np.ascontiguousarray(props.profile_code)
         self._p0 = np.ascontiguousarray(props.profile_p0, dtype=np.float64)
         self._p1 = np.ascontiguousarray(props.profile_p1, dtype=np.float64)
-        self._table = K.build_table(self._codes, self._p0, self._p1, self._R, self._Rt,
-                                    self._sph_r, self.cylinders, self.light_samples,
-                                    self._QUAD_SCALE_M)
+        self._table = K.build_table(self._medium(props), self._sph_r, self.cylinders,
+                                    self.light_samples, self._QUAD_SCALE_M)
         self.table_build_s = time.perf_counter() - t0
+
+    def _medium(self, props):
+        """The kernels' medium record of these optical properties on this model's shell."""
+        from skydome.transport._medium import medium_from_properties
+
+        return medium_from_properties(props)._replace(R=float(self._R), Rt=float(self._Rt))
 
     def _trace(self, dirs, entry, r0, sun, surface_code, mu_grid, e_sky) -> np.ndarray:
         from skydome.models.simulated import _kernels_nishita1993 as K
@@ -312,16 +317,18 @@ class Nishita1993(SkyModel):
         p = entry["props"]
         flat = np.ascontiguousarray(dirs.reshape(-1, 3), dtype=np.float64)
         out = np.empty((flat.shape[0], p.wavelengths_nm.size))
-        K.render_rays(flat, float(r0), np.ascontiguousarray(sun, dtype=np.float64), self._R,
-                      self._Rt, self._codes, self._p0, self._p1,
-                      np.ascontiguousarray(p.scattering), np.ascontiguousarray(p.extinction),
-                      np.ascontiguousarray(p.phase_code), np.ascontiguousarray(p.phase_param,
-                                                                                dtype=np.float64),
-                      entry["e_sun"], self._sph_r, self._table, self._SPACING_SCALE_M,
-                      self._Rt - self._R, self._SPACING_LINEAR, self._N_INNER, self.light_exact,
-                      self.light_samples, self._QUAD_SCALE_M, self.substeps, surface_code,
-                      entry["albedo"], mu_grid, e_sky, entry["water_c"], entry["water_b"],
-                      N_WATER, self._texture, entry["basis"], self._rot, out)
+        lt = K.LightTable(self._sph_r, self._table, float(self._SPACING_SCALE_M),
+                          float(self._Rt - self._R), float(self._SPACING_LINEAR), int(self._N_INNER),
+                          bool(self.light_exact), int(self.light_samples), float(self._QUAD_SCALE_M),
+                          int(self.substeps))
+        sf = K.Surface(int(surface_code), np.ascontiguousarray(entry["albedo"], dtype=np.float64),
+                       np.ascontiguousarray(mu_grid, dtype=np.float64),
+                       np.ascontiguousarray(e_sky, dtype=np.float64),
+                       np.ascontiguousarray(entry["water_c"], dtype=np.float64),
+                       np.ascontiguousarray(entry["water_b"], dtype=np.float64), float(N_WATER),
+                       self._texture, entry["basis"], self._rot)
+        K.render_rays(flat, float(r0), np.ascontiguousarray(sun, dtype=np.float64),
+                      self._medium(p), entry["e_sun"], lt, sf, out)
         return out
 
     def _sky_irradiance_table(self, entry):

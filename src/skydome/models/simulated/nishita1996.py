@@ -156,15 +156,15 @@ class Nishita1996Sky(SkyModel):
     def _precompute(self, wl):
         from skydome.models.simulated import _kernels_nishita1996 as K
         from skydome.spectra import solar_irradiance
-        from skydome.transport._kernels import profile_density
+        from skydome.transport._medium import medium_from_properties, profile_density
 
         pr = self.atmosphere.optical_properties(wl)
+        med = medium_from_properties(pr)
         R, Rt = float(pr.planet_radius_m), float(pr.top_radius_m)
-        lo, hi = K.build_cylinder_table(pr.profile_code, pr.profile_p0, pr.profile_p1, R, Rt,
-                                        128, 128, 512, 8)
+        lo, hi = K.build_cylinder_table(med, 128, 128, 512, 8)
         e_sun = np.ascontiguousarray(solar_irradiance(wl) * self.sun.irradiance_scale)
         n = self.view_samples
-        st = dict(props=pr, R=R, Rt=Rt, lo=lo, hi=hi, e_sun=e_sun, wl=wl,
+        st = dict(props=pr, medium=med, R=R, Rt=Rt, lo=lo, hi=hi, e_sun=e_sun, wl=wl,
                   r0=R + self.observer_altitude_m)
         if self.orders == 1:
             return st
@@ -178,14 +178,9 @@ class Nishita1996Sky(SkyModel):
         fine, dw = _fine_grid()
         owner = np.ascontiguousarray(np.argmax(fine @ dirs.T, axis=1).astype(np.int64))
         nc = pr.profile_code.size
-        # phase integrals over each cell: W[c, j, k] = int_cell_j P_c(w . d_k) dw, sum_j = 1
-        W = np.zeros((nc, Kd, Kd))
-        cosm = fine @ dirs.T                                  # (nf, K)
-        for c in range(nc):
-            ph = _phase(pr.phase_code[c], pr.phase_param[c], cosm) * dw[:, None]
-            for j in range(Kd):
-                W[c, j] = ph[owner == j].sum(axis=0)
-            W[c] /= W[c].sum(axis=0, keepdims=True)
+        # phase integrals over each cell: W[c, lw, j, k] = int_cell_j P_c(w . d_k) dw, sum_j = 1
+        W = K.phase_cell_weights(med, np.ascontiguousarray(fine @ dirs.T), np.ascontiguousarray(dw),
+                                 owner, Kd)
         # lattice (gnomonic about the observer): x = D sign(s) s^2, h = Htop w^2
         D = math.sqrt(Rt * Rt - R * R) * 1.05
         Htop = Rt - R
@@ -215,9 +210,7 @@ class Nishita1996Sky(SkyModel):
         nl = wl.size
         # order 1 on the lattice
         I = np.empty((nodes.shape[0], Kd, nl))
-        K.lattice_single(nodes, dirs, self._sun, R, Rt, pr.profile_code, pr.profile_p0,
-                         pr.profile_p1, pr.scattering, pr.extinction, pr.phase_code,
-                         pr.phase_param, albedo, e_sun, lo, hi, n, 500.0, I)
+        K.lattice_single(nodes, dirs, self._sun, med, e_sun, lo, hi, n, 500.0, I)
         fields = [I]
         for _ in range(2, self.orders):
             I5 = fields[-1].reshape(nx, nx, nh, Kd, nl)
@@ -226,8 +219,7 @@ class Nishita1996Sky(SkyModel):
             K.lattice_source(fields[-1], rho_nodes, pr.scattering, W, J)
             In = np.empty_like(fields[-1])
             K.lattice_gather(nodes, dirs, np.ascontiguousarray(J.reshape(nx, nx, nh, Kd, nl)),
-                             np.ascontiguousarray(G), R, Rt, D, Htop, pr.profile_code,
-                             pr.profile_p0, pr.profile_p1, pr.extinction, n, 500.0, In)
+                             np.ascontiguousarray(G), med, D, Htop, n, 500.0, In)
             fields.append(In)
         # every order's lattice light (order k at index k - 1) and ground radiance, stacked
         fields_all = np.ascontiguousarray(np.stack([f.reshape(nx, nx, nh, Kd, nl) for f in fields]))
@@ -251,21 +243,17 @@ class Nishita1996Sky(SkyModel):
         d = as_directions(directions)
         wl = as_wavelengths(wavelengths_nm)
         st = self._state(wl)
-        pr = st["props"]
         v = self._rotate(d)
         nl = wl.size
-        albedo = np.ascontiguousarray(pr.ground_albedo, dtype=np.float64)
         out = np.zeros((self.orders, v.shape[0], nl))
-        K.view_single(v, st["r0"], self._sun, st["R"], st["Rt"], pr.profile_code, pr.profile_p0,
-                      pr.profile_p1, pr.scattering, pr.extinction, pr.phase_code, pr.phase_param,
-                      albedo, st["e_sun"], st["lo"], st["hi"], self.view_samples, 500.0, out[0])
+        med = st["medium"]
+        K.view_single(v, st["r0"], self._sun, med, st["e_sun"], st["lo"], st["hi"],
+                      self.view_samples, 500.0, out[0])
         if self.orders > 1:
             # orders 2..N in one pass: the phase-cell weights and the ray's nodes are shared
             K.view_gather_orders(v, st["r0"], st["fields_all"], st["grounds_all"], st["fine"],
-                                 st["dw"], st["owner"], st["R"], st["Rt"], st["D"], st["Htop"],
-                                 pr.profile_code, pr.profile_p0, pr.profile_p1, pr.scattering,
-                                 pr.extinction, pr.phase_code, pr.phase_param, self.view_samples,
-                                 500.0, out[1:])
+                                 st["dw"], st["owner"], med, st["D"], st["Htop"],
+                                 self.view_samples, 500.0, out[1:])
         np.maximum(out, 0.0, out=out)
         out[~np.isfinite(out)] = 0.0
         return out.reshape((self.orders,) + d.shape[:-1] + (nl,))
@@ -295,18 +283,3 @@ class Nishita1996Sky(SkyModel):
         out = super().describe()
         out["parameters"]["atmosphere"] = self.atmosphere.describe()
         return out
-
-
-def _phase(code, param, c):
-    """Normalised phase functions [sr^-1] (same forms as skydome.transport._kernels)."""
-    if code == 0:
-        g = param
-        return 3.0 / (16.0 * math.pi) * 1.0 / (1.0 + 2.0 * g) * ((1.0 + 3.0 * g) + (1.0 - g) * c * c)
-    if code in (1, 2):
-        g = param
-        d = 1.0 + g * g - 2.0 * g * c
-        hg = (1.0 - g * g) / (d * np.sqrt(d)) / (4 * math.pi)
-        if code == 1:
-            return hg
-        return 3.0 * (1.0 + c * c) / (2.0 * (2.0 + g * g)) * hg
-    return np.full_like(c, 1.0 / (4 * math.pi))
