@@ -653,6 +653,12 @@ def _check_figure_path(out: str) -> None:
         raise UserError(f"out = {out!r}: folder {str(p.parent)!r} is not writable")
 
 
+# `skydome validate ...` lives in its own module (imports nothing heavy until run)
+from skydome.validation.cli import validate_app  # noqa: E402
+
+app.add_typer(validate_app, name="validate")
+
+
 def main() -> None:  # console-script entry point
     try:
         app()
