@@ -119,7 +119,7 @@ def test_aerosol_optics():
     atm = aeronet.aerosol_atmosphere(r)
     aero = [c for c in atm.constituents if c.name == "aerosol"][0]
     assert aero.phase == "tabulated"
-    assert atm.ground_albedo(np.array([440.0]))[0] == pytest.approx(0.0294)
+    assert atm.ground_albedo(np.array([440.0]))[0] == pytest.approx(r.surface_albedo[0])
 
 
 def test_pfn_bad_file(tmp_path):
