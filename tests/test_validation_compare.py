@@ -104,3 +104,22 @@ def test_cli_table(tmp_path):
     text = out.read_text()
     assert "| single_scattering | tabulated |" in text and "| perez1993 |" in text
     assert [p.name for p in tmp_path.iterdir()] == ["t.md"]
+
+
+# precomputed (skydome's physically based default) at the coarse test settings
+PRECOMPUTED = [("11:00:00", 0.1916, 0.1418, 0.1423, 0.3065, 0.0179),
+               ("12:45:00", 0.1619, 0.1126, 0.0996, 0.2912, 0.0179)]
+
+
+@pytest.mark.slow
+def test_precomputed_errors_pinned(caps):
+    """precomputed (Henyey-Greenstein with the measured asymmetry: see TABULATED_FALLBACK):
+    luminance level within 2 points, RMS errors within 10 % of the pinned values."""
+    for c, (lab, lvl, rms, rest, spec, xy) in zip(caps, PRECOMPUTED):
+        r = compare.compare_one("precomputed", c, fast=True)
+        assert r.capture == lab and r.phase.startswith("henyey_greenstein")
+        assert r.luminance_level == pytest.approx(lvl, abs=0.02)
+        assert r.luminance_shape["all"]["rms"] == pytest.approx(rms, rel=0.1)
+        assert r.luminance_shape["rest"]["rms"] == pytest.approx(rest, rel=0.1)
+        assert r.spectral_rms == pytest.approx(spec, rel=0.1)
+        assert r.xy_rms == pytest.approx(xy, rel=0.1)

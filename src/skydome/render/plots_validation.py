@@ -85,8 +85,9 @@ def plot_error_maps(capture, measured, models, path, *, excluded=(0,), limit=0.5
     n = len(models)
     cols = min(n, 4)
     rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.8 * rows), squeeze=False,
+    fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols + 1.2, 3.6 * rows), squeeze=False,
                              subplot_kw={"projection": "polar"})
+    fig.subplots_adjust(left=0.03, right=0.86, wspace=0.35, hspace=0.35, top=0.86)
     k = _keep(measured.size, excluded)
     theta = np.radians(capture.azimuth_deg)
     r = 90.0 - capture.elevation_deg
@@ -103,11 +104,14 @@ def plot_error_maps(capture, measured, models, path, *, excluded=(0,), limit=0.5
         ax.set_rlim(0, 90)
         ax.set_rticks([30, 60, 90])
         ax.set_yticklabels([])
+        ax.set_xticks(np.radians([0, 90, 180, 270]))
+        ax.set_xticklabels(["N", "E", "S", "W"])
         rms = float(np.sqrt(np.mean(err[k] ** 2)))
         ax.set_title(f"{m}\nshape RMS {100 * rms:.0f} %", fontsize=9)
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
-    fig.colorbar(sc, ax=list(axes.flat), shrink=0.7, label="model / measured - 1 (each / own mean)")
+    cax = fig.add_axes([0.89, 0.2, 0.015, 0.6])
+    fig.colorbar(sc, cax=cax, label="model / measured - 1 (each / own mean)")
     fig.suptitle(title or f"capture {capture.label}: luminance shape error (sun: star)")
     _save(fig, path)
     plt.close(fig)
