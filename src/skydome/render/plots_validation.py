@@ -80,14 +80,14 @@ def plot_spectra(capture, wavelengths_nm, models, path, *, samples=(80, 24, 44, 
 
 def plot_error_maps(capture, measured, models, path, *, excluded=(0,), limit=0.5, title=None) -> None:
     """Shape error of each model (``models``: {name: luminance (81,)}) on the sky grid:
-    polar panels, north up, east right (as seen from below), radius = zenith angle."""
+    polar panels in map view (north up, east right), radius = zenith angle."""
     plt = _pyplot()
     n = len(models)
     cols = min(n, 4)
     rows = (n + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols + 1.2, 3.6 * rows), squeeze=False,
                              subplot_kw={"projection": "polar"})
-    fig.subplots_adjust(left=0.03, right=0.86, wspace=0.35, hspace=0.35, top=0.86)
+    fig.subplots_adjust(left=0.03, right=0.86, wspace=0.35, hspace=0.55, top=0.86)
     k = _keep(measured.size, excluded)
     theta = np.radians(capture.azimuth_deg)
     r = 90.0 - capture.elevation_deg
