@@ -33,9 +33,10 @@ __all__ = ["arc_directions", "MODELS", "EXCLUDED_SAMPLES", "compare_measured", "
            "measured_luminance"]
 
 #: Samples left out of the statistics: sample 0 (north, low, the first of each scan) reads
-#: 26-42 % below the mean of its two ring neighbours in every capture from 10:00 on, where
-#: no other sample of the ring (bar its neighbours) falls below 0.89 and the ring's median
-#: departure is 1 % (tests/test_validation_kider2014.py); Bruneton notes it seems systematically wrong (clear-sky-models, measured_atmosphere.cc).
+#: 25-42 % below the mean of its two ring neighbours in every capture from 10:00 on, more
+#: than 10 % below any other sample of the ring by that measure (bar its neighbours)
+#: (tests/test_validation_kider2014.py); Bruneton notes it seems systematically wrong
+#: (clear-sky-models, measured_atmosphere.cc).
 EXCLUDED_SAMPLES = (0,)
 
 #: Models compared by default, in the table's order.
@@ -185,7 +186,7 @@ def arc_directions(capture, n_sub: int = 8, move: str = "from_previous") -> np.n
     """Directions along each sample's move (81, n_sub, 3).
 
     The scanner is a pan-tilt head: between sample i-1 and sample i it turns in azimuth and
-    elevation together, and it integrates while it moves. Sample i (i >= 1) is modelled as
+    elevation together; if it integrated while it moved, a sample would be this mean. Sample i (i >= 1) is modelled as
     the mean over ``n_sub`` points at fractions (j + 0.5) / n_sub of the move from the
     previous sample's (azimuth, elevation) to its own, linear in both angles (the azimuth
     the short way round). Sample 0 has no previous sample: its points all lie at its own direction.

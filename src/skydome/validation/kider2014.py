@@ -24,7 +24,7 @@ tests/validation/test_kider2014.py):
   circumsolar peak, :func:`sun_from_data`) lies 7-12 deg from the SPA sun at every capture,
   always towards where the sun was earlier that morning: both its elevation and its azimuth
   match the SPA sun of about 40 minutes before the label (:func:`fit_clock_offset`: the
-  residual drops to 0-3 deg for the 12 captures whose sun the 81 samples resolve). One time
+  residual drops to 0.3-3.6 deg for 12 of the 13 captures from 10:00 on). One time
   shift fixing elevation and azimuth together points to the scanner's clock rather than to
   its azimuth alignment (an azimuth offset would leave the elevation error). Bruneton's
   reader notes the same mismatch and estimates the sun azimuth from the symmetry axis
