@@ -127,3 +127,16 @@ def test_pfn_bad_file(tmp_path):
     p.write_text("not aeronet\n")
     with pytest.raises(ValueError, match="not an AERONET"):
         aeronet.read_pfn(p)
+
+
+def test_per_sample_sun_moves_during_the_scan():
+    """SPA per sample: the sun moves about 1-1.5 deg in a 343 s scan in late-May mid-morning
+    (15 deg/h of hour angle times cos(declination 21.3 deg): 1.31 deg over 80/81 of 343 s);
+    the mean-time sun lies between the first and last."""
+    c = kider2014.load_captures("10:30:00")[0]
+    el, az = c.sample_sun_elevation_deg, c.sample_sun_azimuth_deg
+    first = kider2014._enu(az[0], el[0])
+    last = kider2014._enu(az[-1], el[-1])
+    move = np.degrees(np.arccos(first @ last))
+    assert 1.0 < move < 1.5
+    assert el[0] < c.sun.elevation_deg < el[-1] and az[0] < c.sun.azimuth_deg < az[-1]
