@@ -322,7 +322,7 @@ def day_table(results) -> str:
             return "n/a" if not np.isfinite(x) else f"{100 * x:+.1f}" if x is lvl else f"{100 * x:.1f}"
 
         lvl = mean(lambda r: r.luminance_level)
-        phases = sorted({r.phase.split(" (")[0] if "type" not in r.phase else "analytic" for r in rs})
+        phases = sorted({r.phase.split(" (")[0] for r in rs if r.phase != "no pyranometer record"})
         vals = [pct(lvl)] + [pct(mean(lambda r, k=k, s=s: r.luminance_shape[k][s]))
                              for k, s in (("all", "rms"), ("all", "median"), ("all", "max"),
                                           ("circumsolar", "rms"), ("horizon", "rms"), ("rest", "rms"))]
