@@ -77,6 +77,15 @@ def figures(results_dir: Path, fig_dir: Path) -> int:
     maps = {r.model: r.model_luminance for r in results if r.capture == lab and r.model_luminance is not None}
     maps = {m: maps[m] for m in order if m in maps}
     pv.plot_error_maps(caps[lab], lum, maps, fig_dir / "validation_measured_error_maps.png")
+    # the scanner's motion: hillaire2020 at the labelled directions and along each move
+    from skydome.validation.compare import compare_one
+
+    point = compare_one("hillaire2020", caps[lab])
+    arc = compare_one("hillaire2020", caps[lab], motion="from_previous")
+    pv.plot_scan_order(caps[lab], lum, {"hillaire2020 at the labelled directions": point.model_luminance,
+                                        "hillaire2020 along each move": arc.model_luminance},
+                       fig_dir / "validation_measured_scan_order.png",
+                       title=f"capture {lab}: point sampling and the mean along the scanner's move")
     return 0
 
 

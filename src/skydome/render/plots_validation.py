@@ -13,7 +13,7 @@ import numpy as np
 
 from skydome.render.plots import _pyplot, _save
 
-__all__ = ["plot_luminance_vs_scattering_angle", "plot_spectra", "plot_error_maps"]
+__all__ = ["plot_luminance_vs_scattering_angle", "plot_spectra", "plot_error_maps", "plot_scan_order"]
 
 _STYLE = {"precomputed": ("C0", "o"), "hillaire2020": ("C1", "s"), "nishita1996": ("C2", "^"),
           "single_scattering": ("C3", "v"), "montecarlo": ("C4", "D"), "preetham1999": ("C5", "P"),
@@ -113,5 +113,29 @@ def plot_error_maps(capture, measured, models, path, *, excluded=(0,), limit=0.5
     cax = fig.add_axes([0.89, 0.2, 0.015, 0.6])
     fig.colorbar(sc, cax=cax, label="model / measured - 1 (each / own mean)")
     fig.suptitle(title or f"capture {capture.label}: luminance shape error (sun: star)")
+    _save(fig, path)
+    plt.close(fig)
+
+
+def plot_scan_order(capture, measured, models, path, *, title=None) -> None:
+    """Luminance against the sample index (the scanner's order): the measurement and
+    ``models`` ({label: luminance (81,)}), e.g. a model sampled at the labelled directions
+    and averaged along each move. Ring boundaries are marked."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(11, 3.8))
+    i = np.arange(measured.size)
+    ax.semilogy(i, measured, "ko-", ms=4, lw=0.8, label="measured")
+    for k, (lab, L) in enumerate(models.items()):
+        ax.semilogy(i, L, ".-", color=f"C{k}", ms=5, lw=0.8, label=lab)
+    for b in np.flatnonzero(np.diff(capture.elevation_deg) != 0) + 0.5:
+        ax.axvline(b, color="0.6", lw=0.8, ls=":")
+    ax.annotate("sample 0", (0, measured[0]), xytext=(3, measured[0] * 0.8), fontsize=8,
+                arrowprops={"arrowstyle": "->"})
+    ax.set_xlabel("sample (scan order; dotted: next ring)")
+    ax.set_ylabel("luminance [cd m$^{-2}$]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title or f"capture {capture.label}")
+    fig.tight_layout()
     _save(fig, path)
     plt.close(fig)
