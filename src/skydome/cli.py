@@ -965,6 +965,10 @@ app.add_typer(export_app, name="export")
 from skydome.daylighting.cli import register as _register_daylighting  # noqa: E402
 
 _register_daylighting(app)
+# `skydome validate ...` lives in its own module (imports nothing heavy until run)
+from skydome.validation.cli import validate_app  # noqa: E402
+
+app.add_typer(validate_app, name="validate")
 
 
 def main() -> None:  # console-script entry point

@@ -1,0 +1,80 @@
+"""``skydome validate``: models against measured skies.
+
+``skydome validate measured`` compares the models with the Kider et al. 2014 scans of
+2013-05-27 (:func:`skydome.validation.compare.compare_measured`) and prints, or writes
+(``--out table.md``, atomically), the day's table.
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+validate_app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
+                           help="Validate the models against measured skies.")
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+@validate_app.command("measured")
+def measured(
+    models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996", "single_scattering",
+                                         "preetham1999", "perez1993", "cie2003")),
+                               help="Comma-separated models (also montecarlo, precomputed_accurate)."),
+    captures: Optional[str] = typer.Option(None, help="Comma-separated capture labels HH:MM:SS (default all 15)."),
+    phase: str = typer.Option("tabulated", help="Aerosol phase of the physically based models: tabulated "
+                                                "(AERONET, measured), henyey_greenstein or cornette_shanks."),
+    fast: bool = typer.Option(False, "--fast", help="Coarse model settings (quick look)."),
+    out: Optional[str] = typer.Option(None, help="Write the Markdown table to this .md file."),
+) -> None:
+    """Compare models with the Kider et al. 2014 sky scans of 2013-05-27 (Cornell)."""
+    from pathlib import Path
+
+    from skydome.validation.compare import MODELS, compare_measured, day_table
+    from skydome.validation.kider2014 import capture_labels
+
+    names = [m.strip() for m in models.split(",") if m.strip()]
+    valid = MODELS + ("precomputed_accurate",)
+    bad = [m for m in names if m not in valid]
+    if not names or bad:
+        _fail(f"models = {models!r}: each must be one of {', '.join(valid)}")
+    labs = None
+    if captures is not None:
+        labs = [c.strip() for c in captures.split(",") if c.strip()]
+        wrong = [c for c in labs if c not in capture_labels()]
+        if not labs or wrong:
+            _fail(f"captures = {captures!r}: each must be one of {', '.join(capture_labels())}")
+    if phase not in ("tabulated", "henyey_greenstein", "cornette_shanks"):
+        _fail(f"phase = {phase!r}: must be tabulated, henyey_greenstein or cornette_shanks")
+    if out is not None:
+        p = Path(out)
+        if p.suffix.lower() != ".md":
+            _fail(f"out = {out!r}: must be a .md file")
+        if not p.parent.is_dir():
+            _fail(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
+    try:
+        results = compare_measured(names, labs, fast=fast, phase=phase,
+                                   progress=lambda m, c: typer.echo(f"{m} {c}", err=True))
+    except (ValueError, TypeError) as exc:
+        _fail(str(exc.args[0] if exc.args else exc))
+    table = day_table(results)
+    if out is None:
+        typer.echo(table)
+        return
+    import os
+    import tempfile
+
+    p = Path(out)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(table)
+        os.replace(tmp, p)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    typer.echo(f"wrote {out}")

@@ -1,0 +1,142 @@
+"""The Kider et al. 2014 loader, its conventions, and the AERONET reader.
+
+References: the data set's own file names and pyranometer records (sky-measurements-2014,
+Apache-2.0); NREL SPA through pvlib for the sun; the AERONET file's own values; Bruneton's
+reader (ebruneton/clear-sky-models, measured_atmosphere.cc) for the sample order and the
+counter-clockwise file azimuth.
+"""
+
+import numpy as np
+import pytest
+
+from skydome.validation import aeronet, kider2014
+
+
+def test_table_shape_and_grid():
+    labels = kider2014.capture_labels()
+    assert len(labels) == 15 and labels[0] == "09:30:00" and labels[-1] == "13:30:00"
+    c = kider2014.load_captures("10:30:00")[0]
+    assert c.radiance.shape == (81, 131)
+    assert c.wavelengths_nm[0] == 350 and c.wavelengths_nm[-1] == 1000
+    assert np.all(np.isfinite(c.radiance)) and np.all(c.radiance > 0)
+    # Bruneton's grid: rings of 32, 24, 16, 8 samples at 12.1, 33.7, 53.4, 71.9 deg, then zenith
+    assert np.allclose(np.unique(c.elevation_deg), [12.1151, 33.749, 53.3665, 71.9187, 90.0])
+    assert [int(np.sum(c.elevation_deg == e)) for e in np.unique(c.elevation_deg)] == [32, 24, 16, 8, 1]
+    assert np.allclose(np.linalg.norm(c.directions, axis=1), 1.0)
+
+
+def test_file_azimuth_counter_clockwise():
+    c = kider2014.load_captures("10:30:00")[0]
+    # file azimuth 90 (ccw from north) is west: ENU x < 0
+    i = int(np.flatnonzero((c.azimuth_file_deg == 90.0) & (c.elevation_deg < 13))[0])
+    assert c.azimuth_deg[i] == pytest.approx(270.0)
+    assert c.directions[i, 0] == pytest.approx(-np.cos(np.radians(12.1151)))
+
+
+def test_sample_times_span_the_scan():
+    c = kider2014.load_captures("10:30:00", clock_offset_min=0)[0]
+    assert c.start.utcoffset().total_seconds() == -4 * 3600
+    span = (c.sample_times[-1] - c.sample_times[0]).total_seconds()
+    assert span == pytest.approx(kider2014.SCAN_DURATION_S * 80 / 81)
+    # the pyranometer mean over the scan window (its own records, 10:30:00-10:35:43)
+    assert 700 < c.ghi_w_m2 < 950
+
+
+def test_conventions_from_the_data():
+    """The sun seen in the radiance fits SPA best with the file azimuth counter-clockwise
+    and the labels in EDT (UTC-4); clockwise, or UTC-5, do not fit."""
+    r = kider2014.fit_conventions()
+    best = np.median(r[("ccw", -4.0)])
+    assert best < 12.0
+    for k in (("ccw", -5.0), ("cw", -4.0), ("cw", -5.0)):
+        assert np.median(r[k]) > best + 10.0, k
+
+
+def test_clock_offset_from_the_data():
+    """One time shift brings the data's sun onto SPA in elevation and azimuth together."""
+    r = kider2014.fit_clock_offset()
+    assert -50.0 <= r["median_best_min"] <= -30.0
+    assert r["median_best_min"] == pytest.approx(kider2014.CLOCK_OFFSET_MIN, abs=5.0)
+    offs = list(r["offsets_min"])
+    at0 = r["angles_deg"][:, offs.index(0.0)]
+    atfit = r["angles_deg"][:, offs.index(kider2014.CLOCK_OFFSET_MIN)]
+    assert np.median(at0) > 7.0 and np.median(atfit) < 3.0
+
+
+def test_sample0_misbehaves():
+    """Sample 0 (north, first of the scan) reads well below its ring neighbours from 10:00 on,
+    far below any other sample of the ring (bar its two neighbours) (why it is left out of the statistics)."""
+    from skydome.validation.compare import EXCLUDED_SAMPLES, measured_luminance
+
+    assert 0 in EXCLUDED_SAMPLES
+    for c in kider2014.load_captures(["10:00:00", "11:15:00", "12:30:00"]):
+        L, _ = measured_luminance(c)
+        ring = L[:32]
+        r = ring / (0.5 * (np.roll(ring, 1) + np.roll(ring, -1)))
+        assert r[0] < 0.8
+        assert r[0] < 0.9 * r[2:31].min()
+        assert np.median(np.abs(np.log(r[2:31]))) < 0.02
+
+
+def test_bad_capture_label():
+    with pytest.raises(ValueError, match="capture must be one of"):
+        kider2014.load_captures("09:31:00")
+    with pytest.raises(ValueError, match="clock_offset_min"):
+        kider2014.load_captures(clock_offset_min=500)
+
+
+# -- AERONET ---------------------------------------------------------------------------------
+def test_pfn_values_as_in_the_file():
+    rs = aeronet.egbert_20130527()
+    assert len(rs) == 5
+    r = rs[0]
+    assert r.time.isoformat() == "2013-05-27T11:19:04+00:00"
+    assert r.tau440 == 0.113925 and r.alpha == 1.174858
+    assert r.theta_deg.size == 83 and r.theta_deg[0] == 0 and r.theta_deg[-1] == 180
+    assert list(r.phase_wavelengths_nm) == [442, 674, 871, 1020]
+    assert r.phase[0, 0] == 73.345490 and r.phase[1, 0] == 41.616860
+    assert list(r.surface_albedo) == [0.029400, 0.091870, 0.435330, 0.432620]
+
+
+def test_pfn_phase_normalised_to_4pi():
+    """AERONET phase functions integrate to 4 pi over the sphere (AERONET units page)."""
+    for r in aeronet.egbert_20130527():
+        t = np.radians(r.theta_deg)
+        norm = 2 * np.pi * np.trapezoid(r.phase * np.sin(t)[:, None], t, axis=0)
+        assert np.allclose(norm, 4 * np.pi, rtol=0.01)
+
+
+def test_aerosol_optics():
+    r = aeronet.egbert_20130527()[-1]
+    assert r.optical_depth(440.0) == pytest.approx(r.tau440)
+    assert r.optical_depth(870.0) == pytest.approx(r.tau440 * (870 / 440) ** -r.alpha)
+    tab = r.phase_table().on_grid([442.0, 558.0, 674.0])
+    g = np.linspace(0, np.pi, tab.shape[0])
+    assert np.allclose(2 * np.pi * np.trapezoid(tab * np.sin(g)[:, None], g, axis=0), 1.0, rtol=1e-6)
+    # linear in wavelength between the measured tables, then renormalised
+    mid = 0.5 * (tab[:, 0] + tab[:, 2])
+    assert np.allclose(tab[:, 1], mid, rtol=0.02)
+    atm = aeronet.aerosol_atmosphere(r)
+    aero = [c for c in atm.constituents if c.name == "aerosol"][0]
+    assert aero.phase == "tabulated"
+    assert atm.ground_albedo(np.array([440.0]))[0] == pytest.approx(r.surface_albedo[0])
+
+
+def test_pfn_bad_file(tmp_path):
+    p = tmp_path / "x.pfn"
+    p.write_text("not aeronet\n")
+    with pytest.raises(ValueError, match="not an AERONET"):
+        aeronet.read_pfn(p)
+
+
+def test_per_sample_sun_moves_during_the_scan():
+    """SPA per sample: the sun moves about 1-1.5 deg in a 343 s scan in late-May mid-morning
+    (15 deg/h of hour angle times cos(declination 21.3 deg): 1.31 deg over 80/81 of 343 s);
+    the mean-time sun lies between the first and last."""
+    c = kider2014.load_captures("10:30:00")[0]
+    el, az = c.sample_sun_elevation_deg, c.sample_sun_azimuth_deg
+    first = kider2014._enu(az[0], el[0])
+    last = kider2014._enu(az[-1], el[-1])
+    move = np.degrees(np.arccos(first @ last))
+    assert 1.0 < move < 1.5
+    assert el[0] < c.sun.elevation_deg < el[-1] and az[0] < c.sun.azimuth_deg < az[-1]
