@@ -70,11 +70,7 @@ COMPANIONS: dict[tuple[str, str], dict] = {
 EAGER = {"precomputed"}
 
 #: Declared ranges known to differ from the enforced ones, with the reason.
-KNOWN = {
-    ("precomputed", "observer_altitude_m", "high"):
-        "precomputed declares [0, 999999] m but refuses the top of the atmosphere "
-        "(100 km); it adopts the shared OBSERVER_ALTITUDE_M declaration with its package split",
-}
+KNOWN: dict = {}   # (model, parameter, side) -> why a declared bound is not the enforced one
 
 
 def _kwargs(name, **extra):

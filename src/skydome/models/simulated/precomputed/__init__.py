@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_number
-from skydome.models import Parameter, SkyModel, check_sun, register, resolve_atmosphere
+from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
 from skydome.models.simulated.precomputed._precompute import QUADRATURE_SCALE_M
 from skydome.models.simulated.precomputed._tables import Tables
 
@@ -98,10 +98,7 @@ class PrecomputedSky(SkyModel):
     native = "spectral"
     summary = "Bruneton-style precomputed multiple scattering tables (spectral, any atmosphere)."
     parameters = (
-        Parameter("atmosphere", "", None, doc="skydome.Atmosphere (default Atmosphere.earth(turbidity))",
-                  kind="object"),
-        Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity when no atmosphere is given"),
-        Parameter("observer_altitude_m", "m", 0.0, 0.0, 999_999.0, "observer altitude above the ground"),
+        *ATMOSPHERE_PARAMETERS,
         Parameter("n_wavelengths", "", 20, 1, 400, "table wavelengths over 380-780 nm", kind="int"),
         Parameter("table_wavelengths_nm", "nm", None, doc="explicit table wavelength grid",
                   kind="object"),
@@ -128,11 +125,8 @@ class PrecomputedSky(SkyModel):
 
     def __init__(self, sun, **params):
 
-        check_sun(sun)
-        p = self._validate_params(params)
-        if not isinstance(p["cache"], (bool, np.bool_)):
-            raise TypeError(f"cache must be True or False, not {p['cache']!r}")
-        atm = resolve_atmosphere(p, params)
+        p = self._begin(sun, params)   # sun, strict parameters, atmosphere (the protocol)
+        atm = p["atmosphere"]
         if p["scattering_mu_size"] % 2:
             raise ValueError(f"scattering_mu_size = {p['scattering_mu_size']} is out of range: "
                              "it must be even, in [4, 2048]")
