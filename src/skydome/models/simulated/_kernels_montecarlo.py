@@ -39,7 +39,6 @@ perpendicular axis is b = k x a.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -134,51 +133,16 @@ def sample_cos(code, g, rho, state):
 
 
 @njit(cache=True, inline="always")
-def _phase_at(codes, params, table, c, l, cth):
-    """Phase function of constituent c at wavelength l [sr^-1] (transport._phase's phase
-    function of the record, on three of its arrays so that the hot loop does not pass the
-    whole record)."""
-    code = codes[c]
-    if code == TABULATED:
-        return tabulated_phase(table, c, l, cth)
-    return phase_value(code, params[c], cth)
-
-
-@njit(cache=True, inline="always")
-def _light(table, R, Rt, r, mu_s, out):
-    """Columns to the sun from the table (the look-up of transport._kernels' light
-    columns); False in the earth's shadow."""
-    if ray_hits_ground(r, mu_s, R):
-        return False
-    lookup_columns(table, r, mu_s, R, Rt, out)
-    return True
-
-
-@njit(cache=True, inline="always")
 def _rho(m, c):
     """Depolarisation ratio of constituent c (Rayleigh), 0 otherwise."""
     return rayleigh_rho(m.phase_param[c]) if m.phase_code[c] == RAYLEIGH else 0.0
 
 
 @njit(cache=True, inline="always")
-def _rho_at(codes, params, c):
-    """:func:`_rho` on the record's arrays."""
-    return rayleigh_rho(params[c]) if codes[c] == RAYLEIGH else 0.0
-
-
-@njit(cache=True, inline="always")
-def _sample_at(codes, params, cdf, c, l, state):
-    """:func:`sample_phase` on the record's arrays."""
-    code = codes[c]
-    if code == TABULATED:
-        return sample_tabulated(cdf, c, l, _rand(state))
-    return sample_cos(code, params[c], _rho_at(codes, params, c), state)
-
-
-@njit(cache=True, inline="always")
 def sample_phase(m, c, l, state):
     """Cosine of the scattering angle drawn from constituent c's phase function at
-    wavelength l (a tabulated one by inverting its cumulative distribution)."""
+    wavelength l (a tabulated one by inverting its cumulative distribution); the path
+    tracer's scattering step does the same on the record's arrays."""
     code = m.phase_code[c]
     if code == TABULATED:
         return sample_tabulated(m.phase_cdf, c, l, _rand(state))
@@ -243,12 +207,8 @@ def _plane_frames(k_out, k_in, a_cur, tmp, a_in):
 
 
 @njit(cache=True, inline="always")
-def _segment_majorant(m, ext_l, r, mu, t_end):
+def _segment_majorant(codes, p0s, p1s, R, ext_l, r, mu, t_end):
     """sum_c beta_e,c max rho_c over the altitudes the segment [0, t_end] spans."""
-    R = m.R
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
     r_end = radius_along(r, mu, t_end)
     t_low = min(max(-r * mu, 0.0), t_end)
     r_low = radius_along(r, mu, t_low)
@@ -357,401 +317,333 @@ def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44, tmp):
         A[j, 3] = a3 * f44
 
 
-class _Path(NamedTuple):
-    """State and work arrays of the paths of one (direction, wavelength). The steps that
-    take it are inlined (``inline="always"``): called, each would pass and reference-count
-    its 18 arrays, which made the tracer three times slower."""
-
-    A: np.ndarray          # (4, 4) Stokes matrix to the camera frame
-    est: np.ndarray        # (4,) estimate of the current sample
-    pos: np.ndarray        # (3,) vertex [m]
-    w: np.ndarray          # (3,) backward direction
-    wn: np.ndarray         # (3,) next direction
-    k_out: np.ndarray      # (3,) propagation direction leaving the vertex (towards the camera)
-    k_in: np.ndarray       # (3,) propagation direction arriving at the vertex
-    a_cur: np.ndarray      # (3,) parallel axis of the current frame
-    a_new: np.ndarray      # (3,)
-    tmp: np.ndarray        # (3,)
-    ws: np.ndarray         # (3,) sampled direction to the sun
-    scol: np.ndarray       # (nc,) light-path columns
-    ext_l: np.ndarray      # (nc,) extinction at this wavelength [m^-1]
-    sca_l: np.ndarray      # (nc,) scattering at this wavelength [m^-1]
-    mus_c: np.ndarray      # (nc,) local scattering coefficients at the vertex [m^-1]
-    state: np.ndarray      # (1,) uint64 random stream
-    node_t: np.ndarray     # (2 N_CAMERA + 1,) camera-ray nodes [m]
-    node_tau: np.ndarray   # (2 N_CAMERA + 1,) cumulative optical depth there
+# -- the steps of a path ------------------------------------------------------------------------
+# The steps below are inlined into the path loop (``inline="always"``) and take plain arrays:
+# :func:`_trace_one` reads the arrays out of the Medium record once per (direction,
+# wavelength) and allocates the path's work arrays itself. Reading an array out of a
+# NamedTuple costs a reference-count update each time, so neither the record nor a tuple of
+# work arrays is passed to the steps, which run at every vertex and tentative collision.
 
 
 @njit(cache=True, inline="always")
-def _new_path(m, l, seed, i):
-    nc = m.profile_code.shape[0]
-    state = np.empty(1, dtype=np.uint64)
-    state[0] = _stream_seed(seed, i, l)
-    pt = _Path(np.empty((4, 4)), np.zeros(4), np.empty(3), np.empty(3), np.empty(3), np.empty(3),
-               np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(nc),
-               np.empty(nc), np.empty(nc), np.empty(nc), state, np.empty(2 * N_CAMERA + 1),
-               np.empty(2 * N_CAMERA + 1))
-    for c in range(nc):
-        pt.ext_l[c] = m.extinction[c, l]
-        pt.sca_l[c] = m.scattering[c, l]
-    return pt
-
-
-@njit(cache=True, inline="always")
-def _local_scattering(codes, p0s, p1s, R, ext_l, sca_l, mus_c, rr):
-    """(mu_t, mu_s): local extinction and scattering coefficients at radius rr [m^-1];
-    per constituent scattering in mus_c (arrays of the record and of the path passed one
-    by one: this runs at every tentative collision)."""
-    mut = 0.0
-    mus = 0.0
-    for c in range(codes.shape[0]):
-        d = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-        mut += ext_l[c] * d
-        mus_c[c] = sca_l[c] * d
-        mus += mus_c[c]
-    return mut, mus
-
-
-@njit(cache=True, inline="always")
-def _forced_collision(pt, m, cam_r0, cam_mu, n_nodes, tau_cam):
+def _forced_collision(codes, p0s, p1s, R, sca_l, mus_c, node_t, node_tau, state, cam_r0,
+                      cam_mu, n_nodes, tau_cam):
     """The camera ray's first collision, forced inside the air by inverting its tabulated
     optical depth: tau* = -ln(1 - xi (1 - T)). Returns (ok, t, mu_t of the interval, mu_s)."""
-    m_R = m.R
-    m_profile_code = m.profile_code
-    m_profile_p0 = m.profile_p0
-    m_profile_p1 = m.profile_p1
-    p_mus_c = pt.mus_c
-    p_node_t = pt.node_t
-    p_node_tau = pt.node_tau
-    p_sca_l = pt.sca_l
-    p_state = pt.state
     w0 = -math.expm1(-tau_cam)
-    target = -math.log1p(-_rand(p_state) * w0)
+    target = -math.log1p(-_rand(state) * w0)
     lo = 0
     hi = n_nodes - 1
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        if p_node_tau[mid] <= target:
+        if node_tau[mid] <= target:
             lo = mid
         else:
             hi = mid
-    dtau = p_node_tau[hi] - p_node_tau[lo]
+    dtau = node_tau[hi] - node_tau[lo]
     if dtau <= 0.0:
         return False, 0.0, 0.0, 0.0          # (measure zero: xi at the very end)
-    mut = dtau / (p_node_t[hi] - p_node_t[lo])     # extinction of the interval
-    t = p_node_t[lo] + (target - p_node_tau[lo]) / mut
+    mut = dtau / (node_t[hi] - node_t[lo])     # extinction of the interval
+    t = node_t[lo] + (target - node_tau[lo]) / mut
     rr = radius_along(cam_r0, cam_mu, t)
     mus = 0.0
-    for c in range(m_profile_code.shape[0]):
-        p_mus_c[c] = p_sca_l[c] * profile_density(m_profile_code[c], m_profile_p0[c],
-                                                    m_profile_p1[c], rr - m_R)
-        mus += p_mus_c[c]
+    for c in range(codes.shape[0]):
+        mus_c[c] = sca_l[c] * profile_density(codes[c], p0s[c], p1s[c], rr - R)
+        mus += mus_c[c]
     return True, t, mut, mus
 
 
 @njit(cache=True, inline="always")
-def _delta_track(pt, m, r, mu, t0, t_end):
+def _delta_track(codes, p0s, p1s, R, ext_l, sca_l, mus_c, state, r, mu, t0, t_end):
     """Delta tracking (Woodcock) along [0, t_end] against the segment's majorant.
     Returns (collided, t, mu_t, mu_s) at the real collision."""
-    p_ext_l = pt.ext_l
-    p_sca_l = pt.sca_l
-    p_mus_c = pt.mus_c
-    p_state = pt.state
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
-    R = m.R
-    mbar = _segment_majorant(m, p_ext_l, r, mu, t_end)
+    nc = codes.shape[0]
+    mbar = _segment_majorant(codes, p0s, p1s, R, ext_l, r, mu, t_end)
     t = 0.0
     mut = 0.0
     mus = 0.0
     if t_end > t0 and mbar > 0.0:
         while True:
-            t -= math.log(1.0 - _rand(p_state)) / mbar
+            t -= math.log(1.0 - _rand(state)) / mbar
             if t >= t_end:
                 break
-            mut, mus = _local_scattering(codes, p0s, p1s, R, p_ext_l, p_sca_l, p_mus_c,
-                                         radius_along(r, mu, t))
-            if _rand(p_state) * mbar < mut:
+            # local extinction mu_t and scattering mu_s (per constituent in mus_c)
+            hh = radius_along(r, mu, t) - R
+            mut = 0.0
+            mus = 0.0
+            for c in range(nc):
+                d = profile_density(codes[c], p0s[c], p1s[c], hh)
+                mut += ext_l[c] * d
+                mus_c[c] = sca_l[c] * d
+                mus += mus_c[c]
+            if _rand(state) * mbar < mut:
                 return True, t, mut, mus
     return False, t, mut, mus
 
 
 @njit(cache=True, inline="always")
-def _next_event_sun(pt, m, l, sun, cos_alpha, table, rloc, mus, scale, polarised):
-    """Next-event estimation towards the sun disc from the vertex: pt.est += scale x
+def _next_event_sun(ph_codes, ph_params, ph_table, R, Rt, table, l, sun, cos_alpha, A, est,
+                    ext_l, mus_c, pos, w, ws, k_in, k_out, a_cur, a_new, tmp, scol, state, rloc,
+                    mus, scale, polarised):
+    """Next-event estimation towards the sun disc from the vertex: est += scale x
     transmittance x phase-weighted mixture / mu_s (with the Stokes rotation when polarised)."""
-    m_R = m.R
-    m_Rt = m.Rt
-    m_phase_code = m.phase_code
-    m_phase_param = m.phase_param
-    m_phase_table = m.phase_table
-    m_profile_code = m.profile_code
-    p_A = pt.A
-    p_a_cur = pt.a_cur
-    p_a_new = pt.a_new
-    p_est = pt.est
-    p_ext_l = pt.ext_l
-    p_k_in = pt.k_in
-    p_k_out = pt.k_out
-    p_mus_c = pt.mus_c
-    p_pos = pt.pos
-    p_scol = pt.scol
-    p_state = pt.state
-    p_tmp = pt.tmp
-    p_w = pt.w
-    p_ws = pt.ws
-    nc = m_profile_code.shape[0]
-    _sun_sample(sun, cos_alpha, p_state, p_ws)
-    mu_s = (p_pos[0] * p_ws[0] + p_pos[1] * p_ws[1] + p_pos[2] * p_ws[2]) / rloc
-    if not _light(table, m_R, m_Rt, rloc, mu_s, p_scol):
-        return
+    nc = mus_c.shape[0]
+    _sun_sample(sun, cos_alpha, state, ws)
+    mu_s = (pos[0] * ws[0] + pos[1] * ws[1] + pos[2] * ws[2]) / rloc
+    if ray_hits_ground(rloc, mu_s, R):
+        return                                  # in the earth's shadow
+    lookup_columns(table, rloc, mu_s, R, Rt, scol)
     tau = 0.0
     for c in range(nc):
-        tau += p_ext_l[c] * p_scol[c]
+        tau += ext_l[c] * scol[c]
     tr = math.exp(-tau)
-    cth = p_ws[0] * p_w[0] + p_ws[1] * p_w[1] + p_ws[2] * p_w[2]
+    cth = ws[0] * w[0] + ws[1] * w[1] + ws[2] * w[2]
     if polarised:
         for j in range(3):
-            p_k_in[j] = -p_ws[j]
-        c2, s2r = _plane_frames(p_k_out, p_k_in, p_a_cur, p_tmp, p_a_new)
+            k_in[j] = -ws[j]
+        c2, s2r = _plane_frames(k_out, k_in, a_cur, tmp, a_new)
         v0 = 0.0
         v1 = 0.0
         for c in range(nc):
-            if p_mus_c[c] > 0.0:
-                p = _phase_at(m_phase_code, m_phase_param, m_phase_table, c, l, cth) * p_mus_c[c]
-                f12, _f22, _f33, _f44 = matrix_ratios(m_phase_code[c], _rho_at(m_phase_code, m_phase_param, c), cth)
+            if mus_c[c] > 0.0:
+                code = ph_codes[c]
+                param = ph_params[c]
+                if code == TABULATED:
+                    p = tabulated_phase(ph_table, c, l, cth) * mus_c[c]
+                else:
+                    p = phase_value(code, param, cth) * mus_c[c]
+                f12, _f22, _f33, _f44 = matrix_ratios(
+                    code, rayleigh_rho(param) if code == RAYLEIGH else 0.0, cth)
                 v0 += p
                 v1 += p * f12
         # L(phi) (v0, v1, 0, 0)
-        _mat_apply(p_A, v0, c2 * v1, -s2r * v1, 0.0, p_est, scale / mus * tr, True)
+        _mat_apply(A, v0, c2 * v1, -s2r * v1, 0.0, est, scale / mus * tr, True)
     else:
         p = 0.0
         for c in range(nc):
-            if p_mus_c[c] > 0.0:
-                p += _phase_at(m_phase_code, m_phase_param, m_phase_table, c, l, cth) * p_mus_c[c]
-        p_est[0] += scale * p / mus * tr
+            if mus_c[c] > 0.0:
+                code = ph_codes[c]
+                if code == TABULATED:
+                    p += tabulated_phase(ph_table, c, l, cth) * mus_c[c]
+                else:
+                    p += phase_value(code, ph_params[c], cth) * mus_c[c]
+        est[0] += scale * p / mus * tr
 
 
 @njit(cache=True, inline="always")
-def _scatter(pt, m, l, mus, polarised):
+def _scatter(ph_codes, ph_params, ph_cdf, l, A, mus_c, w, wn, k_in, k_out, a_cur, a_new, tmp,
+             state, mus, polarised):
     """Continue the path: choose a constituent with probability mu_s,c / mu_s, sample its
     phase function, rotate the direction (and the Stokes matrix and frame)."""
-    m_phase_cdf = m.phase_cdf
-    m_phase_code = m.phase_code
-    m_phase_param = m.phase_param
-    m_profile_code = m.profile_code
-    p_A = pt.A
-    p_a_cur = pt.a_cur
-    p_a_new = pt.a_new
-    p_k_in = pt.k_in
-    p_k_out = pt.k_out
-    p_mus_c = pt.mus_c
-    p_state = pt.state
-    p_tmp = pt.tmp
-    p_w = pt.w
-    p_wn = pt.wn
-    nc = m_profile_code.shape[0]
-    u = _rand(p_state) * mus
+    nc = mus_c.shape[0]
+    u = _rand(state) * mus
     cc = nc - 1
     acc = 0.0
     for c in range(nc):
-        acc += p_mus_c[c]
+        acc += mus_c[c]
         if u < acc:
             cc = c
             break
-    while p_mus_c[cc] <= 0.0 and cc > 0:
+    while mus_c[cc] <= 0.0 and cc > 0:
         cc -= 1
-    cth = _sample_at(m_phase_code, m_phase_param, m_phase_cdf, cc, l, p_state)
-    rotate_about(p_w, cth, TWO_PI * _rand(p_state), p_wn)
+    code = ph_codes[cc]
+    rho = rayleigh_rho(ph_params[cc]) if code == RAYLEIGH else 0.0
+    if code == TABULATED:
+        cth = sample_tabulated(ph_cdf, cc, l, _rand(state))
+    else:
+        cth = sample_cos(code, ph_params[cc], rho, state)
+    rotate_about(w, cth, TWO_PI * _rand(state), wn)
     if polarised:
         for j in range(3):
-            p_k_in[j] = -p_wn[j]
-        c2, s2r = _plane_frames(p_k_out, p_k_in, p_a_cur, p_tmp, p_a_new)
-        f12, f22, f33, f44 = matrix_ratios(m_phase_code[cc], _rho_at(m_phase_code, m_phase_param, cc), cth)
-        _mat_rot_scatter(p_A, c2, s2r, f12, f22, f33, f44, p_tmp)
+            k_in[j] = -wn[j]
+        c2, s2r = _plane_frames(k_out, k_in, a_cur, tmp, a_new)
+        f12, f22, f33, f44 = matrix_ratios(code, rho, cth)
+        _mat_rot_scatter(A, c2, s2r, f12, f22, f33, f44, tmp)
         for j in range(3):
-            p_a_cur[j] = p_a_new[j]
+            a_cur[j] = a_new[j]
     for j in range(3):
-        p_w[j] = p_wn[j]
+        w[j] = wn[j]
 
 
 @njit(cache=True, inline="always")
-def _ground_vertex(pt, m, sun, cos_alpha, table, t_end, scale, polarised):
-    """Move the vertex to the ground point (just above it; normal in pt.tmp) and add the
+def _ground_vertex(R, Rt, table, sun, cos_alpha, A, est, ext_l, pos, w, ws, tmp, scol, state,
+                   t_end, scale, polarised):
+    """Move the vertex to the ground point (just above it; normal in tmp) and add the
     next-event estimate of the sunlit Lambertian ground, scale x albedo / pi E mu_s T
     (``scale`` includes the albedo, E_sun and the path weight)."""
-    m_R = m.R
-    m_Rt = m.Rt
-    m_profile_code = m.profile_code
-    p_A = pt.A
-    p_est = pt.est
-    p_ext_l = pt.ext_l
-    p_pos = pt.pos
-    p_scol = pt.scol
-    p_state = pt.state
-    p_tmp = pt.tmp
-    p_w = pt.w
-    p_ws = pt.ws
-    R = m_R
     for j in range(3):
-        p_pos[j] += t_end * p_w[j]
-    rg = math.sqrt(p_pos[0] * p_pos[0] + p_pos[1] * p_pos[1] + p_pos[2] * p_pos[2])
+        pos[j] += t_end * w[j]
+    rg = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
     for j in range(3):
-        p_pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
-        p_tmp[j] = p_pos[j] / (R * (1.0 + 1e-12))  # normal
+        pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
+        tmp[j] = pos[j] / (R * (1.0 + 1e-12))  # normal
     if scale <= 0.0:
         return
-    _sun_sample(sun, cos_alpha, p_state, p_ws)
-    mu_s = p_tmp[0] * p_ws[0] + p_tmp[1] * p_ws[1] + p_tmp[2] * p_ws[2]
-    if mu_s > 0.0 and _light(table, R, m_Rt, R * (1.0 + 1e-12), mu_s, p_scol):
+    _sun_sample(sun, cos_alpha, state, ws)
+    mu_s = tmp[0] * ws[0] + tmp[1] * ws[1] + tmp[2] * ws[2]
+    if mu_s > 0.0 and not ray_hits_ground(R * (1.0 + 1e-12), mu_s, R):
+        lookup_columns(table, R * (1.0 + 1e-12), mu_s, R, Rt, scol)
         tau = 0.0
-        for c in range(m_profile_code.shape[0]):
-            tau += p_ext_l[c] * p_scol[c]
+        for c in range(ext_l.shape[0]):
+            tau += ext_l[c] * scol[c]
         # reflected light is unpolarised: only A's first column matters
-        _mat_apply(p_A, 1.0, 0.0, 0.0, 0.0, p_est, scale / math.pi * mu_s * math.exp(-tau),
+        _mat_apply(A, 1.0, 0.0, 0.0, 0.0, est, scale / math.pi * mu_s * math.exp(-tau),
                    polarised)
 
 
 @njit(cache=True, inline="always")
-def _ground_bounce(pt):
-    """Continue from the ground: a cosine-weighted direction about the normal pt.tmp; the
+def _ground_bounce(A, a_cur, tmp, w, state):
+    """Continue from the ground: a cosine-weighted direction about the normal tmp; the
     Stokes matrix depolarised (first column kept) and a new frame."""
-    p_A = pt.A
-    p_a_cur = pt.a_cur
-    p_state = pt.state
-    p_tmp = pt.tmp
-    p_w = pt.w
-    u1 = _rand(p_state)
-    rotate_about(p_tmp, math.sqrt(u1), TWO_PI * _rand(p_state), p_w)
+    u1 = _rand(state)
+    rotate_about(tmp, math.sqrt(u1), TWO_PI * _rand(state), w)
     for j in range(4):          # depolarise: keep the first column
-        p_A[j, 1] = 0.0
-        p_A[j, 2] = 0.0
-        p_A[j, 3] = 0.0
+        A[j, 1] = 0.0
+        A[j, 2] = 0.0
+        A[j, 3] = 0.0
     # new frame: any axis perpendicular to the new ray
-    _cross(p_tmp, p_w, p_a_cur)
-    nn = math.sqrt(p_a_cur[0] ** 2 + p_a_cur[1] ** 2 + p_a_cur[2] ** 2)
+    _cross(tmp, w, a_cur)
+    nn = math.sqrt(a_cur[0] ** 2 + a_cur[1] ** 2 + a_cur[2] ** 2)
     if nn < 1e-12:
-        rotate_about(p_w, 0.0, 0.0, p_a_cur)
+        rotate_about(w, 0.0, 0.0, a_cur)
     else:
         for j in range(3):
-            p_a_cur[j] /= nn
-
-
-@njit(cache=True, inline="always")
-def _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table,
-                 polarised, max_order, n_nodes, tau_cam, t_cam, c_t1):
-    """One path of one camera branch, its estimates added to pt.est. Branch 0: the camera
-    ray's first collision, forced inside the air (weight 1 - T); branch 1: the camera ray
-    reaches the ground without collision (weight T)."""
-    m_R = m.R
-    m_Rt = m.Rt
-    m_albedo = m.albedo
-    p_A = pt.A
-    p_a_cur = pt.a_cur
-    p_k_out = pt.k_out
-    p_pos = pt.pos
-    p_state = pt.state
-    p_w = pt.w
-    esun = e_sun[l]
-    alb = m_albedo[l]
-    for j in range(4):
-        for k in range(4):
-            p_A[j, k] = 1.0 if j == k else 0.0
-    p_pos[0], p_pos[1], p_pos[2] = 0.0, 0.0, r0
-    for j in range(3):
-        p_w[j] = dirs[i, j]
-        p_a_cur[j] = zen_ref[i, j]
-    weight = 1.0
-    w0 = 1.0
-    order = 0
-    first = True
-    while True:
-        r = math.sqrt(p_pos[0] * p_pos[0] + p_pos[1] * p_pos[1] + p_pos[2] * p_pos[2])
-        mu = (p_pos[0] * p_w[0] + p_pos[1] * p_w[1] + p_pos[2] * p_w[2]) / r
-        t0, t_end, hits_ground = ray_segment(r, mu, m_R, m_Rt)
-        if first:
-            first = False
-            mus = 0.0
-            mut = 0.0
-            t = 0.0
-            if branch == 1:
-                collided = False
-                t_end = c_t1
-                w0 = t_cam
-            else:
-                collided = True
-                w0 = -math.expm1(-tau_cam)
-                ok, t, mut, mus = _forced_collision(pt, m, r0, dirs[i, 2], n_nodes, tau_cam)
-                if not ok:
-                    break
-        else:
-            collided, t, mut, mus = _delta_track(pt, m, r, mu, t0, t_end)
-        if not collided and not hits_ground:
-            break                                   # leaves the atmosphere
-        order += 1
-        if collided:
-            for j in range(3):
-                p_pos[j] += t * p_w[j]
-            if mus <= 0.0:
-                break                               # pure absorber
-            weight *= mus / mut                     # local single-scattering albedo
-            rloc = math.sqrt(p_pos[0] * p_pos[0] + p_pos[1] * p_pos[1] + p_pos[2] * p_pos[2])
-            for j in range(3):
-                p_k_out[j] = -p_w[j]
-            _next_event_sun(pt, m, l, sun, cos_alpha, table, rloc, mus, w0 * weight * esun,
-                            polarised)
-            if max_order >= 0 and order >= max_order:
-                break
-            _scatter(pt, m, l, mus, polarised)
-        else:
-            _ground_vertex(pt, m, sun, cos_alpha, table, t_end,
-                           w0 * weight * alb * esun if alb > 0.0 else 0.0, polarised)
-            if alb <= 0.0:
-                break
-            if max_order >= 0 and order >= max_order:
-                break
-            weight *= alb
-            _ground_bounce(pt)
-        # -- Russian roulette ---------------------------------------------------------------
-        if order >= RR_ORDER:
-            q = min(0.95, weight)
-            if q <= 0.0 or _rand(p_state) >= q:
-                break
-            weight /= q      # A stays normalised (A[0, 0] = 1 at the camera)
+            a_cur[j] /= nn
 
 
 @njit(cache=True)
 def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed,
                polarised, max_order, mean, err):
     """Mean and standard error of n_samples paths for direction i at wavelength l."""
-    pt = _new_path(m, l, seed, i)
-    p_est = pt.est
-    p_ext_l = pt.ext_l
-    p_node_t = pt.node_t
-    p_node_tau = pt.node_tau
+    # -- the record's arrays, read once ---------------------------------------------------
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    ph_codes = m.phase_code
+    ph_params = m.phase_param
+    ph_table = m.phase_table
+    ph_cdf = m.phase_cdf
+    nc = codes.shape[0]
+    # -- the path's state and work arrays -------------------------------------------------
+    state = np.empty(1, dtype=np.uint64)
+    state[0] = _stream_seed(seed, i, l)
+    A = np.empty((4, 4))                # Stokes matrix to the camera frame
+    est = np.zeros(4)                   # estimate of the current sample
+    pos = np.empty(3)                   # vertex [m]
+    w = np.empty(3)                     # backward direction
+    wn = np.empty(3)                    # next direction
+    k_out = np.empty(3)                 # propagation direction leaving the vertex
+    k_in = np.empty(3)                  # propagation direction arriving at the vertex
+    a_cur = np.empty(3)                 # parallel axis of the current frame
+    a_new = np.empty(3)
+    tmp = np.empty(3)
+    ws = np.empty(3)                    # sampled direction to the sun
+    scol = np.empty(nc)                 # light-path columns
+    ext_l = np.empty(nc)                # extinction at this wavelength [m^-1]
+    sca_l = np.empty(nc)                # scattering at this wavelength [m^-1]
+    mus_c = np.empty(nc)                # local scattering coefficients at the vertex [m^-1]
+    node_t = np.empty(2 * N_CAMERA + 1)      # camera-ray nodes [m]
+    node_tau = np.empty(2 * N_CAMERA + 1)    # cumulative optical depth there
+    for c in range(nc):
+        ext_l[c] = m.extinction[c, l]
+        sca_l[c] = m.scattering[c, l]
+    esun = e_sun[l]
+    alb = m.albedo[l]
     s1 = np.zeros(4)
     s2 = np.zeros(4)
     # -- the camera ray: cumulative optical depth for the forced first collision ----------
     cam_mu = dirs[i, 2]
-    c_t0, c_t1, cam_ground = ray_segment(r0, cam_mu, m.R, m.Rt)
-    n_nodes = _camera_columns(m, p_ext_l, r0, cam_mu, c_t0, c_t1, p_node_t, p_node_tau)
-    tau_cam = p_node_tau[n_nodes - 1]
+    c_t0, c_t1, cam_ground = ray_segment(r0, cam_mu, R, Rt)
+    n_nodes = _camera_columns(m, ext_l, r0, cam_mu, c_t0, c_t1, node_t, node_tau)
+    tau_cam = node_tau[n_nodes - 1]
     t_cam = math.exp(-tau_cam)
     nv = 4 if polarised else 1
     for _s in range(n_samples):
         for j in range(4):
-            p_est[j] = 0.0
+            est[j] = 0.0
         for branch in range(2):
+            # branch 0: the camera ray's first collision, forced inside the air (weight 1 - T);
+            # branch 1: the camera ray reaches the ground without collision (weight T)
             if branch == 0 and tau_cam <= 0.0:
                 continue
             if branch == 1 and not cam_ground:
                 continue
-            _sample_path(pt, i, l, branch, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table,
-                         polarised, max_order, n_nodes, tau_cam, t_cam, c_t1)
+            for j in range(4):
+                for k in range(4):
+                    A[j, k] = 1.0 if j == k else 0.0
+            pos[0], pos[1], pos[2] = 0.0, 0.0, r0
+            for j in range(3):
+                w[j] = dirs[i, j]
+                a_cur[j] = zen_ref[i, j]
+            weight = 1.0
+            w0 = 1.0
+            order = 0
+            first = True
+            while True:
+                r = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
+                mu = (pos[0] * w[0] + pos[1] * w[1] + pos[2] * w[2]) / r
+                t0, t_end, hits_ground = ray_segment(r, mu, R, Rt)
+                if first:
+                    first = False
+                    mus = 0.0
+                    mut = 0.0
+                    t = 0.0
+                    if branch == 1:
+                        collided = False
+                        t_end = c_t1
+                        w0 = t_cam
+                    else:
+                        collided = True
+                        w0 = -math.expm1(-tau_cam)
+                        ok, t, mut, mus = _forced_collision(codes, p0s, p1s, R, sca_l, mus_c,
+                                                            node_t, node_tau, state, r0, cam_mu,
+                                                            n_nodes, tau_cam)
+                        if not ok:
+                            break
+                else:
+                    collided, t, mut, mus = _delta_track(codes, p0s, p1s, R, ext_l, sca_l, mus_c,
+                                                         state, r, mu, t0, t_end)
+                if not collided and not hits_ground:
+                    break                                   # leaves the atmosphere
+                order += 1
+                if collided:
+                    for j in range(3):
+                        pos[j] += t * w[j]
+                    if mus <= 0.0:
+                        break                               # pure absorber
+                    weight *= mus / mut                     # local single-scattering albedo
+                    rloc = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
+                    for j in range(3):
+                        k_out[j] = -w[j]
+                    _next_event_sun(ph_codes, ph_params, ph_table, R, Rt, table, l, sun,
+                                    cos_alpha, A, est, ext_l, mus_c, pos, w, ws, k_in, k_out,
+                                    a_cur, a_new, tmp, scol, state, rloc, mus,
+                                    w0 * weight * esun, polarised)
+                    if max_order >= 0 and order >= max_order:
+                        break
+                    _scatter(ph_codes, ph_params, ph_cdf, l, A, mus_c, w, wn, k_in, k_out,
+                             a_cur, a_new, tmp, state, mus, polarised)
+                else:
+                    _ground_vertex(R, Rt, table, sun, cos_alpha, A, est, ext_l, pos, w, ws, tmp,
+                                   scol, state, t_end,
+                                   w0 * weight * alb * esun if alb > 0.0 else 0.0, polarised)
+                    if alb <= 0.0:
+                        break
+                    if max_order >= 0 and order >= max_order:
+                        break
+                    weight *= alb
+                    _ground_bounce(A, a_cur, tmp, w, state)
+                # -- Russian roulette -----------------------------------------------------------
+                if order >= RR_ORDER:
+                    q = min(0.95, weight)
+                    if q <= 0.0 or _rand(state) >= q:
+                        break
+                    weight /= q      # A stays normalised (A[0, 0] = 1 at the camera)
         for j in range(nv):
-            s1[j] += p_est[j]
-            s2[j] += p_est[j] * p_est[j]
+            s1[j] += est[j]
+            s2[j] += est[j] * est[j]
     n = float(n_samples)
     for j in range(nv):
         mn = s1[j] / n
