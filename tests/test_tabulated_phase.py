@@ -274,3 +274,29 @@ def test_precomputed_tabulated_phase_export_and_lut_refusal(tmp_path):
     back = type(m).load(tmp_path / "t.npz")
     d = _sun_angle_dirs()
     np.testing.assert_array_equal(back.radiance(d, WL), m.radiance(d, WL))
+
+
+def test_precomputed_spectral_table_per_wavelength():
+    """A table whose phase changes with the wavelength (HG with g = 0.6, 0.7, 0.8 at 450,
+    550, 650 nm) gives, at each table wavelength, the sky of the analytic HG aerosol with
+    that wavelength's g (4 orders: J's phase matrix is the one of its own wavelength),
+    within 1e-3."""
+    gs = (0.6, 0.7, 0.8)
+    theta = np.linspace(0.0, 180.0, 1441)
+    c = np.cos(np.radians(theta))
+    table = TabulatedPhase(theta, np.stack([hg(g, c) for g in gs], axis=-1), WL,
+                           normalise=False)
+    base = Atmosphere.earth(turbidity=4.0, aerosol_phase="henyey_greenstein", aerosol_g=0.7)
+    cons = tuple(Constituent(k.name, k.scattering, k.absorption, k.profile, "tabulated", 0.7,
+                             phase_table=table) if k.name == "aerosol" else k
+                 for k in base.constituents)
+    d = _dirs()
+    # per unit solar irradiance (radiance_table): the solar spectrum on a one-wavelength
+    # table is not the one on the three-wavelength table
+    L = _precomputed(Atmosphere(cons, ground_albedo=0.1)).radiance_table(d)
+    for j, g in enumerate(gs):
+        ref_atm = Atmosphere.earth(turbidity=4.0, aerosol_phase="henyey_greenstein", aerosol_g=g)
+        ref_atm = Atmosphere(ref_atm.constituents, ground_albedo=0.1)
+        ref = sd.model("precomputed", sun=SUN, atmosphere=ref_atm,
+                       table_wavelengths_nm=[WL[j]], **PC_SMALL).radiance_table(d)
+        np.testing.assert_allclose(L[:, j], ref[:, 0], rtol=1e-3)
