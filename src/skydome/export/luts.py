@@ -97,6 +97,10 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     if src.get("format") != TABLE_FORMAT:
         raise ValueError(f"textures.json format = {src.get('format')!r} is not supported; "
                          f"valid: {TABLE_FORMAT!r} (the mu_s mapping this bake describes)")
+    if 4 in src["phase_code"]:
+        raise ValueError("the sky has a tabulated phase function (phase code 4): the LUT bake "
+                         "stores XYZ single scattering for an analytic phase only; give the "
+                         "constituents an analytic phase (henyey_greenstein, cornette_shanks)")
     K = xyz_weights_for_table(src["wavelengths_nm"])
     ss = arrays["single_scattering"].astype(np.float64)       # (k, r, mu, mu_s, nu, l)
     ms = arrays["multiple_scattering"].astype(np.float64)     # (r, mu, mu_s, nu, l)

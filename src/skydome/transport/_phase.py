@@ -99,12 +99,18 @@ def tabulated_phase(table, ci, l, c):
 
 
 @njit(cache=True)
+def phase_coded(codes, params, table, ci, l, c):
+    """Phase function of constituent ci of the arrays (codes, params, table) at wavelength
+    index l and cosine c [sr^-1] (``table`` is read only where codes[ci] is TABULATED)."""
+    if codes[ci] == TABULATED:
+        return tabulated_phase(table, ci, l, c)
+    return phase_value(codes[ci], params[ci], c)
+
+
+@njit(cache=True)
 def phase_of(m, ci, l, c):
     """Phase function of constituent ci of the medium m at wavelength index l [sr^-1]."""
-    code = m.phase_code[ci]
-    if code == TABULATED:
-        return tabulated_phase(m.phase_table, ci, l, c)
-    return phase_value(code, m.phase_param[ci], c)
+    return phase_coded(m.phase_code, m.phase_param, m.phase_table, ci, l, c)
 
 
 @njit(cache=True)
@@ -114,16 +120,23 @@ def phase_is_spectral(m, ci):
 
 
 @njit(cache=True)
-def phase_fill(m, ci, c, out):
-    """out[l] = phase function of constituent ci at cosine c for every wavelength [sr^-1]."""
-    if m.phase_code[ci] == TABULATED:
-        k, f = angle_cell(c, m.phase_table.shape[1])
+def phase_fill_coded(codes, params, table, ci, c, out):
+    """out[l] = phase function of constituent ci of the arrays (codes, params, table) at
+    cosine c for every wavelength [sr^-1]."""
+    if codes[ci] == TABULATED:
+        k, f = angle_cell(c, table.shape[1])
         for l in range(out.shape[0]):
-            out[l] = (1.0 - f) * m.phase_table[ci, k, l] + f * m.phase_table[ci, k + 1, l]
+            out[l] = (1.0 - f) * table[ci, k, l] + f * table[ci, k + 1, l]
     else:
-        p = phase_value(m.phase_code[ci], m.phase_param[ci], c)
+        p = phase_value(codes[ci], params[ci], c)
         for l in range(out.shape[0]):
             out[l] = p
+
+
+@njit(cache=True)
+def phase_fill(m, ci, c, out):
+    """out[l] = phase function of constituent ci at cosine c for every wavelength [sr^-1]."""
+    phase_fill_coded(m.phase_code, m.phase_param, m.phase_table, ci, c, out)
 
 
 @njit(cache=True)

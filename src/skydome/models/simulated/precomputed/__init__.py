@@ -33,7 +33,6 @@ __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
 # the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
 # in angle) and azimuth nodes from the sun's over [0, 180] deg
 _SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
-_TABULATED = 4      # skydome.transport._phase.TABULATED (not imported: it loads numba)
 
 
 @register
@@ -156,13 +155,8 @@ class PrecomputedSky(SkyModel):
         from skydome.models.simulated.precomputed import _cache
         from skydome.models.simulated.precomputed._precompute import precompute
 
+        # tabulated phase functions are evaluated on the table wavelengths here, once
         props = atm.optical_properties(wl)
-        tab = [c.name for c, code, sc in zip(atm.constituents, props.phase_code, props.scattering)
-               if code == _TABULATED and np.any(sc > 0)]
-        if tab:
-            raise ValueError(f"atmosphere constituent(s) {', '.join(tab)} have a tabulated phase "
-                             "function, which the precomputed model does not support yet: give "
-                             "them an analytic phase (henyey_greenstein, cornette_shanks)")
         if not use_cache:
             return precompute(props, wl, p), False
         settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}
@@ -313,8 +307,8 @@ class PrecomputedSky(SkyModel):
         ss_s, ms_s = self._observer_slices()
         t = self._t
         _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
-                           t.phase_code, t.phase_param, ms_s, t.columns, t.beta_e,
-                           t.ground_albedo, t.irradiance, scale, self._R, self._Rt,
+                           t.phase_code, t.phase_param, t.kernel_phase_table, ms_s, t.columns,
+                           t.beta_e, t.ground_albedo, t.irradiance, scale, self._R, self._Rt,
                            self._alpha, self._slice_geometry(), out)
         return out
 
@@ -396,7 +390,7 @@ class PrecomputedSky(SkyModel):
         t = self._t
         _render.aerial_perspective(flat, dist, self._r0, np.ascontiguousarray(self.sun.direction),
                               t.single_scattering, t.phase_code, t.phase_param,
-                              t.multiple_scattering, t.columns, t.beta_e, self._R,
+                              t.kernel_phase_table, t.multiple_scattering, t.columns, t.beta_e, self._R,
                               self._Rt, self._mu_s_min, tr, ins)
         if self._night():
             ins[:] = 0.0
@@ -412,16 +406,16 @@ class PrecomputedSky(SkyModel):
             for ms_x, o, geom in ((ms_s, a_sl, self._slice_geometry()),
                                   (ms_tab, a_tab, self._slice_geometry(table=True))):
                 _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), zero,
-                                   t.phase_code, t.phase_param, ms_x, t.columns, t.beta_e,
-                                   no_ground, t.irradiance, one, self._R, self._Rt, self._alpha,
+                                   t.phase_code, t.phase_param, t.kernel_phase_table, ms_x,
+                                   t.columns, t.beta_e, no_ground, t.irradiance, one, self._R, self._Rt, self._alpha,
                                    geom, o)
             # applied in proportion to the path's share of the whole ray's extinction,
             # 1 - T(d) over 1 - T(end): 0 at distance 0, all of it at the end of the ray
             tr_end, ins_end = np.empty_like(tr), np.zeros_like(ins)
             _render.aerial_perspective(flat, np.full(flat.shape[0], 1e12), self._r0,
                                   np.ascontiguousarray(self.sun.direction), t.single_scattering,
-                                  t.phase_code, t.phase_param, t.multiple_scattering,
-                                  t.columns, t.beta_e, self._R, self._Rt, self._mu_s_min,
+                                  t.phase_code, t.phase_param, t.kernel_phase_table,
+                                  t.multiple_scattering, t.columns, t.beta_e, self._R, self._Rt, self._mu_s_min,
                                   tr_end, ins_end)
             share = np.clip((1.0 - tr) / np.maximum(1.0 - tr_end, 1e-300), 0.0, 1.0)
             np.maximum(ins + share * (a_sl - a_tab), 0.0, out=ins)

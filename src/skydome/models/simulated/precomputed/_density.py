@@ -16,13 +16,14 @@ from skydome.models.simulated.precomputed._lookup import (columns_segment, irrad
                                                            sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import cell_r, mu_s_from_unit
 from skydome.transport._kernels import phase_value
+from skydome.transport._phase import phase_coded
 
 INV_PI = 1.0 / math.pi
 
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt, mu_s_min, alpha,
+def incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, Rt, mu_s_min, alpha,
                       n_r, n_ms, th_in, ph_in, out):
     """Radiance of the previous order arriving at each (r, mu_s) node of the 4-D table
     from the incident directions, including the light reflected once more by the ground
@@ -58,7 +59,7 @@ def incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt, 
                 ground = hits_ground(r, ct, R)
                 o = out[i, ir, ims]
                 o[:] = 0.0
-                sky_lookup_acc(first, ss, pc, pp, delta, r, ct, mu_s, nu, ground, R, Rt, mu_s_min,
+                sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, ground, R, Rt, mu_s_min,
                                1.0, o)
                 if ground:
                     dg = distance_to_ground(r, ct, R)
@@ -79,8 +80,11 @@ def incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt, 
 
 
 @njit(parallel=True, cache=True)
-def phase_matrix(code, param, th_out, ph_out, th_in, ph_in, d_omega, out):
-    """out[o, i] = dOmega_i (P(w_o . w_i) + P(w_o . w_i')) with w_i' the mirror image of w_i
+def phase_matrix(codes, params, table, k, l, th_out, ph_out, th_in, ph_in, d_omega, out):
+    """out[o, i] = dOmega_i (P(w_o . w_i) + P(w_o . w_i')), P the phase function of
+    constituent k of (codes, params, table) at wavelength index l
+    (:func:`skydome.transport._phase.phase_coded`; l matters only for a tabulated phase),
+    with w_i' the mirror image of w_i
     in the sun's vertical plane (the incident field is symmetric about it), so that
     J(w_o) = sum_i out[o, i] L(w_i) is [Bru17] ComputeScatteringDensity's quadrature over the
     sphere ([BN08] eq. 7) evaluated on a fixed grid of outgoing directions."""
@@ -101,8 +105,8 @@ def phase_matrix(code, param, th_out, ph_out, th_in, ph_in, d_omega, out):
                 sp = math.sin(ph_in[b])
                 c1 = clamp_cos(st_o * st * (cp_o * cp + sp_o * sp) + ct_o * ct)
                 c2 = clamp_cos(st_o * st * (cp_o * cp - sp_o * sp) + ct_o * ct)
-                out[o, a * n_pi + b] = d_omega[a] * (phase_value(code, param, c1)
-                                                     + phase_value(code, param, c2))
+                out[o, a * n_pi + b] = d_omega[a] * (phase_coded(codes, params, table, k, l, c1)
+                                                     + phase_coded(codes, params, table, k, l, c2))
 
 
 def quadratic_phase_factors(code, param, th_out, ph_out, th_in, ph_in, d_omega, P):

@@ -91,6 +91,12 @@ def export_textures(model, folder) -> list:
                        "solar irradiance (dimensionless); x_r = (r - R)/(Rt - R), "
                        "x_mu_s = (mu_s + 1)/2, node i at x = i/(n-1)"),
     }
+    if t.phase_table is not None:
+        tex["phase_table"] = (t.phase_table.astype(np.float32),
+                              ["constituent", "angle", "wavelength"],
+                              "tabulated phase function [sr^-1] of the constituents with phase "
+                              "code 4 (zeros for the others), scattering angle node k at "
+                              "pi k/(n-1), linear in angle")
     desc = {
         "format": FORMAT, "units": "lengths m; radiance per unit extraterrestrial solar "
         "spectral irradiance; multiply by E_sun(lambda) [W m^-2 nm^-1]",
@@ -99,7 +105,8 @@ def export_textures(model, folder) -> list:
         "phase_code": [int(x) for x in t.phase_code],
         "phase_param": [float(x) for x in t.phase_param],
         "phase_codes": {"0": "rayleigh (param = rho/(2-rho))", "1": "henyey_greenstein (g)",
-                        "2": "cornette_shanks (g)", "3": "isotropic"},
+                        "2": "cornette_shanks (g)", "3": "isotropic",
+                        "4": "tabulated (texture phase_table)"},
         "mappings": {
             "r": "x = rho/H, rho = sqrt(r^2 - R^2), H = sqrt(Rt^2 - R^2)",
             "mu": "first half: rays hitting the ground, node 0 = horizon .. n/2-1 = nadir, "

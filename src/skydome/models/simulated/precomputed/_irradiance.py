@@ -32,7 +32,7 @@ def direct_irradiance_acc(col, beta_e, r, mu_s, R, Rt, alpha, scale, cs, out):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def indirect_irradiance(first, ss, pc, pp, delta, R, Rt, mu_s_min, th, ph, d_omega, out):
+def indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th, ph, d_omega, out):
     """Irradiance on a horizontal surface from the sky of one scattering order ([Bru17]
     ComputeIndirectIrradiance, [BN08] eq. 9 for one order): out[r, mu_s, l] =
     sum over the upper hemisphere of L(w) cos(theta) dOmega (phi over [0, pi], doubled)."""
@@ -50,5 +50,5 @@ def indirect_irradiance(first, ss, pc, pp, delta, R, Rt, mu_s_min, th, ph, d_ome
             st = math.sin(th[a])
             for b in range(ph.shape[0]):
                 nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)
-                sky_lookup_acc(first, ss, pc, pp, delta, r, ct, mu_s, nu, False, R, Rt, mu_s_min,
+                sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, False, R, Rt, mu_s_min,
                                2.0 * ct * d_omega[a], o)

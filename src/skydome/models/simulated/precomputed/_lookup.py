@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
-from skydome.transport._kernels import phase_value, profile_density
+from skydome.transport._kernels import profile_density
+from skydome.transport._phase import phase_fill_coded
 from skydome.transport._tables import lookup_columns as columns_at
 
 
@@ -50,8 +52,8 @@ def sun_visible_fraction(r, mu_s, R, alpha):
 
 
 @njit(cache=True)
-def _quad_acc(tab, ir, a, imu, b, ims, c, inu, e, w, out):
-    """out[l] += w x quadrilinear interpolation of tab[r, mu, mu_s, nu, l]."""
+def _quad_acc(tab, ir, a, imu, b, ims, c, inu, e, w, pw, out):
+    """out[l] += w pw[l] x quadrilinear interpolation of tab[r, mu, mu_s, nu, l]."""
     nl = out.shape[0]
     for dr in range(2):
         wr = a if dr else 1.0 - a
@@ -71,14 +73,17 @@ def _quad_acc(tab, ir, a, imu, b, ims, c, inu, e, w, out):
                         continue
                     wt = w * wr * wm * ws * wn
                     for l in range(nl):
-                        out[l] += wt * tab[ir + dr, imu + dm, ims + ds, inu + dn, l]
+                        out[l] += wt * pw[l] * tab[ir + dr, imu + dm, ims + ds, inu + dn, l]
 
 
 @njit(cache=True)
-def sky_lookup_acc(first, ss, pc, pp, delta, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, w, out):
+def sky_lookup_acc(first, ss, pc, pp, pt, delta, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, w,
+                   out):
     """out += w x radiance of one scattering order arriving at r from (mu) ([Bru17]
     GetScattering): order 1 from the single-scattering tables times each constituent's
-    phase function at nu; higher orders from the full-radiance table ``delta``."""
+    phase function at nu (codes pc, parameters pp, per-wavelength table pt where tabulated:
+    :func:`skydome.transport._phase.phase_fill_coded`); higher orders from the
+    full-radiance table ``delta``."""
     if first:
         n_r, n_mu, n_ms, n_nu = ss.shape[1], ss.shape[2], ss.shape[3], ss.shape[4]
     else:
@@ -87,12 +92,13 @@ def sky_lookup_acc(first, ss, pc, pp, delta, r, mu, mu_s, nu, ground, R, Rt, mu_
     imu, b = mu_index(r, mu, ground, n_mu, R, Rt)
     ims, c = _split(mu_s_unit(mu_s, mu_s_min) * (n_ms - 1), n_ms)
     inu, e = _split((nu + 1.0) * 0.5 * (n_nu - 1), n_nu)
+    pw = np.ones(out.shape[0])
     if first:
         for k in range(ss.shape[0]):
-            p = phase_value(pc[k], pp[k], nu)
-            _quad_acc(ss[k], ir, a, imu, b, ims, c, inu, e, w * p, out)
+            phase_fill_coded(pc, pp, pt, k, nu, pw)
+            _quad_acc(ss[k], ir, a, imu, b, ims, c, inu, e, w, pw, out)
     else:
-        _quad_acc(delta, ir, a, imu, b, ims, c, inu, e, w, out)
+        _quad_acc(delta, ir, a, imu, b, ims, c, inu, e, w, pw, out)
 
 
 @njit(cache=True)

@@ -17,6 +17,7 @@ import numpy as np
 from skydome._progress import report
 
 QUADRATURE_SCALE_M = 500.0
+TABULATED = 4       # skydome.transport._phase.TABULATED (not imported: it loads numba)
 # sun angular radius used for the earth's shadow edge [rad] ([Bru17] demo: 0.2666 deg)
 SUN_ANGULAR_RADIUS_RAD = float(np.radians(0.2666))
 
@@ -49,9 +50,10 @@ def single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_
 class _DensityQuadrature:
     """Step 3b's fixed parts: incident directions (Bruneton's n x 2n over the sphere in the
     sun's frame, kept on phi in [0, pi]), the outgoing grid of J, and the phase matrices,
-    factored where the phase function is a polynomial of degree <= 2 in the cosine."""
+    factored where the phase function is a polynomial of degree <= 2 in the cosine; a
+    tabulated phase function has one matrix per table wavelength (``per_wavelength[k]``)."""
 
-    def __init__(self, pc, pp, n_th):
+    def __init__(self, pc, pp, pt, n_th):
         from skydome.models.simulated.precomputed import _density
 
         self.th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
@@ -67,11 +69,20 @@ class _DensityQuadrature:
         # the Rayleigh part of the product costs 10/256 of the full one (checked against the
         # full matrix to 1e-9 of its largest entry, else the full matrix is used):
         # J = sum_k P_k (L w_k) = [left_k | ...] [right_k (L w_k); ...]
-        left, self.right = [], []
+        left, self.right, self.per_wavelength = [], [], []
         for k in range(pc.size):
             P = np.empty((self.n_out, self.n_in))
-            _density.phase_matrix(int(pc[k]), float(pp[k]), self.th_out, self.ph_out, self.th_in,
+            _density.phase_matrix(pc, pp, pt, k, 0, self.th_out, self.ph_out, self.th_in,
                                   self.ph_in, d_omega, P)
+            self.per_wavelength.append(None)
+            if int(pc[k]) == TABULATED:
+                mats = [P.astype(np.float32)]
+                for l in range(1, pt.shape[2]):
+                    _density.phase_matrix(pc, pp, pt, k, l, self.th_out, self.ph_out,
+                                          self.th_in, self.ph_in, d_omega, P)
+                    mats.append(P.astype(np.float32))
+                self.per_wavelength[k] = mats
+                P = np.zeros((self.n_out, 0))
             fac = _density.quadratic_phase_factors(int(pc[k]), float(pp[k]), self.th_out,
                                                    self.ph_out, self.th_in, self.ph_in, d_omega, P)
             left.append(P if fac is None else fac[0])
@@ -99,6 +110,11 @@ def precompute(props, wl, p):
     beta_s = np.ascontiguousarray(props.scattering[sc_idx])
     pc = np.ascontiguousarray(props.phase_code[sc_idx])
     pp = np.ascontiguousarray(props.phase_param[sc_idx])
+    # tabulated phase functions: the atmosphere's table on the table wavelengths (evaluated
+    # there by Atmosphere.optical_properties), its scattering constituents' rows
+    pt_tab = (None if props.phase_table is None
+              else np.ascontiguousarray(props.phase_table[sc_idx], dtype=np.float64))
+    pt = pt_tab if pt_tab is not None else np.zeros((sc_idx.size, 2, wl.size))
     albedo = np.ascontiguousarray(props.ground_albedo)
     nl = wl.size
     n_r = p["scattering_r_size"]
@@ -113,7 +129,7 @@ def precompute(props, wl, p):
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
     if p["orders"] >= 2:
-        q = _DensityQuadrature(pc, pp, p["sphere_samples"])
+        q = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
         # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
         # hemisphere; phi on [0, pi] doubled)
         n_ti = 16
@@ -138,21 +154,31 @@ def precompute(props, wl, p):
         for order in range(2, p["orders"] + 1):
             first = order == 2
             # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
-            _density.incident_radiance(first, ss, pc, pp, delta, dE, col, beta_e, albedo, R, Rt,
+            _density.incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, Rt,
                                        mu_s_min, alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
             # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid: one float32
             # matrix product (BLAS) over all (r, mu_s, l), laid out [k, theta, phi, r, mu_s, l]
             lin = L_in.reshape(q.n_in, -1)
             for k in range(nsc):
                 out = rhs[q.rows[k]:q.rows[k + 1]]
+                if q.per_wavelength[k] is not None:
+                    continue
                 if q.right[k] is None:
                     np.multiply(lin, w_col[k], out=out)
                 else:
                     np.matmul(q.right[k], lin, out=out)
                     out *= w_col[k]
             for k in range(nsc):
-                np.matmul(q.left[:, q.rows[k]:q.rows[k + 1]], rhs[q.rows[k]:q.rows[k + 1]],
-                          out=J[k].reshape(q.n_out, -1))
+                if q.per_wavelength[k] is None:
+                    np.matmul(q.left[:, q.rows[k]:q.rows[k + 1]], rhs[q.rows[k]:q.rows[k + 1]],
+                              out=J[k].reshape(q.n_out, -1))
+                    continue
+                # tabulated phase: one product per table wavelength
+                lin3 = L_in.reshape(q.n_in, -1, nl)
+                J3 = J[k].reshape(q.n_out, -1, nl)
+                for l in range(nl):
+                    x = np.ascontiguousarray(lin3[:, :, l]) * np.float32(beta_s[k, l])
+                    J3[:, :, l] = q.per_wavelength[k][l] @ x
             # the density of orders 2..N, kept for the observer's slice at render time
             if J_sum is None:
                 J_sum = J.copy()
@@ -160,7 +186,7 @@ def precompute(props, wl, p):
                 J_sum += J
             # 3c. ground irradiance of order-1 ([BN08] eq. 9)
             dE_new = np.empty_like(E)
-            _irradiance.indirect_irradiance(first, ss, pc, pp, delta, R, Rt, mu_s_min, th_i, ph_i,
+            _irradiance.indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th_i, ph_i,
                                             dom_i, dE_new)
             E += dE_new
             dE_prev, dE = dE, dE_new
@@ -194,7 +220,7 @@ def precompute(props, wl, p):
                   phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
                   scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
                   mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
-                  precompute_seconds=time.perf_counter() - t_start, **dens)
+                  precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
 
 
 def _series_factor(tot, tot_prev):

@@ -15,7 +15,8 @@ from skydome.models.simulated.precomputed._lookup import (columns_at, columns_se
                                                            irradiance_lookup_acc, sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import _split, mu_index
 from skydome.models.simulated.precomputed._multiple import slice_index
-from skydome.transport._kernels import exp_neg_array, phase_value
+from skydome.transport._kernels import exp_neg_array
+from skydome.transport._phase import phase_fill_coded
 
 INV_PI = 1.0 / math.pi
 
@@ -23,11 +24,12 @@ INV_PI = 1.0 / math.pi
 
 # -- rendering --------------------------------------------------------------------------------------
 @njit(parallel=True, cache=True, fastmath=True)
-def render_observer(dirs, r, sun, ss_slice, pc, pp, ms_slice, col, beta_e, albedo, E, scale, R,
+def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, albedo, E, scale, R,
                     Rt, alpha, geom, out):
     """Radiance [scale units] from each direction for an observer at radius r on the +z axis.
 
-    ``ss_slice`` (nsc, n_mu, n_nu, nl) and ``ms_slice`` (n_mu, n_nu, nl) are the 4-D tables
+    ``ss_slice`` (nsc, n_mu, n_nu, nl) is multiplied by each constituent's phase function
+    at nu (codes pc, parameters pp, per-wavelength table pt where tabulated); it and ``ms_slice`` (n_mu, n_nu, nl) are the 4-D tables
     already interpolated at the observer's r and mu_s (multilinear interpolation is
     separable, so the result equals the full 4-D lookup). With ``geom[0] > 0``, ``ms_slice``
     is instead the observer's sky map (n_ground + n_sky, n_phi, nl) of
@@ -53,6 +55,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, ms_slice, col, beta_e, albed
         w2 = np.empty(nc)
         cs = np.empty(nc)
         acc = np.empty(nl)
+        pw = np.empty(nl)
         eg = np.empty(nl)
         xb = np.empty(2 * nl)
         eb = np.empty(2 * nl)
@@ -81,10 +84,10 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, ms_slice, col, beta_e, albed
                 acc[l] = ((1.0 - bm) * ((1.0 - f) * ms_slice[jm, jn, l] + f * ms_slice[jm, jn + 1, l])
                           + bm * ((1.0 - f) * ms_slice[jm + 1, jn, l] + f * ms_slice[jm + 1, jn + 1, l]))
             for k in range(nsc):
-                p = phase_value(pc[k], pp[k], nu)
+                phase_fill_coded(pc, pp, pt, k, nu, pw)
                 s = ss_slice[k]
                 for l in range(nl):
-                    acc[l] += p * (w00 * s[im, inu, l] + w01 * s[im, inu + 1, l]
+                    acc[l] += pw[l] * (w00 * s[im, inu, l] + w01 * s[im, inu + 1, l]
                                    + w10 * s[im + 1, inu, l] + w11 * s[im + 1, inu + 1, l])
             if ground:
                 dg = distance_to_ground(r, mu, R)
@@ -121,7 +124,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, ms_slice, col, beta_e, albed
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def aerial_perspective(dirs, dist, r, sun, ss, pc, pp, ms, col, beta_e, R, Rt, mu_s_min,
+def aerial_perspective(dirs, dist, r, sun, ss, pc, pp, pt, ms, col, beta_e, R, Rt, mu_s_min,
                        trans, inscat):
     """Transmittance and in-scattered radiance between the observer (radius r, +z axis) and
     the point at distance dist[i] along dirs[i] ([Bru17] GetSkyRadianceToPoint):
@@ -151,12 +154,14 @@ def aerial_perspective(dirs, dist, r, sun, ss, pc, pp, ms, col, beta_e, R, Rt, m
         rp = point_along(r, mu, d, R, Rt)
         mup = clamp_cos((r * mu + d) / rp)
         mu_sp = clamp_cos((r * mu_s + d * nu) / rp)
-        sky_lookup_acc(True, ss, pc, pp, ms, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, 1.0, s0)
-        sky_lookup_acc(False, ss, pc, pp, ms, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, 1.0, s0)
+        sky_lookup_acc(True, ss, pc, pp, pt, ms, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, 1.0,
+                       s0)
+        sky_lookup_acc(False, ss, pc, pp, pt, ms, r, mu, mu_s, nu, ground, R, Rt, mu_s_min, 1.0,
+                       s0)
         if d < d_end:
-            sky_lookup_acc(True, ss, pc, pp, ms, rp, mup, mu_sp, nu, ground, R, Rt, mu_s_min,
+            sky_lookup_acc(True, ss, pc, pp, pt, ms, rp, mup, mu_sp, nu, ground, R, Rt, mu_s_min,
                            1.0, s1)
-            sky_lookup_acc(False, ss, pc, pp, ms, rp, mup, mu_sp, nu, ground, R, Rt, mu_s_min,
+            sky_lookup_acc(False, ss, pc, pp, pt, ms, rp, mup, mu_sp, nu, ground, R, Rt, mu_s_min,
                            1.0, s1)
         for l in range(nl):
             inscat[i, l] = max(s0[l] - trans[i, l] * s1[l], 0.0)

@@ -56,10 +56,22 @@ class Tables:
     profile_p0: np.ndarray | None = _axes("constituent", dtype="float64", optional=True)
     profile_p1: np.ndarray | None = _axes("constituent", dtype="float64", optional=True)
     scattering_index: np.ndarray | None = _axes("scattering", dtype="int64", optional=True)
+    # tabulated phase functions only: the atmosphere's table (skydome.transport._phase,
+    # uniform in the scattering angle over [0, pi]) on the table wavelengths [sr^-1]
+    phase_table: np.ndarray | None = _axes("scattering", "angle", "wavelength", dtype="float64",
+                                           optional=True)
 
     @property
     def has_density(self) -> bool:
         return self.scattering_density is not None
+
+    @property
+    def kernel_phase_table(self) -> np.ndarray:
+        """``phase_table``, or a zero placeholder (read by no kernel) where every phase
+        function is analytic."""
+        if self.phase_table is not None:
+            return self.phase_table
+        return np.zeros((self.phase_code.size, 2, self.table_wavelengths_nm.size))
 
     def arrays(self) -> dict:
         """Every field as a numpy array (scalars as 0-d arrays; absent optional fields left
