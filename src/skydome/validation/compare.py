@@ -125,11 +125,11 @@ def atmosphere_for(capture, phase: str = "tabulated"):
     return _ATM_CACHE[key]
 
 
-#: Models whose tabulated-phase path fails the single-scattering check (with orders = 1 it
-#: does not reproduce single_scattering on the same tabulated atmosphere, 0.15 against 0.62
-#: of the measurement 13 deg from the sun, where with Henyey-Greenstein they agree to 1 %):
-#: they take Henyey-Greenstein with the measured asymmetry factor instead, and say so.
-TABULATED_FALLBACK = ("precomputed", "precomputed_accurate")
+#: Models that take Henyey-Greenstein with the measured asymmetry factor when the tabulated
+#: (measured) phase is asked, because their tabulated path fails the single-scattering check
+#: (tests/test_validation_compare.py). Empty: precomputed evaluates tabulated phase
+#: functions per table wavelength and passes it.
+TABULATED_FALLBACK: tuple = ()
 
 
 def model_phase(name: str, phase: str) -> str:
