@@ -414,7 +414,9 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     check_choice("projection", projection, PROJECTIONS)
-    check_choice("tonemap", tonemap, ("hue-preserving", "filmic", "reinhard", "clamp"))
+    from skydome.render.display import DISPLAY_TRANSFORMS
+
+    check_choice("tonemap", tonemap, DISPLAY_TRANSFORMS)
     check_choice("bits", bits, (8, 16))
     if ev100 is not None and exposure is not None:
         raise UserError("give --exposure or --ev100, not both")
