@@ -16,7 +16,7 @@ SKIES = [  # (label, sun elevation, sun azimuth, model parameters)
     ("sun 30 deg", 30.0, 135.0, {}),
     ("sun 2 deg", 2.0, 270.0, {}),
     ("turbidity 8, sun 30 deg", 30.0, 180.0, {"turbidity": 8.0}),
-    ("sun -4 deg (civil twilight)", -4.0, 270.0, {}),
+    ("sun -4 deg, twilight", -4.0, 270.0, {}),
 ]
 #: columns: (transform, Hunt-effect chroma gain on)
 COLUMNS = [("hue-preserving", True), ("hue-preserving", False), ("agx", True), ("agx", False),
@@ -64,7 +64,7 @@ def doc_figures(directory, cache=None) -> dict:
     for (label, *_), im in zip(SKIES, images):
         k = im.auto_exposure()
         for tm, hunt in COLUMNS:
-            tiles.append((im.to_srgb(k, tm, hunt=hunt), label if tm == COLUMNS[0][0] and hunt else ""))
+            tiles.append((im.to_srgb(k, tm, hunt=hunt), ()))
     # the noon zenith (centre pixel) through each column
     im = images[0]
     c = im.shape[0] // 2

@@ -202,7 +202,9 @@ def _lab_f_inv(f):
 def scale_chroma(rgb, gain: float) -> np.ndarray:
     """Scale the CIELAB chroma [CIE15] of linear sRGB colours ``rgb`` (..., 3) by ``gain`` at
     constant luminance Y and CIELAB hue (D65 white). Each colour is scaled to Y = 1 first,
-    so the result does not depend on the exposure. Colours with Y <= 0 are left as they are.
+    so the result does not depend on the exposure. Colours with Y <= 0 are left as they are;
+    colours inside the sRGB gamut are boosted at most to its boundary (luminance kept),
+    colours outside it (already more saturated than the display shows) not at all.
     """
     from skydome.spectra import SRGB_WHITE_XY, _xy_to_white_xyz, linear_srgb_to_xyz, xyz_to_linear_srgb
 
@@ -219,7 +221,14 @@ def scale_chroma(rgb, gain: float) -> np.ndarray:
     a, b = gain * 500.0 * (fx - fy), gain * 200.0 * (fy - fz)
     n2 = np.stack([_lab_f_inv(fy + a / 500.0), np.ones_like(a), _lab_f_inv(fy - b / 200.0)], axis=-1)
     out = xyz_to_linear_srgb(n2 * _xy_to_white_xyz(SRGB_WHITE_XY) * np.where(ok, Y, 0.0))
-    return np.where(ok, out, rgb)
+    out = np.where(ok, out, rgb)
+    # a gain > 1 must not push an in-gamut colour out of the gamut (the later gamut
+    # compression would turn its hue): stop on the segment towards the boosted colour
+    # where the smallest component reaches 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(out < 0.0, rgb / (rgb - out), 1.0).min(axis=-1, keepdims=True)
+    t = np.where(rgb.min(axis=-1, keepdims=True) >= 0.0, np.clip(t, 0.0, 1.0), 0.0)
+    return rgb + t * (out - rgb)
 
 
 def _into_gamut(rgb: np.ndarray) -> np.ndarray:
