@@ -386,7 +386,7 @@ def render(
     size: str = typer.Option("512", help="Image size in pixels: N (square / width) or WxH."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm for spectral models, 3..401."),
     exposure: Optional[float] = typer.Option(None, help="PNG only: exposure multiplier on luminance in cd/m^2 (default automatic)."),
-    tonemap: str = typer.Option("hue-preserving", help="PNG only: hue-preserving (default: keeps hue, compresses the gamut), filmic (per-channel ACES fit), reinhard or clamp."),
+    tonemap: str = typer.Option("hue-preserving", help="PNG only: hue-preserving (default: keeps hue, compresses the gamut), agx (Blender 4.x AgX base), aces-hill (ACES 1.x fit by Hill), filmic (per-channel ACES fit by Narkowicz), reinhard or clamp."),
     bits: int = typer.Option(8, help="PNG only: 8 or 16 bits per channel."),
     no_sun: bool = typer.Option(False, "--no-sun", help="Do not draw the sun disc."),
     ev100: Optional[float] = typer.Option(None, help="PNG only: exposure value at ISO 100, -20..30 (instead of --exposure)."),

@@ -14,6 +14,31 @@ so the exposure multiplier that maps L_max to display value 1 is ``k = 1 / (1.2 
 twilight, day sheets) use ONE such exposure or an explicit ramp, so a darker sky gives a
 darker picture.
 
+Colourfulness (Hunt effect)
+---------------------------
+A clear sky of a few thousand cd m^-2 looks more colourful than the same chromaticities
+on an 80 cd m^-2 display: colourfulness grows with the adapting luminance (the Hunt
+effect). CAM16 [Li17] eq. 15 writes it M = C F_L^(1/4), F_L from the adapting luminance
+L_A ([CIE159] eq. 7). Pictures keep M: the CIELAB chroma of each colour is scaled by
+g = (F_L(L_A scene) / F_L(L_A display))^(1/4) at constant luminance and hue, with L_A of
+the scene its log-average sky luminance and of the display a fifth of its 80 cd m^-2
+white (IEC 61966-2-1; [CIE159]'s L_A = L_W / 5). g is about 1.6 at noon, 1.4 at sunset
+and kept at 1 in dim twilight (where the eye's colours fade but a photograph's do not).
+In-gamut colours are boosted at most to the gamut's boundary. Deviation: CIELAB chroma
+stands in for CAM16 chroma (whose C grows as the 0.9 power of the opponent signal), so
+the gain is applied about 10 % more gently than CAM16 would; the adaptation white stays
+D65 (no camera-like "daylight" white balance).
+
+Measured on the default model (``docs/display_figures.py``): the noon zenith (sun 60 deg)
+is linear sRGB (4490, 5309, 7295) cd m^-2, CIE xy (0.281, 0.293), about 9700 K: a pale
+blue 30 deg from the sun, in the aureole. Auto exposure (EV100 14.3) puts it at display
+Y 0.2-0.3, as bright as in a photograph (the sRGB (60-90, 110-140, 200-230) of a clear
+zenith has Y 0.16-0.27), so exposure was not what made it grey: the colorimetric
+picture (every transform keeps or lowers its chroma) shows CIELAB C* 14 (sRGB 141, 152,
+176); with the Hunt gain C* 21.5 (130, 150, 187). The rest of the way to a photograph's
+C* 50 is the camera's rendering (daylight white balance near 5500 K, saturated picture
+styles), not the sky's colour.
+
 Display transforms
 ------------------
 ``"hue-preserving"`` (default)
@@ -25,6 +50,15 @@ Display transforms
     the display's white run to white ("path to white", as film and AgX do) only when
     m exceeds 4 (two stops above white), blending fully to white at m = 64: a sunset
     stays orange, the noon zenith stays deep blue, the sun's disc is white.
+``"agx"``
+    Troy Sobotka's AgX base as in Blender 4.x [Sob23], with the sigmoid fit of [Wre23]:
+    Rec. 2020 inset matrix, log2 encoding over [-12.47, 4.03] EV, per-channel sigmoid,
+    outset matrix. Gamut compression and a path to white by construction; it lowers the
+    chroma of mid-tones (the noon zenith C* 14 -> 8) and turns hues by up to 9 deg.
+``"aces-hill"``
+    The ACES 1.x reference rendering + sRGB output transform as fitted by S. Hill [Hil16]
+    (not ACES 2.0): darker (mid-grey 0.18 -> 0.106) and contrasty; it turns the
+    orange-red horizon under a 2 deg sun yellow (hue off by 21 deg).
 ``"filmic"``
     The [Nar15] curve on each channel separately (the former default): bright
     saturated colours shift towards yellow and white (an orange-red sunset turns pale
@@ -32,10 +66,11 @@ Display transforms
 ``"reinhard"``, ``"clamp"``
     x / (1 + x) per channel [Rei02] eq. 3; min(x, 1).
 
-Why this default: on the demo skies (docs/rendering.md) the per-channel curve clips the
-orange-red horizon under a 2 deg sun (linear (1, 0.31, 0.05)) to pale yellow and greys
-the zenith; the hue-preserving curve keeps both hues within a few degrees (CIELAB), which
-the tests check, at the price of less "filmic" desaturation in bright skies.
+Why this default: on the demo skies (docs/figures/display_transforms.png) the
+hue-preserving curve with the Hunt gain gives the deepest blue zenith and keeps every
+tested hue within 2.3 deg of the linear colour (horizon under a 2 deg sun, noon zenith,
+Belt of Venus at -2 deg; tests/test_display.py); AgX passes the hue tests too (within
+9.5 deg) but is visibly greyer; the per-channel ACES curves fail the sunset.
 
 References
 ----------
@@ -44,6 +79,19 @@ References
 .. [Rei02] E. Reinhard et al., "Photographic tone reproduction for digital images",
    ACM TOG 21(3), 2002.
 .. [Nar15] K. Narkowicz, "ACES filmic tone mapping curve", 2015.
+.. [Sob23] T. Sobotka, AgX (github.com/sobotka/AgX) and its Blender 4.0 configuration
+   (the Rec. 2020 inset/outset matrices, log2 range -12.47393 .. 4.026069 EV), as
+   reproduced in three.js's AgXToneMapping (2024).
+.. [Wre23] B. Wrensch, "Minimal AgX implementation", iolite engine blog, 2023 (the
+   6th-order polynomial fit of the AgX base sigmoid).
+.. [Hil16] S. Hill, BakingLab ACES.hlsl, 2016 (RRTAndODTFit and its two matrices).
+.. [CIE159] CIE 159:2004, A colour appearance model for colour management systems:
+   CIECAM02 (eq. 7, F_L; worked example F_L = 1.16754 at L_A = 318.31 cd m^-2).
+.. [Li17] C. Li et al., "Comprehensive color solutions: CAM16, CAT16, and CAM16-UCS",
+   Color Res. Appl. 42(6), 2017.
+.. [CIE15] CIE 15:2004, Colorimetry (CIELAB).
+.. [709], [2020] ITU-R BT.709-6 and BT.2020-2 primaries; [RP177] SMPTE RP 177
+   (normalised primary matrix); ITU-R BT.2087-0 (the 709 -> 2020 matrix, tested).
 """
 
 from __future__ import annotations

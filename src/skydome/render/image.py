@@ -268,9 +268,10 @@ class SkyImage:
         exposure : float, optional
             Multiplier k [m^2/cd] on the linear sRGB values in cd m^-2 (> 0); None:
             from ``ev100`` or :meth:`auto_exposure`.
-        tonemap : {"hue-preserving", "filmic", "reinhard", "clamp"}
+        tonemap : {"hue-preserving", "agx", "aces-hill", "filmic", "reinhard", "clamp"}
             Display transform (:func:`skydome.render.display.display_transform`):
-            the default keeps hue and compresses the gamut; the others act per channel
+            the default keeps hue and compresses the gamut; ``agx`` and ``aces-hill``
+            work in their own primaries; the last three act per channel
             (:func:`tonemap_curve`, after clipping out-of-gamut negatives to 0). Masked
             pixels are black.
         ev100 : float, optional
