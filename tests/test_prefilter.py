@@ -78,3 +78,27 @@ def test_mip_options_refused(sky):
         prefiltered_mips(env, 3)
     with pytest.raises(ValueError, match="mip_levels = 9"):
         check_mip_levels(9, 128)
+
+
+def test_cli_writes_the_mip_chain(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+    from skydome.render.image import read_exr
+
+    runner = CliRunner()
+    out = tmp_path / "sky.exr"
+    res = runner.invoke(app, ["export", "envmap", "--model", "hosek_wilkie2012", "--size",
+                              "64x32", "--half", "--mips", "4", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "sky.mips.json").read_text())
+    assert [lv["roughness"] for lv in doc["levels"]] == pytest.approx([0, 1 / 3, 2 / 3, 1])
+    for k, lv in enumerate(doc["levels"]):
+        ch = read_exr(tmp_path / lv["file"])
+        assert ch["R"].shape == (32 >> k, 64 >> k) and ch["R"].dtype == np.float16
+    res = runner.invoke(app, ["export", "envmap", "--model", "hosek_wilkie2012", "--size",
+                              "64x32", "--mips", "9", "--out", str(tmp_path / "x.exr")])
+    assert res.exit_code == 2 and "--mips = 9" in res.output
+    assert not (tmp_path / "x.exr").exists()

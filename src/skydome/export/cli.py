@@ -65,6 +65,7 @@ def envmap(
     ground: str = typer.Option("lambertian", help="Below the horizon: lambertian (albedo x E_h / pi), black or model."),
     ground_albedo: Optional[float] = typer.Option(None, help="Ground albedo 0..1 (default the model's, else 0.2)."),
     sh: bool = typer.Option(False, "--sh", help="Also write OUT.sh.json: order-2 irradiance SH (9 RGB coefficients)."),
+    mips: int = typer.Option(0, "--mips", help="Also write N-1 GGX-prefiltered levels OUT_mip1.. (roughness k/(N-1)) + OUT.mips.json; latlong and cube layouts; 0 = none."),
     sun_elevation: Optional[float] = _SUN_EL,
     sun_azimuth: Optional[float] = _SUN_AZ,
     lat: Optional[float] = _LAT,
@@ -77,11 +78,11 @@ def envmap(
     from skydome.cli import _run
 
     _run(_envmap, ctx.args, model, out, convention, layout, size, half, sun_in_map, ground,
-         ground_albedo, sh, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths)
+         ground_albedo, sh, mips, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths)
 
 
 def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, ground, ground_albedo,
-            sh, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths):
+            sh, mips, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths):
     import json
 
     from skydome._validate import check_int, check_number
@@ -95,8 +96,15 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
     checked = {}
 
     def check():
-        checked["conv"], checked["layout"], _ = check_envmap_options(convention, layout, size,
-                                                                     sun_mode, ground)
+        checked["conv"], checked["layout"], (_, height) = check_envmap_options(
+            convention, layout, size, sun_mode, ground)
+        if mips:
+            from skydome.export.prefilter import check_mip_levels
+
+            if checked["layout"] not in ("latlong", "cubemap", "faces", "cross"):
+                raise ValueError(f"--mips: layout = {checked['layout']!r} has no prefiltered "
+                                 "mips (latlong, cubemap, faces or cross)")
+            check_mip_levels(mips, height, "mips")
         if half and sun_in_map:
             raise ValueError("--half cannot hold the sun (half floats end at 65504): drop "
                              "--sun-in-map or --half")
@@ -119,6 +127,15 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
     finally:
         progress.close()
     written = env.write(p, half=half)
+    if mips:
+        from skydome.export.prefilter import prefiltered_mips, write_mips
+
+        try:
+            written += write_mips(prefiltered_mips(env, mips), p, half=half)
+        except BaseException:
+            for w in written:
+                w.unlink(missing_ok=True)
+            raise
     if not sun_in_map:
         light = sun_light(sky, conv)
         if light is not None:

@@ -45,15 +45,15 @@ def mip_roughness(levels: int) -> np.ndarray:
     return np.linspace(0.0, 1.0, levels)
 
 
-def check_mip_levels(levels, height: int) -> int:
+def check_mip_levels(levels, height: int, name: str = "mip_levels") -> int:
     """ValueError unless ``levels`` is an integer in [2, 16] with the last level at least
     4 texels high (lat-long) / wide (cube faces)."""
     from skydome._validate import check_int
 
-    levels = check_int("mip_levels", levels, 2, 16)
+    levels = check_int(name, levels, 2, 16)
     if height >> (levels - 1) < 4:
         top = max(2, int(np.log2(max(height, 1))) - 1)
-        raise ValueError(f"mip_levels = {levels} is out of range for a map {height} texels "
+        raise ValueError(f"{name} = {levels} is out of range for a map {height} texels "
                          f"high: valid [2, {top}] (the last level must be >= 4 texels)")
     return levels
 
@@ -213,3 +213,44 @@ def prefiltered_mips(env, levels: int = 6, progress=None) -> list:
         if progress is not None:
             progress(k, levels - 1)
     return out
+
+
+def mip_paths(path, levels: int) -> list:
+    """File of each level k >= 1 beside ``path``: ``<stem>_mip<k><suffix>``."""
+    from pathlib import Path
+
+    p = Path(path)
+    return [p.with_name(f"{p.stem}_mip{k}{p.suffix}") for k in range(1, levels)]
+
+
+def write_mips(mips, path, half: bool = False) -> list:
+    """Write levels 1.. of ``mips`` (from :func:`prefiltered_mips`) beside the level-0 file
+    ``path`` as ``<stem>_mip<k><suffix>`` (each in the map's layout; ``faces``: six files
+    per level) and ``<stem>.mips.json`` (roughness, alpha and file of every level). All or
+    nothing: on a failure the files already written are removed. Returns the paths."""
+    import json
+    from pathlib import Path
+
+    from skydome._io import atomic_write
+
+    p = Path(path)
+    written = []
+    try:
+        for lev, target in zip(mips[1:], mip_paths(p, len(mips))):
+            written += lev.write(target, half=half)
+        doc = {"prefilter": "GGX specular, split sum with n = v = r (Karis 2013, "
+                            "PrefilterEnvMap), integrated over every texel of the map",
+               "roughness_to_alpha": "alpha = roughness^2",
+               "convention": mips[0].convention.name, "layout": mips[0].layout,
+               "levels": [{"level": k, "roughness": float(r), "alpha": float(r * r),
+                           "file": (p if k == 0 else mip_paths(p, len(mips))[k - 1]).name,
+                           "size": list(next(iter(m.images.values())).shape[:2])}
+                          for k, (m, r) in enumerate(zip(mips, mip_roughness(len(mips))))]}
+        js = p.with_name(p.stem + ".mips.json")
+        atomic_write(js, lambda tmp: Path(tmp).write_text(json.dumps(doc, indent=2)))
+        written.append(js)
+    except BaseException:
+        for w in written:
+            Path(w).unlink(missing_ok=True)
+        raise
+    return written
