@@ -104,7 +104,7 @@ def test_methods_other_than_get_refused(viewer_url):  # noqa: F811
 @pytest.mark.parametrize("query,message", [
     # the messages of the model constructors, which the CLI prints as "error: <message>"
     ("model=preetham1999&turbidity=20", "turbidity = 20 is out of range [2, 10]"),
-    ("model=preetham1999&sun_elevation=95", "elevation_deg = 95 deg is out of range [-90, 90] deg"),
+    ("model=preetham1999&sun_elevation=95", "sun_elevation = 95 deg is out of range [-90, 90] deg"),
     ("model=preetham1999&sun_elevation=-4", "out of range [0, 90] deg for model 'preetham1999'"),
     ("model=oneil2005&kr=abc", "kr = 'abc' is not a valid float"),
     ("model=oneil2005&samples=2.5", "samples = '2.5' is not a valid int"),

@@ -93,30 +93,13 @@ def parse_request(query: Mapping[str, str]) -> tuple[str, dict[str, Any], dict[s
     return model, sun, params
 
 
-def make_sun(sun_elevation=None, sun_azimuth=None, lat=None, lon=None, time=None):
-    """A :class:`skydome.Sun` from angles [deg] or from place and time (ISO 8601 with an
-    offset), with the CLI's rules: one way or the other, not both (default 30 deg high in
-    the south)."""
-    from skydome.sun import Sun
-
-    by_angles = sun_elevation is not None or sun_azimuth is not None
-    by_place = any(v is not None for v in (lat, lon, time))
-    if by_angles and by_place:
-        raise ValueError("give either sun_elevation/sun_azimuth or lat/lon/time, not both")
-    if by_place:
-        missing = [n for n, v in (("lat", lat), ("lon", lon), ("time", time)) if v is None]
-        if missing:
-            raise ValueError(f"{', '.join(missing)} missing: lat, lon and time go together")
-        return Sun.from_location(lat, lon, time)
-    return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
-               azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
-
-
 def build_model(model: str, sun_kw: Mapping[str, Any], params: Mapping[str, Any]):
     """The skydome model the page renders (its constructor validates the parameters)."""
     import skydome
 
-    sun = make_sun(**sun_kw)
+    from skydome.sun import sun_from_options
+
+    sun = sun_from_options(**sun_kw)
     if model == "precomputed":
         return _precomputed_model(sun, dict(params))
     if model == "oneil2005" and params.get("samples", 2) > ONEIL_MAX_SAMPLES:
