@@ -38,9 +38,10 @@ function paramControls(model) {
     label.textContent = `${p.name}${p.unit ? ` [${p.unit}]` : ""} `;
     label.title = p.doc;
     let input;
-    if (p.kind === "choice") {
+    if (p.kind === "choice" || p.kind === "bool") {
       input = document.createElement("select");
-      for (const c of p.choices) input.append(new Option(c, c, c === p.default, c === p.default));
+      const choices = p.kind === "bool" ? [true, false] : p.choices;
+      for (const c of choices) input.append(new Option(String(c), String(c), c === p.default, c === p.default));
     } else {
       input = document.createElement("input");
       input.type = "number";
@@ -223,9 +224,12 @@ function wireDrag() {
 // -- the test and benchmark interface ----------------------------------------------------
 // renderFloat(model, values, w, h, projection): XYZ per pixel, row 0 at the top, as a plain
 // array of w*h*3 numbers (Y in cd/m^2); projection 1 = skydome's equirect-hemisphere.
-async function renderFloat(model, values, w, h, projection = 1) {
-  const scene = await fetchScene(model, values);
-  await renderer.renderXYZ([{ scene, x0: 0, w }], cameraAxes(180, 15, 90, projection), w, h);
+// opts.camera: [view azimuth, elevation, field of view] of a camera view (projection 0);
+// opts.output: dobashi2002's quantity (0 the scene, 1 in-scattered light, 2 transmittance
+// as the XYZ of a white surface facing the sun, 3 the surface's distance [m] in X).
+async function renderFloat(model, values, w, h, projection = 1, opts = {}) {
+  const scene = await fetchScene(model, values), [az, el, fov] = opts.camera || [180, 15, 90];
+  await renderer.renderXYZ([{ scene, x0: 0, w, output: opts.output || 0 }], cameraAxes(az, el, fov, projection), w, h);
   const a = renderer.readXYZ(), out = new Array(w * h * 3);
   for (let i = 0, j = 0; i < a.length; i += 4, j += 3) { out[j] = a[i]; out[j + 1] = a[i + 1]; out[j + 2] = a[i + 2]; }
   return out;

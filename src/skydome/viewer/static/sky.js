@@ -59,8 +59,32 @@ SETTERS.precomputed = (gl, u, s) => {
   gl.uniform2f(u("u_pp"), ...s.pp);
 };
 
+SETTERS.dobashi2002 = (gl, u, s) => {
+  gl.uniform1i(u("u_tables"), 7);
+  gl.uniform1i(u("u_grid"), 8);
+  gl.uniform2i(u("u_table_size"), ...s.table_size);
+  gl.uniform2f(u("u_mu_range"), ...s.mu_range);
+  gl.uniform1f(u("u_extent"), s.extent_m);
+  gl.uniform2i(u("u_grid_size"), ...s.grid_size);
+  gl.uniform2f(u("u_grid_origin"), ...s.grid_origin);
+  gl.uniform2f(u("u_grid_step"), ...s.grid_step);
+  gl.uniform1f(u("u_hmax"), s.hmax);
+  gl.uniform3fv(u("u_eye"), s.eye);
+  gl.uniform1f(u("u_planet_radius"), s.planet_radius_m);
+  gl.uniform1f(u("u_datum_radius"), s.datum_radius_m);
+  for (const k of ["march_steps", "nc", "shafts", "n_planes"]) gl.uniform1i(u(`u_${k}`), s[k]);
+  gl.uniform4iv(u("u_phase_codes"), s.phase_codes);
+  gl.uniform4fv(u("u_phase_params"), s.phase_params);
+  gl.uniform4fv(u("u_ext"), s.ext);
+  gl.uniform3fv(u("u_tw"), s.t_weights.flat());
+  gl.uniform3fv(u("u_albedo"), s.albedo);
+  gl.uniform1f(u("u_fill"), s.fill);
+  gl.uniformMatrix3fv(u("u_srgb_to_xyz"), false, s.srgb_to_xyz);
+  gl.uniformMatrix3fv(u("u_xyz_to_srgb"), false, s.xyz_to_srgb);
+};
+
 // extra shader sources a model's program includes between common.glsl and its own
-const INCLUDES = { precomputed: ["transport"] };
+const INCLUDES = { precomputed: ["transport"], dobashi2002: ["transport"] };
 
 function f32FromBase64(b64) {
   const bin = atob(b64), bytes = new Uint8Array(bin.length);
@@ -94,6 +118,35 @@ const PREPASSES = {
       r.precomputed = { key: s.lut_key, tex };
     }
     r.precomputed.tex.forEach((t, k) => { gl.activeTexture(gl.TEXTURE4 + k); gl.bindTexture(gl.TEXTURE_3D, t); });
+    gl.activeTexture(gl.TEXTURE0);
+  },
+
+  // dobashi2002: upload the [DYN02] tables and the heightmap grid (once per turbidity and sun)
+  async dobashi2002(r, s) {
+    const gl = r.gl;
+    if (r.dobashi?.key !== s.lut_key) {
+      if (r.dobashi) { gl.deleteTexture(r.dobashi.tables); gl.deleteTexture(r.dobashi.grid); }
+      const nearest = (target) => {
+        for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(target, p, gl.NEAREST);
+      };
+      const tables = gl.createTexture();
+      gl.activeTexture(gl.TEXTURE7);
+      gl.bindTexture(gl.TEXTURE_2D_ARRAY, tables);
+      const [na, nd] = s.table_size;
+      gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA32F, na, nd, s.nc);
+      gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, 0, na, nd, s.nc, gl.RGBA, gl.FLOAT, f32FromBase64(s.tables_b64));
+      nearest(gl.TEXTURE_2D_ARRAY);
+      const grid = gl.createTexture();
+      gl.activeTexture(gl.TEXTURE8);
+      gl.bindTexture(gl.TEXTURE_2D, grid);
+      const [nx, ny] = s.grid_size;
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, nx, ny);
+      gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, nx, ny, gl.RGBA, gl.FLOAT, f32FromBase64(s.grid_b64));
+      nearest(gl.TEXTURE_2D);
+      r.dobashi = { key: s.lut_key, tables, grid };
+    }
+    gl.activeTexture(gl.TEXTURE7); gl.bindTexture(gl.TEXTURE_2D_ARRAY, r.dobashi.tables);
+    gl.activeTexture(gl.TEXTURE8); gl.bindTexture(gl.TEXTURE_2D, r.dobashi.grid);
     gl.activeTexture(gl.TEXTURE0);
   },
 
@@ -269,7 +322,8 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_up"), camera.up);
       gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
-      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed"].includes(v.scene.model) ? 1 : 0);
+      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002"].includes(v.scene.model) ? 1 : 0);
+      gl.uniform1i(u("u_output"), v.output || 0);
       SETTERS[v.scene.model](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }
