@@ -343,20 +343,42 @@ export class SkyRenderer {
   }
 
   // Show the float target on the canvas: mode 0 exposure + sRGB, 1 false colour.
-  async show(display) {
-    const gl = this.gl, { tex, w, h } = this.target, { program, u } = await this.displayProgram();
-    if (this.canvas.width !== w || this.canvas.height !== h) { this.canvas.width = w; this.canvas.height = h; }
-    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+  async show(display, source = this.target, fb = null) {
+    const gl = this.gl, { tex, w, h } = source, { program, u } = await this.displayProgram();
+    if (!fb && (this.canvas.width !== w || this.canvas.height !== h)) { this.canvas.width = w; this.canvas.height = h; }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
     gl.viewport(0, 0, w, h);
     gl.useProgram(program);
     gl.activeTexture(gl.TEXTURE0);
     gl.bindTexture(gl.TEXTURE_2D, tex);
     gl.uniform1i(u("u_xyz"), 0);
     gl.uniform1i(u("u_mode"), display.mode);
-    gl.uniform1f(u("u_white"), display.white);
+    gl.uniform1f(u("u_k"), display.k);
+    gl.uniform1i(u("u_transform"), display.transform);
     gl.uniform2f(u("u_log_range"), display.logLo, display.logHi);
     gl.bindVertexArray(this.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  // The display pass applied to a list of linear XYZ colours: [[r, g, b] 0..255, ...] as
+  // read back from an 8-bit target (for the test against render/display.py).
+  async displayColours(xyz, display) {
+    const gl = this.gl, n = xyz.length, src = this._ensureAux("colours", n, 1);
+    const data = new Float32Array(4 * n);
+    xyz.forEach((c, i) => data.set([c[0], c[1], c[2], 1], 4 * i));
+    gl.bindTexture(gl.TEXTURE_2D, src.tex);
+    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, n, 1, gl.RGBA, gl.FLOAT, data);
+    const tex = gl.createTexture(), fb = gl.createFramebuffer();
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8, n, 1);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+    await this.show(display, src, fb);
+    const px = new Uint8Array(4 * n);
+    gl.readPixels(0, 0, n, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    gl.deleteFramebuffer(fb);
+    gl.deleteTexture(tex);
+    return Array.from({ length: n }, (_, i) => [px[4 * i], px[4 * i + 1], px[4 * i + 2]]);
   }
 
   // Block until the GPU has finished (a one-pixel read), for frame timing.
