@@ -301,11 +301,14 @@ def _layers(tab: np.ndarray, n4: int) -> np.ndarray:
     return out.reshape(ny, nx, n4, 4).transpose(2, 0, 1, 3)
 
 
-def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray) -> np.ndarray:
+def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray,
+                      lam4: bool = True) -> np.ndarray:
     """(n_grid, 3): XYZ = sum_g K_g L_g for radiance per unit irradiance L on the table
     grid, the linear map of Hillaire2020Sky.radiance (values on the grid taken to ``wl``
     linearly in L lambda^4, times the solar spectrum) followed by SkyModel.xyz's CIE
-    weights."""
+    weights. With ``lam4`` False, linear in the value itself: the map of
+    Hillaire2020Sky.aerial_perspective's transmittance (np.interp), times the solar
+    spectrum (the XYZ of sunlight seen through the air)."""
     if grid.shape == wl.shape and np.array_equal(grid, wl):
         M = np.eye(wl.size)
     else:
@@ -313,8 +316,9 @@ def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray) -> np
         a = (wl - grid[idx]) / (grid[idx + 1] - grid[idx])
         M = np.zeros((wl.size, grid.size))
         rows = np.arange(wl.size)
-        M[rows, idx] += (1.0 - a) * grid[idx] ** 4 / wl ** 4
-        M[rows, idx + 1] += a * grid[idx + 1] ** 4 / wl ** 4
+        p = 4.0 if lam4 else 0.0
+        M[rows, idx] += (1.0 - a) * grid[idx] ** p / wl ** p
+        M[rows, idx + 1] += a * grid[idx + 1] ** p / wl ** p
     return (M * solar[:, None]).T @ _xyz_weights(wl)
 
 
@@ -362,8 +366,13 @@ def _hillaire(sky) -> dict[str, Any]:
     out = dict(_HILLAIRE_CACHE[key])
     grid = np.asarray(out["grid_nm"])
     K = np.zeros((4 * out["ng"], 3))
-    K[:grid.size] = _hillaire_weights(grid, wl, solar_irradiance(wl) * sky.sun.irradiance_scale)
-    out.update({"K": K.tolist(), "h0": sky.observer_altitude_m,
+    KT = np.zeros((4 * out["ng"], 3))
+    solar = solar_irradiance(wl) * sky.sun.irradiance_scale
+    K[:grid.size] = _hillaire_weights(grid, wl, solar)
+    KT[:grid.size] = _hillaire_weights(grid, wl, solar, lam4=False)
+    out.update({"K": K.tolist(), "KT": KT.tolist(), "sun_xyz": KT.sum(axis=0).tolist(), "h0": sky.observer_altitude_m,
+                "ap_size": sky.ap_size, "ap_km_per_slice": sky.ap_km_per_slice,
+                "ap_samples": sky.ap_samples,
                 "sv_size": [sky.skyview_width, sky.skyview_height], "n_steps": sky.view_samples,
                 "use_ms": 1 if sky.multiple_scattering else 0})
     return out

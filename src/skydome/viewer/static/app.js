@@ -237,10 +237,13 @@ function wireDrag() {
 // array of w*h*3 numbers (Y in cd/m^2); projection 1 = skydome's equirect-hemisphere.
 // opts.camera: [view azimuth, elevation, field of view] of a camera view (projection 0);
 // opts.output: dobashi2002's quantity (0 the scene, 1 in-scattered light, 2 transmittance
-// as the XYZ of a white surface facing the sun, 3 the surface's distance [m] in X).
+// as the XYZ of a white surface facing the sun, 3 the surface's distance [m] in X);
+// hillaire2020's aerial perspective to opts.distance [m] (1 in-scattered light, 2 the
+// XYZ of sunlight through the transmittance).
 async function renderFloat(model, values, w, h, projection = 1, opts = {}) {
   const scene = await fetchScene(model, values), [az, el, fov] = opts.camera || [180, 15, 90];
-  await renderer.renderXYZ([{ scene, x0: 0, w, output: opts.output || 0 }], cameraAxes(az, el, fov, projection), w, h);
+  await renderer.renderXYZ([{ scene, x0: 0, w, output: opts.output || 0, distance: opts.distance || 0 }],
+                          cameraAxes(az, el, fov, projection), w, h);
   const a = renderer.readXYZ(), out = new Array(w * h * 3);
   for (let i = 0, j = 0; i < a.length; i += 4, j += 3) { out[j] = a[i]; out[j + 1] = a[i + 1]; out[j + 2] = a[i + 2]; }
   return out;

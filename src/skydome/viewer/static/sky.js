@@ -43,6 +43,11 @@ const SETTERS = {
 };
 SETTERS.hillaire2020 = (gl, u, s) => {
   gl.uniform1i(u("u_skyview"), 3);
+  gl.uniform1i(u("u_ap_l"), 9);
+  gl.uniform1i(u("u_ap_t"), 10);
+  gl.uniform1i(u("u_ap_size"), s.ap_size);
+  gl.uniform1f(u("u_ap_km_per_slice"), s.ap_km_per_slice);
+  gl.uniform3fv(u("u_sun_xyz"), s.sun_xyz);
   gl.uniform2i(u("u_sv_size"), ...s.sv_size);
   gl.uniform1f(u("u_R"), s.R);
   gl.uniform1f(u("u_h0"), s.h0);
@@ -200,8 +205,45 @@ const PREPASSES = {
     gl.uniform3fv(u("u_K"), s.K.flat());
     gl.bindVertexArray(r.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
+    // the aerial-perspective volume ([Hil20] 5.4): n^3 froxels as an (n n) x n 2-D
+    // target pair (in-scattering, transmittance), the same march per froxel
+    const n = s.ap_size, apKey = `hillaire2020_ap/${s.ng}`;
+    if (!r.programs.has(apKey)) {
+      const text = `#version 300 es\n#define NG ${s.ng}\n#define AP_VOLUME 1\nprecision highp float;\nprecision highp int;\nconst float PI = 3.14159265358979;\n${await source("transport")}\n${await source("hillaire2020_lut")}`;
+      r.programs.set(apKey, r._link(text, "hillaire2020_ap"));
+    }
+    const ap = r._ensureAuxMRT("aerial", n * n, n);
+    const pa = r.programs.get(apKey);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, ap.fb);
+    gl.viewport(0, 0, n * n, n);
+    gl.useProgram(pa.program);
+    for (const [name, fn] of [["u_tlut", 1], ["u_mslut", 2]]) gl.uniform1i(pa.u(name), fn);
+    gl.uniform2i(pa.u("u_tlut_size"), ...s.tlut_size);
+    gl.uniform2i(pa.u("u_mslut_size"), ...s.mslut_size);
+    for (const k of ["R", "Rt", "h0", "ts"]) gl.uniform1f(pa.u(`u_${k}`), s[k]);
+    gl.uniform1f(pa.u("u_sz"), s.sun.direction[2]);
+    gl.uniform1i(pa.u("u_n_steps"), s.ap_samples);
+    gl.uniform1i(pa.u("u_use_ms"), s.use_ms);
+    gl.uniform1i(pa.u("u_nc"), s.nc);
+    gl.uniform4iv(pa.u("u_codes"), s.codes);
+    gl.uniform4fv(pa.u("u_p0"), s.p0);
+    gl.uniform4fv(pa.u("u_p1"), s.p1);
+    gl.uniform4iv(pa.u("u_phase_codes"), s.phase_codes);
+    gl.uniform4fv(pa.u("u_phase_params"), s.phase_params);
+    gl.uniform4fv(pa.u("u_beta_s"), s.beta_s);
+    gl.uniform4fv(pa.u("u_beta_e"), s.beta_e);
+    gl.uniform4fv(pa.u("u_albedo"), s.albedo);
+    gl.uniform3fv(pa.u("u_K"), s.K.flat());
+    gl.uniform3fv(pa.u("u_KT"), s.KT.flat());
+    gl.uniform1i(pa.u("u_ap_size"), n);
+    gl.uniform1f(pa.u("u_ap_km_per_slice"), s.ap_km_per_slice);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
     gl.activeTexture(gl.TEXTURE3);
     gl.bindTexture(gl.TEXTURE_2D, t.tex);
+    gl.activeTexture(gl.TEXTURE9);
+    gl.bindTexture(gl.TEXTURE_2D, ap.tex[0]);
+    gl.activeTexture(gl.TEXTURE10);
+    gl.bindTexture(gl.TEXTURE_2D, ap.tex[1]);
     gl.activeTexture(gl.TEXTURE0);
   },
 };
@@ -299,6 +341,28 @@ export class SkyRenderer {
     return (this.aux[name] = this._makeTarget(w, h));
   }
 
+  // two float targets drawn by one pass (gl.drawBuffers)
+  _ensureAuxMRT(name, w, h) {
+    this.aux = this.aux || {};
+    const t = this.aux[name], gl = this.gl;
+    if (t && t.w === w && t.h === h) return t;
+    const tex = [0, 1].map(() => {
+      const x = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, x);
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, w, h);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      return x;
+    });
+    const fb = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    tex.forEach((x, i) => gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + i, gl.TEXTURE_2D, x, 0));
+    gl.drawBuffers([gl.COLOR_ATTACHMENT0, gl.COLOR_ATTACHMENT1]);
+    const st = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
+    if (st !== gl.FRAMEBUFFER_COMPLETE) throw new Error(`float render targets incomplete (0x${st.toString(16)})`);
+    return (this.aux[name] = { tex, fb, w, h });
+  }
+
   // Draw the views into the float target. views: [{scene, x0, w}] side by side (split view);
   // camera: {projection, fwd, right, up, tanHalfFov}.
   async renderXYZ(views, camera, w, h) {
@@ -324,6 +388,7 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
       gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002"].includes(v.scene.model) ? 1 : 0);
       gl.uniform1i(u("u_output"), v.output || 0);
+      gl.uniform1f(u("u_ap_distance"), v.distance || 0);
       SETTERS[v.scene.model](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }
