@@ -104,7 +104,7 @@ def test_methods_other_than_get_refused(viewer_url):  # noqa: F811
 @pytest.mark.parametrize("query,message", [
     # the messages of the model constructors, which the CLI prints as "error: <message>"
     ("model=preetham1999&turbidity=20", "turbidity = 20 is out of range [2, 10]"),
-    ("model=preetham1999&sun_elevation=95", "elevation_deg = 95 deg is out of range [-90, 90] deg"),
+    ("model=preetham1999&sun_elevation=95", "sun_elevation = 95 deg is out of range [-90, 90] deg"),
     ("model=preetham1999&sun_elevation=-4", "out of range [0, 90] deg for model 'preetham1999'"),
     ("model=oneil2005&kr=abc", "kr = 'abc' is not a valid float"),
     ("model=oneil2005&samples=2.5", "samples = '2.5' is not a valid int"),
@@ -117,6 +117,9 @@ def test_methods_other_than_get_refused(viewer_url):  # noqa: F811
     ("model=preetham1999&turbidity=nan", "turbidity = nan is not a finite number"),
     ("model=preetham1999&sun_elevation=10&lat=48", "not both"),
     ("model=preetham1999&lat=48&lon=16", "time missing"),
+    ("model=dobashi2002&shafts=maybe", "shafts = 'maybe' is not a boolean"),
+    ("model=dobashi2002&n_planes=500", "n_planes = 500 is out of range [1, 128]"),
+    ("model=dobashi2002&turbidity=0.5", "turbidity = 0.5 is out of range [1, 32]"),
 ])
 def test_bad_parameters_400(viewer_url, query, message):  # noqa: F811
     status, headers, body = _get(viewer_url, "/api/scene?" + query)
@@ -155,8 +158,9 @@ def test_models_route(viewer_url):  # noqa: F811
     assert status == 200
     models = json.loads(body)
     assert set(models) == {"preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020",
-                           "precomputed"}
+                           "precomputed", "dobashi2002"}
     assert [p["name"] for p in models["preetham1999"]["parameters"]] == ["turbidity"]
+    assert [p["name"] for p in models["dobashi2002"]["parameters"]] == ["turbidity", "shafts", "n_planes"]
 
 
 @pytest.mark.parametrize("host", ["0.0.0.0", "::", "192.168.1.10", "example.com", ""])

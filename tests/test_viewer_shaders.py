@@ -138,3 +138,35 @@ def test_shader_matches_cpu(browser_page, model, elevation, params):  # noqa: F8
     assert value >= PSNR_FLOOR_DB, (f"{model} sun {elevation:g} deg {params}: PSNR "
                                     f"{value:.1f} dB < {PSNR_FLOOR_DB} dB")
     assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]
+
+
+@pytest.mark.parametrize("elevation", [60.0, 20.0, 5.0])
+def test_hillaire2020_aerial_perspective_volume(browser_page, elevation):  # noqa: F811
+    """The per-frame aerial-perspective volume ([Hil20] 5.4, 32^3 froxels built by the GPU)
+    looked up at a few distances over the whole sphere, against the CPU model's
+    ``aerial_perspective(directions, distance_m, wavelengths_nm)``: in-scattered light and
+    transmittance (as the XYZ of sunlight seen through it)."""
+    import skydome
+    from skydome.render.projections import Equirect
+    from skydome.spectra import default_wavelengths, solar_irradiance, spectrum_to_xyz
+
+    page, messages = browser_page
+    sky = skydome.model("hillaire2020", sun=skydome.Sun(elevation_deg=elevation,
+                                                        azimuth_deg=SUN_AZIMUTH_DEG))
+    d, _ = Equirect(W, W // 2).directions()
+    wl = default_wavelengths()
+    values = {"sun_elevation": elevation, "sun_azimuth": SUN_AZIMUTH_DEG}
+    for dist in (1000.0, 10000.0, 60000.0):
+        T, L = sky.aerial_perspective(d, dist, wl)
+        ref = {1: spectrum_to_xyz(L, wl),
+               2: spectrum_to_xyz(T * solar_irradiance(wl) * sky.sun.irradiance_scale, wl)}
+        for output, name in ((1, "in-scattering"), (2, "transmittance")):
+            flat = page.evaluate("([m, v, w, h, o, s]) => window.skydomeViewer.renderFloat(m, v, w, h, 3, "
+                                 "{output: o, distance: s})", ["hillaire2020", values, W, W // 2, output, dist])
+            gpu = np.asarray(flat, dtype=np.float64).reshape(W // 2, W, 3)
+            assert np.max(ref[output]) > 0.0
+            value = psnr_db(gpu, ref[output])
+            print(f"PSNR hillaire2020 aerial perspective {name}, {dist / 1000:g} km, sun {elevation:g} deg: "
+                  f"{value:.1f} dB")
+            assert value >= PSNR_FLOOR_DB
+    assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]

@@ -224,33 +224,13 @@ def _check_azimuth(option: str, value) -> float:
 
 # -- helpers --------------------------------------------------------------------------------
 def _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method):
-    from skydome.sun import Sun
+    from skydome.sun import sun_from_options
 
-    from skydome._validate import check_number
-
-    if sun_elevation is not None:
-        check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg")
-    if sun_azimuth is not None:
-        _check_azimuth("sun_azimuth", sun_azimuth)
-    if lat is not None:
-        check_number("lat", lat, -90.0, 90.0, "deg")
-    if lon is not None:
-        check_number("lon", lon, -180.0, 180.0, "deg")
-    by_angles = sun_elevation is not None or sun_azimuth is not None
-    by_place = any(v is not None for v in (lat, lon, time))
-    if by_angles and by_place:
-        raise UserError("give either --sun-elevation/--sun-azimuth or --lat/--lon/--time, not both")
-    if by_place:
-        missing = [n for n, v in (("--lat", lat), ("--lon", lon), ("--time", time)) if v is None]
-        if missing:
-            raise UserError(f"{', '.join(missing)} missing: --lat, --lon and --time go together")
-        from skydome._validate import check_choice
-        from skydome.sun import parse_time
-
-        check_choice("sun_method", sun_method, ("spa", "preetham1999"))
-        return Sun.from_location(lat, lon, parse_time(time, "time"), method=sun_method)
-    return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
-               azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
+    try:
+        return sun_from_options(sun_elevation, sun_azimuth, lat, lon, time, sun_method,
+                                option_prefix="--")
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
 
 
 def _parse_model_params(cls, extra: list[str]) -> dict[str, Any]:

@@ -43,6 +43,7 @@ __all__ = [
     "SOLAR_POSITION_METHODS",
     "SOLAR_CONSTANT_W_M2",
     "eccentricity_correction_spencer1971",
+    "sun_from_options",
 ]
 
 #: Solar position algorithms understood by :func:`solar_position`.
@@ -487,3 +488,39 @@ class Sun:
     def extraterrestrial_irradiance(self) -> float:
         """Total solar irradiance at the top of the atmosphere [W/m^2]: 1361.1 / d^2."""
         return SOLAR_CONSTANT_W_M2 * self.irradiance_scale
+
+
+def sun_from_options(sun_elevation=None, sun_azimuth=None, lat=None, lon=None, time=None,
+                     method: str = "spa", *, option_prefix: str = "") -> "Sun":
+    """The :class:`Sun` of a command line or an API request: by angles [deg] or by place
+    and ISO 8601 time, not both (default: 30 deg high in the south).
+
+    Every value is checked before any work, with a message naming it as
+    ``option_prefix + name`` (``"--"`` on the command line, where the names are
+    ``--sun-elevation`` ...; ``""`` in the viewer's API). Raises ValueError.
+    """
+    def name(key: str) -> str:
+        return option_prefix + (key.replace("_", "-") if option_prefix else key)
+
+    if sun_elevation is not None:
+        check_number("sun_elevation", sun_elevation, -90.0, 90.0, "deg")
+    if sun_azimuth is not None:
+        check_number("sun_azimuth", sun_azimuth, -360.0, 360.0, "deg")
+    if lat is not None:
+        check_number("lat", lat, -90.0, 90.0, "deg")
+    if lon is not None:
+        check_number("lon", lon, -180.0, 180.0, "deg")
+    by_angles = sun_elevation is not None or sun_azimuth is not None
+    by_place = any(v is not None for v in (lat, lon, time))
+    if by_angles and by_place:
+        raise ValueError(f"give either {name('sun_elevation')}/{name('sun_azimuth')} or "
+                         f"{name('lat')}/{name('lon')}/{name('time')}, not both")
+    if by_place:
+        missing = [name(n) for n, v in (("lat", lat), ("lon", lon), ("time", time)) if v is None]
+        if missing:
+            raise ValueError(f"{', '.join(missing)} missing: {name('lat')}, {name('lon')} and "
+                             f"{name('time')} go together")
+        check_choice("sun_method", method, SOLAR_POSITION_METHODS)
+        return Sun.from_location(lat, lon, parse_time(time, "time"), method=method)
+    return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
+               azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)

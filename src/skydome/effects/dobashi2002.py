@@ -55,7 +55,7 @@ from skydome._validate import as_wavelengths, check_choice, check_int, check_num
 from skydome.camera import Camera
 
 __all__ = ["Camera", "Heightmap", "ScatteringTables", "apply_aerial_perspective",
-           "synthetic_mountains", "build_tables", "inscatter_direct", "shadow_volume_top",
+           "synthetic_mountains", "build_tables", "reference_sunlight", "terrain_lambert", "inscatter_direct", "shadow_volume_top",
            "DEFAULT_CAMERA"]
 
 
@@ -299,6 +299,7 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
                              shafts: bool = False, heightmap: Heightmap | None = None,
                              wavelengths_nm=None, white_luminance_cd_m2: float | None = None,
                              n_planes: int = 48, n_distance: int = 64, n_angle: int = 64,
+                             extent_m: float | None = None, mu_range=None,
                              return_parts: bool = False):
     """Add aerial perspective (and optionally light shafts) to an image with depth [DYN02].
 
@@ -332,6 +333,12 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
         Sampling planes for the shadow test.
     n_distance, n_angle : int
         Table size.
+    extent_m : float, optional
+        Distance [m] that the tables cover and depth of the last sampling plane (default:
+        the farthest surface of the image); every finite depth must be within it. A fixed
+        extent makes the tables independent of the image (the viewer's shader uses that).
+    mu_range : (float, float), optional
+        Range of view zenith cosines of the tables (default: that of the surface pixels).
     return_parts : bool
         Also return (transmittance, in-scattered light) in the output's units.
 
@@ -378,6 +385,15 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
     if shafts and not isinstance(heightmap, Heightmap):
         raise ValueError("shafts=True needs a heightmap (skydome.effects.dobashi2002.Heightmap)")
     n_planes = check_int("n_planes", n_planes, 1, 4096)
+    if extent_m is not None:
+        extent_m = check_number("extent_m", extent_m, 0.0, 1e7, "m", low_open=True)
+        far = float(depth[np.isfinite(depth)].max(initial=0.0))
+        if far > extent_m:
+            raise ValueError(f"depth_m reaches {far:g} m, beyond extent_m = {extent_m:g} m")
+    if mu_range is not None:
+        lo, hi = (check_number("mu_range", float(v), -1.0, 1.0) for v in mu_range)
+        if not lo < hi:
+            raise ValueError(f"mu_range = {tuple(mu_range)} must be increasing within [-1, 1]")
 
     dirs = cam.ray_directions(W, H)
     mu = dirs[..., 2]
@@ -385,10 +401,14 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
     out_T = np.ones((H, W, wl.size))
     out_L = np.zeros((H, W, wl.size))
     if np.any(finite & (depth > 0)):
-        tmax = float(depth[finite].max())
+        tmax = float(depth[finite].max()) if extent_m is None else extent_m
         mus = mu[finite]
-        tables = build_tables(atmosphere, wl, sun, cam.altitude_m, tmax, (mus.min(), mus.max()),
-                              n_distance, n_angle if mus.max() > mus.min() else 1)
+        if mu_range is None:
+            tables = build_tables(atmosphere, wl, sun, cam.altitude_m, tmax, (mus.min(), mus.max()),
+                                  n_distance, n_angle if mus.max() > mus.min() else 1)
+        else:
+            tables = build_tables(atmosphere, wl, sun, cam.altitude_m, tmax, mu_range, n_distance,
+                                  n_angle)
         t_pix = np.where(finite, depth, 0.0)
         cos_theta = dirs @ sun.direction
         phase = _phases(atmosphere, wl, cos_theta)                                        # (H,W,nc,nl)
@@ -399,7 +419,7 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
             J = tables.inscatter_integrals(t_pix, mu)                                     # eq. (2)
         else:
             J = _shadowed_integrals(tables, heightmap, cam, sun, dirs, t_pix, n_planes,
-                                    atmosphere.planet_radius_m)                     # eq. (4)
+                                    atmosphere.planet_radius_m, extent_m)                     # eq. (4)
         out_L = tables.e_sun * np.einsum("hwcl,hwcl->hwl", weight, J)                    # eq. (1)
         out_T = np.where(finite[..., None], out_T, 1.0)
         out_L = np.where(finite[..., None], out_L, 0.0)
@@ -407,11 +427,9 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
         out = img * out_T + out_L
         return (out, out_T, out_L) if return_parts else out
     # RGB: in-scattered light to linear sRGB; transmittance per channel for sunlit surfaces
-    from skydome.spectra import solar_irradiance, spectrum_to_xyz, xyz_to_linear_srgb
+    from skydome.spectra import spectrum_to_xyz, xyz_to_linear_srgb
 
-    e_sun = solar_irradiance(wl) * sun.irradiance_scale
-    direct = e_sun * _sun_transmittance(atmosphere, np.array(cam.altitude_m), float(sun.direction[2]), wl)
-    ref = direct if spectrum_to_xyz(direct, wl)[1] > 1e-9 * spectrum_to_xyz(e_sun, wl)[1] else e_sun
+    ref = reference_sunlight(atmosphere, sun, cam.altitude_m, wl)
     ref_rgb = np.maximum(xyz_to_linear_srgb(spectrum_to_xyz(ref / np.pi, wl)), 1e-30)
     if white_luminance_cd_m2 is None:
         # white-balanced to the sunlight: (1, 1, 1) = a white Lambertian surface facing the sun
@@ -429,15 +447,27 @@ def apply_aerial_perspective(image, depth_m, camera, sun, atmosphere=None, metho
     return (out, T_rgb, L_rgb) if return_parts else out
 
 
-def _shadowed_integrals(tables, heightmap, cam, sun, dirs, t_pix, n_planes, planet_radius_m):
+def reference_sunlight(atmosphere, sun, altitude_m: float, wl) -> np.ndarray:
+    """Spectral irradiance [W m^-2 nm^-1] of the direct sunlight at the camera, the white of
+    the white-balanced RGB images (the unattenuated sun when it is (nearly) set)."""
+    from skydome.spectra import solar_irradiance, spectrum_to_xyz
+
+    e_sun = solar_irradiance(wl) * sun.irradiance_scale
+    direct = e_sun * _sun_transmittance(atmosphere, np.array(float(altitude_m)), float(sun.direction[2]), wl)
+    return direct if spectrum_to_xyz(direct, wl)[1] > 1e-9 * spectrum_to_xyz(e_sun, wl)[1] else e_sun
+
+
+def _shadowed_integrals(tables, heightmap, cam, sun, dirs, t_pix, n_planes, planet_radius_m,
+                        extent_m=None):
     """Eq. (4): slab-by-slab table differences weighted by the sun's visibility at the
     middle of each slab; slabs are cut by planes perpendicular to the view axis at
-    z_k = z_max (k / n)^2 (denser near the eye, where a shadow covers more pixels)."""
+    z_k = z_max (k / n)^2 (denser near the eye, where a shadow covers more pixels), z_max
+    the farthest surface's depth along the view axis, or ``extent_m``."""
     forward, _, _ = cam.basis()
     mu = dirs[..., 2]
     cosf = np.maximum(dirs @ forward, 1e-6)
     z_pix = t_pix * cosf
-    zmax = float(z_pix.max())
+    zmax = float(z_pix.max()) if extent_m is None else float(extent_m)
     top = shadow_volume_top(heightmap, sun.direction)
     J_prev = np.zeros(t_pix.shape + tables.J.shape[2:])
     total = np.zeros_like(J_prev)
@@ -478,6 +508,23 @@ def _ridge_noise(rng, x, octaves=6, base_wavelength_m=8000.0):
         total += amp
         amp *= 0.5
     return v / total
+
+
+#: Mean grey-green albedo of the synthetic terrain (linear sRGB) and its constant sky fill
+TERRAIN_ALBEDO = np.array([0.16, 0.19, 0.12])
+TERRAIN_FILL = 0.15
+#: How far the synthetic scene's rays are marched (x its farthest ridge) and in how many steps
+MARCH_RANGE, MARCH_STEPS = 1.3, 1500
+
+
+def terrain_lambert(heightmap: Heightmap, sun_direction) -> np.ndarray:
+    """cos(incidence) of the sun on the heightmap grid (>= 0): normals from the height
+    gradient (central differences)."""
+    H = heightmap.heights_m
+    gy, gx = np.gradient(H, heightmap.y_m[1] - heightmap.y_m[0], heightmap.x_m[1] - heightmap.x_m[0])
+    n = np.stack([-gx, -gy, np.ones_like(H)], axis=-1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.clip(n @ np.asarray(sun_direction, dtype=np.float64), 0.0, None)
 
 
 DEFAULT_CAMERA = Camera(fov_deg=60.0, azimuth_deg=0.0, elevation_deg=2.0, altitude_m=300.0)
@@ -522,7 +569,7 @@ def synthetic_mountains(width: int = 320, height: int = 180, seed: int = 0, came
     f, right, _ = cam.basis()
     fh = np.array([f[0], f[1], 0.0]) / np.hypot(f[0], f[1])
     rh = np.array([right[0], right[1], 0.0])
-    far = 1000.0 * max(ranges_km) * 1.3
+    far = 1000.0 * max(ranges_km) * MARCH_RANGE
     half = far * np.tan(np.radians(min(cam.fov_deg, 150.0)) / 2.0) * 1.3 + 2000.0
     step = 200.0
     # grid covering the view's footprint
@@ -546,7 +593,7 @@ def synthetic_mountains(width: int = 320, height: int = 180, seed: int = 0, came
     # render: march each ray over the heightmap
     dirs = cam.ray_directions(width, height)
     mu = dirs[..., 2]
-    n_steps = 1500
+    n_steps = MARCH_STEPS
     ts = far * (np.arange(1, n_steps + 1) / n_steps) ** 1.5
     depth = np.full((height, width), np.inf)
     hit_prev = np.zeros((height, width), dtype=bool)
@@ -570,10 +617,7 @@ def synthetic_mountains(width: int = 320, height: int = 180, seed: int = 0, came
             hit_prev |= hit
         t_prev = np.where(hit_prev, t_prev, t)
     # shading: normals from the heightmap gradient, Lambert with the sun, a little sky fill
-    gy, gx = np.gradient(Hm, step)
-    n = np.stack([-gx, -gy, np.ones_like(Hm)], axis=-1)
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    lambert = np.clip(n @ sun.direction, 0.0, None)
+    lambert = terrain_lambert(hm, sun.direction)
     top = shadow_volume_top(hm, sun.direction)
     finite = np.isfinite(depth)
     t_hit = np.where(finite, depth, 0.0)
@@ -581,7 +625,7 @@ def synthetic_mountains(width: int = 320, height: int = 180, seed: int = 0, came
     py = cam.north_m + t_hit * dirs[..., 1]
     shade = hm.sample(lambert, px, py)
     lit = hm.height(px, py) + 1.0 >= hm.sample(top, px, py, outside=-np.inf)
-    albedo = np.array([0.16, 0.19, 0.12]) * (0.85 + 0.3 * rng.random((height, width, 1)))
-    img = albedo * (np.where(lit, shade, 0.0)[..., None] + 0.15)
+    albedo = TERRAIN_ALBEDO * (0.85 + 0.3 * rng.random((height, width, 1)))
+    img = albedo * (np.where(lit, shade, 0.0)[..., None] + TERRAIN_FILL)
     img = np.where(finite[..., None], img, 0.0)
     return img, depth, hm

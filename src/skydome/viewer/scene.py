@@ -14,11 +14,17 @@ Nothing physical is computed in the page that is not also computed here or in th
   the map :meth:`SkyModel.xyz` applies).
 * ``oneil2005``: 1 / lambda^4 and the solar irradiance per wavelength, the chapter's
   constants ([ONe05] 16.2-16.5) and the same CIE weights.
+* ``dobashi2002``: the synthetic mountain scene's heightmap with its shadow-volume top and
+  Lambert term on the grid, and the [DYN02] tables J_c, D_c of
+  :func:`skydome.effects.dobashi2002.build_tables` reduced to XYZ per constituent (the
+  phase functions do not depend on the wavelength, so the reduction is exact), for the
+  effect's fixed extent (the scene's march range) and every view cosine.
 
 References
 ----------
 [PSS99] Preetham, Shirley & Smits, SIGGRAPH 99. [HP02] Hoffman & Preetham, GDC 2002.
-[ONe05] O'Neil, GPU Gems 2, ch. 16.
+[ONe05] O'Neil, GPU Gems 2, ch. 16. [DYN02] Dobashi, Yamamoto & Nishita, Graphics
+Hardware 2002.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ VIEWER_MODELS: dict[str, tuple[str, ...]] = {
     "oneil2005": ("kr", "km", "g", "scale_depth", "outer_ratio", "samples"),
     "hillaire2020": ("turbidity", "observer_altitude_m"),
     "precomputed": ("turbidity", "observer_altitude_m"),
+    "dobashi2002": ("turbidity", "shafts", "n_planes"),
 }
 
 #: Table sizes of the viewer's precomputed model: smaller than the model's defaults so that
@@ -59,21 +66,73 @@ def _number(key: str, text: str, kind: str = "float"):
         raise ValueError(f"{key} = {text!r} is not a valid {kind}") from None
 
 
+class Dobashi2002View:
+    """The viewer's dobashi2002 scene: the aerial perspective and light shafts of
+    :mod:`skydome.effects.dobashi2002` over :func:`synthetic_mountains` (seed 0, camera
+    ``DEFAULT_CAMERA``'s position; the page turns the view). Not a sky model: the sky
+    behind the terrain is not rendered."""
+
+    name = "dobashi2002"
+    reference = "Dobashi, Yamamoto & Nishita 2002"
+    summary = ("light shafts and aerial perspective over a synthetic mountain scene: sampling "
+               "planes, 2D look-up tables, shadow volume from a heightmap")
+    #: table sizes: distance nodes over the scene's march range, view cosines over [-1, 1]
+    N_DISTANCE, N_ANGLE, N_WAVELENGTHS = 64, 256, 21
+
+    @staticmethod
+    def _parameters():
+        from skydome.models import Parameter
+
+        return (Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity of the air"),
+                Parameter("shafts", "", True, doc="shadow test at the sampling planes (light shafts)",
+                          kind="bool"),
+                Parameter("n_planes", "", 48, 1, 128, "sampling planes", kind="int"))
+
+    parameters = property(lambda self: self._parameters())
+
+    def __init__(self, sun, turbidity=2.5, shafts=True, n_planes=48):
+        pars = {p.name: p for p in self._parameters()}
+        self.sun = sun
+        self.turbidity = pars["turbidity"].validate(turbidity)
+        self.shafts = pars["shafts"].validate(shafts)
+        self.n_planes = pars["n_planes"].validate(n_planes)
+
+    def describe(self) -> dict:
+        return {"model": self.name, "turbidity": self.turbidity, "shafts": self.shafts,
+                "n_planes": self.n_planes, "sun_elevation_deg": self.sun.elevation_deg,
+                "sun_azimuth_deg": self.sun.azimuth_deg}
+
+
+def viewer_class(name: str):
+    """The class whose ``parameters`` the page shows for model ``name``."""
+    if name == "dobashi2002":
+        return Dobashi2002View
+    from skydome.models import get_model_class
+
+    return get_model_class(name)
+
+
+def _bool(key: str, text: str) -> bool:
+    words = {"true": True, "1": True, "yes": True, "false": False, "0": False, "no": False}
+    if text.lower() not in words:
+        raise ValueError(f"{key} = {text!r} is not a boolean: give true, false, yes, no, 1 or 0")
+    return words[text.lower()]
+
+
 def parse_request(query: Mapping[str, str]) -> tuple[str, dict[str, Any], dict[str, Any]]:
     """Split a request's query into (model name, sun keywords, model keywords).
 
     Every value arrives as text; numbers are converted with a message naming the key.
     Unknown keys raise ValueError naming the valid ones.
     """
-    from skydome.models import get_model_class
-
     model = query.get("model")
     if model is None:
         raise ValueError(f"model is missing; valid: {', '.join(VIEWER_MODELS)}")
     if model not in VIEWER_MODELS:
         raise ValueError(f"model = {model!r} is not one of {', '.join(VIEWER_MODELS)}")
-    cls = get_model_class(model)
-    pars = {p.name: p for p in cls.parameters if p.name in VIEWER_MODELS[model]}
+    cls = viewer_class(model)
+    params_of = cls._parameters() if model == "dobashi2002" else cls.parameters
+    pars = {p.name: p for p in params_of if p.name in VIEWER_MODELS[model]}
     sun: dict[str, Any] = {}
     params: dict[str, Any] = {}
     for key, text in query.items():
@@ -85,6 +144,8 @@ def parse_request(query: Mapping[str, str]) -> tuple[str, dict[str, Any], dict[s
             p = pars[key]
             if p.kind == "choice":
                 params[key] = text
+            elif p.kind == "bool":
+                params[key] = _bool(key, text)
             else:
                 params[key] = _number(key, text, p.kind)
         else:
@@ -93,32 +154,17 @@ def parse_request(query: Mapping[str, str]) -> tuple[str, dict[str, Any], dict[s
     return model, sun, params
 
 
-def make_sun(sun_elevation=None, sun_azimuth=None, lat=None, lon=None, time=None):
-    """A :class:`skydome.Sun` from angles [deg] or from place and time (ISO 8601 with an
-    offset), with the CLI's rules: one way or the other, not both (default 30 deg high in
-    the south)."""
-    from skydome.sun import Sun
-
-    by_angles = sun_elevation is not None or sun_azimuth is not None
-    by_place = any(v is not None for v in (lat, lon, time))
-    if by_angles and by_place:
-        raise ValueError("give either sun_elevation/sun_azimuth or lat/lon/time, not both")
-    if by_place:
-        missing = [n for n, v in (("lat", lat), ("lon", lon), ("time", time)) if v is None]
-        if missing:
-            raise ValueError(f"{', '.join(missing)} missing: lat, lon and time go together")
-        return Sun.from_location(lat, lon, time)
-    return Sun(elevation_deg=30.0 if sun_elevation is None else sun_elevation,
-               azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
-
-
 def build_model(model: str, sun_kw: Mapping[str, Any], params: Mapping[str, Any]):
     """The skydome model the page renders (its constructor validates the parameters)."""
     import skydome
 
-    sun = make_sun(**sun_kw)
+    from skydome.sun import sun_from_options
+
+    sun = sun_from_options(**sun_kw)
     if model == "precomputed":
         return _precomputed_model(sun, dict(params))
+    if model == "dobashi2002":
+        return Dobashi2002View(sun, **params)
     if model == "oneil2005" and params.get("samples", 2) > ONEIL_MAX_SAMPLES:
         raise ValueError(f"samples = {params['samples']} is out of range [1, "
                          f"{ONEIL_MAX_SAMPLES}] in the viewer")
@@ -255,11 +301,14 @@ def _layers(tab: np.ndarray, n4: int) -> np.ndarray:
     return out.reshape(ny, nx, n4, 4).transpose(2, 0, 1, 3)
 
 
-def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray) -> np.ndarray:
+def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray,
+                      lam4: bool = True) -> np.ndarray:
     """(n_grid, 3): XYZ = sum_g K_g L_g for radiance per unit irradiance L on the table
     grid, the linear map of Hillaire2020Sky.radiance (values on the grid taken to ``wl``
     linearly in L lambda^4, times the solar spectrum) followed by SkyModel.xyz's CIE
-    weights."""
+    weights. With ``lam4`` False, linear in the value itself: the map of
+    Hillaire2020Sky.aerial_perspective's transmittance (np.interp), times the solar
+    spectrum (the XYZ of sunlight seen through the air)."""
     if grid.shape == wl.shape and np.array_equal(grid, wl):
         M = np.eye(wl.size)
     else:
@@ -267,8 +316,9 @@ def _hillaire_weights(grid: np.ndarray, wl: np.ndarray, solar: np.ndarray) -> np
         a = (wl - grid[idx]) / (grid[idx + 1] - grid[idx])
         M = np.zeros((wl.size, grid.size))
         rows = np.arange(wl.size)
-        M[rows, idx] += (1.0 - a) * grid[idx] ** 4 / wl ** 4
-        M[rows, idx + 1] += a * grid[idx + 1] ** 4 / wl ** 4
+        p = 4.0 if lam4 else 0.0
+        M[rows, idx] += (1.0 - a) * grid[idx] ** p / wl ** p
+        M[rows, idx + 1] += a * grid[idx + 1] ** p / wl ** p
     return (M * solar[:, None]).T @ _xyz_weights(wl)
 
 
@@ -316,15 +366,84 @@ def _hillaire(sky) -> dict[str, Any]:
     out = dict(_HILLAIRE_CACHE[key])
     grid = np.asarray(out["grid_nm"])
     K = np.zeros((4 * out["ng"], 3))
-    K[:grid.size] = _hillaire_weights(grid, wl, solar_irradiance(wl) * sky.sun.irradiance_scale)
-    out.update({"K": K.tolist(), "h0": sky.observer_altitude_m,
+    KT = np.zeros((4 * out["ng"], 3))
+    solar = solar_irradiance(wl) * sky.sun.irradiance_scale
+    K[:grid.size] = _hillaire_weights(grid, wl, solar)
+    KT[:grid.size] = _hillaire_weights(grid, wl, solar, lam4=False)
+    out.update({"K": K.tolist(), "KT": KT.tolist(), "sun_xyz": KT.sum(axis=0).tolist(), "h0": sky.observer_altitude_m,
+                "ap_size": sky.ap_size, "ap_km_per_slice": sky.ap_km_per_slice,
+                "ap_samples": sky.ap_samples,
                 "sv_size": [sky.skyview_width, sky.skyview_height], "n_steps": sky.view_samples,
                 "use_ms": 1 if sky.multiple_scattering else 0})
     return out
 
 
+_DOBASHI_CACHE: dict = {}
+
+
+def _dobashi(view) -> dict[str, Any]:
+    """Heightmap, shadow volume and [DYN02] tables for the page's dobashi2002 shader."""
+    from skydome.atmosphere import Atmosphere
+    from skydome.constants import EARTH_RADIUS
+    from skydome.effects import dobashi2002 as dy
+    from skydome.spectra import _M_SRGB_TO_XYZ, _M_XYZ_TO_SRGB
+
+    sun = view.sun
+    key = (round(view.turbidity, 9), tuple(round(float(v), 12) for v in sun.direction))
+    if key not in _DOBASHI_CACHE:
+        cam = dy.DEFAULT_CAMERA
+        _, _, hm = dy.synthetic_mountains(8, 8, seed=0, camera=cam, sun=sun)
+        far = 1000.0 * 35.0 * dy.MARCH_RANGE        # synthetic_mountains' march range (ranges_km)
+        atm = Atmosphere.earth(turbidity=view.turbidity)
+        wl = np.linspace(380.0, 780.0, view.N_WAVELENGTHS)
+        tb = dy.build_tables(atm, wl, sun, cam.altitude_m, far, (-1.0, 1.0), view.N_DISTANCE,
+                             view.N_ANGLE)                                       # eqs. (2)-(3)
+        from skydome.transport._medium import medium_from_properties
+
+        med = medium_from_properties(atm.optical_properties(wl))
+        nc = int(med.phase_code.size)
+        if nc > 4:
+            raise ValueError(f"the atmosphere has {nc} constituents; the viewer takes at most 4")
+        pp = np.asarray(med.phase_param, dtype=np.float64).reshape(nc, -1)
+        if not np.allclose(pp, pp[:, :1]):
+            raise ValueError("the viewer's dobashi2002 shader needs phase functions that do not "
+                             "depend on the wavelength")
+        W = _xyz_weights(wl)                                                    # (nl, 3)
+        # J~_c = sum_l W_l E_sun,l beta_c,l J_c,l: eq. (1) per constituent, in XYZ
+        JX = np.einsum("dacl,cl,l,lk->cdak", tb.J, tb.scattering, tb.e_sun, W)
+        tex = np.concatenate([JX, np.transpose(tb.D, (2, 0, 1))[..., None]], axis=-1)   # (nc, nd, na, 4)
+        ref = dy.reference_sunlight(atm, sun, cam.altitude_m, wl)
+        top = dy.shadow_volume_top(hm, sun.direction)
+        grid = np.stack([hm.heights_m, np.minimum(top, 1e30), dy.terrain_lambert(hm, sun.direction),
+                         np.zeros_like(top)], axis=-1)
+        ext = np.zeros((4, wl.size))
+        ext[:nc] = tb.extinction
+        _DOBASHI_CACHE.clear()
+        _DOBASHI_CACHE[key] = {
+            "lut_key": f"dobashi2002/{key}", "nc": nc, "nl": int(wl.size),
+            "wavelengths_nm": wl.tolist(), "tables_b64": _b64(tex), "table_size": [tb.mu.size, tb.t_m.size],
+            "mu_range": [float(tb.mu[0]), float(tb.mu[-1])], "extent_m": far,
+            "grid_b64": _b64(grid), "grid_size": [hm.x_m.size, hm.y_m.size],
+            "grid_origin": [float(hm.x_m[0]), float(hm.y_m[0])],
+            "grid_step": [float(hm.x_m[1] - hm.x_m[0]), float(hm.y_m[1] - hm.y_m[0])],
+            "hmax": float(hm.heights_m.max()),
+            "eye": [cam.east_m, cam.north_m, cam.altitude_m],
+            "planet_radius_m": atm.planet_radius_m, "datum_radius_m": EARTH_RADIUS,
+            "march_steps": dy.MARCH_STEPS,
+            "phase_codes": [int(v) for v in med.phase_code] + [3] * (4 - nc),
+            "phase_params": [float(v) for v in pp[:, 0]] + [0.0] * (4 - nc),
+            "ext": ext.T.reshape(-1).tolist(),                                   # (nl, 4)
+            "t_weights": (W * (ref / np.pi)[:, None]).tolist(),                  # (nl, 3)
+            "albedo": dy.TERRAIN_ALBEDO.tolist(), "fill": dy.TERRAIN_FILL,
+            "srgb_to_xyz": np.asarray(_M_SRGB_TO_XYZ).T.reshape(-1).tolist(),   # column-major
+            "xyz_to_srgb": np.asarray(_M_XYZ_TO_SRGB).T.reshape(-1).tolist()}
+    out = dict(_DOBASHI_CACHE[key])
+    out.update({"shafts": 1 if view.shafts else 0, "n_planes": view.n_planes})
+    return out
+
+
 _BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil,
-             "hillaire2020": _hillaire, "precomputed": _precomputed}
+             "hillaire2020": _hillaire, "precomputed": _precomputed, "dobashi2002": _dobashi}
 
 
 def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:

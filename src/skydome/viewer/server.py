@@ -185,16 +185,16 @@ class ViewerServer(ThreadingHTTPServer):
 
     def models(self) -> dict:
         if self._models is None:
-            from skydome.models import get_model_class
-            from skydome.viewer.scene import VIEWER_MODELS
+            from skydome.viewer.scene import VIEWER_MODELS, Dobashi2002View, viewer_class
 
             out = {}
             for name, keys in VIEWER_MODELS.items():
-                cls = get_model_class(name)
+                cls = viewer_class(name)
+                params = cls._parameters() if cls is Dobashi2002View else cls.parameters
                 out[name] = {"reference": cls.reference, "summary": cls.summary, "parameters": [
                     {"name": p.name, "unit": p.unit, "default": p.default, "low": p.low,
                      "high": p.high, "kind": p.kind, "choices": list(p.choices), "doc": p.doc}
-                    for p in cls.parameters if p.name in keys]}
+                    for p in params if p.name in keys]}
             self._models = out
         return self._models
 

@@ -38,9 +38,10 @@ function paramControls(model) {
     label.textContent = `${p.name}${p.unit ? ` [${p.unit}]` : ""} `;
     label.title = p.doc;
     let input;
-    if (p.kind === "choice") {
+    if (p.kind === "choice" || p.kind === "bool") {
       input = document.createElement("select");
-      for (const c of p.choices) input.append(new Option(c, c, c === p.default, c === p.default));
+      const choices = p.kind === "bool" ? [true, false] : p.choices;
+      for (const c of choices) input.append(new Option(String(c), String(c), c === p.default, c === p.default));
     } else {
       input = document.createElement("input");
       input.type = "number";
@@ -73,7 +74,9 @@ function camera() {
 }
 
 function display() {
-  return { mode: +$("mode").value, white: Math.max(+$("white").value, 1e-6),
+  // render.display.ev100_to_exposure: k = 1 / (1.2 x 2^EV100) [LdR14]
+  const ev = Math.min(30, Math.max(-20, +$("ev100").value));
+  return { mode: +$("mode").value, ev100: ev, k: 1 / (1.2 * 2 ** ev), transform: +$("transform").value,
            logLo: Math.log10(Math.max(+$("fc-lo").value, 1e-6)),
            logHi: Math.log10(Math.max(+$("fc-hi").value, 2e-6)) };
 }
@@ -104,7 +107,7 @@ async function draw() {
       await renderer.renderXYZ(views, camera(), w, h);
       renderer.sync();
       const ms1 = performance.now() - t0;
-      if ($("auto-exp").checked) autoWhite();
+      if ($("auto-exp").checked) autoExposure();
       await renderer.show(display());
       frameTimes.push(ms1);
       if (frameTimes.length > 20) frameTimes.shift();
@@ -150,12 +153,21 @@ function drawScale() {
   g.fillText("cd/m^2", w, 44);
 }
 
-function autoWhite() {
-  // white = 2x the mean luminance of the sky pixels (read back from the float target)
+// SkyImage.auto_exposure: k = 0.18 / (log-average luminance of the sky pixels above the
+// horizon, 0 < Y <= 1e5 cd/m^2, delta 1e-6) [Rei02] eq. 1; shown as its EV100
+// (render.display.exposure_to_ev100)
+function autoExposure() {
   const xyz = renderer.readXYZ();
-  let s = 0, n = 0;
-  for (let i = 0; i < xyz.length; i += 4) if (xyz[i + 3] > 0) { s += xyz[i + 1]; n += 1; }
-  if (n && s > 0) $("white").value = (2 * s / n).toPrecision(3);
+  let s = 0, n = 0, below = 0, nb = 0;
+  for (let i = 0; i < xyz.length; i += 4) {
+    const Y = xyz[i + 1];
+    if (!(Y > 0 && Y <= 1e5)) continue;
+    if (xyz[i + 3] === 1) { s += Math.log(1e-6 + Y); n += 1; } else if (xyz[i + 3] > 0) { below += Math.log(1e-6 + Y); nb += 1; }
+  }
+  if (!n) { s = below; n = nb; }        // no sky above the horizon in view: every rendered pixel
+  if (!n) return;
+  const k = 0.18 / Math.exp(s / n);
+  $("ev100").value = Math.log2(1 / (1.2 * k)).toFixed(2);
 }
 
 function saveView() {
@@ -223,9 +235,15 @@ function wireDrag() {
 // -- the test and benchmark interface ----------------------------------------------------
 // renderFloat(model, values, w, h, projection): XYZ per pixel, row 0 at the top, as a plain
 // array of w*h*3 numbers (Y in cd/m^2); projection 1 = skydome's equirect-hemisphere.
-async function renderFloat(model, values, w, h, projection = 1) {
-  const scene = await fetchScene(model, values);
-  await renderer.renderXYZ([{ scene, x0: 0, w }], cameraAxes(180, 15, 90, projection), w, h);
+// opts.camera: [view azimuth, elevation, field of view] of a camera view (projection 0);
+// opts.output: dobashi2002's quantity (0 the scene, 1 in-scattered light, 2 transmittance
+// as the XYZ of a white surface facing the sun, 3 the surface's distance [m] in X);
+// hillaire2020's aerial perspective to opts.distance [m] (1 in-scattered light, 2 the
+// XYZ of sunlight through the transmittance).
+async function renderFloat(model, values, w, h, projection = 1, opts = {}) {
+  const scene = await fetchScene(model, values), [az, el, fov] = opts.camera || [180, 15, 90];
+  await renderer.renderXYZ([{ scene, x0: 0, w, output: opts.output || 0, distance: opts.distance || 0 }],
+                          cameraAxes(az, el, fov, projection), w, h);
   const a = renderer.readXYZ(), out = new Array(w * h * 3);
   for (let i = 0, j = 0; i < a.length; i += 4, j += 3) { out[j] = a[i]; out[j + 1] = a[i + 1]; out[j + 2] = a[i + 2]; }
   return out;
@@ -252,6 +270,11 @@ function sample(points) {
 
 const idle = () => !busy && !pending;
 
+// displayColours(xyz, ev100, transform): the display pass on linear XYZ colours, 8-bit RGB
+async function displayColours(xyz, ev100, transform = 0) {
+  return renderer.displayColours(xyz, { mode: 0, k: 1 / (1.2 * 2 ** ev100), transform, logLo: 0, logHi: 1 });
+}
+
 async function main() {
   try {
     renderer = new SkyRenderer($("sky"));
@@ -259,7 +282,7 @@ async function main() {
     showError(e.message);
     return;
   }
-  window.skydomeViewer = { renderFloat, benchmark, sample, idle, ready: false };
+  window.skydomeViewer = { renderFloat, benchmark, sample, idle, displayColours, ready: false };
   try {
     models = await getJSON("/api/models");
   } catch (e) {
@@ -273,7 +296,7 @@ async function main() {
   paramControls($("model").value);
   $("model").addEventListener("change", () => { paramControls($("model").value); schedule(); });
   for (const id of ["model-b", "sun-el", "sun-az", "lat", "lon", "time", "projection", "view-az",
-                    "view-el", "fov", "mode", "white", "fc-lo", "fc-hi"])
+                    "view-el", "fov", "mode", "transform", "ev100", "fc-lo", "fc-hi"])
     $(id).addEventListener("input", schedule);
   for (const el of document.querySelectorAll("input[name=sunmode]")) el.addEventListener("change", schedule);
   $("auto-exp").addEventListener("change", schedule);

@@ -43,6 +43,11 @@ const SETTERS = {
 };
 SETTERS.hillaire2020 = (gl, u, s) => {
   gl.uniform1i(u("u_skyview"), 3);
+  gl.uniform1i(u("u_ap_l"), 9);
+  gl.uniform1i(u("u_ap_t"), 10);
+  gl.uniform1i(u("u_ap_size"), s.ap_size);
+  gl.uniform1f(u("u_ap_km_per_slice"), s.ap_km_per_slice);
+  gl.uniform3fv(u("u_sun_xyz"), s.sun_xyz);
   gl.uniform2i(u("u_sv_size"), ...s.sv_size);
   gl.uniform1f(u("u_R"), s.R);
   gl.uniform1f(u("u_h0"), s.h0);
@@ -59,8 +64,32 @@ SETTERS.precomputed = (gl, u, s) => {
   gl.uniform2f(u("u_pp"), ...s.pp);
 };
 
+SETTERS.dobashi2002 = (gl, u, s) => {
+  gl.uniform1i(u("u_tables"), 7);
+  gl.uniform1i(u("u_grid"), 8);
+  gl.uniform2i(u("u_table_size"), ...s.table_size);
+  gl.uniform2f(u("u_mu_range"), ...s.mu_range);
+  gl.uniform1f(u("u_extent"), s.extent_m);
+  gl.uniform2i(u("u_grid_size"), ...s.grid_size);
+  gl.uniform2f(u("u_grid_origin"), ...s.grid_origin);
+  gl.uniform2f(u("u_grid_step"), ...s.grid_step);
+  gl.uniform1f(u("u_hmax"), s.hmax);
+  gl.uniform3fv(u("u_eye"), s.eye);
+  gl.uniform1f(u("u_planet_radius"), s.planet_radius_m);
+  gl.uniform1f(u("u_datum_radius"), s.datum_radius_m);
+  for (const k of ["march_steps", "nc", "shafts", "n_planes"]) gl.uniform1i(u(`u_${k}`), s[k]);
+  gl.uniform4iv(u("u_phase_codes"), s.phase_codes);
+  gl.uniform4fv(u("u_phase_params"), s.phase_params);
+  gl.uniform4fv(u("u_ext"), s.ext);
+  gl.uniform3fv(u("u_tw"), s.t_weights.flat());
+  gl.uniform3fv(u("u_albedo"), s.albedo);
+  gl.uniform1f(u("u_fill"), s.fill);
+  gl.uniformMatrix3fv(u("u_srgb_to_xyz"), false, s.srgb_to_xyz);
+  gl.uniformMatrix3fv(u("u_xyz_to_srgb"), false, s.xyz_to_srgb);
+};
+
 // extra shader sources a model's program includes between common.glsl and its own
-const INCLUDES = { precomputed: ["transport"] };
+const INCLUDES = { precomputed: ["transport"], dobashi2002: ["transport"] };
 
 function f32FromBase64(b64) {
   const bin = atob(b64), bytes = new Uint8Array(bin.length);
@@ -94,6 +123,35 @@ const PREPASSES = {
       r.precomputed = { key: s.lut_key, tex };
     }
     r.precomputed.tex.forEach((t, k) => { gl.activeTexture(gl.TEXTURE4 + k); gl.bindTexture(gl.TEXTURE_3D, t); });
+    gl.activeTexture(gl.TEXTURE0);
+  },
+
+  // dobashi2002: upload the [DYN02] tables and the heightmap grid (once per turbidity and sun)
+  async dobashi2002(r, s) {
+    const gl = r.gl;
+    if (r.dobashi?.key !== s.lut_key) {
+      if (r.dobashi) { gl.deleteTexture(r.dobashi.tables); gl.deleteTexture(r.dobashi.grid); }
+      const nearest = (target) => {
+        for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(target, p, gl.NEAREST);
+      };
+      const tables = gl.createTexture();
+      gl.activeTexture(gl.TEXTURE7);
+      gl.bindTexture(gl.TEXTURE_2D_ARRAY, tables);
+      const [na, nd] = s.table_size;
+      gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA32F, na, nd, s.nc);
+      gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, 0, na, nd, s.nc, gl.RGBA, gl.FLOAT, f32FromBase64(s.tables_b64));
+      nearest(gl.TEXTURE_2D_ARRAY);
+      const grid = gl.createTexture();
+      gl.activeTexture(gl.TEXTURE8);
+      gl.bindTexture(gl.TEXTURE_2D, grid);
+      const [nx, ny] = s.grid_size;
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, nx, ny);
+      gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, nx, ny, gl.RGBA, gl.FLOAT, f32FromBase64(s.grid_b64));
+      nearest(gl.TEXTURE_2D);
+      r.dobashi = { key: s.lut_key, tables, grid };
+    }
+    gl.activeTexture(gl.TEXTURE7); gl.bindTexture(gl.TEXTURE_2D_ARRAY, r.dobashi.tables);
+    gl.activeTexture(gl.TEXTURE8); gl.bindTexture(gl.TEXTURE_2D, r.dobashi.grid);
     gl.activeTexture(gl.TEXTURE0);
   },
 
@@ -147,8 +205,45 @@ const PREPASSES = {
     gl.uniform3fv(u("u_K"), s.K.flat());
     gl.bindVertexArray(r.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
+    // the aerial-perspective volume ([Hil20] 5.4): n^3 froxels as an (n n) x n 2-D
+    // target pair (in-scattering, transmittance), the same march per froxel
+    const n = s.ap_size, apKey = `hillaire2020_ap/${s.ng}`;
+    if (!r.programs.has(apKey)) {
+      const text = `#version 300 es\n#define NG ${s.ng}\n#define AP_VOLUME 1\nprecision highp float;\nprecision highp int;\nconst float PI = 3.14159265358979;\n${await source("transport")}\n${await source("hillaire2020_lut")}`;
+      r.programs.set(apKey, r._link(text, "hillaire2020_ap"));
+    }
+    const ap = r._ensureAuxMRT("aerial", n * n, n);
+    const pa = r.programs.get(apKey);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, ap.fb);
+    gl.viewport(0, 0, n * n, n);
+    gl.useProgram(pa.program);
+    for (const [name, fn] of [["u_tlut", 1], ["u_mslut", 2]]) gl.uniform1i(pa.u(name), fn);
+    gl.uniform2i(pa.u("u_tlut_size"), ...s.tlut_size);
+    gl.uniform2i(pa.u("u_mslut_size"), ...s.mslut_size);
+    for (const k of ["R", "Rt", "h0", "ts"]) gl.uniform1f(pa.u(`u_${k}`), s[k]);
+    gl.uniform1f(pa.u("u_sz"), s.sun.direction[2]);
+    gl.uniform1i(pa.u("u_n_steps"), s.ap_samples);
+    gl.uniform1i(pa.u("u_use_ms"), s.use_ms);
+    gl.uniform1i(pa.u("u_nc"), s.nc);
+    gl.uniform4iv(pa.u("u_codes"), s.codes);
+    gl.uniform4fv(pa.u("u_p0"), s.p0);
+    gl.uniform4fv(pa.u("u_p1"), s.p1);
+    gl.uniform4iv(pa.u("u_phase_codes"), s.phase_codes);
+    gl.uniform4fv(pa.u("u_phase_params"), s.phase_params);
+    gl.uniform4fv(pa.u("u_beta_s"), s.beta_s);
+    gl.uniform4fv(pa.u("u_beta_e"), s.beta_e);
+    gl.uniform4fv(pa.u("u_albedo"), s.albedo);
+    gl.uniform3fv(pa.u("u_K"), s.K.flat());
+    gl.uniform3fv(pa.u("u_KT"), s.KT.flat());
+    gl.uniform1i(pa.u("u_ap_size"), n);
+    gl.uniform1f(pa.u("u_ap_km_per_slice"), s.ap_km_per_slice);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
     gl.activeTexture(gl.TEXTURE3);
     gl.bindTexture(gl.TEXTURE_2D, t.tex);
+    gl.activeTexture(gl.TEXTURE9);
+    gl.bindTexture(gl.TEXTURE_2D, ap.tex[0]);
+    gl.activeTexture(gl.TEXTURE10);
+    gl.bindTexture(gl.TEXTURE_2D, ap.tex[1]);
     gl.activeTexture(gl.TEXTURE0);
   },
 };
@@ -246,6 +341,28 @@ export class SkyRenderer {
     return (this.aux[name] = this._makeTarget(w, h));
   }
 
+  // two float targets drawn by one pass (gl.drawBuffers)
+  _ensureAuxMRT(name, w, h) {
+    this.aux = this.aux || {};
+    const t = this.aux[name], gl = this.gl;
+    if (t && t.w === w && t.h === h) return t;
+    const tex = [0, 1].map(() => {
+      const x = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, x);
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, w, h);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      return x;
+    });
+    const fb = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    tex.forEach((x, i) => gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + i, gl.TEXTURE_2D, x, 0));
+    gl.drawBuffers([gl.COLOR_ATTACHMENT0, gl.COLOR_ATTACHMENT1]);
+    const st = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
+    if (st !== gl.FRAMEBUFFER_COMPLETE) throw new Error(`float render targets incomplete (0x${st.toString(16)})`);
+    return (this.aux[name] = { tex, fb, w, h });
+  }
+
   // Draw the views into the float target. views: [{scene, x0, w}] side by side (split view);
   // camera: {projection, fwd, right, up, tanHalfFov}.
   async renderXYZ(views, camera, w, h) {
@@ -269,7 +386,9 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_up"), camera.up);
       gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
-      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed"].includes(v.scene.model) ? 1 : 0);
+      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002"].includes(v.scene.model) ? 1 : 0);
+      gl.uniform1i(u("u_output"), v.output || 0);
+      gl.uniform1f(u("u_ap_distance"), v.distance || 0);
       SETTERS[v.scene.model](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }
@@ -289,20 +408,42 @@ export class SkyRenderer {
   }
 
   // Show the float target on the canvas: mode 0 exposure + sRGB, 1 false colour.
-  async show(display) {
-    const gl = this.gl, { tex, w, h } = this.target, { program, u } = await this.displayProgram();
-    if (this.canvas.width !== w || this.canvas.height !== h) { this.canvas.width = w; this.canvas.height = h; }
-    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+  async show(display, source = this.target, fb = null) {
+    const gl = this.gl, { tex, w, h } = source, { program, u } = await this.displayProgram();
+    if (!fb && (this.canvas.width !== w || this.canvas.height !== h)) { this.canvas.width = w; this.canvas.height = h; }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
     gl.viewport(0, 0, w, h);
     gl.useProgram(program);
     gl.activeTexture(gl.TEXTURE0);
     gl.bindTexture(gl.TEXTURE_2D, tex);
     gl.uniform1i(u("u_xyz"), 0);
     gl.uniform1i(u("u_mode"), display.mode);
-    gl.uniform1f(u("u_white"), display.white);
+    gl.uniform1f(u("u_k"), display.k);
+    gl.uniform1i(u("u_transform"), display.transform);
     gl.uniform2f(u("u_log_range"), display.logLo, display.logHi);
     gl.bindVertexArray(this.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  // The display pass applied to a list of linear XYZ colours: [[r, g, b] 0..255, ...] as
+  // read back from an 8-bit target (for the test against render/display.py).
+  async displayColours(xyz, display) {
+    const gl = this.gl, n = xyz.length, src = this._ensureAux("colours", n, 1);
+    const data = new Float32Array(4 * n);
+    xyz.forEach((c, i) => data.set([c[0], c[1], c[2], 1], 4 * i));
+    gl.bindTexture(gl.TEXTURE_2D, src.tex);
+    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, n, 1, gl.RGBA, gl.FLOAT, data);
+    const tex = gl.createTexture(), fb = gl.createFramebuffer();
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8, n, 1);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+    await this.show(display, src, fb);
+    const px = new Uint8Array(4 * n);
+    gl.readPixels(0, 0, n, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    gl.deleteFramebuffer(fb);
+    gl.deleteTexture(tex);
+    return Array.from({ length: n }, (_, i) => [px[4 * i], px[4 * i + 1], px[4 * i + 2]]);
   }
 
   // Block until the GPU has finished (a one-pixel read), for frame timing.

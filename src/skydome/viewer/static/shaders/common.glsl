@@ -69,5 +69,6 @@ void main() {
            : u_projection == 3 ? equirect(px, size, PI)
            : u_projection == 2 ? fisheye(px, size) : pinhole(px, size);
     vec3 xyz = max(sky_xyz(d), vec3(0.0));
-    o_xyz = vec4(xyz, (g_masked || (d.z < 0.0 && u_shows_ground == 0)) ? 0.0 : 1.0);
+    // alpha: 1 sky above the horizon, 0.5 rendered below it, 0 not rendered
+    o_xyz = vec4(xyz, (g_masked || (d.z < 0.0 && u_shows_ground == 0)) ? 0.0 : d.z < 0.0 ? 0.5 : 1.0);
 }

@@ -32,7 +32,15 @@ uniform vec4 u_beta_e[4 * NG];
 uniform vec4 u_albedo[NG];
 uniform vec3 u_K[4 * NG];               // XYZ weight per table wavelength
 
+#ifdef AP_VOLUME
+layout(location = 0) out vec4 o_xyz;   // in-scattered radiance, XYZ
+layout(location = 1) out vec4 o_t;     // transmittance, XYZ of the sun's spectrum through it
+uniform vec3 u_KT[4 * NG];             // XYZ weight of the transmittance per table wavelength
+uniform int u_ap_size;                 // n_v = n_u = n_s
+uniform float u_ap_km_per_slice;
+#else
 out vec4 o_xyz;
+#endif
 
 float log1p_(float x) { return x < 1e-4 ? x * (1.0 - 0.5 * x) : log(1.0 + x); }
 float expm1_(float x) { return abs(x) < 1e-3 ? x * (1.0 + 0.5 * x * (1.0 + x / 3.0)) : exp(x) - 1.0; }
@@ -105,18 +113,13 @@ vec2 skyview_angles(int row, int col, int H, int W, float r0) {
     return vec2(cos(theta), 1.0 - 2.0 * x * x);
 }
 
-void main() {
-    int col = int(gl_FragCoord.x), row = int(gl_FragCoord.y);   // texel (row, col)
-    float r0 = u_R + u_h0;
-    vec2 ang = skyview_angles(row, col, u_sv_size.y, u_sv_size.x, r0);
-    float mu = ang.x, cphi = ang.y;
-    float sz = u_sz, sx = sqrt(max(1.0 - sz * sz, 0.0));
-    float st = sqrt(max(1.0 - mu * mu, 0.0));
-    float nu = st * cphi * sx + mu * sz;
+// march: [Hil20] eq. 1 with eq. 11's source along the ray (r0, mu, nu) to the top, the
+// ground (with the lit Lambertian ground when `ground`) or t_stop > 0; L, T per wavelength
+void march(float r0, float mu, float nu, float t_stop, bool ground, out vec4 L[NG], out vec4 T[NG]) {
+    float sz = u_sz;
     float phs[4];
     for (int c = 0; c < 4; ++c) phs[c] = c < u_nc ? phase_value(u_phase_codes[c], u_phase_params[c], nu) : 0.0;
 
-    vec4 L[NG], T[NG];
     for (int g = 0; g < NG; ++g) { L[g] = vec4(0.0); T[g] = vec4(1.0); }
 
     // ray_segment(r0, mu, R, Rt): the observer is inside the atmosphere (t0 = 0)
@@ -124,6 +127,7 @@ void main() {
     bool hits = ray_hits_ground(r0, u_h0, mu);
     if (hits) t1 = max(-r0 * mu - sqrt(max(r0 * r0 * mu * mu - rho2(u_h0), 0.0)), 0.0);
     else t1 = distance_to_top(r0, u_h0, mu);
+    if (t_stop > 0.0 && t_stop < t1) { t1 = max(t_stop, t0); hits = false; }
     float tmin = clamp(-r0 * mu, t0, t1);           // lowest point of the ray
     float q0 = rho2(u_h0);
     for (int piece = 0; piece < 2; ++piece) {
@@ -170,7 +174,7 @@ void main() {
             }
         }
     }
-    if (hits) {                                          // lit Lambertian ground
+    if (hits && ground) {                                // lit Lambertian ground
         float mu_g = (r0 * sz + t1 * nu) / u_R;
         if (mu_g > 0.0) {
             int ti, tj; float ta, tb;
@@ -179,8 +183,59 @@ void main() {
                 L[g] += u_albedo[g] / PI * bilerp(u_tlut, ti, tj, ta, tb, g) * mu_g * T[g];
         }
     }
+}
+
+vec3 to_xyz(vec4 L[NG]) {
     vec3 xyz = vec3(0.0);
     for (int g = 0; g < NG; ++g)
         for (int k = 0; k < 4; ++k) xyz += max(L[g][k], 0.0) * u_K[4 * g + k];
-    o_xyz = vec4(xyz, 1.0);
+    return xyz;
 }
+
+#ifndef AP_VOLUME
+// build_skyview: one texel per fragment
+void main() {
+    int col = int(gl_FragCoord.x), row = int(gl_FragCoord.y);   // texel (row, col)
+    float r0 = u_R + u_h0;
+    vec2 ang = skyview_angles(row, col, u_sv_size.y, u_sv_size.x, r0);
+    float mu = ang.x, cphi = ang.y;
+    float sz = u_sz, sx = sqrt(max(1.0 - sz * sz, 0.0));
+    float st = sqrt(max(1.0 - mu * mu, 0.0));
+    float nu = st * cphi * sx + mu * sz;
+    vec4 L[NG], T[NG];
+    march(r0, mu, nu, -1.0, true, L, T);
+    o_xyz = vec4(to_xyz(L), 1.0);
+}
+#else
+// ap_direction: direction of froxel column (row, col) in the frame where the sun's azimuth
+// is +x: elevation = 90 deg s|s|, s = 2 row/(n_v-1) - 1, cos(phi) = 1 - 2 x^2, x = col/(n_u-1)
+vec3 ap_direction(int row, int col, int n_v, int n_u) {
+    float s = 2.0 * float(row) / (float(n_v) - 1.0) - 1.0;
+    float elev = 0.5 * PI * s * abs(s);
+    float x = float(col) / (float(n_u) - 1.0);
+    float cphi = 1.0 - 2.0 * x * x;
+    float sphi = sqrt(max(1.0 - cphi * cphi, 0.0));
+    float ce = cos(elev);
+    return vec3(ce * cphi, ce * sphi, sin(elev));
+}
+
+// build_aerial_perspective ([Hil20] sec. 5.4): froxel (row, col, k) at texel
+// (col n_s + k, row); depth_k = km_per_slice n_s ((k + 0.5)/n_s)^2 km; no ground
+void main() {
+    int n = u_ap_size;
+    int x = int(gl_FragCoord.x), row = int(gl_FragCoord.y);
+    int col = x / n, k = x - col * n;
+    vec3 d = ap_direction(row, col, n, n);
+    float sz = u_sz, sx = sqrt(max(1.0 - sz * sz, 0.0));
+    float nu = d.x * sx + d.z * sz;
+    float f = (float(k) + 0.5) / float(n);
+    float depth = u_ap_km_per_slice * 1000.0 * float(n) * f * f;
+    vec4 L[NG], T[NG];
+    march(u_R + u_h0, d.z, nu, depth, false, L, T);
+    vec3 xt = vec3(0.0);
+    for (int g = 0; g < NG; ++g)
+        for (int c = 0; c < 4; ++c) xt += clamp(T[g][c], 0.0, 1.0) * u_KT[4 * g + c];
+    o_xyz = vec4(to_xyz(L), 1.0);
+    o_t = vec4(xt, 1.0);
+}
+#endif

@@ -1,0 +1,69 @@
+"""The page's display pass against skydome.render.display (what `skydome render` writes).
+
+A few linear colours (XYZ, cd/m^2) go through the page's display shader into an 8-bit
+target; the same colours through SkyImage.to_srgb's steps (linear sRGB x the EV100
+exposure k = 1 / (1.2 x 2^EV100), render.display.display_transform, spectra.srgb_encode)
+must give the same bytes within 1/255. The reference is the Python pipeline, independent
+of the GLSL code.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from _viewer import browser_page, viewer_url  # noqa: F401 - fixtures
+
+EV100 = 13.0
+# linear sRGB colours in units of the exposure's display white, then scaled to cd/m^2
+COLOURS_RGB = [
+    (0.0, 0.0, 0.0),            # black
+    (0.18, 0.18, 0.18),         # mid grey
+    (0.05, 0.12, 0.45),         # noon zenith blue
+    (1.0, 0.31, 0.05),          # orange-red horizon under a 2 deg sun (render/display.py)
+    (2.5, 0.9, 0.2),            # over-exposed orange (compressed, hue kept)
+    (12.0, 10.0, 8.0),          # path to white (4 < max < 64)
+    (200.0, 180.0, 150.0),      # the sun's disc: white
+    (-0.05, 0.3, 0.6),          # out of gamut (a negative component)
+    (0.002, 0.0025, 0.003),     # the linear part of the sRGB curve
+]
+
+
+def _reference(xyz, ev100, transform):
+    from skydome.render.display import display_transform, ev100_to_exposure
+    from skydome.spectra import srgb_encode, xyz_to_linear_srgb
+
+    rgb = xyz_to_linear_srgb(xyz) * ev100_to_exposure(ev100)
+    if transform != "hue-preserving":
+        rgb = np.maximum(rgb, 0.0)
+    return 255.0 * np.clip(srgb_encode(display_transform(rgb, transform)), 0.0, 1.0)
+
+
+@pytest.mark.parametrize("index,transform", [(0, "hue-preserving"), (1, "filmic"),
+                                             (2, "reinhard"), (3, "clamp")])
+def test_display_pass_matches_render_display(browser_page, index, transform):  # noqa: F811
+    from skydome.render.display import DISPLAY_TRANSFORMS, ev100_to_exposure
+    from skydome.spectra import linear_srgb_to_xyz
+
+    assert DISPLAY_TRANSFORMS.index(transform) == index       # the shader's numbering
+    page, messages = browser_page
+    xyz = linear_srgb_to_xyz(np.array(COLOURS_RGB)) / ev100_to_exposure(EV100)
+    gpu = np.asarray(page.evaluate("([c, ev, t]) => window.skydomeViewer.displayColours(c, ev, t)",
+                                   [xyz.tolist(), EV100, index]), dtype=np.float64)
+    want = _reference(xyz, EV100, transform)
+    assert np.max(np.abs(gpu - want)) <= 1.0, np.c_[gpu, want]
+    assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]
+
+
+def test_hue_preserving_keeps_the_sunset_orange(browser_page):  # noqa: F811
+    """The default transform on the page keeps an over-exposed sunset orange (R > G > B)
+    where filmic turns it towards yellow (G/R at least 0.1 higher)."""
+    from skydome.render.display import ev100_to_exposure
+    from skydome.spectra import linear_srgb_to_xyz
+
+    page, _ = browser_page
+    xyz = linear_srgb_to_xyz(np.array([[2.5, 0.9, 0.2]])) / ev100_to_exposure(EV100)
+    hp, fm = (np.asarray(page.evaluate("([c, ev, t]) => window.skydomeViewer.displayColours(c, ev, t)",
+                                       [xyz.tolist(), EV100, t]))[0] for t in (0, 1))
+    assert hp[0] > hp[1] > hp[2]
+    assert fm[1] / fm[0] > hp[1] / hp[0] + 0.1
