@@ -56,7 +56,20 @@ class ClosureResult:
         return self.model_w_m2 / self.measured_w_m2 - 1.0
 
 
-def _model(name, capture, atmosphere, wl, fast):
+def _label_sun(label: str, offset_min: float):
+    """The SPA sun at the middle of the scan window labelled ``label`` (EDT) + ``offset_min``."""
+    from datetime import datetime, timedelta
+
+    from skydome.sun import Sun
+    from skydome.validation import kider2014 as k
+
+    h, m, s = (int(x) for x in label.split(":"))
+    t = datetime(*k.DATE, h, m, s, tzinfo=k.EDT) + timedelta(minutes=offset_min,
+                                                              seconds=k.SCAN_DURATION_S / 2.0)
+    return Sun.from_location(k.SITE_LATITUDE_DEG, k.SITE_LONGITUDE_DEG, t)
+
+
+def _model(name, sun, atmosphere, wl, fast):
     import skydome as sd
 
     if name == "precomputed":
@@ -64,8 +77,8 @@ def _model(name, capture, atmosphere, wl, fast):
         if fast:
             kw.update(orders=4, scattering_mu_size=64, scattering_mu_s_size=32, scattering_nu_size=8,
                       sphere_samples=16)
-        return sd.model("precomputed", sun=capture.sun, atmosphere=atmosphere, **kw)
-    return sd.model("hillaire2020", sun=capture.sun, atmosphere=atmosphere, n_wavelengths=wl.size)
+        return sd.model("precomputed", sun=sun, atmosphere=atmosphere, **kw)
+    return sd.model("hillaire2020", sun=sun, atmosphere=atmosphere, n_wavelengths=wl.size)
 
 
 def _components(sky, wl):
@@ -98,7 +111,7 @@ def broadband_ghi(sky, band_nm=BAND_NM) -> tuple[float, float]:
 
 def closure(captures, model: str = "precomputed", *, precipitable_water_cm: float = 1.42,
             gas_reference_airmass: float = 1.5, fast: bool = False,
-            band_nm=BAND_NM) -> list[ClosureResult]:
+            band_nm=BAND_NM, pyranometer_clock_offset_min: float | None = None) -> list[ClosureResult]:
     """Model against pyranometer GHI for each capture that has a pyranometer record.
 
     Parameters
@@ -114,6 +127,10 @@ def closure(captures, model: str = "precomputed", *, precipitable_water_cm: floa
         precomputed at coarse table sizes (the tests' setting).
     band_nm : (float, float)
         Integration band [nm] within 300-4000.
+    pyranometer_clock_offset_min : float, optional
+        Offset [min] in [-120, 120] of the pyranometer's clock: the model's sun is then at
+        the scan window's mid time by the label plus this offset. None (default): the
+        capture's own sun (the scanner's clock correction).
     """
     from skydome.validation.aeronet import aerosol_atmosphere, egbert_20130527, nearest_retrieval
 
@@ -124,6 +141,9 @@ def closure(captures, model: str = "precomputed", *, precipitable_water_cm: floa
     hi = check_number("band_nm[1]", band_nm[1], 300.0, 4000.0, "nm")
     if hi <= lo:
         raise ValueError(f"band_nm = {tuple(band_nm)} must increase")
+    if pyranometer_clock_offset_min is not None:
+        off = check_number("pyranometer_clock_offset_min", pyranometer_clock_offset_min,
+                           -120.0, 120.0, "min")
     wl = closure_wavelengths((lo, hi))
     retrievals = egbert_20130527()
     atmospheres: dict = {}
@@ -135,8 +155,9 @@ def closure(captures, model: str = "precomputed", *, precipitable_water_cm: floa
         if r.time not in atmospheres:
             atmospheres[r.time] = aerosol_atmosphere(r, precipitable_water_cm=w,
                                                      gas_reference_airmass=m)
-        sky = _model(model, c, atmospheres[r.time], wl, fast)
+        sun = c.sun if pyranometer_clock_offset_min is None else _label_sun(c.label, off)
+        sky = _model(model, sun, atmospheres[r.time], wl, fast)
         direct, diffuse = broadband_ghi(sky, (lo, hi))
-        out.append(ClosureResult(c.label, model, float(c.sun.elevation_deg), float(c.ghi_w_m2),
+        out.append(ClosureResult(c.label, model, float(sun.elevation_deg), float(c.ghi_w_m2),
                                  direct + diffuse, direct, diffuse))
     return out
