@@ -87,7 +87,11 @@ def test_custom_reproduces_explicit_coefficients():
 
 
 def test_optical_properties_shapes():
+    # rayleigh, aerosol, ozone, water_vapour, mixed_gases
     op = Atmosphere.earth().optical_properties(np.linspace(380, 780, 16))
+    assert op.scattering.shape == (5, 16) and op.extinction.shape == (5, 16)
+    op = Atmosphere.earth(precipitable_water_cm=0, mixed_gases=False).optical_properties(
+        np.linspace(380, 780, 16))
     assert op.scattering.shape == (3, 16) and op.extinction.shape == (3, 16)
     assert np.all(op.extinction >= op.scattering)
     assert op.ground_albedo.shape == (16,)

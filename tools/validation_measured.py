@@ -59,7 +59,7 @@ def figures(results_dir: Path, fig_dir: Path) -> int:
     labels = list(dict.fromkeys(r.capture for r in results))
     caps = {c.label: c for c in load_captures(labels)}
     order = ["precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
-             "preetham1999", "perez1993", "cie2003"]
+             "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"]
     panels = []
     for lab in labels:
         lum, _ = measured_luminance(caps[lab])

@@ -285,14 +285,26 @@ class OpticalProperties(NamedTuple):
 
 # ---------------------------------------------------------------------------------------------
 def ozone_cross_section(wavelength_nm) -> np.ndarray:
-    """Ozone absorption cross section at 233 K [m^2] (Serdyuchenko et al. 2014, 10 nm bin
-    means from 360-830 nm, placed at the bin centres; linear interpolation; the end values
-    are held beyond the table -- below 365 nm this underestimates the Huggins band)."""
+    """Ozone absorption cross section [m^2].
+
+    From 365 nm: Serdyuchenko et al. 2014 at 233 K (10 nm bin means from 360-830 nm, placed
+    at the bin centres; linear interpolation; the 830 nm bin held beyond). The Huggins band
+    below: Bird & Riordan 1986's a_o (300-350 nm, :func:`skydome.atmosphere.gases.
+    ozone_cross_section_br86`), log-linear from their 350 nm value to the 365 nm bin, their
+    300 nm value held below 300 nm (an underestimate there: the Hartley band keeps rising)."""
+    from skydome.atmosphere.gases import ozone_cross_section_br86
     from skydome.data import load_table
     from skydome.spectra import resample
 
+    wl = np.asarray(wavelength_nm, dtype=np.float64)
     _, t = load_table("ozone_cross_section_233k")
-    return resample(wavelength_nm, t[:, 0] + 5.0, t[:, 1], "hold")
+    lo, hi = 350.0, t[0, 0] + 5.0
+    upper = resample(wl, t[:, 0] + 5.0, t[:, 1], "hold")
+    huggins = ozone_cross_section_br86(np.minimum(wl, lo))
+    s_lo, s_hi = float(ozone_cross_section_br86(lo)), float(t[0, 1])
+    f = np.clip((wl - lo) / (hi - lo), 0.0, 1.0)
+    bridge = np.exp((1.0 - f) * np.log(s_lo) + f * np.log(s_hi))
+    return np.where(wl >= hi, upper, np.where(wl <= lo, huggins, bridge))
 
 
 @dataclass(frozen=True, eq=False)
@@ -347,6 +359,9 @@ class Atmosphere:
               number_density_m3: float = N_S_SURVEY,
               depolarisation: float = 0.0,
               ozone_du: float = 300.0,
+              precipitable_water_cm: float = 1.42,
+              mixed_gases: bool = True,
+              gas_reference_airmass: float = 1.5,
               ground_albedo: Any = 0.1,
               planet_radius_m: float = EARTH_RADIUS,
               top_altitude_m: float = 100e3) -> "Atmosphere":
@@ -371,7 +386,19 @@ class Atmosphere:
             m^-3, no King correction (reproduces Table 1).
         ozone_du : float
             Total ozone column [DU] in [0, 1000] on a 10-25-40 km tent profile (Bruneton
-            2017); 0 disables ozone.
+            2017); 0 disables ozone. Cross sections: Serdyuchenko et al. 2014 from 365 nm,
+            the Huggins band below from Bird & Riordan 1986 (:func:`ozone_cross_section`).
+        precipitable_water_cm : float
+            Water vapour column [cm] in [0, 10] on a 2 km exponential profile (default 1.42,
+            the US Standard Atmosphere's: Anderson et al. 1986, AFGL-TR-86-0110); 0 disables
+            water vapour. Bird & Riordan 1986 band coefficients
+            (:mod:`skydome.atmosphere.gases`).
+        mixed_gases : bool
+            O2 (A and B bands) and CO2 absorption with the air density (Bird & Riordan 1986),
+            default True.
+        gas_reference_airmass : float
+            Air mass in [1, 40] at which the water-vapour and mixed-gas band models are
+            matched by Beer's law (default 1.5; :mod:`skydome.atmosphere.gases`).
         ground_albedo : float or spectral, in [0, 1].
         """
         from skydome.atmosphere.aerosols import (aerosol_optical_depth as _aod,
@@ -389,6 +416,10 @@ class Atmosphere:
         h_m = check_number("aerosol_scale_height_m", aerosol_scale_height_m, 10.0, 1e5, "m")
         ssa = check_number("aerosol_single_scattering_albedo", aerosol_single_scattering_albedo, 0.0, 1.0)
         ozone = check_number("ozone_du", ozone_du, 0.0, 1000.0, "DU")
+        water = check_number("precipitable_water_cm", precipitable_water_cm, 0.0, 10.0, "cm")
+        m_ref = check_number("gas_reference_airmass", gas_reference_airmass, 1.0, 40.0)
+        if not isinstance(mixed_gases, (bool, np.bool_)):
+            raise TypeError(f"mixed_gases must be True or False, got {mixed_gases!r}")
         check_number("rayleigh_scale_height_m", rayleigh_scale_height_m, 10.0, 1e5, "m")
         # validate Rayleigh inputs once, here
         rayleigh_scattering_coefficient(550.0, refractive_index=refractive_index,
@@ -418,9 +449,30 @@ class Atmosphere:
         ]
         if ozone > 0:
             constituents.append(cls.ozone_layer(ozone, top))
+        constituents.extend(cls.gas_constituents(water, bool(mixed_gases), top, m_ref,
+                                                 rayleigh_scale_height_m))
         return cls(tuple(constituents), planet_radius_m=planet_radius_m, top_altitude_m=top,
                    ground_albedo=ground_albedo,
-                   name=f"earth(beta={beta:.4g}, alpha={alpha:g}, ozone={ozone:g} DU)")
+                   name=f"earth(beta={beta:.4g}, alpha={alpha:g}, ozone={ozone:g} DU, "
+                        f"water={water:g} cm, mixed_gases={bool(mixed_gases)})")
+
+    @staticmethod
+    def gas_constituents(precipitable_water_cm: float = 1.42, mixed_gases: bool = True,
+                         top_altitude_m: float = 100e3, gas_reference_airmass: float = 1.5,
+                         air_scale_height_m: float = H_RAYLEIGH) -> list:
+        """The absorbing gases besides ozone: water vapour (``precipitable_water_cm`` [cm],
+        none when 0) and the mixed gases O2 / CO2 (with the air's ``air_scale_height_m``)
+        (:mod:`skydome.atmosphere.gases`)."""
+        from skydome.atmosphere import gases
+
+        out = []
+        if precipitable_water_cm > 0:
+            out.append(gases.water_vapour(precipitable_water_cm, top_altitude_m,
+                                          reference_airmass=gas_reference_airmass))
+        if mixed_gases:
+            out.append(gases.mixed_gases(top_altitude_m, scale_height_m=air_scale_height_m,
+                                         reference_airmass=gas_reference_airmass))
+        return out
 
     @staticmethod
     def ozone_layer(ozone_du: float = 300.0, top_altitude_m: float = 100e3) -> Constituent:

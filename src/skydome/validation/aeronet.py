@@ -156,7 +156,9 @@ def nearest_retrieval(retrievals, time: datetime) -> AeronetRetrieval:
 
 def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
                        ozone_du: float = 300.0, ground_albedo=None,
-                       aerosol_scale_height_m: float = 1200.0):
+                       aerosol_scale_height_m: float = 1200.0,
+                       precipitable_water_cm: float = 1.42, mixed_gases: bool = True,
+                       gas_reference_airmass: float = 1.5):
     """Earth's atmosphere with the retrieval's aerosol.
 
     Rayleigh: Ciddor 1996 refractive index of standard air (15 degC, 101325 Pa), number
@@ -168,7 +170,9 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
     "cornette_shanks" with the measured asymmetry factor at 674 nm. Ozone ``ozone_du`` on
     the 10-25-40 km tent (300 DU: not measured that day; a typical mid-latitude column).
     Ground albedo: ``ground_albedo`` or, by default, the inversion's surface albedo (at
-    Egbert; the Ithaca roof's is unknown).
+    Egbert; the Ithaca roof's is unknown). Water vapour ``precipitable_water_cm`` (1.42 cm,
+    the US Standard Atmosphere's: the inversion file holds no water column and none was
+    measured at the site) and the mixed gases, as :meth:`Atmosphere.earth`.
     """
     from skydome._validate import check_choice
     from skydome.atmosphere import Atmosphere, Constituent, ExponentialProfile
@@ -198,7 +202,9 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
             Constituent("aerosol", scattering=lambda wl: retrieval.single_scattering_albedo(wl) * ext(wl),
                         absorption=lambda wl: (1.0 - retrieval.single_scattering_albedo(wl)) * ext(wl),
                         profile=prof, **kw),
-            Atmosphere.ozone_layer(ozone_du, 100e3))
+            Atmosphere.ozone_layer(ozone_du, 100e3),
+            *Atmosphere.gas_constituents(precipitable_water_cm, mixed_gases, 100e3,
+                                         gas_reference_airmass, 7994.0))
     if ground_albedo is None:
         ground_albedo = retrieval.ground_albedo
     return Atmosphere(cons, ground_albedo=ground_albedo,

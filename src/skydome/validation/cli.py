@@ -23,7 +23,7 @@ def _fail(message: str) -> None:
 @validate_app.command("measured")
 def measured(
     models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996", "single_scattering",
-                                         "preetham1999", "perez1993", "cie2003")),
+                                         "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")),
                                help="Comma-separated models (also montecarlo, precomputed_accurate)."),
     captures: Optional[str] = typer.Option(None, help="Comma-separated capture labels HH:MM:SS (default all 15)."),
     phase: str = typer.Option("tabulated", help="Aerosol phase of the physically based models: tabulated "

@@ -41,7 +41,7 @@ EXCLUDED_SAMPLES = (0,)
 
 #: Models compared by default, in the table's order.
 MODELS = ("precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
-          "preetham1999", "perez1993", "cie2003")
+          "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")
 
 PHYSICAL = ("precomputed", "precomputed_accurate", "montecarlo", "hillaire2020", "nishita1996",
             "single_scattering")
@@ -155,6 +155,13 @@ def _build(name, capture, fast, phase):
         turbidity = (beta + 0.04586) / 0.04608  # [PSS99] A.2 inverted
         return sd.model("preetham1999", sun=sun, turbidity=float(np.clip(turbidity, 1.7, 10.0))), \
             f"analytic (T = {turbidity:.2f} from AERONET beta)"
+    if name == "hosek_wilkie2012":
+        beta = float(r.optical_depth(1000.0))
+        turbidity = (beta + 0.04586) / 0.04608  # [PSS99] A.2 inverted: [HW12] use Preetham's T
+        albedo = float(np.interp(550.0, r.albedo_wavelengths_nm, r.surface_albedo))
+        return sd.model("hosek_wilkie2012", sun=sun, turbidity=float(np.clip(turbidity, 1.0, 10.0)),
+                        albedo=albedo), \
+            f"analytic (T = {turbidity:.2f} from AERONET beta, albedo {albedo:.2f})"
     if name == "perez1993":
         import pvlib
 
