@@ -231,3 +231,21 @@ def test_dense_wavelength_grid_interpolation():
     a = hil(30.0).radiance(DIRS[:9], wl)
     b = hil(30.0, n_wavelengths=41).radiance(DIRS[:9], wl)
     np.testing.assert_allclose(a, b, rtol=0.025)
+
+
+def test_wavelength_resampling_equals_linear_interpolation_in_l_lambda4():
+    """The table grid -> request resampling (through ``skydome.spectra.resample``) equals
+    plain linear interpolation (numpy's ``interp``) of L lambda^4 to round-off, and plain
+    linear interpolation for the transmittance; the identity where the grids coincide."""
+    from skydome.models.simulated.hillaire2020 import Hillaire2020 as H
+
+    rng = np.random.default_rng(3)
+    grid = np.linspace(380.0, 780.0, 16)
+    wl = np.linspace(380.0, 780.0, 41)
+    x = rng.uniform(0.1, 2.0, (5, 7, grid.size))
+    ref_l = np.stack([np.interp(wl, grid, row * grid ** 4) / wl ** 4
+                      for row in x.reshape(-1, grid.size)]).reshape(5, 7, wl.size)
+    ref_t = np.stack([np.interp(wl, grid, row) for row in x.reshape(-1, grid.size)]).reshape(5, 7, wl.size)
+    np.testing.assert_allclose(H._to_request(x, grid, wl), ref_l, rtol=1e-13, atol=0.0)
+    np.testing.assert_allclose(H._to_grid(x, grid, wl), ref_t, rtol=1e-13, atol=0.0)
+    assert H._to_request(x, grid, grid) is x

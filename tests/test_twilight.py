@@ -5,8 +5,9 @@ import pytest
 from typer.testing import CliRunner
 
 from skydome.cli import app
-from skydome.apps.twilight import (anti_solar_profile, belt_of_venus, horizon_views,
-                                      horizontal_illuminance, twilight_models, zenith_luminance_curve)
+from skydome.apps.twilight import horizon_views
+from skydome.effects.twilight import (anti_solar_profile, belt_of_venus, horizontal_illuminance,
+                                      twilight_models, zenith_luminance_curve)
 
 # 32 mu_s nodes of the sunset-centred mapping give every twilight band at least the cells of
 # the 16 nodes of Bruneton's mapping these tests were written with

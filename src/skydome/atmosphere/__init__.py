@@ -499,7 +499,7 @@ class Atmosphere:
              Constituent("aerosol", scattering=0.9 * mie_ext, absorption=0.1 * mie_ext,
                          profile=ExponentialProfile(1200.0), phase="cornette_shanks", g=0.8),
              cls.ozone_layer(300.0, 60e3)),
-            planet_radius_m=6360e3, top_altitude_m=60e3, ground_albedo=0.1, name="bruneton2017")
+            planet_radius_m=EARTH_RADIUS, top_altitude_m=60e3, ground_albedo=0.1, name="bruneton2017")
 
     @classmethod
     def volcanic_ash(cls, optical_depth_550: float = 1.0, *, median_radius_um: float = 0.45,

@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import check_number
+from skydome.constants import SUN_ANGULAR_RADIUS_DEG
 
 __all__ = ["refraction_bennett_arcmin", "refraction_saemundsson_arcmin", "apparent_elevation",
            "true_elevation", "sun_disc_shape"]
@@ -88,13 +89,14 @@ def true_elevation(apparent_elevation_deg, pressure_pa: float = 101000.0,
     return h - refraction_bennett_arcmin(h, pressure_pa, temperature_c) / 60.0
 
 
-def sun_disc_shape(true_elevation_deg: float, angular_radius_deg: float = 0.26667,
+def sun_disc_shape(true_elevation_deg: float, angular_radius_deg: float = SUN_ANGULAR_RADIUS_DEG,
                    pressure_pa: float = 101000.0, temperature_c: float = 10.0,
                    n_limb: int = 721) -> dict:
     """Apparent shape of the refracted sun disc.
 
     Each limb point (true elevation/azimuth offset on a small circle of radius
-    ``angular_radius_deg`` around the true centre) is lifted by the Saemundsson
+    ``angular_radius_deg`` around the true centre; default the mean apparent radius of
+    :data:`skydome.constants.SUN_ANGULAR_RADIUS_DEG`, 0.2665 deg) is lifted by the Saemundsson
     refraction of its own true elevation; the apparent vertical diameter is the spread of
     apparent elevations, the horizontal one the spread of azimuth offsets times the cosine
     of the apparent centre elevation.

@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from skydome._validate import check_int, check_number
+from skydome.constants import EARTH_RADIUS
 
 __all__ = ["column_density", "optical_depth", "chapman_column", "chapman", "ColumnTable",
            "DEFAULT_QUADRATURE_SCALE_M"]
@@ -53,7 +54,8 @@ def _rays(altitude_m, cos_zenith, planet_radius_m, top_radius_m):
     return h, mu
 
 
-def column_density(profile, altitude_m, cos_zenith, planet_radius_m=6360e3, top_radius_m=6460e3,
+def column_density(profile, altitude_m, cos_zenith, planet_radius_m=EARTH_RADIUS,
+                   top_radius_m=EARTH_RADIUS + 100e3,
                    samples: int = 256, scale_m: float = DEFAULT_QUADRATURE_SCALE_M) -> np.ndarray:
     """Column density of a density profile along rays, by quadrature [m].
 
@@ -148,7 +150,7 @@ def chapman(x, cos_chi) -> np.ndarray:
     return np.where(mu >= 0.0, up, down)
 
 
-def chapman_column(scale_height_m, altitude_m, cos_zenith, planet_radius_m=6360e3) -> np.ndarray:
+def chapman_column(scale_height_m, altitude_m, cos_zenith, planet_radius_m=EARTH_RADIUS) -> np.ndarray:
     """Column of an exponential profile exp(-h/H) along rays, by the Chapman approximation [m]:
     H exp(-h/H) Ch((R + h)/H, chi); infinite where the ray hits the ground."""
     H = float(scale_height_m)

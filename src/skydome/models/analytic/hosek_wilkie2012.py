@@ -46,6 +46,7 @@ from functools import lru_cache
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
+from skydome.constants import K_M
 from skydome.data import load_table
 from skydome.models import Parameter, SkyModel, register
 
@@ -64,8 +65,6 @@ WAVELENGTH_RANGE = (320.0, 720.0)
 ACCEPTED_RANGE = (320.0, 780.0)
 _CHANNEL_CODES = {"R": 1, "G": 2, "B": 3, "X": 4, "Y": 5, "Z": 6}
 _N_PIECES = 45                                       # [HW13] pieces of the solar function
-#: Luminous efficacy used by the authors to turn their Y channel into luminance [lm/W].
-_K_M = 683.0
 
 
 # --------------------------------------------------------------------------------------
@@ -277,12 +276,12 @@ class HosekWilkie2012(SkyModel):
 
     def xyz(self, directions) -> np.ndarray:
         """CIE 1931 XYZ of the sky from the authors' XYZ dataset, Y in cd m^-2, (..., 3)."""
-        return _K_M * self._eval(directions, "xyz")
+        return K_M * self._eval(directions, "xyz")
 
     def rgb(self, directions) -> np.ndarray:
         """Linear RGB (Rec. 709 primaries) of the sky from the authors' RGB dataset, in the
         same photometric scale as :meth:`xyz` (683 lm/W), shape (..., 3)."""
-        return _K_M * self._eval(directions, "rgb")
+        return K_M * self._eval(directions, "rgb")
 
     # -- the sun ([HW13]) --------------------------------------------------------------------
     def _sun_bands(self) -> np.ndarray:

@@ -132,82 +132,64 @@ def sample_cos(code, g, rho, state):
     return 2.0 * _rand(state) - 1.0
 
 
-@njit(cache=True, inline="always")
-def _rho(m, c):
-    """Depolarisation ratio of constituent c (Rayleigh), 0 otherwise."""
-    return rayleigh_rho(m.phase_param[c]) if m.phase_code[c] == RAYLEIGH else 0.0
-
-
-@njit(cache=True, inline="always")
-def sample_phase(m, c, l, state):
-    """Cosine of the scattering angle drawn from constituent c's phase function at
-    wavelength l (a tabulated one by inverting its cumulative distribution); the path
-    tracer's scattering step does the same on the record's arrays."""
-    code = m.phase_code[c]
-    if code == TABULATED:
-        return sample_tabulated(m.phase_cdf, c, l, _rand(state))
-    return sample_cos(code, m.phase_param[c], _rho(m, c), state)
-
-
 @njit(cache=True)
-def rotate_about(w, c, phi, out):
-    """out = unit vector at angle acos(c) from w with azimuth phi about w."""
+def rotate_about(wx, wy, wz, c, phi):
+    """Unit vector at angle acos(c) from the unit vector w with azimuth phi about w."""
     s = safe_sqrt(1.0 - c * c)
     # orthonormal basis (Duff et al. 2017)
-    sign = 1.0 if w[2] >= 0.0 else -1.0
-    a = -1.0 / (sign + w[2])
-    b = w[0] * w[1] * a
-    t1x, t1y, t1z = 1.0 + sign * w[0] * w[0] * a, sign * b, -sign * w[0]
-    t2x, t2y, t2z = b, sign + w[1] * w[1] * a, -w[1]
+    sign = 1.0 if wz >= 0.0 else -1.0
+    a = -1.0 / (sign + wz)
+    b = wx * wy * a
+    t1x, t1y, t1z = 1.0 + sign * wx * wx * a, sign * b, -sign * wx
+    t2x, t2y, t2z = b, sign + wy * wy * a, -wy
     cp = math.cos(phi) * s
     sp = math.sin(phi) * s
-    out[0] = c * w[0] + cp * t1x + sp * t2x
-    out[1] = c * w[1] + cp * t1y + sp * t2y
-    out[2] = c * w[2] + cp * t1z + sp * t2z
-    n = math.sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2])
-    out[0] /= n
-    out[1] /= n
-    out[2] /= n
+    ox = c * wx + cp * t1x + sp * t2x
+    oy = c * wy + cp * t1y + sp * t2y
+    oz = c * wz + cp * t1z + sp * t2z
+    n = math.sqrt(ox * ox + oy * oy + oz * oz)
+    return ox / n, oy / n, oz / n
 
 
 @njit(cache=True)
-def _cross(a, b, out):
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
+def _cross(ax, ay, az, bx, by, bz):
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
 @njit(cache=True)
-def _plane_frames(k_out, k_in, a_cur, tmp, a_in):
+def _plane_frames(kox, koy, koz, kix, kiy, kiz, ax, ay, az):
     """Scattering plane of k_in -> k_out (propagation directions). Returns (cos 2phi,
     sin 2phi) of the rotation L from the scattering-plane frame of the outgoing beam to its
-    current frame ``a_cur``, and writes the scattering-plane parallel axis of the incoming
-    beam into ``a_in`` (a = n x k, n = k_in x k_out / |.|)."""
-    _cross(k_in, k_out, tmp)
-    nn = math.sqrt(tmp[0] * tmp[0] + tmp[1] * tmp[1] + tmp[2] * tmp[2])
+    current frame (parallel axis a), and the scattering-plane parallel axis of the incoming
+    beam (a = n x k, n = k_in x k_out / |.|): (cos 2phi, sin 2phi, a_in)."""
+    tx, ty, tz = _cross(kix, kiy, kiz, kox, koy, koz)
+    nn = math.sqrt(tx * tx + ty * ty + tz * tz)
     if nn < 1e-12:
         # forward/backward scattering: any plane; keep the current frame
-        for j in range(3):
-            a_in[j] = a_cur[j]
-        return 1.0, 0.0
-    n0, n1, n2 = tmp[0] / nn, tmp[1] / nn, tmp[2] / nn
+        return 1.0, 0.0, ax, ay, az
+    n0, n1, n2 = tx / nn, ty / nn, tz / nn
     # outgoing scattering-plane axes: a_sp = n x k_out, b_sp = k_out x a_sp = n
-    asx = n1 * k_out[2] - n2 * k_out[1]
-    asy = n2 * k_out[0] - n0 * k_out[2]
-    asz = n0 * k_out[1] - n1 * k_out[0]
-    c = asx * a_cur[0] + asy * a_cur[1] + asz * a_cur[2]
-    s = n0 * a_cur[0] + n1 * a_cur[1] + n2 * a_cur[2]
+    asx = n1 * koz - n2 * koy
+    asy = n2 * kox - n0 * koz
+    asz = n0 * koy - n1 * kox
+    c = asx * ax + asy * ay + asz * az
+    s = n0 * ax + n1 * ay + n2 * az
     h = c * c + s * s
     if h <= 0.0:
         c, s, h = 1.0, 0.0, 1.0
-    a_in[0] = n1 * k_in[2] - n2 * k_in[1]
-    a_in[1] = n2 * k_in[0] - n0 * k_in[2]
-    a_in[2] = n0 * k_in[1] - n1 * k_in[0]
-    return (c * c - s * s) / h, 2.0 * c * s / h
+    return ((c * c - s * s) / h, 2.0 * c * s / h,
+            n1 * kiz - n2 * kiy, n2 * kix - n0 * kiz, n0 * kiy - n1 * kix)
+
+
+# -- the path's per-wavelength constituent data: one (N_ROWS, nc) array --------------------------
+P0, P1, EXT, SCA, MUS, PHP = 0, 1, 2, 3, 4, 5
+N_ROWS = 6
+# rows of the (2, nc) int64 array of codes
+PROFILE, PHASE = 0, 1
 
 
 @njit(cache=True, inline="always")
-def _segment_majorant(codes, p0s, p1s, R, ext_l, r, mu, t_end):
+def _segment_majorant(ic, cw, R, r, mu, t_end):
     """sum_c beta_e,c max rho_c over the altitudes the segment [0, t_end] spans."""
     r_end = radius_along(r, mu, t_end)
     t_low = min(max(-r * mu, 0.0), t_end)
@@ -215,43 +197,39 @@ def _segment_majorant(codes, p0s, p1s, R, ext_l, r, mu, t_end):
     h_lo = max(r_low - R, 0.0)
     h_hi = max(max(r, r_end) - R, h_lo)
     mj = 0.0
-    for c in range(codes.shape[0]):
-        if ext_l[c] <= 0.0:
+    for c in range(ic.shape[1]):
+        if cw[EXT, c] <= 0.0:
             continue
-        code = codes[c]
+        code = ic[PROFILE, c]
+        p0 = cw[P0, c]
+        p1 = cw[P1, c]
         if code == EXPONENTIAL:
-            d = profile_density(code, p0s[c], p1s[c], h_lo)
+            d = profile_density(code, p0, p1, h_lo)
         elif code == UNIFORM:
-            d = 1.0 if h_lo < p0s[c] else 0.0
+            d = 1.0 if h_lo < p0 else 0.0
         else:   # tent / gaussian peak at p0
-            if h_lo <= p0s[c] <= h_hi:
+            if h_lo <= p0 <= h_hi:
                 d = 1.0
             else:
-                d = max(profile_density(code, p0s[c], p1s[c], h_lo),
-                        profile_density(code, p0s[c], p1s[c], h_hi))
-        mj += ext_l[c] * d
+                d = max(profile_density(code, p0, p1, h_lo), profile_density(code, p0, p1, h_hi))
+        mj += cw[EXT, c] * d
     return mj * (1.0 + 1e-9)
 
 
 @njit(cache=True, inline="always")
-def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
+def _camera_columns(ic, cw, R, r, mu, t0, t1, node_t, node_tau):
     """Cumulative optical depth along the camera ray at nodes t_k in [t0, t1]: the ray is
     split at its lowest point and each piece gets N_CAMERA nodes at the cell edges of the
     geometric rule of ``transport._quadrature`` (spaced geometrically away from the dense
     end); each interval is integrated by Simpson's rule. Returns the number of nodes
     (node_tau[0] = 0)."""
-    m_R = m.R
-    m_profile_code = m.profile_code
-    m_profile_p0 = m.profile_p0
-    m_profile_p1 = m.profile_p1
-    R = m_R
     node_t[0] = t0
     node_tau[0] = 0.0
     nn = 1
     if t1 <= t0:
         return nn
     tmin = min(max(-r * mu, t0), t1)
-    nc = m_profile_code.shape[0]
+    nc = ic.shape[1]
     for piece in range(2):
         if piece == 0:
             a, b = t0, tmin
@@ -276,9 +254,9 @@ def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
                 wq = 1.0 if q != 1 else 4.0
                 rr = radius_along_above(r, mu, tt, R)
                 for c in range(nc):
-                    if ext_l[c] > 0.0:
-                        sacc += wq * ext_l[c] * profile_density(m_profile_code[c], m_profile_p0[c],
-                                                                m_profile_p1[c], rr - R)
+                    if cw[EXT, c] > 0.0:
+                        sacc += wq * cw[EXT, c] * profile_density(ic[PROFILE, c], cw[P0, c],
+                                                                  cw[P1, c], rr - R)
             node_t[nn] = t
             node_tau[nn] = node_tau[nn - 1] + (t - tp) / 6.0 * sacc
             nn += 1
@@ -286,10 +264,10 @@ def _camera_columns(m, ext_l, r, mu, t0, t1, node_t, node_tau):
 
 
 @njit(cache=True)
-def _sun_sample(sun, cos_alpha, state, out):
-    """A direction uniform in the solar cone of half-angle acos(cos_alpha)."""
+def _sun_sample(sx, sy, sz, cos_alpha, state):
+    """A direction uniform in the solar cone of half-angle acos(cos_alpha) about s."""
     c = 1.0 - _rand(state) * (1.0 - cos_alpha)
-    rotate_about(sun, c, TWO_PI * _rand(state), out)
+    return rotate_about(sx, sy, sz, c, TWO_PI * _rand(state))
 
 
 @njit(cache=True)
@@ -303,7 +281,7 @@ def _mat_apply(A, v0, v1, v2, v3, est, scale, polarised):
 
 
 @njit(cache=True)
-def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44, tmp):
+def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44):
     """A <- A L(c2, s2) F with F = [[1,f12,0,0],[f12,f22,0,0],[0,0,f33,0],[0,0,0,f44]]
     (F divided by F11) and L = [[1,0,0,0],[0,c2,s2,0],[0,-s2,c2,0],[0,0,0,1]]."""
     for j in range(4):
@@ -318,18 +296,21 @@ def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44, tmp):
 
 
 # -- the steps of a path ------------------------------------------------------------------------
-# The steps below are inlined into the path loop (``inline="always"``) and take plain arrays:
-# :func:`_trace_one` reads the arrays out of the Medium record once per (direction,
-# wavelength) and allocates the path's work arrays itself. Reading an array out of a
-# NamedTuple costs a reference-count update each time, so neither the record nor a tuple of
-# work arrays is passed to the steps, which run at every vertex and tentative collision.
+# The steps below are inlined into the path loop (``inline="always"``). In numba every array
+# handed to an inlined function costs a reference-count update (its argument becomes a copy of
+# the variable), and so does every array read out of a NamedTuple. So the steps take few
+# arrays: the path's 3-vectors (vertex, direction, Stokes frame, the sampled sun direction)
+# are scalars, returned as tuples where a step changes them; the per-wavelength constituent
+# data are the rows of one (N_ROWS, nc) array ``cw`` and the codes the rows of one (2, nc)
+# array ``ic``, both filled by :func:`_trace_one` once per (direction, wavelength) from the
+# Medium record.
 
 
 @njit(cache=True, inline="always")
-def _forced_collision(codes, p0s, p1s, R, sca_l, mus_c, node_t, node_tau, state, cam_r0,
-                      cam_mu, n_nodes, tau_cam):
+def _forced_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_nodes, tau_cam):
     """The camera ray's first collision, forced inside the air by inverting its tabulated
-    optical depth: tau* = -ln(1 - xi (1 - T)). Returns (ok, t, mu_t of the interval, mu_s)."""
+    optical depth: tau* = -ln(1 - xi (1 - T)). Returns (ok, t, mu_t of the interval, mu_s)
+    and the local scattering coefficients in cw[MUS]."""
     w0 = -math.expm1(-tau_cam)
     target = -math.log1p(-_rand(state) * w0)
     lo = 0
@@ -347,18 +328,18 @@ def _forced_collision(codes, p0s, p1s, R, sca_l, mus_c, node_t, node_tau, state,
     t = node_t[lo] + (target - node_tau[lo]) / mut
     rr = radius_along(cam_r0, cam_mu, t)
     mus = 0.0
-    for c in range(codes.shape[0]):
-        mus_c[c] = sca_l[c] * profile_density(codes[c], p0s[c], p1s[c], rr - R)
-        mus += mus_c[c]
+    for c in range(ic.shape[1]):
+        cw[MUS, c] = cw[SCA, c] * profile_density(ic[PROFILE, c], cw[P0, c], cw[P1, c], rr - R)
+        mus += cw[MUS, c]
     return True, t, mut, mus
 
 
 @njit(cache=True, inline="always")
-def _delta_track(codes, p0s, p1s, R, ext_l, sca_l, mus_c, state, r, mu, t0, t_end):
+def _delta_track(ic, cw, R, state, r, mu, t0, t_end):
     """Delta tracking (Woodcock) along [0, t_end] against the segment's majorant.
-    Returns (collided, t, mu_t, mu_s) at the real collision."""
-    nc = codes.shape[0]
-    mbar = _segment_majorant(codes, p0s, p1s, R, ext_l, r, mu, t_end)
+    Returns (collided, t, mu_t, mu_s) at the real collision (per constituent in cw[MUS])."""
+    nc = ic.shape[1]
+    mbar = _segment_majorant(ic, cw, R, r, mu, t_end)
     t = 0.0
     mut = 0.0
     mus = 0.0
@@ -367,51 +348,50 @@ def _delta_track(codes, p0s, p1s, R, ext_l, sca_l, mus_c, state, r, mu, t0, t_en
             t -= math.log(1.0 - _rand(state)) / mbar
             if t >= t_end:
                 break
-            # local extinction mu_t and scattering mu_s (per constituent in mus_c)
+            # local extinction mu_t and scattering mu_s
             hh = radius_along(r, mu, t) - R
             mut = 0.0
             mus = 0.0
             for c in range(nc):
-                d = profile_density(codes[c], p0s[c], p1s[c], hh)
-                mut += ext_l[c] * d
-                mus_c[c] = sca_l[c] * d
-                mus += mus_c[c]
+                d = profile_density(ic[PROFILE, c], cw[P0, c], cw[P1, c], hh)
+                mut += cw[EXT, c] * d
+                cw[MUS, c] = cw[SCA, c] * d
+                mus += cw[MUS, c]
             if _rand(state) * mbar < mut:
                 return True, t, mut, mus
     return False, t, mut, mus
 
 
 @njit(cache=True, inline="always")
-def _next_event_sun(ph_codes, ph_params, ph_table, R, Rt, table, l, sun, cos_alpha, A, est,
-                    ext_l, mus_c, pos, w, ws, k_in, k_out, a_cur, a_new, tmp, scol, state, rloc,
-                    mus, scale, polarised):
-    """Next-event estimation towards the sun disc from the vertex: est += scale x
-    transmittance x phase-weighted mixture / mu_s (with the Stokes rotation when polarised)."""
-    nc = mus_c.shape[0]
-    _sun_sample(sun, cos_alpha, state, ws)
-    mu_s = (pos[0] * ws[0] + pos[1] * ws[1] + pos[2] * ws[2]) / rloc
+def _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt, l, sx, sy, sz,
+                    cos_alpha, px, py, pz, wx, wy, wz, ax, ay, az, rloc, mus, scale, polarised):
+    """Next-event estimation towards the sun disc from the vertex p (backward direction w,
+    Stokes frame a): est += scale x transmittance x phase-weighted mixture / mu_s (with the
+    Stokes rotation when polarised)."""
+    nc = ic.shape[1]
+    wsx, wsy, wsz = _sun_sample(sx, sy, sz, cos_alpha, state)
+    mu_s = (px * wsx + py * wsy + pz * wsz) / rloc
     if ray_hits_ground(rloc, mu_s, R):
         return                                  # in the earth's shadow
     lookup_columns(table, rloc, mu_s, R, Rt, scol)
     tau = 0.0
     for c in range(nc):
-        tau += ext_l[c] * scol[c]
+        tau += cw[EXT, c] * scol[c]
     tr = math.exp(-tau)
-    cth = ws[0] * w[0] + ws[1] * w[1] + ws[2] * w[2]
+    cth = wsx * wx + wsy * wy + wsz * wz
     if polarised:
-        for j in range(3):
-            k_in[j] = -ws[j]
-        c2, s2r = _plane_frames(k_out, k_in, a_cur, tmp, a_new)
+        # k_out = -w leaves the vertex, k_in = -ws arrives at it
+        c2, s2r, _bx, _by, _bz = _plane_frames(-wx, -wy, -wz, -wsx, -wsy, -wsz, ax, ay, az)
         v0 = 0.0
         v1 = 0.0
         for c in range(nc):
-            if mus_c[c] > 0.0:
-                code = ph_codes[c]
-                param = ph_params[c]
+            if cw[MUS, c] > 0.0:
+                code = ic[PHASE, c]
+                param = cw[PHP, c]
                 if code == TABULATED:
-                    p = tabulated_phase(ph_table, c, l, cth) * mus_c[c]
+                    p = tabulated_phase(ph_table, c, l, cth) * cw[MUS, c]
                 else:
-                    p = phase_value(code, param, cth) * mus_c[c]
+                    p = phase_value(code, param, cth) * cw[MUS, c]
                 f12, _f22, _f33, _f44 = matrix_ratios(
                     code, rayleigh_rho(param) if code == RAYLEIGH else 0.0, cth)
                 v0 += p
@@ -421,94 +401,99 @@ def _next_event_sun(ph_codes, ph_params, ph_table, R, Rt, table, l, sun, cos_alp
     else:
         p = 0.0
         for c in range(nc):
-            if mus_c[c] > 0.0:
-                code = ph_codes[c]
+            if cw[MUS, c] > 0.0:
+                code = ic[PHASE, c]
                 if code == TABULATED:
-                    p += tabulated_phase(ph_table, c, l, cth) * mus_c[c]
+                    p += tabulated_phase(ph_table, c, l, cth) * cw[MUS, c]
                 else:
-                    p += phase_value(code, ph_params[c], cth) * mus_c[c]
+                    p += phase_value(code, cw[PHP, c], cth) * cw[MUS, c]
         est[0] += scale * p / mus * tr
 
 
 @njit(cache=True, inline="always")
-def _scatter(ph_codes, ph_params, ph_cdf, l, A, mus_c, w, wn, k_in, k_out, a_cur, a_new, tmp,
-             state, mus, polarised):
+def _scatter(ic, cw, ph_cdf, A, state, l, wx, wy, wz, ax, ay, az, mus, polarised):
     """Continue the path: choose a constituent with probability mu_s,c / mu_s, sample its
-    phase function, rotate the direction (and the Stokes matrix and frame)."""
-    nc = mus_c.shape[0]
+    phase function, rotate the direction (and the Stokes matrix and frame). Returns the new
+    backward direction and Stokes frame (wx, wy, wz, ax, ay, az)."""
+    nc = ic.shape[1]
     u = _rand(state) * mus
     cc = nc - 1
     acc = 0.0
     for c in range(nc):
-        acc += mus_c[c]
+        acc += cw[MUS, c]
         if u < acc:
             cc = c
             break
-    while mus_c[cc] <= 0.0 and cc > 0:
+    while cw[MUS, cc] <= 0.0 and cc > 0:
         cc -= 1
-    code = ph_codes[cc]
-    rho = rayleigh_rho(ph_params[cc]) if code == RAYLEIGH else 0.0
+    code = ic[PHASE, cc]
+    rho = rayleigh_rho(cw[PHP, cc]) if code == RAYLEIGH else 0.0
     if code == TABULATED:
         cth = sample_tabulated(ph_cdf, cc, l, _rand(state))
     else:
-        cth = sample_cos(code, ph_params[cc], rho, state)
-    rotate_about(w, cth, TWO_PI * _rand(state), wn)
+        cth = sample_cos(code, cw[PHP, cc], rho, state)
+    wnx, wny, wnz = rotate_about(wx, wy, wz, cth, TWO_PI * _rand(state))
     if polarised:
-        for j in range(3):
-            k_in[j] = -wn[j]
-        c2, s2r = _plane_frames(k_out, k_in, a_cur, tmp, a_new)
+        # k_out = -w leaves the vertex, k_in = -wn arrives at it
+        c2, s2r, ax, ay, az = _plane_frames(-wx, -wy, -wz, -wnx, -wny, -wnz, ax, ay, az)
         f12, f22, f33, f44 = matrix_ratios(code, rho, cth)
-        _mat_rot_scatter(A, c2, s2r, f12, f22, f33, f44, tmp)
-        for j in range(3):
-            a_cur[j] = a_new[j]
-    for j in range(3):
-        w[j] = wn[j]
+        _mat_rot_scatter(A, c2, s2r, f12, f22, f33, f44)
+    return wnx, wny, wnz, ax, ay, az
 
 
 @njit(cache=True, inline="always")
-def _ground_vertex(R, Rt, table, sun, cos_alpha, A, est, ext_l, pos, w, ws, tmp, scol, state,
-                   t_end, scale, polarised):
-    """Move the vertex to the ground point (just above it; normal in tmp) and add the
-    next-event estimate of the sunlit Lambertian ground, scale x albedo / pi E mu_s T
-    (``scale`` includes the albedo, E_sun and the path weight)."""
-    for j in range(3):
-        pos[j] += t_end * w[j]
-    rg = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
-    for j in range(3):
-        pos[j] *= R * (1.0 + 1e-12) / rg   # just above the ground
-        tmp[j] = pos[j] / (R * (1.0 + 1e-12))  # normal
+def _ground_vertex(cw, table, scol, A, est, state, R, Rt, sx, sy, sz, cos_alpha, px, py, pz,
+                   wx, wy, wz, t_end, scale, polarised):
+    """Move the vertex to the ground point (just above it) and add the next-event estimate
+    of the sunlit Lambertian ground, scale x albedo / pi E mu_s T (``scale`` includes the
+    albedo, E_sun and the path weight). Returns the vertex and the ground normal."""
+    px += t_end * wx
+    py += t_end * wy
+    pz += t_end * wz
+    rg = math.sqrt(px * px + py * py + pz * pz)
+    f = R * (1.0 + 1e-12) / rg
+    px *= f                                  # just above the ground
+    py *= f
+    pz *= f
+    nx = px / (R * (1.0 + 1e-12))            # normal
+    ny = py / (R * (1.0 + 1e-12))
+    nz = pz / (R * (1.0 + 1e-12))
     if scale <= 0.0:
-        return
-    _sun_sample(sun, cos_alpha, state, ws)
-    mu_s = tmp[0] * ws[0] + tmp[1] * ws[1] + tmp[2] * ws[2]
+        return px, py, pz, nx, ny, nz
+    wsx, wsy, wsz = _sun_sample(sx, sy, sz, cos_alpha, state)
+    mu_s = nx * wsx + ny * wsy + nz * wsz
     if mu_s > 0.0 and not ray_hits_ground(R * (1.0 + 1e-12), mu_s, R):
         lookup_columns(table, R * (1.0 + 1e-12), mu_s, R, Rt, scol)
         tau = 0.0
-        for c in range(ext_l.shape[0]):
-            tau += ext_l[c] * scol[c]
+        for c in range(scol.shape[0]):
+            tau += cw[EXT, c] * scol[c]
         # reflected light is unpolarised: only A's first column matters
         _mat_apply(A, 1.0, 0.0, 0.0, 0.0, est, scale / math.pi * mu_s * math.exp(-tau),
                    polarised)
+    return px, py, pz, nx, ny, nz
 
 
 @njit(cache=True, inline="always")
-def _ground_bounce(A, a_cur, tmp, w, state):
-    """Continue from the ground: a cosine-weighted direction about the normal tmp; the
-    Stokes matrix depolarised (first column kept) and a new frame."""
+def _ground_bounce(A, state, nx, ny, nz):
+    """Continue from the ground: a cosine-weighted direction about the normal n; the
+    Stokes matrix depolarised (first column kept) and a new frame. Returns the new backward
+    direction and Stokes frame (wx, wy, wz, ax, ay, az)."""
     u1 = _rand(state)
-    rotate_about(tmp, math.sqrt(u1), TWO_PI * _rand(state), w)
+    wx, wy, wz = rotate_about(nx, ny, nz, math.sqrt(u1), TWO_PI * _rand(state))
     for j in range(4):          # depolarise: keep the first column
         A[j, 1] = 0.0
         A[j, 2] = 0.0
         A[j, 3] = 0.0
     # new frame: any axis perpendicular to the new ray
-    _cross(tmp, w, a_cur)
-    nn = math.sqrt(a_cur[0] ** 2 + a_cur[1] ** 2 + a_cur[2] ** 2)
+    ax, ay, az = _cross(nx, ny, nz, wx, wy, wz)
+    nn = math.sqrt(ax ** 2 + ay ** 2 + az ** 2)
     if nn < 1e-12:
-        rotate_about(w, 0.0, 0.0, a_cur)
+        ax, ay, az = rotate_about(wx, wy, wz, 0.0, 0.0)
     else:
-        for j in range(3):
-            a_cur[j] /= nn
+        ax /= nn
+        ay /= nn
+        az /= nn
+    return wx, wy, wz, ax, ay, az
 
 
 @njit(cache=True)
@@ -518,37 +503,29 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
     # -- the record's arrays, read once ---------------------------------------------------
     R = m.R
     Rt = m.Rt
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
-    ph_codes = m.phase_code
-    ph_params = m.phase_param
     ph_table = m.phase_table
     ph_cdf = m.phase_cdf
-    nc = codes.shape[0]
+    nc = m.profile_code.shape[0]
+    ic = np.empty((2, nc), dtype=np.int64)   # profile and phase codes
+    cw = np.empty((N_ROWS, nc))              # per-constituent data at this wavelength
+    for c in range(nc):
+        ic[PROFILE, c] = m.profile_code[c]
+        ic[PHASE, c] = m.phase_code[c]
+        cw[P0, c] = m.profile_p0[c]
+        cw[P1, c] = m.profile_p1[c]
+        cw[EXT, c] = m.extinction[c, l]     # extinction at this wavelength [m^-1]
+        cw[SCA, c] = m.scattering[c, l]     # scattering at this wavelength [m^-1]
+        cw[MUS, c] = 0.0                    # local scattering coefficients at the vertex
+        cw[PHP, c] = m.phase_param[c]
+    sx, sy, sz = sun[0], sun[1], sun[2]
     # -- the path's state and work arrays -------------------------------------------------
     state = np.empty(1, dtype=np.uint64)
     state[0] = _stream_seed(seed, i, l)
     A = np.empty((4, 4))                # Stokes matrix to the camera frame
     est = np.zeros(4)                   # estimate of the current sample
-    pos = np.empty(3)                   # vertex [m]
-    w = np.empty(3)                     # backward direction
-    wn = np.empty(3)                    # next direction
-    k_out = np.empty(3)                 # propagation direction leaving the vertex
-    k_in = np.empty(3)                  # propagation direction arriving at the vertex
-    a_cur = np.empty(3)                 # parallel axis of the current frame
-    a_new = np.empty(3)
-    tmp = np.empty(3)
-    ws = np.empty(3)                    # sampled direction to the sun
     scol = np.empty(nc)                 # light-path columns
-    ext_l = np.empty(nc)                # extinction at this wavelength [m^-1]
-    sca_l = np.empty(nc)                # scattering at this wavelength [m^-1]
-    mus_c = np.empty(nc)                # local scattering coefficients at the vertex [m^-1]
     node_t = np.empty(2 * N_CAMERA + 1)      # camera-ray nodes [m]
     node_tau = np.empty(2 * N_CAMERA + 1)    # cumulative optical depth there
-    for c in range(nc):
-        ext_l[c] = m.extinction[c, l]
-        sca_l[c] = m.scattering[c, l]
     esun = e_sun[l]
     alb = m.albedo[l]
     s1 = np.zeros(4)
@@ -556,7 +533,7 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
     # -- the camera ray: cumulative optical depth for the forced first collision ----------
     cam_mu = dirs[i, 2]
     c_t0, c_t1, cam_ground = ray_segment(r0, cam_mu, R, Rt)
-    n_nodes = _camera_columns(m, ext_l, r0, cam_mu, c_t0, c_t1, node_t, node_tau)
+    n_nodes = _camera_columns(ic, cw, R, r0, cam_mu, c_t0, c_t1, node_t, node_tau)
     tau_cam = node_tau[n_nodes - 1]
     t_cam = math.exp(-tau_cam)
     nv = 4 if polarised else 1
@@ -573,17 +550,16 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
             for j in range(4):
                 for k in range(4):
                     A[j, k] = 1.0 if j == k else 0.0
-            pos[0], pos[1], pos[2] = 0.0, 0.0, r0
-            for j in range(3):
-                w[j] = dirs[i, j]
-                a_cur[j] = zen_ref[i, j]
+            px, py, pz = 0.0, 0.0, r0                       # vertex [m]
+            wx, wy, wz = dirs[i, 0], dirs[i, 1], dirs[i, 2]  # backward direction
+            ax, ay, az = zen_ref[i, 0], zen_ref[i, 1], zen_ref[i, 2]  # Stokes frame axis
             weight = 1.0
             w0 = 1.0
             order = 0
             first = True
             while True:
-                r = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
-                mu = (pos[0] * w[0] + pos[1] * w[1] + pos[2] * w[2]) / r
+                r = math.sqrt(px * px + py * py + pz * pz)
+                mu = (px * wx + py * wy + pz * wz) / r
                 t0, t_end, hits_ground = ray_segment(r, mu, R, Rt)
                 if first:
                     first = False
@@ -597,44 +573,41 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
                     else:
                         collided = True
                         w0 = -math.expm1(-tau_cam)
-                        ok, t, mut, mus = _forced_collision(codes, p0s, p1s, R, sca_l, mus_c,
-                                                            node_t, node_tau, state, r0, cam_mu,
-                                                            n_nodes, tau_cam)
+                        ok, t, mut, mus = _forced_collision(ic, cw, R, node_t, node_tau, state,
+                                                            r0, cam_mu, n_nodes, tau_cam)
                         if not ok:
                             break
                 else:
-                    collided, t, mut, mus = _delta_track(codes, p0s, p1s, R, ext_l, sca_l, mus_c,
-                                                         state, r, mu, t0, t_end)
+                    collided, t, mut, mus = _delta_track(ic, cw, R, state, r, mu, t0, t_end)
                 if not collided and not hits_ground:
                     break                                   # leaves the atmosphere
                 order += 1
                 if collided:
-                    for j in range(3):
-                        pos[j] += t * w[j]
+                    px += t * wx
+                    py += t * wy
+                    pz += t * wz
                     if mus <= 0.0:
                         break                               # pure absorber
                     weight *= mus / mut                     # local single-scattering albedo
-                    rloc = math.sqrt(pos[0] * pos[0] + pos[1] * pos[1] + pos[2] * pos[2])
-                    for j in range(3):
-                        k_out[j] = -w[j]
-                    _next_event_sun(ph_codes, ph_params, ph_table, R, Rt, table, l, sun,
-                                    cos_alpha, A, est, ext_l, mus_c, pos, w, ws, k_in, k_out,
-                                    a_cur, a_new, tmp, scol, state, rloc, mus,
-                                    w0 * weight * esun, polarised)
+                    rloc = math.sqrt(px * px + py * py + pz * pz)
+                    _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt, l,
+                                    sx, sy, sz, cos_alpha, px, py, pz, wx, wy, wz, ax, ay, az,
+                                    rloc, mus, w0 * weight * esun, polarised)
                     if max_order >= 0 and order >= max_order:
                         break
-                    _scatter(ph_codes, ph_params, ph_cdf, l, A, mus_c, w, wn, k_in, k_out,
-                             a_cur, a_new, tmp, state, mus, polarised)
+                    wx, wy, wz, ax, ay, az = _scatter(ic, cw, ph_cdf, A, state, l, wx, wy, wz,
+                                                      ax, ay, az, mus, polarised)
                 else:
-                    _ground_vertex(R, Rt, table, sun, cos_alpha, A, est, ext_l, pos, w, ws, tmp,
-                                   scol, state, t_end,
-                                   w0 * weight * alb * esun if alb > 0.0 else 0.0, polarised)
+                    px, py, pz, nx, ny, nz = _ground_vertex(
+                        cw, table, scol, A, est, state, R, Rt, sx, sy, sz, cos_alpha,
+                        px, py, pz, wx, wy, wz, t_end,
+                        w0 * weight * alb * esun if alb > 0.0 else 0.0, polarised)
                     if alb <= 0.0:
                         break
                     if max_order >= 0 and order >= max_order:
                         break
                     weight *= alb
-                    _ground_bounce(A, a_cur, tmp, w, state)
+                    wx, wy, wz, ax, ay, az = _ground_bounce(A, state, nx, ny, nz)
                 # -- Russian roulette -----------------------------------------------------------
                 if order >= RR_ORDER:
                     q = min(0.95, weight)

@@ -194,17 +194,31 @@ class Hillaire2020(SkyModel):
         return self._tables[key]
 
     @staticmethod
-    def _to_request(x, grid, wl):
-        """Values on ``grid`` (..., n_grid) to ``wl``: linear in x lambda^4 (exact for a
-        lambda^-4 spectrum), identity when the grids coincide."""
+    def _weights(grid, wl):
+        """(n_wl, n_grid) matrix of the linear interpolation from ``grid`` to ``wl``: the
+        image of the identity under :func:`skydome.spectra.resample` (the library's one
+        resampling convention; ``wl`` lies inside ``grid``, which spans it)."""
+        from skydome.spectra import resample
+
+        return resample(wl, grid, np.eye(grid.size), "hold")
+
+    @classmethod
+    def _to_grid(cls, x, grid, wl):
+        """Values on ``grid`` (..., n_grid) to ``wl`` by :func:`skydome.spectra.resample`
+        (linear in wavelength), identity when the grids coincide."""
         if grid.shape == wl.shape and np.array_equal(grid, wl):
             return x
-        y = x * grid ** 4
-        flat = y.reshape(-1, grid.size)
-        idx = np.clip(np.searchsorted(grid, wl) - 1, 0, grid.size - 2)
-        a = (wl - grid[idx]) / (grid[idx + 1] - grid[idx])
-        out = flat[:, idx] * (1.0 - a) + flat[:, idx + 1] * a
-        return (out / wl ** 4).reshape(x.shape[:-1] + (wl.size,))
+        out = x.reshape(-1, grid.size) @ cls._weights(grid, wl).T
+        return out.reshape(x.shape[:-1] + (wl.size,))
+
+    @classmethod
+    def _to_request(cls, x, grid, wl):
+        """Radiance on ``grid`` (..., n_grid) to ``wl``: linear in x lambda^4 (exact for a
+        lambda^-4 spectrum; :func:`skydome.spectra.resample` applied to x lambda^4),
+        identity when the grids coincide."""
+        if grid.shape == wl.shape and np.array_equal(grid, wl):
+            return x
+        return cls._to_grid(x * grid ** 4, grid, wl) / wl ** 4
 
     def _solar(self, wl):
         from skydome.spectra import solar_irradiance
@@ -251,8 +265,7 @@ class Hillaire2020(SkyModel):
         mu = np.ascontiguousarray(d.reshape(-1, 3)[:, 2])
         out = np.empty((mu.size, tb.grid.size))
         K.lookup_transmittance(np.full(mu.size, tb.r0), mu, tb.tlut, tb.R, tb.Rt, out)
-        if not np.array_equal(tb.grid, wl):
-            out = np.stack([np.interp(wl, tb.grid, row) for row in out])
+        out = self._to_grid(out, tb.grid, wl)
         return np.clip(out, 0.0, 1.0).reshape(d.shape[:-1] + (wl.size,))
 
     def sun_radiance(self, wavelengths_nm) -> np.ndarray:
@@ -313,9 +326,7 @@ class Hillaire2020(SkyModel):
             K.march_directions(flat, sun, tb.r0, stop, *tb._args(), False, self.view_samples,
                                tb.ts, L, T)
         L = np.maximum(self._to_request(L, tb.grid, wl) * self._solar(wl), 0.0)
-        if not np.array_equal(tb.grid, wl):
-            T = np.stack([np.interp(wl, tb.grid, row) for row in T])
-        T = np.clip(T, 0.0, 1.0)
+        T = np.clip(self._to_grid(T, tb.grid, wl), 0.0, 1.0)
         return T.reshape(shape + (wl.size,)), L.reshape(shape + (wl.size,))
 
     def describe(self):
