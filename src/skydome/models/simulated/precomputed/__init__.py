@@ -76,6 +76,12 @@ class PrecomputedSky(SkyModel):
         (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
+    order_table_divisor : int
+        Each scattering order's radiance, which is only the source of the next order, is
+        integrated on a table this many times coarser on the mu, mu_s and nu axes (default
+        2; 1: on the full table, about 2.5x slower); the stored multiple-scattering table
+        is integrated once, at full size, from the summed scattering density, and the
+        observer's sky from that density, so only orders >= 3 see the coarse table.
 
     The defaults are the settings validated against the Monte Carlo reference, with 48
     nodes of the new mu_s mapping instead of 64 of Bruneton's (docs/validation.md). Bruneton's cheaper sizes, 5-14 % off in hazy air: ``orders=4,
@@ -118,6 +124,8 @@ class PrecomputedSky(SkyModel):
                   kind="int"),
         Parameter("density_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
+        Parameter("order_table_divisor", "", 2, 1, 8,
+                  "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
         Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),
     )
@@ -493,7 +501,7 @@ _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "trans
                    "scattering_r_size", "scattering_mu_size", "scattering_mu_s_size",
                    "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
                    "integration_samples", "sphere_samples", "density_mu_s_size",
-                   "max_sun_zenith_deg")
+                   "order_table_divisor", "max_sun_zenith_deg")
 
 
 def clear_cache() -> int:

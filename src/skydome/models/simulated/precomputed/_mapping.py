@@ -28,6 +28,23 @@ def _mu_s_u(th):
 
 
 @njit(cache=True)
+def mu_s_frame(mu_s_min):
+    """The constants of :func:`mu_s_unit` for one ``mu_s_min``: (theta_max, u(theta_max),
+    1 / (u(theta_max) - u(0))), so that a kernel computes them once."""
+    th_max = math.acos(clamp_cos(mu_s_min))
+    top = _mu_s_u(th_max)
+    return th_max, top, 1.0 / (top - _mu_s_u(0.0))
+
+
+@njit(cache=True)
+def mu_s_unit_framed(mu_s, frame):
+    """:func:`mu_s_unit` with the constants ``frame`` of :func:`mu_s_frame`."""
+    th = math.acos(clamp_cos(mu_s))
+    x = (frame[1] - _mu_s_u(min(th, frame[0]))) * frame[2]
+    return min(max(x, 0.0), 1.0)
+
+
+@njit(cache=True)
 def mu_s_unit(mu_s, mu_s_min):
     """mu_s mapping to [0, 1] (0 at mu_s_min, clamped below; 1 at the zenith):
     x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)), u(theta) = asinh((theta - 92 deg)
@@ -42,11 +59,7 @@ def mu_s_unit(mu_s, mu_s_min):
     elevation, and 15x lower at the zenith, where it changes slowly. Cells for 64 nodes
     (sun zenith bands 0-30, 30-60, 60-80, 80-90, 90-96, 96-102, 102-108 deg): 4.8, 8.0,
     11.4, 13.7, 11.7, 8.1, 5.2; [Bru17]'s at 64 nodes: 1.1, 5.5, 14.4, 18.3, 11.4, 7.6, 4.6."""
-    th = math.acos(clamp_cos(mu_s))
-    th_max = math.acos(clamp_cos(mu_s_min))
-    top = _mu_s_u(th_max)
-    x = (top - _mu_s_u(min(th, th_max))) / (top - _mu_s_u(0.0))
-    return min(max(x, 0.0), 1.0)
+    return mu_s_unit_framed(mu_s, mu_s_frame(mu_s_min))
 
 
 @njit(cache=True)
@@ -133,10 +146,10 @@ def mu_index(r, mu, ground, n_mu, R, Rt):
 
 
 @njit(cache=True, fastmath=True)
-def density_mu_s_index(mu_s_t, mu_s_min, n_msj):
+def density_mu_s_index(mu_s_t, frame, n_msj):
     """Node and fraction of mu_s_t on the scattering density's mu_s axis (the mapping of
-    :func:`mu_s_unit`, its own node count)."""
-    return _split(mu_s_unit(mu_s_t, mu_s_min) * (n_msj - 1), n_msj)
+    :func:`mu_s_unit`, its own node count; ``frame`` from :func:`mu_s_frame`)."""
+    return _split(mu_s_unit_framed(mu_s_t, frame) * (n_msj - 1), n_msj)
 
 
 @njit(cache=True, fastmath=True)
