@@ -113,9 +113,12 @@ def main(argv=None):
                   f"({100 * v[:, 1].sum() / cpu:4.1f} %) x{len(v)}")
     print(f"  {'other':28s} {'':7s}         {cpu - par:7.1f} s CPU")
     print(f"estimated idle wall on 2 cores: {par / 2 + (cpu - par):.1f} s")
-    if totals:
-        tot = np.array(totals)
-        print("order totals of the multiple-scattering table (share of orders 2..N):")
+    n_orders = len(rec.get("density_products", ()))
+    if n_orders:
+        # one multiple-scattering integral per order (on the per-order table), then the
+        # stored table from the summed density
+        tot = np.array(totals[:n_orders])
+        print("per-order tables' totals (share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
             print(f"  order {i + 2}: {100 * t / tot.sum():5.2f} %")
 

@@ -74,14 +74,20 @@ class PrecomputedSky(SkyModel):
     sphere_samples : int
         Zenith-angle samples of the incident directions in the scattering density
         (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
+    high_order_sphere_samples : int, optional
+        Zenith-angle samples of the incident directions in the scattering density of
+        orders >= 3 (default 16: their sources, scattered at least twice, are smooth; None:
+        ``sphere_samples``).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
     order_table_divisor : int
         Each scattering order's radiance, which is only the source of the next order, is
         integrated on a table this many times coarser on the mu, mu_s and nu axes (default
-        2; 1: on the full table, about 2.5x slower); the stored multiple-scattering table
-        is integrated once, at full size, from the summed scattering density, and the
-        observer's sky from that density, so only orders >= 3 see the coarse table.
+        2; 1: on the full table), and the scattering density of orders >= 3 on an
+        outgoing grid this many times coarser, interpolated up; the stored
+        multiple-scattering table is integrated once, at full size, from the summed
+        scattering density, and the observer's sky from that density, so only orders >= 3
+        see the coarse grids.
 
     The defaults are the settings validated against the Monte Carlo reference, with 48
     nodes of the new mu_s mapping instead of 64 of Bruneton's (docs/validation.md). Bruneton's cheaper sizes, 5-14 % off in hazy air: ``orders=4,
@@ -121,6 +127,9 @@ class PrecomputedSky(SkyModel):
         Parameter("irradiance_r_size", "", 16, 2, 4096, "irradiance table, r axis", kind="int"),
         Parameter("integration_samples", "", 20, 2, 1000, "quadrature nodes per ray piece", kind="int"),
         Parameter("sphere_samples", "", 32, 4, 256, "zenith samples of the scattering density",
+                  kind="int"),
+        Parameter("high_order_sphere_samples", "", 16, 4, 256,
+                  "zenith samples of the scattering density of orders >= 3 (None: sphere_samples)",
                   kind="int"),
         Parameter("density_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
@@ -500,7 +509,8 @@ Precomputed = PrecomputedSky
 _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "transmittance_r_size",
                    "scattering_r_size", "scattering_mu_size", "scattering_mu_s_size",
                    "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
-                   "integration_samples", "sphere_samples", "density_mu_s_size",
+                   "integration_samples", "sphere_samples", "high_order_sphere_samples",
+                   "density_mu_s_size",
                    "order_table_divisor", "max_sun_zenith_deg")
 
 

@@ -11,7 +11,10 @@ import math
 
 from numba import njit
 
-from skydome.models.simulated.precomputed._geometry import clamp_cos
+import numpy as np
+
+from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
+                                                             distance_to_top, ray_nodes)
 
 
 
@@ -160,3 +163,30 @@ def density_phi_index(nu, mu_s_t, mt, n_pj):
     den = math.sqrt(max((1.0 - nu * nu) * (1.0 - mu_s_t * mu_s_t), 0.0))
     cphi = 1.0 if den < 1e-9 else clamp_cos((mt - nu * mu_s_t) / den)
     return _split(math.acos(cphi) / math.pi * (n_pj - 1), n_pj)
+
+
+# -- the rays of the 4-D table ---------------------------------------------------------------------
+@njit(cache=True)
+def mu_s_nodes(n_ms, mu_s_min):
+    """mu_s of every node of a table's mu_s axis of n_ms nodes."""
+    mus = np.empty(n_ms)
+    for ims in range(n_ms):
+        mus[ims] = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+    return mus
+
+
+@njit(cache=True)
+def table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq, wq, nus):
+    """The view ray of the 4-D table's (r, mu) cell number idx (r major): (ir, imu, r, mu,
+    hits_ground, number of quadrature nodes); its nodes and weights in tq, wq
+    (:func:`._geometry.ray_nodes`) and nus[ims * n_nu + inu] the nu of every (mu_s, nu)
+    node (mu_s at ``mus``)."""
+    ir = idx // n_mu
+    imu = idx % n_mu
+    r = cell_r(ir, n_r, R, Rt)
+    mu, ground = cell_mu(imu, n_mu, r, R, Rt)
+    for ims in range(mus.shape[0]):
+        for inu in range(n_nu):
+            nus[ims * n_nu + inu] = cell_nu(inu, n_nu, mu, mus[ims])
+    d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+    return ir, imu, r, mu, ground, ray_nodes(r, mu, d, n_q, ts, tq, wq)

@@ -53,16 +53,18 @@ class _DensityQuadrature:
     factored where the phase function is a polynomial of degree <= 2 in the cosine; a
     tabulated phase function has one matrix per table wavelength (``per_wavelength[k]``)."""
 
-    def __init__(self, pc, pp, pt, n_th):
+    def __init__(self, pc, pp, pt, n_th, n_th_out=None):
         from skydome.models.simulated.precomputed import _density
+
+        n_th_out = n_th if n_th_out is None else n_th_out
 
         self.th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
         self.ph_in = (np.arange(n_th) + 0.5) * np.pi / n_th
         d_omega = np.sin(self.th_in) * (np.pi / n_th) ** 2
         # outgoing grid of the scattering density, in the sun's frame: theta (angle from the
         # sun) and phi (azimuth about the sun) in [0, pi]
-        self.th_out = np.linspace(0.0, np.pi, 2 * n_th + 1)
-        self.ph_out = np.linspace(0.0, np.pi, n_th + 1)
+        self.th_out = np.linspace(0.0, np.pi, 2 * n_th_out + 1)
+        self.ph_out = np.linspace(0.0, np.pi, n_th_out + 1)
         self.n_in = self.th_in.size * self.ph_in.size
         self.n_out = self.th_out.size * self.ph_out.size
         # P(o.i) = a0 + a1 o.i + a2 (o.i)^2 is exactly left(o) . right(i) with 10 terms, so
@@ -129,7 +131,15 @@ def precompute(props, wl, p):
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
     if p["orders"] >= 2:
-        q = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
+        q = q2 = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
+        # orders >= 3 (smooth: their sources are scattered at least twice) with their own,
+        # coarser sphere of incident directions and an outgoing grid order_table_divisor
+        # times coarser (interpolated up into the summed density)
+        div = p["order_table_divisor"]
+        n_high = p["high_order_sphere_samples"] or p["sphere_samples"]
+        n_out_high = max(2, p["sphere_samples"] // div)
+        q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
+            pc, pp, pt, n_high, n_out_high)
         # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
         # hemisphere; phi on [0, pi] doubled)
         n_ti = 16
@@ -158,6 +168,9 @@ def precompute(props, wl, p):
         axes = tuple(range(delta.ndim - 1))
         for order in range(2, p["orders"] + 1):
             first = order == 2
+            if order == 3 and q3 is not q2:
+                q, J = q3, None
+                L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
             # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
             _density.incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, Rt,
                                        mu_s_min, alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
@@ -170,7 +183,7 @@ def precompute(props, wl, p):
             if J_sum is None:
                 J_sum, J = J, None
             else:
-                J_sum += J
+                add_density(J_sum, J, q2, q)
             # 3c. ground irradiance of order-1 ([BN08] eq. 9)
             dE_new = np.empty_like(E)
             _irradiance.indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th_i, ph_i,
@@ -190,7 +203,7 @@ def precompute(props, wl, p):
             # ground reflection enters.) Added to the summed density in place: the last
             # order's J is not needed afterwards.
             g = _series_factor(tot, tot_prev).astype(np.float32)
-            J_sum += np.multiply(J, g, out=J)
+            add_density(J_sum, np.multiply(J, g, out=J), q2, q)
             ea = tuple(range(dE.ndim - 1))
             E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
         del J, L_in, rhs, delta
@@ -223,6 +236,29 @@ def order_table_shape(shape, divisor):
     d = int(divisor)
     return (n_r, max(4, 2 * ((n_mu // d) // 2)), max(2, (n_ms - 1) // d + 1),
             max(2, (n_nu - 1) // d + 1))
+
+
+def add_density(J_sum, J, q_sum, q):
+    """J_sum += J, J on the outgoing grid of ``q`` and J_sum on that of ``q_sum``
+    (:class:`_DensityQuadrature`, both uniform in theta and phi over [0, pi]): bilinear in
+    (theta, phi) where the grids differ, one theta row of J_sum at a time (no temporary
+    of the whole table)."""
+    if J.shape == J_sum.shape:
+        J_sum += J
+        return
+
+    def cells(fine, coarse):
+        x = fine / np.pi * (coarse.size - 1)
+        i = np.minimum(x.astype(np.int64), coarse.size - 2)
+        return i, (x - i).astype(np.float32)
+
+    it, ft = cells(q_sum.th_out, q.th_out)
+    ip, fp = cells(q_sum.ph_out, q.ph_out)
+    wp = fp[:, None, None, None]
+    for a in range(J_sum.shape[1]):
+        for k in range(J_sum.shape[0]):
+            row = (1.0 - ft[a]) * J[k, it[a]] + ft[a] * J[k, it[a] + 1]   # (phi, r, mu_s, l)
+            J_sum[k, a] += (1.0 - wp) * row[ip] + wp * row[ip + 1]
 
 
 def density_products(q, L_in, w_col, beta_s, rhs, J):
