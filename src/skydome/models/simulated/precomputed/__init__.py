@@ -76,8 +76,8 @@ class PrecomputedSky(SkyModel):
         (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
     high_order_sphere_samples : int, optional
         Zenith-angle samples of the incident directions in the scattering density of
-        orders >= 3 (default 16: their sources, scattered at least twice, are smooth; None:
-        ``sphere_samples``).
+        orders >= 3, at most ``sphere_samples`` (default 16: their sources, scattered at
+        least twice, are smooth; None: ``sphere_samples``).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
     order_table_divisor : int

@@ -136,7 +136,7 @@ def precompute(props, wl, p):
         # coarser sphere of incident directions and an outgoing grid order_table_divisor
         # times coarser (interpolated up into the summed density)
         div = p["order_table_divisor"]
-        n_high = p["high_order_sphere_samples"] or p["sphere_samples"]
+        n_high = min(p["high_order_sphere_samples"] or p["sphere_samples"], p["sphere_samples"])
         n_out_high = max(2, p["sphere_samples"] // div)
         q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
             pc, pp, pt, n_high, n_out_high)
