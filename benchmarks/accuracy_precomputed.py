@@ -36,6 +36,9 @@ SETTINGS = {
                           scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64,
                           integration_samples=20),
     "default": {},
+    # the default with every order on the full table and sphere (what the coarser grids of
+    # orders >= 3 give up)
+    "full_orders": dict(order_table_divisor=1, high_order_sphere_samples=32),
 }
 
 

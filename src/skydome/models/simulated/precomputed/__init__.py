@@ -74,8 +74,20 @@ class PrecomputedSky(SkyModel):
     sphere_samples : int
         Zenith-angle samples of the incident directions in the scattering density
         (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
+    high_order_sphere_samples : int, optional
+        Zenith-angle samples of the incident directions in the scattering density of
+        orders >= 3, at most ``sphere_samples`` (default 16: their sources, scattered at
+        least twice, are smooth; None: ``sphere_samples``).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
+    order_table_divisor : int
+        Each scattering order's radiance, which is only the source of the next order, is
+        integrated on a table this many times coarser on the mu, mu_s and nu axes (default
+        2; 1: on the full table), and the scattering density of orders >= 3 on an
+        outgoing grid this many times coarser, interpolated up; the stored
+        multiple-scattering table is integrated once, at full size, from the summed
+        scattering density, and the observer's sky from that density, so only orders >= 3
+        see the coarse grids.
 
     The defaults are the settings validated against the Monte Carlo reference, with 48
     nodes of the new mu_s mapping instead of 64 of Bruneton's (docs/validation.md). Bruneton's cheaper sizes, 5-14 % off in hazy air: ``orders=4,
@@ -116,8 +128,13 @@ class PrecomputedSky(SkyModel):
         Parameter("integration_samples", "", 20, 2, 1000, "quadrature nodes per ray piece", kind="int"),
         Parameter("sphere_samples", "", 32, 4, 256, "zenith samples of the scattering density",
                   kind="int"),
+        Parameter("high_order_sphere_samples", "", 16, 4, 256,
+                  "zenith samples of the scattering density of orders >= 3 (None: sphere_samples)",
+                  kind="int"),
         Parameter("density_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
+        Parameter("order_table_divisor", "", 2, 1, 8,
+                  "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
         Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),
     )
@@ -492,8 +509,9 @@ Precomputed = PrecomputedSky
 _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "transmittance_r_size",
                    "scattering_r_size", "scattering_mu_size", "scattering_mu_s_size",
                    "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
-                   "integration_samples", "sphere_samples", "density_mu_s_size",
-                   "max_sun_zenith_deg")
+                   "integration_samples", "sphere_samples", "high_order_sphere_samples",
+                   "density_mu_s_size",
+                   "order_table_divisor", "max_sun_zenith_deg")
 
 
 def clear_cache() -> int:

@@ -11,7 +11,10 @@ import math
 
 from numba import njit
 
-from skydome.models.simulated.precomputed._geometry import clamp_cos
+import numpy as np
+
+from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
+                                                             distance_to_top, ray_nodes)
 
 
 
@@ -25,6 +28,23 @@ MU_S_WIDTH = math.radians(6.0)
 @njit(cache=True)
 def _mu_s_u(th):
     return math.asinh((th - MU_S_CENTRE) / MU_S_WIDTH)
+
+
+@njit(cache=True)
+def mu_s_frame(mu_s_min):
+    """The constants of :func:`mu_s_unit` for one ``mu_s_min``: (theta_max, u(theta_max),
+    1 / (u(theta_max) - u(0))), so that a kernel computes them once."""
+    th_max = math.acos(clamp_cos(mu_s_min))
+    top = _mu_s_u(th_max)
+    return th_max, top, 1.0 / (top - _mu_s_u(0.0))
+
+
+@njit(cache=True)
+def mu_s_unit_framed(mu_s, frame):
+    """:func:`mu_s_unit` with the constants ``frame`` of :func:`mu_s_frame`."""
+    th = math.acos(clamp_cos(mu_s))
+    x = (frame[1] - _mu_s_u(min(th, frame[0]))) * frame[2]
+    return min(max(x, 0.0), 1.0)
 
 
 @njit(cache=True)
@@ -42,11 +62,7 @@ def mu_s_unit(mu_s, mu_s_min):
     elevation, and 15x lower at the zenith, where it changes slowly. Cells for 64 nodes
     (sun zenith bands 0-30, 30-60, 60-80, 80-90, 90-96, 96-102, 102-108 deg): 4.8, 8.0,
     11.4, 13.7, 11.7, 8.1, 5.2; [Bru17]'s at 64 nodes: 1.1, 5.5, 14.4, 18.3, 11.4, 7.6, 4.6."""
-    th = math.acos(clamp_cos(mu_s))
-    th_max = math.acos(clamp_cos(mu_s_min))
-    top = _mu_s_u(th_max)
-    x = (top - _mu_s_u(min(th, th_max))) / (top - _mu_s_u(0.0))
-    return min(max(x, 0.0), 1.0)
+    return mu_s_unit_framed(mu_s, mu_s_frame(mu_s_min))
 
 
 @njit(cache=True)
@@ -133,10 +149,10 @@ def mu_index(r, mu, ground, n_mu, R, Rt):
 
 
 @njit(cache=True, fastmath=True)
-def density_mu_s_index(mu_s_t, mu_s_min, n_msj):
+def density_mu_s_index(mu_s_t, frame, n_msj):
     """Node and fraction of mu_s_t on the scattering density's mu_s axis (the mapping of
-    :func:`mu_s_unit`, its own node count)."""
-    return _split(mu_s_unit(mu_s_t, mu_s_min) * (n_msj - 1), n_msj)
+    :func:`mu_s_unit`, its own node count; ``frame`` from :func:`mu_s_frame`)."""
+    return _split(mu_s_unit_framed(mu_s_t, frame) * (n_msj - 1), n_msj)
 
 
 @njit(cache=True, fastmath=True)
@@ -147,3 +163,30 @@ def density_phi_index(nu, mu_s_t, mt, n_pj):
     den = math.sqrt(max((1.0 - nu * nu) * (1.0 - mu_s_t * mu_s_t), 0.0))
     cphi = 1.0 if den < 1e-9 else clamp_cos((mt - nu * mu_s_t) / den)
     return _split(math.acos(cphi) / math.pi * (n_pj - 1), n_pj)
+
+
+# -- the rays of the 4-D table ---------------------------------------------------------------------
+@njit(cache=True)
+def mu_s_nodes(n_ms, mu_s_min):
+    """mu_s of every node of a table's mu_s axis of n_ms nodes."""
+    mus = np.empty(n_ms)
+    for ims in range(n_ms):
+        mus[ims] = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+    return mus
+
+
+@njit(cache=True)
+def table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq, wq, nus):
+    """The view ray of the 4-D table's (r, mu) cell number idx (r major): (ir, imu, r, mu,
+    hits_ground, number of quadrature nodes); its nodes and weights in tq, wq
+    (:func:`._geometry.ray_nodes`) and nus[ims * n_nu + inu] the nu of every (mu_s, nu)
+    node (mu_s at ``mus``)."""
+    ir = idx // n_mu
+    imu = idx % n_mu
+    r = cell_r(ir, n_r, R, Rt)
+    mu, ground = cell_mu(imu, n_mu, r, R, Rt)
+    for ims in range(mus.shape[0]):
+        for inu in range(n_nu):
+            nus[ims * n_nu + inu] = cell_nu(inu, n_nu, mu, mus[ims])
+    d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+    return ir, imu, r, mu, ground, ray_nodes(r, mu, d, n_q, ts, tq, wq)

@@ -12,9 +12,35 @@ from numba import njit, prange
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along, ray_nodes)
 from skydome.models.simulated.precomputed._lookup import node_weights
-from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
-                                                            density_mu_s_index, density_phi_index,
-                                                            mu_s_from_unit, r_index)
+from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
+                                                            density_phi_index, mu_s_frame,
+                                                            mu_s_nodes, r_index, table_ray)
+
+
+
+@njit(cache=True, fastmath=True)
+def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
+    """out[l] += sum_k tw[k, l] J_k(theta, phi, r, mu_s)[l]: the scattering density J
+    [k, theta, phi, r, mu_s, l] interpolated quadrilinearly in the cell (jt + jb, ip + e,
+    jr + ja, ims_j + c), weighted per constituent by ``tw`` (:func:`._lookup.node_weights`);
+    the weights in the precision of ``out``."""
+    nl = out.shape[0]
+    for kk in range(J.shape[0]):
+        twk = tw[kk]
+        Jk = J[kk]
+        for dt in range(2):
+            wt = jb if dt else 1.0 - jb
+            for dr in range(2):
+                wr = ja if dr else 1.0 - ja
+                for ds in range(2):
+                    ws = c if ds else 1.0 - c
+                    w0 = wt * wr * ws
+                    row0 = Jk[jt + dt, ip, jr + dr, ims_j + ds]
+                    row1 = Jk[jt + dt, ip + 1, jr + dr, ims_j + ds]
+                    wa = out.dtype.type(w0 * (1.0 - e))
+                    wb = out.dtype.type(w0 * e)
+                    for l in range(nl):
+                        out[l] += (wa * row0[l] + wb * row1[l]) * twk[l]
 
 
 
@@ -44,12 +70,9 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     nk = n_ms * n_nu
-    mus = np.empty(n_ms)
-    for ims in range(n_ms):
-        mus[ims] = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+    frame = mu_s_frame(mu_s_min)
+    mus = mu_s_nodes(n_ms, mu_s_min)
     for idx in prange(n_r * n_mu):
-        ir = idx // n_mu
-        imu = idx % n_mu
         tq = np.empty(2 * n_q)
         wq = np.empty(2 * n_q)
         w1 = np.empty(nc)
@@ -60,16 +83,11 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
         nus = np.empty(nk)
         jts = np.empty(nk, dtype=np.int64)
         jbs = np.empty(nk)
-        r = cell_r(ir, n_r, R, Rt)
-        mu, ground = cell_mu(imu, n_mu, r, R, Rt)
-        for ims in range(n_ms):
-            for inu in range(n_nu):
-                k = ims * n_nu + inu
-                nus[k] = cell_nu(inu, n_nu, mu, mus[ims])
-                # the angle from the sun (acos nu) is the same at every node of the ray
-                jts[k], jbs[k] = _split(math.acos(nus[k]) / math.pi * (n_tj - 1), n_tj)
-        d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
-        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+        ir, imu, r, mu, ground, nq = table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq,
+                                               wq, nus)
+        for k in range(nk):
+            # the angle from the sun (acos nu) is the same at every node of the ray
+            jts[k], jbs[k] = _split(math.acos(nus[k]) / math.pi * (n_tj - 1), n_tj)
         for q in range(nq):
             t = tq[q]
             rt = point_along(r, mu, t, R, Rt)
@@ -78,32 +96,19 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
                          w1, w2, cs, tw)
             inv_rt = 1.0 / rt
-            for k in range(nk):
+            # nu outer, mu_s inner: successive nodes share the angle from the sun, so the
+            # rows of J they read lie in one (theta, r) block (4.5x less memory traffic)
+            for kn in range(nk):
+                k = (kn % n_ms) * n_nu + kn // n_ms
                 nu = nus[k]
                 mu_s_t = clamp_cos((r * mus[k // n_nu] + t * nu) * inv_rt)
-                ims_j, c = density_mu_s_index(mu_s_t, mu_s_min, n_msj)
+                ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
                 # J in the sun's frame: angle from the sun (acos nu) and azimuth about the
                 # sun from its vertical plane (zenith side)
                 jt = jts[k]
                 jb = jbs[k]
                 ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
-                o = acc[k]
-                for kk in range(nsc):
-                    twk = tw[kk]
-                    Jk = J[kk]
-                    for dt in range(2):
-                        wt = jb if dt else 1.0 - jb
-                        for dr in range(2):
-                            wr = ja if dr else 1.0 - ja
-                            for ds in range(2):
-                                ws = c if ds else 1.0 - c
-                                w0 = wt * wr * ws
-                                row0 = Jk[jt + dt, ip, jr + dr, ims_j + ds]
-                                row1 = Jk[jt + dt, ip + 1, jr + dr, ims_j + ds]
-                                wa = np.float32(w0 * (1.0 - e))
-                                wb = np.float32(w0 * e)
-                                for l in range(nl):
-                                    o[l] += (wa * row0[l] + wb * row1[l]) * twk[l]
+                density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, acc[k])
         for k in range(nk):
             for l in range(nl):
                 out[ir, imu, k // n_nu, k % n_nu, l] = acc[k, l]
@@ -127,6 +132,7 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     n_mu, n_nu, nl = out.shape
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
         tq = np.empty(2 * n_q)
         wq = np.empty(2 * n_q)
@@ -150,25 +156,10 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             for inu in range(n_nu):
                 nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
-                ims_j, c = density_mu_s_index(mu_s_t, mu_s_min, n_msj)
+                ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
                 jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
                 ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
-                o = acc[inu]
-                for kk in range(nsc):
-                    Jk = J[kk]
-                    for dt in range(2):
-                        wt = jb if dt else 1.0 - jb
-                        for dr in range(2):
-                            wr = ja if dr else 1.0 - ja
-                            for ds in range(2):
-                                ws = c if ds else 1.0 - c
-                                w0 = wt * wr * ws
-                                row0 = Jk[jt + dt, ip, jr + dr, ims_j + ds]
-                                row1 = Jk[jt + dt, ip + 1, jr + dr, ims_j + ds]
-                                wa = w0 * (1.0 - e)
-                                wb = w0 * e
-                                for l in range(nl):
-                                    o[l] += (wa * row0[l] + wb * row1[l]) * tw[kk, l]
+                density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, acc[inu])
         for inu in range(n_nu):
             for l in range(nl):
                 out[imu, inu, l] = acc[inu, l]

@@ -53,16 +53,18 @@ class _DensityQuadrature:
     factored where the phase function is a polynomial of degree <= 2 in the cosine; a
     tabulated phase function has one matrix per table wavelength (``per_wavelength[k]``)."""
 
-    def __init__(self, pc, pp, pt, n_th):
+    def __init__(self, pc, pp, pt, n_th, n_th_out=None):
         from skydome.models.simulated.precomputed import _density
+
+        n_th_out = n_th if n_th_out is None else n_th_out
 
         self.th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
         self.ph_in = (np.arange(n_th) + 0.5) * np.pi / n_th
         d_omega = np.sin(self.th_in) * (np.pi / n_th) ** 2
         # outgoing grid of the scattering density, in the sun's frame: theta (angle from the
         # sun) and phi (azimuth about the sun) in [0, pi]
-        self.th_out = np.linspace(0.0, np.pi, 2 * n_th + 1)
-        self.ph_out = np.linspace(0.0, np.pi, n_th + 1)
+        self.th_out = np.linspace(0.0, np.pi, 2 * n_th_out + 1)
+        self.ph_out = np.linspace(0.0, np.pi, n_th_out + 1)
         self.n_in = self.th_in.size * self.ph_in.size
         self.n_out = self.th_out.size * self.ph_out.size
         # P(o.i) = a0 + a1 o.i + a2 (o.i)^2 is exactly left(o) . right(i) with 10 terms, so
@@ -125,91 +127,93 @@ def precompute(props, wl, p):
     col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
     ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
     report("precomputing tables: scattering orders", 1, p["orders"])
-    ms = np.zeros(ss.shape[1:], dtype=np.float32)
+    ms = None   # orders 2..N (step 4)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
     if p["orders"] >= 2:
-        q = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
+        q = q2 = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
+        # orders >= 3 (smooth: their sources are scattered at least twice) with their own,
+        # coarser sphere of incident directions and an outgoing grid order_table_divisor
+        # times coarser (interpolated up into the summed density)
+        div = p["order_table_divisor"]
+        n_high = min(p["high_order_sphere_samples"] or p["sphere_samples"], p["sphere_samples"])
+        n_out_high = max(2, p["sphere_samples"] // div)
+        q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
+            pc, pp, pt, n_high, n_out_high)
         # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
         # hemisphere; phi on [0, pi] doubled)
         n_ti = 16
         th_i = (np.arange(n_ti) + 0.5) * (0.5 * np.pi) / n_ti
         ph_i = (np.arange(2 * n_ti) + 0.5) * np.pi / (2 * n_ti)
         dom_i = np.sin(th_i) * (0.5 * np.pi / n_ti) * (np.pi / (2 * n_ti))
-        delta = np.zeros((1, 1, 1, 1, nl), dtype=np.float32)
         dE = np.zeros_like(E)
         # the scattering density's own mu_s axis (same mapping, its own node count)
         n_ms_j = p["density_mu_s_size"] or p["scattering_mu_s_size"]
         L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-        rhs = np.empty((int(q.rows[-1]), n_r * n_ms_j * nl), dtype=np.float32)
+        # right-hand sides of the factored (polynomial) phase functions only
+        rhs = np.empty((10, n_r * n_ms_j * nl), dtype=np.float32)
         # weight of each constituent at every (r, mu_s, l) column of L_in: its scattering
         # coefficient at reference density (the density profile is applied exactly along
         # each ray in 3d: J_k / rho_k is smooth in r, rho_k J_k is not)
         w_col = [np.ascontiguousarray(np.broadcast_to(beta_s[k].astype(np.float32),
                                                       (n_r, n_ms_j, nl)).reshape(-1))
                  for k in range(nsc)]
-        J = np.empty((nsc, q.th_out.size, q.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+        # each order's radiance, needed only as the source of the next order (3a, 3c) and
+        # for the geometric ratio, on a table ``order_table_divisor`` times coarser in mu,
+        # mu_s and nu; the stored table is integrated once from the summed density (4.)
+        delta = np.empty(order_table_shape(ss.shape[1:-1], p["order_table_divisor"]) + (nl,),
+                         dtype=np.float32)
+        J = None
         tot = tot_prev = dE_prev = None
-        axes = tuple(range(ms.ndim - 1))
+        axes = tuple(range(delta.ndim - 1))
         for order in range(2, p["orders"] + 1):
             first = order == 2
+            if order == 3 and q3 is not q2:
+                q, J = q3, None
+                L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
             # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
             _density.incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, Rt,
                                        mu_s_min, alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
-            # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid: one float32
-            # matrix product (BLAS) over all (r, mu_s, l), laid out [k, theta, phi, r, mu_s, l]
-            lin = L_in.reshape(q.n_in, -1)
-            for k in range(nsc):
-                out = rhs[q.rows[k]:q.rows[k + 1]]
-                if q.per_wavelength[k] is not None:
-                    continue
-                if q.right[k] is None:
-                    np.multiply(lin, w_col[k], out=out)
-                else:
-                    np.matmul(q.right[k], lin, out=out)
-                    out *= w_col[k]
-            for k in range(nsc):
-                if q.per_wavelength[k] is None:
-                    np.matmul(q.left[:, q.rows[k]:q.rows[k + 1]], rhs[q.rows[k]:q.rows[k + 1]],
-                              out=J[k].reshape(q.n_out, -1))
-                    continue
-                # tabulated phase: one product per table wavelength
-                lin3 = L_in.reshape(q.n_in, -1, nl)
-                J3 = J[k].reshape(q.n_out, -1, nl)
-                for l in range(nl):
-                    x = np.ascontiguousarray(lin3[:, :, l]) * np.float32(beta_s[k, l])
-                    J3[:, :, l] = q.per_wavelength[k][l] @ x
-            # the density of orders 2..N, kept for the observer's slice at render time
+            # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid
+            if J is None:
+                J = np.empty((nsc, q.th_out.size, q.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+            density_products(q, L_in, w_col, beta_s, rhs, J)
+            # the density of orders 2..N, kept for the observer's slice at render time and
+            # for the stored table
             if J_sum is None:
-                J_sum = J.copy()
+                J_sum, J = J, None
             else:
-                J_sum += J
+                add_density(J_sum, J, q2, q)
             # 3c. ground irradiance of order-1 ([BN08] eq. 9)
             dE_new = np.empty_like(E)
             _irradiance.indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th_i, ph_i,
                                             dom_i, dE_new)
             E += dE_new
             dE_prev, dE = dE, dE_new
-            # 3d. scattering of this order along every ray ([BN08] eq. 8)
-            if first:
-                delta = np.empty_like(ms)
-            _multiple.multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                                mu_s_min, n_q_ms, QUADRATURE_SCALE_M, delta)
-            ms += delta
+            # 3d. scattering of this order along every ray ([BN08] eq. 8), on the order table
+            _multiple.multiple_scattering_table(J_sum if J is None else J, codes, p0s, p1s,
+                                                sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms,
+                                                QUADRATURE_SCALE_M, delta)
             tot_prev, tot = tot, delta.sum(axis=axes, dtype=np.float64)
             report("precomputing tables: scattering orders", order, p["orders"])
         if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
             # the orders beyond N as a geometric series whose ratio f is that of the last two
             # orders' total radiance, per wavelength (the idea of [Hil20] eq. 10):
             # L_N f / (1 - f). (A per-cell ratio was tried: it is unstable in cells where the
-            # ground reflection enters.) Added in place: the last order's delta and J are
-            # not needed afterwards.
+            # ground reflection enters.) Added to the summed density in place: the last
+            # order's J is not needed afterwards.
             g = _series_factor(tot, tot_prev).astype(np.float32)
-            ms += np.multiply(delta, g, out=delta)
-            J_sum += np.multiply(J, g, out=J)
+            add_density(J_sum, np.multiply(J, g, out=J), q2, q)
             ea = tuple(range(dE.ndim - 1))
             E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
-        del J, L_in, rhs
+        del J, L_in, rhs, delta
+        # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
+        # the full table (the integral is linear in J: the same as the sum of the orders')
+        ms = np.empty(ss.shape[1:], dtype=np.float32)
+        _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                            mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
+    if ms is None:
+        ms = np.zeros(ss.shape[1:], dtype=np.float32)
     dens = {}
     if J_sum is not None:
         dens = dict(scattering_density=J_sum, profile_code=np.asarray(codes),
@@ -221,6 +225,69 @@ def precompute(props, wl, p):
                   scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
                   mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
                   precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
+
+
+def order_table_shape(shape, divisor):
+    """(n_r, n_mu, n_mu_s, n_nu) of the per-order table: ``shape`` (of the stored 4-D
+    table) with mu, mu_s and nu ``divisor`` times coarser (n_mu kept even, at least 4; the
+    others at least 2 nodes); r is kept, so that the scattering density's r nodes fall on
+    nodes of the table."""
+    n_r, n_mu, n_ms, n_nu = shape
+    d = int(divisor)
+    return (n_r, max(4, 2 * ((n_mu // d) // 2)), max(2, (n_ms - 1) // d + 1),
+            max(2, (n_nu - 1) // d + 1))
+
+
+def add_density(J_sum, J, q_sum, q):
+    """J_sum += J, J on the outgoing grid of ``q`` and J_sum on that of ``q_sum``
+    (:class:`_DensityQuadrature`, both uniform in theta and phi over [0, pi]): bilinear in
+    (theta, phi) where the grids differ, one theta row of J_sum at a time (no temporary
+    of the whole table)."""
+    if J.shape == J_sum.shape:
+        J_sum += J
+        return
+
+    def cells(fine, coarse):
+        x = fine / np.pi * (coarse.size - 1)
+        i = np.minimum(x.astype(np.int64), coarse.size - 2)
+        return i, (x - i).astype(np.float32)
+
+    it, ft = cells(q_sum.th_out, q.th_out)
+    ip, fp = cells(q_sum.ph_out, q.ph_out)
+    wp = fp[:, None, None, None]
+    for a in range(J_sum.shape[1]):
+        for k in range(J_sum.shape[0]):
+            row = (1.0 - ft[a]) * J[k, it[a]] + ft[a] * J[k, it[a] + 1]   # (phi, r, mu_s, l)
+            J_sum[k, a] += (1.0 - wp) * row[ip] + wp * row[ip + 1]
+
+
+def density_products(q, L_in, w_col, beta_s, rhs, J):
+    """Step 3b: the scattering density J ([BN08] eq. 7) on the outgoing grid of ``q``
+    (:class:`_DensityQuadrature`), laid out [k, theta, phi, r, mu_s, l], from the incident
+    radiance ``L_in`` [i, r, mu_s, l]: one float32 matrix product (BLAS) per scattering
+    constituent over all (r, mu_s, l) columns, each column weighted by the constituent's
+    scattering coefficient ``w_col[k]`` after the product (J = P (L w) = (P L) w: no scaled
+    copy of L_in); factored phase functions through their 10-row right-hand side ``rhs``;
+    tabulated ones one product per wavelength."""
+    nsc, nl = J.shape[0], J.shape[-1]
+    lin = L_in.reshape(q.n_in, -1)
+    for k in range(nsc):
+        Jk = J[k].reshape(q.n_out, -1)
+        if q.per_wavelength[k] is not None:
+            lin3 = L_in.reshape(q.n_in, -1, nl)
+            J3 = J[k].reshape(q.n_out, -1, nl)
+            for l in range(nl):
+                x = np.ascontiguousarray(lin3[:, :, l]) * np.float32(beta_s[k, l])
+                J3[:, :, l] = q.per_wavelength[k][l] @ x
+            continue
+        left = q.left[:, q.rows[k]:q.rows[k + 1]]
+        if q.right[k] is None:
+            np.matmul(left, lin, out=Jk)
+        else:
+            out = rhs[:q.right[k].shape[0]]
+            np.matmul(q.right[k], lin, out=out)
+            np.matmul(left, out, out=Jk)
+        Jk *= w_col[k]
 
 
 def _series_factor(tot, tot_prev):

@@ -9,10 +9,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
-                                                             distance_to_top, point_along, ray_nodes)
+from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._lookup import columns_segment
-from skydome.models.simulated.precomputed._mapping import cell_mu, cell_nu, cell_r, mu_s_from_unit
+from skydome.models.simulated.precomputed._mapping import mu_s_nodes, table_ray
 from skydome.transport._kernels import profile_density
 
 
@@ -40,12 +39,8 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
     n_rT, n_muT = trans.shape[0], trans.shape[1]
     H = math.sqrt(Rt * Rt - R * R)
     nk = n_ms * n_nu
-    mus = np.empty(n_ms)
-    for ims in range(n_ms):
-        mus[ims] = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+    mus = mu_s_nodes(n_ms, mu_s_min)
     for idx in prange(n_r * n_mu):
-        ir = idx // n_mu
-        imu = idx % n_mu
         tq = np.empty(2 * n_q)
         wq = np.empty(2 * n_q)
         w1 = np.empty(nc)
@@ -56,13 +51,8 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
         tsun = np.empty(nl, dtype=np.float32)
         acc = np.zeros((nk, nsc, nl), dtype=np.float32)
         nus = np.empty(nk)
-        r = cell_r(ir, n_r, R, Rt)
-        mu, ground = cell_mu(imu, n_mu, r, R, Rt)
-        for ims in range(n_ms):
-            for inu in range(n_nu):
-                nus[ims * n_nu + inu] = cell_nu(inu, n_nu, mu, mus[ims])
-        d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
-        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+        ir, imu, r, mu, ground, nq = table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq,
+                                               wq, nus)
         for q in range(nq):
             t = tq[q]
             rt = point_along(r, mu, t, R, Rt)
