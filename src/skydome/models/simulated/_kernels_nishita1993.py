@@ -39,7 +39,7 @@ from skydome.transport._medium import profile_density
 from skydome.transport._phase import phase_fill
 from skydome.transport._quadrature import column_quadrature, medium_columns
 
-SURFACE_ALBEDO, SURFACE_OCEAN, SURFACE_TEXTURE = 0, 1, 2
+SURFACE_ALBEDO, SURFACE_OCEAN, SURFACE_TEXTURE, SURFACE_EARTH = 0, 1, 2, 3
 
 
 # -- sphere / cylinder index mapping -----------------------------------------------------------
@@ -88,14 +88,15 @@ class LightTable(NamedTuple):
 class Surface(NamedTuple):
     """The surface seen where a view ray hits the ground ([NSTN93] sec. 5)."""
 
-    code: int              # SURFACE_ALBEDO, SURFACE_OCEAN or SURFACE_TEXTURE
+    code: int              # SURFACE_ALBEDO, SURFACE_OCEAN, SURFACE_TEXTURE or SURFACE_EARTH
     albedo: np.ndarray     # (nl,) Lambertian albedo
     mu_grid: np.ndarray    # (n_mu,) sun cosines of the skylight table
     e_sky: np.ndarray      # (n_mu, nl) diffuse sky irradiance [W m^-2 nm^-1]
     water_c: np.ndarray    # (nl,) attenuation coefficient of the water [m^-1]
     water_b: np.ndarray    # (nl,) scattering coefficient of the water [m^-1]
     n_water: float         # refractive index of the water
-    tex: np.ndarray        # (th, tw, 3) texture albedo (latitude x longitude)
+    sigma2: float          # mean square slope of the sea surface (Cox & Munk 1954)
+    tex: np.ndarray        # (th, tw, 4) texture albedo R, G, B and land fraction
     tex_basis: np.ndarray  # (3, nl) spectra of the texture's R, G, B
     rot: np.ndarray        # (3, 3) local ENU -> earth-fixed
 
@@ -182,6 +183,50 @@ def fresnel(cos_i, n):
     rs = (ci - n * ct) / (ci + n * ct)
     rp = (n * ci - ct) / (n * ci + ct)
     return 0.5 * (rs * rs + rp * rp)
+
+
+@njit(cache=True)
+def cox_munk_glint(sx, sy, sz, vx, vy, vz, nx, ny, nz, sigma2, n):
+    """Sun glint of a rough sea: reflected radiance per unit of normal solar irradiance
+    [sr^-1] for the sun in direction s and the viewer in direction v (unit vectors away from
+    the surface), the mean surface normal n.
+
+    Facets with an isotropic Gaussian distribution of slopes ([CM54], mean square slope
+    ``sigma2``), each a Fresnel mirror: the facets that reflect s into v have the normal
+    h = (s + v) / |s + v|, tilted by beta from n, and
+    ``L / E_n = F(s.h) p(tan beta) / (4 mu_v cos^4 beta)``, p(tan beta) =
+    exp(-tan^2 beta / sigma2) / (pi sigma2) ([CM54] eq. 5 with the Gram-Charlier terms
+    dropped; the reflection geometry of [CM54] sec. 5). No shadowing by the waves."""
+    mu_s = sx * nx + sy * ny + sz * nz
+    mu_v = vx * nx + vy * ny + vz * nz
+    if mu_s <= 0.0 or mu_v <= 0.0:
+        return 0.0
+    hx = sx + vx
+    hy = sy + vy
+    hz = sz + vz
+    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+    if hn < 1e-12:
+        return 0.0
+    cb = (hx * nx + hy * ny + hz * nz) / hn                 # cos(beta), facet tilt
+    if cb <= 0.0:
+        return 0.0
+    cw = (hx * sx + hy * sy + hz * sz) / hn                 # cos of the incidence on the facet
+    tan2 = (1.0 - cb * cb) / (cb * cb)
+    x = tan2 / sigma2
+    if x > 700.0:
+        return 0.0
+    p = math.exp(-x) / (math.pi * sigma2)                   # [CM54] slope density
+    cb2 = cb * cb
+    return fresnel(cw, n) * p / (4.0 * max(mu_v, 1e-6) * cb2 * cb2)
+
+
+@njit(cache=True)
+def cox_munk_glint_many(s, v, n, sigma2, n_water, out):
+    """:func:`cox_munk_glint` for the sun s (3,) and arrays of viewer directions v (m, 3)
+    over the mean normal n (3,) (for tests)."""
+    for i in range(v.shape[0]):
+        out[i] = cox_munk_glint(s[0], s[1], s[2], v[i, 0], v[i, 1], v[i, 2], n[0], n[1], n[2],
+                                sigma2, n_water)
 
 
 @njit(cache=True)
@@ -321,8 +366,8 @@ def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
 
 @njit(cache=True)
 def _texture_rgb(sf, nx, ny, nz):
-    """Texture albedo (r, g, b) at the surface normal n (latitude / longitude of the point;
-    sf.rot: local ENU -> earth-fixed)."""
+    """Texture albedo (r, g, b) and land fraction at the surface normal n (latitude /
+    longitude of the point; sf.rot: local ENU -> earth-fixed)."""
     rot = sf.rot
     ex = rot[0, 0] * nx + rot[0, 1] * ny + rot[0, 2] * nz
     ey = rot[1, 0] * nx + rot[1, 1] * ny + rot[1, 2] * nz
@@ -333,7 +378,7 @@ def _texture_rgb(sf, nx, ny, nz):
     tw = sf.tex.shape[1]
     row = min(max(int((0.5 - lat / math.pi) * th), 0), th - 1)
     col = int((lon / (2.0 * math.pi) + 0.5) * tw) % tw
-    return sf.tex[row, col, 0], sf.tex[row, col, 1], sf.tex[row, col, 2]
+    return sf.tex[row, col, 0], sf.tex[row, col, 1], sf.tex[row, col, 2], sf.tex[row, col, 3]
 
 
 @njit(cache=True)
@@ -348,10 +393,11 @@ def _sun_transmittance(m, scol, l, direct):
 
 
 @njit(cache=True, fastmath=True)
-def _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct):
-    """Add the light leaving a smooth ocean surface, attenuated towards the camera: Fresnel
-    reflection of the skylight plus the light scattered once in the water and refracted
-    out ([NSTN93] sec. 5)."""
+def _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct, weight):
+    """Add ``weight`` x the light leaving the sea surface, attenuated towards the camera:
+    the sun's glint on the rough surface (:func:`cox_munk_glint`), Fresnel reflection of
+    the skylight, and the light scattered once in the water and refracted out ([NSTN93]
+    sec. 5)."""
     m_extinction = m.extinction
     m_profile_code = m.profile_code
     wk_dcol = wk.dcol
@@ -391,14 +437,20 @@ def _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct):
     cos_psi = -(ss * sv * cphi) - ms_w * mv_w
     p_w = (1.0 + 0.835 * cos_psi * cos_psi) / (4.0 * math.pi * (1.0 + 0.835 / 3.0))
     mbar = 0.842
+    glint = 0.0
+    if direct:
+        glint = cox_munk_glint(sun[0], sun[1], sun[2], -d[0], -d[1], -d[2], nx, ny, nz,
+                               sf.sigma2, n)
     for l in range(nl):
-        e_dir = e_sun[l] * _sun_transmittance(m, wk_scol, l, direct) * max(mu_s, 0.0)
+        t_sun = _sun_transmittance(m, wk_scol, l, direct)
+        e_dir = e_sun[l] * t_sun * max(mu_s, 0.0)
         e_dif = _interp_irradiance(sf_mu_grid, sf_e_sky, mu_s, l)
         cw = sf_water_c[l]
         up = sf_water_b[l] * (p_w * e_dir * (1.0 - r_s) / (cw * (ms_w + mv_w))
                               + e_dif * (1.0 - 0.066) / (4.0 * math.pi) / (cw * (mbar + mv_w)))
-        l_surf = r_v * e_dif / math.pi + (1.0 - r_v) / (n * n) * up
-        wk_res[l] += l_surf * _view_transmittance(m_extinction, wk_dcol, l, nc)
+        l_surf = (e_sun[l] * t_sun * glint + r_v * e_dif / math.pi
+                  + (1.0 - r_v) / (n * n) * up)
+        wk_res[l] += weight * l_surf * _view_transmittance(m_extinction, wk_dcol, l, nc)
 
 
 @njit(cache=True, fastmath=True)
@@ -431,21 +483,29 @@ def _surface(d, r0, sun, m, e_sun, lt, sf, wk, t):
     mu_v = -(nx * d[0] + ny * d[1] + nz * d[2])             # cos of the viewing angle there
     direct = sun_columns(lt, m, m_R * (1.0 + 1e-12), mu_s, wk_scol) and mu_s > 0.0
     if sf_code == SURFACE_OCEAN:
-        _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct)
+        _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct, 1.0)
         return
     tr = 0.0
     tg = 0.0
     tb = 0.0
-    if sf_code == SURFACE_TEXTURE:
-        tr, tg, tb = _texture_rgb(sf, nx, ny, nz)
+    land = 1.0
+    if sf_code == SURFACE_TEXTURE or sf_code == SURFACE_EARTH:
+        tr, tg, tb, land = _texture_rgb(sf, nx, ny, nz)
+    if sf_code == SURFACE_EARTH:
+        if land < 1.0:
+            _ocean(d, sun, m, e_sun, sf, wk, nx, ny, nz, mu_s, mu_v, direct, 1.0 - land)
+        if land <= 0.0:
+            return
+    else:
+        land = 1.0
     for l in range(nl):
-        if sf_code == SURFACE_TEXTURE:
+        if sf_code == SURFACE_TEXTURE or sf_code == SURFACE_EARTH:
             a = tr * sf_tex_basis[0, l] + tg * sf_tex_basis[1, l] + tb * sf_tex_basis[2, l]
         else:
             a = sf_albedo[l]
         e_tot = (e_sun[l] * _sun_transmittance(m, wk_scol, l, direct) * max(mu_s, 0.0)
                  + _interp_irradiance(sf_mu_grid, sf_e_sky, mu_s, l))
-        wk_res[l] += a / math.pi * e_tot * _view_transmittance(m_extinction, wk_dcol, l, nc)
+        wk_res[l] += land * a / math.pi * e_tot * _view_transmittance(m_extinction, wk_dcol, l, nc)
 
 
 @njit(cache=True, fastmath=True)

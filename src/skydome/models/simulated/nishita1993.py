@@ -22,11 +22,19 @@ from skydome.models import ATMOSPHERE, TURBIDITY, Parameter, SkyModel, register
 
 __all__ = ["Nishita1993", "parse_length"]
 
-_SURFACES = ("ocean", "albedo", "texture")
+_SURFACES = ("ocean", "albedo", "texture", "earth")
 _LENGTH_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(km|m)?\s*$")
 _MAX_ALTITUDE_M = 1e9
 #: relative refractive index of sea water in the visible
 N_WATER = 1.34
+#: the shipped map of the earth's land (RGB) and land fraction (alpha), see its .txt
+EARTH_MAP = "earth_albedo_512x256.png"
+
+
+def cox_munk_mean_square_slope(wind_speed_m_s: float) -> float:
+    """Mean square slope of the sea surface for wind speed W [m/s] at 12.5 m above the sea:
+    sigma^2 = 0.003 + 5.12e-3 W (Cox & Munk 1954, clean surface, both slope components)."""
+    return 0.003 + 5.12e-3 * float(wind_speed_m_s)       # [CM54] eq. for sigma_c^2 + sigma_u^2
 
 
 def parse_length(name: str, value) -> float:
@@ -55,7 +63,8 @@ def _load_texture(texture) -> np.ndarray:
         with Image.open(path) as im:
             rgb = np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
         # sRGB transfer function (IEC 61966-2-1) decoded to linear reflectance
-        return np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+        lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+        return _with_land(lin)
     a = np.asarray(texture, dtype=np.float64)
     if a.ndim == 2:
         a = np.repeat(a[..., None], 3, axis=-1)
@@ -65,7 +74,30 @@ def _load_texture(texture) -> np.ndarray:
     a = a[..., :3]
     if not np.all(np.isfinite(a)) or a.min() < 0.0 or a.max() > 1.0:
         raise ValueError("texture values are out of range [0, 1] (albedo)")
-    return np.ascontiguousarray(a)
+    return _with_land(a)
+
+
+def _with_land(rgb: np.ndarray, land: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, 4): linear RGB albedo and the land fraction (1 where not given)."""
+    out = np.ones(rgb.shape[:2] + (4,))
+    out[..., :3] = rgb
+    if land is not None:
+        out[..., 3] = land
+    return np.ascontiguousarray(out)
+
+
+def _load_earth_map() -> np.ndarray:
+    """(256, 512, 4) the shipped earth map: linear RGB albedo of the land and land fraction."""
+    from PIL import Image
+
+    from skydome.data import DATA_DIR
+
+    with Image.open(DATA_DIR / EARTH_MAP) as im:
+        a = np.asarray(im.convert("RGBA"), dtype=np.float64) / 255.0
+    rgb = a[..., :3]
+    # sRGB transfer function (IEC 61966-2-1) decoded to linear reflectance
+    lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    return _with_land(lin, a[..., 3])
 
 
 def _texture_basis(wl: np.ndarray) -> np.ndarray:
@@ -102,9 +134,15 @@ class Nishita1993(SkyModel):
     camera_latitude_deg, camera_longitude_deg : float
         Geographic position of the sub-camera point [deg]; orients the albedo texture
         (default 0, 0).
-    surface : {"ocean", "albedo", "texture"}
-        What covers the planet: the paper's sea (default), a uniform Lambertian ``albedo``,
-        or a Lambertian albedo ``texture``.
+    surface : {"ocean", "albedo", "texture", "earth"}
+        What covers the planet: the paper's sea with the sun's glint on a wind-roughened
+        surface (default), a uniform Lambertian ``albedo``, a Lambertian albedo ``texture``,
+        or ``earth``: the land of the shipped Blue Marble map (Lambertian, its colour as
+        albedo) and the sea elsewhere.
+    wind_speed_m_s : float
+        Wind speed over the sea [m/s] at 12.5 m, [0, 30] (default 5): the mean square
+        slope of the waves, sigma^2 = 0.003 + 5.12e-3 W (Cox & Munk 1954), sets the size
+        of the sun's glint.
     albedo : float, optional
         Uniform albedo [0, 1] for ``surface="albedo"`` (default: the atmosphere's ground
         albedo).
@@ -146,8 +184,10 @@ class Nishita1993(SkyModel):
         Parameter("camera_latitude_deg", "deg", 0.0, -90.0, 90.0, "latitude of the sub-camera point"),
         Parameter("camera_longitude_deg", "deg", 0.0, -180.0, 180.0,
                   "longitude of the sub-camera point"),
-        Parameter("surface", "", "ocean", doc="ocean, albedo or texture", kind="choice",
-                  choices=_SURFACES),
+        Parameter("surface", "", "ocean", doc="ocean, albedo, texture or earth (land map + ocean)",
+                  kind="choice", choices=_SURFACES),
+        Parameter("wind_speed_m_s", "m/s", 5.0, 0.0, 30.0,
+                  "wind speed over the sea (Cox-Munk wave slopes: size of the sun's glint)"),
         Parameter("albedo", "", None, 0.0, 1.0, "uniform surface albedo (default: the atmosphere's)"),
         Parameter("texture", "", None, doc="equirectangular albedo image path or array", kind="object"),
         Parameter("spheres", "", 64, 8, 1024, "spheres of the optical-depth table", kind="int"),
@@ -180,7 +220,7 @@ class Nishita1993(SkyModel):
         else:
             if p["texture"] is not None:
                 raise ValueError(f"texture given but surface = {p['surface']!r}: use surface='texture'")
-            self._texture = np.zeros((1, 1, 3))
+            self._texture = _load_earth_map() if p["surface"] == "earth" else np.zeros((1, 1, 4))
         if p["albedo"] is not None and p["surface"] != "albedo":
             raise ValueError(f"albedo given but surface = {p['surface']!r}: use surface='albedo'")
 
@@ -192,6 +232,8 @@ class Nishita1993(SkyModel):
         self.camera_latitude_deg = p["camera_latitude_deg"]
         self.camera_longitude_deg = p["camera_longitude_deg"]
         self.surface = p["surface"]
+        self.wind_speed_m_s = float(p["wind_speed_m_s"])
+        self._sigma2 = cox_munk_mean_square_slope(self.wind_speed_m_s)
         self.albedo = p["albedo"]
         self.texture = p["texture"] if isinstance(p["texture"], str) else (
             None if p["texture"] is None else "array")
@@ -306,7 +348,7 @@ class Nishita1993(SkyModel):
                        np.ascontiguousarray(e_sky, dtype=np.float64),
                        np.ascontiguousarray(entry["water_c"], dtype=np.float64),
                        np.ascontiguousarray(entry["water_b"], dtype=np.float64), float(N_WATER),
-                       self._texture, entry["basis"], self._rot)
+                       float(self._sigma2), self._texture, entry["basis"], self._rot)
         K.render_rays(flat, float(r0), np.ascontiguousarray(sun, dtype=np.float64),
                       self._medium(p), entry["e_sun"], lt, sf, out)
         return out
@@ -349,7 +391,7 @@ class Nishita1993(SkyModel):
         d = as_directions(directions)
         wl = as_wavelengths(wavelengths_nm)
         entry = self._optics(wl)
-        code = {"albedo": 0, "ocean": 1, "texture": 2}[self.surface]
+        code = {"albedo": 0, "ocean": 1, "texture": 2, "earth": 3}[self.surface]
         out = self._trace(d, entry, self._r0, self.sun.direction, code, entry["mu_grid"],
                           entry["e_sky"])
         np.maximum(out, 0.0, out=out)
