@@ -171,7 +171,7 @@ def sky_matrix_chunks(weather, chunk_hours: int = 730, sun_position: str = "spa"
     from skydome._validate import check_int
 
     chunk_hours = check_int("chunk_hours", chunk_hours, 1, None)
-    sd = weather.sun_directions if sun_position == "spa" else weather.radiance_sun_directions()
+    sd = weather.spa_sun_directions() if sun_position == "spa" else weather.radiance_sun_directions()
     n = len(weather)
     td = np.full(n, 11.0) if weather.dew_point_c is None else np.where(
         np.isfinite(weather.dew_point_c), weather.dew_point_c, 11.0)

@@ -18,59 +18,94 @@ from skydome.models.analytic._kernels_analytic import perez1993_patch_row
 MAX_SUN_PATCHES = 4
 
 
-@njit(parallel=True, cache=True, fastmath=True)
-def fill_perez_sky(out, hours, nodes, weights, offsets, centres, dom, s_dist, s_true, coef,
-                   e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min):
-    """Fill ``out[hours[i]]`` (P + 1, C) for each listed hour.
+#: Hours per tile of the sky-matrix kernel: a tile is computed into a thread-local buffer and
+#: copied out patch by patch, so that a (patches, hours) file-order output is written in runs
+#: of TILE_HOURS contiguous values rather than one value per memory page.
+TILE_HOURS = 32
 
-    s_dist (H, 3): sun vector of the distribution (zenith clamped); s_true (H, 3): the true
-    sun (ground term, nearest patches); coef (H, 5); e_diff, e_dir (H,) [lx]; rho (H,);
-    tint, grey (C,); nsuns 0 = no sun in the matrix; fixed_sa > 0 replaces the patches'
-    solid angles for the sun (gendaymtx -5)."""
+
+@njit(cache=True, fastmath=True)
+def _perez_hour(dest, h, nodes, weights, offsets, centres, dom, s_dist, s_true, coef, e_diff,
+                e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min, means):
+    """One hour's patch values (ground first) into ``dest`` (P + 1, C)."""
     n_patch = offsets.shape[0] - 1
-    ncomp = out.shape[2]
-    for i in prange(hours.shape[0]):
-        h = hours[i]
-        means = np.empty(n_patch)
-        horiz = perez1993_patch_row(nodes, weights, offsets, s_dist[h], coef[h], cz_min, means)
-        if horiz <= 1e-6:  # gendaymtx: a zero sky is made uniform, normalised by pi
-            for k in range(n_patch):
-                means[k] = 1.0
-            horiz = math.pi
-        scale = e_diff[h] / horiz * out_scale  # the sky's horizontal illuminance is Dh
+    ncomp = dest.shape[1]
+    horiz = perez1993_patch_row(nodes, weights, offsets, s_dist[h], coef[h], cz_min, means)
+    if horiz <= 1e-6:  # gendaymtx: a zero sky is made uniform, normalised by pi
         for k in range(n_patch):
-            v = means[k] * scale
-            for c in range(ncomp):
-                out[h, k + 1, c] = v * tint[c]
-        sz = s_true[h, 2]
-        g = e_diff[h]
-        if sz > 0.0:
-            g += e_dir[h] * sz
-        g *= rho[h] / math.pi * out_scale  # ground: rho (Dh + Dn sin a) / pi
+            means[k] = 1.0
+        horiz = math.pi
+    scale = e_diff[h] / horiz * out_scale  # the sky's horizontal illuminance is Dh
+    for k in range(n_patch):
+        v = means[k] * scale
         for c in range(ncomp):
-            out[h, 0, c] = g * grey[c]
-        if nsuns == 0 or e_dir[h] <= 1e-4:
+            dest[k + 1, c] = v * tint[c]
+    sz = s_true[h, 2]
+    g = e_diff[h]
+    if sz > 0.0:
+        g += e_dir[h] * sz
+    g *= rho[h] / math.pi * out_scale  # ground: rho (Dh + Dn sin a) / pi
+    for c in range(ncomp):
+        dest[0, c] = g * grey[c]
+    if nsuns == 0 or e_dir[h] <= 1e-4:
+        return
+    # gendaymtx AddDirect: the nsuns patches nearest the sun, weight 1 / (1.002 - cos)
+    near = np.full(MAX_SUN_PATCHES, -1)
+    ndot = np.full(MAX_SUN_PATCHES, -2.0)
+    sx, sy, szz = s_true[h, 0], s_true[h, 1], s_true[h, 2]
+    for k in range(n_patch):
+        d = centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * szz
+        for j in range(nsuns):
+            if d > ndot[j]:
+                for jj in range(nsuns - 1, j, -1):
+                    ndot[jj] = ndot[jj - 1]
+                    near[jj] = near[jj - 1]
+                ndot[j] = d
+                near[j] = k
+                break
+    wtot = 0.0
+    for j in range(nsuns):
+        wtot += 1.0 / (1.002 - ndot[j])
+    for j in range(nsuns):
+        k = near[j]
+        sa = fixed_sa if fixed_sa > 0.0 else dom[k]
+        v = (1.0 / (1.002 - ndot[j])) * e_dir[h] * out_scale / (wtot * sa)
+        for c in range(ncomp):
+            dest[k + 1, c] += v * grey[c]
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def fill_perez_sky(out, day, nodes, weights, offsets, centres, dom, s_dist, s_true, coef,
+                   e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min):
+    """Fill ``out[h]`` (P + 1, C) for each hour h with ``day[h]``; other hours are left as
+    they are (zero).
+
+    ``out`` (H, P + 1, C) may be a strided view (e.g. of a (P + 1, H, C) file-order array);
+    hours are computed in tiles of TILE_HOURS in parallel. s_dist (H, 3): sun vector of the
+    distribution (zenith clamped); s_true (H, 3): the true sun (ground term, nearest patches);
+    coef (H, 5); e_diff, e_dir (H,) [lx]; rho (H,); tint, grey (C,); nsuns 0 = no sun in the
+    matrix; fixed_sa > 0 replaces the patches' solid angles for the sun (gendaymtx -5)."""
+    n_h = out.shape[0]
+    n_row = out.shape[1]
+    ncomp = out.shape[2]
+    n_tiles = (n_h + TILE_HOURS - 1) // TILE_HOURS
+    for t in prange(n_tiles):
+        h0 = t * TILE_HOURS
+        h1 = min(n_h, h0 + TILE_HOURS)
+        any_day = False
+        for h in range(h0, h1):
+            any_day = any_day or day[h]
+        if not any_day:
             continue
-        # gendaymtx AddDirect: the nsuns patches nearest the sun, weight 1 / (1.002 - cos)
-        near = np.full(MAX_SUN_PATCHES, -1)
-        ndot = np.full(MAX_SUN_PATCHES, -2.0)
-        sx, sy, szz = s_true[h, 0], s_true[h, 1], s_true[h, 2]
-        for k in range(n_patch):
-            d = centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * szz
-            for j in range(nsuns):
-                if d > ndot[j]:
-                    for jj in range(nsuns - 1, j, -1):
-                        ndot[jj] = ndot[jj - 1]
-                        near[jj] = near[jj - 1]
-                    ndot[j] = d
-                    near[j] = k
-                    break
-        wtot = 0.0
-        for j in range(nsuns):
-            wtot += 1.0 / (1.002 - ndot[j])
-        for j in range(nsuns):
-            k = near[j]
-            sa = fixed_sa if fixed_sa > 0.0 else dom[k]
-            v = (1.0 / (1.002 - ndot[j])) * e_dir[h] * out_scale / (wtot * sa)
-            for c in range(ncomp):
-                out[h, k + 1, c] += v * grey[c]
+        buf = np.zeros((h1 - h0, n_row, ncomp))
+        means = np.empty(n_row - 1)
+        for h in range(h0, h1):
+            if day[h]:
+                _perez_hour(buf[h - h0], h, nodes, weights, offsets, centres, dom, s_dist,
+                            s_true, coef, e_diff, e_dir, rho, tint, grey, out_scale, nsuns,
+                            fixed_sa, cz_min, means)
+        for k in range(n_row):  # patch by patch: runs of hours in the file order
+            for j in range(h1 - h0):
+                if day[h0 + j]:
+                    for c in range(ncomp):
+                        out[h0 + j, k, c] = buf[j, k, c]

@@ -64,7 +64,7 @@ def _sun_scene(m, hours_minute, alt_ok) -> str:
 
 
 def skymatrix_cmd(
-    weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
+    weather: str = typer.Option(..., "--weather", help="EPW, TMY3 or Radiance .wea file"),
     out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
     patches: str = typer.Option("tregenza", "--patches", help="tregenza | reinhart:MF"),
     model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
@@ -90,7 +90,8 @@ def skymatrix_cmd(
     import numpy as np
 
     from skydome.daylighting.patches import patches as make_patches
-    from skydome.daylighting.radiance_io import FORMATS, atomic_write_bytes, write_matrix
+    from skydome.daylighting.radiance_io import (FORMATS, atomic_write_bytes, matrix_file,
+                                                 write_matrix)
     from skydome.daylighting.skymatrix import parse_sun_option, perez_sky_matrix_from_weather
 
     # -- validate everything before any work -------------------------------------------------
@@ -131,7 +132,7 @@ def skymatrix_cmd(
             _fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
     from skydome.daylighting.weather import read_weather
 
-    w = _guard(read_weather, weather)
+    w = _guard(read_weather, weather, sun_position=sun_position)
     if rho is None:
         rho_v = w.albedo if w.albedo is not None else np.full(len(w), 0.2)
         rho_v = np.where(np.isfinite(rho_v), rho_v, 0.2)
@@ -157,18 +158,25 @@ def skymatrix_cmd(
 
         m = _M()
         m.sky = sky
-    else:
-        m = _guard(perez_sky_matrix_from_weather, w, sun_position=sun_position, patches=ps,
-                   order=order, sun=sun, components=components, ground_reflectance=rho_v,
-                   dtype=dtype)
     info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
             f"--model {model} --components {components} --sun {sun} --order {order} "
             f"--sun-position {sun_position}",
             f"LATLONG= {w.site.latitude_deg:.8f} {w.site.longitude_deg:.8f}"]
     written = []
+    kw = dict(sun_position=sun_position, patches=ps, order=order, sun=sun,
+              components=components, ground_reflectance=rho_v, dtype=dtype)
     try:
-        write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
-                     transpose=out_p.suffix.lower() != ".npy")
+        if not distributed and fmt != "ascii" and out_p.suffix.lower() != ".npy":
+            # the kernel fills the file's memory map in Radiance's order: no copy, one pass
+            ncomp = 3 if components == "rgb" else 1
+            with matrix_file(out_p, len(ps), len(w), ncomp, fmt=fmt, info=info,
+                             overwrite=overwrite) as body:
+                m = _guard(perez_sky_matrix_from_weather, w, out=body, **kw)
+        else:
+            if not distributed:
+                m = _guard(perez_sky_matrix_from_weather, w, **kw)
+            write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
+                         transpose=out_p.suffix.lower() != ".npy")
         written.append(out_p)
         if mode == "separate":
             write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,

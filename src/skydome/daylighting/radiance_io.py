@@ -23,6 +23,7 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import tempfile
@@ -30,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_matrix", "read_matrix", "atomic_write_bytes", "atomic_write_stream", "FORMATS"]
+__all__ = ["write_matrix", "read_matrix", "matrix_file", "atomic_write_bytes",
+           "atomic_write_stream", "FORMATS"]
 
 FORMATS = ("ascii", "float", "double")
 
@@ -114,6 +116,51 @@ def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = Fa
                 yield np.ascontiguousarray(part, dtype=dtype).data
 
     atomic_write_stream(path, blocks())
+
+
+@contextlib.contextmanager
+def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", info=(),
+                overwrite: bool = False):
+    """A binary Radiance matrix file filled in place: yields its data as a zero-filled
+    (nrows, ncols, ncomp) memory map, to be filled (e.g. ``perez_sky_matrix(..., out=...)``).
+
+    The file is a temporary one beside ``path`` (header, then a sparse zero body), renamed to
+    ``path`` when the block ends without an exception and the data is finite; otherwise it
+    is removed, nothing is left. Writing through the map costs no copy and no second pass.
+    """
+    from skydome._validate import check_choice
+
+    check_choice("fmt", fmt, ("float", "double"))
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise ValueError(f"out = {str(path)!r} exists (pass overwrite to replace it)")
+    if not path.parent.is_dir():
+        raise ValueError(f"out = {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    head = _header(nrows, ncols, ncomp, fmt, list(info))
+    dtype = np.dtype(np.float32 if fmt == "float" else np.float64)
+    size = nrows * ncols * ncomp * dtype.itemsize
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    mm = None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(head)
+            f.truncate(len(head) + size)  # a sparse body of zeros
+        mm = np.memmap(tmp, dtype=dtype, mode="r+", offset=len(head),
+                       shape=(nrows, ncols, ncomp))
+        yield mm.view(np.ndarray)
+        block = max(1, (1 << 22) // max(1, ncols * ncomp))
+        for r0 in range(0, nrows, block):
+            if not np.all(np.isfinite(mm[r0:r0 + block])):
+                raise ValueError("matrix holds nan or inf values")
+        del mm  # no msync: the page cache is coherent, as for a written file
+        mm = None
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        del mm
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 def atomic_write_stream(path, chunks) -> None:

@@ -98,7 +98,7 @@ def plane_series(weather, planes, *, patches: str = "reinhart:4", order: int = 4
     rho = np.broadcast_to(np.asarray(ground_reflectance, dtype=np.float64), (n,))
     if np.any(~np.isfinite(rho)) or np.any(rho < 0.0) or np.any(rho > 1.0):
         raise ValueError("ground_reflectance must be in [0, 1]")
-    sd = weather.sun_directions if sun_position == "spa" else weather.radiance_sun_directions()
+    sd = weather.spa_sun_directions() if sun_position == "spa" else weather.radiance_sun_directions()
     td = 11.0 if weather.dew_point_c is None else np.where(
         np.isfinite(weather.dew_point_c), weather.dew_point_c, 11.0)
     alt = np.arcsin(np.clip(sd[:, 2], -1.0, 1.0))

@@ -100,7 +100,11 @@ class Weather:
         holds none.
     sun_zenith_deg, sun_azimuth_deg : numpy.ndarray
         True (unrefracted) solar zenith angle and azimuth from north towards east [deg]
-        at the hour's midpoint (pvlib SPA [RA04]).
+        at the hour's midpoint, by ``sun_model``.
+    sun_model : str
+        "spa" (pvlib's NREL SPA [RA04], the default) or "radiance" (Radiance's short series,
+        :func:`radiance_sun_directions`; read with ``read_weather(..., sun_position=
+        "radiance")`` to reproduce gendaymtx without computing SPA).
     """
 
     site: Site
@@ -123,15 +127,24 @@ class Weather:
     precipitable_water_cm: np.ndarray | None
     sun_zenith_deg: np.ndarray
     sun_azimuth_deg: np.ndarray
+    sun_model: str = "spa"
 
     def __len__(self) -> int:
         return int(self.dni.shape[0])
 
     @property
     def sun_directions(self) -> np.ndarray:
-        """Unit vectors towards the sun (n, 3), East-North-Up (NREL SPA [RA04])."""
+        """Unit vectors towards the sun (n, 3), East-North-Up, by ``sun_model``."""
         z = np.radians(self.sun_zenith_deg)
         a = np.radians(self.sun_azimuth_deg)
+        return np.stack([np.sin(z) * np.sin(a), np.sin(z) * np.cos(a), np.cos(z)], axis=-1)
+
+    def spa_sun_directions(self) -> np.ndarray:
+        """Unit vectors towards the sun (n, 3) by NREL SPA [RA04] whatever ``sun_model``."""
+        if self.sun_model == "spa":
+            return self.sun_directions
+        zen, azi = _spa_zenith_azimuth(self.site, self.time)
+        z, a = np.radians(zen), np.radians(azi)
         return np.stack([np.sin(z) * np.sin(a), np.sin(z) * np.cos(a), np.cos(z)], axis=-1)
 
     def radiance_sun_directions(self) -> np.ndarray:
@@ -223,6 +236,8 @@ def _detect_format(path: Path) -> str:
     suffix = path.suffix.lower()
     if suffix == ".epw":
         return "epw"
+    if suffix == ".wea":
+        return "wea"
     with path.open("r", errors="replace") as f:
         first = f.readline()
     if first.upper().startswith("LOCATION,"):
@@ -253,16 +268,24 @@ def _check_records(path: Path, fmt: str) -> None:
                              f"{need} fields)")
 
 
-def read_weather(path, *, year: int = 2021) -> Weather:
-    """Read an hourly EPW or TMY3 weather file and compute the sun at each hour's midpoint.
+def read_weather(path, *, year: int = 2021, sun_position: str = "spa") -> Weather:
+    """Read an hourly EPW, TMY3 or Radiance .wea weather file and compute the sun at each
+    hour's midpoint.
 
     Parameters
     ----------
     path : str or Path
-        ``.epw`` (EnergyPlus) or TMY3 ``.csv`` [WM08].
+        ``.epw`` (EnergyPlus) or TMY3 ``.csv`` [WM08], read by pvlib.iotools; or a Radiance
+        ``.wea`` file (gendaymtx's input, as epw2wea and :func:`write_wea` write it: a
+        six-line header, then ``month day hour DNI DHI`` with the hour's midpoint and
+        ``weather_data_file_units 1``, W m^-2). A .wea holds no dew point, albedo or GHI
+        (GHI is DHI + DNI cos(zenith)).
     year : int
         Calendar year the typical months are placed in (TMY files mix years); a non-leap year
         keeps 8760 hours (default 2021).
+    sun_position : {"spa", "radiance"}
+        Sun at the midpoints by NREL SPA (default; pvlib) or by Radiance's short series (what
+        gendaymtx uses; needs neither pvlib nor SPA's 0.1 s for a year).
 
     Returns
     -------
@@ -283,7 +306,12 @@ def read_weather(path, *, year: int = 2021) -> Weather:
         raise FileNotFoundError(f"weather = {str(path)!r}: no such file")
     if not p.is_file():
         raise ValueError(f"weather = {str(path)!r} is not a file")
+    from skydome._validate import check_choice
+
+    check_choice("sun_position", sun_position, ("spa", "radiance"))
     fmt = _detect_format(p)
+    if fmt == "wea":
+        return _read_wea(p, year, sun_position)
     _check_records(p, fmt)
     import warnings
 
@@ -389,7 +417,37 @@ def read_weather(path, *, year: int = 2021) -> Weather:
                              f"({t_end[k]}) is out of range [{lo:g}, {hi:g}] {unit} "
                              "(wrong units?)")
 
-    # -- the sun at the hour's midpoint (pvlib SPA, true zenith) -----------------------------
+    # -- the sun at the hour's midpoint (true zenith) -----------------------------------------
+    month, day, hour, doy = _calendar(t_mid)
+    zen, azi = _sun_zenith_azimuth(site, t_mid, doy, hour, sun_position)
+    return Weather(
+        site=site, path=str(p), format=fmt, time=t_mid, month=month, day=day, hour=hour,
+        day_of_year=doy, dni=values["dni"], dhi=values["dhi"],
+        ghi=values["ghi"] if values.get("ghi") is not None else np.full(n, np.nan),
+        dni_illuminance=values.get("dni_illuminance"),
+        dhi_illuminance=values.get("dhi_illuminance"),
+        ghi_illuminance=values.get("ghi_illuminance"),
+        dew_point_c=values.get("dew_point_c"), albedo=values.get("albedo"),
+        aod=values.get("aod"), precipitable_water_cm=values.get("precipitable_water_cm"),
+        sun_zenith_deg=zen, sun_azimuth_deg=azi, sun_model=sun_position,
+    )
+
+
+def _calendar(t_mid):
+    """Month, day, hour of day (float) and day of the year of datetime64 instants."""
+    t = np.asarray(t_mid, dtype="datetime64[s]")
+    days = t.astype("datetime64[D]")
+    months = days.astype("datetime64[M]")
+    years = days.astype("datetime64[Y]")
+    month = (months - years.astype("datetime64[M]")).astype(np.int64) + 1
+    day = (days - months.astype("datetime64[D]")).astype(np.int64) + 1
+    doy = (days - years.astype("datetime64[D]")).astype(np.int64) + 1
+    hour = (t - days.astype("datetime64[s]")).astype(np.int64) / 3600.0
+    return month, day, hour, doy
+
+
+def _spa_zenith_azimuth(site: Site, t_mid):
+    """True zenith and azimuth [deg] by pvlib's NREL SPA [RA04] at local-standard instants."""
     import datetime
 
     import pandas as pd
@@ -399,24 +457,93 @@ def read_weather(path, *, year: int = 2021) -> Weather:
     idx = pd.DatetimeIndex(t_mid).tz_localize(tz)
     sp = solarposition.get_solarposition(idx, site.latitude_deg, site.longitude_deg,
                                          altitude=site.elevation_m, method="nrel_numpy")
-    mid_index = pd.DatetimeIndex(t_mid)
-    hour = mid_index.hour + mid_index.minute / 60.0
-    return Weather(
-        site=site, path=str(p), format=fmt, time=t_mid,
-        month=np.asarray(mid_index.month, dtype=np.int64),
-        day=np.asarray(mid_index.day, dtype=np.int64),
-        hour=np.asarray(hour, dtype=np.float64),
-        day_of_year=np.asarray(mid_index.day_of_year, dtype=np.int64),
-        dni=values["dni"], dhi=values["dhi"],
-        ghi=values["ghi"] if values.get("ghi") is not None else np.full(n, np.nan),
-        dni_illuminance=values.get("dni_illuminance"),
-        dhi_illuminance=values.get("dhi_illuminance"),
-        ghi_illuminance=values.get("ghi_illuminance"),
-        dew_point_c=values.get("dew_point_c"), albedo=values.get("albedo"),
-        aod=values.get("aod"), precipitable_water_cm=values.get("precipitable_water_cm"),
-        sun_zenith_deg=np.asarray(sp["zenith"], dtype=np.float64),
-        sun_azimuth_deg=np.asarray(sp["azimuth"], dtype=np.float64),
-    )
+    return (np.asarray(sp["zenith"], dtype=np.float64),
+            np.asarray(sp["azimuth"], dtype=np.float64))
+
+
+def _sun_zenith_azimuth(site: Site, t_mid, doy, hour, sun_position: str):
+    if sun_position == "spa":
+        return _spa_zenith_azimuth(site, t_mid)
+    d = radiance_sun_directions(site.latitude_deg, site.longitude_deg, site.utc_offset_h, doy,
+                                hour)
+    zen = np.degrees(np.arccos(np.clip(d[:, 2], -1.0, 1.0)))
+    azi = np.degrees(np.arctan2(d[:, 0], d[:, 1])) % 360.0
+    return zen, azi
+
+
+def _read_wea(p: Path, year: int, sun_position: str) -> Weather:
+    """A Radiance .wea file (gendaymtx's input format; see :func:`write_wea`)."""
+    name = str(p)
+    with p.open("r", errors="replace") as f:
+        lines = f.read().splitlines()
+    head: dict = {}
+    k = 0
+    keys = ("place", "latitude", "longitude", "time_zone", "site_elevation",
+            "weather_data_file_units")
+    while k < len(lines) and lines[k].split(" ", 1)[0] in keys:
+        key, _, val = lines[k].partition(" ")
+        head[key] = val.strip()
+        k += 1
+    for key in keys[1:]:
+        if key not in head:
+            raise ValueError(f"weather = {name!r}: .wea header lacks {key!r}")
+    if head["weather_data_file_units"] != "1":
+        raise ValueError(f"weather = {name!r}: weather_data_file_units = "
+                         f"{head['weather_data_file_units']!r}; only 1 (DNI and DHI in W/m^2) "
+                         "is supported")
+    try:
+        # Radiance's signs: longitude and time_zone (standard meridian) in degrees WEST.
+        site = Site(head.get("place", "").replace("_", " "), float(head["latitude"]),
+                    -float(head["longitude"]), -float(head["time_zone"]) / 15.0,
+                    float(head["site_elevation"]))
+    except ValueError:
+        raise ValueError(f"weather = {name!r}: bad .wea header value") from None
+    if not (-90.0 <= site.latitude_deg <= 90.0) or not (-180.0 <= site.longitude_deg <= 180.0):
+        raise ValueError(f"weather = {name!r}: latitude {site.latitude_deg:g} / longitude "
+                         f"{site.longitude_deg:g} deg out of range")
+    body = [ln for ln in lines[k:] if ln.strip()]
+    if not body:
+        raise ValueError(f"weather = {name!r}: truncated, no data records")
+    for j, ln in enumerate(body):
+        if len(ln.split()) != 5:
+            raise ValueError(f"weather = {name!r}: truncated record (record {j + 1}: "
+                             f"{len(ln.split())} of 5 fields)")
+    try:
+        data = np.array(" ".join(body).split(), dtype=np.float64).reshape(-1, 5)
+    except ValueError:
+        raise ValueError(f"weather = {name!r}: a record is not numeric") from None
+    n = data.shape[0]
+    mo, da = data[:, 0].astype(np.int64), data[:, 1].astype(np.int64)
+    if np.any((mo < 1) | (mo > 12) | (da < 1) | (da > 31)):
+        raise ValueError(f"weather = {name!r}: bad month or day field")
+    y0 = np.datetime64(f"{year:04d}-01", "M")
+    t_day = (y0 + (mo - 1)).astype("datetime64[D]") + (da - 1)
+    t_mid = t_day.astype("datetime64[s]") + np.round(data[:, 2] * 3600.0).astype(
+        "timedelta64[s]")
+    step = np.diff(t_mid).astype(np.int64)
+    if np.any(step != 3600):
+        j = int(np.argmax(step != 3600))
+        raise ValueError(f"weather = {name!r}: time step {step[j] / 3600:g} h between "
+                         f"records {j + 1} and {j + 2}; only hourly files are supported")
+    if n not in (8760, 8784) and n % 24 != 0:
+        raise ValueError(f"weather = {name!r}: truncated, {n} hourly records "
+                         "(a year has 8760; a partial file must hold whole days)")
+    dni, dhi = data[:, 3].copy(), data[:, 4].copy()
+    for key, v in (("dni", dni), ("dhi", dhi)):
+        lo, hi, unit = WEATHER_LIMITS[key]
+        bad = ~np.isfinite(v) | (v < lo) | (v > hi)
+        if np.any(bad):
+            j = int(np.argmax(bad))
+            raise ValueError(f"weather = {name!r}: {key} = {v[j]:g} at record {j + 1} is out "
+                             f"of range [{lo:g}, {hi:g}] {unit} (wrong units?)")
+    month, day, hour, doy = _calendar(t_mid)
+    zen, azi = _sun_zenith_azimuth(site, t_mid, doy, hour, sun_position)
+    ghi = dhi + dni * np.maximum(np.cos(np.radians(zen)), 0.0)
+    return Weather(site=site, path=name, format="wea", time=t_mid, month=month, day=day,
+                   hour=hour, day_of_year=doy, dni=dni, dhi=dhi, ghi=ghi,
+                   dni_illuminance=None, dhi_illuminance=None, ghi_illuminance=None,
+                   dew_point_c=None, albedo=None, aod=None, precipitable_water_cm=None,
+                   sun_zenith_deg=zen, sun_azimuth_deg=azi, sun_model=sun_position)
 
 
 def write_wea(weather: Weather, path) -> None:

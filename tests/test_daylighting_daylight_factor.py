@@ -1,0 +1,91 @@
+"""Daylight factor under the CIE overcast sky: unobstructed planes against the closed form of
+the Moon & Spencer distribution, sensor points in a room against Radiance's own overcast sky
+(gensky -c) traced by the same rtrace."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from skydome.daylighting.daylight_factor import (DF_SKY_ILLUMINANCE_LX, plane_daylight_factor,
+                                                 room_daylight_factor)
+
+
+def _closed_form_sky_df(tilt_deg):
+    """Sky component [%] of a plane under L = Lz (1 + 2 sin a) / 3 [MS42, CIE94], by direct
+    2-D integration with scipy (independent of skydome's quadrature): E_h = 7 pi Lz / 9."""
+    from scipy.integrate import dblquad
+
+    t = math.radians(tilt_deg)
+    n = (0.0, -math.sin(t), math.cos(t))
+
+    def f(a, phi):
+        d = (math.cos(a) * math.sin(phi), math.cos(a) * math.cos(phi), math.sin(a))
+        c = max(0.0, n[0] * d[0] + n[1] * d[1] + n[2] * d[2])
+        return (1.0 + 2.0 * math.sin(a)) / 3.0 * c * math.cos(a)
+
+    # integrate in pieces so the kink of max(0, n.d) does not spoil the rule
+    e = dblquad(f, 0.0, 2.0 * math.pi, 0.0, math.pi / 2.0, epsabs=1e-11, epsrel=1e-11)[0]
+    return 100.0 * e / (7.0 * math.pi / 9.0)
+
+
+def test_unobstructed_planes_closed_form():
+    # horizontal: 100 % by definition; vertical: (2/3)(pi/4 + 2/3) / (7 pi / 9)
+    # = 6/28 + 4/(7 pi) = 39.62 % (the distribution integrated in closed form); the ground
+    # adds rho / 2 (view factor 1/2 of a Lambertian ground lit by E_h)
+    vert = 100.0 * (6.0 / 28.0 + 4.0 / (7.0 * math.pi))
+    df = plane_daylight_factor([0.0, 90.0, 90.0, 180.0], [180.0, 180.0, 0.0, 0.0])
+    assert df[0] == pytest.approx(100.0, rel=1e-6)
+    assert df[1] == pytest.approx(vert, rel=1e-5)
+    assert df[2] == pytest.approx(vert, rel=1e-5)  # no azimuth dependence
+    assert df[3] == pytest.approx(0.0, abs=1e-9)  # facing down: no sky
+    assert plane_daylight_factor(90.0, ground_reflectance=0.2) == pytest.approx(
+        vert + 10.0, rel=1e-5)
+    for tilt in (30.0, 60.0, 120.0):
+        assert plane_daylight_factor(tilt) == pytest.approx(_closed_form_sky_df(tilt), rel=2e-4)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="ground_reflectance"):
+        plane_daylight_factor(0.0, ground_reflectance=1.5)
+    with pytest.raises(ValueError, match="sensors"):
+        room_daylight_factor(__file__, np.zeros((2, 5)))
+    with pytest.raises(ValueError, match="scene"):
+        room_daylight_factor("no_such_room.rad", np.array([[0, 0, 0, 0, 0, 1.0]]))
+
+
+def test_unobstructed_sensors_by_rtrace(tmp_path):
+    """rtrace -I of skydome's exported overcast sky and ground glow: 100 % up, 39.6 % + rho/2
+    for a vertical sensor (Monte Carlo ambient sampling: 1 %)."""
+    (tmp_path / "empty.rad").write_text("# nothing\n")
+    df = room_daylight_factor(tmp_path / "empty.rad",
+                              [[0, 0, 0, 0, 0, 1.0], [0, 0, 0, 0, -1.0, 0]],
+                              ab=1, ad=16384, as_=0, aa=0.0, ground_reflectance=0.2)
+    vert = 100.0 * (6.0 / 28.0 + 4.0 / (7.0 * math.pi)) + 10.0
+    assert df[0] == pytest.approx(100.0, rel=0.01)
+    assert df[1] == pytest.approx(vert, rel=0.01)
+
+
+@pytest.mark.slow
+def test_room_against_gensky_overcast(tmp_path):
+    """The room of the two-phase test (4 x 5 x 3 m, 2 x 1 m south opening): the same rtrace
+    with Radiance's gensky -c sky (its skybright.cal, ground 0.2) gives the same daylight
+    factors within 3 % (ambient sampling noise and gensky's blend of sky and ground near the
+    horizon)."""
+    from _radiance import run_radiance
+    from test_daylighting_twophase import ROOM, SENSORS
+
+    (tmp_path / "room.rad").write_text(ROOM)
+    sens = np.array([[float(v) for v in ln.split()] for ln in SENSORS.splitlines()])
+    b = DF_SKY_ILLUMINANCE_LX / 179.0  # gensky -B: horizontal diffuse irradiance [W/m^2]
+    gensky = run_radiance("gensky", ["-ang", "45", "0", "-c", "-B", f"{b:.6f}", "-g", "0.2"])
+    sky = gensky + ("\nskyfunc glow sky_glow 0 0 4 1 1 1 0\nsky_glow source sky 0 0 4 0 0 1 180\n"
+                    "skyfunc glow ground_glow 0 0 4 1 1 1 0\n"
+                    "ground_glow source ground 0 0 4 0 0 -1 180\n")
+    kw = dict(ab=4, ad=4096, as_=1024, aa=0.05, ar=512, ground_reflectance=0.2)
+    ours = room_daylight_factor(tmp_path / "room.rad", sens, **kw)
+    ref = room_daylight_factor(tmp_path / "room.rad", sens, sky=sky, **kw)
+    assert np.all(ref > 0.2)
+    np.testing.assert_allclose(ours, ref, rtol=0.03)
