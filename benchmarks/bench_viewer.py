@@ -4,7 +4,10 @@ browser the machine has (headless Debian chromium; SwiftShader unless a GPU is e
     PYTHONPATH=src python benchmarks/bench_viewer.py [--frames 5] [--gpu]
 
 ``--gpu`` drops SwiftShader (``--use-angle=swiftshader``) so that Chromium uses the
-machine's GPU; on a desktop run it with a display or ``--headless=new`` and a GPU driver.
+machine's GPU; ``--angle vulkan`` (or ``gl``, ``gl-egl``, ``d3d11``, ``metal``) picks ANGLE's
+back end, ``--headed`` runs with a window (a display is needed) where headless Chromium
+falls back to software. The first line printed names the WebGL renderer: it must name the
+GPU, not SwiftShader, for the figures to be GPU figures (docs/viewer.md).
 Prints ms/frame of the sky pass (render into the float target, synced by a one-pixel
 read), averaged over the frames after one warm-up frame.
 """
@@ -37,6 +40,8 @@ def main() -> None:
     ap.add_argument("--gpu", action="store_true")
     ap.add_argument("--models", default=",".join(MODELS), help="comma-separated subset")
     ap.add_argument("--chromium", default=CHROMIUM, help="browser executable (Chromium or Chrome)")
+    ap.add_argument("--angle", default=None, help="ANGLE back end with --gpu (vulkan, gl, gl-egl, ...)")
+    ap.add_argument("--headed", action="store_true", help="run with a window instead of headless")
     a = ap.parse_args()
     from playwright.sync_api import sync_playwright
 
@@ -44,9 +49,14 @@ def main() -> None:
 
     srv = make_server()
     threading.Thread(target=srv.serve_forever, daemon=True).start()
-    args = [x for x in CHROMIUM_ARGS if not (a.gpu and "swiftshader" in x)]
+    args = [x for x in CHROMIUM_ARGS if not (a.gpu and "swiftshader" in x)
+            and not (a.headed and x.startswith("--headless"))]
+    if a.gpu:
+        args += ["--ignore-gpu-blocklist", "--enable-gpu-rasterization"]
+        if a.angle:
+            args.append(f"--use-angle={a.angle}")
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=a.chromium, args=args)
+        b = p.chromium.launch(executable_path=a.chromium, args=args, headless=not a.headed)
         page = b.new_page()
         page.goto(srv.url)
         wait_ready(page)
