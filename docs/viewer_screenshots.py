@@ -32,8 +32,9 @@ VIEWS = {
                             "mode": 1, "fc-lo": 1000, "fc-hi": 100000},
     "viewer_precomputed_sunset": {"model": "precomputed", "sun-el": 2, "sun-az": 270, "projection": 0,
                                   "view-az": 270, "view-el": 10, "fov": 90},
+    # auto exposure would expose for black space (the sky above the horizon): a fixed EV100
     "viewer_precomputed_99km": {"model": "precomputed", "observer_altitude_m": 99000, "sun-el": 20,
-                                "sun-az": 135, "projection": 3},
+                                "sun-az": 135, "projection": 3, "auto-exp": False, "ev100": 12},
     "viewer_hillaire_sunset": {"model": "hillaire2020", "sun-el": 3, "sun-az": 270, "projection": 0,
                                "view-az": 270, "view-el": 5, "fov": 90},
     "viewer_hillaire_10km": {"model": "hillaire2020", "observer_altitude_m": 10000, "sun-el": 25,
@@ -45,7 +46,8 @@ VIEWS = {
 
 def _set(page, key, value):
     sel = f"#{key}" if not key.endswith("_m") else f"[data-param={key}]"
-    page.evaluate("([s, v]) => { const e = document.querySelector(s); e.value = v; "
+    page.evaluate("([s, v]) => { const e = document.querySelector(s); "
+                  "if (e.type === 'checkbox') e.checked = v === 'True'; else e.value = v; "
                   "e.dispatchEvent(new Event('change')); e.dispatchEvent(new Event('input')); }",
                   [sel, str(value)])
     time.sleep(0.05)
