@@ -39,17 +39,34 @@ def _reference(xyz, ev100, transform):
     return 255.0 * np.clip(srgb_encode(display_transform(rgb, transform)), 0.0, 1.0)
 
 
-@pytest.mark.parametrize("index,transform", [(0, "hue-preserving"), (1, "filmic"),
-                                             (2, "reinhard"), (3, "clamp")])
-def test_display_pass_matches_render_display(browser_page, index, transform):  # noqa: F811
-    from skydome.render.display import DISPLAY_TRANSFORMS, ev100_to_exposure
+def _page_transforms(page) -> dict[str, int]:
+    """The page's display transforms: name -> the shader's number (the options of #transform)."""
+    return {o[0]: int(o[1]) for o in page.evaluate(
+        "() => [...document.getElementById('transform').options].map((o) => [o.text, o.value])")}
+
+
+def test_page_default_is_render_default(browser_page):  # noqa: F811
+    """The page offers transforms of render.display only, and starts with its default."""
+    from skydome.render.display import DEFAULT_TRANSFORM, DISPLAY_TRANSFORMS
+
+    page, _ = browser_page
+    names = _page_transforms(page)
+    assert set(names) <= set(DISPLAY_TRANSFORMS)
+    selected = page.evaluate("() => { const e = document.getElementById('transform'); "
+                             "return e.options[e.selectedIndex].text; }")
+    assert selected == DEFAULT_TRANSFORM
+
+
+@pytest.mark.parametrize("transform", ["hue-preserving", "filmic", "reinhard", "clamp"])
+def test_display_pass_matches_render_display(browser_page, transform):  # noqa: F811
+    from skydome.render.display import ev100_to_exposure
     from skydome.spectra import linear_srgb_to_xyz
 
-    assert DISPLAY_TRANSFORMS.index(transform) == index       # the shader's numbering
     page, messages = browser_page
+    code = _page_transforms(page)[transform]
     xyz = linear_srgb_to_xyz(np.array(COLOURS_RGB)) / ev100_to_exposure(EV100)
     gpu = np.asarray(page.evaluate("([c, ev, t]) => window.skydomeViewer.displayColours(c, ev, t)",
-                                   [xyz.tolist(), EV100, index]), dtype=np.float64)
+                                   [xyz.tolist(), EV100, code]), dtype=np.float64)
     want = _reference(xyz, EV100, transform)
     assert np.max(np.abs(gpu - want)) <= 1.0, np.c_[gpu, want]
     assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]
@@ -63,7 +80,9 @@ def test_hue_preserving_keeps_the_sunset_orange(browser_page):  # noqa: F811
 
     page, _ = browser_page
     xyz = linear_srgb_to_xyz(np.array([[2.5, 0.9, 0.2]])) / ev100_to_exposure(EV100)
+    codes = _page_transforms(page)
     hp, fm = (np.asarray(page.evaluate("([c, ev, t]) => window.skydomeViewer.displayColours(c, ev, t)",
-                                       [xyz.tolist(), EV100, t]))[0] for t in (0, 1))
+                                       [xyz.tolist(), EV100, codes[t]]))[0]
+              for t in ("hue-preserving", "filmic"))
     assert hp[0] > hp[1] > hp[2]
     assert fm[1] / fm[0] > hp[1] / hp[0] + 0.1

@@ -414,8 +414,12 @@ def _dobashi(view) -> dict[str, Any]:
         tex = np.concatenate([JX, np.transpose(tb.D, (2, 0, 1))[..., None]], axis=-1)   # (nc, nd, na, 4)
         ref = dy.reference_sunlight(atm, sun, cam.altitude_m, wl)
         top = dy.shadow_volume_top(hm, sun.direction)
-        grid = np.stack([hm.heights_m, np.minimum(top, 1e30), dy.terrain_lambert(hm, sun.direction),
-                         np.zeros_like(top)], axis=-1)
+        # channel 3: the highest of the four heights that a bilinear sample in cell (j, i)
+        # reads, so that the page's march skips the sample where the ray is above them all
+        Hm = hm.heights_m
+        cell = np.zeros_like(Hm)
+        cell[:-1, :-1] = np.maximum(np.maximum(Hm[:-1, :-1], Hm[:-1, 1:]), np.maximum(Hm[1:, :-1], Hm[1:, 1:]))
+        grid = np.stack([Hm, np.minimum(top, 1e30), dy.terrain_lambert(hm, sun.direction), cell], axis=-1)
         ext = np.zeros((4, wl.size))
         ext[:nc] = tb.extinction
         _DOBASHI_CACHE.clear()

@@ -185,6 +185,14 @@ function saveView() {
   const size = proj === "fisheye" ? String(Math.min(cam.width, cam.height)) : `${cam.width}x${cam.height}`;
   if (scenes[0].wavelengths_nm) cli.push("--wavelengths", String(scenes[0].wavelengths_nm.length));
   cli.push("--projection", proj, "--size", size, "--no-sun", "--out", "view.exr");
+  if (scenes[0].model === "dobashi2002") {
+    // the effect over the same synthetic scene on the CPU (`skydome airlight`; without shafts)
+    cli.length = 0;
+    cli.push("skydome", "airlight", "--synthetic", "--method", "dobashi2002",
+             "--sun-elevation", String(sun.elevation_deg), "--sun-azimuth", String(sun.azimuth_deg),
+             "--turbidity", String(params.turbidity), "--fov", String(cam.fov_deg),
+             "--view-azimuth", String(cam.view_azimuth_deg), "--out", "view.png");
+  }
   const json = { skydome_view: 1, models: scenes.map((s) => s.describe), sun, camera: cam,
                  display: display(), split: scenes.length > 1,
                  render_command: cli.join(" ") };
@@ -249,9 +257,10 @@ async function renderFloat(model, values, w, h, projection = 1, opts = {}) {
   return out;
 }
 
-// benchmark(model, values, n, w, h): mean ms per frame over n synced frames after one warm-up.
-async function benchmark(model, values, n = 20, w = 1920, h = 1080) {
-  const scene = await fetchScene(model, values), cam = cameraAxes(180, 15, 90, 0);
+// benchmark(model, values, n, w, h, camera): mean ms per frame over n synced frames after
+// one warm-up; camera [view azimuth, elevation, field of view] (default south, 15 deg up, 90 deg).
+async function benchmark(model, values, n = 20, w = 1920, h = 1080, camera = [180, 15, 90]) {
+  const scene = await fetchScene(model, values), cam = cameraAxes(...camera, 0);
   await renderer.renderXYZ([{ scene, x0: 0, w }], cam, w, h);
   renderer.sync();
   const t0 = performance.now();

@@ -7,7 +7,7 @@ precision highp float;
 uniform highp sampler2D u_xyz;
 uniform int u_mode;          // 0: photographic, 1: false-colour luminance
 uniform float u_k;           // exposure multiplier [m^2 cd^-1]
-uniform int u_transform;     // 0 hue-preserving, 1 filmic, 2 reinhard, 3 clamp (DISPLAY_TRANSFORMS)
+uniform int u_transform;     // 0 hue-preserving, 1 filmic, 2 reinhard, 3 clamp (the page's #transform)
 uniform vec2 u_log_range;    // log10 of the luminance at the ends of the false-colour scale
 out vec4 o_rgb;
 

@@ -11,7 +11,7 @@
 precision highp sampler2D;
 precision highp sampler2DArray;
 uniform highp sampler2DArray u_tables; // layer c, texel (mu node, t node): (J~_c XYZ, D_c)
-uniform highp sampler2D u_grid;        // heightmap grid: (height, shadow-volume top, Lambert, 0)
+uniform highp sampler2D u_grid;        // heightmap grid: (height, shadow-volume top, Lambert, cell max)
 uniform ivec2 u_table_size;            // n_angle, n_distance
 uniform vec2 u_mu_range;               // first and last view-cosine node
 uniform float u_extent;                // table extent = depth of the last plane = march range [m]
@@ -43,6 +43,17 @@ float heightmap_sample(int ch, float x, float y, float outside) {
     float a = texelFetch(u_grid, ivec2(i, j), 0)[ch], b = texelFetch(u_grid, ivec2(i + 1, j), 0)[ch];
     float c = texelFetch(u_grid, ivec2(i, j + 1), 0)[ch], e = texelFetch(u_grid, ivec2(i + 1, j + 1), 0)[ch];
     return (1.0 - wy) * ((1.0 - wx) * a + wx * b) + wy * ((1.0 - wx) * c + wx * e);
+}
+
+// the highest height a heightmap_sample(0, x, y, 0) can return at (x, y): grid channel 3
+// holds it per cell (a speed-up of the march only: where the ray is above it, the sample
+// cannot be a hit, so it is skipped; the result is the same)
+float cell_max(float x, float y) {
+    float fx = (x - u_grid_origin.x) / u_grid_step.x;
+    float fy = (y - u_grid_origin.y) / u_grid_step.y;
+    int nx = u_grid_size.x, ny = u_grid_size.y;
+    if (!(fx >= 0.0 && fx <= float(nx - 1) && fy >= 0.0 && fy <= float(ny - 1))) return 0.0;
+    return texelFetch(u_grid, ivec2(min(int(fx), nx - 2), min(int(fy), ny - 2)), 0).w;
 }
 
 // _ray_altitude: altitude [m] at distance t along a ray leaving radius r0 = R + h0 with
@@ -119,6 +130,8 @@ float march_terrain(vec3 d) {
         if (k > u_march_steps) break;
         float t = u_extent * pow(float(k) / float(u_march_steps), 1.5);
         float alt = ray_altitude(t, mu, u_datum_radius, u_eye.z);
+        if (mu >= 0.0 && alt > u_hmax) return -1.0;     // rising above the highest terrain
+        if (alt > cell_max(u_eye.x + t * d.x, u_eye.y + t * d.y)) { t_prev = t; continue; }
         float ground = heightmap_sample(0, u_eye.x + t * d.x, u_eye.y + t * d.y, 0.0);
         if (alt <= ground) {
             float ap = ray_altitude(t_prev, mu, u_datum_radius, u_eye.z);
@@ -127,7 +140,6 @@ float march_terrain(vec3 d) {
             float frac = clamp(d0 / max(d0 - d1, 1e-9), 0.0, 1.0);
             return t_prev + frac * (t - t_prev);
         }
-        if (mu >= 0.0 && alt > u_hmax) return -1.0;     // rising above the highest terrain
         t_prev = t;
     }
     return -1.0;
