@@ -3,7 +3,8 @@
 Colour pipeline: spectral radiance [W m^-2 sr^-1 nm^-1] -> CIE 1931 XYZ with Y the
 luminance [cd m^-2] (683 lm/W) -> linear sRGB (Rec. 709 primaries, D65 white) on the same
 scale (so that an (R, G, B) of (1, 1, 1) has a luminance of 1 cd m^-2) -> for display:
-exposure, tone map, sRGB encoding.
+exposure, the Hunt-effect chroma gain, display transform, sRGB encoding
+(:mod:`skydome.render.display`).
 
 Writers (chosen by the file suffix; every write is atomic: a temporary file beside the
 target, renamed over it on success and removed on failure):
