@@ -212,3 +212,21 @@ def test_agx_and_aces_fit_keep_greys_and_order(tm):
     assert np.all((y >= 0) & (y <= 1))
     assert np.allclose(y[:, 0], y[:, 1], atol=2e-3) and np.allclose(y[:, 2], y[:, 1], atol=2e-3)
     assert np.all(np.diff(y[:, 1]) >= -1e-9) and y[-1, 1] > 0.98 and y[0, 1] < 0.01
+
+
+def test_cli_render_transform_and_no_hunt(tmp_path):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    runner = CliRunner()
+    args = ["render", "--model", "single_scattering", "--sun-elevation", "60", "--size", "32",
+            "--wavelengths", "8"]
+    r = runner.invoke(app, args + ["--tonemap", "agx", "--no-hunt", "--out", str(tmp_path / "a.png")])
+    assert r.exit_code == 0, r.output
+    info = Image.open(tmp_path / "a.png").info
+    assert info["display_transform"] == "agx" and float(info["chroma_gain"]) == 1.0
+    r = runner.invoke(app, args + ["--out", str(tmp_path / "b.png")])
+    assert r.exit_code == 0 and float(Image.open(tmp_path / "b.png").info["chroma_gain"]) > 1.3
+    r = runner.invoke(app, args + ["--tonemap", "agx9", "--out", str(tmp_path / "c.png")])
+    assert r.exit_code == 2 and not (tmp_path / "c.png").exists()

@@ -371,6 +371,7 @@ def render(
     no_sun: bool = typer.Option(False, "--no-sun", help="Do not draw the sun disc."),
     ev100: Optional[float] = typer.Option(None, help="PNG only: exposure value at ISO 100, -20..30 (instead of --exposure)."),
     sun_light: Optional[str] = typer.Option(None, help="Leave the sun out of the image and write it as a light (direction, angular radius, spectral irradiance) to this .json file."),
+    no_hunt: bool = typer.Option(False, "--no-hunt", help="PNG only: show the sky's chromaticities as they are, without the Hunt-effect chroma gain (which keeps the bright sky's colourfulness on the dimmer display)."),
 ):
     """Render a sky model into an image file.
 
@@ -378,11 +379,13 @@ def render(
     (see `skydome models` for each model's options, units and ranges).
     """
     _run(_render, ctx.args, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method,
-         projection, size, wavelengths, exposure, tonemap, bits, not no_sun, ev100, sun_light)
+         projection, size, wavelengths, exposure, tonemap, bits, not no_sun, ev100, sun_light,
+         not no_hunt)
 
 
 def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method, projection,
-            size, wavelengths, exposure, tonemap, bits, draw_sun, ev100=None, sun_light=None):
+            size, wavelengths, exposure, tonemap, bits, draw_sun, ev100=None, sun_light=None,
+            hunt=True):
     from skydome._io import check_output_file
     from skydome._validate import check_choice, check_int, check_number
     from skydome.models import get_model_class
@@ -438,7 +441,7 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
         image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun, output="xyz")
     finally:
         progress.close()
-    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits, ev100=ev100)
+    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits, ev100=ev100, hunt=hunt)
     if sun_light is not None:
         if image.sun_light is None:
             typer.echo("no sun light written: the model has no sun above the horizon", err=True)

@@ -3,7 +3,8 @@
 Colour pipeline: spectral radiance [W m^-2 sr^-1 nm^-1] -> CIE 1931 XYZ with Y the
 luminance [cd m^-2] (683 lm/W) -> linear sRGB (Rec. 709 primaries, D65 white) on the same
 scale (so that an (R, G, B) of (1, 1, 1) has a luminance of 1 cd m^-2) -> for display:
-exposure, tone map, sRGB encoding.
+exposure, the Hunt-effect chroma gain, display transform, sRGB encoding
+(:mod:`skydome.render.display`).
 
 Writers (chosen by the file suffix; every write is atomic: a temporary file beside the
 target, renamed over it on success and removed on failure):
@@ -282,11 +283,13 @@ class SkyImage:
             :mod:`skydome.render.display`); False shows the chromaticities as they are.
         """
         check_choice("tonemap", tonemap, TONEMAPS)
-        k = self.exposure_multiplier(exposure, ev100)
+        return self._display(self.exposure_multiplier(exposure, ev100), tonemap, self.chroma_gain(hunt))
+
+    def _display(self, k: float, tonemap: str, gain: float) -> np.ndarray:
         from skydome.render.display import display_transform, scale_chroma
         from skydome.spectra import srgb_encode
 
-        rgb = scale_chroma(self.linear_srgb() * k, self.chroma_gain(hunt))
+        rgb = scale_chroma(self.linear_srgb() * k, gain)
         if tonemap in TONEMAPS[:3]:   # per-channel curves: out-of-gamut negatives to 0
             rgb = np.maximum(rgb, 0.0)
         out = np.clip(srgb_encode(display_transform(rgb, tonemap)), 0.0, 1.0)
@@ -312,7 +315,8 @@ class SkyImage:
             _atomic_write(p, self._write_hdr)
         else:
             k = self.exposure_multiplier(exposure, ev100)
-            display = self.to_srgb(k, tonemap, hunt=hunt)
+            gain = self.chroma_gain(hunt)
+            display = self._display(k, tonemap, gain)
             from skydome.render.display import exposure_to_ev100
 
             info = {"colour": "display-referred sRGB (IEC 61966-2-1), not radiometric",
@@ -320,7 +324,7 @@ class SkyImage:
                     "exposure_mode": ("explicit" if exposure is not None else
                                       "ev100" if ev100 is not None else "auto (key 0.18)"),
                     "display_transform": tonemap,
-                    "chroma_gain": round(self.chroma_gain(hunt), 4)}
+                    "chroma_gain": round(gain, 4)}
             _atomic_write(p, lambda tmp: self._write_png(tmp, display, bits, info))
         return p
 
