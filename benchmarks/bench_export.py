@@ -27,7 +27,8 @@ def main() -> None:
     ap.add_argument("--model", default="precomputed")
     ap.add_argument("--mips-width", type=int, default=1024)
     ap.add_argument("--mips-face", type=int, default=256)
-    ap.add_argument("--skip-maps", action="store_true", help="only the mips and the bakes")
+    ap.add_argument("--skip-maps", action="store_true", help="no 4096 / 1024^2 maps")
+    ap.add_argument("--skip-bakes", action="store_true", help="no LUT bakes")
     args = ap.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.1f}")
     sun = sd.Sun(elevation_deg=20.0, azimuth_deg=135.0)
@@ -63,7 +64,7 @@ def main() -> None:
             mips = prefiltered_mips(env, 6)
             print(f"{label}: 6 levels (5 filtered) in {time.perf_counter() - t0:.1f} s")
             del mips
-        for name in ("precomputed", "hillaire2020"):
+        for name in () if args.skip_bakes else ("precomputed", "hillaire2020"):
             m = sky if name == args.model else sd.model(name, sun=sun)
             t0 = time.perf_counter()
             files = write_luts(m, Path(tmp) / f"luts_{name}", ("npy", "bin", "exr"))

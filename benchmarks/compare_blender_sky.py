@@ -14,8 +14,10 @@ m^-1 and extinction 1.11 x that (single-scattering albedo 0.9) with a 1.2 km sca
 and a Cornette-Shanks phase of g = 0.76, ozone on the 10-25-40 km tent with the peak
 absorption coefficients of its OZONE_COEFF table (21 wavelengths, 380-780 nm). skydome
 gets the same atmosphere (:func:`blender_nishita_atmosphere`, densities 1, observer at
-sea level, sun disc off, sun_rotation = -azimuth as Cycles' sky_radiance_nishita puts the
-sun at (cos e cos(rot + pi/2), cos e sin(rot + pi/2), sin e)) and renders it with its
+sea level, sun disc off, sun_rotation = the sun's azimuth from north towards east: a
+first run with sun_rotation = -azimuth put the brightest sky texel at azimuth 210.2 deg
+for a sun at 150 deg, i.e. Blender 4.2's Nishita texture turns with the rotation, and the
+script prints where the brightest texel lands) and renders it with its
 ``single_scattering`` model (the same physics), ``nishita1996`` and ``precomputed``
 (multiple scattering, ground albedo 0.1).
 
@@ -46,7 +48,7 @@ CASES = (("HOSEK_WILKIE", "hosek_wilkie2012", {"turbidity": 3.0, "albedo": 0.3})
 # as a light elsewhere), the sun from SUN
 NISHITA = {"altitude": 0.0, "air_density": 1.0, "dust_density": 1.0, "ozone_density": 1.0,
            "sun_disc": False, "sun_elevation": float(np.radians(SUN[0])),
-           "sun_rotation": float(np.radians(-SUN[1]) % (2.0 * np.pi))}
+           "sun_rotation": float(np.radians(SUN[1]))}
 # the peak ozone absorption coefficients [m^-1] of Blender's sky_nishita.cpp (OZONE_COEFF),
 # at 380, 400, ..., 780 nm (Blender 4.2, Apache-2.0)
 _OZONE_COEFF = (3.25126849861e-09, 5.85395365047e-09, 1.977191155085e-08, 7.309568762914e-08,

@@ -286,3 +286,30 @@ def test_write_luts_folder_and_cli(tmp_path):
         assert res.exit_code == 2, (args, res.output)
         assert msg in res.output, (args, res.output)
         assert not bad.exists()
+
+
+@pytest.mark.skipif(not Path("/usr/bin/glslangValidator").exists(),
+                    reason="glslangValidator (Debian glslang-tools, installed by scripts/_setup) missing")
+@pytest.mark.parametrize("version", ["#version 300 es\nprecision highp float;\n"
+                                     "precision highp sampler3D;\n", "#version 330 core\n"])
+def test_glsl_compiles(tmp_path, version):
+    """The GLSL file compiles as GLSL ES 3.00 (WebGL2) and GLSL 3.30 with the Khronos
+    reference compiler, called from a fragment shader that uses every look-up."""
+    import subprocess
+
+    main = """
+uniform sampler2D transLut; uniform sampler2D skyLut; uniform sampler3D apVol;
+uniform vec3 dir; uniform vec3 sunDir; uniform float dist;
+out vec4 colour;
+void main() {
+    vec3 t = transmittanceToTop(transLut, 6.361e6, dir.z, 6.36e6, 6.46e6);
+    vec2 ms = multipleScatteringUv(6.362e6, sunDir.z, 6.36e6, 6.46e6, vec2(32.0));
+    vec3 sky = skyViewXYZ(skyLut, dir, sunDir, 6.3600001e6, 6.36e6);
+    vec4 ap = aerialPerspective(apVol, dir, dist, sunDir, 4.0);
+    colour = vec4(t * sky + ap.rgb * ap.a + vec3(ms, 0.0), 1.0);
+}
+"""
+    src = tmp_path / "lut.frag"
+    src.write_text(version + GLSL.read_text() + main)
+    res = subprocess.run(["/usr/bin/glslangValidator", str(src)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr

@@ -103,17 +103,18 @@ def prefilter_latlong(image, roughness: float, out_width: int, out_height: int,
     # azimuth offsets of the source columns from output column 0 (module notes)
     dphi = 2.0 * np.pi * (0.5 * s - 0.5 + np.arange(Ws)) / Ws
     cos_dphi = np.cos(dphi)
-    F = np.fft.rfft(img * omega[:, None, None], axis=1)      # (Hs, Ws/2+1, 3)
+    # the source rows' spectra, frequency first: (Ws/2+1, Hs, channels)
+    F = np.ascontiguousarray(np.fft.rfft(img * omega[:, None, None], axis=1).transpose(1, 0, 2))
     out = np.empty((out_height, out_width, img.shape[2]))
     for i, t in enumerate(th_o):
         c = (np.cos(t) * np.cos(th_s))[:, None] + (np.sin(t) * np.sin(th_s))[:, None] * cos_dphi
         g = ggx_weight(c, alpha)                              # (Hs, Ws), g[j, m]
-        rows = np.nonzero(g.any(axis=1))[0]
-        g = g[rows]
-        # out(c) = sum_j sum_c' g_j((s c - c') mod Ws) S_j(c'): a circular convolution
-        G = np.fft.rfft(g, axis=1)
-        num = np.fft.irfft((G[:, :, None] * F[rows]).sum(axis=0), n=Ws, axis=0)[::s]
-        den = (g.sum(axis=1) * omega[rows]).sum()
+        # out(c) = sum_j sum_c' g_j((s c - c') mod Ws) S_j(c'): a circular convolution per
+        # source row j, summed over j in frequency space (one batched product per frequency)
+        G = np.fft.rfft(g, axis=1)                            # (Hs, Ws/2+1)
+        num_hat = np.matmul(G.T[:, None, :], F)[:, 0, :]      # (Ws/2+1, channels)
+        num = np.fft.irfft(num_hat, n=Ws, axis=0)[::s]
+        den = g.sum(axis=1) @ omega
         out[i] = num / den
     return np.maximum(out, 0.0)
 
