@@ -47,3 +47,14 @@ def test_closure_bad_input(caps):
         closure.closure(caps, band_nm=(2000.0, 1000.0))
     with pytest.raises(ValueError, match="pyranometer_clock_offset_min"):
         closure.closure(caps, pyranometer_clock_offset_min=500.0)
+
+
+def test_cli_closure_bad_input():
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    for args, word in ((["--model", "perez1993"], "model"), (["--water", "-1"], "water"),
+                       (["--captures", "25:00:00"], "captures")):
+        res = CliRunner().invoke(app, ["validate", "closure", *args])
+        assert res.exit_code == 2 and word in res.output
