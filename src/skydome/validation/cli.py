@@ -2,7 +2,8 @@
 
 ``skydome validate measured`` compares the models with the Kider et al. 2014 scans of
 2013-05-27 (:func:`skydome.validation.compare.compare_measured`) and prints, or writes
-(``--out table.md``, atomically), the day's table.
+(``--out table.md``, atomically), the day's table; ``skydome validate closure`` the broadband
+irradiance against the pyranometer (:mod:`skydome.validation.closure`).
 """
 
 from __future__ import annotations
@@ -78,3 +79,33 @@ def measured(
         if os.path.exists(tmp):
             os.unlink(tmp)
     typer.echo(f"wrote {out}")
+
+
+@validate_app.command("closure")
+def closure_cmd(
+    model: str = typer.Option("precomputed", help="precomputed or hillaire2020."),
+    captures: Optional[str] = typer.Option(None, help="Comma-separated capture labels HH:MM:SS (default all)."),
+    water: float = typer.Option(1.42, help="Precipitable water [cm], 0-10 (default: US standard)."),
+    fast: bool = typer.Option(False, "--fast", help="precomputed at coarse table sizes."),
+) -> None:
+    """Broadband (300-2800 nm) global horizontal irradiance against the Kider et al. 2014
+    pyranometer, capture by capture (prints a Markdown table)."""
+    from skydome.validation import closure
+    from skydome.validation.kider2014 import capture_labels, load_captures
+
+    if model not in closure.CLOSURE_MODELS:
+        _fail(f"model = {model!r}: must be one of {', '.join(closure.CLOSURE_MODELS)}")
+    if not 0.0 <= water <= 10.0:
+        _fail(f"water = {water:g} is out of range [0, 10] cm")
+    labs = None
+    if captures is not None:
+        labs = [c.strip() for c in captures.split(",") if c.strip()]
+        wrong = [c for c in labs if c not in capture_labels()]
+        if not labs or wrong:
+            _fail(f"captures = {captures!r}: each must be one of {', '.join(capture_labels())}")
+    res = closure.closure(load_captures(labs), model, precipitable_water_cm=water, fast=fast)
+    lines = ["| capture | sun elevation [deg] | measured [W m^-2] | model [W m^-2] | direct | diffuse | error |",
+             "|---|---|---|---|---|---|---|"]
+    lines += [f"| {r.capture} | {r.sun_elevation_deg:.1f} | {r.measured_w_m2:.1f} | {r.model_w_m2:.1f} | "
+              f"{r.direct_w_m2:.1f} | {r.diffuse_w_m2:.1f} | {100 * r.error:+.1f} % |" for r in res]
+    typer.echo("\n".join(lines))

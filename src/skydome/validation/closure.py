@@ -1,8 +1,9 @@
 """Broadband closure: a physically based model's global horizontal irradiance against the
 Kider et al. 2014 pyranometer, capture by capture (docs/validation_measured.md).
 
-The model sees the capture's sun (SPA at the scan's mean time, the loader's clock
-correction) and the AERONET atmosphere of :func:`skydome.validation.aeronet.aerosol_atmosphere`
+The model sees the sun at the middle of the pyranometer's window (SPA; the labels' time,
+which the pyranometer's record fits, see ``pyranometer_clock_offset_min``) and the AERONET
+atmosphere of :func:`skydome.validation.aeronet.aerosol_atmosphere`
 with the absorbing gases of :mod:`skydome.atmosphere.gases`. Its spectral global horizontal
 irradiance (direct + diffuse) is computed at the Bird & Riordan 1986 table wavelengths in
 the band (where the gas coefficients are given; linear between them) and integrated against
@@ -19,11 +20,15 @@ import numpy as np
 
 from skydome._validate import check_choice, check_number
 
-__all__ = ["BAND_NM", "ClosureResult", "closure_wavelengths", "broadband_ghi", "closure"]
+__all__ = ["BAND_NM", "PYRANOMETER_CLOCK_OFFSET_MIN", "ClosureResult", "closure_wavelengths", "broadband_ghi", "closure"]
 
 #: the pyranometer's band [nm] (a thermopile pyranometer's 285-2800 nm, from 300 nm where
 #: the gas table starts: below it the ground irradiance is under 0.01 % of the total)
 BAND_NM = (300.0, 2800.0)
+
+#: the pyranometer's clock offset [min]: its record fits the labels (EDT) as they are, not
+#: the scanner's -40 min (docs/validation_measured.md, "Broadband closure")
+PYRANOMETER_CLOCK_OFFSET_MIN = 0.0
 
 #: models the closure runs
 CLOSURE_MODELS = ("precomputed", "hillaire2020")
@@ -111,7 +116,8 @@ def broadband_ghi(sky, band_nm=BAND_NM) -> tuple[float, float]:
 
 def closure(captures, model: str = "precomputed", *, precipitable_water_cm: float = 1.42,
             gas_reference_airmass: float = 1.5, fast: bool = False,
-            band_nm=BAND_NM, pyranometer_clock_offset_min: float | None = None) -> list[ClosureResult]:
+            band_nm=BAND_NM,
+            pyranometer_clock_offset_min: float | None = PYRANOMETER_CLOCK_OFFSET_MIN) -> list[ClosureResult]:
     """Model against pyranometer GHI for each capture that has a pyranometer record.
 
     Parameters
@@ -127,10 +133,11 @@ def closure(captures, model: str = "precomputed", *, precipitable_water_cm: floa
         precomputed at coarse table sizes (the tests' setting).
     band_nm : (float, float)
         Integration band [nm] within 300-4000.
-    pyranometer_clock_offset_min : float, optional
-        Offset [min] in [-120, 120] of the pyranometer's clock: the model's sun is then at
-        the scan window's mid time by the label plus this offset. None (default): the
-        capture's own sun (the scanner's clock correction).
+    pyranometer_clock_offset_min : float or None
+        Offset [min] in [-120, 120] of the pyranometer's clock: the model's sun is at the
+        middle of the labelled window plus this offset (default
+        :data:`PYRANOMETER_CLOCK_OFFSET_MIN`, 0: the labels, which the pyranometer's record
+        fits). None: the capture's own sun (the scanner's clock correction, -40 min).
     """
     from skydome.validation.aeronet import aerosol_atmosphere, egbert_20130527, nearest_retrieval
 
