@@ -134,6 +134,25 @@ def test_nan_and_complex_directions_refused(name):
             m.radiance([[0.0, 0.0, 1.0]], [550.0, np.nan])
 
 
+def test_direction_from_angles_validates_its_angles():
+    """Issue 10, Reliability: ``direction_from_angles`` refuses NaN, infinite, complex,
+    non-numeric and out-of-range angles with the argument's name (it accepted them)."""
+    from skydome.transport.geometry import direction_from_angles
+
+    with pytest.raises(ValueError, match="elevation_deg"):
+        direction_from_angles(np.nan, 0.0)
+    with pytest.raises(ValueError, match="azimuth_deg"):
+        direction_from_angles(10.0, [0.0, np.inf])
+    with pytest.raises(ValueError, match=r"elevation_deg = 91.*\[-90, 90\]"):
+        direction_from_angles([10.0, 91.0], 0.0)
+    with pytest.raises(TypeError, match="elevation_deg"):
+        direction_from_angles(10.0 + 1.0j, 0.0)
+    with pytest.raises(TypeError, match="azimuth_deg"):
+        direction_from_angles(10.0, "north")
+    d = direction_from_angles(90.0, 123.0)                      # the zenith, any azimuth
+    np.testing.assert_allclose(d, [0.0, 0.0, 1.0], atol=1e-15)
+
+
 # -- symmetry about the solar meridian ---------------------------------------------------------
 @pytest.mark.parametrize("name", NAMES)
 def test_symmetric_about_solar_meridian(name):

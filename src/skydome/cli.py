@@ -233,6 +233,20 @@ def _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method):
         raise UserError(str(exc)) from None
 
 
+def _folder_model(out: str, model: str, extra: list[str]):
+    """(model class, keyword parameters) of a folder-writing command: the output folder
+    checked first, then the model name and its extra ``--name value`` options, validated
+    against the model's declarations (all before any work)."""
+    from skydome._io import check_output_folder
+    from skydome.models import get_model_class
+
+    check_output_folder(out)
+    cls = get_model_class(model)
+    params = _parse_model_params(cls, extra)
+    cls._validate_params(dict(params))
+    return cls, params
+
+
 def _parse_model_params(cls, extra: list[str]) -> dict[str, Any]:
     """Turn ``--name value`` pairs into keyword parameters of model class ``cls``."""
     params = {p.name: p for p in cls.parameters}
@@ -722,17 +736,10 @@ def timelapse_cmd(
     Model parameters are given as extra options, e.g. --turbidity 3.
     """
     def go():
-        from skydome._validate import check_choice
+        from skydome._validate import check_choice, check_int, check_number
         from skydome.apps.timelapse import day_times, parse_every, run_timelapse
-        from skydome.models import get_model_class
 
-        from skydome._io import check_output_folder
-        from skydome._validate import check_int, check_number
-
-        check_output_folder(out)
-        cls = get_model_class(model)
-        params = _parse_model_params(cls, ctx.args)
-        cls._validate_params(dict(params))
+        cls, params = _folder_model(out, model, ctx.args)
         check_choice("projection", projection, PROJECTIONS[:-1])
         check_number("lat", lat, -90.0, 90.0, "deg")
         check_number("lon", lon, -180.0, 180.0, "deg")
@@ -825,17 +832,11 @@ def twilight_cmd(
     Model parameters are given as extra options, e.g. --turbidity 3.
     """
     def go():
-        from skydome.apps.twilight import run_twilight
-        from skydome.models import get_model_class
-
-        from skydome._io import check_output_folder
         from skydome._progress import reporting
         from skydome._validate import check_int
+        from skydome.apps.twilight import run_twilight
 
-        check_output_folder(out)
-        cls = get_model_class(model)
-        params = _parse_model_params(cls, ctx.args)
-        cls._validate_params(dict(params))
+        cls, params = _folder_model(out, model, ctx.args)
         lo, hi = cls.sun_elevation_range_deg
         if not (lo <= -18.0 and hi >= 0.0) and cls.sun_outside_range == "raise":
             raise UserError(f"--model = {model!r} does not cover the sun from 0 to -18 deg "

@@ -49,30 +49,35 @@ def _factor(pressure_pa: float, temperature_c: float) -> float:
     return (p / 1000.0 / P_REF_KPA) * (T_REF_K / (273.0 + t))   # [Mee98] ch. 16
 
 
+def _cot_fit(name: str, elevation_deg, k: float, a: float, b: float, h_min: float,
+             pressure_pa: float, temperature_c: float) -> np.ndarray:
+    """R = k cot(h + a / (h + b)) [arcmin] at elevation h [deg] (the form of both fits),
+    0 below h_min, scaled to the pressure and temperature."""
+    h = np.asarray(elevation_deg, dtype=np.float64)
+    if np.any(~np.isfinite(h)) or np.any(np.abs(h) > 90.0):
+        raise ValueError(f"{name} must lie in [-90, 90] deg")
+    hh = np.maximum(h, h_min)
+    r = k / np.tan(np.radians(hh + a / (hh + b)))
+    r = np.where(h >= h_min, r, 0.0)
+    # at the zenith cot(90 + ...) is slightly negative: no refraction
+    return np.maximum(r, 0.0) * _factor(pressure_pa, temperature_c)
+
+
 def refraction_bennett_arcmin(apparent_elevation_deg, pressure_pa: float = 101000.0,
                               temperature_c: float = 10.0) -> np.ndarray:
     """Refraction R [arcmin] from the apparent elevation [deg] ([Ben82]); 0 below -1 deg."""
-    h = np.asarray(apparent_elevation_deg, dtype=np.float64)
-    if np.any(~np.isfinite(h)) or np.any(np.abs(h) > 90.0):
-        raise ValueError("apparent_elevation_deg must lie in [-90, 90] deg")
-    hh = np.maximum(h, -1.0)
-    r = 1.0 / np.tan(np.radians(hh + 7.31 / (hh + 4.4)))                # [Ben82]
-    r = np.where(h >= -1.0, r, 0.0)
-    # at the zenith cot(90 + ...) is slightly negative: no refraction
-    return np.maximum(r, 0.0) * _factor(pressure_pa, temperature_c)
+    # [Ben82]: R = cot(h_a + 7.31 / (h_a + 4.4))
+    return _cot_fit("apparent_elevation_deg", apparent_elevation_deg, 1.0, 7.31, 4.4, -1.0,
+                    pressure_pa, temperature_c)
 
 
 def refraction_saemundsson_arcmin(true_elevation_deg, pressure_pa: float = 101000.0,
                                   temperature_c: float = 10.0) -> np.ndarray:
     """Refraction R [arcmin] from the true (airless) elevation [deg] ([Sae86], [Mee98]
     eq. 16.4); 0 below -1.9 deg."""
-    h = np.asarray(true_elevation_deg, dtype=np.float64)
-    if np.any(~np.isfinite(h)) or np.any(np.abs(h) > 90.0):
-        raise ValueError("true_elevation_deg must lie in [-90, 90] deg")
-    hh = np.maximum(h, -1.9)
-    r = 1.02 / np.tan(np.radians(hh + 10.3 / (hh + 5.11)))             # [Sae86]
-    r = np.where(h >= -1.9, r, 0.0)
-    return np.maximum(r, 0.0) * _factor(pressure_pa, temperature_c)
+    # [Sae86]: R = 1.02 cot(h + 10.3 / (h + 5.11))
+    return _cot_fit("true_elevation_deg", true_elevation_deg, 1.02, 10.3, 5.11, -1.9,
+                    pressure_pa, temperature_c)
 
 
 def apparent_elevation(true_elevation_deg, pressure_pa: float = 101000.0,

@@ -62,14 +62,12 @@ def horizontal_irradiance(sky, wavelengths_nm=None, n_mu: int = 32, n_phi: int =
     spectral [W m^-2 nm^-1] at ``wavelengths_nm``, or XYZ (Y = illuminance [lx]) if None."""
     from skydome.render.sun_disc import XYZ_CHANNEL_WAVELENGTHS_NM, _visible_fraction, sun_disc_radiance
 
-    x, w = np.polynomial.legendre.leggauss(n_mu)
-    mu, wmu = 0.5 * (x + 1.0), 0.5 * w                      # cos(theta) on (0, 1)
-    phi = (np.arange(n_phi) + 0.5) * 2.0 * np.pi / n_phi
-    M, P = np.meshgrid(mu, phi, indexing="ij")
-    s = np.sqrt(1.0 - M * M)
-    d = np.stack([s * np.sin(P), s * np.cos(P), M], axis=-1).reshape(-1, 3)
-    L = _sky_values(sky, d, wavelengths_nm).reshape(n_mu, n_phi, -1)
-    E = np.einsum("ijc,i,ij->c", L, wmu, M) * (2.0 * np.pi / n_phi)
+    from skydome.illuminance import sky_quadrature
+
+    # the horizontal plane's directions and weights (cos(theta) included) of the library's
+    # one hemisphere quadrature
+    d, w = sky_quadrature((0.0, 0.0, 1.0), n_mu, n_phi)
+    E = w @ _sky_values(sky, d, wavelengths_nm)
     sun = getattr(sky, "sun", None)
     if include_sun and sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
         Ls = sun_disc_radiance(sky, wavelengths_nm)

@@ -84,6 +84,17 @@ def ring_weights(elev, rings_deg, cubic):
     return j, w0, w1, w2, w3
 
 
+@njit(cache=True, inline="always")
+def ring_of(q, j, w0, w1, w2, w3, nr):
+    """(ring index, weight) of the q-th (0..3) of the rings j-1 .. j+2 of
+    :func:`ring_weights`; weight 0 for a ring outside the nr rings."""
+    r = j - 1 + q
+    w = w0 if q == 0 else (w1 if q == 1 else (w2 if q == 2 else w3))
+    if r < 0 or r >= nr:
+        return r, 0.0
+    return r, w
+
+
 @njit(cache=True, fastmath=True, inline="always")
 def _elevation_cphi(d, i, sin_az, cos_az):
     """Elevation [deg] of ray i and cos(phi), phi = its azimuth - the solar azimuth (azimuth
@@ -105,9 +116,8 @@ def _ray(d, i, coef, terms, rings_deg, sin_az, cos_az, cubic, out):
     for l in range(nl):
         out[i, l] = 0.0
     for q in range(4):
-        r = j - 1 + q
-        w = w0 if q == 0 else (w1 if q == 1 else (w2 if q == 2 else w3))
-        if w == 0.0 or r < 0 or r >= nr:
+        r, w = ring_of(q, j, w0, w1, w2, w3, nr)
+        if w == 0.0:
             continue
         t_prev = 1.0
         t_cur = cphi
@@ -214,9 +224,8 @@ def _ray_grid(d, i, table, rings_deg, sin_az, cos_az, cubic, out):
     for l in range(nl):
         out[i, l] = 0.0
     for q in range(4):
-        r = j - 1 + q
-        w = w0 if q == 0 else (w1 if q == 1 else (w2 if q == 2 else w3))
-        if w == 0.0 or r < 0 or r >= nr:
+        r, w = ring_of(q, j, w0, w1, w2, w3, nr)
+        if w == 0.0:
             continue
         a0 = w * gu
         a1 = w * fu
