@@ -137,7 +137,7 @@ def precompute(props, wl, p):
         # times coarser (interpolated up into the summed density)
         div = p["order_table_divisor"]
         n_high = min(p["high_order_sphere_samples"] or p["sphere_samples"], p["sphere_samples"])
-        n_out_high = max(2, p["sphere_samples"] // div)
+        n_out_high = min(p["sphere_samples"], max(ORDER_DENSITY_MIN, p["sphere_samples"] // div))
         q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
             pc, pp, pt, n_high, n_out_high)
         # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
@@ -227,15 +227,22 @@ def precompute(props, wl, p):
                   precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
 
 
+# the per-order grids of orders >= 3 are never coarser than these (nor finer than the full
+# ones): mu, mu_s and nu nodes of the per-order table, zenith samples of J's outgoing grid
+ORDER_TABLE_MIN = (32, 16, 8)
+ORDER_DENSITY_MIN = 16
+
+
 def order_table_shape(shape, divisor):
     """(n_r, n_mu, n_mu_s, n_nu) of the per-order table: ``shape`` (of the stored 4-D
-    table) with mu, mu_s and nu ``divisor`` times coarser (n_mu kept even, at least 4; the
-    others at least 2 nodes); r is kept, so that the scattering density's r nodes fall on
-    nodes of the table."""
+    table) with mu, mu_s and nu ``divisor`` times coarser (n_mu kept even), but not below
+    ``ORDER_TABLE_MIN``; r is kept, so that the scattering density's r nodes fall on nodes
+    of the table."""
     n_r, n_mu, n_ms, n_nu = shape
     d = int(divisor)
-    return (n_r, max(4, 2 * ((n_mu // d) // 2)), max(2, (n_ms - 1) // d + 1),
-            max(2, (n_nu - 1) // d + 1))
+    m_mu, m_ms, m_nu = ORDER_TABLE_MIN
+    return (n_r, min(n_mu, max(m_mu, 2 * ((n_mu // d) // 2))),
+            min(n_ms, max(m_ms, (n_ms - 1) // d + 1)), min(n_nu, max(m_nu, (n_nu - 1) // d + 1)))
 
 
 def add_density(J_sum, J, q_sum, q):
