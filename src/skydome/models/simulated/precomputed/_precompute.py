@@ -163,6 +163,8 @@ def precompute(props, wl, p):
         # mu_s and nu; the stored table is integrated once from the summed density (4.)
         delta = np.empty(order_table_shape(ss.shape[1:-1], p["order_table_divisor"]) + (nl,),
                          dtype=np.float32)
+        # on the full table the orders are summed as they come (no integral in step 4)
+        ms = np.zeros(ss.shape[1:], dtype=np.float32) if delta.shape == ss.shape[1:] else None
         J = None
         tot = tot_prev = dE_prev = None
         axes = tuple(range(delta.ndim - 1))
@@ -195,6 +197,8 @@ def precompute(props, wl, p):
                                                 sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms,
                                                 QUADRATURE_SCALE_M, delta)
             tot_prev, tot = tot, delta.sum(axis=axes, dtype=np.float64)
+            if ms is not None:
+                ms += delta
             report("precomputing tables: scattering orders", order, p["orders"])
         if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
             # the orders beyond N as a geometric series whose ratio f is that of the last two
@@ -204,14 +208,17 @@ def precompute(props, wl, p):
             # order's J is not needed afterwards.
             g = _series_factor(tot, tot_prev).astype(np.float32)
             add_density(J_sum, np.multiply(J, g, out=J), q2, q)
+            if ms is not None:
+                ms += np.multiply(delta, g, out=delta)
             ea = tuple(range(dE.ndim - 1))
             E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
         del J, L_in, rhs, delta
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
-        ms = np.empty(ss.shape[1:], dtype=np.float32)
-        _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                            mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
+        if ms is None:
+            ms = np.empty(ss.shape[1:], dtype=np.float32)
+            _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R,
+                                                Rt, mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
     if ms is None:
         ms = np.zeros(ss.shape[1:], dtype=np.float32)
     dens = {}
