@@ -9,6 +9,7 @@ the precomputation wall time and the luminance RMS / max relative error per sky 
 weighted, as in ``validate_multiple_scattering.py``) and the Monte Carlo noise floor.
 
 Run: python benchmarks/accuracy_precomputed.py [--refs FILE] [--samples N] [--settings a,b]
+[--skies 0,2] [--against full_orders] [--table-wavelengths]
 """
 
 from __future__ import annotations
@@ -39,6 +40,9 @@ SETTINGS = {
     # the default with every order on the full table and sphere (what the coarser grids of
     # orders >= 3 give up)
     "full_orders": dict(order_table_divisor=1, high_order_sphere_samples=32),
+    # one of the two at a time
+    "grid2_sphere32": dict(order_table_divisor=2, high_order_sphere_samples=32),
+    "grid1_sphere16": dict(order_table_divisor=1, high_order_sphere_samples=16),
 }
 
 
@@ -49,6 +53,10 @@ def main(argv=None):
     ap.add_argument("--twilight-samples", type=int, default=100_000)
     ap.add_argument("--settings", default=",".join(SETTINGS))
     ap.add_argument("--skies", default="", help="indices into SKIES, e.g. 0,1 (default all)")
+    ap.add_argument("--against", default="", help="also print each setting's luminance RMS "
+                    "against this setting's radiance (the first in --settings; no MC noise)")
+    ap.add_argument("--table-wavelengths", action="store_true",
+                    help="tables on the 6 compared wavelengths instead of 20 over 380-780 nm")
     args = ap.parse_args(argv)
 
     import skydome as sd
@@ -71,20 +79,30 @@ def main(argv=None):
         print(f"reference sun {elev:g} aod {aod:g}: {n} paths, {time.perf_counter() - t0:.0f} s",
               flush=True)
     print(f"load average {os.getloadavg()[0]:.1f} (shared machine)")
+    got = {}
+    table_wl = {"table_wavelengths_nm": wl} if args.table_wavelengths else {}
     for name in [n for n in args.settings.split(",") if n]:
         kw = SETTINGS[name]
         print(f"{name}: {kw}", flush=True)
         for aod in sorted({a for _, a in skies}):
             t0 = time.perf_counter()
             m = sd.model("precomputed", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=180.0),
-                         atmosphere=Atmosphere.earth(aerosol_optical_depth=aod), cache=False, **kw)
+                         atmosphere=Atmosphere.earth(aerosol_optical_depth=aod), cache=False,
+                         **table_wl, **kw)
             print(f"  aod {aod:g}: precompute {time.perf_counter() - t0:.1f} s", flush=True)
             for elev in [e for e, a in skies if a == aod]:
                 k = f"{elev:g}_{aod:g}"
                 sky = m.with_sun(sd.Sun(elevation_deg=elev, azimuth_deg=180.0))
-                c = compare(refs[k], refs[k + "_err"], sky.radiance(dirs, wl), wl, w)
+                L = got[name, k] = sky.radiance(dirs, wl)
+                c = compare(refs[k], refs[k + "_err"], L, wl, w)
+                extra = ""
+                if args.against and (args.against, k) in got and name != args.against:
+                    a = compare(got[args.against, k], np.zeros_like(L), L, wl, w)
+                    extra = (f"; against {args.against}: RMS {100 * a['rms']:.2f} %, max "
+                             f"{100 * a['max']:.2f} %")
                 print(f"    sun {elev:5.1f}: lum RMS {100 * c['rms']:5.2f} %  max "
-                      f"{100 * c['max']:5.2f} %  (MC noise {100 * c['noise']:.2f} %)", flush=True)
+                      f"{100 * c['max']:5.2f} %  (MC noise {100 * c['noise']:.2f} %){extra}",
+                      flush=True)
 
 
 if __name__ == "__main__":

@@ -110,7 +110,8 @@ def main(argv=None):
             v = np.array(rec[name])
             par += v[:, 1].sum()
             print(f"  {name:28s} {v[:, 0].sum():7.1f} s wall {v[:, 1].sum():7.1f} s CPU "
-                  f"({100 * v[:, 1].sum() / cpu:4.1f} %) x{len(v)}")
+                  f"({100 * v[:, 1].sum() / cpu:4.1f} %) x{len(v)} "
+                  f"[{', '.join(f'{x:.1f}' for x in v[:, 1])}]")
     print(f"  {'other':28s} {'':7s}         {cpu - par:7.1f} s CPU")
     print(f"estimated idle wall on 2 cores: {par / 2 + (cpu - par):.1f} s")
     n_orders = len(rec.get("density_products", ()))

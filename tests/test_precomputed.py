@@ -372,3 +372,45 @@ def test_default_settings_against_monte_carlo():
     rel = np.abs(m.radiance(d, wl) / ref - 1.0)[:, 0]
     assert np.all(rel[:4] < 0.03), rel
     assert rel[4] < 0.06, rel
+
+
+def test_coarse_density_of_higher_orders_is_interpolated_bilinearly():
+    """The scattering density of orders >= 3 lives on an outgoing grid twice as coarse and
+    is added into the summed density bilinearly in (theta, phi): a density that is linear in
+    theta and phi (a, b, c chosen here) must come out exactly, a + b theta + c phi, on every
+    node of the fine grid."""
+    from skydome.models.simulated.precomputed import _precompute as PC
+
+    class Grid:
+        def __init__(self, n):
+            self.th_out = np.linspace(0.0, np.pi, 2 * n + 1)
+            self.ph_out = np.linspace(0.0, np.pi, n + 1)
+
+    fine, coarse = Grid(8), Grid(4)
+    a, b, c = 0.5, 2.0, -0.25
+
+    def linear(g):
+        T, P = np.meshgrid(g.th_out, g.ph_out, indexing="ij")
+        v = (a + b * T + c * P).astype(np.float32)
+        return np.ascontiguousarray(np.broadcast_to(v[None, :, :, None, None, None],
+                                                    (2,) + v.shape + (3, 4, 5)))
+
+    J_sum = np.zeros_like(linear(fine))
+    PC.add_density(J_sum, linear(coarse), fine, coarse)
+    np.testing.assert_allclose(J_sum, linear(fine), rtol=1e-6, atol=1e-6)
+    # the same grid: a plain sum
+    PC.add_density(J_sum, linear(fine), fine, fine)
+    np.testing.assert_allclose(J_sum, 2 * linear(fine), rtol=1e-6, atol=1e-6)
+
+
+def test_order_table_shape_halves_and_keeps_floors():
+    """The per-order table of orders >= 3: mu, mu_s and nu halved at the default sizes
+    (128 x 48 x 16 -> 64 x 24 x 8), r kept, never below 32 x 16 x 8 nor above the full
+    table, mu even."""
+    from skydome.models.simulated.precomputed._precompute import order_table_shape
+
+    assert order_table_shape((32, 128, 48, 16), 2) == (32, 64, 24, 8)
+    assert order_table_shape((32, 128, 48, 16), 1) == (32, 128, 48, 16)
+    assert order_table_shape((12, 48, 12, 6), 2) == (12, 32, 12, 6)
+    assert order_table_shape((8, 256, 64, 32), 8) == (8, 32, 16, 8)
+    assert order_table_shape((8, 100, 64, 32), 3) == (8, 32, 22, 11)   # (n - 1) // 3 + 1

@@ -81,18 +81,14 @@ class PrecomputedSky(SkyModel):
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
     order_table_divisor : int
-        Each scattering order's radiance, which is only the source of the next order, is
-        integrated on a table this many times coarser on the mu, mu_s and nu axes (default
-        2; 1: on the full table), and the scattering density of orders >= 3 on an
-        outgoing grid this many times coarser, interpolated up; the stored
-        multiple-scattering table is integrated once, at full size, from the summed
-        scattering density, and the observer's sky from that density, so only orders >= 3
-        see the coarse grids.
-
-    The defaults are the settings validated against the Monte Carlo reference, with 48
-    nodes of the new mu_s mapping instead of 64 of Bruneton's (docs/validation.md). Bruneton's cheaper sizes, 5-14 % off in hazy air: ``orders=4,
-    remaining_orders="none", sphere_samples=16, scattering_nu_size=8,
-    scattering_mu_s_size=32``.
+        1 (default): every order on the full 4-D table. 2, ...: a faster approximation:
+        each order's radiance, which is only the source of the next order, on a table this
+        many times coarser in mu, mu_s and nu (never below 32 x 16 x 8), the scattering
+        density of orders >= 3 on an outgoing grid this many times coarser, and the stored
+        multiple-scattering table integrated once, at full size, from the summed density.
+        At 2: 2.8x less CPU time and 1.46 GB instead of 1.9 GB peak at 20 wavelengths, but
+        0.9-2.8 % RMS off the default at AOD 0.5 (docs/models.md, "Cost of the
+        precomputation").
     max_sun_zenith_deg : float
         Largest sun zenith angle in the tables [deg], [90, 120] (default 108: astronomical
         twilight).
@@ -133,7 +129,7 @@ class PrecomputedSky(SkyModel):
                   kind="int"),
         Parameter("density_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
-        Parameter("order_table_divisor", "", 2, 1, 8,
+        Parameter("order_table_divisor", "", 1, 1, 8,
                   "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
         Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),

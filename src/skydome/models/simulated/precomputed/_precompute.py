@@ -137,7 +137,7 @@ def precompute(props, wl, p):
         # times coarser (interpolated up into the summed density)
         div = p["order_table_divisor"]
         n_high = min(p["high_order_sphere_samples"] or p["sphere_samples"], p["sphere_samples"])
-        n_out_high = max(2, p["sphere_samples"] // div)
+        n_out_high = min(p["sphere_samples"], max(ORDER_DENSITY_MIN, p["sphere_samples"] // div))
         q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
             pc, pp, pt, n_high, n_out_high)
         # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
@@ -163,6 +163,8 @@ def precompute(props, wl, p):
         # mu_s and nu; the stored table is integrated once from the summed density (4.)
         delta = np.empty(order_table_shape(ss.shape[1:-1], p["order_table_divisor"]) + (nl,),
                          dtype=np.float32)
+        # on the full table the orders are summed as they come (no integral in step 4)
+        ms = np.zeros(ss.shape[1:], dtype=np.float32) if delta.shape == ss.shape[1:] else None
         J = None
         tot = tot_prev = dE_prev = None
         axes = tuple(range(delta.ndim - 1))
@@ -195,6 +197,8 @@ def precompute(props, wl, p):
                                                 sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms,
                                                 QUADRATURE_SCALE_M, delta)
             tot_prev, tot = tot, delta.sum(axis=axes, dtype=np.float64)
+            if ms is not None:
+                ms += delta
             report("precomputing tables: scattering orders", order, p["orders"])
         if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
             # the orders beyond N as a geometric series whose ratio f is that of the last two
@@ -204,14 +208,17 @@ def precompute(props, wl, p):
             # order's J is not needed afterwards.
             g = _series_factor(tot, tot_prev).astype(np.float32)
             add_density(J_sum, np.multiply(J, g, out=J), q2, q)
+            if ms is not None:
+                ms += np.multiply(delta, g, out=delta)
             ea = tuple(range(dE.ndim - 1))
             E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
         del J, L_in, rhs, delta
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
-        ms = np.empty(ss.shape[1:], dtype=np.float32)
-        _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                            mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
+        if ms is None:
+            ms = np.empty(ss.shape[1:], dtype=np.float32)
+            _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R,
+                                                Rt, mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
     if ms is None:
         ms = np.zeros(ss.shape[1:], dtype=np.float32)
     dens = {}
@@ -227,15 +234,22 @@ def precompute(props, wl, p):
                   precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
 
 
+# the per-order grids of orders >= 3 are never coarser than these (nor finer than the full
+# ones): mu, mu_s and nu nodes of the per-order table, zenith samples of J's outgoing grid
+ORDER_TABLE_MIN = (32, 16, 8)
+ORDER_DENSITY_MIN = 16
+
+
 def order_table_shape(shape, divisor):
     """(n_r, n_mu, n_mu_s, n_nu) of the per-order table: ``shape`` (of the stored 4-D
-    table) with mu, mu_s and nu ``divisor`` times coarser (n_mu kept even, at least 4; the
-    others at least 2 nodes); r is kept, so that the scattering density's r nodes fall on
-    nodes of the table."""
+    table) with mu, mu_s and nu ``divisor`` times coarser (n_mu kept even), but not below
+    ``ORDER_TABLE_MIN``; r is kept, so that the scattering density's r nodes fall on nodes
+    of the table."""
     n_r, n_mu, n_ms, n_nu = shape
     d = int(divisor)
-    return (n_r, max(4, 2 * ((n_mu // d) // 2)), max(2, (n_ms - 1) // d + 1),
-            max(2, (n_nu - 1) // d + 1))
+    m_mu, m_ms, m_nu = ORDER_TABLE_MIN
+    return (n_r, min(n_mu, max(m_mu, 2 * ((n_mu // d) // 2))),
+            min(n_ms, max(m_ms, (n_ms - 1) // d + 1)), min(n_nu, max(m_nu, (n_nu - 1) // d + 1)))
 
 
 def add_density(J_sum, J, q_sum, q):
