@@ -33,8 +33,9 @@ JOBS = [
      "fisheye", "512", "precomputed, sun -4 deg W (civil twilight)"),
     ("hillaire_fisheye", "hillaire2020", {}, {"elevation_deg": 10.0, "azimuth_deg": 90.0},
      "fisheye", "512", "Hillaire 2020, sun 10 deg E"),
-    ("earth_from_space", "nishita1993", {"camera_altitude_m": 36e6}, {"elevation_deg": 30.0, "azimuth_deg": 180.0},
-     "camera", "384", "Nishita 1993, earth from 36000 km"),
+    ("earth_from_space", "nishita1993", {"camera_altitude_m": 36e6, "surface": "earth"},
+     {"elevation_deg": 50.0, "azimuth_deg": 240.0},
+     "camera", "384", "Nishita 1993, earth from 36000 km, sun 40 deg off"),
     ("vienna_sunset_equirect", "precomputed", {},
      {"location": (48.21, 16.37, "2026-06-21T20:45+02:00")}, "equirect", "1024x512",
      "Vienna 2026-06-21 20:45, equirect"),
@@ -69,11 +70,14 @@ def run(out_dir: Path, only: list[str] | None = None) -> list[Path]:
         png = out_dir / f"{stem}.png"
         exposure = None
         if proj_name == "camera":
-            # a planet on black space: expose for the bright disc, not for the log-average
+            # a planet on black space, exposed as a satellite camera is calibrated: in
+            # reflectance, a white Lambertian surface under the overhead sun, luminance
+            # E_sun / pi, at scene value 2 (so the dark sea, the land and the glint read)
             import numpy as np
 
-            Y = image.luminance()[image.mask]
-            exposure = 0.8 / float(np.percentile(Y[Y > 0], 99))
+            from skydome.spectra import luminance_from_spectrum, solar_irradiance
+
+            exposure = 2.0 * np.pi / float(luminance_from_spectrum(solar_irradiance(wl), wl))
         image.save(png, exposure=exposure)
         hdr = out_dir / f"{stem}.exr"
         image.save(hdr)

@@ -374,11 +374,34 @@ def _texture_rgb(sf, nx, ny, nz):
     ez = rot[2, 0] * nx + rot[2, 1] * ny + rot[2, 2] * nz
     lat = math.asin(clamp_cosine(ez))
     lon = math.atan2(ey, ex)
-    th = sf.tex.shape[0]
-    tw = sf.tex.shape[1]
-    row = min(max(int((0.5 - lat / math.pi) * th), 0), th - 1)
-    col = int((lon / (2.0 * math.pi) + 0.5) * tw) % tw
-    return sf.tex[row, col, 0], sf.tex[row, col, 1], sf.tex[row, col, 2], sf.tex[row, col, 3]
+    tex = sf.tex
+    th = tex.shape[0]
+    tw = tex.shape[1]
+    # bilinear between pixel centres; rows clamped at the poles, columns wrap
+    fy = min(max((0.5 - lat / math.pi) * th - 0.5, 0.0), th - 1.0)
+    fx = (lon / (2.0 * math.pi) + 0.5) * tw - 0.5
+    r0 = min(int(fy), th - 1)
+    r1 = min(r0 + 1, th - 1)
+    a = fy - r0
+    c0f = math.floor(fx)
+    b = fx - c0f
+    c0 = int(c0f) % tw
+    c1 = (c0 + 1) % tw
+    # weights times the land fraction: the colour is the mean of the land's colours only
+    w00 = (1.0 - a) * (1.0 - b) * tex[r0, c0, 3]
+    w01 = (1.0 - a) * b * tex[r0, c1, 3]
+    w10 = a * (1.0 - b) * tex[r1, c0, 3]
+    w11 = a * b * tex[r1, c1, 3]
+    land = w00 + w01 + w10 + w11
+    if land <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    v0 = (w00 * tex[r0, c0, 0] + w01 * tex[r0, c1, 0] + w10 * tex[r1, c0, 0]
+          + w11 * tex[r1, c1, 0]) / land
+    v1 = (w00 * tex[r0, c0, 1] + w01 * tex[r0, c1, 1] + w10 * tex[r1, c0, 1]
+          + w11 * tex[r1, c1, 1]) / land
+    v2 = (w00 * tex[r0, c0, 2] + w01 * tex[r0, c1, 2] + w10 * tex[r1, c0, 2]
+          + w11 * tex[r1, c1, 2]) / land
+    return v0, v1, v2, land
 
 
 @njit(cache=True)
