@@ -67,10 +67,19 @@ def skymatrix_cmd(
     weather: str = typer.Option(..., "--weather", help="EPW, TMY3 or Radiance .wea file"),
     out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
     patches: str = typer.Option("tregenza", "--patches", help="tregenza | reinhart:MF"),
-    model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
-    components: str = typer.Option("rgb", "--components", help="rgb | luminance"),
-    sun: str = typer.Option("spread", "--sun",
-                            help="spread | spread:N | disc:ANGLE | separate | none"),
+    model: str = typer.Option("perez1993", "--model",
+                              help="perez1993, or any skydome model (e.g. precomputed; .zarr)"),
+    components: Optional[str] = typer.Option(
+        None, "--components", help="rgb | luminance (perez1993, default rgb); luminance | "
+        "spectral | spectral:N (other models, default spectral:16)"),
+    sun: Optional[str] = typer.Option(None, "--sun",
+                                      help="spread (default) | spread:N | disc:ANGLE | "
+                                      "separate | none (perez1993)"),
+    aod_from: Optional[str] = typer.Option(
+        None, "--aod-from", help="aerosol optical depth per hour: 'weather' or a number "
+        "(models with an atmosphere)"),
+    param: list[str] = typer.Option([], "--param",
+                                    help="model parameter NAME=VALUE (repeat; other models)"),
     order: int = typer.Option(4, "--order", help="quadrature order per patch (0 = centre)"),
     sun_position: str = typer.Option("spa", "--sun-position",
                                      help="spa | radiance (gendaymtx's approximate sun)"),
@@ -96,9 +105,15 @@ def skymatrix_cmd(
 
     # -- validate everything before any work -------------------------------------------------
     ps = _guard(make_patches, patches)
-    mode = _guard(parse_sun_option, sun)[0]
     if model != "perez1993":
-        _fail(f"model = {model!r} is not available for sky matrices (choices: perez1993)")
+        return _model_matrix(weather, out, ps, model, components or "spectral:16", sun,
+                             aod_from, param, order, sun_position, overwrite, scheduler,
+                             workers, chunk_hours)
+    if aod_from is not None or param:
+        _fail("--aod-from and --param apply to physically based models, not perez1993")
+    components = components or "rgb"
+    sun = sun or "spread"
+    mode = _guard(parse_sun_option, sun)[0]
     if components not in ("rgb", "luminance"):
         _fail(f"components = {components!r} is unknown (choices: rgb, luminance)")
     if fmt not in FORMATS:
@@ -195,6 +210,65 @@ def skymatrix_cmd(
         shutil.rmtree(chunk_dir, ignore_errors=True)
     typer.echo(f"wrote {', '.join(str(t) for t in written)}: {len(ps)} patches x {len(w)} hours "
                f"x {m.sky.shape[2]} components")
+
+
+def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, order,
+                  sun_position, overwrite, scheduler, workers, chunk_hours):
+    """``skymatrix --model NAME`` for any model but perez1993: a Zarr array (hours, patches,
+    components) written one chunk of hours at a time into a temporary folder beside OUT,
+    renamed when complete."""
+    import os
+    import shutil
+
+    from skydome.daylighting.skymatrix import parse_components, weather_model_sky_matrix
+    from skydome.daylighting.weather import read_weather
+    from skydome.models import get_model_class
+
+    _guard(get_model_class, model)
+    _guard(parse_components, components)
+    if sun not in (None, "none"):
+        _fail(f"sun = {sun!r}: model {model!r} matrices hold the sky only (give --sun none "
+              "or leave it out)")
+    if scheduler is not None or workers > 0:
+        _fail(f"--scheduler/--workers are available for perez1993 matrices only, not {model!r}")
+    if not 0 <= order <= 16:
+        _fail(f"order = {order} is out of range [0, 16]")
+    if sun_position not in ("spa", "radiance"):
+        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    if chunk_hours < 1:
+        _fail(f"chunk-hours = {chunk_hours} must be >= 1")
+    params = {}
+    for item in param:
+        if "=" not in item:
+            _fail(f"param = {item!r} must be NAME=VALUE")
+        k, _, v = item.partition("=")
+        params[k.strip()] = _value(v.strip())
+    out_p = Path(out)
+    if out_p.suffix.lower() != ".zarr":
+        _fail(f"out = {out!r}: model {model!r} matrices are written as Zarr (OUT.zarr)")
+    if out_p.exists() and not overwrite:
+        _fail(f"out = {out!r} exists (use --overwrite)")
+    if not out_p.parent.is_dir():
+        _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    w = _guard(read_weather, weather, sun_position=sun_position)
+    tmp = out_p.parent / f".{out_p.name}.part"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        arr = _guard(weather_model_sky_matrix, w, model, aod_from=aod_from, params=params,
+                     patches=ps, order=order, components=components,
+                     sun_position=sun_position, zarr_path=tmp, chunk_hours=chunk_hours)
+        arr.attrs.update({"model": model, "components": components, "patches": ps.name,
+                          "order": order, "aod_from": str(aod_from), "weather":
+                          Path(weather).name, "axes": ["hour", "patch", "component"],
+                          "units": "cd/m^2" if components == "luminance" else
+                          "W m^-2 sr^-1 nm^-1"})
+        if out_p.exists():
+            shutil.rmtree(out_p)
+        os.replace(tmp, out_p)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    typer.echo(f"wrote {out}: {len(w)} hours x {len(ps)} patches x {arr.shape[2]} components")
 
 
 def illuminance_cmd(
