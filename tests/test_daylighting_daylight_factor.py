@@ -94,3 +94,23 @@ def test_room_against_gensky_overcast(tmp_path):
     assert front.sum() == 3
     np.testing.assert_allclose(ours[front], ref[front], rtol=0.03)
     np.testing.assert_allclose(ours[~front], ref[~front], rtol=0.08)
+
+
+def test_cli_planes(tmp_path):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    out = tmp_path / "df.csv"
+    r = CliRunner().invoke(app, ["daylight-factor", "--plane", "horizontal", "--plane",
+                                 "vertical:180", "--ground-reflectance", "0", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    rows = out.read_text().splitlines()
+    assert rows[0] == "plane,tilt_deg,azimuth_deg,daylight_factor_percent"
+    assert float(rows[1].split(",")[-1]) == pytest.approx(100.0, abs=1e-3)
+    assert float(rows[2].split(",")[-1]) == pytest.approx(
+        100.0 * (6.0 / 28.0 + 4.0 / (7.0 * math.pi)), abs=1e-3)
+    for args in (["--plane", "bogus"], ["--plane", "horizontal", "--ground-reflectance", "2"],
+                 ["--scene", "x.rad"], ["--plane", "horizontal", "--out", str(out)]):
+        r = CliRunner().invoke(app, ["daylight-factor", *args])
+        assert r.exit_code == 2, (args, r.output)

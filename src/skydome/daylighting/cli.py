@@ -303,6 +303,66 @@ def illuminance_cmd(
     typer.echo(f"wrote {out}: {len(w)} hours x {len(planes)} planes")
 
 
+def daylight_factor_cmd(
+    plane: list[str] = typer.Option([], "--plane", help="unobstructed plane: horizontal | "
+                                    "vertical:AZ | tilted:TILT:AZ (repeat)"),
+    scene: list[str] = typer.Option([], "--scene", help="Radiance scene file (repeat)"),
+    sensors: Optional[str] = typer.Option(None, "--sensors",
+                                          help="points file, one 'x y z dx dy dz' a line"),
+    ground_reflectance: float = typer.Option(0.2, "--ground-reflectance",
+                                             help="ground reflectance in [0, 1]"),
+    ab: int = typer.Option(5, "--ab", help="rtrace ambient bounces"),
+    ad: int = typer.Option(2048, "--ad", help="rtrace ambient divisions"),
+    out: Optional[str] = typer.Option(None, "--out", help="output .csv (default: stdout)"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace an existing output"),
+):
+    """Daylight factor [%] under the CIE overcast sky: of unobstructed planes (--plane), or of
+    sensor points in a Radiance scene by rtrace (--scene, --sensors)."""
+    from skydome.daylighting.daylight_factor import (plane_daylight_factor, read_sensors,
+                                                     room_daylight_factor)
+    from skydome.daylighting.series import parse_plane
+
+    if bool(plane) == bool(scene or sensors):
+        _fail("give --plane (unobstructed planes) or --scene with --sensors, not both")
+    if scene and sensors is None or sensors is not None and not scene:
+        _fail("--scene and --sensors go together")
+    if not 0.0 <= ground_reflectance <= 1.0:
+        _fail(f"ground-reflectance = {ground_reflectance:g} is out of range [0, 1]")
+    if ab < 0 or ad < 1:
+        _fail(f"ab = {ab} must be >= 0 and ad = {ad} >= 1")
+    out_p = Path(out) if out else None
+    if out_p is not None:
+        if out_p.exists() and not overwrite:
+            _fail(f"out = {out!r} exists (use --overwrite)")
+        if not out_p.parent.is_dir():
+            _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    if plane:
+        planes = [_guard(parse_plane, p) for p in plane]
+        df = [_guard(plane_daylight_factor, p.tilt_deg, p.azimuth_deg,
+                     ground_reflectance=ground_reflectance) for p in planes]
+        rows = [f"{p.name},{p.tilt_deg:g},{p.azimuth_deg:g},{v:.4f}" for p, v in zip(planes, df)]
+        text = "plane,tilt_deg,azimuth_deg,daylight_factor_percent\n" + "\n".join(rows) + "\n"
+    else:
+        for f in scene:
+            if not Path(f).is_file():
+                _fail(f"scene = {f!r}: no such file")
+        pts = _guard(read_sensors, sensors)
+        try:
+            df = room_daylight_factor(scene, pts, ground_reflectance=ground_reflectance,
+                                      ab=ab, ad=ad)
+        except RuntimeError as exc:
+            _fail(str(exc).splitlines()[0])
+        rows = [" ".join(f"{v:g}" for v in p) + f",{v:.4f}" for p, v in zip(pts, df)]
+        text = "sensor,daylight_factor_percent\n" + "\n".join(rows) + "\n"
+    if out_p is None:
+        typer.echo(text, nl=False)
+    else:
+        from skydome.daylighting.radiance_io import atomic_write_bytes
+
+        _guard(atomic_write_bytes, out_p, text.encode())
+        typer.echo(f"wrote {out}")
+
+
 def _value(text: str):
     for conv in (int, float):
         try:
@@ -360,6 +420,7 @@ def register(app: typer.Typer) -> None:
     app.add_typer(weather_app, name="weather")
     app.command("skymatrix")(skymatrix_cmd)
     app.command("illuminance")(illuminance_cmd)
+    app.command("daylight-factor")(daylight_factor_cmd)
     # `skydome export radiance` joins the export group of skydome.export.cli
     from skydome.export.cli import export_app
 
