@@ -125,8 +125,6 @@ def skymatrix_cmd(
     if workers < 0 or chunk_hours < 1:
         _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
     distributed = scheduler is not None or workers > 0
-    if distributed and mode == "separate":
-        _fail("--sun separate is not available with --scheduler/--workers yet")
     rho: Optional[float] = None
     if albedo != "weather":
         try:
@@ -173,6 +171,12 @@ def skymatrix_cmd(
 
         m = _M()
         m.sky = sky
+        if mode == "separate":
+            from skydome.distributed import split_sun
+
+            m.sky, m.sun = split_sun(sky)
+            m.sun_directions = (w.spa_sun_directions() if sun_position == "spa" else
+                                w.radiance_sun_directions())
     info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
             f"--model {model} --components {components} --sun {sun} --order {order} "
             f"--sun-position {sun_position}",
