@@ -241,12 +241,7 @@ def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, ord
         _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
     if chunk_hours < 1:
         _fail(f"chunk-hours = {chunk_hours} must be >= 1")
-    params = {}
-    for item in param:
-        if "=" not in item:
-            _fail(f"param = {item!r} must be NAME=VALUE")
-        k, _, v = item.partition("=")
-        params[k.strip()] = _value(v.strip())
+    params = _params(param)
     out_p = Path(out)
     if out_p.suffix.lower() != ".zarr":
         _fail(f"out = {out!r}: model {model!r} matrices are written as Zarr (OUT.zarr)")
@@ -367,6 +362,17 @@ def daylight_factor_cmd(
         typer.echo(f"wrote {out}")
 
 
+def _params(items) -> dict:
+    """--param NAME=VALUE items as a dict (numbers converted)."""
+    params = {}
+    for item in items:
+        if "=" not in item:
+            _fail(f"param = {item!r} must be NAME=VALUE")
+        k, _, v = item.partition("=")
+        params[k.strip()] = _value(v.strip())
+    return params
+
+
 def _value(text: str):
     for conv in (int, float):
         try:
@@ -396,12 +402,7 @@ def export_radiance_cmd(
     import skydome as sd
     from skydome.daylighting.scene import write_radiance_sky
 
-    params = {}
-    for item in param:
-        if "=" not in item:
-            _fail(f"param = {item!r} must be NAME=VALUE")
-        k, _, v = item.partition("=")
-        params[k.strip()] = _value(v.strip())
+    params = _params(param)
     if dni is not None:
         params["dni"] = dni
     if dhi is not None:
