@@ -666,6 +666,8 @@ def compare_cmd(
     size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder (created if missing): grid.png, error_*.png, table.md, table.csv."),
+    scheduler: Optional[str] = typer.Option(None, help="Render the grid's cells as tasks on this Dask cluster (tcp://HOST:8786)."),
+    workers: int = typer.Option(0, help="Render the cells on a local Dask cluster of N processes (0: in process)."),
 ):
     """Render several models for several sun elevations and measure each against a reference.
 
@@ -700,12 +702,22 @@ def compare_cmd(
         check_int("size", size, 16, 4096)
         check_int("wavelengths", wavelengths, 3, 401)
         _check_memory("size", size, size * size, max(wavelengths if c.native == "spectral" else 3 for c in classes))
+        if workers < 0:
+            raise ValueError(f"workers = {workers} is out of range [0, inf)")
+        distributed = scheduler is not None or workers > 0
         progress = _Progress("comparing models")
         try:
+            if distributed:  # cells as Dask tasks, resumable from OUT.chunks/
+                from skydome.apps.compare import spec_builder
+
+                build = spec_builder(_model_spec, list(ctx.args))
+            else:
+                def build(spec, sun):
+                    return _model_spec(spec, ctx.args, sun)
             rows = run_comparison(specs, elevs, out, reference=reference, sun_azimuth_deg=sun_azimuth,
-                                  size=size, wavelengths=wavelengths,
-                                  build=lambda spec, sun: _model_spec(spec, ctx.args, sun),
-                                  progress=progress)
+                                  size=size, wavelengths=wavelengths, build=build,
+                                  progress=None if distributed else progress,
+                                  scheduler=scheduler, workers=workers)
         finally:
             progress.close()
         from skydome.apps.compare import table_markdown

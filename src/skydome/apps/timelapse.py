@@ -101,48 +101,24 @@ def _probe_directions(az_deg: float) -> np.ndarray:
 
 
 def _render_frame(build, el: float, az: float, projection: str, size: int, wavelengths: int):
-    """One frame as a Dask task: the rendered image and the probe colours, packed as the
-    bytes of an .npz (a uint8 array, so that it is stored as a chunk like any other)."""
-    import io
-    import json
-
+    """One frame as a Dask task: the rendered image and the probe colours, packed
+    (:func:`skydome.apps._chunked.pack_image`)."""
+    from skydome.apps._chunked import pack_image
     from skydome.render import make_projection, render
     from skydome.spectra import spectrum_to_xyz, wavelength_grid
     from skydome.sun import Sun
 
     wl = wavelength_grid(380.0, 780.0, n=wavelengths)
-    parts: dict = {}
     try:
         sky = build(Sun(elevation_deg=el, azimuth_deg=az))
         img = render(sky, make_projection(projection, str(size)), wl)
-        parts["data"], parts["mask"] = img.data, img.mask
-        parts["kind"] = np.array(img.kind)
-        if img.wavelengths_nm is not None:
-            parts["wl"] = img.wavelengths_nm
-        parts["metadata"] = np.array(json.dumps(img.metadata, default=str))
         zen, hor = sky.xyz(_probe_directions(az))
-        parts["zenith"], parts["horizon"] = zen, hor
+        sxyz = None
         if sky.native == "spectral" and sky.sun_radiance(wl) is not None:
-            parts["sun"] = spectrum_to_xyz(sky.sun_radiance(wl), wl)
+            sxyz = spectrum_to_xyz(sky.sun_radiance(wl), wl)
     except ValueError as exc:
-        parts = {"note": np.array(str(exc))}
-    buf = io.BytesIO()
-    np.savez(buf, **parts)
-    return np.frombuffer(buf.getvalue(), dtype=np.uint8)
-
-
-def _unpack_frame(packed: np.ndarray, projection):
-    import io
-    import json
-
-    from skydome.render.image import SkyImage
-
-    z = np.load(io.BytesIO(packed.tobytes()))
-    if "note" in z:
-        return None, None, None, None, str(z["note"])
-    img = SkyImage(z["data"], str(z["kind"]), z["wl"] if "wl" in z else None, z["mask"],
-                   projection, json.loads(str(z["metadata"])))
-    return img, z["zenith"], z["horizon"], (z["sun"] if "sun" in z else None), ""
+        return pack_image(None, str(exc))
+    return pack_image(img, zenith=zen, horizon=hor, sun=sxyz)
 
 
 def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_dir, *,
@@ -183,7 +159,8 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     images = []
     chunk_dir = None
     if scheduler is not None or workers > 0 or client is not None:
-        from skydome.distributed import Chunk, _verified, run_chunks
+        from skydome.apps._chunked import load_chunk, unpack_image
+        from skydome.distributed import Chunk, run_chunks
 
         chunk_dir = Path(f"{out_dir}.chunks")
         chunks = [Chunk(f"frame{i:05d}", _render_frame,
@@ -197,16 +174,13 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
             frame = TimelapseFrame(t, float(el[i]), float(az[i]), None, None, None, None)
             name = f"frame_{t.strftime('%H%M')}.png"
             if chunk_dir is not None:
-                key = f"frame{i:05d}"
-                if _verified(chunk_dir, key) is None:
-                    raise ValueError(f"frame chunk {key!r} is missing or damaged")
-                img, zen, hor, sxyz, note = _unpack_frame(np.load(chunk_dir / f"{key}.npy"),
-                                                          proj)
+                img, note, ex = unpack_image(load_chunk(chunk_dir, f"frame{i:05d}"), proj)
                 if img is None:
                     frame.note = note
                 else:
                     images.append((t, img, name))
-                    frame.zenith_xyz, frame.horizon_xyz, frame.sun_xyz = zen, hor, sxyz
+                    frame.zenith_xyz, frame.horizon_xyz = ex["zenith"], ex["horizon"]
+                    frame.sun_xyz = ex.get("sun")
                     frame.image_path = out_dir / name
             else:
                 sun = Sun(elevation_deg=float(el[i]), azimuth_deg=float(az[i]))
