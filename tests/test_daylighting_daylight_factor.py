@@ -70,12 +70,13 @@ def test_unobstructed_sensors_by_rtrace(tmp_path):
 
 @pytest.mark.slow
 def test_room_against_gensky_overcast(tmp_path):
-    """The room of the two-phase test (4 x 5 x 3 m, 2 x 1 m south opening): the same rtrace
-    with Radiance's gensky -c sky (its skybright.cal, ground 0.2) gives the same daylight
-    factors within 3 % where DF > 1 % (measured: ours 1.6-2.5 % above gensky's, whose
-    skybright.cal blends the sky into the ground near the horizon), within 8 % at the back of
-    the room (DF 0.7 %, all interreflected light, where rtrace's ambient sampling at these
-    settings is noisiest; measured 6.6 %)."""
+    """The room of the two-phase test (4 x 5 x 3 m, 2 x 1 m south opening), the sky and
+    externally reflected components (rtrace -ab 1, no ambient cache, 8192 divisions): the
+    same rtrace with Radiance's gensky -c sky (its skybright.cal, ground 0.2) gives the same
+    daylight factor within 2 % at the sensor 1 m from the window (DF 11 %; measured over
+    three runs: 0.1-0.3 %), within 15 % at the three deeper sensors (DF 0.35-1.4 %), which
+    see the window through a few of the 8192 sample directions (measured run to run:
+    1-12 %)."""
     from _radiance import run_radiance
     from test_daylighting_twophase import ROOM, SENSORS
 
@@ -86,14 +87,12 @@ def test_room_against_gensky_overcast(tmp_path):
     sky = gensky + ("\nskyfunc glow sky_glow 0 0 4 1 1 1 0\nsky_glow source sky 0 0 4 0 0 1 180\n"
                     "skyfunc glow ground_glow 0 0 4 1 1 1 0\n"
                     "ground_glow source ground 0 0 4 0 0 -1 180\n")
-    kw = dict(ab=3, ad=1024, as_=256, aa=0.15, ar=64, ground_reflectance=0.2)
+    kw = dict(ab=1, ad=8192, as_=0, aa=0.0, ar=0, ground_reflectance=0.2)
     ours = room_daylight_factor(tmp_path / "room.rad", sens, **kw)
     ref = room_daylight_factor(tmp_path / "room.rad", sens, sky=sky, **kw)
-    assert np.all(ref > 0.2)
-    front = ref > 1.0
-    assert front.sum() == 3
-    np.testing.assert_allclose(ours[front], ref[front], rtol=0.03)
-    np.testing.assert_allclose(ours[~front], ref[~front], rtol=0.08)
+    assert ref[0] > 5.0 and np.all(ref[1:] > 0.2)
+    assert ours[0] == pytest.approx(ref[0], rel=0.02)
+    np.testing.assert_allclose(ours[1:], ref[1:], rtol=0.15)
 
 
 def test_cli_planes(tmp_path):
