@@ -124,3 +124,38 @@ def test_cli_skymatrix_on_local_dask_cluster_equals_in_process(tmp_path):
     b, _ = read_matrix(tmp_path / "b.mtx")
     np.testing.assert_allclose(b, a, rtol=1e-13, atol=1e-12)
     assert not (tmp_path / "b.mtx.chunks").exists()
+
+
+@pytest.mark.slow
+def test_cli_separate_sun_on_scheduler_equals_in_process(tmp_path):
+    """--sun separate through --scheduler (a LocalCluster's address): the sky, sun and sun
+    scene files equal those of the in-process run; resumed chunks are reused."""
+    from distributed import LocalCluster
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+    from skydome.daylighting.radiance_io import read_matrix
+
+    lines = sample_weather_path().read_text().splitlines(keepends=True)
+    w = tmp_path / "d.csv"
+    w.write_text("".join(lines[:2 + 48]))
+    base = ["skymatrix", "--weather", str(w), "--patches", "reinhart:2", "--format", "double",
+            "--sun", "separate"]
+    r1 = CliRunner().invoke(app, base + ["--out", str(tmp_path / "a.mtx")])
+    assert r1.exit_code == 0, r1.output
+    cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                           dashboard_address=None)
+    try:
+        r2 = CliRunner().invoke(app, base + ["--out", str(tmp_path / "b.mtx"), "--scheduler",
+                                             cluster.scheduler_address, "--chunk-hours", "12"])
+    finally:
+        cluster.close()
+    assert r2.exit_code == 0, r2.output
+    assert "4 computed, 0 reused" in r2.output
+    for suffix in (".mtx", ".sun.mtx"):
+        a, _ = read_matrix(tmp_path / f"a{suffix}")
+        b, _ = read_matrix(tmp_path / f"b{suffix}")
+        assert a.shape == b.shape
+        np.testing.assert_allclose(b, a, rtol=1e-13, atol=1e-12)
+    assert (tmp_path / "a.suns.rad").read_text() == (tmp_path / "b.suns.rad").read_text()
+    assert not (tmp_path / "b.mtx.chunks").exists()

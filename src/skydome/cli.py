@@ -665,6 +665,8 @@ def compare_cmd(
     size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder (created if missing): grid.png, error_*.png, table.md, table.csv."),
+    scheduler: Optional[str] = typer.Option(None, help="Render the grid's cells as tasks on this Dask cluster (tcp://HOST:8786)."),
+    workers: int = typer.Option(0, help="Render the cells on a local Dask cluster of N processes (0: in process)."),
 ):
     """Render several models for several sun elevations and measure each against a reference.
 
@@ -699,12 +701,22 @@ def compare_cmd(
         check_int("size", size, 16, 4096)
         check_int("wavelengths", wavelengths, 3, 401)
         _check_memory("size", size, size * size, max(wavelengths if c.native == "spectral" else 3 for c in classes))
+        if workers < 0:
+            raise ValueError(f"workers = {workers} is out of range [0, inf)")
+        distributed = scheduler is not None or workers > 0
         progress = _Progress("comparing models")
         try:
+            if distributed:  # cells as Dask tasks, resumable from OUT.chunks/
+                from skydome.apps.compare import spec_builder
+
+                build = spec_builder(_model_spec, list(ctx.args))
+            else:
+                def build(spec, sun):
+                    return _model_spec(spec, ctx.args, sun)
             rows = run_comparison(specs, elevs, out, reference=reference, sun_azimuth_deg=sun_azimuth,
-                                  size=size, wavelengths=wavelengths,
-                                  build=lambda spec, sun: _model_spec(spec, ctx.args, sun),
-                                  progress=progress)
+                                  size=size, wavelengths=wavelengths, build=build,
+                                  progress=None if distributed else progress,
+                                  scheduler=scheduler, workers=workers)
         finally:
             progress.close()
         from skydome.apps.compare import table_markdown
@@ -730,6 +742,8 @@ def timelapse_cmd(
     size: int = typer.Option(256, help="Frame size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder: frame_HHMM.png, contact_sheet.png, colours.png, colours.csv."),
+    scheduler: Optional[str] = typer.Option(None, help="Render the frames as tasks on this Dask cluster (tcp://HOST:8786)."),
+    workers: int = typer.Option(0, help="Render the frames on a local Dask cluster of N processes (0: in process)."),
 ):
     """The colour of the sky through a day: frames, a contact sheet and a colour-against-time plot.
 
@@ -755,11 +769,22 @@ def timelapse_cmd(
         el = np.atleast_1d(solar_position(lat, lon, times)[0])
         _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3,
                       held_images=max(int(np.sum(el >= min_elevation)) - 1, 0))
+        if workers < 0:
+            raise ValueError(f"workers = {workers} is out of range [0, inf)")
+        distributed = scheduler is not None or workers > 0
         progress = _Progress("timelapse")
         try:
-            frames = run_timelapse(lambda sun: _build_model(cls, progress, sun=sun, **params), lat, lon, times, out,
+            if distributed:  # frames as Dask tasks, resumable from OUT.chunks/
+                from skydome.apps.timelapse import model_builder
+
+                build = model_builder(model, params)
+            else:
+                def build(sun):
+                    return _build_model(cls, progress, sun=sun, **params)
+            frames = run_timelapse(build, lat, lon, times, out,
                                    min_elevation_deg=min_elevation, size=size, wavelengths=wavelengths,
-                                   projection=projection, progress=progress)
+                                   projection=projection, progress=None if distributed else progress,
+                                   scheduler=scheduler, workers=workers)
         finally:
             progress.close()
         done = [f for f in frames if f.image_path is not None]

@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 __all__ = ["Chunk", "JobReport", "run_chunks", "sky_matrix_chunks", "assemble_chunks",
-           "distributed_sky_matrix"]
+           "distributed_sky_matrix", "split_sun"]
 
 
 @dataclass(frozen=True)
@@ -158,10 +158,19 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
 
 
 def _sky_chunk(dni, dhi, sun, doy, td, rho, kwargs):
+    """The chunk's sky matrix (h, P, C); with ``sun="separate"`` its sun matrix is appended
+    as one more row per hour (h, P + 1, C), split off again by :func:`split_sun`."""
     from skydome.daylighting.skymatrix import perez_sky_matrix
 
-    return perez_sky_matrix(dni, dhi, sun, doy, dew_point_c=td, ground_reflectance=rho,
-                            **kwargs).sky
+    m = perez_sky_matrix(dni, dhi, sun, doy, dew_point_c=td, ground_reflectance=rho, **kwargs)
+    if m.sun is None:
+        return m.sky
+    return np.concatenate([m.sky, m.sun[:, None, :].astype(m.sky.dtype)], axis=1)
+
+
+def split_sun(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sky (h, P, C), sun (h, C)) of an assembled ``sun="separate"`` matrix (h, P + 1, C)."""
+    return matrix[:, :-1, :], np.ascontiguousarray(matrix[:, -1, :])
 
 
 def sky_matrix_chunks(weather, chunk_hours: int = 730, sun_position: str = "spa",
@@ -201,7 +210,9 @@ def distributed_sky_matrix(weather, folder, *, chunk_hours: int = 730,
                            scheduler: str | None = None, n_workers: int = 2, client=None,
                            progress: bool = False, **kwargs):
     """Annual sky matrix computed in chunks on Dask; returns (matrix (hours, patches, comp),
-    JobReport). Rerunning with the same ``folder`` reuses the verified chunks."""
+    JobReport). Rerunning with the same ``folder`` reuses the verified chunks. With
+    ``sun="separate"`` the matrix holds the sun matrix as one more row (hours, patches + 1,
+    comp): :func:`split_sun` separates them."""
     chunks = sky_matrix_chunks(weather, chunk_hours=chunk_hours, **kwargs)
     rep = run_chunks(chunks, folder, scheduler=scheduler, n_workers=n_workers, client=client,
                      progress=progress)

@@ -66,11 +66,56 @@ def sky_errors(xyz, xyz_ref, weights, has_colour: bool = True) -> dict:
     return out
 
 
+def _call_spec(func, extra, spec, sun):
+    return func(spec, extra, sun)
+
+
+def spec_builder(func: Callable, extra) -> Callable:
+    """``build(spec, sun) = func(spec, extra, sun)`` as a picklable partial of module-level
+    functions, for :func:`run_comparison` on Dask."""
+    import functools
+
+    return functools.partial(_call_spec, func, extra)
+
+
+def _default_build(spec, sun):
+    from skydome.models import model as _model
+
+    return _model(spec, sun=sun)
+
+
+def _render_cell(build, spec: str, e: float, azimuth: float, size: int, wavelengths: int):
+    """One grid cell as a Dask task: the image (no sun disc), its render time, its kind."""
+    from skydome.apps._chunked import pack_image
+    from skydome.render import render
+    from skydome.render.projections import Fisheye
+    from skydome.spectra import wavelength_grid
+    from skydome.sun import Sun
+
+    wl = wavelength_grid(380.0, 780.0, n=wavelengths)
+    try:
+        sky = build(spec, Sun(elevation_deg=e, azimuth_deg=azimuth))
+        t0 = time.perf_counter()
+        img = render(sky, Fisheye(size), wl, draw_sun=False)
+        seconds = time.perf_counter() - t0
+    except ValueError as exc:
+        return pack_image(None, str(exc))
+    return pack_image(img, seconds=seconds, native=np.array(sky.native))
+
+
 def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_dir, *,
                    reference: str = "precomputed", sun_azimuth_deg: float = 180.0,
                    size: int = 128, wavelengths: int = 16,
-                   build: Callable | None = None, progress: Callable | None = None) -> list[ComparisonRow]:
+                   build: Callable | None = None, progress: Callable | None = None,
+                   scheduler: str | None = None, workers: int = 0,
+                   client=None) -> list[ComparisonRow]:
     """Render and compare; write the report into ``out_dir`` (created if missing).
+
+    With ``scheduler`` (a dask.distributed address), ``workers`` > 0 (a local cluster) or
+    ``client``, every (model, sun elevation) cell is a chunk of
+    :func:`skydome.distributed.run_chunks`, kept in ``OUT.chunks/`` until the report is
+    written (a rerun renders only the missing cells); ``build`` must then be picklable
+    (:func:`spec_builder`).
 
     Parameters
     ----------
@@ -94,10 +139,7 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
     if not elevs:
         raise ValueError("sun_elevation is empty: give at least one sun elevation")
     if build is None:
-        from skydome.models import model as _model
-
-        def build(spec, sun):
-            return _model(spec, sun=sun)
+        build = _default_build
     specs = list(specs)
     if reference not in [s.partition(":")[0] for s in specs]:
         specs.insert(0, reference)
@@ -121,10 +163,33 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
     rows: list[ComparisonRow] = []
     total = len(specs) * len(elevs)
     done = 0
+    chunk_dir = None
+    if scheduler is not None or workers > 0 or client is not None:
+        from skydome.apps._chunked import load_chunk, unpack_image
+        from skydome.distributed import Chunk, run_chunks
+
+        chunk_dir = Path(f"{out_dir}.chunks")
+        cells = {(spec, e): f"cell{k:03d}_{m:03d}" for m, e in enumerate(elevs)
+                 for k, spec in enumerate(specs)}
+        run_chunks([Chunk(key, _render_cell, (build, spec, e, sun_azimuth_deg, size,
+                                              wavelengths))
+                    for (spec, e), key in cells.items()], chunk_dir, scheduler=scheduler,
+                   n_workers=max(workers, 1), client=client, progress=progress is not None)
     for e in elevs:
         sun = Sun(elevation_deg=e, azimuth_deg=sun_azimuth_deg)
         for spec in specs:
             row = ComparisonRow(spec, e)
+            if chunk_dir is not None:
+                img, note, ex = unpack_image(load_chunk(chunk_dir, cells[spec, e]), proj)
+                if img is None:
+                    row.note = note
+                else:
+                    row.seconds = float(ex["seconds"])
+                    images[spec, e] = img
+                    xyzs[spec, e] = img.xyz()
+                    row.extra["native"] = str(ex["native"])
+                rows.append(row)
+                continue
             try:
                 sky = build(spec, sun)
                 t0 = time.perf_counter()
@@ -139,6 +204,8 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
             done += 1
             if progress is not None:
                 progress(done, total)
+    if chunk_dir is not None and progress is not None:
+        progress(total, total)
     for row in rows:
         ref = xyzs.get((ref_spec, row.sun_elevation_deg))
         got = xyzs.get((row.model, row.sun_elevation_deg))
@@ -157,6 +224,10 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
                 plot_error_maps(tmp / f"error_{_safe(spec)}.png", spec, elevs, xyzs, ref_spec, weights)
         (tmp / "table.md").write_text(table_markdown(rows, ref_spec))
         (tmp / "table.csv").write_text(table_csv(rows))
+    if chunk_dir is not None:
+        import shutil
+
+        shutil.rmtree(chunk_dir, ignore_errors=True)
     return rows
 
 

@@ -30,7 +30,7 @@ from skydome._io import atomic_folder, check_output_folder
 from skydome.render.plots import plot_day_colours
 from skydome.render.sheets import contact_sheet
 
-__all__ = ["TimelapseFrame", "day_times", "run_timelapse"]
+__all__ = ["TimelapseFrame", "day_times", "run_timelapse", "model_builder"]
 
 
 @dataclass
@@ -80,20 +80,67 @@ def parse_every(text: str) -> float:
         raise ValueError(f"every = {text!r} is not a duration such as 10min, 1h or 30s") from None
 
 
+def _build_model(name: str, params: dict, sun):
+    import skydome as sd
+
+    return sd.model(name, sun=sun, **params)
+
+
+def model_builder(name: str, params: dict | None = None) -> Callable:
+    """``build(sun)`` for :func:`run_timelapse` that can be sent to Dask workers (a partial of
+    a module-level function, not a closure)."""
+    import functools
+
+    return functools.partial(_build_model, name, dict(params or {}))
+
+
+def _probe_directions(az_deg: float) -> np.ndarray:
+    from skydome.transport.geometry import direction_from_angles
+
+    return direction_from_angles(np.array([90.0, 3.0]), np.array([0.0, az_deg]))
+
+
+def _render_frame(build, el: float, az: float, projection: str, size: int, wavelengths: int):
+    """One frame as a Dask task: the rendered image and the probe colours, packed
+    (:func:`skydome.apps._chunked.pack_image`)."""
+    from skydome.apps._chunked import pack_image
+    from skydome.render import make_projection, render
+    from skydome.spectra import spectrum_to_xyz, wavelength_grid
+    from skydome.sun import Sun
+
+    wl = wavelength_grid(380.0, 780.0, n=wavelengths)
+    try:
+        sky = build(Sun(elevation_deg=el, azimuth_deg=az))
+        img = render(sky, make_projection(projection, str(size)), wl)
+        zen, hor = sky.xyz(_probe_directions(az))
+        sxyz = None
+        if sky.native == "spectral" and sky.sun_radiance(wl) is not None:
+            sxyz = spectrum_to_xyz(sky.sun_radiance(wl), wl)
+    except ValueError as exc:
+        return pack_image(None, str(exc))
+    return pack_image(img, zenith=zen, horizon=hor, sun=sxyz)
+
+
 def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_dir, *,
                   min_elevation_deg: float = -6.0, size: int = 256, wavelengths: int = 16,
-                  projection: str = "fisheye", progress: Callable | None = None) -> list[TimelapseFrame]:
+                  projection: str = "fisheye", progress: Callable | None = None,
+                  scheduler: str | None = None, workers: int = 0,
+                  client=None) -> list[TimelapseFrame]:
     """Render ``build(sun)`` at each time with the sun above ``min_elevation_deg``.
 
     Everything is written into a temporary folder beside ``out_dir`` and moved in at the
     end, so a failure leaves nothing behind.
+
+    With ``scheduler`` (a dask.distributed address), ``workers`` > 0 (a local cluster of
+    that many processes) or ``client``, every frame is a chunk of
+    :func:`skydome.distributed.run_chunks`, kept in ``OUT.chunks/`` until the folder is
+    written: a rerun after an interruption renders only the missing frames. ``build`` must
+    then be picklable (:func:`model_builder`).
     """
     from skydome._validate import check_int, check_number
     from skydome.render import make_projection, render
     from skydome.spectra import spectrum_to_xyz, wavelength_grid
     from skydome.sun import Sun, solar_position
-    from skydome.transport.geometry import direction_from_angles
-
     check_number("lat", lat_deg, -90.0, 90.0, "deg")
     check_number("lon", lon_deg, -180.0, 180.0, "deg")
     min_el = check_number("min_elevation_deg", min_elevation_deg, -90.0, 90.0, "deg")
@@ -110,25 +157,45 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
 
     frames: list[TimelapseFrame] = []
     images = []
+    chunk_dir = None
+    if scheduler is not None or workers > 0 or client is not None:
+        from skydome.apps._chunked import load_chunk, unpack_image
+        from skydome.distributed import Chunk, run_chunks
+
+        chunk_dir = Path(f"{out_dir}.chunks")
+        chunks = [Chunk(f"frame{i:05d}", _render_frame,
+                        (build, float(el[i]), float(az[i]), projection, size, wl.size))
+                  for i in todo]
+        run_chunks(chunks, chunk_dir, scheduler=scheduler, n_workers=max(workers, 1),
+                   client=client, progress=progress is not None)
     with atomic_folder(out_dir) as tmp:
         for n, i in enumerate(todo):
             t = times[i]
-            sun = Sun(elevation_deg=float(el[i]), azimuth_deg=float(az[i]))
             frame = TimelapseFrame(t, float(el[i]), float(az[i]), None, None, None, None)
-            try:
-                sky = build(sun)
-                img = render(sky, proj, wl)
-                name = f"frame_{t.strftime('%H%M')}.png"
-                images.append((t, img, name))
-                probe = direction_from_angles(np.array([90.0, 3.0]), np.array([0.0, az[i]]))
-                frame.zenith_xyz, frame.horizon_xyz = sky.xyz(probe)
-                if sky.native == "spectral" and sky.sun_radiance(wl) is not None:
-                    frame.sun_xyz = spectrum_to_xyz(sky.sun_radiance(wl), wl)
-                frame.image_path = out_dir / name
-            except ValueError as exc:
-                frame.note = str(exc)
+            name = f"frame_{t.strftime('%H%M')}.png"
+            if chunk_dir is not None:
+                img, note, ex = unpack_image(load_chunk(chunk_dir, f"frame{i:05d}"), proj)
+                if img is None:
+                    frame.note = note
+                else:
+                    images.append((t, img, name))
+                    frame.zenith_xyz, frame.horizon_xyz = ex["zenith"], ex["horizon"]
+                    frame.sun_xyz = ex.get("sun")
+                    frame.image_path = out_dir / name
+            else:
+                sun = Sun(elevation_deg=float(el[i]), azimuth_deg=float(az[i]))
+                try:
+                    sky = build(sun)
+                    img = render(sky, proj, wl)
+                    images.append((t, img, name))
+                    frame.zenith_xyz, frame.horizon_xyz = sky.xyz(_probe_directions(az[i]))
+                    if sky.native == "spectral" and sky.sun_radiance(wl) is not None:
+                        frame.sun_xyz = spectrum_to_xyz(sky.sun_radiance(wl), wl)
+                    frame.image_path = out_dir / name
+                except ValueError as exc:
+                    frame.note = str(exc)
             frames.append(frame)
-            if progress is not None:
+            if progress is not None and chunk_dir is None:
                 progress(n + 1, len(todo))
         if not images:
             raise ValueError("the model refused every frame: " + frames[0].note)
@@ -140,6 +207,10 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
                       tmp / "contact_sheet.png", cols=8, tile=128)
         _write_csv(frames, tmp / "colours.csv")
         plot_day_colours(frames, tmp / "colours.png", _display_colour)
+    if chunk_dir is not None:
+        import shutil
+
+        shutil.rmtree(chunk_dir, ignore_errors=True)
     return frames
 
 

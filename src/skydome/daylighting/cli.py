@@ -67,10 +67,19 @@ def skymatrix_cmd(
     weather: str = typer.Option(..., "--weather", help="EPW, TMY3 or Radiance .wea file"),
     out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
     patches: str = typer.Option("tregenza", "--patches", help="tregenza | reinhart:MF"),
-    model: str = typer.Option("perez1993", "--model", help="sky model (perez1993)"),
-    components: str = typer.Option("rgb", "--components", help="rgb | luminance"),
-    sun: str = typer.Option("spread", "--sun",
-                            help="spread | spread:N | disc:ANGLE | separate | none"),
+    model: str = typer.Option("perez1993", "--model",
+                              help="perez1993, or any skydome model (e.g. precomputed; .zarr)"),
+    components: Optional[str] = typer.Option(
+        None, "--components", help="rgb | luminance (perez1993, default rgb); luminance | "
+        "spectral | spectral:N (other models, default spectral:16)"),
+    sun: Optional[str] = typer.Option(None, "--sun",
+                                      help="spread (default) | spread:N | disc:ANGLE | "
+                                      "separate | none (perez1993)"),
+    aod_from: Optional[str] = typer.Option(
+        None, "--aod-from", help="aerosol optical depth per hour: 'weather' or a number "
+        "(models with an atmosphere)"),
+    param: list[str] = typer.Option([], "--param",
+                                    help="model parameter NAME=VALUE (repeat; other models)"),
     order: int = typer.Option(4, "--order", help="quadrature order per patch (0 = centre)"),
     sun_position: str = typer.Option("spa", "--sun-position",
                                      help="spa | radiance (gendaymtx's approximate sun)"),
@@ -96,9 +105,15 @@ def skymatrix_cmd(
 
     # -- validate everything before any work -------------------------------------------------
     ps = _guard(make_patches, patches)
-    mode = _guard(parse_sun_option, sun)[0]
     if model != "perez1993":
-        _fail(f"model = {model!r} is not available for sky matrices (choices: perez1993)")
+        return _model_matrix(weather, out, ps, model, components or "spectral:16", sun,
+                             aod_from, param, order, sun_position, overwrite, scheduler,
+                             workers, chunk_hours)
+    if aod_from is not None or param:
+        _fail("--aod-from and --param apply to physically based models, not perez1993")
+    components = components or "rgb"
+    sun = sun or "spread"
+    mode = _guard(parse_sun_option, sun)[0]
     if components not in ("rgb", "luminance"):
         _fail(f"components = {components!r} is unknown (choices: rgb, luminance)")
     if fmt not in FORMATS:
@@ -110,8 +125,6 @@ def skymatrix_cmd(
     if workers < 0 or chunk_hours < 1:
         _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
     distributed = scheduler is not None or workers > 0
-    if distributed and mode == "separate":
-        _fail("--sun separate is not available with --scheduler/--workers yet")
     rho: Optional[float] = None
     if albedo != "weather":
         try:
@@ -158,6 +171,12 @@ def skymatrix_cmd(
 
         m = _M()
         m.sky = sky
+        if mode == "separate":
+            from skydome.distributed import split_sun
+
+            m.sky, m.sun = split_sun(sky)
+            m.sun_directions = (w.spa_sun_directions() if sun_position == "spa" else
+                                w.radiance_sun_directions())
     info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
             f"--model {model} --components {components} --sun {sun} --order {order} "
             f"--sun-position {sun_position}",
@@ -197,6 +216,60 @@ def skymatrix_cmd(
                f"x {m.sky.shape[2]} components")
 
 
+def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, order,
+                  sun_position, overwrite, scheduler, workers, chunk_hours):
+    """``skymatrix --model NAME`` for any model but perez1993: a Zarr array (hours, patches,
+    components) written one chunk of hours at a time into a temporary folder beside OUT,
+    renamed when complete."""
+    import os
+    import shutil
+
+    from skydome.daylighting.skymatrix import parse_components, weather_model_sky_matrix
+    from skydome.daylighting.weather import read_weather
+    from skydome.models import get_model_class
+
+    _guard(get_model_class, model)
+    _guard(parse_components, components)
+    if sun not in (None, "none"):
+        _fail(f"sun = {sun!r}: model {model!r} matrices hold the sky only (give --sun none "
+              "or leave it out)")
+    if scheduler is not None or workers > 0:
+        _fail(f"--scheduler/--workers are available for perez1993 matrices only, not {model!r}")
+    if not 0 <= order <= 16:
+        _fail(f"order = {order} is out of range [0, 16]")
+    if sun_position not in ("spa", "radiance"):
+        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    if chunk_hours < 1:
+        _fail(f"chunk-hours = {chunk_hours} must be >= 1")
+    params = _params(param)
+    out_p = Path(out)
+    if out_p.suffix.lower() != ".zarr":
+        _fail(f"out = {out!r}: model {model!r} matrices are written as Zarr (OUT.zarr)")
+    if out_p.exists() and not overwrite:
+        _fail(f"out = {out!r} exists (use --overwrite)")
+    if not out_p.parent.is_dir():
+        _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    w = _guard(read_weather, weather, sun_position=sun_position)
+    tmp = out_p.parent / f".{out_p.name}.part"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        arr = _guard(weather_model_sky_matrix, w, model, aod_from=aod_from, params=params,
+                     patches=ps, order=order, components=components,
+                     sun_position=sun_position, zarr_path=tmp, chunk_hours=chunk_hours)
+        arr.attrs.update({"model": model, "components": components, "patches": ps.name,
+                          "order": order, "aod_from": str(aod_from), "weather":
+                          Path(weather).name, "axes": ["hour", "patch", "component"],
+                          "units": "cd/m^2" if components == "luminance" else
+                          "W m^-2 sr^-1 nm^-1"})
+        if out_p.exists():
+            shutil.rmtree(out_p)
+        os.replace(tmp, out_p)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    typer.echo(f"wrote {out}: {len(w)} hours x {len(ps)} patches x {arr.shape[2]} components")
+
+
 def illuminance_cmd(
     weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
     plane: list[str] = typer.Option(..., "--plane",
@@ -229,6 +302,77 @@ def illuminance_cmd(
     typer.echo(f"wrote {out}: {len(w)} hours x {len(planes)} planes")
 
 
+def daylight_factor_cmd(
+    plane: list[str] = typer.Option([], "--plane", help="unobstructed plane: horizontal | "
+                                    "vertical:AZ | tilted:TILT:AZ (repeat)"),
+    scene: list[str] = typer.Option([], "--scene", help="Radiance scene file (repeat)"),
+    sensors: Optional[str] = typer.Option(None, "--sensors",
+                                          help="points file, one 'x y z dx dy dz' a line"),
+    ground_reflectance: float = typer.Option(0.2, "--ground-reflectance",
+                                             help="ground reflectance in [0, 1]"),
+    ab: int = typer.Option(5, "--ab", help="rtrace ambient bounces"),
+    ad: int = typer.Option(2048, "--ad", help="rtrace ambient divisions"),
+    out: Optional[str] = typer.Option(None, "--out", help="output .csv (default: stdout)"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace an existing output"),
+):
+    """Daylight factor [%] under the CIE overcast sky: of unobstructed planes (--plane), or of
+    sensor points in a Radiance scene by rtrace (--scene, --sensors)."""
+    from skydome.daylighting.daylight_factor import (plane_daylight_factor, read_sensors,
+                                                     room_daylight_factor)
+    from skydome.daylighting.series import parse_plane
+
+    if bool(plane) == bool(scene or sensors):
+        _fail("give --plane (unobstructed planes) or --scene with --sensors, not both")
+    if scene and sensors is None or sensors is not None and not scene:
+        _fail("--scene and --sensors go together")
+    if not 0.0 <= ground_reflectance <= 1.0:
+        _fail(f"ground-reflectance = {ground_reflectance:g} is out of range [0, 1]")
+    if ab < 0 or ad < 1:
+        _fail(f"ab = {ab} must be >= 0 and ad = {ad} >= 1")
+    out_p = Path(out) if out else None
+    if out_p is not None:
+        if out_p.exists() and not overwrite:
+            _fail(f"out = {out!r} exists (use --overwrite)")
+        if not out_p.parent.is_dir():
+            _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    if plane:
+        planes = [_guard(parse_plane, p) for p in plane]
+        df = [_guard(plane_daylight_factor, p.tilt_deg, p.azimuth_deg,
+                     ground_reflectance=ground_reflectance) for p in planes]
+        rows = [f"{p.name},{p.tilt_deg:g},{p.azimuth_deg:g},{v:.4f}" for p, v in zip(planes, df)]
+        text = "plane,tilt_deg,azimuth_deg,daylight_factor_percent\n" + "\n".join(rows) + "\n"
+    else:
+        for f in scene:
+            if not Path(f).is_file():
+                _fail(f"scene = {f!r}: no such file")
+        pts = _guard(read_sensors, sensors)
+        try:
+            df = room_daylight_factor(scene, pts, ground_reflectance=ground_reflectance,
+                                      ab=ab, ad=ad)
+        except RuntimeError as exc:
+            _fail(str(exc).splitlines()[0])
+        rows = [" ".join(f"{v:g}" for v in p) + f",{v:.4f}" for p, v in zip(pts, df)]
+        text = "sensor,daylight_factor_percent\n" + "\n".join(rows) + "\n"
+    if out_p is None:
+        typer.echo(text, nl=False)
+    else:
+        from skydome.daylighting.radiance_io import atomic_write_bytes
+
+        _guard(atomic_write_bytes, out_p, text.encode())
+        typer.echo(f"wrote {out}")
+
+
+def _params(items) -> dict:
+    """--param NAME=VALUE items as a dict (numbers converted)."""
+    params = {}
+    for item in items:
+        if "=" not in item:
+            _fail(f"param = {item!r} must be NAME=VALUE")
+        k, _, v = item.partition("=")
+        params[k.strip()] = _value(v.strip())
+    return params
+
+
 def _value(text: str):
     for conv in (int, float):
         try:
@@ -258,12 +402,7 @@ def export_radiance_cmd(
     import skydome as sd
     from skydome.daylighting.scene import write_radiance_sky
 
-    params = {}
-    for item in param:
-        if "=" not in item:
-            _fail(f"param = {item!r} must be NAME=VALUE")
-        k, _, v = item.partition("=")
-        params[k.strip()] = _value(v.strip())
+    params = _params(param)
     if dni is not None:
         params["dni"] = dni
     if dhi is not None:
@@ -286,6 +425,7 @@ def register(app: typer.Typer) -> None:
     app.add_typer(weather_app, name="weather")
     app.command("skymatrix")(skymatrix_cmd)
     app.command("illuminance")(illuminance_cmd)
+    app.command("daylight-factor")(daylight_factor_cmd)
     # `skydome export radiance` joins the export group of skydome.export.cli
     from skydome.export.cli import export_app
 
