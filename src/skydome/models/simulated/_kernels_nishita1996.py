@@ -195,14 +195,6 @@ def cylinder_lookup(lo, hi, R, Rt, px, py, pz, sx, sy, sz, out):
 
 # -- rays -----------------------------------------------------------------------------------------
 @njit(cache=True)
-def ray_work(n, nc, nl):
-    """Work arrays of :func:`ray_nodes` for one ray of at most 2 n + 1 nodes, nc
-    constituents, nl wavelengths: (pos, wts, rho, trans, t_end)."""
-    return (np.zeros((2 * n + 1, 3)), np.zeros(2 * n + 1), np.zeros((2 * n + 1, nc)),
-            np.zeros((2 * n + 1, nl)), np.zeros(1))
-
-
-@njit(cache=True)
 def ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end):
     """Quadrature nodes along the ray from p along d through the medium m: positions pos
     (m, 3), weights wts [m], relative densities rho (m, nc) and the transmittance from p to
@@ -406,7 +398,11 @@ def lattice_single(nodes, dirs, sun, m, e_sun, lo, hi, n, ts, out):
     for idx in prange(npt * K):
         p = idx // K
         k = idx % K
-        pos, wts, rho, trans, t_end = ray_work(n, nc, nl)
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
         col = np.zeros(nc)
         res = np.zeros(nl)
         phs = np.zeros((nc, nl))
@@ -476,7 +472,11 @@ def lattice_gather(nodes, dirs, Jf, G, m, D, Htop, n, ts, out):
     for idx in prange(npt * K):
         p = idx // K
         k = idx % K
-        pos, wts, rho, trans, t_end = ray_work(n, nc, nl)
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
         tmp = np.zeros(nl)
         res = np.zeros(nl)
         gather_along(nodes[p, 0], nodes[p, 1], nodes[p, 2], dirs[k, 0], dirs[k, 1], dirs[k, 2], k,
@@ -493,7 +493,11 @@ def view_single(vdirs, r0, sun, m, e_sun, lo, hi, n, ts, out):
     nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
     for i in prange(nv):
-        pos, wts, rho, trans, t_end = ray_work(n, nc, nl)
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
         col = np.zeros(nc)
         res = np.zeros(nl)
         phs = np.zeros((nc, nl))
@@ -538,7 +542,11 @@ def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, 
                     tot += v
                 for j in range(K):
                     W[c, lw, j] /= tot          # normalise: sum_j W = 1 (energy conservation)
-        pos, wts, rho, trans, t_end = ray_work(n, nc, nl)
+        pos = np.zeros((2 * n + 1, 3))
+        wts = np.zeros(2 * n + 1)
+        rho = np.zeros((2 * n + 1, nc))
+        trans = np.zeros((2 * n + 1, nl))
+        t_end = np.zeros(1)
         tmp = np.zeros(nl)
         sw = np.zeros((K, nl))
         for o in range(n_o):
