@@ -52,7 +52,7 @@ def _sun_dir(theta_s):
     return np.array([math.sin(t), 0.0, math.cos(t)])
 
 
-def _reflected_fraction_view_space(theta_s, sigma2, alpha_max, n_a=600, n_p=720):
+def _reflected_fraction_view_space(theta_s, sigma2, alpha_max, n_a=300, n_p=360):
     """int L mu_v dOmega_v / (E_n mu_s) over the upper hemisphere, by Gauss-Legendre nodes in
     polar coordinates (alpha, phi) about the specular direction."""
     s = _sun_dir(theta_s)
@@ -72,7 +72,7 @@ def _reflected_fraction_view_space(theta_s, sigma2, alpha_max, n_a=600, n_p=720)
     return float(np.sum(g * mu_v * wt)) / s[2]
 
 
-def _reflected_fraction_slope_space(theta_s, sigma2, n=1601):
+def _reflected_fraction_slope_space(theta_s, sigma2, n=1001):
     """The same fraction over the facet slopes (zx, zy) of the Cox-Munk Gaussian: the flux
     each facet intercepts, E_n (n_f . s) / cos(beta) per unit horizontal area, times its
     Fresnel reflectance, for the facets that face the sun and send the light upwards."""
@@ -104,9 +104,9 @@ def test_glint_of_a_flat_sea_reflects_the_fresnel_fraction(theta_s):
     """Nearly flat sea (sigma^2 = 1e-4): the reflected irradiance over the incident one is
     the Fresnel reflectance at the sun's incidence angle."""
     frac = _reflected_fraction_view_space(theta_s, 1e-4, alpha_max=0.15)
-    assert frac == pytest.approx(float(_fresnel_ref(math.cos(math.radians(theta_s)))), rel=5e-3)
+    assert frac == pytest.approx(float(_fresnel_ref(math.cos(math.radians(theta_s)))), rel=2e-3)
     if theta_s == 0.0:
-        assert frac == pytest.approx((0.34 / 2.34) ** 2, rel=5e-3)
+        assert frac == pytest.approx((0.34 / 2.34) ** 2, rel=2e-3)
 
 
 @pytest.mark.parametrize("theta_s", [20.0, 50.0])
@@ -115,11 +115,11 @@ def test_glint_energy_matches_slope_space_quadrature(theta_s, wind):
     """Rough sea: the kernel's glint radiance integrated over the viewer's hemisphere equals
     the reflected flux summed facet by facet over the Cox-Munk slope distribution."""
     sigma2 = 0.003 + 5.12e-3 * wind
-    view = _reflected_fraction_view_space(theta_s, sigma2, alpha_max=math.pi, n_a=900, n_p=720)
+    view = _reflected_fraction_view_space(theta_s, sigma2, alpha_max=math.pi, n_a=500, n_p=400)
     slope = _reflected_fraction_slope_space(theta_s, sigma2)
-    assert view == pytest.approx(slope, rel=5e-3)
-    # and stays close to the flat-sea Fresnel reflectance (a few per cent at these slopes)
-    assert view == pytest.approx(float(_fresnel_ref(math.cos(math.radians(theta_s)))), rel=0.25)
+    assert view == pytest.approx(slope, rel=1e-3)
+    # and stays near the flat-sea Fresnel reflectance (0.4-11 % above it at these slopes)
+    assert view == pytest.approx(float(_fresnel_ref(math.cos(math.radians(theta_s)))), rel=0.15)
 
 
 def test_earth_map_land_fraction_and_places():

@@ -5,8 +5,9 @@ Scattering", SIGGRAPH 93, 175-182 ([NSTN93]; survey section 7.3). Single scatter
 parallel sunlight by air molecules and aerosols in a spherical atmosphere, with the
 optical depth to the sun read from the paper's spheres x cylinders lookup table, the
 earth's shadow, and the light of the surface below (a uniform albedo, a sea coloured by
-Fresnel reflection and scattering by the water, or an albedo texture) attenuated on its way
-to the camera. See ``docs/sections/nishita1993.md`` for the equations, the tables and
+Fresnel reflection and scattering by the water with the sun's glint on its waves after
+Cox & Munk 1954 [CM54], an albedo texture, or the earth's land from a Blue Marble map with
+that sea around it) attenuated on its way to the camera. See ``docs/sections/nishita1993.md`` for the equations, the tables and
 every departure from the paper.
 """
 
@@ -51,7 +52,8 @@ def parse_length(name: str, value) -> float:
 
 
 def _load_texture(texture) -> np.ndarray:
-    """(H, W, 3) linear RGB albedo in [0, 1] from an image path or an array."""
+    """(H, W, 4) linear RGB albedo in [0, 1] from an image path or an array, and a land
+    fraction of 1 (the whole texture is Lambertian)."""
     if isinstance(texture, (str, bytes)) or hasattr(texture, "__fspath__"):
         import os
 
@@ -62,9 +64,9 @@ def _load_texture(texture) -> np.ndarray:
 
         with Image.open(path) as im:
             rgb = np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
-        # sRGB transfer function (IEC 61966-2-1) decoded to linear reflectance
-        lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
-        return _with_land(lin)
+        from skydome.spectra import srgb_decode
+
+        return _with_land(srgb_decode(rgb))      # IEC 61966-2-1, to linear reflectance
     a = np.asarray(texture, dtype=np.float64)
     if a.ndim == 2:
         a = np.repeat(a[..., None], 3, axis=-1)
@@ -94,10 +96,9 @@ def _load_earth_map() -> np.ndarray:
 
     with Image.open(DATA_DIR / EARTH_MAP) as im:
         a = np.asarray(im.convert("RGBA"), dtype=np.float64) / 255.0
-    rgb = a[..., :3]
-    # sRGB transfer function (IEC 61966-2-1) decoded to linear reflectance
-    lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
-    return _with_land(lin, a[..., 3])
+    from skydome.spectra import srgb_decode
+
+    return _with_land(srgb_decode(a[..., :3]), a[..., 3])   # IEC 61966-2-1
 
 
 def _texture_basis(wl: np.ndarray) -> np.ndarray:
@@ -173,7 +174,8 @@ class Nishita1993(SkyModel):
     reference = ("Nishita, Sirai, Tadamura & Nakamae, Display of the Earth Taking into Account "
                  "Atmospheric Scattering, SIGGRAPH 93, 175-182 (eqs. 1-3, sec. 4-5)")
     native = "spectral"
-    summary = "The earth seen from space or the air: single scattering, sea colour, shadow."
+    summary = ("The earth seen from space or the air: single scattering, sea colour and glint, "
+               "land map, shadow.")
     parameters = (
         ATMOSPHERE,
         TURBIDITY,
