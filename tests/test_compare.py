@@ -74,20 +74,11 @@ def test_cli_compare_bad_input(tmp_path, args, frag):
 def test_cli_compare_grid_on_dask_equals_in_process(tmp_path):
     """--scheduler: every (model, elevation) cell a Dask task; the measured errors, the notes
     of refused cells and grid.png equal the in-process run's; the chunk folder is gone."""
-    from distributed import LocalCluster
+    from _dask import run_both
 
-    base = ["compare", "--models", "cie1994_overcast,preetham1999,cie2003:12", "--reference",
-            "cie1994_overcast", "--sun-elevation", "-2,30", "--size", "24"]
-    res = runner.invoke(app, base + ["--out", str(tmp_path / "a")])
-    assert res.exit_code == 0, res.output
-    cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                           dashboard_address=None)
-    try:
-        res = runner.invoke(app, base + ["--out", str(tmp_path / "b"), "--scheduler",
-                                         cluster.scheduler_address])
-    finally:
-        cluster.close()
-    assert res.exit_code == 0, res.output
+    run_both(["compare", "--models", "cie1994_overcast,preetham1999,cie2003:12", "--reference",
+              "cie1994_overcast", "--sun-elevation", "-2,30", "--size", "24"],
+             tmp_path / "a", tmp_path / "b")
     ta = list(csv.DictReader(open(tmp_path / "a" / "table.csv")))
     tb = list(csv.DictReader(open(tmp_path / "b" / "table.csv")))
     assert len(ta) == len(tb) == 6

@@ -130,28 +130,17 @@ def test_cli_skymatrix_on_local_dask_cluster_equals_in_process(tmp_path):
 def test_cli_separate_sun_on_scheduler_equals_in_process(tmp_path):
     """--sun separate through --scheduler (a LocalCluster's address): the sky, sun and sun
     scene files equal those of the in-process run; resumed chunks are reused."""
-    from distributed import LocalCluster
-    from typer.testing import CliRunner
+    from _dask import run_both
 
-    from skydome.cli import app
     from skydome.daylighting.radiance_io import read_matrix
 
     lines = sample_weather_path().read_text().splitlines(keepends=True)
     w = tmp_path / "d.csv"
     w.write_text("".join(lines[:2 + 48]))
-    base = ["skymatrix", "--weather", str(w), "--patches", "reinhart:2", "--format", "double",
-            "--sun", "separate"]
-    r1 = CliRunner().invoke(app, base + ["--out", str(tmp_path / "a.mtx")])
-    assert r1.exit_code == 0, r1.output
-    cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                           dashboard_address=None)
-    try:
-        r2 = CliRunner().invoke(app, base + ["--out", str(tmp_path / "b.mtx"), "--scheduler",
-                                             cluster.scheduler_address, "--chunk-hours", "12"])
-    finally:
-        cluster.close()
-    assert r2.exit_code == 0, r2.output
-    assert "4 computed, 0 reused" in r2.output
+    out = run_both(["skymatrix", "--weather", w, "--patches", "reinhart:2", "--format",
+                    "double", "--sun", "separate", "--chunk-hours", "12"],
+                   tmp_path / "a.mtx", tmp_path / "b.mtx")
+    assert "4 computed, 0 reused" in out
     for suffix in (".mtx", ".sun.mtx"):
         a, _ = read_matrix(tmp_path / f"a{suffix}")
         b, _ = read_matrix(tmp_path / f"b{suffix}")

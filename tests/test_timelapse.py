@@ -62,21 +62,11 @@ def test_timelapse_bad_input(tmp_path):
 def test_timelapse_frames_on_dask_equal_in_process(tmp_path):
     """--scheduler: every frame a Dask task (a LocalCluster's address); the frames, the CSV and
     the contact sheet equal the in-process run's byte for byte; the chunk folder is gone."""
-    from distributed import LocalCluster
+    from _dask import run_both
 
-    base = ["timelapse", "--lat", "48.21", "--lon", "16.37", "--date", "2026-06-21",
-            "--utc-offset", "+02:00", "--every", "3h", "--size", "24", "--wavelengths", "8",
-            "--model", "preetham1999"]
-    res = runner.invoke(app, base + ["--out", str(tmp_path / "a")])
-    assert res.exit_code == 0, res.output
-    cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                           dashboard_address=None)
-    try:
-        res = runner.invoke(app, base + ["--out", str(tmp_path / "b"), "--scheduler",
-                                         cluster.scheduler_address])
-    finally:
-        cluster.close()
-    assert res.exit_code == 0, res.output
+    run_both(["timelapse", "--lat", "48.21", "--lon", "16.37", "--date", "2026-06-21",
+              "--utc-offset", "+02:00", "--every", "3h", "--size", "24", "--wavelengths", "8",
+              "--model", "preetham1999"], tmp_path / "a", tmp_path / "b")
     names = sorted(p.name for p in (tmp_path / "a").iterdir())
     assert names == sorted(p.name for p in (tmp_path / "b").iterdir())
     assert sum(n.startswith("frame_") for n in names) >= 4
