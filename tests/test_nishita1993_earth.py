@@ -256,3 +256,22 @@ def test_night_side_is_black_and_finite():
     # 104 deg from the subsolar point only the air near 100 km still sees the sun: dark
     dusk = sky.radiance(_limb_dirs(sky, 60.0, [-300e3]), WL)[0]
     assert np.all(dusk < 1e-6 * day.max())
+
+
+def test_terminator_fades_to_night():
+    """Across the terminator (points of the disc 70-100 deg from the subsolar point) the
+    disc darkens monotonically, to under 1e-4 of the day side 10 deg past the terminator
+    (only the high air still sees the sun there)."""
+    from skydome.spectra import spectrum_to_xyz
+
+    sky = get_model_class("nishita1993")(sun=sd.Sun(elevation_deg=50.0, azimuth_deg=240.0),
+                                         camera_altitude_m=GEO, surface="ocean", spheres=32)
+    a = math.radians(60.0)
+    dirs = []
+    for g in np.radians(np.arange(30.0, 61.0, 3.0)):       # 70 .. 100 deg from the subsolar point
+        p = R * np.array([math.sin(g) * math.sin(a), math.sin(g) * math.cos(a), math.cos(g)])
+        d = p - np.array([0.0, 0.0, R + GEO])
+        dirs.append(d / np.linalg.norm(d))
+    Y = spectrum_to_xyz(sky.radiance(np.array(dirs), WL), WL)[:, 1]
+    assert np.all(np.diff(Y) < 0.0)
+    assert Y[-1] < 1e-4 * Y[0]
