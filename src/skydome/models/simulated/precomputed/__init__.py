@@ -86,7 +86,7 @@ class PrecomputedSky(SkyModel):
         many times coarser in mu, mu_s and nu (never below 32 x 16 x 8), the scattering
         density of orders >= 3 on an outgoing grid this many times coarser, and the stored
         multiple-scattering table integrated once, at full size, from the summed density.
-        At 2: 2.8x less CPU time and 1.46 GB instead of 1.9 GB peak at 20 wavelengths, but
+        At 2: 2.5x less CPU time and 1.46 GB instead of 2.25 GB peak at 20 wavelengths, but
         0.9-2.8 % RMS off the default at AOD 0.5 (docs/models.md, "Cost of the
         precomputation").
     max_sun_zenith_deg : float
