@@ -21,6 +21,19 @@ def _fail(message: str) -> None:
     raise typer.Exit(code=2)
 
 
+def _captures(captures):
+    """The capture labels of a comma-separated option (None: all)."""
+    from skydome.validation.kider2014 import capture_labels
+
+    if captures is None:
+        return None
+    labs = [c.strip() for c in captures.split(",") if c.strip()]
+    wrong = [c for c in labs if c not in capture_labels()]
+    if not labs or wrong:
+        _fail(f"captures = {captures!r}: each must be one of {', '.join(capture_labels())}")
+    return labs
+
+
 @validate_app.command("measured")
 def measured(
     models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996", "single_scattering",
@@ -36,19 +49,13 @@ def measured(
     from pathlib import Path
 
     from skydome.validation.compare import MODELS, compare_measured, day_table
-    from skydome.validation.kider2014 import capture_labels
 
     names = [m.strip() for m in models.split(",") if m.strip()]
     valid = MODELS + ("precomputed_accurate",)
     bad = [m for m in names if m not in valid]
     if not names or bad:
         _fail(f"models = {models!r}: each must be one of {', '.join(valid)}")
-    labs = None
-    if captures is not None:
-        labs = [c.strip() for c in captures.split(",") if c.strip()]
-        wrong = [c for c in labs if c not in capture_labels()]
-        if not labs or wrong:
-            _fail(f"captures = {captures!r}: each must be one of {', '.join(capture_labels())}")
+    labs = _captures(captures)
     if phase not in ("tabulated", "henyey_greenstein", "cornette_shanks"):
         _fail(f"phase = {phase!r}: must be tabulated, henyey_greenstein or cornette_shanks")
     if out is not None:
@@ -91,18 +98,13 @@ def closure_cmd(
     """Broadband (300-2800 nm) global horizontal irradiance against the Kider et al. 2014
     pyranometer, capture by capture (prints a Markdown table)."""
     from skydome.validation import closure
-    from skydome.validation.kider2014 import capture_labels, load_captures
+    from skydome.validation.kider2014 import load_captures
 
     if model not in closure.CLOSURE_MODELS:
         _fail(f"model = {model!r}: must be one of {', '.join(closure.CLOSURE_MODELS)}")
     if not 0.0 <= water <= 10.0:
         _fail(f"water = {water:g} is out of range [0, 10] cm")
-    labs = None
-    if captures is not None:
-        labs = [c.strip() for c in captures.split(",") if c.strip()]
-        wrong = [c for c in labs if c not in capture_labels()]
-        if not labs or wrong:
-            _fail(f"captures = {captures!r}: each must be one of {', '.join(capture_labels())}")
+    labs = _captures(captures)
     res = closure.closure(load_captures(labs), model, precipitable_water_cm=water, fast=fast)
     lines = ["| capture | sun elevation [deg] | measured [W m^-2] | model [W m^-2] | direct | diffuse | error |",
              "|---|---|---|---|---|---|---|"]
