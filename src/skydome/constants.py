@@ -34,6 +34,14 @@ SUN_ANGULAR_RADIUS_DEG = 0.2665
 # (Reda & Andreas 2004, eq. 42 and A.4: 0.26667 deg). Kept apart from the disc radius above.
 SPA_SUN_RADIUS_DEG = 0.26667
 
+#: Full angle of the solar disc in Radiance [deg]: gendaylit, gendaymtx and the
+#: ``solar source sun`` line all use 0.533 deg (Ward, Radiance's gensky/gendaylit sources).
+RADIANCE_SUN_ANGLE_DEG = 0.533
+
+#: Radiance's luminous efficacy of equal-energy white [lm W^-1] (color.h WHTEFFICACY):
+#: luminance = 179 x (0.265 R + 0.670 G + 0.065 B) in Radiance's units.
+RADIANCE_WHITE_EFFICACY = 179.0
+
 # Total solar irradiance at 1 au [W/m^2], one name per source:
 # Gueymard 2018 (Solar Energy 168, 2-9: 1361.1 +- 0.5), the library's default;
 SOLAR_CONSTANT_GUEYMARD2018 = 1361.1

@@ -101,7 +101,9 @@ def skymatrix_cmd(
     from skydome.daylighting.patches import patches as make_patches
     from skydome.daylighting.radiance_io import (FORMATS, atomic_write_bytes, matrix_file,
                                                  write_matrix)
-    from skydome.daylighting.skymatrix import parse_sun_option, perez_sky_matrix_from_weather
+    from skydome.constants import SUN_ANGULAR_RADIUS_DEG
+    from skydome.daylighting.skymatrix import (SUN_ANGLE_DEG, parse_sun_option,
+                                               perez_sky_matrix_from_weather)
 
     # -- validate everything before any work -------------------------------------------------
     ps = _guard(make_patches, patches)
@@ -199,11 +201,11 @@ def skymatrix_cmd(
         written.append(out_p)
         if mode == "separate":
             write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,
-                         info=info + ["sun matrix: radiance of the 0.533 deg solar disc"],
+                         info=info + [f"sun matrix: radiance of the {SUN_ANGLE_DEG} deg solar disc"],
                          overwrite=overwrite)
             written.append(targets[1])
             minute = 24 * 60 * (w.day_of_year - 1) + (w.hour * 60.0 + 0.5).astype(int)
-            up = m.sun_directions[:, 2] > -np.sin(np.radians(0.2665))
+            up = m.sun_directions[:, 2] > -np.sin(np.radians(SUN_ANGULAR_RADIUS_DEG))
             atomic_write_bytes(targets[2], _sun_scene(m, minute, up).encode())
             written.append(targets[2])
     except BaseException:

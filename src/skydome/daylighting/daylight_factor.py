@@ -44,7 +44,7 @@ __all__ = ["overcast_sky", "plane_daylight_factor", "room_daylight_factor", "rad
 DF_SKY_ILLUMINANCE_LX = 10000.0
 #: Radiance's RGB -> luminance weights and white efficacy [lm W^-1] (color.h).
 _RGB_TO_Y = np.array([0.265, 0.670, 0.065])
-_WHITE_EFFICACY = 179.0
+from skydome.constants import RADIANCE_WHITE_EFFICACY as _WHITE_EFFICACY  # noqa: E402
 
 
 def overcast_sky(diffuse_horizontal_illuminance: float = DF_SKY_ILLUMINANCE_LX):

@@ -28,8 +28,8 @@ import numpy as np
 
 __all__ = ["write_radiance_sky", "sun_direct_illuminance"]
 
-WHITE_EFFICACY = 179.0
-SUN_ANGLE_DEG = 0.533
+from skydome.constants import RADIANCE_SUN_ANGLE_DEG as SUN_ANGLE_DEG
+from skydome.constants import RADIANCE_WHITE_EFFICACY as WHITE_EFFICACY
 
 _CAL = """{{ skydome sky export: direction -> zenith angle and azimuth [deg] }}
 sd_z = if(Dz - 1, 1, if(-1 - Dz, -1, Dz));

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from skydome.constants import RADIANCE_SUN_ANGLE_DEG, RADIANCE_WHITE_EFFICACY
 from skydome.daylighting.patches import PatchSet, patches as _patches
 
 __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_option",
@@ -51,9 +52,9 @@ __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_optio
 #: gendaymtx's default sky colour (its -c default, Radiance 5.4).
 GENDAYMTX_SKY_COLOR = (0.96, 1.004, 1.118)
 #: Radiance's luminous efficacy of white light [lm W^-1] (color.h WHTEFFICACY).
-WHITE_EFFICACY = 179.0
+WHITE_EFFICACY = RADIANCE_WHITE_EFFICACY
 #: Full angle of the solar disc in gendaymtx (SUN_ANG_DEG) [deg].
-SUN_ANGLE_DEG = 0.533
+SUN_ANGLE_DEG = RADIANCE_SUN_ANGLE_DEG  # Radiance's disc, full angle [deg]
 #: Default quadrature order per patch (q x q Gauss-Legendre nodes; see patches).
 DEFAULT_ORDER = 4
 _NSUNPATCH = 4

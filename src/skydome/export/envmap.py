@@ -47,7 +47,7 @@ __all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envm
 #: Luminous efficacy of the maps' photometric scale [lm/W].
 K_M = 683.0
 #: Radiance's white efficacy [lm/W] (its .hdr files).
-RADIANCE_EFFICACY = 179.0
+from skydome.constants import RADIANCE_WHITE_EFFICACY as RADIANCE_EFFICACY  # noqa: E402
 #: Largest finite half float.
 HALF_MAX = 65504.0
 #: Cube faces in file order.

@@ -59,7 +59,7 @@ TONEMAPS = ("clamp", "reinhard", "filmic", "hue-preserving", "agx", "aces-hill")
 #: Default display transform (skydome.render.display): hue-preserving, gamut compressed.
 DEFAULT_TONEMAP = "hue-preserving"
 #: Radiance's luminous efficacy of equal-energy white [lm/W] (WHTEFFICACY, color.h).
-WHITE_EFFICACY = 179.0
+from skydome.constants import RADIANCE_WHITE_EFFICACY as WHITE_EFFICACY  # noqa: E402
 #: Pixels brighter than this [cd m^-2] (the sun's disc) are left out of auto exposure.
 AUTO_EXPOSURE_CUTOFF = 1.0e5
 #: Reinhard's key value: the log-average luminance maps to this display value [Rei02].

@@ -64,7 +64,7 @@ SOLAR_CONSTANT_PEREZ = SOLAR_CONSTANT_WRC
 # Extraterrestrial normal illuminance used by gendaylit to start the -L iteration [lx].
 SOLAR_ILLUMINANCE_CONSTANT = 127500.0
 # Radiance's luminous efficacy of "white" light, WHTEFFICACY in color.h [lm W^-1].
-WHITE_EFFICACY = 179.0
+from skydome.constants import RADIANCE_WHITE_EFFICACY as WHITE_EFFICACY  # noqa: E402
 # Sky-clearness bin edges of [PSM93] Table 1 and [PISMS90] Table 4.
 EPSILON_EDGES = (1.0, 1.065, 1.23, 1.5, 1.95, 2.8, 4.5, 6.2)
 # Limits of the model's parameters, as gendaylit applies them (its check_parametrization).
