@@ -39,6 +39,7 @@ from skydome.transport._quadrature import (column_quadrature, geometric_node,  #
 from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
 from skydome.transport._tables import lookup_columns
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
+from skydome.transport._vexp import exp_neg_many
 from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
 
 
@@ -63,6 +64,20 @@ def exp_neg_array(x, out, ibuf):
         ibuf[l] = (np.int64(k) + 1023) << 52
     for l in range(n):
         out[l] *= fbuf[l]
+
+
+@njit(cache=True)
+def profile_density_many(code, p0, p1, r, R, n, out, ibuf, fbuf):
+    """out[i] = profile_density(code, p0, p1, r[i] - R) for i < n (radii r [m]); the
+    exponential profile ([KRZ06] eq. 7) in one vectorised pass of
+    :func:`skydome.transport._vexp.exp_neg_many` (ibuf, fbuf its scratch)."""
+    if code == EXPONENTIAL:
+        for i in range(n):
+            out[i] = -max(r[i] - R, 0.0) / p0
+        exp_neg_many(out, n, out, ibuf, fbuf)
+        return
+    for i in range(n):
+        out[i] = profile_density(code, p0, p1, r[i] - R)
 
 
 # -- column-density table (Bruneton 2017 transmittance parametrisation) --------------------------
@@ -147,6 +162,12 @@ class _SingleWork(NamedTuple):
     scat: np.ndarray       # (nc,) 1 where the constituent scatters
     brk: np.ndarray        # (6,) break points
     phs: np.ndarray        # (nl,) phase function per wavelength
+    node_t: np.ndarray     # (n_view,) distances of the nodes of the current piece
+    node_w: np.ndarray     # (n_view,) their weights
+    node_r: np.ndarray     # (2 n_view,) radii of the nodes, then of the midpoints before them
+    node_rho: np.ndarray   # (nc, 2 n_view) densities there
+    xbits: np.ndarray      # (max(2 n_view, nl),) int64 scratch of exp_neg_many
+    xbits_f: np.ndarray    # its float64 view
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -181,9 +202,12 @@ def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, 
     prange body were lost under numba 0.68's parfor lowering)."""
     nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
+    xbits = np.zeros(max(2 * n_view, nl), dtype=np.int64)
     w = _SingleWork(np.zeros((nc, nl)), np.zeros(nl), np.zeros(nc), np.zeros(nc),
                     np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nl),
-                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl))
+                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl),
+                    np.zeros(n_view), np.zeros(n_view), np.zeros(2 * n_view),
+                    np.zeros((nc, 2 * n_view)), xbits, xbits.view(np.float64))
     for c in range(nc):
         for l in range(nl):
             if m.scattering[c, l] > 0.0:
@@ -209,6 +233,12 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     w_scat = w.scat
     w_scol = w.scol
     w_tau = w.tau
+    w_node_t = w.node_t
+    w_node_w = w.node_w
+    w_node_r = w.node_r
+    w_node_rho = w.node_rho
+    w_xbits = w.xbits
+    w_xbits_f = w.xbits_f
     m_R = m.R
     m_extinction = m.extinction
     m_profile_code = m.profile_code
@@ -234,19 +264,30 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
         if length <= 0.0:
             continue
         dv = geometric_step(length, n_view, ts)
+        # the nodes of the piece in increasing t, with the radii at them and at the
+        # midpoints before them (Simpson's rule for the view column), then the densities
+        # of every constituent at all of them at once (exp_neg_many: one vectorised pass)
+        tp = t_prev
         for kk in range(n_view):
-            # nodes in increasing t
             k = n_view - 1 - kk if dense_at_b else kk
             u, wt = geometric_node(k, dv, ts)
             t = b - u if dense_at_b else a + u
-            rr = radius_along_above(r0, mu, t, R)
-            tm = 0.5 * (t_prev + t)
-            rm = radius_along_above(r0, mu, tm, R)
+            w_node_t[kk] = t
+            w_node_w[kk] = wt
+            w_node_r[kk] = radius_along_above(r0, mu, t, R)
+            w_node_r[n_view + kk] = radius_along_above(r0, mu, 0.5 * (tp + t), R)
+            tp = t
+        for c in range(nc):
+            profile_density_many(codes[c], p0s[c], p1s[c], w_node_r, R, 2 * n_view,
+                                 w_node_rho[c], w_xbits, w_xbits_f)
+        for kk in range(n_view):
+            t = w_node_t[kk]
+            wt = w_node_w[kk]
+            rr = w_node_r[kk]
             h = t - t_prev
             for c in range(nc):
-                w_rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                w_rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                w_dcol[c] += simpson(w_rho_prev[c], w_rho_mid[c], w_rho[c], h)
+                w_rho[c] = w_node_rho[c, kk]
+                w_dcol[c] += simpson(w_rho_prev[c], w_node_rho[c, n_view + kk], w_rho[c], h)
                 w_rho_prev[c] = w_rho[c]
             t_prev = t
             mu_s = (r0 * sun[2] + t * nu) / rr
@@ -297,11 +338,16 @@ def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, 
     mu_s = (r0 * sun[2] + t * nu) / R
     if mu_s > 0.0:
         light_columns(table, m, R * (1.0 + 1e-12), mu_s, light_exact, n_light, ts, w_scol)
+        w_tau = w.tau
+        w_ebuf = w.ebuf
         for l in range(nl):
             s = 0.0
             for c in range(nc):
                 s += m_extinction[c, l] * (w_dcol[c] + w_scol[c])
-            out[i, l] += m_albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+            w_tau[l] = -s
+        exp_neg_many(w_tau, nl, w_ebuf, w.xbits, w.xbits_f)
+        for l in range(nl):
+            out[i, l] += m_albedo[l] / math.pi * e_sun[l] * mu_s * w_ebuf[l]
 
 
 @njit(cache=True, fastmath=True)
