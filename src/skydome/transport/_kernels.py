@@ -37,7 +37,8 @@ from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4P
 from skydome.transport._quadrature import (column_quadrature, geometric_node,  # noqa: F401
                                           geometric_step, medium_columns, simpson)
 from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
-from skydome.transport._tables import lookup_columns
+from skydome.transport._tables import cell as table_cell
+from skydome.transport._tables import lookup_columns, lookup_columns_cell
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
 from skydome.transport._vexp import exp_neg_many
 from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
@@ -166,6 +167,9 @@ class _SingleWork(NamedTuple):
     node_w: np.ndarray     # (n_view,) their weights
     node_r: np.ndarray     # (2 n_view,) radii of the nodes, then of the midpoints before them
     node_rho: np.ndarray   # (nc, 2 n_view) densities there
+    node_mus: np.ndarray   # (n_view,) cosine of the sun's zenith angle at the nodes
+    node_xr: np.ndarray    # (n_view,) their column-table coordinates (x_r, x_mu)
+    node_xmu: np.ndarray
     xbits: np.ndarray      # (max(2 n_view, nl),) int64 scratch of exp_neg_many
     xbits_f: np.ndarray    # its float64 view
 
@@ -207,7 +211,8 @@ def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, 
                     np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nl),
                     np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl),
                     np.zeros(n_view), np.zeros(n_view), np.zeros(2 * n_view),
-                    np.zeros((nc, 2 * n_view)), xbits, xbits.view(np.float64))
+                    np.zeros((nc, 2 * n_view)), np.zeros(n_view), np.zeros(n_view),
+                    np.zeros(n_view), xbits, xbits.view(np.float64))
     for c in range(nc):
         for l in range(nl):
             if m.scattering[c, l] > 0.0:
@@ -239,7 +244,13 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     w_node_rho = w.node_rho
     w_xbits = w.xbits
     w_xbits_f = w.xbits_f
+    w_node_mus = w.node_mus
+    w_node_xr = w.node_xr
+    w_node_xmu = w.node_xmu
     m_R = m.R
+    m_Rt = m.Rt
+    n_r = table.shape[1]
+    n_mu = table.shape[2]
     m_extinction = m.extinction
     m_profile_code = m.profile_code
     m_profile_p0 = m.profile_p0
@@ -280,6 +291,11 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
         for c in range(nc):
             profile_density_many(codes[c], p0s[c], p1s[c], w_node_r, R, 2 * n_view,
                                  w_node_rho[c], w_xbits, w_xbits_f)
+        # the sun's zenith cosine at the nodes and their column-table coordinates
+        for kk in range(n_view):
+            mu_s = (r0 * sun[2] + w_node_t[kk] * nu) / w_node_r[kk]
+            w_node_mus[kk] = mu_s
+            w_node_xr[kk], w_node_xmu[kk] = table_coords(w_node_r[kk], mu_s, R, m_Rt)
         for kk in range(n_view):
             t = w_node_t[kk]
             wt = w_node_w[kk]
@@ -290,9 +306,17 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
                 w_dcol[c] += simpson(w_rho_prev[c], w_node_rho[c, n_view + kk], w_rho[c], h)
                 w_rho_prev[c] = w_rho[c]
             t_prev = t
-            mu_s = (r0 * sun[2] + t * nu) / rr
-            if not light_columns(table, m, rr, mu_s, light_exact, n_light, ts, w_scol):
+            # the light path's columns (light_columns, with the table cell from the
+            # coordinates above)
+            mu_s = w_node_mus[kk]
+            if ray_hits_ground(rr, mu_s, R):
                 continue
+            if light_exact:
+                medium_columns(m, rr, mu_s, n_light, ts, True, w_scol)
+            else:
+                ci, fa = table_cell(w_node_xr[kk], n_r)
+                cj, fb = table_cell(w_node_xmu[kk], n_mu)
+                lookup_columns_cell(table, ci, cj, fa, fb, w_scol)
             for l in range(nl):
                 w_tau[l] = 0.0
             for c in range(nc):

@@ -27,8 +27,8 @@ _LN2_LO = 1.90821492927058770002e-10   # ln 2 - _LN2_HI (fdlibm e_exp.c ln2LO)
 _INV_LN2 = 1.44269504088896338700e+00
 _X_MIN = -708.0
 
-# no reassociation: it would undo the split of ln 2
-_FLAGS = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
+# no reassociation (it would undo the split of ln 2), no "no infinities" (-inf gives 0)
+_FLAGS = {"nsz", "contract", "afn"}
 
 
 @njit(cache=True, fastmath=_FLAGS)
