@@ -40,7 +40,7 @@ from skydome.transport._tables import lookup_column as table_lookup  # noqa: F40
 from skydome.transport._tables import cell as table_cell
 from skydome.transport._tables import lookup_columns, lookup_columns_cell
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
-from skydome.transport._vexp import exp_neg_many
+from skydome.transport._vexp import exp_neg_many, expm1_many
 from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
 
 
@@ -278,16 +278,20 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
         # the nodes of the piece in increasing t, with the radii at them and at the
         # midpoints before them (Simpson's rule for the view column), then the densities
         # of every constituent at all of them at once (exp_neg_many: one vectorised pass)
-        tp = t_prev
+        # (geometric_node: u = ts expm1((k + 1/2) dv), w = (u + ts) dv, by expm1_many)
         for kk in range(n_view):
             k = n_view - 1 - kk if dense_at_b else kk
-            u, wt = geometric_node(k, dv, ts)
-            t = b - u if dense_at_b else a + u
-            w_node_t[kk] = t
-            w_node_w[kk] = wt
+            w_node_t[kk] = (k + 0.5) * dv
+        expm1_many(w_node_t, n_view, w_node_w, w_xbits, w_xbits_f)
+        for kk in range(n_view):
+            u = ts * w_node_w[kk]
+            w_node_w[kk] = (u + ts) * dv
+            w_node_t[kk] = b - u if dense_at_b else a + u
+        for kk in range(n_view):
+            t = w_node_t[kk]
+            tp = w_node_t[kk - 1] if kk > 0 else t_prev
             w_node_r[kk] = radius_along_above(r0, mu, t, R)
             w_node_r[n_view + kk] = radius_along_above(r0, mu, 0.5 * (tp + t), R)
-            tp = t
         for c in range(nc):
             profile_density_many(codes[c], p0s[c], p1s[c], w_node_r, R, 2 * n_view,
                                  w_node_rho[c], w_xbits, w_xbits_f)
