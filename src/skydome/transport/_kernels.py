@@ -221,7 +221,7 @@ def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, 
         _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w)
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, inline="always")
 def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light, t0, t1,
                        nbrk, w):
     """Accumulate w.acc[c, l] = int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt over the pieces
@@ -336,7 +336,7 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     return t_prev
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, inline="always")
 def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
                  out, w):
     """Add the Lambertian reflection of the attenuated direct sun at the ground point t1,
@@ -378,7 +378,7 @@ def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, 
             out[i, l] += m_albedo[l] / math.pi * e_sun[l] * mu_s * w_ebuf[l]
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, inline="always")
 def _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w):
     """One ray of :func:`single_scattering` (work arrays w passed in, reset here)."""
     w_acc = w.acc
