@@ -67,7 +67,7 @@ def exp_neg_array(x, out, ibuf):
         out[l] *= fbuf[l]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def profile_density_many(code, p0, p1, r, R, n, out, ibuf, fbuf):
     """out[i] = profile_density(code, p0, p1, r[i] - R) for i < n (radii r [m]); the
     exponential profile ([KRZ06] eq. 7) in one vectorised pass of

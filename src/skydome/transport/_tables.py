@@ -214,7 +214,7 @@ def lookup_columns(table, r, mu, R, Rt, out):
     lookup_columns_cell(table, i, j, a, b, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lookup_columns_cell(table, i, j, a, b, out):
     """out[c] = bilinear interpolation of table[c] at cell (i, j), fractions (a, b) (the
     look-up of :func:`lookup_columns` once the cell is known)."""
