@@ -31,6 +31,19 @@ _X_MIN = -708.0
 _FLAGS = {"nsz", "contract", "afn"}
 
 
+@njit(cache=True, fastmath=_FLAGS, inline="always")
+def _exp_parts(x):
+    """(exp(t), bits of 2^k) with x = k ln 2 + t, k = round(x / ln 2), |t| <= ln(2)/2:
+    exp(x) is their product (Cody-Waite reduction, Taylor series to degree 13)."""
+    k = math.floor(x * _INV_LN2 + 0.5)
+    t = (x - k * _LN2_HI) - k * _LN2_LO
+    p = 1.0 + t * (1.0 + t * (0.5 + t * (1.0 / 6.0 + t * (1.0 / 24.0 + t * (
+        1.0 / 120.0 + t * (1.0 / 720.0 + t * (1.0 / 5040.0 + t * (1.0 / 40320.0 + t * (
+            1.0 / 362880.0 + t * (1.0 / 3628800.0 + t * (1.0 / 39916800.0 + t * (
+                1.0 / 479001600.0 + t / 6227020800.0))))))))))))
+    return p, (np.int64(k) + 1023) << 52
+
+
 @njit(cache=True, fastmath=_FLAGS)
 def exp_neg_many(x, n, out, ibuf, fbuf):
     """out[i] = exp(x[i]) for i < n, x[i] <= 0 (x may be out); ibuf an int64 array and
@@ -41,13 +54,7 @@ def exp_neg_many(x, n, out, ibuf, fbuf):
             out[i] = 0.0
             ibuf[i] = 1023 << 52
             continue
-        k = math.floor(xi * _INV_LN2 + 0.5)
-        t = (xi - k * _LN2_HI) - k * _LN2_LO
-        out[i] = 1.0 + t * (1.0 + t * (0.5 + t * (1.0 / 6.0 + t * (1.0 / 24.0 + t * (
-            1.0 / 120.0 + t * (1.0 / 720.0 + t * (1.0 / 5040.0 + t * (1.0 / 40320.0 + t * (
-                1.0 / 362880.0 + t * (1.0 / 3628800.0 + t * (1.0 / 39916800.0 + t * (
-                    1.0 / 479001600.0 + t / 6227020800.0))))))))))))
-        ibuf[i] = (np.int64(k) + 1023) << 52
+        out[i], ibuf[i] = _exp_parts(xi)
     for i in range(n):
         out[i] *= fbuf[i]
 
@@ -61,13 +68,7 @@ def expm1_many(x, n, out, ibuf, fbuf):
     exp there); ibuf, fbuf as in :func:`exp_neg_many`."""
     for i in range(n):
         xi = x[i]
-        k = math.floor(xi * _INV_LN2 + 0.5)
-        t = (xi - k * _LN2_HI) - k * _LN2_LO
-        out[i] = 1.0 + t * (1.0 + t * (0.5 + t * (1.0 / 6.0 + t * (1.0 / 24.0 + t * (
-            1.0 / 120.0 + t * (1.0 / 720.0 + t * (1.0 / 5040.0 + t * (1.0 / 40320.0 + t * (
-                1.0 / 362880.0 + t * (1.0 / 3628800.0 + t * (1.0 / 39916800.0 + t * (
-                    1.0 / 479001600.0 + t / 6227020800.0))))))))))))
-        ibuf[i] = (np.int64(k) + 1023) << 52
+        out[i], ibuf[i] = _exp_parts(xi)
     for i in range(n):
         xi = x[i]
         s = xi * (1.0 + xi * (1.0 / 2.0 + xi * (1.0 / 6.0 + xi * (1.0 / 24.0 + xi * (
