@@ -37,8 +37,10 @@ from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4P
 from skydome.transport._quadrature import (column_quadrature, geometric_node,  # noqa: F401
                                           geometric_step, medium_columns, simpson)
 from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
-from skydome.transport._tables import lookup_columns
+from skydome.transport._tables import cell as table_cell
+from skydome.transport._tables import lookup_columns, lookup_columns_cell
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
+from skydome.transport._vexp import exp_neg_many, expm1_many
 from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
 
 
@@ -63,6 +65,20 @@ def exp_neg_array(x, out, ibuf):
         ibuf[l] = (np.int64(k) + 1023) << 52
     for l in range(n):
         out[l] *= fbuf[l]
+
+
+@njit(cache=True, inline="always")
+def profile_density_many(code, p0, p1, r, R, n, out, ibuf, fbuf):
+    """out[i] = profile_density(code, p0, p1, r[i] - R) for i < n (radii r [m]); the
+    exponential profile ([KRZ06] eq. 7) in one vectorised pass of
+    :func:`skydome.transport._vexp.exp_neg_many` (ibuf, fbuf its scratch)."""
+    if code == EXPONENTIAL:
+        for i in range(n):
+            out[i] = -max(r[i] - R, 0.0) / p0
+        exp_neg_many(out, n, out, ibuf, fbuf)
+        return
+    for i in range(n):
+        out[i] = profile_density(code, p0, p1, r[i] - R)
 
 
 # -- column-density table (Bruneton 2017 transmittance parametrisation) --------------------------
@@ -147,6 +163,15 @@ class _SingleWork(NamedTuple):
     scat: np.ndarray       # (nc,) 1 where the constituent scatters
     brk: np.ndarray        # (6,) break points
     phs: np.ndarray        # (nl,) phase function per wavelength
+    node_t: np.ndarray     # (n_view,) distances of the nodes of the current piece
+    node_w: np.ndarray     # (n_view,) their weights
+    node_r: np.ndarray     # (2 n_view,) radii of the nodes, then of the midpoints before them
+    node_rho: np.ndarray   # (nc, 2 n_view) densities there
+    node_mus: np.ndarray   # (n_view,) cosine of the sun's zenith angle at the nodes
+    node_xr: np.ndarray    # (n_view,) their column-table coordinates (x_r, x_mu)
+    node_xmu: np.ndarray
+    xbits: np.ndarray      # (max(2 n_view, nl),) int64 scratch of exp_neg_many
+    xbits_f: np.ndarray    # its float64 view
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -181,9 +206,13 @@ def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, 
     prange body were lost under numba 0.68's parfor lowering)."""
     nc = m.profile_code.shape[0]
     nl = e_sun.shape[0]
+    xbits = np.zeros(max(2 * n_view, nl), dtype=np.int64)
     w = _SingleWork(np.zeros((nc, nl)), np.zeros(nl), np.zeros(nc), np.zeros(nc),
                     np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nl),
-                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl))
+                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl),
+                    np.zeros(n_view), np.zeros(n_view), np.zeros(2 * n_view),
+                    np.zeros((nc, 2 * n_view)), np.zeros(n_view), np.zeros(n_view),
+                    np.zeros(n_view), xbits, xbits.view(np.float64))
     for c in range(nc):
         for l in range(nl):
             if m.scattering[c, l] > 0.0:
@@ -192,7 +221,7 @@ def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, 
         _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w)
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, inline="always")
 def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_light, t0, t1,
                        nbrk, w):
     """Accumulate w.acc[c, l] = int rho_c(t) exp(-tau(0,t) - tau_sun(t)) dt over the pieces
@@ -209,7 +238,19 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     w_scat = w.scat
     w_scol = w.scol
     w_tau = w.tau
+    w_node_t = w.node_t
+    w_node_w = w.node_w
+    w_node_r = w.node_r
+    w_node_rho = w.node_rho
+    w_xbits = w.xbits
+    w_xbits_f = w.xbits_f
+    w_node_mus = w.node_mus
+    w_node_xr = w.node_xr
+    w_node_xmu = w.node_xmu
     m_R = m.R
+    m_Rt = m.Rt
+    n_r = table.shape[1]
+    n_mu = table.shape[2]
     m_extinction = m.extinction
     m_profile_code = m.profile_code
     m_profile_p0 = m.profile_p0
@@ -234,24 +275,52 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
         if length <= 0.0:
             continue
         dv = geometric_step(length, n_view, ts)
+        # the nodes of the piece in increasing t, with the radii at them and at the
+        # midpoints before them (Simpson's rule for the view column), then the densities
+        # of every constituent at all of them at once (exp_neg_many: one vectorised pass)
+        # (geometric_node: u = ts expm1((k + 1/2) dv), w = (u + ts) dv, by expm1_many)
         for kk in range(n_view):
-            # nodes in increasing t
             k = n_view - 1 - kk if dense_at_b else kk
-            u, wt = geometric_node(k, dv, ts)
-            t = b - u if dense_at_b else a + u
-            rr = radius_along_above(r0, mu, t, R)
-            tm = 0.5 * (t_prev + t)
-            rm = radius_along_above(r0, mu, tm, R)
+            w_node_t[kk] = (k + 0.5) * dv
+        expm1_many(w_node_t, n_view, w_node_w, w_xbits, w_xbits_f)
+        for kk in range(n_view):
+            u = ts * w_node_w[kk]
+            w_node_w[kk] = (u + ts) * dv
+            w_node_t[kk] = b - u if dense_at_b else a + u
+        for kk in range(n_view):
+            t = w_node_t[kk]
+            tp = w_node_t[kk - 1] if kk > 0 else t_prev
+            w_node_r[kk] = radius_along_above(r0, mu, t, R)
+            w_node_r[n_view + kk] = radius_along_above(r0, mu, 0.5 * (tp + t), R)
+        for c in range(nc):
+            profile_density_many(codes[c], p0s[c], p1s[c], w_node_r, R, 2 * n_view,
+                                 w_node_rho[c], w_xbits, w_xbits_f)
+        # the sun's zenith cosine at the nodes and their column-table coordinates
+        for kk in range(n_view):
+            mu_s = (r0 * sun[2] + w_node_t[kk] * nu) / w_node_r[kk]
+            w_node_mus[kk] = mu_s
+            w_node_xr[kk], w_node_xmu[kk] = table_coords(w_node_r[kk], mu_s, R, m_Rt)
+        for kk in range(n_view):
+            t = w_node_t[kk]
+            wt = w_node_w[kk]
+            rr = w_node_r[kk]
             h = t - t_prev
             for c in range(nc):
-                w_rho[c] = profile_density(codes[c], p0s[c], p1s[c], rr - R)
-                w_rho_mid[c] = profile_density(codes[c], p0s[c], p1s[c], rm - R)
-                w_dcol[c] += simpson(w_rho_prev[c], w_rho_mid[c], w_rho[c], h)
+                w_rho[c] = w_node_rho[c, kk]
+                w_dcol[c] += simpson(w_rho_prev[c], w_node_rho[c, n_view + kk], w_rho[c], h)
                 w_rho_prev[c] = w_rho[c]
             t_prev = t
-            mu_s = (r0 * sun[2] + t * nu) / rr
-            if not light_columns(table, m, rr, mu_s, light_exact, n_light, ts, w_scol):
+            # the light path's columns (light_columns, with the table cell from the
+            # coordinates above)
+            mu_s = w_node_mus[kk]
+            if ray_hits_ground(rr, mu_s, R):
                 continue
+            if light_exact:
+                medium_columns(m, rr, mu_s, n_light, ts, True, w_scol)
+            else:
+                ci, fa = table_cell(w_node_xr[kk], n_r)
+                cj, fb = table_cell(w_node_xmu[kk], n_mu)
+                lookup_columns_cell(table, ci, cj, fa, fb, w_scol)
             for l in range(nl):
                 w_tau[l] = 0.0
             for c in range(nc):
@@ -267,7 +336,7 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     return t_prev
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, inline="always")
 def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, t_prev, t1,
                  out, w):
     """Add the Lambertian reflection of the attenuated direct sun at the ground point t1,
@@ -297,14 +366,19 @@ def _ground_term(i, r0, mu, nu, sun, m, e_sun, table, light_exact, n_light, ts, 
     mu_s = (r0 * sun[2] + t * nu) / R
     if mu_s > 0.0:
         light_columns(table, m, R * (1.0 + 1e-12), mu_s, light_exact, n_light, ts, w_scol)
+        w_tau = w.tau
+        w_ebuf = w.ebuf
         for l in range(nl):
             s = 0.0
             for c in range(nc):
                 s += m_extinction[c, l] * (w_dcol[c] + w_scol[c])
-            out[i, l] += m_albedo[l] / math.pi * e_sun[l] * mu_s * math.exp(-s)
+            w_tau[l] = -s
+        exp_neg_many(w_tau, nl, w_ebuf, w.xbits, w.xbits_f)
+        for l in range(nl):
+            out[i, l] += m_albedo[l] / math.pi * e_sun[l] * mu_s * w_ebuf[l]
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, inline="always")
 def _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_light, out, w):
     """One ray of :func:`single_scattering` (work arrays w passed in, reset here)."""
     w_acc = w.acc

@@ -211,6 +211,13 @@ def lookup_columns(table, r, mu, R, Rt, out):
     """out[c] = bilinear look-up of table[c, r, mu] (per-constituent columns to the top in
     the transmittance mapping, :func:`skydome.transport._kernels.build_column_table`)."""
     i, j, a, b = transmittance_cell(r, mu, R, Rt, table.shape[1], table.shape[2])
+    lookup_columns_cell(table, i, j, a, b, out)
+
+
+@njit(cache=True, inline="always")
+def lookup_columns_cell(table, i, j, a, b, out):
+    """out[c] = bilinear interpolation of table[c] at cell (i, j), fractions (a, b) (the
+    look-up of :func:`lookup_columns` once the cell is known)."""
     w00 = (1.0 - a) * (1.0 - b)
     w01 = (1.0 - a) * b
     w10 = a * (1.0 - b)
