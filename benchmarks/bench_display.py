@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from skydome.render import SkyImage
-from skydome.render.display import DISPLAY_TRANSFORMS
+from skydome.imaging import SkyImage
+from skydome.imaging.display import DISPLAY_TRANSFORMS
 
 
 def main(width: int = 2048) -> None:

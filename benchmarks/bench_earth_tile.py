@@ -1,7 +1,7 @@
 """Benchmark: the demo's earth-from-space tile (``nishita1993``, 384 x 384 px, 16 wavelengths).
 
 Prints, for each surface, the model's set-up (optical-depth table and sky-light table) and
-the render of the tile through ``skydome.render`` (camera projection, XYZ output), best of
+the render of the tile through ``skydome.render()`` (camera projection, XYZ output), best of
 3 after a warm-up run (numba compiled and cached). Run: python benchmarks/bench_earth_tile.py
 """
 

@@ -23,7 +23,7 @@ import tracemalloc
 import numpy as np
 
 import skydome as sd
-from skydome.render import Equirect, render
+from skydome.imaging import Equirect, render
 from skydome.spectra import wavelength_grid
 
 

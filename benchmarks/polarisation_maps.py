@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from skydome.effects.polarisation_maps import find_neutral_points, meridian_profile, polarisation_maps
-from skydome.render.plots import plot_polarisation_maps
+from skydome.imaging.plots import plot_polarisation_maps
 from skydome.sun import Sun
 
 FIG = Path(__file__).resolve().parent.parent / "docs" / "figures"

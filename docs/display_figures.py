@@ -26,7 +26,7 @@ COLUMNS = [("hue-preserving", True), ("hue-preserving", False), ("agx", True), (
 def render_skies(size: int = 160, cache=None):
     """XYZ images (Y in cd m^-2) of the demo skies from the default model, fisheye."""
     import skydome as sd
-    from skydome.render import SkyImage, make_projection
+    from skydome.imaging import SkyImage, make_projection
     from skydome.spectra import wavelength_grid
 
     proj = make_projection("fisheye", str(size))
@@ -47,7 +47,7 @@ def render_skies(size: int = 160, cache=None):
 
 def _lch(srgb_code):
     """CIELAB L*, C*, h [deg] (D65) of sRGB code values in [0, 1] (our own conversion)."""
-    from skydome.render.display import _lab_f
+    from skydome.imaging.display import _lab_f
     from skydome.spectra import SRGB_WHITE_XY, _xy_to_white_xyz, linear_srgb_to_xyz, srgb_decode
 
     n = linear_srgb_to_xyz(srgb_decode(np.asarray(srgb_code, float))) / _xy_to_white_xyz(SRGB_WHITE_XY)
@@ -57,7 +57,7 @@ def _lch(srgb_code):
 
 
 def doc_figures(directory, cache=None) -> dict:
-    from skydome.render.sheets import contact_sheet
+    from skydome.imaging.sheets import contact_sheet
 
     images = render_skies(cache=cache)
     tiles, res = [], {}

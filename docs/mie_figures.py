@@ -11,7 +11,7 @@ import numpy as np
 from skydome.apps.aureole import render_closeup
 from skydome.effects.aureole import (bishops_ring_atmosphere, diffraction_ring_radius_deg,
                                      radiance_profile, ring_analysis, sun_disc_radiance)
-from skydome.render.plots import _pyplot, _save, plot_radiance_profiles
+from skydome.imaging.plots import _pyplot, _save, plot_radiance_profiles
 
 
 def doc_figures(directory) -> dict:

@@ -15,8 +15,8 @@ import pytest
 from PIL import Image
 
 import skydome as sd
-from skydome.render import Fisheye, render
-from skydome.render.display import display_transform, ev100_to_exposure, exposure_to_ev100
+from skydome.imaging import Fisheye, render
+from skydome.imaging.display import display_transform, ev100_to_exposure, exposure_to_ev100
 
 colour = pytest.importorskip("colour")
 
@@ -157,7 +157,7 @@ def test_noon_zenith_keeps_its_chroma_and_hue(scenes):
 def test_luminance_adaptation_factor_cie159_worked_example():
     # CIE 159:2004 worked example (L_A = 318.31 cd/m^2): F_L = 1.16754; colour-science's
     # CIECAM02 viewing-condition parameters as a second oracle over a range of L_A
-    from skydome.render.display import hunt_chroma_gain, luminance_adaptation_factor
+    from skydome.imaging.display import hunt_chroma_gain, luminance_adaptation_factor
     from colour.appearance.ciecam02 import viewing_conditions_dependent_parameters as vc
 
     assert luminance_adaptation_factor(318.31) == pytest.approx(1.16754, abs=5e-5)
@@ -172,7 +172,7 @@ def test_luminance_adaptation_factor_cie159_worked_example():
 
 
 def test_scale_chroma_against_colour_science():
-    from skydome.render.display import scale_chroma
+    from skydome.imaging.display import scale_chroma
     from skydome.spectra import linear_srgb_to_xyz
 
     rgb = np.array([[0.3, 0.4, 0.9], [0.45, 0.5, 0.6], [0.6, 0.5, 0.4], [0.5, 0.5, 0.5], [0.9, 0.3, 0.05]])
@@ -196,7 +196,7 @@ def test_scale_chroma_against_colour_science():
 
 def test_rec709_to_rec2020_matrix_itu_bt2087():
     # ITU-R BT.2087-0 eq. (2): linear BT.709 -> BT.2020 to four decimals
-    from skydome.render.display import _rec709_rec2020
+    from skydome.imaging.display import _rec709_rec2020
 
     to2020, _ = _rec709_rec2020()
     bt2087 = np.array([[0.6274, 0.3293, 0.0433], [0.0691, 0.9195, 0.0114], [0.0164, 0.0880, 0.8956]])

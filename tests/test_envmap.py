@@ -98,7 +98,7 @@ def test_compass_points():
 
 
 def test_radiance_fisheye_is_skydome_fisheye():
-    from skydome.render.projections import Fisheye
+    from skydome.imaging.projections import Fisheye
 
     d = _dirs(300, upper=True)
     a = MapProjection("radiance", 200, 200).pixel_from_direction(d)
@@ -325,7 +325,7 @@ def test_ground_is_lambertian(sky):
 
 
 def test_write_exr_half_and_hdr(sky, tmp_path):
-    from skydome.render.image import read_exr, read_hdr
+    from skydome.imaging.image import read_exr, read_hdr
 
     env = render_envmap(sky, "unreal", size=64)
     (p,) = env.write(tmp_path / "a.exr", half=True)
@@ -377,6 +377,6 @@ def test_mitsuba_reads_the_map_in_its_convention(sky):
 def test_exact_pixel_solid_angles_match_the_jacobian(proj):
     """The closed-form pixel solid angles against the base class's 4 x 4 midpoint
     integration of each projection's Jacobian."""
-    from skydome.render.projections import Projection
+    from skydome.imaging.projections import Projection
 
     np.testing.assert_allclose(proj.solid_angles(), Projection.solid_angles(proj), rtol=2e-3)

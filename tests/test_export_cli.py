@@ -13,7 +13,7 @@ HW = ("--model", "hosek_wilkie2012", "--turbidity", "3", "--albedo", "0.2")
 
 
 def test_export_envmap_with_sun_json_and_sh(tmp_path):
-    from skydome.render.image import read_exr
+    from skydome.imaging.image import read_exr
 
     out = tmp_path / "sky.exr"
     res = runner.invoke(app, ["export", "envmap", *HW, "--lat", "48.21", "--lon", "16.37",

@@ -254,7 +254,7 @@ def test_write_luts_folder_and_cli(tmp_path):
     from typer.testing import CliRunner
 
     from skydome.cli import app
-    from skydome.render.image import read_exr
+    from skydome.imaging.image import read_exr
 
     runner = CliRunner()
     out = tmp_path / "luts"

@@ -95,7 +95,7 @@ def test_cli_export_luts_precomputed(tmp_path):
     from typer.testing import CliRunner
 
     from skydome.cli import app
-    from skydome.render.image import read_exr
+    from skydome.imaging.image import read_exr
 
     small = ["--n-wavelengths", "4", "--scattering-r-size", "4", "--scattering-mu-size", "8",
              "--scattering-mu-s-size", "4", "--scattering-nu-size", "2", "--orders", "2",

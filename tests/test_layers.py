@@ -30,7 +30,7 @@ def test_lower_layers_import_no_render_apps_or_plotting(package):
     mods = _modules(package) if SRC.joinpath(*package.split(".")).is_dir() else [package]
     code = ("import importlib, sys\n"
             f"for m in {mods!r}:\n    importlib.import_module(m)\n"
-            "bad = sorted(m for m in sys.modules if m.startswith(('skydome.render', 'skydome.apps', "
+            "bad = sorted(m for m in sys.modules if m.startswith(('skydome.imaging', 'skydome.apps', "
             "'skydome.cli', 'matplotlib', 'PIL')))\nprint(','.join(bad))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}, timeout=300)
@@ -93,7 +93,7 @@ def test_camera_refuses_bad_placements():
 
 def test_dobashi2002_and_render_share_one_camera_class():
     from skydome.effects import dobashi2002
-    from skydome.render.projections import Projection
+    from skydome.imaging.projections import Projection
 
     assert dobashi2002.Camera is Camera
     assert issubclass(Camera, Projection)
@@ -102,7 +102,7 @@ def test_dobashi2002_and_render_share_one_camera_class():
 def test_contact_sheet_layout(tmp_path):
     from PIL import Image
 
-    from skydome.render.sheets import contact_sheet
+    from skydome.imaging.sheets import contact_sheet
 
     red = np.zeros((20, 20, 3))
     red[..., 0] = 1.0
@@ -126,7 +126,7 @@ def test_contact_sheet_letterbox_cells(tmp_path):
     # one to 60 x 15; the last, shorter row centred; captions in a band under each box
     from PIL import Image
 
-    from skydome.render.sheets import contact_sheet
+    from skydome.imaging.sheets import contact_sheet
 
     red = np.zeros((10, 10, 3))
     red[..., 0] = 1.0

@@ -18,7 +18,7 @@ from skydome.effects.polarisation import (angle_of_polarisation, degree_of_polar
                                           rayleigh_degree_of_polarisation)
 from skydome.effects.polarisation_maps import (e_vectors, find_neutral_points, meridian_profile,
                                                polarisation_maps, sky_stokes)
-from skydome.render.plots import plot_polarisation_maps
+from skydome.imaging.plots import plot_polarisation_maps
 from skydome.models.simulated.montecarlo import stokes_frame
 from skydome.sun import Sun
 from skydome.transport.geometry import direction_from_angles

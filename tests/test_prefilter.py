@@ -86,7 +86,7 @@ def test_cli_writes_the_mip_chain(tmp_path):
     from typer.testing import CliRunner
 
     from skydome.cli import app
-    from skydome.render.image import read_exr
+    from skydome.imaging.image import read_exr
 
     runner = CliRunner()
     out = tmp_path / "sky.exr"

@@ -1,4 +1,4 @@
-"""Tests of skydome.render (projections, render(), SkyImage, writers).
+"""Tests of skydome.imaging (projections, render(), SkyImage, writers).
 
 Oracles: analytic geometry (solid angle of the sphere 4 pi and hemisphere 2 pi, the
 equidistant fisheye r = k theta), Radiance's own programs shipped with pyradiance
@@ -18,9 +18,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skydome.render import (AngularMap, Equirect, Fisheye, Projection, SkyImage, make_projection,
+from skydome.imaging import (AngularMap, Equirect, Fisheye, Projection, SkyImage, make_projection,
                             render)
-from skydome.render import image as img
+from skydome.imaging import image as img
 from skydome.sun import Sun
 
 
@@ -501,17 +501,21 @@ def test_import_is_light():
     import subprocess
     import sys
 
-    code = ("import sys, skydome.render; "
+    code = ("import sys, skydome.imaging; "
             "print(any(m in sys.modules for m in ('numba', 'matplotlib', 'OpenEXR', 'PIL')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 
 
 def test_package_level_render_after_subpackage_import():
-    # ``skydome.render`` is both the subpackage and the function: after
-    # ``from skydome.render import ...`` the attribute is the module, which must still render.
+    # ``skydome.render`` is the function and the package is ``skydome.imaging``: importing
+    # the package's submodules, in every form, leaves the function in place.
     import skydome as sd
-    from skydome.render import make_projection as _mp  # noqa: F401
+    import skydome.imaging.sun_disc as _sd  # noqa: F401
+    from skydome.imaging import make_projection as _mp  # noqa: F401
+
+    assert callable(sd.render) and sd.render.__module__ == "skydome.imaging"
+    assert sd.imaging.sun_disc is _sd
 
     im = sd.render(ConstantSpectral(c=0.02), sd.Fisheye(8))
     assert isinstance(im, SkyImage) and im.data.shape == (8, 8, 16)

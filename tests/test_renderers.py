@@ -73,7 +73,7 @@ def test_blender_planes_and_pole_shadow(sky, expected, tmp_path):
     if importlib.util.find_spec("bpy") is None:
         pytest.skip("bpy (Blender as a Python module) is not installed")
     from skydome.export.sun import write_sun_json
-    from skydome.render.image import read_exr
+    from skydome.imaging.image import read_exr
 
     render_envmap(sky, "blender", size="512x256").write(tmp_path / "map.exr")
     write_sun_json(sun_light(sky, "blender"), tmp_path / "sun.json")

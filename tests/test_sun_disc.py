@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import skydome as sd
-from skydome.render import AngularMap, Equirect, Fisheye, render
+from skydome.imaging import AngularMap, Equirect, Fisheye, render
 from skydome.camera import Camera
-from skydome.render.sun_disc import limb_darkening, limb_darkening_mean
+from skydome.imaging.sun_disc import limb_darkening, limb_darkening_mean
 from skydome.sun import Sun
 
 

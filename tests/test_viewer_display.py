@@ -1,4 +1,4 @@
-"""The page's display pass against skydome.render.display (what `skydome render` writes).
+"""The page's display pass against skydome.imaging.display (what `skydome render` writes).
 
 A few linear colours (XYZ, cd/m^2) go through the page's display shader into an 8-bit
 target; the same colours through SkyImage.to_srgb's steps (linear sRGB x the EV100
@@ -30,7 +30,7 @@ COLOURS_RGB = [
 
 
 def _reference(xyz, ev100, transform):
-    from skydome.render.display import display_transform, ev100_to_exposure
+    from skydome.imaging.display import display_transform, ev100_to_exposure
     from skydome.spectra import srgb_encode, xyz_to_linear_srgb
 
     rgb = xyz_to_linear_srgb(xyz) * ev100_to_exposure(ev100)
@@ -47,7 +47,7 @@ def _page_transforms(page) -> dict[str, int]:
 
 def test_page_default_is_render_default(browser_page):  # noqa: F811
     """The page offers transforms of render.display only, and starts with its default."""
-    from skydome.render.display import DEFAULT_TRANSFORM, DISPLAY_TRANSFORMS
+    from skydome.imaging.display import DEFAULT_TRANSFORM, DISPLAY_TRANSFORMS
 
     page, _ = browser_page
     names = _page_transforms(page)
@@ -59,7 +59,7 @@ def test_page_default_is_render_default(browser_page):  # noqa: F811
 
 @pytest.mark.parametrize("transform", ["hue-preserving", "filmic", "reinhard", "clamp"])
 def test_display_pass_matches_render_display(browser_page, transform):  # noqa: F811
-    from skydome.render.display import ev100_to_exposure
+    from skydome.imaging.display import ev100_to_exposure
     from skydome.spectra import linear_srgb_to_xyz
 
     page, messages = browser_page
@@ -75,7 +75,7 @@ def test_display_pass_matches_render_display(browser_page, transform):  # noqa: 
 def test_hue_preserving_keeps_the_sunset_orange(browser_page):  # noqa: F811
     """The default transform on the page keeps an over-exposed sunset orange (R > G > B)
     where filmic turns it towards yellow (G/R at least 0.1 higher)."""
-    from skydome.render.display import ev100_to_exposure
+    from skydome.imaging.display import ev100_to_exposure
     from skydome.spectra import linear_srgb_to_xyz
 
     page, _ = browser_page

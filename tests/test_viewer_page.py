@@ -133,7 +133,7 @@ def test_saved_view_reproduces_on_the_cpu(page, tmp_path):
     import sys
     from pathlib import Path
 
-    from skydome.render.image import read_exr
+    from skydome.imaging.image import read_exr
     from skydome.spectra import xyz_to_linear_srgb
 
     page, messages = page

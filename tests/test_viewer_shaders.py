@@ -58,7 +58,7 @@ def _cpu_model(model: str, elevation: float, params: dict):
 
 
 def cpu_xyz(model: str, elevation: float, params: dict) -> np.ndarray:
-    from skydome.render.projections import Equirect
+    from skydome.imaging.projections import Equirect
 
     sky = _cpu_model(model, elevation, params)
     d, _ = Equirect(W, H, hemisphere=True).directions()
@@ -76,7 +76,7 @@ def test_hillaire2020_ground_from_10km(browser_page):  # noqa: F811
     """The whole sphere (equirect) from 10 km: the lower half of the sky-view LUT holds the
     lit ground and the air in front of it; the shader must match the CPU there too."""
     import skydome
-    from skydome.render.projections import Equirect
+    from skydome.imaging.projections import Equirect
 
     page, messages = browser_page
     params = {"observer_altitude_m": 10000.0}
@@ -97,7 +97,7 @@ def test_hillaire2020_ground_from_10km(browser_page):  # noqa: F811
 def test_precomputed_from_100km(browser_page):  # noqa: F811
     """The whole sphere from just below the top of the atmosphere (99 km): every direction
     that does not meet the ground, against the CPU model with the same tables."""
-    from skydome.render.projections import Equirect
+    from skydome.imaging.projections import Equirect
 
     page, messages = browser_page
     params = {"observer_altitude_m": 99000.0}
@@ -147,7 +147,7 @@ def test_hillaire2020_aerial_perspective_volume(browser_page, elevation):  # noq
     ``aerial_perspective(directions, distance_m, wavelengths_nm)``: in-scattered light and
     transmittance (as the XYZ of sunlight seen through it)."""
     import skydome
-    from skydome.render.projections import Equirect
+    from skydome.imaging.projections import Equirect
     from skydome.spectra import default_wavelengths, solar_irradiance, spectrum_to_xyz
 
     page, messages = browser_page

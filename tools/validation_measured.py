@@ -4,7 +4,7 @@
 
 Writes OUT_FOLDER/validation_measured_table.md (the day's table), results.npz (per model
 and capture: the model luminance in the 81 directions and its 400-700 nm spectra) and the
-figures of skydome.render.plots_validation.
+figures of skydome.imaging.plots_validation.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def main(argv=None) -> int:
 def figures(results_dir: Path, fig_dir: Path) -> int:
     import numpy as np
 
-    from skydome.render import plots_validation as pv
+    from skydome.imaging import plots_validation as pv
     from skydome.validation.compare import LUMINANCE_WL, SPECTRAL_BAND, measured_luminance
     from skydome.validation.kider2014 import load_captures
 

@@ -28,11 +28,11 @@ _LAZY = {
     "model": "skydome.models",
     "available_models": "skydome.models",
     "SkyModel": "skydome.models",
-    "render": "skydome.render",
-    "SkyImage": "skydome.render.image",
-    "Equirect": "skydome.render.projections",
-    "Fisheye": "skydome.render.projections",
-    "AngularMap": "skydome.render.projections",
+    "render": "skydome.imaging",
+    "SkyImage": "skydome.imaging.image",
+    "Equirect": "skydome.imaging.projections",
+    "Fisheye": "skydome.imaging.projections",
+    "AngularMap": "skydome.imaging.projections",
     "wavelength_grid": "skydome.spectra",
     "direction_from_angles": "skydome.transport.geometry",
 }
@@ -40,7 +40,7 @@ _LAZY = {
 __all__ = sorted(_LAZY) + ["__version__"]
 
 
-_SUBMODULES = {"models", "spectra", "atmosphere", "transport", "render", "sun", "effects", "data",
+_SUBMODULES = {"models", "spectra", "atmosphere", "transport", "imaging", "sun", "effects", "data",
                "illuminance"}
 
 

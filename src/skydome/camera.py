@@ -3,9 +3,9 @@ pixels of an image map to directions and back) and the pinhole :class:`Camera`.
 
 Models that own a view (``nishita1993``'s earth from space) and effects that work on a
 photograph (``dobashi2002``'s aerial perspective, the airlight driver) build a Camera here,
-and :func:`skydome.render.render` renders any Projection; so neither models nor effects
-import :mod:`skydome.render`. The sky projections (fisheye, equirect, angular map) are in
-:mod:`skydome.render.projections`.
+and :func:`skydome.imaging.render` renders any Projection; so neither models nor effects
+import :mod:`skydome.imaging`. The sky projections (fisheye, equirect, angular map) are in
+:mod:`skydome.imaging.projections`.
 
 Pixel convention: continuous coordinates ``(row, col)``, row down from the top edge, column
 right from the left edge; pixel ``(i, j)`` covers ``[i, i+1) x [j, j+1)``, its centre is at
@@ -185,7 +185,7 @@ class Camera(Projection):
       ``Camera(640, 480, 30, position=(0, 0, 36e6), look_at=(0, 0, -6.371e6), up=(0, 1, 0))``.
 
     With ``width`` (and ``height``) it is a :class:`Projection` that
-    :func:`skydome.render.render` renders; without, :meth:`ray_directions` gives the rays of
+    :func:`skydome.imaging.render` renders; without, :meth:`ray_directions` gives the rays of
     an image of any size.
 
     Parameters

@@ -403,15 +403,15 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     from skydome._io import check_output_file
     from skydome._validate import check_choice, check_int, check_number
     from skydome.models import get_model_class
-    from skydome.render import make_projection, render as render_sky
-    from skydome.render.image import check_output_path
+    from skydome.imaging import make_projection, render as render_sky
+    from skydome.imaging.image import check_output_path
     from skydome.spectra import wavelength_grid
 
     # 1. validate everything before any work
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     check_choice("projection", projection, PROJECTIONS)
-    from skydome.render.display import DISPLAY_TRANSFORMS
+    from skydome.imaging.display import DISPLAY_TRANSFORMS
 
     check_choice("tonemap", tonemap, DISPLAY_TRANSFORMS)
     check_choice("bits", bits, (8, 16))
@@ -431,7 +431,7 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
         if not hasattr(cls, "default_projection"):
             raise UserError(f"projection = 'camera' needs a model with its own camera "
                             f"(e.g. nishita1993); model {model!r} has none")
-        from skydome.render.projections import _parse_size
+        from skydome.imaging.projections import _parse_size
 
         w, h = _parse_size(size)
         _check_memory("size", size, w * (w if h is None else h), n_channels)
@@ -617,7 +617,7 @@ def plot_luminance(
         _check_shared(ctx.args, [get_model_class(model.partition(":")[0])])
         s = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, "spa")
         sky = _model_spec(model, ctx.args, s)
-        from skydome.render.plots import plot_luminance_map
+        from skydome.imaging.plots import plot_luminance_map
 
         plot_luminance_map(sky, out, log=not linear, title=f"{model}: luminance [cd/m$^2$]")
         typer.echo(f"wrote {out}")
@@ -648,7 +648,7 @@ def plot_compare_cmd(
         _check_shared(ctx.args, [get_model_class(sp.partition(":")[0]) for sp in specs])
         s = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, "spa")
         skies = [_model_spec(sp, ctx.args, s) for sp in specs]
-        from skydome.render.plots import plot_compare
+        from skydome.imaging.plots import plot_compare
 
         plot_compare(skies, specs, out, relative=relative)
         typer.echo(f"wrote {out}")

@@ -30,7 +30,7 @@ def pack_image(img, note: str = "", **extra) -> np.ndarray:
 
 def unpack_image(packed: np.ndarray, projection):
     """(SkyImage or None, note, dict of the extra arrays)."""
-    from skydome.render.image import SkyImage
+    from skydome.imaging.image import SkyImage
 
     z = dict(np.load(io.BytesIO(np.asarray(packed, dtype=np.uint8).tobytes())))
     note = str(z.pop("note")) if "note" in z else ""

@@ -28,7 +28,7 @@ def _read_image(path):
         a = np.asarray(Image.open(p).convert("RGB"), dtype=np.float64) / 255.0
         return srgb_decode(a)
     if suf == ".exr":
-        from skydome.render.image import read_exr
+        from skydome.imaging.image import read_exr
 
         ch = read_exr(p)
         return np.stack([ch["R"], ch["G"], ch["B"]], axis=-1).astype(np.float64)
@@ -45,7 +45,7 @@ def _read_depth(path):
     if suf == ".npy":
         return np.load(p).astype(np.float64)
     if suf == ".exr":
-        from skydome.render.image import read_exr
+        from skydome.imaging.image import read_exr
 
         ch = read_exr(p)
         key = next((k for k in ("Z", "Y", "R", "depth") if k in ch), None)
@@ -86,7 +86,7 @@ def _display_gain(x) -> float:
 
 
 def _side_by_side(before, after, path, labels):
-    from skydome.render.sheets import contact_sheet
+    from skydome.imaging.sheets import contact_sheet
     from skydome.spectra import srgb_encode
 
     imgs = [srgb_encode(np.clip(x, 0, 1)) for x in (before, *after)]

@@ -23,7 +23,7 @@ def render_closeup(atmosphere, sun, wavelengths_nm=None, *, fov_deg: float = 50.
     ``size`` x ``size`` pixels over ``fov_deg`` (in (1, 120) deg). The sun disc is drawn
     with :func:`sun_disc_radiance` where ``with_sun``."""
     from skydome.effects.aureole import _sun
-    from skydome.render.image import SkyImage
+    from skydome.imaging.image import SkyImage
 
     sun = _sun(sun)
     fov = check_number("fov_deg", fov_deg, 1.0, 120.0, "deg", low_open=True, high_open=True)
@@ -66,7 +66,7 @@ def run_aureole(out, aerosol: str = "earth", sun_elevation_deg: float = 30.0, fo
     ``closeup.png`` and ``sun.txt`` (the sun's transmittance at 450 and 650 nm) into the
     folder ``out`` (atomically); return the lines of ``sun.txt``."""
     from skydome.atmosphere import Atmosphere
-    from skydome.render.plots import plot_radiance_profiles
+    from skydome.imaging.plots import plot_radiance_profiles
     from skydome.sun import Sun
 
     elev = check_aureole_args(aerosol, sun_elevation_deg, fov_deg, size, out)

@@ -27,8 +27,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
-from skydome.render.plots import plot_error_maps
-from skydome.render.sheets import contact_sheet
+from skydome.imaging.plots import plot_error_maps
+from skydome.imaging.sheets import contact_sheet
 
 __all__ = ["ComparisonRow", "run_comparison", "sky_errors"]
 
@@ -87,8 +87,8 @@ def _default_build(spec, sun):
 def _render_cell(build, spec: str, e: float, azimuth: float, size: int, wavelengths: int):
     """One grid cell as a Dask task: the image (no sun disc), its render time, its kind."""
     from skydome.apps._chunked import pack_image
-    from skydome.render import render
-    from skydome.render.projections import Fisheye
+    from skydome.imaging import render
+    from skydome.imaging.projections import Fisheye
     from skydome.spectra import wavelength_grid
     from skydome.sun import Sun
 
@@ -128,8 +128,8 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
         Output folder; files are written to a temporary folder first and moved in at the end.
     """
     from skydome._validate import check_int, check_number
-    from skydome.render import render
-    from skydome.render.projections import Fisheye
+    from skydome.imaging import render
+    from skydome.imaging.projections import Fisheye
     from skydome.spectra import wavelength_grid
     from skydome.sun import Sun
 

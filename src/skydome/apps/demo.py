@@ -53,7 +53,7 @@ def _sun(spec):
 
 def run(out_dir: Path, only: list[str] | None = None) -> list[Path]:
     import skydome as sd
-    from skydome.render import make_projection
+    from skydome.imaging import make_projection
     from skydome.spectra import wavelength_grid
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -121,7 +121,7 @@ def _effects(out_dir: Path) -> list[Path]:
     written.append(eff / "bishops_ring.png")
     # 5.7 polarisation: single-scattering Rayleigh field (analytic)
     from skydome.effects.polarisation_maps import polarisation_maps
-    from skydome.render.plots import plot_polarisation_maps
+    from skydome.imaging.plots import plot_polarisation_maps
 
     pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
     plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")
@@ -158,7 +158,7 @@ def _effects(out_dir: Path) -> list[Path]:
 def _contact_sheet(tiles, path: Path, tile=256, cols: int = 3) -> None:
     """A grid of equal cells (``tile`` box, each image letterboxed into it), a caption under
     each, ``cols`` across."""
-    from skydome.render.sheets import contact_sheet
+    from skydome.imaging.sheets import contact_sheet
 
     contact_sheet(tiles, path, cols=cols, tile=tile, line_height=18, background=(24, 24, 24),
                   text_colours=((230, 230, 230),), letterbox=True)

@@ -1,5 +1,5 @@
 """Polarisation maps as files (``skydome polarisation``): the figure is
-:func:`skydome.render.plots.plot_polarisation_maps`, the numbers per pixel :func:`write_map_csv`.
+:func:`skydome.imaging.plots.plot_polarisation_maps`, the numbers per pixel :func:`write_map_csv`.
 The physics is in :mod:`skydome.effects.polarisation_maps`."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ def run_polarisation(out, sun, *, method: str = "montecarlo", csv=None, size: in
     import os
 
     from skydome.effects.polarisation_maps import polarisation_maps
-    from skydome.render.plots import plot_polarisation_maps
+    from skydome.imaging.plots import plot_polarisation_maps
 
     kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
     pmap = polarisation_maps(method, sun, size=size, wavelength_nm=wavelength_nm, turbidity=turbidity, **kw)

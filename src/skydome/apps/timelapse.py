@@ -27,8 +27,8 @@ from typing import Callable
 import numpy as np
 
 from skydome._io import atomic_folder, check_output_folder
-from skydome.render.plots import plot_day_colours
-from skydome.render.sheets import contact_sheet
+from skydome.imaging.plots import plot_day_colours
+from skydome.imaging.sheets import contact_sheet
 
 __all__ = ["TimelapseFrame", "day_times", "run_timelapse", "model_builder"]
 
@@ -104,7 +104,7 @@ def _render_frame(build, el: float, az: float, projection: str, size: int, wavel
     """One frame as a Dask task: the rendered image and the probe colours, packed
     (:func:`skydome.apps._chunked.pack_image`)."""
     from skydome.apps._chunked import pack_image
-    from skydome.render import make_projection, render
+    from skydome.imaging import make_projection, render
     from skydome.spectra import spectrum_to_xyz, wavelength_grid
     from skydome.sun import Sun
 
@@ -138,7 +138,7 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     then be picklable (:func:`model_builder`).
     """
     from skydome._validate import check_int, check_number
-    from skydome.render import make_projection, render
+    from skydome.imaging import make_projection, render
     from skydome.spectra import spectrum_to_xyz, wavelength_grid
     from skydome.sun import Sun, solar_position
     check_number("lat", lat_deg, -90.0, 90.0, "deg")

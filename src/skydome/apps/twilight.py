@@ -15,8 +15,8 @@ import numpy as np
 from skydome._io import atomic_folder, check_output_folder
 from skydome.effects.twilight import (SUN_AZIMUTH_DEG, anti_solar_profile, belt_of_venus,
                                       horizontal_illuminance, sky_luminance, twilight_models)
-from skydome.render.plots import plot_twilight
-from skydome.render.sheets import contact_sheet, to_uint8
+from skydome.imaging.plots import plot_twilight
+from skydome.imaging.sheets import contact_sheet, to_uint8
 
 __all__ = ["horizon_views", "run_twilight", "demo_effects", "EXPOSURES"]
 
@@ -63,8 +63,8 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
     the log-average sky luminance), so every pair looks about equally bright (-12 deg
     looks like day): not a faithful sequence, kept for inspecting colours."""
     from skydome._validate import check_int, check_number
-    from skydome.render import render
-    from skydome.render.projections import Fisheye
+    from skydome.imaging import render
+    from skydome.imaging.projections import Fisheye
     from skydome.spectra import wavelength_grid
 
     from skydome._validate import check_choice

@@ -15,7 +15,7 @@ def warm(verbose: bool = True) -> float:
     """Build the default precomputed tables (cached) and render a tiny image with the
     default model and the analytic models' kernels; returns the seconds it took."""
     import skydome as sd
-    from skydome.render import make_projection
+    from skydome.imaging import make_projection
 
     t0 = time.perf_counter()
     sun = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)

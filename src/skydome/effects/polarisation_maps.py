@@ -22,7 +22,7 @@ south), which leaves Q and U unchanged (a rotation by 180 deg). ``test_polarisat
 checks both.
 
 :func:`polarisation_maps` samples a fisheye (north up, east left, looking up),
-:func:`skydome.render.plots.plot_polarisation_maps` draws the degree (perceptual colour map, 0..1) and angle
+:func:`skydome.imaging.plots.plot_polarisation_maps` draws the degree (perceptual colour map, 0..1) and angle
 (cyclic colour map, with E-vector segments) of polarisation, and :func:`meridian_profile`
 with :func:`find_neutral_points` locate the Arago, Babinet and Brewster neutral points
 along the solar meridian.
@@ -206,7 +206,7 @@ def polarisation_maps(method: str, sun, size: int = 48, wavelength_nm: float = 5
     """Degree and angle of polarisation on a ``size`` x ``size`` fisheye (north up, east
     left, zenith at the centre, horizon on the inscribed circle) at one wavelength [nm].
     ``kw`` go to :func:`sky_stokes`."""
-    from skydome.render.projections import Fisheye
+    from skydome.imaging.projections import Fisheye
 
     size = check_int("size", size, 4, 4096)
     wl = float(check_number("wavelength_nm", wavelength_nm, 200.0, 4000.0, "nm"))

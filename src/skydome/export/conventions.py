@@ -270,7 +270,7 @@ _S = (0.0, -1.0, 0.0)
 CONVENTIONS: dict[str, Convention] = {c.name: c for c in (
     Convention("skydome", "skydome", "+Z", "right", (_E, _N, _U),
                ("latlong", "cubemap", "cross"), "south (azimuth 180 deg); north at the left edge",
-               "+Y", "skydome.render.projections.Equirect", _uv_skydome, _dir_skydome),
+               "+Y", "skydome.imaging.projections.Equirect", _uv_skydome, _dir_skydome),
     Convention("blender", "Blender (Cycles, EEVEE) Environment Texture, equirectangular",
                "+Z", "right", (_E, _N, _U), ("latlong",),
                "+X = east; north (+Y) a quarter from the left edge", "+Y",

@@ -9,7 +9,7 @@ W m^-2 sr^-1 on the photometric scale luminance = 683 lm/W x (0.2126 R + 0.7152 
 (Mitsuba) matches the map when E = illuminance / 683 (:mod:`skydome.export.sun`). The
 ``radiance`` convention's .hdr files use Radiance's own scale instead (179 lm/W).
 
-The sky comes from :func:`skydome.render.render` through a :class:`MapProjection` (the
+The sky comes from :func:`skydome.imaging.render` through a :class:`MapProjection` (the
 convention's pixel layout as a skydome projection), without the sun; the sun is either
 left out (exported as a light) or added energy-true into the pixel that holds its centre
 (``sun="map"``). Below the horizon the map holds, by default, a Lambertian ground of the
@@ -37,7 +37,7 @@ from typing import Any, Callable
 import numpy as np
 
 from skydome.export.conventions import Convention, get_convention
-from skydome.render.projections import Projection
+from skydome.imaging.projections import Projection
 
 __all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envmap",
            "FACES", "LAYOUTS", "cube_face_direction", "cube_face_from_direction",
@@ -90,10 +90,10 @@ class _Cached:
 
 class MapProjection(_Cached, Projection):
     """A convention's single-image layout (lat-long, equal-area square or fisheye) as a
-    skydome :class:`~skydome.render.projections.Projection` (directions in ENU)."""
+    skydome :class:`~skydome.imaging.projections.Projection` (directions in ENU)."""
 
     def __init__(self, convention, width: int, height: int):
-        from skydome.render.projections import _check_size
+        from skydome.imaging.projections import _check_size
 
         self.convention = get_convention(convention)
         self.layout = self.convention.layouts[0] if self.convention.layouts[0] in _NATIVE else "latlong"
@@ -111,7 +111,7 @@ class MapProjection(_Cached, Projection):
         return d
 
     def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
-        from skydome.render.projections import _as_dirs
+        from skydome.imaging.projections import _as_dirs
 
         u, v = self.convention.uv_from_direction(_as_dirs(directions))
         return v * self.height, u * self.width
@@ -167,7 +167,7 @@ class CubeFaceProjection(_Cached, Projection):
     tool's axes, except for three.js, which looks cube textures up with x negated."""
 
     def __init__(self, convention, face: str, size: int):
-        from skydome.render.projections import _check_size
+        from skydome.imaging.projections import _check_size
 
         if face not in FACES:
             raise ValueError(f"face = {face!r} is not one of {', '.join(FACES)}")
@@ -189,7 +189,7 @@ class CubeFaceProjection(_Cached, Projection):
         return d
 
     def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
-        from skydome.render.projections import _as_dirs
+        from skydome.imaging.projections import _as_dirs
 
         face, s, t = cube_face_from_direction(_as_dirs(directions) @ self.convention.cube_matrix.T)
         mine = face == FACES.index(self.face)
@@ -258,7 +258,7 @@ class EnvironmentMap:
         ``{"map": ...}`` for single-image layouts, ``{"+X": ..., ..., "-Z": ...}`` for cube
         layouts.
     projections : dict
-        Image name -> the :class:`~skydome.render.projections.Projection` of its pixels.
+        Image name -> the :class:`~skydome.imaging.projections.Projection` of its pixels.
     convention : Convention
     layout : str
     metadata : dict
@@ -345,7 +345,7 @@ class EnvironmentMap:
     def _write_exr(self, tmp: str, im: np.ndarray, half: bool) -> None:
         import OpenEXR
 
-        from skydome.render.image import _SRGB_CHROMATICITIES
+        from skydome.imaging.image import _SRGB_CHROMATICITIES
 
         dtype = np.float16 if half else np.float32
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
@@ -359,7 +359,7 @@ class EnvironmentMap:
             f.write(tmp)
 
     def _write_hdr(self, tmp: str, im: np.ndarray) -> None:
-        from skydome.render.image import rgbe_encode
+        from skydome.imaging.image import rgbe_encode
 
         H, W = im.shape[:2]
         scale = K_M / RADIANCE_EFFICACY if self.convention.name == "radiance" else 1.0
@@ -380,7 +380,7 @@ class EnvironmentMap:
 def check_map_path(path, half: bool = False) -> Path:
     """ValueError unless ``path`` ends in .exr or .hdr in a writable folder (and .exr if
     ``half``)."""
-    from skydome.render.image import check_output_path
+    from skydome.imaging.image import check_output_path
 
     p = Path(path)
     if p.suffix.lower() not in (".exr", ".hdr"):
@@ -470,11 +470,11 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
     ground_albedo : float, optional
         In [0, 1]; default the model's ``albedo`` / ``ground_albedo`` if it has one, else 0.2.
     wavelengths_nm : array_like, optional
-        For spectral models (default: skydome.render's 16 samples 380-780 nm).
+        For spectral models (default: skydome.render()'s 16 samples 380-780 nm).
     progress : callable, optional
         ``progress(done, total)`` over all pixels.
     """
-    from skydome.render import render
+    from skydome.imaging import render
 
     conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground)
     if ground_albedo is None:

@@ -16,7 +16,7 @@ primaries, W m^-2 with 683 lm/W), the normal illuminance [lx], and what each tar
   multiply them); the light points along its node's local -Z, turned to -direction.
 
 The irradiance is ``sky.sun_radiance(wl) x sun.solid_angle_sr x visible fraction`` (the
-part of the disc above the horizon, flat circular-segment geometry as skydome.render).
+part of the disc above the horizon, flat circular-segment geometry as skydome.imaging).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ _K_M = 683.0
 def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | None:
     """The sun of ``sky`` as a light (see the module docstring); None if the model has no
     sun with a radiance, or the sun is wholly below the horizon."""
-    from skydome.render.sun_disc import sun_light as render_sun_light
+    from skydome.imaging.sun_disc import sun_light as render_sun_light
     from skydome.spectra import default_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
 
     conv = get_convention(convention)

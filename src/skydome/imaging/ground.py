@@ -9,7 +9,7 @@ for an observer standing on it (no air between the eye and the ground). E_h is c
 by Gauss-Legendre quadrature in cos(theta) (32 nodes) times the midpoint rule in azimuth
 (64 nodes) over the model's own sky.
 
-``ground="model"`` (the default of :func:`skydome.render.render`): models that trace
+``ground="model"`` (the default of :func:`skydome.imaging.render`): models that trace
 ground-hit rays themselves (the physically based ones: their radiance below the horizon
 is the ground seen through the air in front of it) keep their values. Two of them light
 their ground with the transmitted sun only (:data:`SUN_ONLY_GROUND`: measured, the nadir
@@ -60,7 +60,7 @@ def horizontal_irradiance(sky, wavelengths_nm=None, n_mu: int = 32, n_phi: int =
                           include_sun: bool = True) -> np.ndarray:
     """Irradiance on a horizontal plane from the model's sky and (``include_sun``) sun:
     spectral [W m^-2 nm^-1] at ``wavelengths_nm``, or XYZ (Y = illuminance [lx]) if None."""
-    from skydome.render.sun_disc import XYZ_CHANNEL_WAVELENGTHS_NM, _visible_fraction, sun_disc_radiance
+    from skydome.imaging.sun_disc import XYZ_CHANNEL_WAVELENGTHS_NM, _visible_fraction, sun_disc_radiance
 
     from skydome.illuminance import sky_quadrature
 

@@ -256,7 +256,7 @@ def plot_polarisation_maps(pmap, path, title: str | None = None,
     segments on a ``segments`` x ``segments`` grid, of length proportional to the degree.
     North up, east left; the sun is marked. Written atomically (.png, .pdf or .svg)."""
     from skydome.effects.polarisation_maps import _sun_pixel, e_vectors
-    from skydome.render.projections import Fisheye
+    from skydome.imaging.projections import Fisheye
 
     plt = _pyplot()
 

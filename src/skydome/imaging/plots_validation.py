@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skydome.render.plots import _pyplot, _save
+from skydome.imaging.plots import _pyplot, _save
 
 __all__ = ["plot_luminance_vs_scattering_angle", "plot_spectra", "plot_error_maps", "plot_scan_order"]
 

@@ -10,13 +10,12 @@ Nothing heavy is imported here (OpenEXR, Pillow and matplotlib load when used).
 
 from __future__ import annotations
 
-import sys as _sys
 from typing import Callable
 
 import numpy as np
 
-from skydome.render.image import SkyImage
-from skydome.render.projections import AngularMap, Equirect, Fisheye, Projection, make_projection
+from skydome.imaging.image import SkyImage
+from skydome.imaging.projections import AngularMap, Equirect, Fisheye, Projection, make_projection
 
 __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "SkyImage",
            "Projection"]
@@ -44,7 +43,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     draw_sun : bool
         Draw the solar disc where the model has a sun with a radiance (see Notes). If
         False the image has no disc and ``image.sun_light`` holds the sun as a separate
-        :class:`~skydome.render.sun_disc.SunLight` (direction, angular radius, spectral
+        :class:`~skydome.imaging.sun_disc.SunLight` (direction, angular radius, spectral
         normal irradiance) for renderers that take it that way.
     chunk : int
         Directions per model call (>= 1), bounding memory use.
@@ -52,7 +51,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
         Give the disc the sun's centre-to-limb darkening (Neckel 2005; default) or, if
         False, a uniform radiance. Either way its flux is the model's.
     ground : {"model", "black"} or float
-        What the pixels below the horizon show (:mod:`skydome.render.ground`): "model"
+        What the pixels below the horizon show (:mod:`skydome.imaging.ground`): "model"
         (default) the model's own ground where it traces ground-hit rays, else a
         Lambertian ground of the model's albedo (0.2 without one) lit by its sky and sun;
         "black"; or an albedo in [0, 1] for a Lambertian ground on every model.
@@ -74,9 +73,9 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     Notes
     -----
     The sun: if ``draw_sun``, ``sky.sun`` is set, the model gives a sun radiance
-    (:func:`~skydome.render.sun_disc.sun_disc_radiance`) and the sun's elevation exceeds
+    (:func:`~skydome.imaging.sun_disc.sun_disc_radiance`) and the sun's elevation exceeds
     minus its angular radius, the disc is drawn by
-    :func:`~skydome.render.sun_disc.draw_sun_disc`: its limb-darkened radiance is
+    :func:`~skydome.imaging.sun_disc.draw_sun_disc`: its limb-darkened radiance is
     distributed over the pixels it covers in proportion to the flux falling into each, so
     that the drawn flux sum (L - L_sky) Omega_pix equals the model's direct normal
     irradiance L_sun Omega_sun (times the part of the disc above the horizon) in any
@@ -93,7 +92,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     if not isinstance(projection, Projection):
         raise TypeError(f"projection must be a skydome Projection, got {type(projection).__name__}")
     chunk = check_int("chunk", chunk, 1, None)
-    from skydome.render.ground import apply_ground, check_ground
+    from skydome.imaging.ground import apply_ground, check_ground
 
     ground = check_ground(ground)
     if progress is not None and not callable(progress):
@@ -156,7 +155,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
                     "angular_radius_deg": sun.angular_radius_deg}
     sun_light = None
     if sun is not None and sun.elevation_deg > -sun.angular_radius_deg:
-        from skydome.render import sun_disc
+        from skydome.imaging import sun_disc
 
         if draw_sun:
             L_sun = sun_disc.sun_disc_radiance(sky, wl)
@@ -224,15 +223,3 @@ def _fused_sampler(sky, wl):
         if R.shape == (int(n_t), wl.size) and np.all(R >= 0.0):
             return table, R @ M
     return (lambda d: sky.radiance(d, wl)), M
-
-
-# ``skydome.render`` names both this subpackage and the function above. Once the subpackage
-# has been imported (``from skydome.render import ...``) Python binds the attribute
-# ``skydome.render`` to the module, so the module itself is made callable: calling it calls
-# :func:`render`, and ``sd.render(sky, projection)`` works either way.
-class _CallableModule(type(_sys.modules[__name__])):
-    def __call__(self, *args, **kwargs):
-        return render(*args, **kwargs)
-
-
-_sys.modules[__name__].__class__ = _CallableModule

@@ -4,7 +4,7 @@ Colour pipeline: spectral radiance [W m^-2 sr^-1 nm^-1] -> CIE 1931 XYZ with Y t
 luminance [cd m^-2] (683 lm/W) -> linear sRGB (Rec. 709 primaries, D65 white) on the same
 scale (so that an (R, G, B) of (1, 1, 1) has a luminance of 1 cd m^-2) -> for display:
 exposure, the Hunt-effect chroma gain, display transform, sRGB encoding
-(:mod:`skydome.render.display`).
+(:mod:`skydome.imaging.display`).
 
 Writers (chosen by the file suffix; every write is atomic: a temporary file beside the
 target, renamed over it on success and removed on failure):
@@ -56,7 +56,7 @@ __all__ = ["SkyImage", "check_output_path", "read_hdr", "read_exr", "read_png16"
 
 SUFFIXES = (".exr", ".hdr", ".png")
 TONEMAPS = ("clamp", "reinhard", "filmic", "hue-preserving", "agx", "aces-hill")
-#: Default display transform (skydome.render.display): hue-preserving, gamut compressed.
+#: Default display transform (skydome.imaging.display): hue-preserving, gamut compressed.
 DEFAULT_TONEMAP = "hue-preserving"
 #: Radiance's luminous efficacy of equal-energy white [lm/W] (WHTEFFICACY, color.h).
 from skydome.constants import RADIANCE_WHITE_EFFICACY as WHITE_EFFICACY  # noqa: E402
@@ -214,7 +214,7 @@ class SkyImage:
         brighter than 1e5 cd m^-2 (the sun), black pixels and, where the projection is
         known, pixels below the horizon (the ground) are left out. None if no pixel
         qualifies. It keys :meth:`auto_exposure` and stands for the adapting luminance of
-        the scene in the colourfulness gain (:func:`skydome.render.display.hunt_chroma_gain`)."""
+        the scene in the colourfulness gain (:func:`skydome.imaging.display.hunt_chroma_gain`)."""
         sel = self.mask
         if self.projection is not None:
             dirs, _ = self.projection.directions()
@@ -235,18 +235,18 @@ class SkyImage:
 
     def chroma_gain(self, hunt: bool = True) -> float:
         """CIELAB chroma gain of the picture: the Hunt-effect compensation
-        :func:`skydome.render.display.hunt_chroma_gain` of the scene's adapting luminance
+        :func:`skydome.imaging.display.hunt_chroma_gain` of the scene's adapting luminance
         if ``hunt``, else 1."""
         la = self.adapting_luminance() if hunt else None
         if la is None:
             return 1.0
-        from skydome.render.display import hunt_chroma_gain
+        from skydome.imaging.display import hunt_chroma_gain
 
         return hunt_chroma_gain(la)
 
     def exposure_multiplier(self, exposure: float | None = None, ev100: float | None = None) -> float:
         """The exposure multiplier k [m^2/cd]: ``exposure`` if given (> 0), else from
-        ``ev100`` (k = 1 / (1.2 x 2^EV100), :mod:`skydome.render.display`), else
+        ``ev100`` (k = 1 / (1.2 x 2^EV100), :mod:`skydome.imaging.display`), else
         :meth:`auto_exposure`."""
         if exposure is not None and ev100 is not None:
             raise ValueError("give exposure or ev100, not both")
@@ -255,7 +255,7 @@ class SkyImage:
 
             return check_number("exposure", exposure, 0.0, None, low_open=True)
         if ev100 is not None:
-            from skydome.render.display import ev100_to_exposure
+            from skydome.imaging.display import ev100_to_exposure
 
             return ev100_to_exposure(ev100)
         return self.auto_exposure()
@@ -270,7 +270,7 @@ class SkyImage:
             Multiplier k [m^2/cd] on the linear sRGB values in cd m^-2 (> 0); None:
             from ``ev100`` or :meth:`auto_exposure`.
         tonemap : {"hue-preserving", "agx", "aces-hill", "filmic", "reinhard", "clamp"}
-            Display transform (:func:`skydome.render.display.display_transform`):
+            Display transform (:func:`skydome.imaging.display.display_transform`):
             the default keeps hue and compresses the gamut; ``agx`` and ``aces-hill``
             work in their own primaries; the last three act per channel
             (:func:`tonemap_curve`, after clipping out-of-gamut negatives to 0). Masked
@@ -280,13 +280,13 @@ class SkyImage:
         hunt : bool
             Scale the CIELAB chroma by :meth:`chroma_gain` (default), which keeps the
             colourfulness of the bright sky on the dimmer display (the Hunt effect,
-            :mod:`skydome.render.display`); False shows the chromaticities as they are.
+            :mod:`skydome.imaging.display`); False shows the chromaticities as they are.
         """
         check_choice("tonemap", tonemap, TONEMAPS)
         return self._display(self.exposure_multiplier(exposure, ev100), tonemap, self.chroma_gain(hunt))
 
     def _display(self, k: float, tonemap: str, gain: float) -> np.ndarray:
-        from skydome.render.display import display_transform, scale_chroma
+        from skydome.imaging.display import display_transform, scale_chroma
         from skydome.spectra import srgb_encode
 
         rgb = scale_chroma(self.linear_srgb() * k, gain)
@@ -317,7 +317,7 @@ class SkyImage:
             k = self.exposure_multiplier(exposure, ev100)
             gain = self.chroma_gain(hunt)
             display = self._display(k, tonemap, gain)
-            from skydome.render.display import exposure_to_ev100
+            from skydome.imaging.display import exposure_to_ev100
 
             info = {"colour": "display-referred sRGB (IEC 61966-2-1), not radiometric",
                     "exposure_m2_per_cd": float(k), "ev100": round(exposure_to_ev100(k), 4),
