@@ -7,6 +7,20 @@ of the same sky in the ``blender`` convention (a control: it must give back the 
 comparison is relative (each image divided by its median over the upper hemisphere), as
 Blender scales its sky textures with its own factors; the scale factor is printed.
 
+Blender 4.2's third variant, ``NISHITA``, is a single-scattering spectral sky
+(intern/sky/source/sky_nishita.cpp, Apache-2.0): radii 6360 / 6420 km, Rayleigh
+5.4248e-5 (lambda / 380 nm)^-4 m^-1 with an 8 km scale height, aerosol scattering 2e-5
+m^-1 and extinction 1.11 x that (single-scattering albedo 0.9) with a 1.2 km scale height
+and a Cornette-Shanks phase of g = 0.76, ozone on the 10-25-40 km tent with the peak
+absorption coefficients of its OZONE_COEFF table (21 wavelengths, 380-780 nm). skydome
+gets the same atmosphere (:func:`blender_nishita_atmosphere`, densities 1, observer at
+sea level, sun disc off, sun_rotation = the sun's azimuth from north towards east: a
+first run with sun_rotation = -azimuth put the brightest sky texel at azimuth 210.2 deg
+for a sun at 150 deg, i.e. Blender 4.2's Nishita texture turns with the rotation, and the
+script prints where the brightest texel lands) and renders it with its
+``single_scattering`` model (the same physics), ``nishita1996`` and ``precomputed``
+(multiple scattering, ground albedo 0.1).
+
 Writes docs/figures/blender_sky_comparison.png and prints the numbers for
 docs/rendering.md.
 
@@ -26,7 +40,40 @@ import numpy as np
 W, H = 256, 128
 SUN = (35.0, 150.0)                     # elevation, azimuth [deg]
 CASES = (("HOSEK_WILKIE", "hosek_wilkie2012", {"turbidity": 3.0, "albedo": 0.3}),
-         ("PREETHAM", "preetham1999", {"turbidity": 3.0}))
+         ("PREETHAM", "preetham1999", {"turbidity": 3.0}),
+         ("NISHITA", "single_scattering", {"atmosphere": "blender_nishita"}),
+         ("NISHITA", "nishita1996", {"atmosphere": "blender_nishita"}),
+         ("NISHITA", "precomputed", {"atmosphere": "blender_nishita"}))
+# Blender's NISHITA settings: sea level, unit densities, no sun disc (the sun is compared
+# as a light elsewhere), the sun from SUN
+NISHITA = {"altitude": 0.0, "air_density": 1.0, "dust_density": 1.0, "ozone_density": 1.0,
+           "sun_disc": False, "sun_elevation": float(np.radians(SUN[0])),
+           "sun_rotation": float(np.radians(SUN[1]))}
+# the peak ozone absorption coefficients [m^-1] of Blender's sky_nishita.cpp (OZONE_COEFF),
+# at 380, 400, ..., 780 nm (Blender 4.2, Apache-2.0)
+_OZONE_COEFF = (3.25126849861e-09, 5.85395365047e-09, 1.977191155085e-08, 7.309568762914e-08,
+                2.0084561514287e-07, 4.0383958096161e-07, 6.3551335912363e-07,
+                9.670704118097e-07, 1.5479740042441e-06, 2.09038647223331e-06,
+                2.46128056164565e-06, 2.73551299461512e-06, 2.15125863128643e-06,
+                1.59051840791988e-06, 1.12356197979857e-06, 7.3527551487574e-07,
+                4.6450130357806e-07, 3.3096079921048e-07, 2.2512612292678e-07,
+                1.487912926649e-07, 1.6828623364192e-07)
+
+
+def blender_nishita_atmosphere():
+    """skydome's Atmosphere with the constants of Blender's NISHITA sky (module notes)."""
+    from skydome.atmosphere import Atmosphere, Constituent, ExponentialProfile, TentProfile
+
+    wl_tab = np.linspace(380.0, 780.0, 21)
+    return Atmosphere(
+        (Constituent("rayleigh", scattering=lambda wl: 5.42482e-5 * (np.asarray(wl) / 380.0) ** -4.0,
+                     profile=ExponentialProfile(8000.0), phase="rayleigh"),
+         Constituent("aerosol", scattering=2e-5, absorption=0.11 * 2e-5,
+                     profile=ExponentialProfile(1200.0), phase="cornette_shanks", g=0.76),
+         Constituent("ozone", scattering=0.0,
+                     absorption=lambda wl: np.interp(wl, wl_tab, _OZONE_COEFF),
+                     profile=TentProfile(25e3, 15e3), phase="isotropic")),
+        planet_radius_m=6360e3, top_altitude_m=60e3, ground_albedo=0.1, name="blender_nishita")
 
 
 def _blender(job: dict) -> None:
@@ -59,6 +106,8 @@ def _blender(job: dict) -> None:
             tex.turbidity = 3.0
             tex.ground_albedo = 0.3
             tex.sun_direction = job["sun_direction"]
+            for k, v in item.get("settings", {}).items():
+                setattr(tex, k, v)
         bg = nt.nodes.new("ShaderNodeBackground")
         out = nt.nodes.new("ShaderNodeOutputWorld")
         nt.links.new(tex.outputs["Color"], bg.inputs["Color"])
@@ -97,12 +146,18 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         worlds, maps = [], {}
         for kind, model, params in CASES:
+            params = dict(params)
+            if params.get("atmosphere") == "blender_nishita":
+                params["atmosphere"] = blender_nishita_atmosphere()
             env = render_envmap(sd.model(model, sun=sun, **params), "blender", size=f"{W}x{H}",
                                 ground="black")
             env.write(Path(tmp) / f"{model}.exr")
             maps[model] = env.images["map"]
-            worlds += [{"kind": "map", "map": str(Path(tmp) / f"{model}.exr"), "name": f"ctl_{model}"},
-                       {"kind": kind, "name": f"blender_{kind}"}]
+            worlds.append({"kind": "map", "map": str(Path(tmp) / f"{model}.exr"),
+                           "name": f"ctl_{model}"})
+            if not any(w["name"] == f"blender_{kind}" for w in worlds):
+                worlds.append({"kind": kind, "name": f"blender_{kind}",
+                               "settings": NISHITA if kind == "NISHITA" else {}})
         job = {"dir": tmp, "worlds": worlds, "sun_direction": [float(x) for x in sun.direction]}
         proc = subprocess.run([sys.executable, __file__, "--blender", json.dumps(job)],
                               capture_output=True, text=True)
@@ -121,6 +176,15 @@ def main() -> None:
         ratio = (Yb * scale)[upper] / Ym[upper]
         chroma_m = mine[upper] / Ym[upper][..., None]
         chroma_b = theirs[upper] / Yb[upper][..., None]
+        if kind == "NISHITA" and row == [c[0] for c in CASES].index("NISHITA"):
+            # where Blender put its sun: the brightest sky texel (the aureole's peak)
+            r0, c0 = np.unravel_index(np.argmax(np.where(upper[:, None], Yb, 0.0)), Yb.shape)
+            from skydome.export.envmap import MapProjection
+
+            dpk = MapProjection("blender", W, H).direction_from_pixel(r0 + 0.5, c0 + 0.5)
+            print(f"NISHITA brightest texel at azimuth "
+                  f"{np.degrees(np.arctan2(dpk[0], dpk[1])) % 360:.1f} deg, elevation "
+                  f"{np.degrees(np.arcsin(dpk[2])):.1f} deg (sun: {SUN[1]:g}, {SUN[0]:g})")
         print(f"{kind} vs skydome {model}: control |map through the camera / map - 1| median "
               f"{ctl_err:.3%}; Blender x {scale:.4g} matches skydome's median luminance; "
               f"relative luminance ratio median {np.median(ratio):.3f}, 5-95 % "

@@ -255,6 +255,35 @@ def test_sh_irradiance_against_direct_integration(sky, name):
     assert rel.max() < 0.06
 
 
+@pytest.mark.parametrize("elevation", [10.0, 25.0, 60.0])
+@pytest.mark.parametrize("ground", ["lambertian", "black"])
+def test_sh_irradiance_error_against_ramamoorthi_hanrahan(elevation, ground):
+    """The order-2 truncation error of the SH irradiance of the same map (sky alone or
+    sky + Lambertian ground, the sun a separate light), luminance of 400 normals, against
+    the claims of [RH01]: at most 9 % for any non-negative lighting (their theoretical
+    bound) for every normal (sky-only: normals that see the sky, n_z >= 0, as the
+    irradiance of a downward normal over a black ground is 0), and an average error of
+    about 1 % ("average errors of only 1 %", abstract) for the sun at 25 and 60 deg. At
+    10 deg the sky's brightness crowds at the horizon and the mean is 1.2 % (recorded in
+    docs/rendering.md): order 2 cannot do better there, so that case is held to the bound."""
+    sky = sd.model("hosek_wilkie2012", sun=sd.Sun(elevation_deg=elevation, azimuth_deg=120.0),
+                   turbidity=3.0, albedo=0.3)
+    env = render_envmap(sky, "skydome", size=256, ground=ground)
+    sh = env.irradiance_sh()
+    d, w = env.directions()
+    L = env.pixels()
+    normals = _dirs(400, seed=5)
+    if ground == "black":
+        normals = normals[normals[:, 2] >= 0.0]
+    y = np.array([0.2126, 0.7152, 0.0722])
+    approx = sh_irradiance(sh, normals) @ y
+    exact = np.array([(L @ y) @ (np.maximum(d @ n, 0.0) * w) for n in normals])
+    rel = np.abs(approx / exact - 1.0)
+    assert rel.max() < 0.09
+    if elevation >= 25.0:
+        assert rel.mean() < 0.01
+
+
 # -- the sun and the files --------------------------------------------------------------------
 def test_sun_light_json(sky, tmp_path):
     light = sun_light(sky, "unity")

@@ -86,3 +86,37 @@ def test_bake_refuses_other_table_format(tmp_path):
     with pytest.raises(ValueError, match="skydome.precomputed/1"):
         write_precomputed_luts(OldTables(), out)
     assert not out.exists()
+
+
+def test_cli_export_luts_precomputed(tmp_path):
+    """`skydome export luts --model precomputed`: Bruneton's layout in float32 EXR (3-D
+    textures as stacked slices) equal to the .npy, and luts.json; an existing folder gets
+    its files replaced; bad input exits 2 leaving nothing."""
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+    from skydome.render.image import read_exr
+
+    small = ["--n-wavelengths", "4", "--scattering-r-size", "4", "--scattering-mu-size", "8",
+             "--scattering-mu-s-size", "4", "--scattering-nu-size", "2", "--orders", "2",
+             "--transmittance-mu-size", "16", "--transmittance-r-size", "8",
+             "--irradiance-mu-s-size", "8", "--irradiance-r-size", "4", "--cache", "false"]
+    runner = CliRunner()
+    out = tmp_path / "luts"
+    for _ in range(2):                                   # new folder, then the existing one
+        res = runner.invoke(app, ["export", "luts", "--model", "precomputed", "--format",
+                                  "exr,npy", "--out", str(out), *small])
+        assert res.exit_code == 0, res.output
+    desc = json.loads((out / "luts.json").read_text())
+    assert desc["format"] == "skydome.luts.bruneton-xyz/2"
+    ms = np.load(out / "multiple_scattering.npy")
+    assert ms.shape == (4, 8, 2 * 4, 4)
+    ch = read_exr(out / "multiple_scattering.exr")
+    assert ch["R"].dtype == np.float32 and ch["R"].shape == (4 * 8, 8)
+    np.testing.assert_array_equal(ch["G"], ms[..., 1].reshape(32, 8))
+    assert not list(out.glob("*.bin"))
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+    res = runner.invoke(app, ["export", "luts", "--model", "precomputed", "--format", "tiff",
+                              "--out", str(tmp_path / "bad")])
+    assert res.exit_code == 2 and "formats" in res.output
+    assert not (tmp_path / "bad").exists()

@@ -24,6 +24,46 @@ _LAT = typer.Option(None, help="Latitude [deg] (with --lon and --time).")
 _LON = typer.Option(None, help="Longitude [deg], east positive.")
 _TIME = typer.Option(None, help="ISO 8601 time with UTC offset.")
 _SUN_METHOD = typer.Option("spa", help="Solar position algorithm: spa or preetham1999.")
+# the sun options of every command, in the order of skydome.cli._make_sun's arguments
+_SUN_OPTIONS = {"sun_elevation": (Optional[float], _SUN_EL),
+                "sun_azimuth": (Optional[float], _SUN_AZ),
+                "lat": (Optional[float], _LAT), "lon": (Optional[float], _LON),
+                "time": (Optional[str], _TIME), "sun_method": (str, _SUN_METHOD)}
+
+
+def _sun_options(command):
+    """Give a command (declared with ``**sun``) the sun options shared by every command:
+    --sun-elevation, --sun-azimuth, --lat, --lon, --time, --sun-method (typer reads the
+    parameters from the signature and the annotations)."""
+    import inspect
+
+    kw = inspect.Parameter.KEYWORD_ONLY
+    sig = inspect.signature(command)
+    params = [p for p in sig.parameters.values() if p.kind != inspect.Parameter.VAR_KEYWORD]
+    params += [inspect.Parameter(name, kw, default=marker, annotation=ann)
+               for name, (ann, marker) in _SUN_OPTIONS.items()]
+    command.__signature__ = sig.replace(parameters=params)
+    command.__annotations__ = {**command.__annotations__,
+                               **{n: ann for n, (ann, _) in _SUN_OPTIONS.items()}}
+    return command
+
+
+def _sky(model, extra, sun: dict, check=None, progress=None):
+    """The model and sun options of every command, validated before any work: the model
+    class and its ``--name value`` parameters, then ``check()`` (the command's own
+    options), then the sun; returns the constructed sky (its set-up's progress shown on
+    ``progress`` when given)."""
+    from skydome.cli import _build_model, _make_sun, _parse_model_params
+    from skydome.models import get_model_class
+
+    cls = get_model_class(model)
+    params = _parse_model_params(cls, extra)
+    if check is not None:
+        check()
+    position = _make_sun(*(sun.get(n) for n in _SUN_OPTIONS))
+    if progress is None:
+        return cls(sun=position, **params)
+    return _build_model(cls, progress, sun=position, **params)
 
 
 def _sun_path(out: str):
@@ -34,6 +74,7 @@ def _sun_path(out: str):
 
 
 @export_app.command("envmap", context_settings=_EXTRA)
+@_sun_options
 def envmap(
     ctx: typer.Context,
     model: str = _MODEL,
@@ -46,46 +87,51 @@ def envmap(
     ground: str = typer.Option("lambertian", help="Below the horizon: lambertian (albedo x E_h / pi), black or model."),
     ground_albedo: Optional[float] = typer.Option(None, help="Ground albedo 0..1 (default the model's, else 0.2)."),
     sh: bool = typer.Option(False, "--sh", help="Also write OUT.sh.json: order-2 irradiance SH (9 RGB coefficients)."),
-    sun_elevation: Optional[float] = _SUN_EL,
-    sun_azimuth: Optional[float] = _SUN_AZ,
-    lat: Optional[float] = _LAT,
-    lon: Optional[float] = _LON,
-    time: Optional[str] = _TIME,
-    sun_method: str = _SUN_METHOD,
+    mips: int = typer.Option(0, "--mips", help="Also write N-1 GGX-prefiltered levels OUT_mip1.. (roughness k/(N-1)) + OUT.mips.json; latlong and cube layouts; 0 = none."),
     wavelengths: int = typer.Option(16, help="Wavelengths 380-780 nm for spectral models, 3..401."),
+    **sun,
 ):
     """Render a sky into an environment map in a renderer's convention (+ OUT.sun.json)."""
     from skydome.cli import _run
 
     _run(_envmap, ctx.args, model, out, convention, layout, size, half, sun_in_map, ground,
-         ground_albedo, sh, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths)
+         ground_albedo, sh, mips, sun, wavelengths)
 
 
 def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, ground, ground_albedo,
-            sh, sun_elevation, sun_azimuth, lat, lon, time, sun_method, wavelengths):
+            sh, mips, sun, wavelengths):
     import json
 
     from skydome._validate import check_int, check_number
-    from skydome.cli import _make_sun, _parse_model_params, _Progress
+    from skydome.cli import _Progress
     from skydome.export.envmap import check_envmap_options, check_map_path, render_envmap
     from skydome.export.sun import sun_light, write_sun_json
-    from skydome.models import get_model_class
     from skydome.spectra import wavelength_grid
 
     # 1. validate everything before any work
-    cls = get_model_class(model)
-    params = _parse_model_params(cls, extra)
     sun_mode = "map" if sun_in_map else "separate"
-    conv, layout, _ = check_envmap_options(convention, layout, size, sun_mode, ground)
-    if half and sun_in_map:
-        raise ValueError("--half cannot hold the sun (half floats end at 65504): drop "
-                         "--sun-in-map or --half")
-    p = check_map_path(out, half)
-    if ground_albedo is not None:
-        check_number("ground_albedo", ground_albedo, 0.0, 1.0)
-    check_int("wavelengths", wavelengths, 3, 401)
-    sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
-    sky = cls(sun=sun, **params)
+    checked = {}
+
+    def check():
+        checked["conv"], checked["layout"], (_, height) = check_envmap_options(
+            convention, layout, size, sun_mode, ground)
+        if mips:
+            from skydome.export.prefilter import check_mip_levels
+
+            if checked["layout"] not in ("latlong", "cubemap", "faces", "cross"):
+                raise ValueError(f"--mips: layout = {checked['layout']!r} has no prefiltered "
+                                 "mips (latlong, cubemap, faces or cross)")
+            check_mip_levels(mips, height, "mips")
+        if half and sun_in_map:
+            raise ValueError("--half cannot hold the sun (half floats end at 65504): drop "
+                             "--sun-in-map or --half")
+        checked["p"] = check_map_path(out, half)
+        if ground_albedo is not None:
+            check_number("ground_albedo", ground_albedo, 0.0, 1.0)
+        check_int("wavelengths", wavelengths, 3, 401)
+
+    sky = _sky(model, extra, sun, check)
+    conv, layout, p = checked["conv"], checked["layout"], checked["p"]
 
     # 2. work
     progress = _Progress(f"exporting {model} ({conv.name}, {layout})")
@@ -98,6 +144,15 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
     finally:
         progress.close()
     written = env.write(p, half=half)
+    if mips:
+        from skydome.export.prefilter import prefiltered_mips, write_mips
+
+        try:
+            written += write_mips(prefiltered_mips(env, mips), p, half=half)
+        except BaseException:
+            for w in written:
+                w.unlink(missing_ok=True)
+            raise
     if not sun_in_map:
         light = sun_light(sky, conv)
         if light is not None:
@@ -126,46 +181,85 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
 
 
 @export_app.command("sun", context_settings=_EXTRA)
+@_sun_options
 def sun_cmd(
     ctx: typer.Context,
     model: str = _MODEL,
     out: str = typer.Option(..., help="Output .json file."),
     convention: str = typer.Option("skydome", help="Axes of the direction: a convention name."),
-    sun_elevation: Optional[float] = _SUN_EL,
-    sun_azimuth: Optional[float] = _SUN_AZ,
-    lat: Optional[float] = _LAT,
-    lon: Optional[float] = _LON,
-    time: Optional[str] = _TIME,
-    sun_method: str = _SUN_METHOD,
+    **sun,
 ):
     """The sun as a light: direction, angular radius, spectral and RGB irradiance, lx."""
     from skydome.cli import _run
 
-    _run(_sun, ctx.args, model, out, convention, sun_elevation, sun_azimuth, lat, lon, time,
-         sun_method)
+    _run(_sun, ctx.args, model, out, convention, sun)
 
 
-def _sun(extra, model, out, convention, sun_elevation, sun_azimuth, lat, lon, time, sun_method):
+def _sun(extra, model, out, convention, sun):
     from pathlib import Path
 
-    from skydome.cli import UserError, _make_sun, _parse_model_params
+    from skydome.cli import UserError
     from skydome.export.conventions import get_convention
     from skydome.export.sun import sun_light, write_sun_json
-    from skydome.models import get_model_class
 
-    cls = get_model_class(model)
-    params = _parse_model_params(cls, extra)
-    conv = get_convention(convention)
     p = Path(out)
-    if p.suffix.lower() != ".json":
-        raise UserError(f"out = {out!r} must end in .json")
-    if not (p.parent if str(p.parent) else Path(".")).is_dir():
-        raise UserError(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
-    sun = _make_sun(sun_elevation, sun_azimuth, lat, lon, time, sun_method)
-    sky = cls(sun=sun, **params)
+
+    def check():
+        if p.suffix.lower() != ".json":
+            raise UserError(f"out = {out!r} must end in .json")
+        if not (p.parent if str(p.parent) else Path(".")).is_dir():
+            raise UserError(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
+
+    conv = get_convention(convention)
+    sky = _sky(model, extra, sun, check)
     light = sun_light(sky, conv)
     if light is None:
         raise UserError(f"model {model!r} has no sun above the horizon to export "
-                        f"(sun elevation {sun.elevation_deg:.2f} deg)")
+                        f"(sun elevation {sky.sun.elevation_deg:.2f} deg)")
     write_sun_json(light, p)
     typer.echo(f"wrote {out} ({light['illuminance_lx']:.0f} lx, {conv.name} axes)")
+
+
+@export_app.command("luts", context_settings=_EXTRA)
+@_sun_options
+def luts_cmd(
+    ctx: typer.Context,
+    model: str = _MODEL,
+    out: str = typer.Option(..., help="Output folder (created complete, or files replaced in it)."),
+    format: str = typer.Option("npy,bin", "--format", help="Comma-separated: exr, npy, bin."),
+    half: bool = typer.Option(False, "--half", help="Half-float EXR (with --format exr)."),
+    **sun,
+):
+    """Bake the model's tables for a real-time renderer: precomputed in Bruneton's layout,
+    hillaire2020 in Hillaire's (+ luts.json: axes, mappings, units, XYZ conversion)."""
+    from skydome.cli import _run
+
+    _run(_luts, ctx.args, model, out, format, half, sun)
+
+
+def _luts(extra, model, out, formats, half, sun):
+    from skydome._io import check_output_folder
+    from skydome.cli import _Progress
+    from skydome.export.luts import LUT_MODELS, check_luts_options, write_luts
+
+    checked = {}
+
+    def check():
+        if model not in LUT_MODELS:
+            raise ValueError(f"model = {model!r} has no LUT bake; valid: {', '.join(LUT_MODELS)}")
+        checked["formats"] = check_luts_options(formats, half)
+        check_output_folder(out)
+
+    from skydome._progress import reporting
+
+    progress = _Progress(f"baking {model} LUTs")
+    t0 = _time.perf_counter()
+    try:
+        sky = _sky(model, extra, sun, check, progress)
+        with reporting(progress):
+            written = write_luts(sky, out, checked["formats"], half=half, progress=progress)
+    finally:
+        progress.close()
+    typer.echo(f"wrote {len(written)} files into {out} ({model}, "
+               f"{_time.perf_counter() - t0:.1f} s)")
+

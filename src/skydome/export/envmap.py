@@ -498,7 +498,7 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
         def prog(k, _n, base=base):
             if progress is not None:
                 progress(base + k, total)
-        img = render(sky, proj, wavelengths_nm, draw_sun=False, progress=prog)
+        img = render(sky, proj, wavelengths_nm, draw_sun=False, progress=prog, output="xyz")
         rgb = np.where(img.mask[..., None], img.linear_srgb(), 0.0) / K_M
         images[name] = np.maximum(rgb, 0.0)            # out-of-gamut negatives clipped
         done[0] += proj.width * proj.height

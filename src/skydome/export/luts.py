@@ -1,5 +1,8 @@
 """LUT bakes for real-time renderers: the precomputed model's tables in Bruneton's
-texture layout, reduced to CIE XYZ the way Bruneton reduces his spectral tables.
+texture layout and the hillaire2020 model's tables in Hillaire's, reduced to CIE XYZ the
+way Bruneton reduces his spectral tables (:func:`bake`, :func:`write_luts`; the command
+``skydome export luts``). The hillaire2020 bake is described in :func:`bake_hillaire2020`;
+its shader-side lookups are in ``export/glsl/hillaire2020.glsl``.
 
 Bruneton (2017) stores the 4-D scattering function S(r, mu, mu_s, nu) in a 3-D texture:
 x = nu and mu_s together (``x = (i_nu + u_mu_s) / NU_SIZE``: blocks of mu_s, one per nu
@@ -52,11 +55,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["xyz_weights_for_table", "bake_precomputed", "write_precomputed_luts", "LUT_FORMAT"]
+__all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "bake",
+           "write_luts", "write_precomputed_luts", "check_luts_options", "LUT_FORMAT",
+           "HILLAIRE_FORMAT", "LUT_MODELS", "LUT_FILE_FORMATS"]
 
 #: version 2: the mu_s axis is the model's zenith-angle mapping (table format
 #: skydome.precomputed/2), no longer [Bru17]'s
 LUT_FORMAT = "skydome.luts.bruneton-xyz/2"
+#: the hillaire2020 bake (Hillaire's layout, XYZ)
+HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/1"
+#: models that have a bake
+LUT_MODELS = ("precomputed", "hillaire2020")
+#: file formats of :func:`write_luts`
+LUT_FILE_FORMATS = ("exr", "npy", "bin")
 #: the model's table format whose axes this bake describes
 TABLE_FORMAT = "skydome.precomputed/2"
 
@@ -126,6 +137,149 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     return tex, desc
 
 
+def _solar_xyz_weights(grid_nm, wavelengths_nm=None, to_request=None) -> np.ndarray:
+    """(n_grid, 3) weights K: XYZ [Y in cd m^-2] = sum_j K_j x_j of a spectrum per unit solar
+    irradiance x given on ``grid_nm``, mapped to the output wavelengths by ``to_request``
+    (a linear map (..., n_grid) -> (..., n_out); default linear interpolation)."""
+    from skydome.constants import K_M
+    from skydome.spectra import default_wavelengths, integration_weights, solar_irradiance
+
+    grid = np.asarray(grid_nm, dtype=np.float64)
+    wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
+    if to_request is None:
+        return xyz_weights_for_table(grid, wl)
+    W = to_request(np.eye(grid.size), grid, wl)                      # (n_grid, n_out)
+    cmf = K_M * np.asarray(integration_weights(wl))                  # (n_out, 3)
+    return (W * solar_irradiance(wl)[None, :]) @ cmf
+
+
+def _rgba(xyz: np.ndarray, alpha=None) -> np.ndarray:
+    out = np.zeros(xyz.shape[:-1] + (4,), dtype=np.float32)
+    out[..., :3] = xyz
+    if alpha is not None:
+        out[..., 3] = alpha
+    return out
+
+
+def bake_hillaire2020(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """(textures, description) of a :class:`~skydome.models.simulated.hillaire2020.Hillaire2020`
+    sky in Hillaire's (2020) layout, CIE XYZ.
+
+    The four tables of the model ([Hil20] secs. 4.1, 5.3-5.5), for the sky's atmosphere,
+    observer and sun, built on its internal wavelength grid for ``wavelengths_nm`` (default
+    skydome's 41 wavelengths, i.e. the grid ``sky.xyz`` uses) and reduced to XYZ with the
+    model's own grid -> output map (linear in L lambda^4), the ASTM G173 sun and the CIE
+    1931 functions. Textures (float32 RGBA, C order; 2-D (height, width, 4), 3-D
+    (depth, height, width, 4)):
+
+    * ``transmittance`` (64, 256): [Bru17]'s (r, mu) mapping, x = mu unit, y = r unit;
+      RGB = the sun's XYZ through the air over its XYZ above it (per channel, exact for
+      the solar disc's colour), A = 0.
+    * ``multiple_scattering`` (32, 32): Psi_ms, x = mu_s = 2 u - 1, y = altitude / (top -
+      ground); RGB = the XYZ of Psi_ms times the sun (the source term of [Hil20] eq. 11 is
+      sigma_s x this), A = 0.
+    * ``sky_view`` (108, 192): XYZ radiance of the sky [cd m^-2] (sun at 1 au) in the
+      paper's latitude mapping (two halves, above and below the horizon, squared towards
+      the horizon) and azimuth from the sun, cos(phi) = 1 - 2 x^2; A = 0.
+    * ``aerial_perspective`` (32, 32, 32): in-scattered XYZ [cd m^-2] from the observer to
+      slice k (depth ``km_per_slice n ((k + 0.5)/n)^2`` km), rows elevation
+      90 deg s|s| with s = 2 y - 1, columns as the sky view; A = the sun-luminance-weighted
+      transmittance (Y channel of the next texture).
+    * ``aerial_transmittance`` (32, 32, 32): per-channel sun-weighted transmittance, A = 0.
+
+    Sky view and in-scatter are linear in the spectral tables, so these XYZ textures give
+    exactly what ``sky.xyz`` gives after the same bilinear / trilinear lookup. The
+    transmittance and Psi_ms textures reduce a spectrum to three channels, the usual RGB
+    approximation of real-time engines; the spectral tables themselves come with the bake
+    (``*_spectral``, wavelength last, in ``.npy`` / ``.bin``) for engines that march per
+    wavelength.
+    """
+    from skydome.spectra import default_wavelengths
+
+    if getattr(sky, "name", None) != "hillaire2020":
+        raise ValueError(f"model = {getattr(sky, 'name', type(sky).__name__)!r}: the Hillaire "
+                         "bake needs a hillaire2020 sky")
+    wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
+    tb = sky.tables(wl)
+    grid = tb.grid
+    K = _solar_xyz_weights(grid, wl, to_request=type(sky)._to_request)       # radiance
+    Ks = _solar_xyz_weights(grid, wl)                                          # transmittance
+    Ks_norm = Ks / Ks.sum(axis=0)
+    vl, vt = tb.aerial
+    ap_l = (vl @ K).transpose(2, 0, 1, 3)                                      # (s, v, u, 3)
+    ap_t = (vt @ Ks_norm).transpose(2, 0, 1, 3)
+    tex = {
+        "transmittance": _rgba(tb.tlut @ Ks_norm),
+        "multiple_scattering": _rgba(tb.mslut @ K),
+        "sky_view": _rgba(tb.skyview @ K),
+        "aerial_perspective": _rgba(ap_l, ap_t[..., 1]),
+        "aerial_transmittance": _rgba(ap_t),
+    }
+    spectral = {"transmittance_spectral": tb.tlut, "multiple_scattering_spectral": tb.mslut,
+                "sky_view_spectral": tb.skyview,
+                "aerial_perspective_spectral": vl.transpose(2, 0, 1, 3),
+                "aerial_transmittance_spectral": vt.transpose(2, 0, 1, 3)}
+    tex.update({k: np.ascontiguousarray(v, dtype=np.float32) for k, v in spectral.items()})
+    s = sky.sun
+    desc = {
+        "format": HILLAIRE_FORMAT, "model": "hillaire2020",
+        "reference": "S. Hillaire, A Scalable and Production Ready Sky and Atmosphere "
+                     "Rendering Technique, CGF 39(4), EGSR 2020",
+        "units": "XYZ textures: CIE 1931 XYZ, Y in cd m^-2, for a sun at 1 au (multiply by "
+                 "Sun.irradiance_scale); transmittance unitless; *_spectral: radiance per "
+                 "unit solar irradiance [sr^-1 nm^-1 per W m^-2 nm^-1 = sr^-1] on "
+                 "grid_wavelengths_nm, wavelength last",
+        "planet_radius_m": tb.R, "top_radius_m": tb.Rt,
+        "observer_radius_m": tb.r0, "observer_altitude_m": float(sky.observer_altitude_m),
+        "sun": {"elevation_deg": s.elevation_deg, "azimuth_deg": s.azimuth_deg,
+                "direction_enu": [float(x) for x in s.direction],
+                "note": "sky_view and aerial_* hold this sun and observer; transmittance and "
+                        "multiple_scattering do not depend on them"},
+        "ap_km_per_slice": float(sky.ap_km_per_slice),
+        "multiple_scattering_on": bool(sky.multiple_scattering),
+        "grid_wavelengths_nm": grid.tolist(),
+        "output_wavelengths_nm": np.asarray(wl).tolist(),
+        "xyz_weights_radiance": K.tolist(),
+        "xyz_weights_transmittance": Ks_norm.tolist(),
+        "texel_convention": "node i of n at unit coordinate x = i / (n - 1); a GPU texture "
+                            "coordinate is u = (x (n - 1) + 0.5) / n (texel centres)",
+        "mappings": {
+            "transmittance": "x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), "
+                             "rho = sqrt(r^2 - R^2), H = sqrt(Rt^2 - R^2), d = distance to "
+                             "the top along mu, d_min = Rt - r, d_max = rho + H ([Bru17] "
+                             "GetTransmittanceTextureUvFromRMu; [Hil20] sec. 4.1)",
+            "multiple_scattering": "x = (mu_s + 1) / 2, y = (r - R) / (Rt - R) ([Hil20] sec. "
+                                   "5.5: a linear 32 x 32 grid)",
+            "sky_view": "rows 0..H/2-1 above the horizon: theta = Z_h (1 - (1 - c)^2), "
+                        "c = row / (H/2 - 1); rows H/2..H-1 below: theta = Z_h + beta c^2; "
+                        "beta = acos(sqrt(r0^2 - R^2) / r0), Z_h = pi - beta; the halves are "
+                        "interpolated apart (never across the horizon); columns: "
+                        "cos(phi_rel) = 1 - 2 x^2, x = col / (W - 1), phi_rel the azimuth "
+                        "from the sun ([Hil20] sec. 5.3)",
+            "aerial_perspective": "row: elevation = 90 deg s |s|, s = 2 row / (n - 1) - 1; "
+                                  "column: as sky_view; slice k at depth km_per_slice n "
+                                  "((k + 0.5) / n)^2 km, looked up at w = sqrt(d / "
+                                  "km_per_slice / n); below half a slice the in-scatter "
+                                  "fades to 0 at d = 0 ([Hil20] sec. 5.4)",
+        },
+        "glsl": "export/glsl/hillaire2020.glsl (the lookups of this bake)",
+        "textures": {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
+                     for n, a in tex.items()},
+    }
+    return tex, desc
+
+
+def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The bake of ``sky`` in its model's layout: Bruneton's for ``precomputed``, Hillaire's
+    for ``hillaire2020``; ValueError for other models."""
+    name = getattr(sky, "name", type(sky).__name__)
+    if name == "hillaire2020":
+        return bake_hillaire2020(sky, wavelengths_nm)
+    if name == "precomputed" or hasattr(sky, "export_textures"):
+        return bake_precomputed(sky)
+    raise ValueError(f"model = {name!r} has no LUT bake; valid: {', '.join(LUT_MODELS)}")
+
+
 def _npy_bytes(arr: np.ndarray) -> bytes:
     import io
 
@@ -134,26 +288,96 @@ def _npy_bytes(arr: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
+def check_luts_options(formats=("npy", "bin"), half: bool = False) -> tuple[str, ...]:
+    """Validate the file formats of :func:`write_luts` before any work."""
+    if isinstance(formats, str):
+        formats = tuple(f.strip() for f in formats.split(",") if f.strip())
+    formats = tuple(formats)
+    bad = [f for f in formats if f not in LUT_FILE_FORMATS]
+    if bad or not formats:
+        raise ValueError(f"formats = {','.join(formats)!r} is not a list of "
+                         f"{', '.join(LUT_FILE_FORMATS)}")
+    if half and "exr" not in formats:
+        raise ValueError("half = True needs the exr format (half floats are for EXR files)")
+    return formats
+
+
+def _exr_2d(arr: np.ndarray) -> np.ndarray:
+    """A 2-D or 3-D RGBA texture as one image: 3-D slices stacked top to bottom."""
+    return arr if arr.ndim == 3 else arr.reshape(-1, arr.shape[-2], arr.shape[-1])
+
+
+def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str) -> None:
+    import OpenEXR
+
+    img = _exr_2d(arr)
+    dtype = np.float16 if half else np.float32
+    names = "RGBA" if img.shape[-1] == 4 else None
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+              "skydome:texture": desc_name}
+    if names is None:
+        ch = {f"C{i:03d}": np.ascontiguousarray(img[..., i].astype(dtype))
+              for i in range(img.shape[-1])}
+    else:
+        ch = {c: np.ascontiguousarray(img[..., i].astype(dtype)) for i, c in enumerate(names)}
+    with OpenEXR.File(header, ch) as f:
+        f.write(tmp)
+
+
+def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
+               wavelengths_nm=None, progress=None) -> list[Path]:
+    """Write :func:`bake` of ``sky`` into ``folder``: each texture as ``<name>.bin`` (raw
+    little-endian float32), ``<name>.npy`` and/or ``<name>.exr`` (float32, or half with
+    ``half``; 3-D textures as their slices stacked top to bottom), and ``luts.json``
+    describing axes, mappings, units and the XYZ conversion. The folder appears at once,
+    complete (:func:`skydome._io.atomic_folder`); into an existing folder each file is
+    renamed into place. ``progress(done, total)`` is called per file. Returns the paths."""
+    from skydome._io import atomic_folder, check_output_folder
+
+    formats = check_luts_options(formats, half)
+    folder = check_output_folder(folder)
+    tex, desc = bake(sky, wavelengths_nm)
+    if half:
+        big = max(float(np.max(a)) for n, a in tex.items() if a.shape[-1] == 4)
+        from skydome.export.envmap import HALF_MAX
+
+        if big > HALF_MAX:
+            raise ValueError(f"half = True: the largest texel {big:.4g} exceeds the half-float "
+                             f"range ({HALF_MAX:g}); write float32")
+    desc["files"] = {n: [f"{n}.{f}" for f in formats if f != "exr" or a.shape[-1] == 4]
+                     for n, a in tex.items()}
+    if "exr" in formats:
+        desc["exr"] = {"dtype": "float16" if half else "float32", "channels": "RGBA",
+                       "3-D textures": "slices stacked top to bottom: image row = "
+                                       "slice * height + row",
+                       "spectral textures": "not in EXR (.npy / .bin only)"}
+    names = [(n, f) for n, a in tex.items() for f in formats if f != "exr" or a.shape[-1] == 4]
+    total = len(names) + 1
+    written = []
+    with atomic_folder(folder) as tmp:
+        for k, (n, f) in enumerate(names):
+            arr = np.ascontiguousarray(tex[n], dtype="<f4")
+            target = tmp / f"{n}.{f}"
+            if f == "bin":
+                arr.tofile(target)
+            elif f == "npy":
+                target.write_bytes(_npy_bytes(arr))
+            else:
+                _write_exr(str(target), arr, half, n)
+            written.append(folder / target.name)
+            if progress is not None:
+                progress(k + 1, total)
+        (tmp / "luts.json").write_text(json.dumps(desc, indent=2))
+        written.append(folder / "luts.json")
+    if progress is not None:
+        progress(total, total)
+    return written
+
+
 def write_precomputed_luts(sky, folder) -> list[str]:
     """Write :func:`bake_precomputed` as ``<name>.bin`` (raw little-endian float32),
-    ``<name>.npy`` and ``luts.json`` into ``folder`` (created; files written to temporary
-    names and renamed, so no partial file is left). Returns the paths."""
-    from skydome.render.image import _atomic_write
-
-    folder = os.fspath(folder)
-    tex, desc = bake_precomputed(sky)
-    os.makedirs(folder, exist_ok=True)
-    written = []
-
-    def atomic(path, write):
-        _atomic_write(Path(path), write)
-        written.append(path)
-
-    for name, a in tex.items():
-        arr = np.ascontiguousarray(a, dtype="<f4")
-        atomic(os.path.join(folder, f"{name}.bin"), lambda tmp, arr=arr: arr.tofile(tmp))
-        atomic(os.path.join(folder, f"{name}.npy"),
-               lambda tmp, arr=arr: Path(tmp).write_bytes(_npy_bytes(arr)))
-    atomic(os.path.join(folder, "luts.json"),
-           lambda tmp: Path(tmp).write_text(json.dumps(desc, indent=2)))
-    return written
+    ``<name>.npy`` and ``luts.json`` into ``folder`` (:func:`write_luts`). Returns the
+    paths."""
+    if not hasattr(sky, "export_textures"):
+        raise ValueError("write_precomputed_luts needs a precomputed sky")
+    return [str(p) for p in write_luts(sky, folder, ("bin", "npy"))]
