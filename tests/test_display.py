@@ -124,3 +124,109 @@ def test_display_transform_properties():
     assert np.allclose(display_transform(np.array([[1e5, 3e4, 5e3]])), 1.0)
     with pytest.raises(ValueError, match="transform"):
         display_transform(x, "agx9")
+
+
+# -- the noon zenith's colourfulness (Hunt effect) ----------------------------------------
+
+def _lab(xyz):
+    return colour.XYZ_to_Lab(np.asarray(xyz, float),
+                             colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])
+
+
+def test_noon_zenith_keeps_its_chroma_and_hue(scenes):
+    # the displayed zenith (PNG, decoded by colour-science) against the linear colour scaled
+    # to the displayed luminance: the chroma at least 1.3 x (the Hunt-effect gain at the noon
+    # sky's adapting luminance is about 1.5; the colorimetric picture has 1.0) and the hue
+    # within 10 deg
+    el, im, rc, paths = scenes[1]
+    shown = _png_xyz(paths["hue-preserving"], rc)
+    true = im.xyz()[rc] / im.xyz()[rc][1] * shown[1]
+    lab_s, lab_t = _lab(shown), _lab(true)
+    c_s, c_t = np.hypot(*lab_s[1:]), np.hypot(*lab_t[1:])
+    assert c_s >= 1.3 * c_t, (c_s, c_t)
+    assert _hue_gap(_hue_deg(true), _hue_deg(shown)) < 10.0
+    # the gain is recorded, and without it the chroma stays that of the linear colour
+    info = Image.open(paths["hue-preserving"]).info
+    assert float(info["chroma_gain"]) == pytest.approx(im.chroma_gain(), rel=1e-3) and im.chroma_gain() > 1.3
+    plain = im.to_srgb(tonemap="hue-preserving", hunt=False)[rc]
+    lab_p = _lab(colour.RGB_to_XYZ(plain, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_decoding=True))
+    true_p = _lab(im.xyz()[rc] / im.xyz()[rc][1] * colour.sRGB_to_XYZ(plain)[1])
+    assert np.hypot(*lab_p[1:]) == pytest.approx(np.hypot(*true_p[1:]), rel=0.05)
+
+
+def test_luminance_adaptation_factor_cie159_worked_example():
+    # CIE 159:2004 worked example (L_A = 318.31 cd/m^2): F_L = 1.16754; colour-science's
+    # CIECAM02 viewing-condition parameters as a second oracle over a range of L_A
+    from skydome.render.display import hunt_chroma_gain, luminance_adaptation_factor
+    from colour.appearance.ciecam02 import viewing_conditions_dependent_parameters as vc
+
+    assert luminance_adaptation_factor(318.31) == pytest.approx(1.16754, abs=5e-5)
+    for la in (0.5, 16.0, 200.0, 4000.0, 1e5):
+        assert luminance_adaptation_factor(la) == pytest.approx(float(vc(20.0, 100.0, la)[1]), rel=1e-9)
+    # the gain: (F_L(scene) / F_L(80 / 5))^(1/4), never below 1
+    g = hunt_chroma_gain(4000.0)
+    assert g == pytest.approx((float(vc(20.0, 100.0, 4000.0)[1]) / float(vc(20.0, 100.0, 16.0)[1])) ** 0.25)
+    assert hunt_chroma_gain(1.0) == 1.0
+    with pytest.raises(ValueError, match="scene_adapting_luminance_cd_m2"):
+        hunt_chroma_gain(-1.0)
+
+
+def test_scale_chroma_against_colour_science():
+    from skydome.render.display import scale_chroma
+    from skydome.spectra import linear_srgb_to_xyz
+
+    rgb = np.array([[0.3, 0.4, 0.9], [0.45, 0.5, 0.6], [0.6, 0.5, 0.4], [0.5, 0.5, 0.5], [0.9, 0.3, 0.05]])
+    out = scale_chroma(rgb, 1.5)
+    lab_in, lab_out = _lab(linear_srgb_to_xyz(rgb)), _lab(linear_srgb_to_xyz(out))
+    assert np.allclose(lab_out[:, 0], lab_in[:, 0], atol=1e-6)           # same luminance
+    lch_in, lch_out = colour.Lab_to_LCHab(lab_in), colour.Lab_to_LCHab(lab_out)
+    assert np.allclose(lch_out[:3, 2], lch_in[:3, 2], atol=1e-6)        # same CIELAB hue
+    # on the cube-root branch (L* = 100 after normalising to Y = 1) chroma scales exactly
+    lab1_in = _lab(linear_srgb_to_xyz(rgb) / linear_srgb_to_xyz(rgb)[:, 1:2])
+    lab1_out = _lab(linear_srgb_to_xyz(out) / linear_srgb_to_xyz(out)[:, 1:2])
+    c_in, c_out = np.hypot(lab1_in[:, 1], lab1_in[:, 2]), np.hypot(lab1_out[:, 1], lab1_out[:, 2])
+    assert np.allclose(c_out[:3], 1.5 * c_in[:3])
+    assert np.allclose(out[3], 0.5)                                    # grey stays grey
+    # an orange that a 1.5 x gain would push out of the gamut stops on its boundary
+    assert out[4].min() == pytest.approx(0.0, abs=1e-12) and 1.0 < c_out[4] / c_in[4] < 1.5
+    assert abs(lch_out[4, 2] - lch_in[4, 2]) < 3.0
+
+
+# -- AgX and the ACES 1.x fit --------------------------------------------------------------
+
+def test_rec709_to_rec2020_matrix_itu_bt2087():
+    # ITU-R BT.2087-0 eq. (2): linear BT.709 -> BT.2020 to four decimals
+    from skydome.render.display import _rec709_rec2020
+
+    to2020, _ = _rec709_rec2020()
+    bt2087 = np.array([[0.6274, 0.3293, 0.0433], [0.0691, 0.9195, 0.0114], [0.0164, 0.0880, 0.8956]])
+    assert np.allclose(to2020, bt2087, atol=6e-5)
+
+
+@pytest.mark.parametrize("tm", ["agx", "aces-hill"])
+def test_agx_and_aces_fit_keep_greys_and_order(tm):
+    # both are built from white-preserving matrices (rows summing to 1): greys stay grey;
+    # the curves are monotone and bounded; a transposed matrix would tint the greys
+    grey = np.geomspace(1e-4, 1e3, 60)[:, None] * np.ones(3)
+    y = display_transform(grey, tm)
+    assert np.all((y >= 0) & (y <= 1))
+    assert np.allclose(y[:, 0], y[:, 1], atol=2e-3) and np.allclose(y[:, 2], y[:, 1], atol=2e-3)
+    assert np.all(np.diff(y[:, 1]) >= -1e-9) and y[-1, 1] > 0.98 and y[0, 1] < 0.01
+
+
+def test_cli_render_transform_and_no_hunt(tmp_path):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    runner = CliRunner()
+    args = ["render", "--model", "single_scattering", "--sun-elevation", "60", "--size", "32",
+            "--wavelengths", "8"]
+    r = runner.invoke(app, args + ["--tonemap", "agx", "--no-hunt", "--out", str(tmp_path / "a.png")])
+    assert r.exit_code == 0, r.output
+    info = Image.open(tmp_path / "a.png").info
+    assert info["display_transform"] == "agx" and float(info["chroma_gain"]) == 1.0
+    r = runner.invoke(app, args + ["--out", str(tmp_path / "b.png")])
+    assert r.exit_code == 0 and float(Image.open(tmp_path / "b.png").info["chroma_gain"]) > 1.3
+    r = runner.invoke(app, args + ["--tonemap", "agx9", "--out", str(tmp_path / "c.png")])
+    assert r.exit_code == 2 and not (tmp_path / "c.png").exists()

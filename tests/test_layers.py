@@ -119,3 +119,25 @@ def test_contact_sheet_layout(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["s.png"]
     with pytest.raises(ValueError, match="tiles is empty"):
         contact_sheet([], tmp_path / "t.png")
+
+
+def test_contact_sheet_letterbox_cells(tmp_path):
+    # every cell the box (60 x 40): a square image scaled up to 40 x 40 and centred, a wide
+    # one to 60 x 15; the last, shorter row centred; captions in a band under each box
+    from PIL import Image
+
+    from skydome.render.sheets import contact_sheet
+
+    red = np.zeros((10, 10, 3))
+    red[..., 0] = 1.0
+    blue = np.zeros((10, 40, 3))
+    blue[..., 2] = 1.0
+    tiles = [(red, "a"), (blue, "b"), (red, "c")]
+    out = contact_sheet(tiles, tmp_path / "s.png", cols=2, tile=(60, 40), line_height=10,
+                        background=(0, 0, 0), letterbox=True)
+    im = np.asarray(Image.open(out))
+    assert im.shape == (2 * (40 + 10), 120, 3)
+    assert tuple(im[20, 30]) == (255, 0, 0) and tuple(im[2, 30]) == (255, 0, 0)   # filled 40 px high
+    assert tuple(im[20, 5]) == (0, 0, 0)                                           # letterbox bar
+    assert tuple(im[20, 62]) == (0, 0, 255) and tuple(im[10, 90]) == (0, 0, 0)     # 60 x 15, centred
+    assert tuple(im[50 + 20, 60]) == (255, 0, 0) and tuple(im[50 + 20, 20]) == (0, 0, 0)  # last row centred

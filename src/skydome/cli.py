@@ -366,11 +366,12 @@ def render(
     size: str = typer.Option("512", help="Image size in pixels: N (square / width) or WxH."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm for spectral models, 3..401."),
     exposure: Optional[float] = typer.Option(None, help="PNG only: exposure multiplier on luminance in cd/m^2 (default automatic)."),
-    tonemap: str = typer.Option("hue-preserving", help="PNG only: hue-preserving (default: keeps hue, compresses the gamut), filmic (per-channel ACES fit), reinhard or clamp."),
+    tonemap: str = typer.Option("hue-preserving", help="PNG only: hue-preserving (default: keeps hue, compresses the gamut), agx (Blender 4.x AgX base), aces-hill (ACES 1.x fit by Hill), filmic (per-channel ACES fit by Narkowicz), reinhard or clamp."),
     bits: int = typer.Option(8, help="PNG only: 8 or 16 bits per channel."),
     no_sun: bool = typer.Option(False, "--no-sun", help="Do not draw the sun disc."),
     ev100: Optional[float] = typer.Option(None, help="PNG only: exposure value at ISO 100, -20..30 (instead of --exposure)."),
     sun_light: Optional[str] = typer.Option(None, help="Leave the sun out of the image and write it as a light (direction, angular radius, spectral irradiance) to this .json file."),
+    no_hunt: bool = typer.Option(False, "--no-hunt", help="PNG only: show the sky's chromaticities as they are, without the Hunt-effect chroma gain (which keeps the bright sky's colourfulness on the dimmer display)."),
 ):
     """Render a sky model into an image file.
 
@@ -378,11 +379,13 @@ def render(
     (see `skydome models` for each model's options, units and ranges).
     """
     _run(_render, ctx.args, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method,
-         projection, size, wavelengths, exposure, tonemap, bits, not no_sun, ev100, sun_light)
+         projection, size, wavelengths, exposure, tonemap, bits, not no_sun, ev100, sun_light,
+         not no_hunt)
 
 
 def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_method, projection,
-            size, wavelengths, exposure, tonemap, bits, draw_sun, ev100=None, sun_light=None):
+            size, wavelengths, exposure, tonemap, bits, draw_sun, ev100=None, sun_light=None,
+            hunt=True):
     from skydome._io import check_output_file
     from skydome._validate import check_choice, check_int, check_number
     from skydome.models import get_model_class
@@ -394,7 +397,9 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     check_choice("projection", projection, PROJECTIONS)
-    check_choice("tonemap", tonemap, ("hue-preserving", "filmic", "reinhard", "clamp"))
+    from skydome.render.display import DISPLAY_TRANSFORMS
+
+    check_choice("tonemap", tonemap, DISPLAY_TRANSFORMS)
     check_choice("bits", bits, (8, 16))
     if ev100 is not None and exposure is not None:
         raise UserError("give --exposure or --ev100, not both")
@@ -436,7 +441,7 @@ def _render(extra, model, out, sun_elevation, sun_azimuth, lat, lon, time, sun_m
         image = render_sky(sky, proj, wl, progress=progress, draw_sun=draw_sun, output="xyz")
     finally:
         progress.close()
-    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits, ev100=ev100)
+    image.save(out, exposure=exposure, tonemap=tonemap, bits=bits, ev100=ev100, hunt=hunt)
     if sun_light is not None:
         if image.sun_light is None:
             typer.echo("no sun light written: the model has no sun above the horizon", err=True)

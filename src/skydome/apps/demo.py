@@ -133,6 +133,7 @@ def _effects(out_dir: Path) -> list[Path]:
     labels = {"contact_sheet.png": "", "bishops_ring.png": "Bishop's ring (1 um ash, Mie)",
               "polarisation_rayleigh.png": "polarisation (single Rayleigh)",
               "twilight.png": "twilight: zenith luminance, Belt of Venus",
+              "horizon_sheet.png": "twilight horizon, sun side | anti-sun side",
               "airlight_mountains.png": "airlight: none / clear / haze"}
     tiles = []
     for p in written:
@@ -141,7 +142,8 @@ def _effects(out_dir: Path) -> list[Path]:
             label = "timelapse, Vienna 21 June" if "timelapse" in str(p) else "twilight 0..-18 deg"
         tiles.append((p, label))
     sheet = eff / "effects_gallery.png"
-    _contact_sheet(tiles, sheet, tile=320)
+    cols = min((3, 4), key=lambda c: (-len(tiles) % c, -c))   # fewest empty cells
+    _contact_sheet(tiles, sheet, tile=(320, 240), cols=cols)
     written.append(sheet)
     for p in written:
         print(p)
@@ -149,12 +151,13 @@ def _effects(out_dir: Path) -> list[Path]:
     return written
 
 
-def _contact_sheet(tiles, path: Path, tile: int = 256) -> None:
-    """A labelled grid of the rendered PNGs, three across."""
+def _contact_sheet(tiles, path: Path, tile=256, cols: int = 3) -> None:
+    """A grid of equal cells (``tile`` box, each image letterboxed into it), a caption under
+    each, ``cols`` across."""
     from skydome.render.sheets import contact_sheet
 
-    contact_sheet(tiles, path, cols=3, tile=tile, line_height=18, background=(24, 24, 24),
-                  text_colours=((230, 230, 230),))
+    contact_sheet(tiles, path, cols=cols, tile=tile, line_height=18, background=(24, 24, 24),
+                  text_colours=((230, 230, 230),), letterbox=True)
 
 
 def main(argv=None) -> None:

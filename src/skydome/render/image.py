@@ -3,7 +3,8 @@
 Colour pipeline: spectral radiance [W m^-2 sr^-1 nm^-1] -> CIE 1931 XYZ with Y the
 luminance [cd m^-2] (683 lm/W) -> linear sRGB (Rec. 709 primaries, D65 white) on the same
 scale (so that an (R, G, B) of (1, 1, 1) has a luminance of 1 cd m^-2) -> for display:
-exposure, tone map, sRGB encoding.
+exposure, the Hunt-effect chroma gain, display transform, sRGB encoding
+(:mod:`skydome.render.display`).
 
 Writers (chosen by the file suffix; every write is atomic: a temporary file beside the
 target, renamed over it on success and removed on failure):
@@ -54,7 +55,7 @@ __all__ = ["SkyImage", "check_output_path", "read_hdr", "read_exr", "read_png16"
            "tonemap_curve", "SUFFIXES", "WHITE_EFFICACY"]
 
 SUFFIXES = (".exr", ".hdr", ".png")
-TONEMAPS = ("clamp", "reinhard", "filmic", "hue-preserving")
+TONEMAPS = ("clamp", "reinhard", "filmic", "hue-preserving", "agx", "aces-hill")
 #: Default display transform (skydome.render.display): hue-preserving, gamut compressed.
 DEFAULT_TONEMAP = "hue-preserving"
 #: Radiance's luminous efficacy of equal-energy white [lm/W] (WHTEFFICACY, color.h).
@@ -208,11 +209,12 @@ class SkyImage:
 
         return xyz_to_linear_srgb(self.xyz())
 
-    def auto_exposure(self) -> float:
-        """Exposure multiplier k [m^2/cd] mapping the log-average luminance of the sky
-        pixels to Reinhard's key 0.18 [Rei02] eq. 1; pixels brighter than 1e5 cd m^-2
-        (the sun), black pixels and, where the projection is known, pixels below the
-        horizon (the ground) are left out. 1 if no pixel qualifies."""
+    def adapting_luminance(self) -> float | None:
+        """Log-average luminance L̄ [cd m^-2] of the sky pixels, [Rei02] eq. 1: pixels
+        brighter than 1e5 cd m^-2 (the sun), black pixels and, where the projection is
+        known, pixels below the horizon (the ground) are left out. None if no pixel
+        qualifies. It keys :meth:`auto_exposure` and stands for the adapting luminance of
+        the scene in the colourfulness gain (:func:`skydome.render.display.hunt_chroma_gain`)."""
         sel = self.mask
         if self.projection is not None:
             dirs, _ = self.projection.directions()
@@ -221,9 +223,26 @@ class SkyImage:
         Y = self.luminance()[sel]
         Y = Y[(Y > 0.0) & (Y <= AUTO_EXPOSURE_CUTOFF)]
         if Y.size == 0:
+            return None
+        return float(np.exp(np.mean(np.log(_DELTA + Y))))  # [Rei02] eq. 1
+
+    def auto_exposure(self) -> float:
+        """Exposure multiplier k [m^2/cd] mapping the log-average luminance of the sky
+        pixels (:meth:`adapting_luminance`) to Reinhard's key 0.18 [Rei02]; 1 if no pixel
+        qualifies."""
+        log_avg = self.adapting_luminance()
+        return 1.0 if log_avg is None else KEY / log_avg
+
+    def chroma_gain(self, hunt: bool = True) -> float:
+        """CIELAB chroma gain of the picture: the Hunt-effect compensation
+        :func:`skydome.render.display.hunt_chroma_gain` of the scene's adapting luminance
+        if ``hunt``, else 1."""
+        la = self.adapting_luminance() if hunt else None
+        if la is None:
             return 1.0
-        log_avg = float(np.exp(np.mean(np.log(_DELTA + Y))))  # [Rei02] eq. 1
-        return KEY / log_avg
+        from skydome.render.display import hunt_chroma_gain
+
+        return hunt_chroma_gain(la)
 
     def exposure_multiplier(self, exposure: float | None = None, ev100: float | None = None) -> float:
         """The exposure multiplier k [m^2/cd]: ``exposure`` if given (> 0), else from
@@ -242,7 +261,7 @@ class SkyImage:
         return self.auto_exposure()
 
     def to_srgb(self, exposure: float | None = None, tonemap: str = DEFAULT_TONEMAP,
-                ev100: float | None = None) -> np.ndarray:
+                ev100: float | None = None, hunt: bool = True) -> np.ndarray:
         """Display values: float (H, W, 3) in [0, 1], sRGB encoded.
 
         Parameters
@@ -250,21 +269,28 @@ class SkyImage:
         exposure : float, optional
             Multiplier k [m^2/cd] on the linear sRGB values in cd m^-2 (> 0); None:
             from ``ev100`` or :meth:`auto_exposure`.
-        tonemap : {"hue-preserving", "filmic", "reinhard", "clamp"}
+        tonemap : {"hue-preserving", "agx", "aces-hill", "filmic", "reinhard", "clamp"}
             Display transform (:func:`skydome.render.display.display_transform`):
-            the default keeps hue and compresses the gamut; the others act per channel
+            the default keeps hue and compresses the gamut; ``agx`` and ``aces-hill``
+            work in their own primaries; the last three act per channel
             (:func:`tonemap_curve`, after clipping out-of-gamut negatives to 0). Masked
             pixels are black.
         ev100 : float, optional
             Exposure value at ISO 100 (alternative to ``exposure``).
+        hunt : bool
+            Scale the CIELAB chroma by :meth:`chroma_gain` (default), which keeps the
+            colourfulness of the bright sky on the dimmer display (the Hunt effect,
+            :mod:`skydome.render.display`); False shows the chromaticities as they are.
         """
         check_choice("tonemap", tonemap, TONEMAPS)
-        k = self.exposure_multiplier(exposure, ev100)
-        from skydome.render.display import display_transform
+        return self._display(self.exposure_multiplier(exposure, ev100), tonemap, self.chroma_gain(hunt))
+
+    def _display(self, k: float, tonemap: str, gain: float) -> np.ndarray:
+        from skydome.render.display import display_transform, scale_chroma
         from skydome.spectra import srgb_encode
 
-        rgb = self.linear_srgb() * k
-        if tonemap != "hue-preserving":
+        rgb = scale_chroma(self.linear_srgb() * k, gain)
+        if tonemap in TONEMAPS[:3]:   # per-channel curves: out-of-gamut negatives to 0
             rgb = np.maximum(rgb, 0.0)
         out = np.clip(srgb_encode(display_transform(rgb, tonemap)), 0.0, 1.0)
         out[~self.mask] = 0.0
@@ -272,10 +298,10 @@ class SkyImage:
 
     # -- writing ------------------------------------------------------------------------
     def save(self, path, exposure: float | None = None, tonemap: str = DEFAULT_TONEMAP,
-             bits: int = 8, ev100: float | None = None) -> Path:
+             bits: int = 8, ev100: float | None = None, hunt: bool = True) -> Path:
         """Write the image; the format follows the suffix (.exr, .hdr, .png).
 
-        ``exposure`` (or ``ev100``), ``tonemap`` and ``bits`` (8 or 16) apply to PNG
+        ``exposure`` (or ``ev100``), ``tonemap``, ``hunt`` and ``bits`` (8 or 16) apply to PNG
         only; the PNG records them, says it is display-referred and carries an sRGB
         chunk. The write is atomic. Returns the path written.
         """
@@ -289,14 +315,16 @@ class SkyImage:
             _atomic_write(p, self._write_hdr)
         else:
             k = self.exposure_multiplier(exposure, ev100)
-            display = self.to_srgb(k, tonemap)
+            gain = self.chroma_gain(hunt)
+            display = self._display(k, tonemap, gain)
             from skydome.render.display import exposure_to_ev100
 
             info = {"colour": "display-referred sRGB (IEC 61966-2-1), not radiometric",
                     "exposure_m2_per_cd": float(k), "ev100": round(exposure_to_ev100(k), 4),
                     "exposure_mode": ("explicit" if exposure is not None else
                                       "ev100" if ev100 is not None else "auto (key 0.18)"),
-                    "display_transform": tonemap}
+                    "display_transform": tonemap,
+                    "chroma_gain": round(gain, 4)}
             _atomic_write(p, lambda tmp: self._write_png(tmp, display, bits, info))
         return p
 

@@ -35,7 +35,8 @@ def _as_pil(image):
 def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, labels_above: bool = False,
                   line_height: int = 14, upscale: bool = False, background=(16, 16, 16),
                   column_labels: Sequence[str] | None = None, row_labels: Sequence[str] | None = None,
-                  row_label_width: int = 150, text_colours=((220, 220, 220), (170, 170, 170))) -> Path:
+                  row_label_width: int = 150, text_colours=((220, 220, 220), (170, 170, 170)),
+                  letterbox: bool = False) -> Path:
     """Write a grid of images with text lines under (or above) each one to ``path`` (PNG).
 
     Parameters
@@ -51,6 +52,10 @@ def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, l
         The box (width, height) [pixels] each image is fitted into, keeping its aspect
         ratio; images are only shrunk unless ``upscale``. A row is as high as its tallest
         image plus the label band.
+    letterbox : bool
+        Every cell is exactly the box: each image is scaled (up or down) to fit it, keeping
+        its aspect ratio, and centred on the background; the caption band is under the
+        box; a last row with fewer images is centred. For galleries of unlike images.
     labels_above : bool
         Draw the label band above each image instead of below.
     line_height : int
@@ -80,12 +85,12 @@ def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, l
             continue
         im = _as_pil(image)
         scale = min(tw / im.width, th / im.height)
-        if scale < 1.0 or (upscale and scale > 1.0):
+        if scale < 1.0 or ((upscale or letterbox) and scale > 1.0):
             im = im.resize((max(1, round(im.width * scale)), max(1, round(im.height * scale))),
                            Image.LANCZOS)
         ims.append(im)
     band = line_height * max((len(t) for t in texts), default=0)
-    cell_h = max((im.height for im in ims if im is not None), default=th)
+    cell_h = th if letterbox else max((im.height for im in ims if im is not None), default=th)
     left = row_label_width if row_labels is not None else 0
     top = line_height + 4 if column_labels is not None else 0
     sheet = Image.new("RGB", (left + cols * tw, top + rows * (cell_h + band)), tuple(background))
@@ -96,8 +101,11 @@ def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, l
     if row_labels is not None:
         for i, text in enumerate(row_labels):
             draw.text((4, top + i * (cell_h + band) + cell_h // 2), str(text)[:24], fill=text_colours[0])
+    last = n - (rows - 1) * cols   # images in the last row
     for k, (im, lines) in enumerate(zip(ims, texts)):
         x = left + (k % cols) * tw
+        if letterbox and k // cols == rows - 1:
+            x += (cols - last) * tw // 2
         y = top + (k // cols) * (cell_h + band)
         y_img, y_txt = (y + band, y) if labels_above else (y, y + cell_h)
         if im is None:
