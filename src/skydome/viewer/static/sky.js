@@ -420,6 +420,7 @@ export class SkyRenderer {
     gl.uniform1i(u("u_mode"), display.mode);
     gl.uniform1f(u("u_k"), display.k);
     gl.uniform1i(u("u_transform"), display.transform);
+    gl.uniform1f(u("u_gain"), display.gain ?? 1);
     gl.uniform2f(u("u_log_range"), display.logLo, display.logHi);
     gl.bindVertexArray(this.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
