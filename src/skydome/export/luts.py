@@ -289,18 +289,9 @@ def bake_hillaire2020(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], 
                                   "fades to 0 at d = 0 ([Hil20] sec. 5.4)",
         },
         "glsl": "export/glsl/hillaire2020.glsl (the lookups of this bake)",
+        "textures": {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
+                     for n, a in tex.items()},
     }
-    if ground:
-        tex["transmittance_spectral"] = _spectral_layers(arrays["transmittance"].astype(np.float32))
-        tex["irradiance_spectral"] = _spectral_layers(arrays["irradiance"].astype(np.float32))
-        props = sky.atmosphere.optical_properties(np.asarray(src["wavelengths_nm"]))
-        desc["ground_albedo"] = np.asarray(props.ground_albedo, dtype=np.float64).tolist()
-        desc["ground_layout"] = ("*_spectral: float32 (ceil(nl / 4), n_r, n_mu or n_mu_s, 4), "
-                                 "layer k channel c = table wavelength 4 k + c; transmittance: "
-                                 "x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min); "
-                                 "irradiance: x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2")
-    desc["textures"] = {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
-                        for n, a in tex.items()}
     return tex, desc
 
 
