@@ -62,8 +62,8 @@ SETTERS.precomputed = (gl, u, s) => {
   gl.uniform1i(u("u_nsc"), s.nsc);
   gl.uniform2i(u("u_pc"), ...s.pc);
   gl.uniform2f(u("u_pp"), ...s.pp);
-  gl.uniform1i(u("u_tr"), 9);
-  gl.uniform1i(u("u_irr"), 10);
+  gl.uniform1i(u("u_tr"), 11);
+  gl.uniform1i(u("u_irr"), 12);
   gl.uniform3i(u("u_ground_sizes"), s.textures.transmittance_spectral[1], s.textures.transmittance_spectral[2],
                s.textures.irradiance_spectral[2]);
   gl.uniform1i(u("u_nl"), s.nl);
@@ -113,9 +113,9 @@ const PREPASSES = {
     const gl = r.gl;
     if (r.precomputed?.key !== s.lut_key) {
       if (r.precomputed) for (const [, t] of r.precomputed.tex) gl.deleteTexture(t);
-      // texture units: scattering tables 4-6, the ground's spectral tables 9-10
+      // texture units: scattering tables 4-6, the ground's spectral tables 11-12 (hillaire2020 has 1-3 and 9-10, dobashi2002 7-8)
       const units = { multiple_scattering: 4, single_scattering_0: 5, single_scattering_1: 6,
-                      transmittance_spectral: 9, irradiance_spectral: 10 };
+                      transmittance_spectral: 11, irradiance_spectral: 12 };
       const tex = [];
       for (const name of Object.keys(units).filter((n) => n in s.textures)) {
         const resp = await fetch(`/api/lut?${new URLSearchParams({ key: s.lut_key, name })}`);
