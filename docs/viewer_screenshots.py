@@ -35,6 +35,10 @@ VIEWS = {
     # auto exposure would expose for black space (the sky above the horizon): a fixed EV100
     "viewer_precomputed_99km": {"model": "precomputed", "observer_altitude_m": 99000, "sun-el": 20,
                                 "sun-az": 135, "projection": 3, "auto-exp": False, "ev100": 12},
+    # the ground below the horizon from 10 km: Bruneton's ground radiance through the air
+    "viewer_precomputed_ground_10km": {"model": "precomputed", "observer_altitude_m": 10000, "sun-el": 20,
+                                       "sun-az": 135, "projection": 0, "view-az": 135, "view-el": -5,
+                                       "fov": 100},
     "viewer_hillaire_sunset": {"model": "hillaire2020", "sun-el": 3, "sun-az": 270, "projection": 0,
                                "view-az": 270, "view-el": 5, "fov": 90},
     "viewer_hillaire_10km": {"model": "hillaire2020", "observer_altitude_m": 10000, "sun-el": 25,

@@ -40,6 +40,16 @@ def wait_ready(page, timeout_s: float = 60.0) -> None:
         time.sleep(0.1)
 
 
+def warm_precomputed() -> None:
+    """Build the viewer's precomputed tables and their bake in this process (the server
+    thread shares the caches of skydome.viewer.scene), with no time limit, so that a page
+    that switches to the precomputed model does not wait for a table build (minutes on a
+    loaded machine) inside a test's drawing timeout."""
+    from skydome.viewer.scene import shader_scene
+
+    shader_scene({"model": "precomputed", "sun_elevation": "40", "sun_azimuth": "180"})
+
+
 @pytest.fixture(scope="module")
 def viewer_url():
     from skydome.viewer.server import make_server

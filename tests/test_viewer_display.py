@@ -1,10 +1,11 @@
 """The page's display pass against skydome.imaging.display (what `skydome render` writes).
 
 A few linear colours (XYZ, cd/m^2) go through the page's display shader into an 8-bit
-target; the same colours through SkyImage.to_srgb's steps (linear sRGB x the EV100
-exposure k = 1 / (1.2 x 2^EV100), render.display.display_transform, spectra.srgb_encode)
-must give the same bytes within 1/255. The reference is the Python pipeline, independent
-of the GLSL code.
+target; the same colours as a one-row SkyImage written by SkyImage.save to a PNG (linear
+sRGB x the EV100 exposure k = 1 / (1.2 x 2^EV100), the Hunt-effect chroma gain of the
+colours' adapting luminance, imaging.display.display_transform, spectra.srgb_encode, 8-bit
+quantisation) must give the same bytes within 1/255. The reference is the Python pipeline
+that writes `skydome render`'s PNGs, independent of the GLSL code.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ COLOURS_RGB = [
     (0.0, 0.0, 0.0),            # black
     (0.18, 0.18, 0.18),         # mid grey
     (0.05, 0.12, 0.45),         # noon zenith blue
-    (1.0, 0.31, 0.05),          # orange-red horizon under a 2 deg sun (render/display.py)
+    (1.0, 0.31, 0.05),          # orange-red horizon under a 2 deg sun (imaging/display.py)
     (2.5, 0.9, 0.2),            # over-exposed orange (compressed, hue kept)
     (12.0, 10.0, 8.0),          # path to white (4 < max < 64)
     (200.0, 180.0, 150.0),      # the sun's disc: white
@@ -34,7 +35,7 @@ def _reference(xyz, ev100, transform):
     from skydome.spectra import srgb_encode, xyz_to_linear_srgb
 
     rgb = xyz_to_linear_srgb(xyz) * ev100_to_exposure(ev100)
-    if transform != "hue-preserving":
+    if transform in ("filmic", "reinhard", "clamp"):
         rgb = np.maximum(rgb, 0.0)
     return 255.0 * np.clip(srgb_encode(display_transform(rgb, transform)), 0.0, 1.0)
 
@@ -46,7 +47,7 @@ def _page_transforms(page) -> dict[str, int]:
 
 
 def test_page_default_is_render_default(browser_page):  # noqa: F811
-    """The page offers transforms of render.display only, and starts with its default."""
+    """The page offers transforms of imaging.display only, and starts with its default."""
     from skydome.imaging.display import DEFAULT_TRANSFORM, DISPLAY_TRANSFORMS
 
     page, _ = browser_page
@@ -57,19 +58,59 @@ def test_page_default_is_render_default(browser_page):  # noqa: F811
     assert selected == DEFAULT_TRANSFORM
 
 
-@pytest.mark.parametrize("transform", ["hue-preserving", "filmic", "reinhard", "clamp"])
-def test_display_pass_matches_render_display(browser_page, transform):  # noqa: F811
+def _saved_png(xyz, ev100, transform, hunt, tmp_path):
+    """The colours as SkyImage.save writes them to an 8-bit PNG: (N, 3) bytes, and the
+    chroma gain save applies (SkyImage.chroma_gain)."""
+    from PIL import Image
+
+    from skydome.imaging.image import SkyImage
+
+    img = SkyImage(np.asarray(xyz, dtype=np.float64)[None], "xyz")
+    path = img.save(tmp_path / f"c-{transform}-{hunt}.png", ev100=ev100, tonemap=transform, hunt=hunt)
+    with Image.open(path) as im:
+        rgb = np.asarray(im.convert("RGB"), dtype=np.float64)[0]
+    return rgb, img.chroma_gain(hunt)
+
+
+def _page_colours(page, xyz, ev100, code, hunt):
+    r = page.evaluate("([c, ev, t, h]) => window.skydomeViewer.displayColours(c, ev, t, h)",
+                      [np.asarray(xyz).tolist(), ev100, code, hunt])
+    return np.asarray(r["rgb"], dtype=np.float64), float(r["gain"])
+
+
+@pytest.mark.parametrize("transform", ["hue-preserving", "agx", "aces-hill", "filmic", "reinhard", "clamp"])
+def test_display_pass_matches_saved_png(browser_page, transform, tmp_path):  # noqa: F811
+    """The page's display pass (with its Hunt-effect chroma gain, which is on by default as
+    in SkyImage.save) gives the bytes of the PNG that SkyImage.save writes, within 1/255."""
     from skydome.imaging.display import ev100_to_exposure
     from skydome.spectra import linear_srgb_to_xyz
 
     page, messages = browser_page
     code = _page_transforms(page)[transform]
     xyz = linear_srgb_to_xyz(np.array(COLOURS_RGB)) / ev100_to_exposure(EV100)
-    gpu = np.asarray(page.evaluate("([c, ev, t]) => window.skydomeViewer.displayColours(c, ev, t)",
-                                   [xyz.tolist(), EV100, code]), dtype=np.float64)
-    want = _reference(xyz, EV100, transform)
+    gpu, gpu_gain = _page_colours(page, xyz, EV100, code, True)
+    want, gain = _saved_png(xyz, EV100, transform, True, tmp_path)
+    assert gain > 1.2   # a daylight scene: the gain is in play
+    assert abs(gpu_gain - gain) <= 1e-3, (gpu_gain, gain)
     assert np.max(np.abs(gpu - want)) <= 1.0, np.c_[gpu, want]
     assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]
+
+
+@pytest.mark.parametrize("transform", ["hue-preserving", "agx", "filmic", "clamp"])
+def test_display_pass_without_hunt_gain(browser_page, transform, tmp_path):  # noqa: F811
+    """With the gain switched off (`skydome render --no-hunt`, the page's checkbox) both
+    show the chromaticities as they are; the steps equal imaging.display's functions."""
+    from skydome.imaging.display import ev100_to_exposure
+    from skydome.spectra import linear_srgb_to_xyz
+
+    page, _ = browser_page
+    code = _page_transforms(page)[transform]
+    xyz = linear_srgb_to_xyz(np.array(COLOURS_RGB)) / ev100_to_exposure(EV100)
+    gpu, gpu_gain = _page_colours(page, xyz, EV100, code, False)
+    want, gain = _saved_png(xyz, EV100, transform, False, tmp_path)
+    assert gpu_gain == 1.0 and gain == 1.0
+    assert np.max(np.abs(gpu - want)) <= 1.0, np.c_[gpu, want]
+    assert np.max(np.abs(want - np.round(_reference(xyz, EV100, transform)))) <= 1.0
 
 
 def test_hue_preserving_keeps_the_sunset_orange(browser_page):  # noqa: F811
@@ -81,8 +122,6 @@ def test_hue_preserving_keeps_the_sunset_orange(browser_page):  # noqa: F811
     page, _ = browser_page
     xyz = linear_srgb_to_xyz(np.array([[2.5, 0.9, 0.2]])) / ev100_to_exposure(EV100)
     codes = _page_transforms(page)
-    hp, fm = (np.asarray(page.evaluate("([c, ev, t]) => window.skydomeViewer.displayColours(c, ev, t)",
-                                       [xyz.tolist(), EV100, codes[t]]))[0]
-              for t in ("hue-preserving", "filmic"))
+    hp, fm = (_page_colours(page, xyz, EV100, codes[t], False)[0][0] for t in ("hue-preserving", "filmic"))
     assert hp[0] > hp[1] > hp[2]
     assert fm[1] / fm[0] > hp[1] / hp[0] + 0.1

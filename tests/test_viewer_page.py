@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from _viewer import browser_page, viewer_url  # noqa: F401 - fixtures
+from _viewer import browser_page, viewer_url, warm_precomputed  # noqa: F401 - fixtures
 
 MODELS = ["preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020", "precomputed"]
 
@@ -61,6 +61,7 @@ def _save_view(page):
 @pytest.fixture(scope="module")
 def page(browser_page):  # noqa: F811
     page, messages = browser_page
+    warm_precomputed()
     page.evaluate("() => { const c = document.getElementById('sky'); c.width = 256; c.height = 128; }")
     _set(page, "#model-b", "")
     _set(page, "#projection", "1")            # equirect hemisphere: zenith row 0, horizon last

@@ -170,3 +170,37 @@ def test_hillaire2020_aerial_perspective_volume(browser_page, elevation):  # noq
                   f"{value:.1f} dB")
             assert value >= PSNR_FLOOR_DB
     assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]
+
+
+GROUND_VIEWS = [(0.0, el) for el in (60.0, 20.0, 5.0, 0.0, -4.0)] + [(99000.0, el) for el in (60.0, 20.0, -4.0)]
+
+
+@pytest.mark.parametrize("altitude,elevation", GROUND_VIEWS,
+                         ids=[f"{a / 1000:g}km-sun{e:g}deg" for a, e in GROUND_VIEWS])
+def test_precomputed_ground(browser_page, altitude, elevation):  # noqa: F811
+    """The ground below the horizon ([Bru17] GetSkyRadianceToPoint + GetSunAndSkyIrradiance:
+    the Lambertian ground lit by the transmitted sun and the sky irradiance table, seen
+    through the air in front of it) over every ground-hit direction of the whole sphere,
+    against the CPU model's ground-hit rays (PrecomputedSky.radiance, the same tables)."""
+    from skydome.imaging.projections import Equirect
+
+    page, messages = browser_page
+    params = {"observer_altitude_m": altitude}
+    sky = _cpu_model("precomputed", elevation, params)
+    d, _ = Equirect(W, W // 2).directions()
+    r, R = sky.atmosphere.planet_radius_m + altitude, sky.atmosphere.planet_radius_m
+    mu = d[..., 2]
+    hits = (mu < 0.0) & (r * r * (mu * mu - 1.0) + R * R >= 0.0)
+    assert 0.4 < hits.mean() <= 0.5
+    ref = np.asarray(sky.xyz(d), dtype=np.float64)[hits]
+    assert np.max(ref[:, 1]) > 0.0                              # the ground is lit
+    values = {"sun_elevation": elevation, "sun_azimuth": SUN_AZIMUTH_DEG, **params}
+    flat = page.evaluate("([m, v, w, h]) => window.skydomeViewer.renderFloat(m, v, w, h, 3)",
+                         ["precomputed", values, W, W // 2])
+    gpu = np.asarray(flat, dtype=np.float64).reshape(W // 2, W, 3)[hits]
+    assert np.all(np.isfinite(gpu)) and np.all(gpu >= 0.0)
+    value = psnr_db(gpu, ref)
+    print(f"PSNR precomputed ground, observer {altitude / 1000:g} km, sun {elevation:g} deg: "
+          f"{value:.1f} dB (ground Y max {np.max(ref[:, 1]):.4g} cd/m^2)")
+    assert value >= PSNR_FLOOR_DB
+    assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]

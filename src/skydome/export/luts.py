@@ -97,8 +97,25 @@ def _bruneton_3d(tab: np.ndarray) -> np.ndarray:
     return out.reshape(n_r, n_mu, n_nu * n_ms, 4)
 
 
-def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """(textures, description) of a :class:`PrecomputedSky` in Bruneton's layout, XYZ."""
+def _spectral_layers(tab: np.ndarray) -> np.ndarray:
+    """(a, b, nl) -> (ceil(nl / 4), a, b, 4): four table wavelengths per RGBA texel, layer k
+    channel c holding wavelength 4 k + c (zeros past the last)."""
+    a, b, nl = tab.shape
+    n4 = -(-nl // 4)
+    out = np.zeros((a, b, 4 * n4), dtype=np.float32)
+    out[..., :nl] = tab
+    return np.ascontiguousarray(out.reshape(a, b, n4, 4).transpose(2, 0, 1, 3))
+
+
+def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """(textures, description) of a :class:`PrecomputedSky` in Bruneton's layout, XYZ.
+
+    ``ground``: also the tables of [Bru17]'s ground radiance (GetSunAndSkyIrradiance and
+    GetTransmittance of GetSkyRadianceToPoint), which is a product of spectra and so is
+    kept on the table wavelengths: ``transmittance_spectral`` (to the top, (r, mu) in the
+    transmittance mapping) and ``irradiance_spectral`` (the sky irradiance E(r, mu_s)),
+    both (ceil(nl / 4), n_r, n_mu, 4) with four wavelengths per texel; the description gets
+    the ground albedo on the table wavelengths and their XYZ weights K_j (above)."""
     with tempfile.TemporaryDirectory() as tmp:
         sky.export_textures(tmp)
         with open(os.path.join(tmp, "textures.json")) as f:
@@ -131,9 +148,18 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         "mappings": src["mappings"],
         "table_wavelengths_nm": src["wavelengths_nm"],
         "xyz_weights": K.tolist(),
-        "textures": {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
-                     for n, a in tex.items()},
     }
+    if ground:
+        tex["transmittance_spectral"] = _spectral_layers(arrays["transmittance"].astype(np.float32))
+        tex["irradiance_spectral"] = _spectral_layers(arrays["irradiance"].astype(np.float32))
+        props = sky.atmosphere.optical_properties(np.asarray(src["wavelengths_nm"]))
+        desc["ground_albedo"] = np.asarray(props.ground_albedo, dtype=np.float64).tolist()
+        desc["ground_layout"] = ("*_spectral: float32 (ceil(nl / 4), n_r, n_mu or n_mu_s, 4), "
+                                 "layer k channel c = table wavelength 4 k + c; transmittance: "
+                                 "x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min); "
+                                 "irradiance: x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2")
+    desc["textures"] = {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
+                        for n, a in tex.items()}
     return tex, desc
 
 

@@ -211,7 +211,7 @@ def _precomputed(sky) -> dict[str, Any]:
     if key not in _LUTS:
         if len(_LUTS) >= 2:
             _LUTS.clear()
-        _LUTS[key] = bake_precomputed(sky)
+        _LUTS[key] = bake_precomputed(sky, ground=True)
     tex, desc = _LUTS[key]
     sz = desc["sizes"]
     if len(desc["phase_code"]) > 2:
@@ -222,7 +222,11 @@ def _precomputed(sky) -> dict[str, Any]:
             "sizes": [sz["r"], sz["mu"], sz["mu_s"], sz["nu"]], "R": desc["planet_radius_m"],
             "Rt": desc["top_radius_m"], "mu_s_min": desc["mu_s_min"],
             "h0": sky.observer_altitude_m, "irradiance_scale": sky.sun.irradiance_scale,
-            "nsc": len(desc["phase_code"]), "pc": pc, "pp": pp}
+            "nsc": len(desc["phase_code"]), "pc": pc, "pp": pp,
+            # the ground ([Bru17] GetSkyRadianceToPoint + GetSunAndSkyIrradiance), spectral
+            "nl": len(desc["table_wavelengths_nm"]), "albedo": desc["ground_albedo"],
+            "K": np.asarray(desc["xyz_weights"]).ravel().tolist(),
+            "sun_alpha": float(np.radians(sky.sun.angular_radius_deg))}
 
 
 def _xyz_weights(wl: np.ndarray) -> np.ndarray:

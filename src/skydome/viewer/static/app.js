@@ -8,7 +8,7 @@ const RAMP = [[0, 0, 0], [0.1, 0.1, 0.8], [0, 0.7, 0.9], [0.1, 0.8, 0.2], [0.95,
               [0.9, 0.15, 0.1], [1, 1, 1]];
 
 const $ = (id) => document.getElementById(id);
-let renderer = null, models = {}, lastScenes = [], frameTimes = [];
+let renderer = null, models = {}, lastScenes = [], frameTimes = [], chromaGain = 1;
 
 function showError(msg) { $("error").textContent = msg || ""; }
 
@@ -74,9 +74,10 @@ function camera() {
 }
 
 function display() {
-  // render.display.ev100_to_exposure: k = 1 / (1.2 x 2^EV100) [LdR14]
+  // imaging.display.ev100_to_exposure: k = 1 / (1.2 x 2^EV100) [LdR14]
   const ev = Math.min(30, Math.max(-20, +$("ev100").value));
   return { mode: +$("mode").value, ev100: ev, k: 1 / (1.2 * 2 ** ev), transform: +$("transform").value,
+           gain: $("hunt").checked ? chromaGain : 1,
            logLo: Math.log10(Math.max(+$("fc-lo").value, 1e-6)),
            logHi: Math.log10(Math.max(+$("fc-hi").value, 2e-6)) };
 }
@@ -107,7 +108,10 @@ async function draw() {
       await renderer.renderXYZ(views, camera(), w, h);
       renderer.sync();
       const ms1 = performance.now() - t0;
-      if ($("auto-exp").checked) autoExposure();
+      const la = adaptingLuminance(renderer.readXYZ());
+      if ($("auto-exp").checked && la !== null) $("ev100").value = Math.log2(1 / (1.2 * 0.18 / la)).toFixed(2);
+      chromaGain = la === null ? 1 : huntChromaGain(la);
+      $("gain-v").textContent = $("hunt").checked ? chromaGain.toFixed(2) : "off";
       await renderer.show(display());
       frameTimes.push(ms1);
       if (frameTimes.length > 20) frameTimes.shift();
@@ -153,11 +157,12 @@ function drawScale() {
   g.fillText("cd/m^2", w, 44);
 }
 
-// SkyImage.auto_exposure: k = 0.18 / (log-average luminance of the sky pixels above the
-// horizon, 0 < Y <= 1e5 cd/m^2, delta 1e-6) [Rei02] eq. 1; shown as its EV100
-// (render.display.exposure_to_ev100)
-function autoExposure() {
-  const xyz = renderer.readXYZ();
+// SkyImage.adapting_luminance: the log-average luminance of the sky pixels above the
+// horizon (alpha 1), 0 < Y <= 1e5 cd/m^2, delta 1e-6 [Rei02] eq. 1; every rendered pixel
+// if none is above the horizon; null if no pixel qualifies. It keys the auto exposure
+// (SkyImage.auto_exposure: k = 0.18 / L, shown as its EV100, imaging.display.exposure_to_ev100)
+// and the chroma gain.
+function adaptingLuminance(xyz) {
   let s = 0, n = 0, below = 0, nb = 0;
   for (let i = 0; i < xyz.length; i += 4) {
     const Y = xyz[i + 1];
@@ -165,9 +170,20 @@ function autoExposure() {
     if (xyz[i + 3] === 1) { s += Math.log(1e-6 + Y); n += 1; } else if (xyz[i + 3] > 0) { below += Math.log(1e-6 + Y); nb += 1; }
   }
   if (!n) { s = below; n = nb; }        // no sky above the horizon in view: every rendered pixel
-  if (!n) return;
-  const k = 0.18 / Math.exp(s / n);
-  $("ev100").value = Math.log2(1 / (1.2 * k)).toFixed(2);
+  return n ? Math.exp(s / n) : null;
+}
+
+// imaging.display.luminance_adaptation_factor: F_L of [CIE159] eq. 7
+function luminanceAdaptationFactor(la) {
+  la = Math.max(la, 0);
+  const k = 1 / (5 * la + 1), k4 = k ** 4;
+  return 0.2 * k4 * (5 * la) + 0.1 * (1 - k4) ** 2 * Math.cbrt(5 * la);
+}
+
+// imaging.display.hunt_chroma_gain: (F_L(scene) / F_L(display))^(1/4), never below 1, with
+// the display's adapting luminance a fifth of its 80 cd/m^2 white (DISPLAY_WHITE_CD_M2)
+function huntChromaGain(la, displayWhite = 80) {
+  return Math.max(1, (luminanceAdaptationFactor(la) / luminanceAdaptationFactor(displayWhite / 5)) ** 0.25);
 }
 
 function saveView() {
@@ -279,9 +295,15 @@ function sample(points) {
 
 const idle = () => !busy && !pending;
 
-// displayColours(xyz, ev100, transform): the display pass on linear XYZ colours, 8-bit RGB
-async function displayColours(xyz, ev100, transform = 0) {
-  return renderer.displayColours(xyz, { mode: 0, k: 1 / (1.2 * 2 ** ev100), transform, logLo: 0, logHi: 1 });
+// displayColours(xyz, ev100, transform, hunt): the display pass on linear XYZ colours, 8-bit
+// RGB; with hunt, the chroma gain of the colours' own adapting luminance (as SkyImage.save
+// computes it for a picture of these colours). Returns { rgb, gain }.
+async function displayColours(xyz, ev100, transform = 0, hunt = true) {
+  const flat = new Float32Array(4 * xyz.length);
+  xyz.forEach((c, i) => flat.set([c[0], c[1], c[2], 1], 4 * i));
+  const la = adaptingLuminance(flat), gain = hunt && la !== null ? huntChromaGain(la) : 1;
+  const rgb = await renderer.displayColours(xyz, { mode: 0, k: 1 / (1.2 * 2 ** ev100), transform, gain, logLo: 0, logHi: 1 });
+  return { rgb, gain };
 }
 
 async function main() {
@@ -305,7 +327,7 @@ async function main() {
   paramControls($("model").value);
   $("model").addEventListener("change", () => { paramControls($("model").value); schedule(); });
   for (const id of ["model-b", "sun-el", "sun-az", "lat", "lon", "time", "projection", "view-az",
-                    "view-el", "fov", "mode", "transform", "ev100", "fc-lo", "fc-hi"])
+                    "view-el", "fov", "mode", "transform", "hunt", "ev100", "fc-lo", "fc-hi"])
     $(id).addEventListener("input", schedule);
   for (const el of document.querySelectorAll("input[name=sunmode]")) el.addEventListener("change", schedule);
   $("auto-exp").addEventListener("change", schedule);

@@ -62,6 +62,14 @@ SETTERS.precomputed = (gl, u, s) => {
   gl.uniform1i(u("u_nsc"), s.nsc);
   gl.uniform2i(u("u_pc"), ...s.pc);
   gl.uniform2f(u("u_pp"), ...s.pp);
+  gl.uniform1i(u("u_tr"), 11);
+  gl.uniform1i(u("u_irr"), 12);
+  gl.uniform3i(u("u_ground_sizes"), s.textures.transmittance_spectral[1], s.textures.transmittance_spectral[2],
+               s.textures.irradiance_spectral[2]);
+  gl.uniform1i(u("u_nl"), s.nl);
+  gl.uniform1fv(u("u_albedo"), new Float32Array(16).fill(0).map((_, i) => s.albedo[i] ?? 0));
+  gl.uniform3fv(u("u_K"), new Float32Array(48).fill(0).map((_, i) => s.K[i] ?? 0));
+  gl.uniform1f(u("u_sun_alpha"), s.sun_alpha);
 };
 
 SETTERS.dobashi2002 = (gl, u, s) => {
@@ -104,25 +112,27 @@ const PREPASSES = {
   async precomputed(r, s) {
     const gl = r.gl;
     if (r.precomputed?.key !== s.lut_key) {
-      if (r.precomputed) for (const t of r.precomputed.tex) gl.deleteTexture(t);
-      const names = ["multiple_scattering", "single_scattering_0", "single_scattering_1"].filter((n) => n in s.textures);
+      if (r.precomputed) for (const [, t] of r.precomputed.tex) gl.deleteTexture(t);
+      // texture units: scattering tables 4-6, the ground's spectral tables 11-12 (hillaire2020 has 1-3 and 9-10, dobashi2002 7-8)
+      const units = { multiple_scattering: 4, single_scattering_0: 5, single_scattering_1: 6,
+                      transmittance_spectral: 11, irradiance_spectral: 12 };
       const tex = [];
-      for (const [k, name] of names.entries()) {
+      for (const name of Object.keys(units).filter((n) => n in s.textures)) {
         const resp = await fetch(`/api/lut?${new URLSearchParams({ key: s.lut_key, name })}`);
         if (!resp.ok) throw new Error(`table ${name}: ${(await resp.json()).error}`);
         const data = new Float32Array(await resp.arrayBuffer());
         const [d, h, w] = s.textures[name];
         const t = gl.createTexture();
-        gl.activeTexture(gl.TEXTURE4 + k);
+        gl.activeTexture(gl.TEXTURE0 + units[name]);
         gl.bindTexture(gl.TEXTURE_3D, t);
         gl.texStorage3D(gl.TEXTURE_3D, 1, gl.RGBA32F, w, h, d);
         gl.texSubImage3D(gl.TEXTURE_3D, 0, 0, 0, 0, w, h, d, gl.RGBA, gl.FLOAT, data);
         for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_3D, p, gl.NEAREST);
-        tex.push(t);
+        tex.push([units[name], t]);
       }
       r.precomputed = { key: s.lut_key, tex };
     }
-    r.precomputed.tex.forEach((t, k) => { gl.activeTexture(gl.TEXTURE4 + k); gl.bindTexture(gl.TEXTURE_3D, t); });
+    r.precomputed.tex.forEach(([unit, t]) => { gl.activeTexture(gl.TEXTURE0 + unit); gl.bindTexture(gl.TEXTURE_3D, t); });
     gl.activeTexture(gl.TEXTURE0);
   },
 
@@ -420,13 +430,14 @@ export class SkyRenderer {
     gl.uniform1i(u("u_mode"), display.mode);
     gl.uniform1f(u("u_k"), display.k);
     gl.uniform1i(u("u_transform"), display.transform);
+    gl.uniform1f(u("u_gain"), display.gain ?? 1);
     gl.uniform2f(u("u_log_range"), display.logLo, display.logHi);
     gl.bindVertexArray(this.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
   // The display pass applied to a list of linear XYZ colours: [[r, g, b] 0..255, ...] as
-  // read back from an 8-bit target (for the test against render/display.py).
+  // read back from an 8-bit target (for the test against imaging/display.py).
   async displayColours(xyz, display) {
     const gl = this.gl, n = xyz.length, src = this._ensureAux("colours", n, 1);
     const data = new Float32Array(4 * n);

@@ -28,7 +28,7 @@ float clamp1(float x) { return clamp(x, -1.0, 1.0); }
 // half the digits there)
 float angle_between(vec3 a, vec3 b) { return atan(length(cross(a, b)), dot(a, b)); }
 
-// skydome.render.projections.Equirect(hemisphere=True / False).direction_from_pixel at the
+// skydome.imaging.projections.Equirect(hemisphere=True / False).direction_from_pixel at the
 // pixel centre: row 0 at the zenith, elevation = 90 deg - span * row / H (span 90 or 180
 // deg), azimuth = 360 deg * col / W from north through east.
 vec3 equirect(vec2 px, vec2 size, float span) {
@@ -39,7 +39,7 @@ vec3 equirect(vec2 px, vec2 size, float span) {
     return vec3(ce * sin(az), ce * cos(az), sin(el));
 }
 
-// skydome.render.projections.Fisheye (Radiance angular fisheye looking up, north at the
+// skydome.imaging.projections.Fisheye (Radiance angular fisheye looking up, north at the
 // top, east on the left): zenith angle = pi * rho, rho in image widths from the centre.
 // On a non-square view the dome is the centred square of side min(width, height).
 vec3 fisheye(vec2 px, vec2 size) {
