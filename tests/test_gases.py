@@ -84,3 +84,26 @@ def test_default_sky_visible_almost_unchanged():
     r = xyz[0][:, 1] / xyz[1][:, 1] - 1.0
     assert np.all(r < 0) and np.all(r > -0.02)
     assert np.max(np.linalg.norm(xyz_to_xy(xyz[0]) - xyz_to_xy(xyz[1]), axis=-1)) < 0.005
+
+
+def test_fold_absorbers_keeps_the_medium():
+    """The mixed gases follow the air density, so they fold into Rayleigh's constituent: the
+    extinction at every altitude and the scattering are unchanged (the exponential profile's
+    density exp(-h/H) evaluated here, independently of the kernels)."""
+    from skydome.atmosphere import fold_absorbers
+
+    wl = np.array([450.0, 550.0, 687.0, 760.0, 940.0])
+    p = Atmosphere.earth().optical_properties(wl)
+    f, keep = fold_absorbers(p)
+    assert p.profile_code.size == 5 and f.profile_code.size == 4
+    assert list(keep) == [0, 1, 2, 3]              # rayleigh, aerosol, ozone, water vapour kept
+    assert np.array_equal(f.scattering, p.scattering[keep])
+    for h in (0.0, 1500.0, 8000.0, 30000.0):
+        def ext(q):
+            expo = q.profile_code == 0
+            return (np.exp(-h / q.profile_p0[expo])[:, None] * q.extinction[expo]).sum(axis=0)
+        assert np.allclose(ext(f), ext(p), rtol=1e-14, atol=0.0)
+    assert np.array_equal(f.extinction[2], p.extinction[2])   # the ozone layer untouched
+    # nothing to fold in a gas-free atmosphere
+    g = Atmosphere.earth(precipitable_water_cm=0.0, mixed_gases=False).optical_properties(wl)
+    assert fold_absorbers(g)[0].profile_code.size == g.profile_code.size

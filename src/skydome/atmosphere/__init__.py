@@ -26,7 +26,7 @@ from skydome.atmosphere.profiles import (DensityProfile, ExponentialProfile, Gau
                                          TentProfile, UniformProfile)
 from skydome.constants import DOBSON_UNIT, EARTH_RADIUS, H_MIE, H_RAYLEIGH, N_S_SURVEY
 
-__all__ = ["Atmosphere", "Constituent", "OpticalProperties", "SpectralCoefficient", "TabulatedPhase",
+__all__ = ["Atmosphere", "Constituent", "OpticalProperties", "fold_absorbers", "SpectralCoefficient", "TabulatedPhase",
            "ExponentialProfile", "TentProfile", "UniformProfile", "GaussianLayerProfile",
            "ozone_cross_section"]
 
@@ -281,6 +281,42 @@ class OpticalProperties(NamedTuple):
     phase_param: np.ndarray      # (nc,)
     ground_albedo: np.ndarray    # (nl,)
     phase_table: np.ndarray | None = None   # (nc, na, nl) [sr^-1] where any is tabulated
+
+
+def fold_absorbers(props: OpticalProperties) -> tuple[OpticalProperties, np.ndarray]:
+    """The same medium with fewer constituents: every purely absorbing constituent whose
+    density profile is identical to an earlier constituent's is folded into it.
+
+    Exact: constituents with one density profile n(h) add their extinction coefficients
+    (tau = integral of n(h) ds x sum of their extinctions), and a constituent that does
+    not scatter adds nothing to the scattering or the phase function. Used where a
+    fixed number of constituents is all there is room for (the viewer's shaders, which
+    pack four in a vec4): the uniformly mixed gases follow the air density, so they fold
+    into Rayleigh's constituent.
+
+    Returns the folded properties and the indices (into ``props``) of the constituents
+    kept, in order.
+    """
+    nc = int(props.profile_code.size)
+    target = np.arange(nc)
+    for j in range(nc):
+        if np.any(props.scattering[j] != 0.0):
+            continue
+        for i in range(j):
+            if (target[i] == i and props.profile_code[i] == props.profile_code[j]
+                    and props.profile_p0[i] == props.profile_p0[j]
+                    and props.profile_p1[i] == props.profile_p1[j]):
+                target[j] = i
+                break
+    keep = np.flatnonzero(target == np.arange(nc))
+    extinction = np.zeros((keep.size, props.extinction.shape[1]))
+    for k, i in enumerate(keep):
+        extinction[k] = props.extinction[target == i].sum(axis=0)
+    table = None if props.phase_table is None else props.phase_table[keep]
+    return props._replace(profile_code=props.profile_code[keep], profile_p0=props.profile_p0[keep],
+                          profile_p1=props.profile_p1[keep], scattering=props.scattering[keep],
+                          extinction=extinction, phase_code=props.phase_code[keep],
+                          phase_param=props.phase_param[keep], phase_table=table), keep
 
 
 # ---------------------------------------------------------------------------------------------

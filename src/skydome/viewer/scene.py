@@ -335,8 +335,10 @@ def _hillaire(sky) -> dict[str, Any]:
     wl = default_wavelengths()
     key = (round(sky.turbidity, 9), round(sky.observer_altitude_m, 6), sky.n_wavelengths)
     if key not in _HILLAIRE_CACHE:
+        from skydome.atmosphere import fold_absorbers
+
         tb = sky.tables(wl)                   # [Hil20] 4.1 transmittance, 5.5 Psi_ms (eqs. 5-10)
-        p = tb.props
+        p, _ = fold_absorbers(tb.props)       # mixed gases into Rayleigh: 4 constituents (exact)
         nl = tb.grid.size
         n4 = (nl + 3) // 4
         nc = int(p.profile_code.size)
@@ -402,9 +404,11 @@ def _dobashi(view) -> dict[str, Any]:
         wl = np.linspace(380.0, 780.0, view.N_WAVELENGTHS)
         tb = dy.build_tables(atm, wl, sun, cam.altitude_m, far, (-1.0, 1.0), view.N_DISTANCE,
                              view.N_ANGLE)                                       # eqs. (2)-(3)
+        from skydome.atmosphere import fold_absorbers
         from skydome.transport._medium import medium_from_properties
 
-        med = medium_from_properties(atm.optical_properties(wl))
+        props, keep = fold_absorbers(atm.optical_properties(wl))   # exact; see its docstring
+        med = medium_from_properties(props)
         nc = int(med.phase_code.size)
         if nc > 4:
             raise ValueError(f"the atmosphere has {nc} constituents; the viewer takes at most 4")
@@ -414,8 +418,10 @@ def _dobashi(view) -> dict[str, Any]:
                              "depend on the wavelength")
         W = _xyz_weights(wl)                                                    # (nl, 3)
         # J~_c = sum_l W_l E_sun,l beta_c,l J_c,l: eq. (1) per constituent, in XYZ
-        JX = np.einsum("dacl,cl,l,lk->cdak", tb.J, tb.scattering, tb.e_sun, W)
-        tex = np.concatenate([JX, np.transpose(tb.D, (2, 0, 1))[..., None]], axis=-1)   # (nc, nd, na, 4)
+        # (a folded absorber does not scatter, and its column densities are those of the
+        # constituent it joined: its J term is 0 and its optical depth is in ext below)
+        JX = np.einsum("dacl,cl,l,lk->cdak", tb.J[:, :, keep], tb.scattering[keep], tb.e_sun, W)
+        tex = np.concatenate([JX, np.transpose(tb.D[:, :, keep], (2, 0, 1))[..., None]], axis=-1)   # (nc, nd, na, 4)
         ref = dy.reference_sunlight(atm, sun, cam.altitude_m, wl)
         top = dy.shadow_volume_top(hm, sun.direction)
         # channel 3: the highest of the four heights that a bilinear sample in cell (j, i)
@@ -425,7 +431,7 @@ def _dobashi(view) -> dict[str, Any]:
         cell[:-1, :-1] = np.maximum(np.maximum(Hm[:-1, :-1], Hm[:-1, 1:]), np.maximum(Hm[1:, :-1], Hm[1:, 1:]))
         grid = np.stack([Hm, np.minimum(top, 1e30), dy.terrain_lambert(hm, sun.direction), cell], axis=-1)
         ext = np.zeros((4, wl.size))
-        ext[:nc] = tb.extinction
+        ext[:nc] = props.extinction
         _DOBASHI_CACHE.clear()
         _DOBASHI_CACHE[key] = {
             "lut_key": f"dobashi2002/{key}", "nc": nc, "nl": int(wl.size),
