@@ -162,6 +162,12 @@ def _sky_chunk(dni, dhi, sun, doy, td, rho, kwargs):
     as one more row per hour (h, P + 1, C), split off again by :func:`split_sun`."""
     from skydome.daylighting.skymatrix import perez_sky_matrix
 
+    # Writable copies: a worker receives its arguments as read-only arrays, for which numba
+    # compiles a second specialisation of the kernels whose floating-point contraction can
+    # differ in the last bit; the same specialisation everywhere keeps chunks bit-identical
+    # to a serial run.
+    dni, dhi, sun, doy, td, rho = (np.array(a) if isinstance(a, np.ndarray) else a
+                                   for a in (dni, dhi, sun, doy, td, rho))
     m = perez_sky_matrix(dni, dhi, sun, doy, dew_point_c=td, ground_reflectance=rho, **kwargs)
     if m.sun is None:
         return m.sky
