@@ -154,6 +154,8 @@ def test_chunk_bit_identical_with_read_only_arguments(days):
     """Workers get their arguments as read-only arrays (dask's zero-copy deserialisation);
     a chunk computed from them equals the serial chunk bit for bit (numba would otherwise
     run a second specialisation of the kernels, 1 ulp apart)."""
+    from skydome.distributed import sky_matrix_chunks
+
     chunks = sky_matrix_chunks(days, chunk_hours=24, **KW)[:2]
 
     def read_only(a):
