@@ -78,6 +78,16 @@ def _directions():
     return d, v.ravel(), p.ravel()
 
 
+def _disort_sky(sun_zenith, rho):
+    """DISORT's downwelling radiance at the ground (bottom of the layer) in _directions(),
+    per unit solar flux normal to the beam; with the view zeniths and azimuths."""
+    _, ui = _disort(np.cos(np.radians(sun_zenith)), rho)
+    _, v, p = _directions()
+    ref = np.array([float(np.squeeze(ui(-np.cos(np.radians(a)), TAU_R + TAU_A, np.radians(b))))
+                    for a, b in zip(v, p)])
+    return ref, v, p
+
+
 def _montecarlo(sun_zenith, rho, seeds, samples, radius=1e8):
     from skydome.spectra import solar_irradiance
 
@@ -98,8 +108,49 @@ def test_montecarlo_equals_disort_plane_parallel(sun_zenith, rho):
     mc = _montecarlo(sun_zenith, rho, seeds=(1, 2, 3, 4), samples=8192)
     mean = mc.mean(axis=0)
     sem = mc.std(axis=0, ddof=1) / np.sqrt(mc.shape[0])
-    _, ui = _disort(np.cos(np.radians(sun_zenith)), rho)
-    _, v, p = _directions()
-    ref = np.array([float(np.squeeze(ui(-np.cos(np.radians(a)), TAU_R + TAU_A, np.radians(b))))
-                    for a, b in zip(v, p)])
+    ref, v, p = _disort_sky(sun_zenith, rho)
     assert np.all(np.abs(mean - ref) <= 0.01 * ref + 3.0 * sem), np.c_[v, p, mean / ref, sem / ref]
+
+
+def _precomputed_over_disort(rho):
+    """precomputed (default settings, one table wavelength 550 nm) over DISORT in
+    _directions() at sun zenith 0, 30 and 60 deg: array (3 suns, directions)."""
+    from skydome.spectra import solar_irradiance
+
+    wl = np.array([550.0])
+    m = sd.model("precomputed", sun=sd.Sun(90.0, 180.0), atmosphere=_atmosphere(rho),
+                 table_wavelengths_nm=wl)
+    d, _, _ = _directions()
+    out = []
+    for sun_zenith in (0.0, 30.0, 60.0):
+        sun = sd.Sun(90.0 - sun_zenith, 180.0)
+        e0 = solar_irradiance(wl)[0] * sun.irradiance_scale
+        ref, _, _ = _disort_sky(sun_zenith, rho)
+        out.append(m.with_sun(sun).radiance(d, wl)[:, 0] / e0 / ref)
+    return np.array(out)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="precomputed's mu table (Bruneton's distance-to-top "
+                   "mapping) puts view zenith 0-70 deg in its first 1.2 % at planet radius "
+                   "1e8 m and an 8 km top: up to 10.7 % low against DISORT (docs/validation_measured.md)")
+def test_precomputed_equals_disort_plane_parallel():
+    """Downwelling radiance at the ground, view zenith 10-70 deg, azimuths 0 / 90 / 180 deg from
+    the sun, sun zenith 0 / 30 / 60 deg, ground albedo 0.3 (the sky and the ground term): the
+    precomputed model at its default settings (one table wavelength, 550 nm) on the layer of
+    the Monte Carlo test, planet radius 1e8 m, against DISORT within 2 %.
+
+    It is not: precomputed / DISORT - 1 is -0.7 % at view zenith 10, sun zenith 0, and falls
+    to -10.1 % at view zenith 50 deg, sun zenith 60 deg; max |difference| 10.1 %, RMS 6.0 %
+    over the 36 points (ground albedo 0: max 10.7 %, RMS 6.2 %; not run here, to keep the
+    test to one table build, about 60 s). The evidence points to table resolution, not
+    physics: the model's mu axis is linear in the distance to the top of
+    the atmosphere, from (top - r) at the zenith to the horizon distance sqrt(2 R H) =
+    1.26e6 m, so view zenith 0-70 deg (distances 8-23 km) fall in the first 1.2 % of the
+    axis, less than one interval of its 64 sky nodes. On Earth's radius (6.36e6 m) the same comparison
+    (ground albedo 0) is within 2.2 %, of which up to 0.8 % is sphericity (measured with the
+    Monte Carlo). Strict xfail: it is reported as passing (XPASS, an error) once the tables
+    resolve this limit, and the xfail must then be removed."""
+    r = _precomputed_over_disort(0.3) - 1.0
+    _, v, p = _directions()
+    assert np.all(np.abs(r) <= 0.02), np.c_[np.tile(v, 3), np.tile(p, 3), r.ravel()]
