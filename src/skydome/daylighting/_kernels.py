@@ -24,7 +24,7 @@ MAX_SUN_PATCHES = 4
 TILE_HOURS = 32
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)  # strict IEEE: see perez1993_patch_row
 def _perez_hour(dest, h, nodes, weights, offsets, centres, dom, s_dist, s_true, coef, e_diff,
                 e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min, means):
     """One hour's patch values (ground first) into ``dest`` (P + 1, C)."""
@@ -74,7 +74,7 @@ def _perez_hour(dest, h, nodes, weights, offsets, centres, dom, s_dist, s_true, 
             dest[k + 1, c] += v * grey[c]
 
 
-@njit(parallel=True, cache=True, fastmath=True)
+@njit(parallel=True, cache=True)  # strict IEEE: see perez1993_patch_row
 def fill_perez_sky(out, day, nodes, weights, offsets, centres, dom, s_dist, s_true, coef,
                    e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min):
     """Fill ``out[h]`` (P + 1, C) for each hour h with ``day[h]``; other hours are left as

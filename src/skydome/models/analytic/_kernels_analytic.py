@@ -292,7 +292,10 @@ def hosek_wilkie(d, s, cfg, rad):
             out[i, c] = v if v > 0.0 else 0.0
     return out
 # -- Perez 1993 over many suns and sky patches at once ([PSM93] eq. 1) --------------------------
-@njit(cache=True, fastmath=True)
+# Strict IEEE arithmetic (no fastmath) in the sky-matrix path: fastmath lets LLVM contract and
+# reorder differently in each compilation, and a matrix chunk compiled in a Dask worker then
+# differs from the serial run in the last bit; without it every compilation gives the same bits.
+@njit(cache=True)
 def perez1993_patch_row(nodes, weights, offsets, s, coef, cz_min, means):
     """Patch means of the relative luminance lv of one sky into ``means`` (P,).
 
