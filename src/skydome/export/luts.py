@@ -28,8 +28,11 @@ Textures (float32, C order, RGBA with A = 0, i.e. (z, y, x, 4)):
   function, same shape; multiply by the constituent's phase function P_k(nu) [sr^-1].
 
 The axis mappings are those of the model's ``textures.json`` (copied into the
-description, with its ``table_format``): r, mu and nu are [Bru17]'s, mu_s is the model's own
-zenith-angle mapping (``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s
+description, with its ``table_format``): r and nu are [Bru17]'s; mu is the model's own
+mapping of the angle from the local horizon (``precomputed._mapping.mu_unit``, table format
+3): on each half of the axis (ground rays, sky rays) x = asinh(e / 2 deg) / asinh(e_max /
+2 deg), e the angle from the horizon of radius r; mu_s is the model's own zenith-angle
+mapping (``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s
 distance-to-the-top mapping:
 
     x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)),
@@ -37,7 +40,8 @@ distance-to-the-top mapping:
 
 theta_s = acos(mu_s), theta_max = acos(mu_s_min), 0 at mu_s_min (clamped below), 1 at
 the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet radius.
-Bake format 2 (``LUT_FORMAT``) is the one with this mu_s axis; format 1 had [Bru17]'s.
+Bake format 3 (``LUT_FORMAT``) is the one with these mu and mu_s axes; format 2 had
+[Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes.
 
 References
 ----------
@@ -60,8 +64,9 @@ __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "ba
            "HILLAIRE_FORMAT", "LUT_MODELS", "LUT_FILE_FORMATS"]
 
 #: version 2: the mu_s axis is the model's zenith-angle mapping (table format
-#: skydome.precomputed/2), no longer [Bru17]'s
-LUT_FORMAT = "skydome.luts.bruneton-xyz/2"
+#: skydome.precomputed/2), no longer [Bru17]'s; version 3: the mu axis too is the model's
+#: (angle from the local horizon, table format skydome.precomputed/3)
+LUT_FORMAT = "skydome.luts.bruneton-xyz/3"
 #: the hillaire2020 bake (Hillaire's layout, XYZ)
 HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/1"
 #: models that have a bake
@@ -69,7 +74,7 @@ LUT_MODELS = ("precomputed", "hillaire2020")
 #: file formats of :func:`write_luts`
 LUT_FILE_FORMATS = ("exr", "npy", "bin")
 #: the model's table format whose axes this bake describes
-TABLE_FORMAT = "skydome.precomputed/2"
+TABLE_FORMAT = "skydome.precomputed/3"
 
 
 def xyz_weights_for_table(table_wavelengths_nm, wavelengths_nm=None) -> np.ndarray:
@@ -124,7 +129,7 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
                   for name, t in src["textures"].items()}
     if src.get("format") != TABLE_FORMAT:
         raise ValueError(f"textures.json format = {src.get('format')!r} is not supported; "
-                         f"valid: {TABLE_FORMAT!r} (the mu_s mapping this bake describes)")
+                         f"valid: {TABLE_FORMAT!r} (the mu and mu_s mappings this bake describes)")
     if 4 in src["phase_code"]:
         raise ValueError("the sky has a tabulated phase function (phase code 4): the LUT bake "
                          "stores XYZ single scattering for an analytic phase only; give the "

@@ -9,8 +9,9 @@ import os
 
 import numpy as np
 
-# version 2: the mu_s axis of [Bru17] replaced by the zenith-angle mapping of _mapping.mu_s_unit
-FORMAT = "skydome.precomputed/2"
+# version 2: the mu_s axis of [Bru17] replaced by the zenith-angle mapping of _mapping.mu_s_unit;
+# version 3: the mu axis of [Bru17] replaced by the horizon-angle mapping of _mapping.mu_unit
+FORMAT = "skydome.precomputed/3"
 
 
 def meta(model) -> dict:
@@ -109,10 +110,12 @@ def export_textures(model, folder) -> list:
                         "4": "tabulated (texture phase_table)"},
         "mappings": {
             "r": "x = rho/H, rho = sqrt(r^2 - R^2), H = sqrt(Rt^2 - R^2)",
-            "mu": "first half: rays hitting the ground, node 0 = horizon .. n/2-1 = nadir, "
-                  "x = (d - (r-R))/(rho - (r-R)), d the distance to the ground; second half: "
-                  "node n/2 = zenith .. n-1 = horizon, x = (d - (Rt-r))/(rho + H - (Rt-r)), "
-                  "d the distance to the top; node k of a half at x = k/(n/2-1)",
+            "mu": "x = asinh(e/w)/asinh(e_max/w), w = 2 deg, e the angle of the ray from the "
+                  "local horizon, whose dip below the horizontal is atan(rho/R): e = asin(mu) "
+                  "+ dip, e_max = 90 deg + dip for rays that do not hit the ground, e = -dip - "
+                  "asin(mu), e_max = 90 deg - dip for rays that do; first half: rays hitting "
+                  "the ground, node k = x (n/2-1) (node 0 = horizon .. n/2-1 = nadir); second "
+                  "half: node n/2 + (1 - x)(n/2-1) (node n/2 = zenith .. n-1 = horizon)",
             "mu_s": "x = (u(theta_max) - u(theta_s))/(u(theta_max) - u(0)), u(theta) = "
                     "asinh((theta - 92 deg)/6 deg), theta_s = acos(mu_s), theta_max = "
                     "acos(mu_s_min) (0 at mu_s_min, 1 at the zenith); node i at x = i/(n-1)",

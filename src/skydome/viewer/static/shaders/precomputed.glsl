@@ -57,27 +57,36 @@ float mu_s_unit(float mu_s, float mu_s_min) {
     return clamp(x, 0.0, 1.0);
 }
 
-// mu_index for a ray that does not hit the ground: the upper half of the mu axis
-void mu_index_sky(float r, float h, float mu, float H, int n_mu, out int i, out float b) {
-    float rho = sqrt(max(rho2_(h), 0.0));
+// the mu mapping's knee (_mapping.MU_WIDTH): 2 deg [rad]
+const float MU_WIDTH = 0.03490658503988659;
+const float HALF_PI = 1.5707963267948966;
+
+// mu_unit: position of a ray on its half of the mu axis, 0 at the local horizon, 1 at the
+// zenith (sky) or the nadir (ground): x = asinh(e / w) / asinh(e_max / w), e the angle
+// from the horizon, whose dip below the horizontal is atan(rho / R) (skydome's mapping,
+// not [Bru17]'s; the same for every R)
+float mu_unit(float h, float mu, bool ground) {
+    float dip = atan(sqrt(max(rho2_(h), 0.0)), u_R);
+    float a = asin(clamp1(mu));
+    float e = ground ? -dip - a : a + dip;
+    float top = asinh(max(ground ? HALF_PI - dip : HALF_PI + dip, 0.0) / MU_WIDTH);
+    if (top <= 0.0) return 0.0;
+    return clamp(asinh(max(e, 0.0) / MU_WIDTH) / top, 0.0, 1.0);
+}
+
+// mu_index for a ray that does not hit the ground: the upper half of the mu axis (node
+// n/2 the zenith, n - 1 the horizon)
+void mu_index_sky(float h, float mu, int n_mu, out int i, out float b) {
     int half_ = n_mu / 2;
-    float rmu = r * mu;
-    float disc = rmu * rmu - rho2_(h);                       // r^2 mu^2 - r^2 + R^2
-    float d = -rmu + sqrt(max(disc + H * H, 0.0));
-    float d_min = (u_Rt - u_R) - h, d_max = rho + H;
-    float x = (d - d_min) / (d_max - d_min);
-    split_(x * (float(half_) - 1.0), half_, i, b);
+    split_((1.0 - mu_unit(h, mu, false)) * (float(half_) - 1.0), half_, i, b);
     i += half_;
 }
 
 // mu_index for a ray that hits the ground: the lower half of the mu axis (node 0 the
-// horizon, n/2 - 1 the nadir); dg the distance to the ground
-void mu_index_ground(float h, float dg, int n_mu, out int i, out float b) {
-    float rho = sqrt(max(rho2_(h), 0.0));
+// horizon, n/2 - 1 the nadir)
+void mu_index_ground(float h, float mu, int n_mu, out int i, out float b) {
     int half_ = n_mu / 2;
-    float d_min = h, d_max = rho;
-    float x = d_max <= d_min ? 0.0 : (dg - d_min) / (d_max - d_min);
-    split_((float(half_) - 1.0) * (1.0 - x), half_, i, b);
+    split_(mu_unit(h, mu, true) * (float(half_) - 1.0), half_, i, b);
 }
 
 // transport._geometry.distance_to_ground: -r mu - sqrt(r^2 mu^2 - (r^2 - R^2)), written as
@@ -171,8 +180,8 @@ vec3 sky_xyz(vec3 d) {
     float a, b, c, e;
     split_(sqrt(max(rho2_(h), 0.0)) / H * float(u_sizes.x - 1), u_sizes.x, ir, a);   // r_index
     float dg = ground ? distance_to_ground(r, h, mu) : 0.0;
-    if (ground) mu_index_ground(h, dg, u_sizes.y, im, b);
-    else mu_index_sky(r, h, mu, H, u_sizes.y, im, b);
+    if (ground) mu_index_ground(h, mu, u_sizes.y, im, b);
+    else mu_index_sky(h, mu, u_sizes.y, im, b);
     split_(mu_s_unit(mu_s, u_mu_s_min) * float(u_sizes.z - 1), u_sizes.z, ims, c);
     split_((nu + 1.0) * 0.5 * float(u_sizes.w - 1), u_sizes.w, inu, e);
     vec3 acc = quad(u_ms, ir, a, im, b, ims, c, inu, e);
