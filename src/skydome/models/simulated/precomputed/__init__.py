@@ -65,8 +65,9 @@ class PrecomputedSky(SkyModel):
         Transmittance (column) table size, default 256 x 64.
     scattering_r_size, scattering_mu_size, scattering_mu_s_size, scattering_nu_size : int
         4-D scattering table size, default 32 x 128 x 48 x 16 (``scattering_mu_size`` even;
-        mu_s on a sunset-centred mapping of the sun's zenith angle, the same for every
-        planet radius).
+        mu on a horizon-centred mapping of the view ray's angle from the local horizon, half
+        the nodes for rays that hit the ground; mu_s on a sunset-centred mapping of the sun's
+        zenith angle; both the same for every planet radius).
     irradiance_mu_s_size, irradiance_r_size : int
         Ground-irradiance table size, default 64 x 16.
     integration_samples : int

@@ -1,6 +1,7 @@
 """The scattering density J ([Bru17] ComputeScatteringDensity, [BN08] eq. 7): the radiance of
 the previous order arriving at each node (with one more ground reflection) and the phase
-matrix of the quadrature over the sphere.
+matrix of the quadrature over the sphere. The previous order is read from the 4-D table
+(:func:`._lookup.sky_lookup_acc`: mu on :func:`._mapping.mu_unit`).
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """Direct ([Bru17] ComputeDirectIrradiance) and indirect ([Bru17] ComputeIndirectIrradiance,
-[BN08] eq. 9) irradiance on a horizontal surface, per unit solar irradiance.
+[BN08] eq. 9) irradiance on a horizontal surface, per unit solar irradiance (the sky
+radiance read from the 4-D table, mu on :func:`._mapping.mu_unit`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """Table lookups of the precomputed model: columns and transmittance ([Bru17]
 GetTransmittance), the sun's visible fraction, the 4-D scattering and 2-D irradiance tables
-([Bru17] GetScattering, GetIrradiance), and the transmittance-weighted quadrature weights.
+([Bru17] GetScattering, GetIrradiance; mu on :func:`._mapping.mu_unit`), and the
+transmittance-weighted quadrature weights.
 """
 
 from __future__ import annotations

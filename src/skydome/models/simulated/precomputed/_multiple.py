@@ -1,5 +1,6 @@
 """Multiple scattering ([Bru17] ComputeMultipleScattering, [BN08] eq. 8): one order on the 4-D
-table, and orders 2..N on the observer's own sky map.
+table (its view rays from :func:`._mapping.table_ray`, mu on :func:`._mapping.mu_unit`), and
+orders 2..N on the observer's own sky map.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """Rendering from the tables: the observer's sky ([Bru17] GetSkyRadiance, with the ground and
-GetSunAndSkyIrradiance) and aerial perspective ([Bru17] GetSkyRadianceToPoint).
+GetSunAndSkyIrradiance) and aerial perspective ([Bru17] GetSkyRadianceToPoint); the 4-D
+tables' mu axis on :func:`._mapping.mu_unit`.
 """
 
 from __future__ import annotations

@@ -1,5 +1,7 @@
 """Single scattering tables ([Bru17] ComputeSingleScattering, [BN08] eq. 4), per scattering
-constituent, without the phase function.
+constituent, without the phase function. The view rays are the nodes of the 4-D table
+(:func:`._mapping.table_ray`: mu on :func:`._mapping.mu_unit`); the sun's transmittance is
+looked up in the transmittance table on [Bru17]'s distance-to-the-top mapping.
 """
 
 from __future__ import annotations
