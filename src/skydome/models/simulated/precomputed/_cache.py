@@ -24,7 +24,7 @@ import shutil
 import numpy as np
 
 # bump when the tables' meaning or layout changes (mapping, units, fields)
-CACHE_FORMAT = "skydome.precomputed-cache/2"
+CACHE_FORMAT = "skydome.precomputed-cache/3"
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 

@@ -3,9 +3,11 @@ further order the scattering density, the indirect irradiance and the multiple s
 
 Each step is one function here calling its numba kernel (modules ``_single``, ``_density``,
 ``_irradiance``, ``_multiple``; called through the module so that a benchmark can time
-them). Working memory: the 4-D tables are float32, the incident radiance and the
-right-hand side of the scattering-density product are float32, the previous order is kept
-only as its per-wavelength totals, and the geometric remainder is added in place.
+them). No order's radiance is tabulated: the incident radiance and ground irradiance of
+orders >= 3 are ray integrals of the previous order's scattering density, and the stored
+multiple-scattering table is one integral of the summed density. Working memory: float32
+throughout, the orders computed one batch of wavelengths at a time (only the batch's last
+order's density kept), the geometric remainder added in place.
 """
 
 from __future__ import annotations
@@ -126,7 +128,12 @@ def precompute(props, wl, p):
     # 1. transmittance; 2. single scattering
     col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
     ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
-    report("precomputing tables: scattering orders", 1, p["orders"])
+    # the orders of each wavelength are independent of the other wavelengths': all orders of
+    # one batch of wavelengths at a time (progress: order 1, then orders 2..N per batch)
+    nb = order_batch_size(p, nl, nsc)
+    n_batch = -(-nl // nb)
+    n_steps = 1 + n_batch * (p["orders"] - 1)
+    report("precomputing tables: scattering orders", 1, n_steps)
     ms = None   # orders 2..N (step 4)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
@@ -143,20 +150,12 @@ def precompute(props, wl, p):
         # the scattering density's own mu_s axis (same mapping, its own node count)
         n_ms_j = p["density_mu_s_size"] or p["scattering_mu_s_size"]
         J_sum = np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
-        # the orders of each wavelength are independent of the other wavelengths': all
-        # orders of one batch of wavelengths at a time, the batch sized so that its working
-        # arrays (one order's J, the incident radiance, the matrix right-hand side) fit
-        # ORDER_BATCH_BYTES
-        # (the ray integrals' geometry is the same for every wavelength and is recomputed
-        # per batch: the fewest batches that fit, of equal size)
-        per_wl = 4 * n_r * n_ms_j * (max(q2.n_out, q3.n_out) * nsc + q2.n_in + 10)
-        n_batch = -(-nl // int(min(nl, max(1, ORDER_BATCH_BYTES // per_wl))))
-        nb = -(-nl // n_batch)
-        for l0 in range(0, nl, nb):
+        for b, l0 in enumerate(range(0, nl, nb)):
             sl = slice(l0, min(nl, l0 + nb))
             orders_batch(ss[..., sl], col, codes, p0s, p1s, sc_idx, beta_e[:, sl],
                          beta_s[:, sl], pc, pp, pt[..., sl], albedo[sl], R, Rt, mu_s_min,
-                         alpha, q2, q3, l0, n_ms_j, n_q_ms, p, J_sum[..., sl], E[..., sl])
+                         alpha, q2, q3, l0, n_ms_j, n_q_ms, p, J_sum[..., sl], E[..., sl],
+                         (b * (p["orders"] - 1), n_steps))
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
         ms = np.empty(ss.shape[1:], dtype=np.float32)
@@ -181,6 +180,18 @@ def precompute(props, wl, p):
 ORDER_BATCH_BYTES = 400_000_000
 
 
+def order_batch_size(p, nl, nsc):
+    """Wavelengths per batch of the order loop: the fewest batches of equal size whose
+    working arrays (one order's J on the full outgoing grid, order 2's incident radiance,
+    the matrix right-hand side; float32) fit ``ORDER_BATCH_BYTES`` (the ray integrals'
+    geometry is the same for every wavelength and is recomputed per batch)."""
+    n = p["sphere_samples"]
+    n_cols = p["scattering_r_size"] * (p["density_mu_s_size"] or p["scattering_mu_s_size"])
+    per_wl = 4 * n_cols * ((2 * n + 1) * (n + 1) * nsc + n * n + 10)
+    n_batch = -(-nl // int(min(nl, max(1, ORDER_BATCH_BYTES // per_wl))))
+    return -(-nl // n_batch)
+
+
 # zenith samples of the hemisphere of the ground irradiance of orders >= 2 (see orders_batch)
 IRRADIANCE_HIGH_ORDER_SAMPLES = 8
 
@@ -195,7 +206,7 @@ def _hemisphere(n):
 
 
 def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, albedo, R, Rt,
-                 mu_s_min, alpha, q2, q3, l0, n_ms_j, n_q, p, J_sum, E):
+                 mu_s_min, alpha, q2, q3, l0, n_ms_j, n_q, p, J_sum, E, progress=(0, None)):
     """Steps 3a-3c for orders 2..N of one batch of wavelengths (every array given on the
     batch's wavelengths; ``l0`` the index of its first table wavelength): the scattering
     density of each order into ``J_sum`` (written by order 2, then summed; J_sum on the
@@ -206,7 +217,8 @@ def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, a
     single-scattering table ([Bru17] ComputeScatteringDensity), that of every later order
     is integrated along each incident ray from the previous order's J
     (:func:`._density.incident_radiance_rays`), and so is the ground irradiance of orders
-    >= 2 (:func:`._irradiance.indirect_irradiance_rays`); only the last order's J is kept."""
+    >= 2 (:func:`._irradiance.indirect_irradiance_rays`); only the last order's J is kept.
+    ``progress``: (steps done before this batch, total steps) of the progress report."""
     from skydome.models.simulated.precomputed import _density, _irradiance
 
     nl = ss.shape[-1]
@@ -275,7 +287,8 @@ def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, a
         # totals of this order's density per wavelength (mean over its grid, so that grids
         # of different sizes compare), for the geometric remainder
         tot_prev, tot = tot, J.reshape(-1, nl).mean(axis=0, dtype=np.float64)
-        report("precomputing tables: scattering orders", order, p["orders"])
+        report("precomputing tables: scattering orders", progress[0] + order,
+               progress[1] or p["orders"])
     if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
         # the orders beyond N as a geometric series whose ratio f is that of the last two
         # orders' scattering density, per wavelength (the idea of [Hil20] eq. 10; the
