@@ -9,7 +9,9 @@ the precomputation wall time and the luminance RMS / max relative error per sky 
 weighted, as in ``validate_multiple_scattering.py``) and the Monte Carlo noise floor.
 
 Run: python benchmarks/accuracy_precomputed.py [--refs FILE] [--samples N] [--settings a,b]
-[--skies 0,2] [--against full_orders] [--table-wavelengths]
+[--skies 0,2] [--against full_orders] [--table-wavelengths] [--save FILE]
+(``--save``: every setting's radiance per sky in an ``.npz`` file, to compare two versions
+of the code on the same directions.)
 """
 
 from __future__ import annotations
@@ -57,6 +59,7 @@ def main(argv=None):
                     "against this setting's radiance (the first in --settings; no MC noise)")
     ap.add_argument("--table-wavelengths", action="store_true",
                     help="tables on the 6 compared wavelengths instead of 20 over 380-780 nm")
+    ap.add_argument("--save", default="", help="write every radiance to this .npz file")
     args = ap.parse_args(argv)
 
     import skydome as sd
@@ -103,6 +106,8 @@ def main(argv=None):
                 print(f"    sun {elev:5.1f}: lum RMS {100 * c['rms']:5.2f} %  max "
                       f"{100 * c['max']:5.2f} %  (MC noise {100 * c['noise']:.2f} %){extra}",
                       flush=True)
+                if args.save:
+                    np.savez(args.save, **{f"{n}_{kk}": v for (n, kk), v in got.items()})
 
 
 if __name__ == "__main__":

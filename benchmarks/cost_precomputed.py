@@ -25,7 +25,8 @@ import time
 import numpy as np
 
 STAGES = ("build_column_table", "single_scattering_table", "incident_radiance",
-          "indirect_irradiance", "multiple_scattering_table", "density_products")
+          "incident_radiance_rays", "indirect_irradiance", "indirect_irradiance_rays",
+          "multiple_scattering_table", "density_products")
 
 
 def _parse(text):
@@ -45,7 +46,8 @@ def _parse(text):
 @contextlib.contextmanager
 def _instrument(rec, order_totals):
     """Wrap the kernels that the precomputation calls through their modules; record wall
-    and CPU time per call, and the total of each order's multiple-scattering table."""
+    and CPU time per call, and the total of each order's scattering density (the calls of
+    the matrix products come batch by batch of wavelengths, orders 2..N within each)."""
     from skydome.models.simulated.precomputed import (_density, _irradiance, _multiple,
                                                       _precompute, _single)
     from skydome.transport import _kernels as K
@@ -63,8 +65,8 @@ def _instrument(rec, order_totals):
                 r = _f(*a)
                 rec.setdefault(_n, []).append((time.perf_counter() - w0,
                                                time.process_time() - c0))
-                if _n == "multiple_scattering_table":
-                    order_totals.append(float(np.asarray(a[-1]).sum(dtype=np.float64)))
+                if _n == "density_products":
+                    order_totals.append(float(np.asarray(a[5]).mean(dtype=np.float64)))
                 return r
 
             setattr(mod, name, g)
@@ -88,8 +90,14 @@ def main(argv=None):
     small = dict(scattering_r_size=4, scattering_mu_size=8, scattering_mu_s_size=4,
                  scattering_nu_size=2, irradiance_mu_s_size=4, irradiance_r_size=4,
                  transmittance_mu_size=8, transmittance_r_size=4)
+    from skydome.models.simulated.precomputed import _precompute
+
     t0 = time.perf_counter()
+    # one wavelength per batch, so that the kernels taking a batch's view of the
+    # single-scattering table (not contiguous) are compiled here too
+    budget, _precompute.ORDER_BATCH_BYTES = _precompute.ORDER_BATCH_BYTES, 1
     sd.model("precomputed", sun=sun, n_wavelengths=2, orders=3, cache=False, **small)
+    _precompute.ORDER_BATCH_BYTES = budget
     print(f"kernel compile/load: {time.perf_counter() - t0:.1f} s")
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     rec, totals = {}, []
@@ -114,12 +122,12 @@ def main(argv=None):
                   f"[{', '.join(f'{x:.1f}' for x in v[:, 1])}]")
     print(f"  {'other':28s} {'':7s}         {cpu - par:7.1f} s CPU")
     print(f"estimated idle wall on 2 cores: {par / 2 + (cpu - par):.1f} s")
-    n_orders = len(rec.get("density_products", ()))
-    if n_orders:
-        # one multiple-scattering integral per order (on the per-order table), then the
-        # stored table from the summed density
-        tot = np.array(totals[:n_orders])
-        print("per-order tables' totals (share of orders 2..N, without the remainder):")
+    n_orders = int(kw.get("orders", 6)) - 1
+    if totals and n_orders > 0:
+        # mean scattering density of each order (over its outgoing grid), summed over the
+        # wavelength batches
+        tot = np.array(totals).reshape(-1, n_orders).sum(axis=0)
+        print("scattering density per order (share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
             print(f"  order {i + 2}: {100 * t / tot.sum():5.2f} %")
 

@@ -82,13 +82,10 @@ class PrecomputedSky(SkyModel):
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
     order_table_divisor : int
-        1 (default): every order on the full 4-D table. 2, ...: a faster approximation:
-        each order's radiance, which is only the source of the next order, on a table this
-        many times coarser in mu, mu_s and nu (never below 32 x 16 x 8), the scattering
-        density of orders >= 3 on an outgoing grid this many times coarser, and the stored
-        multiple-scattering table integrated once, at full size, from the summed density.
-        At 2: 2.5x less CPU time and 1.46 GB instead of 2.25 GB peak at 20 wavelengths, but
-        0.9-2.8 % RMS off the default at AOD 0.5 (docs/models.md, "Cost of the
+        1 (default): the scattering density of every order on the full outgoing grid.
+        2, ...: a faster approximation: the density of orders >= 3 on an outgoing grid this
+        many times coarser in the angle from the sun and the azimuth about it (never below
+        33 x 17), interpolated into the summed density (docs/models.md, "Cost of the
         precomputation").
     max_sun_zenith_deg : float
         Largest sun zenith angle in the tables [deg], [90, 120] (default 108: astronomical

@@ -15,12 +15,39 @@ from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_t
 from skydome.models.simulated.precomputed._irradiance import direct_irradiance_acc
 from skydome.models.simulated.precomputed._lookup import (columns_segment, irradiance_lookup_acc,
                                                            sky_lookup_acc)
-from skydome.models.simulated.precomputed._mapping import cell_r, mu_s_from_unit
+from skydome.models.simulated.precomputed._mapping import cell_r, mu_s_frame, mu_s_from_unit
+from skydome.models.simulated.precomputed._multiple import ray_integral
 from skydome.transport._kernels import phase_value
 from skydome.transport._phase import phase_coded
 
 INV_PI = 1.0 / math.pi
 
+
+
+@njit(cache=True, fastmath=True)
+def ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, alpha, r, ct, mu_s, nu, w1, w2, cs,
+                         tg, eg, out):
+    """out[l] += radiance reflected by the (Lambertian) ground towards r along the ray of
+    zenith cosine ct (which hits the ground) and sun cosine nu, the sun at mu_s: transmittance
+    to the ground x albedo / pi x the ground irradiance of the previous order (``first``: the
+    direct sun's, else the table ``dE``) ([Bru17] ComputeScatteringDensity, ground term)."""
+    nl = out.shape[0]
+    nc = col.shape[0]
+    dg = distance_to_ground(r, ct, R)
+    columns_segment(col, r, ct, dg, True, R, Rt, w1, w2, cs)
+    for l in range(nl):
+        s = 0.0
+        for c in range(nc):
+            s += beta_e[c, l] * cs[c]
+        tg[l] = math.exp(-s) * albedo[l] * INV_PI
+    mu_g = clamp_cos((r * mu_s + dg * nu) / R)
+    eg[:] = 0.0
+    if first:
+        direct_irradiance_acc(col, beta_e, R, mu_g, R, Rt, alpha, 1.0, cs, eg)
+    else:
+        irradiance_lookup_acc(dE, R, mu_g, R, Rt, 1.0, eg)
+    for l in range(nl):
+        out[l] += tg[l] * eg[l]
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -63,21 +90,57 @@ def incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, 
                 sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, ground, R, Rt, mu_s_min,
                                1.0, o)
                 if ground:
-                    dg = distance_to_ground(r, ct, R)
-                    columns_segment(col, r, ct, dg, True, R, Rt, w1, w2, cs)
-                    for l in range(nl):
-                        s = 0.0
-                        for c in range(nc):
-                            s += beta_e[c, l] * cs[c]
-                        tg[l] = math.exp(-s) * albedo[l] * INV_PI
-                    mu_g = clamp_cos((r * mu_s + dg * nu) / R)
-                    eg[:] = 0.0
-                    if first:
-                        direct_irradiance_acc(col, beta_e, R, mu_g, R, Rt, alpha, 1.0, cs, eg)
-                    else:
-                        irradiance_lookup_acc(dE, R, mu_g, R, Rt, 1.0, eg)
-                    for l in range(nl):
-                        o[l] += tg[l] * eg[l]
+                    ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, alpha, r, ct, mu_s,
+                                         nu, w1, w2, cs, tg, eg, o)
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, R, Rt, mu_s_min,
+                           n_q, ts, n_r, n_ms, th_in, ph_in, out):
+    """Radiance of the previous order arriving at each (r, mu_s) node of the scattering
+    density from the incident directions, as :func:`incident_radiance` for orders >= 3 but
+    integrated along each incident ray from the previous order's scattering density ``J``
+    ([BN08] eq. 8, :func:`._multiple.ray_integral`: the quadrature and exact density
+    profiles of :func:`._multiple.multiple_scattering_table`) instead of interpolated from
+    a 4-D table of that order, plus the light the ground reflects once more (irradiance
+    table ``dE`` of the order before). out[i, r, mu_s, l] (float32), directions as in
+    :func:`incident_radiance`. One work item per (r, mu_s) node (no per-ray allocation)."""
+    n_th = th_in.shape[0]
+    n_ph = ph_in.shape[0]
+    nl = out.shape[3]
+    nc = col.shape[0]
+    nsc = J.shape[0]
+    frame = mu_s_frame(mu_s_min)
+    for idx in prange(n_r * n_ms):
+        ir = idx // n_ms
+        ims = idx % n_ms
+        tq = np.empty(2 * n_q)
+        wq = np.empty(2 * n_q)
+        w1 = np.empty(nc)
+        w2 = np.empty(nc)
+        cs = np.empty(nc)
+        tw = np.empty((nsc, nl))
+        acc = np.empty(nl)
+        tg = np.empty(nl)
+        eg = np.empty(nl)
+        r = cell_r(ir, n_r, R, Rt)
+        mu_s = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        for a in range(n_th):
+            nu = math.cos(th_in[a])
+            sg = math.sin(th_in[a])
+            for b in range(n_ph):
+                ct = clamp_cos(nu * mu_s + sg * math.cos(ph_in[b]) * sin_s)
+                ground = hits_ground(r, ct, R)
+                acc[:] = 0.0
+                ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
+                             nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, acc)
+                if ground:
+                    ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
+                                         nu, w1, w2, cs, tg, eg, acc)
+                o = out[a * n_ph + b, ir, ims]
+                for l in range(nl):
+                    o[l] = acc[l]
 
 
 @njit(parallel=True, cache=True)

@@ -7,10 +7,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos
 from skydome.models.simulated.precomputed._lookup import columns_at, sky_lookup_acc
+from skydome.models.simulated.precomputed._mapping import mu_s_frame
+from skydome.models.simulated.precomputed._multiple import ray_integral
 
 
 
@@ -53,3 +56,43 @@ def indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th, ph, d
                 nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)
                 sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, False, R, Rt, mu_s_min,
                                2.0 * ct * d_omega[a], o)
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q, ts,
+                             th, ph, d_omega, out):
+    """:func:`indirect_irradiance` for an order >= 2 whose radiance is not tabulated: the
+    radiance of each hemisphere direction integrated along its ray from that order's
+    scattering density ``J`` ([BN08] eq. 8 and 9, :func:`._multiple.ray_integral`, the
+    quadrature of the multiple-scattering table), on the irradiance table's nodes."""
+    n_r, n_m, nl = out.shape
+    nc = col.shape[0]
+    nsc = J.shape[0]
+    frame = mu_s_frame(mu_s_min)
+    for idx in prange(n_r * n_m):
+        ir = idx // n_m
+        im = idx % n_m
+        tq = np.empty(2 * n_q)
+        wq = np.empty(2 * n_q)
+        w1 = np.empty(nc)
+        w2 = np.empty(nc)
+        cs = np.empty(nc)
+        tw = np.empty((nsc, nl))
+        acc = np.zeros(nl)
+        one = np.empty(nl)
+        r = R + (Rt - R) * ir / (n_r - 1.0)
+        mu_s = -1.0 + 2.0 * im / (n_m - 1.0)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        for a in range(th.shape[0]):
+            ct = math.cos(th[a])
+            st = math.sin(th[a])
+            w = 2.0 * ct * d_omega[a]
+            for b in range(ph.shape[0]):
+                nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)
+                one[:] = 0.0
+                ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
+                             nu, False, n_q, ts, tq, wq, w1, w2, cs, tw, one)
+                for l in range(nl):
+                    acc[l] += w * one[l]
+        for l in range(nl):
+            out[ir, im, l] = acc[l]

@@ -122,9 +122,16 @@ def node_weights(col, r, mu, t, ground, rt, w_q, R, Rt, codes, p0s, p1s, sc_idx,
     scattering constituent k times its density at the node: tw[k, l] (the weights of J_k
     in the ray integrals of :func:`multiple_scattering_table` and
     :func:`multiple_scattering_slice`)."""
-    nl = tw.shape[1]
-    nc = col.shape[0]
     columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
+    weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw)
+
+
+@njit(cache=True, fastmath=True)
+def weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw):
+    """tw[k, l] of :func:`node_weights` from the columns ``cs`` between the ray's start and
+    the node (at radius rt)."""
+    nl = tw.shape[1]
+    nc = cs.shape[0]
     for l in range(nl):
         s = 0.0
         for c in range(nc):

@@ -12,7 +12,8 @@ from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along, ray_nodes)
-from skydome.models.simulated.precomputed._lookup import node_weights
+from skydome.models.simulated.precomputed._lookup import (columns_at, node_weights,
+                                                           weights_from_columns)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
                                                             density_phi_index, mu_s_frame,
                                                             mu_s_nodes, r_index, table_ray)
@@ -43,6 +44,38 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
                     for l in range(nl):
                         out[l] += (wa * row0[l] + wb * row1[l]) * twk[l]
 
+
+
+@njit(cache=True, fastmath=True)
+def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, mu_s, nu, ground,
+                 n_q, ts, tq, wq, w1, w2, cs, tw, acc):
+    """acc[l] += int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt along one
+    ray ([BN08] eq. 8) from radius r in the direction of zenith cosine mu and sun cosine nu,
+    the sun at zenith cosine mu_s, to the ground (``ground``) or the top: the quadrature of
+    :func:`multiple_scattering_table` (nodes of :func:`._geometry.ray_nodes`, exact density
+    profiles, J interpolated in the sun's frame) for a single ray, without per-ray
+    allocations (``tq``, ``wq``: 2 n_q scratch; ``w1``, ``w2``, ``cs``: per column; ``tw``
+    [k, l] in the precision of ``acc``)."""
+    nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+    nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+    jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
+    # the columns at the ray's start, once ([Bru17] GetTransmittance: for rays to the ground
+    # both ends reversed, as in :func:`._lookup.columns_segment`)
+    columns_at(col, r, -mu if ground else mu, R, Rt, w2)
+    for q in range(nq):
+        t = tq[q]
+        rt = point_along(r, mu, t, R, Rt)
+        mt = clamp_cos((r * mu + t) / rt)
+        jr, ja = r_index(rt, n_rj, R, Rt)
+        columns_at(col, rt, -mt if ground else mt, R, Rt, w1)
+        for kc in range(cs.shape[0]):
+            cs[kc] = max(w1[kc] - w2[kc], 0.0) if ground else max(w2[kc] - w1[kc], 0.0)
+        weights_from_columns(cs, rt, wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tw)
+        mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
+        ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
+        ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
+        density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, acc)
 
 
 @njit(parallel=True, cache=True, fastmath=True)

@@ -3,9 +3,11 @@ further order the scattering density, the indirect irradiance and the multiple s
 
 Each step is one function here calling its numba kernel (modules ``_single``, ``_density``,
 ``_irradiance``, ``_multiple``; called through the module so that a benchmark can time
-them). Working memory: the 4-D tables are float32, the incident radiance and the
-right-hand side of the scattering-density product are float32, the previous order is kept
-only as its per-wavelength totals, and the geometric remainder is added in place.
+them). No order's radiance is tabulated: the incident radiance and ground irradiance of
+orders >= 3 are ray integrals of the previous order's scattering density, and the stored
+multiple-scattering table is one integral of the summed density. Working memory: float32
+throughout, the orders computed one batch of wavelengths at a time (only the batch's last
+order's density kept), the geometric remainder added in place.
 """
 
 from __future__ import annotations
@@ -96,7 +98,7 @@ class _DensityQuadrature:
 def precompute(props, wl, p):
     """Every table for the optical properties ``props`` (of the atmosphere on ``wl``) with
     the validated settings ``p`` (a dict of the model's parameters) -> :class:`._tables.Tables`."""
-    from skydome.models.simulated.precomputed import _density, _irradiance, _multiple
+    from skydome.models.simulated.precomputed import _multiple
     from skydome.models.simulated.precomputed._tables import Tables
 
     t_start = time.perf_counter()
@@ -126,99 +128,39 @@ def precompute(props, wl, p):
     # 1. transmittance; 2. single scattering
     col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
     ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
-    report("precomputing tables: scattering orders", 1, p["orders"])
+    # the orders of each wavelength are independent of the other wavelengths': all orders of
+    # one batch of wavelengths at a time (progress: order 1, then orders 2..N per batch)
+    nb = order_batch_size(p, nl, nsc)
+    n_batch = -(-nl // nb)
+    n_steps = 1 + n_batch * (p["orders"] - 1)
+    report("precomputing tables: scattering orders", 1, n_steps)
     ms = None   # orders 2..N (step 4)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
     if p["orders"] >= 2:
-        q = q2 = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
+        q2 = _DensityQuadrature(pc, pp, pt, p["sphere_samples"])
         # orders >= 3 (smooth: their sources are scattered at least twice) with their own,
-        # coarser sphere of incident directions and an outgoing grid order_table_divisor
-        # times coarser (interpolated up into the summed density)
+        # coarser sphere of incident directions and, with order_table_divisor > 1, an
+        # outgoing grid that many times coarser (interpolated up into the summed density)
         div = p["order_table_divisor"]
         n_high = min(p["high_order_sphere_samples"] or p["sphere_samples"], p["sphere_samples"])
         n_out_high = min(p["sphere_samples"], max(ORDER_DENSITY_MIN, p["sphere_samples"] // div))
         q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
             pc, pp, pt, n_high, n_out_high)
-        # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
-        # hemisphere; phi on [0, pi] doubled)
-        n_ti = 16
-        th_i = (np.arange(n_ti) + 0.5) * (0.5 * np.pi) / n_ti
-        ph_i = (np.arange(2 * n_ti) + 0.5) * np.pi / (2 * n_ti)
-        dom_i = np.sin(th_i) * (0.5 * np.pi / n_ti) * (np.pi / (2 * n_ti))
-        dE = np.zeros_like(E)
         # the scattering density's own mu_s axis (same mapping, its own node count)
         n_ms_j = p["density_mu_s_size"] or p["scattering_mu_s_size"]
-        L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-        # right-hand sides of the factored (polynomial) phase functions only
-        rhs = np.empty((10, n_r * n_ms_j * nl), dtype=np.float32)
-        # weight of each constituent at every (r, mu_s, l) column of L_in: its scattering
-        # coefficient at reference density (the density profile is applied exactly along
-        # each ray in 3d: J_k / rho_k is smooth in r, rho_k J_k is not)
-        w_col = [np.ascontiguousarray(np.broadcast_to(beta_s[k].astype(np.float32),
-                                                      (n_r, n_ms_j, nl)).reshape(-1))
-                 for k in range(nsc)]
-        # each order's radiance, needed only as the source of the next order (3a, 3c) and
-        # for the geometric ratio, on a table ``order_table_divisor`` times coarser in mu,
-        # mu_s and nu; the stored table is integrated once from the summed density (4.)
-        delta = np.empty(order_table_shape(ss.shape[1:-1], p["order_table_divisor"]) + (nl,),
-                         dtype=np.float32)
-        # on the full table the orders are summed as they come (no integral in step 4)
-        ms = np.zeros(ss.shape[1:], dtype=np.float32) if delta.shape == ss.shape[1:] else None
-        J = None
-        tot = tot_prev = dE_prev = None
-        axes = tuple(range(delta.ndim - 1))
-        for order in range(2, p["orders"] + 1):
-            first = order == 2
-            if order == 3 and q3 is not q2:
-                q, J = q3, None
-                L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-            # 3a. radiance of order-1 arriving at each node, + ground reflection of order-2
-            _density.incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, Rt,
-                                       mu_s_min, alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
-            # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid
-            if J is None:
-                J = np.empty((nsc, q.th_out.size, q.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
-            density_products(q, L_in, w_col, beta_s, rhs, J)
-            # the density of orders 2..N, kept for the observer's slice at render time and
-            # for the stored table
-            if J_sum is None:
-                J_sum, J = J, None
-            else:
-                add_density(J_sum, J, q2, q)
-            # 3c. ground irradiance of order-1 ([BN08] eq. 9)
-            dE_new = np.empty_like(E)
-            _irradiance.indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th_i, ph_i,
-                                            dom_i, dE_new)
-            E += dE_new
-            dE_prev, dE = dE, dE_new
-            # 3d. scattering of this order along every ray ([BN08] eq. 8), on the order table
-            _multiple.multiple_scattering_table(J_sum if J is None else J, codes, p0s, p1s,
-                                                sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms,
-                                                QUADRATURE_SCALE_M, delta)
-            tot_prev, tot = tot, delta.sum(axis=axes, dtype=np.float64)
-            if ms is not None:
-                ms += delta
-            report("precomputing tables: scattering orders", order, p["orders"])
-        if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
-            # the orders beyond N as a geometric series whose ratio f is that of the last two
-            # orders' total radiance, per wavelength (the idea of [Hil20] eq. 10):
-            # L_N f / (1 - f). (A per-cell ratio was tried: it is unstable in cells where the
-            # ground reflection enters.) Added to the summed density in place: the last
-            # order's J is not needed afterwards.
-            g = _series_factor(tot, tot_prev).astype(np.float32)
-            add_density(J_sum, np.multiply(J, g, out=J), q2, q)
-            if ms is not None:
-                ms += np.multiply(delta, g, out=delta)
-            ea = tuple(range(dE.ndim - 1))
-            E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
-        del J, L_in, rhs, delta
+        J_sum = np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+        for b, l0 in enumerate(range(0, nl, nb)):
+            sl = slice(l0, min(nl, l0 + nb))
+            orders_batch(ss[..., sl], col, codes, p0s, p1s, sc_idx, beta_e[:, sl],
+                         beta_s[:, sl], pc, pp, pt[..., sl], albedo[sl], R, Rt, mu_s_min,
+                         alpha, q2, q3, l0, n_ms_j, n_q_ms, p, J_sum[..., sl], E[..., sl],
+                         (b * (p["orders"] - 1), n_steps))
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
-        if ms is None:
-            ms = np.empty(ss.shape[1:], dtype=np.float32)
-            _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R,
-                                                Rt, mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
+        ms = np.empty(ss.shape[1:], dtype=np.float32)
+        _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R,
+                                            Rt, mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
     if ms is None:
         ms = np.zeros(ss.shape[1:], dtype=np.float32)
     dens = {}
@@ -232,6 +174,131 @@ def precompute(props, wl, p):
                   scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
                   mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
                   precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
+
+
+# working memory of one batch of wavelengths in the order loop [bytes] (see precompute)
+ORDER_BATCH_BYTES = 400_000_000
+
+
+def order_batch_size(p, nl, nsc):
+    """Wavelengths per batch of the order loop: the fewest batches of equal size whose
+    working arrays (one order's J on the full outgoing grid, order 2's incident radiance,
+    the matrix right-hand side; float32) fit ``ORDER_BATCH_BYTES`` (the ray integrals'
+    geometry is the same for every wavelength and is recomputed per batch)."""
+    n = p["sphere_samples"]
+    n_cols = p["scattering_r_size"] * (p["density_mu_s_size"] or p["scattering_mu_s_size"])
+    per_wl = 4 * n_cols * ((2 * n + 1) * (n + 1) * nsc + n * n + 10)
+    n_batch = -(-nl // int(min(nl, max(1, ORDER_BATCH_BYTES // per_wl))))
+    return -(-nl // n_batch)
+
+
+# zenith samples of the hemisphere of the ground irradiance of orders >= 2 (see orders_batch)
+IRRADIANCE_HIGH_ORDER_SAMPLES = 8
+
+
+def _hemisphere(n):
+    """Midpoint quadrature of the upper hemisphere: n zenith x 2n azimuth nodes over
+    [0, pi] (the sky is symmetric about the sun's vertical plane; doubled by the kernel):
+    (theta, phi, solid angle per zenith row)."""
+    th = (np.arange(n) + 0.5) * (0.5 * np.pi) / n
+    ph = (np.arange(2 * n) + 0.5) * np.pi / (2 * n)
+    return th, ph, np.sin(th) * (0.5 * np.pi / n) * (np.pi / (2 * n))
+
+
+def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, albedo, R, Rt,
+                 mu_s_min, alpha, q2, q3, l0, n_ms_j, n_q, p, J_sum, E, progress=(0, None)):
+    """Steps 3a-3c for orders 2..N of one batch of wavelengths (every array given on the
+    batch's wavelengths; ``l0`` the index of its first table wavelength): the scattering
+    density of each order into ``J_sum`` (written by order 2, then summed; J_sum on the
+    outgoing grid of ``q2``) and the ground irradiance of orders 1..N-1 into ``E``, with the
+    geometric remainder.
+
+    No order's radiance is tabulated: order 2's incident radiance comes from the
+    single-scattering table ([Bru17] ComputeScatteringDensity), that of every later order
+    is integrated along each incident ray from the previous order's J
+    (:func:`._density.incident_radiance_rays`), and so is the ground irradiance of orders
+    >= 2 (:func:`._irradiance.indirect_irradiance_rays`); only the last order's J is kept.
+    ``progress``: (steps done before this batch, total steps) of the progress report."""
+    from skydome.models.simulated.precomputed import _density, _irradiance
+
+    nl = ss.shape[-1]
+    nsc = sc_idx.size
+    n_r = ss.shape[1]
+    ts = QUADRATURE_SCALE_M
+    # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
+    # hemisphere; phi on [0, pi] doubled) for the sky of order 1 (table lookups); the
+    # smooth skies of orders >= 2, each direction a ray integral, on 8 x 32
+    th_i, ph_i, dom_i = _hemisphere(16)
+    th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
+    # right-hand sides of the factored (polynomial) phase functions only
+    rhs = np.empty((10, n_r * n_ms_j * nl), dtype=np.float32)
+    # weight of each constituent at every (r, mu_s, l) column of L_in: its scattering
+    # coefficient at reference density (the density profile is applied exactly along each
+    # ray: J_k / rho_k is smooth in r, rho_k J_k is not)
+    w_col = [np.ascontiguousarray(np.broadcast_to(beta_s[k].astype(np.float32),
+                                                  (n_r, n_ms_j, nl)).reshape(-1))
+             for k in range(nsc)]
+    beta_e = np.ascontiguousarray(beta_e)
+    albedo = np.ascontiguousarray(albedo)
+    pt = np.ascontiguousarray(pt)
+    dE = np.zeros(E.shape, dtype=np.float64)
+    dE_prev = None
+    no_table = np.zeros((2, 2, 2, 2, nl), dtype=np.float32)   # (order 2 reads ss)
+    J = None
+    tot = tot_prev = None
+    q = q2
+    for order in range(2, p["orders"] + 1):
+        first = order == 2
+        if first:
+            # 3a. single scattering arriving at each node + ground reflection of the sun
+            L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
+            _density.incident_radiance(True, ss, pc, pp, pt, no_table, dE, col, beta_e,
+                                       albedo, R, Rt, mu_s_min, alpha, n_r, n_ms_j, q.th_in,
+                                       q.ph_in, L_in)
+        else:
+            if q is not q3:
+                q = q3
+                L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
+            # 3a. order-1 radiance arriving at each node, integrated along the incident rays
+            # from J of order-1, + ground reflection of the order-2 irradiance
+            _density.incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
+                                            R, Rt, mu_s_min, n_q, ts, n_r, n_ms_j, q.th_in,
+                                            q.ph_in, L_in)
+        # 3c. ground irradiance of order-1 ([BN08] eq. 9), from the same source
+        dE_new = np.empty_like(dE)
+        if first:
+            _irradiance.indirect_irradiance(True, ss, pc, pp, pt, no_table, R, Rt,
+                                            mu_s_min, th_i, ph_i, dom_i, dE_new)
+        else:
+            _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                                 mu_s_min, n_q, ts, th_h, ph_h, dom_h, dE_new)
+        E += dE_new
+        dE_prev, dE = dE, dE_new
+        # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid (J of order-1 is no
+        # longer needed: its buffer is reused where the grids agree)
+        shape = (nsc, q.th_out.size, q.ph_out.size, n_r, n_ms_j, nl)
+        if J is None or J.shape != shape:
+            J = np.empty(shape, dtype=np.float32)
+        density_products(q, L_in, w_col, beta_s, rhs, J, l0)
+        if first:
+            J_sum[...] = J
+        else:
+            add_density(J_sum, J, q2, q)
+        # totals of this order's density per wavelength (mean over its grid, so that grids
+        # of different sizes compare), for the geometric remainder
+        tot_prev, tot = tot, J.reshape(-1, nl).mean(axis=0, dtype=np.float64)
+        report("precomputing tables: scattering orders", progress[0] + order,
+               progress[1] or p["orders"])
+    if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
+        # the orders beyond N as a geometric series whose ratio f is that of the last two
+        # orders' scattering density, per wavelength (the idea of [Hil20] eq. 10; the
+        # radiance of an order is a linear integral of its density): J_N f / (1 - f) added
+        # to the summed density in place. (A per-cell ratio was tried: it is unstable in
+        # cells where the ground reflection enters.)
+        g = _series_factor(tot, tot_prev).astype(np.float32)
+        add_density(J_sum, np.multiply(J, g, out=J), q2, q)
+        ea = tuple(range(dE.ndim - 1))
+        E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
 
 
 # the per-order grids of orders >= 3 are never coarser than these (nor finer than the full
@@ -275,14 +342,15 @@ def add_density(J_sum, J, q_sum, q):
             J_sum[k, a] += (1.0 - wp) * row[ip] + wp * row[ip + 1]
 
 
-def density_products(q, L_in, w_col, beta_s, rhs, J):
+def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
     """Step 3b: the scattering density J ([BN08] eq. 7) on the outgoing grid of ``q``
     (:class:`_DensityQuadrature`), laid out [k, theta, phi, r, mu_s, l], from the incident
     radiance ``L_in`` [i, r, mu_s, l]: one float32 matrix product (BLAS) per scattering
     constituent over all (r, mu_s, l) columns, each column weighted by the constituent's
     scattering coefficient ``w_col[k]`` after the product (J = P (L w) = (P L) w: no scaled
     copy of L_in); factored phase functions through their 10-row right-hand side ``rhs``;
-    tabulated ones one product per wavelength."""
+    tabulated ones one product per wavelength (``l0``: the table index of J's first
+    wavelength)."""
     nsc, nl = J.shape[0], J.shape[-1]
     lin = L_in.reshape(q.n_in, -1)
     for k in range(nsc):
@@ -292,7 +360,7 @@ def density_products(q, L_in, w_col, beta_s, rhs, J):
             J3 = J[k].reshape(q.n_out, -1, nl)
             for l in range(nl):
                 x = np.ascontiguousarray(lin3[:, :, l]) * np.float32(beta_s[k, l])
-                J3[:, :, l] = q.per_wavelength[k][l] @ x
+                J3[:, :, l] = q.per_wavelength[k][l0 + l] @ x
             continue
         left = q.left[:, q.rows[k]:q.rows[k + 1]]
         if q.right[k] is None:
