@@ -69,7 +69,8 @@ class SkyMatrix:
     patches : PatchSet
     sky : numpy.ndarray
         (n_hours, n_patches, n_components) [W sr^-1 m^-2] (``rgb``) or [cd m^-2]
-        (``luminance``).
+        (``luminance``); from :func:`perez_sky_matrix` a view of an array stored in
+        Radiance's file order (patches, hours, components).
     components : str
     sun : numpy.ndarray or None
         (n_hours, n_components) radiance of the solar disc, same units (``sun="separate"``).
@@ -87,7 +88,8 @@ class SkyMatrix:
     sun_solid_angle_sr: float
 
     def radiance_layout(self) -> np.ndarray:
-        """The sky matrix in Radiance's file order: (n_patches, n_hours, n_components)."""
+        """The sky matrix in Radiance's file order: (n_patches, n_hours, n_components) (no
+        copy for a matrix from :func:`perez_sky_matrix`, which is stored in that order)."""
         return np.ascontiguousarray(np.swapaxes(self.sky, 0, 1))
 
 
@@ -221,24 +223,31 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     dtype = np.dtype(dtype)
     if dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
         raise ValueError(f"dtype = {dtype} must be float64 or float32")
-    if out is not None:  # (P, H, C) in memory, seen as (H, P, C); the kernel writes strided
+    # The kernel fills a C-contiguous (P, H, C) array in Radiance's file order (one compiled
+    # specialisation per dtype); ``sky`` is its (H, P, C) view.
+    if out is not None:
         if not isinstance(out, np.ndarray) or out.shape != (npatch, n, ncomp) or \
-                out.dtype != dtype:
-            raise ValueError(f"out must be a ({npatch}, {n}, {ncomp}) {dtype} array, got "
-                             f"{getattr(out, 'shape', None)} {getattr(out, 'dtype', None)}")
-        sky = np.swapaxes(out, 0, 1)
+                out.dtype != dtype or not out.flags.c_contiguous or not out.flags.writeable:
+            raise ValueError(f"out must be a writeable C-contiguous ({npatch}, {n}, {ncomp}) "
+                             f"{dtype} array, got {getattr(out, 'shape', None)} "
+                             f"{getattr(out, 'dtype', None)}")
+        file_order = out
     else:
-        sky = np.zeros((n, npatch, ncomp), dtype=dtype)
+        file_order = np.zeros((npatch, n, ncomp), dtype=dtype)
+    sky = np.swapaxes(file_order, 0, 1)
     sun_sa = math.pi * math.radians(SUN_ANGLE_DEG / 2.0) ** 2
     fixed_sa = math.pi * math.radians(disc_deg / 2.0) ** 2 if mode == "disc" else 0.0
+    import numba
+
     from skydome.daylighting import _kernels as DK
 
-    DK.fill_perez_sky(sky, np.ascontiguousarray(day), nodes, weights, offsets,
+    DK.fill_perez_sky(file_order, np.ascontiguousarray(day), nodes, weights, offsets,
                       np.ascontiguousarray(ps.centres[1:]), ps.solid_angle_sr[1:],
                       np.ascontiguousarray(s_dist), np.ascontiguousarray(sd),
                       np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),
                       np.ascontiguousarray(sky_tint * np.ones(ncomp)), grey, out_scale,
-                      nsuns if mode in ("spread", "disc") else 0, fixed_sa, COS_ZETA_MIN)
+                      nsuns if mode in ("spread", "disc") else 0, fixed_sa, COS_ZETA_MIN,
+                      numba.get_num_threads())
     sun_mat = None
     if mode == "separate":
         up = day & (alt > -math.radians(SUN_ANGLE_DEG / 2.0))  # gendaymtx -D: sun in the sky
