@@ -47,7 +47,7 @@ from skydome.daylighting.patches import PatchSet, patches as _patches
 __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_option",
            "weather_model_sky_matrix", "parse_components", "weather_aod",
            "GENDAYMTX_SKY_COLOR",
-           "SUN_ANGLE_DEG", "DEFAULT_ORDER"]
+           "SUN_ANGLE_DEG", "DEFAULT_ORDER", "warm_kernels"]
 
 #: gendaymtx's default sky colour (its -c default, Radiance 5.4).
 GENDAYMTX_SKY_COLOR = (0.96, 1.004, 1.118)
@@ -174,7 +174,9 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     check_choice("components", components, ("rgb", "luminance"))
     dni = np.atleast_1d(np.asarray(dni, dtype=np.float64))
     dhi = np.atleast_1d(np.asarray(dhi, dtype=np.float64))
-    sd = np.asarray(sun_directions, dtype=np.float64).reshape(-1, 3)
+    # Own (writable) copies of what reaches the kernel: a read-only argument (a broadcast,
+    # an array from a Dask worker) would make numba compile another specialisation.
+    sd = np.array(sun_directions, dtype=np.float64).reshape(-1, 3)
     n = dni.shape[0]
     if dni.shape != (n,) or dhi.shape != (n,) or sd.shape != (n, 3):
         raise ValueError(f"dni {dni.shape}, dhi {dhi.shape} and sun_directions {sd.shape} "
@@ -194,7 +196,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     td = np.broadcast_to(np.asarray(dew_point_c, dtype=np.float64), (n,))
     if np.any(~np.isfinite(td)) or np.any(td < -70.0) or np.any(td > 40.0):
         raise ValueError("dew_point_c must be finite, in [-70, 40] degC")
-    rho = np.broadcast_to(np.asarray(ground_reflectance, dtype=np.float64), (n,))
+    rho = np.array(np.broadcast_to(np.asarray(ground_reflectance, dtype=np.float64), (n,)))
     if np.any(~np.isfinite(rho)) or np.any(rho < 0.0) or np.any(rho > 1.0):
         raise ValueError("ground_reflectance must be in [0, 1]")
     tint = np.asarray(sky_color, dtype=np.float64)
@@ -254,6 +256,19 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         sun_mat = (np.where(up, e_dir, 0.0) * out_scale / sun_sa)[:, None] * grey[None, :]
     return SkyMatrix(ps, sky, components, sun_mat, sd.copy(),
                      sun_sa if mode == "separate" else fixed_sa)
+
+
+def warm_kernels() -> None:
+    """Compile (or load from numba's on-disk cache) the sky-matrix kernel in both storage
+    types, float32 (a "float" matrix file, filled in place) and float64 (the default), on
+    two hours of a tiny patch set, so that a first ``skydome skymatrix`` loads compiled code
+    instead of compiling it (about 4 s per type on a 2-core EPYC)."""
+    sd = np.array([[0.0, -0.5, math.sqrt(0.75)]] * 2)
+    for dtype in (np.float32, np.float64):
+        ps = _patches("tregenza")
+        out = np.zeros((len(ps), 2, 3), dtype=dtype)
+        perez_sky_matrix([600.0, 0.0], [100.0, 0.0], sd, [172, 172], patches=ps, order=0,
+                         dtype=dtype, out=out)
 
 
 def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) -> SkyMatrix:
