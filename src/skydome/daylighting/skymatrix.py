@@ -152,11 +152,12 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         Storage of the matrix (computed in float64 either way); float32 halves the memory
         of an annual MF:4 RGB matrix (485 MB -> 242 MB) and is what a "float" file holds.
     out : numpy.ndarray, optional
-        A zero-filled (patches, hours, components) array of ``dtype`` in Radiance's file order,
-        e.g. the memory map of the output file (:func:`~skydome.daylighting.radiance_io.
-        matrix_file`): the matrix is filled into it and ``sky`` is its (hours, patches,
-        components) view, so that writing the file needs no transposed copy (1.7 s for an
-        annual MF:4 matrix on a 2-core EPYC) and no second pass.
+        A zero-filled C-contiguous (patches, hours, components) array of ``dtype`` in
+        Radiance's file order, e.g. the body of the output file
+        (:func:`~skydome.daylighting.radiance_io.matrix_file`): the matrix is filled into it
+        and ``sky`` is its (hours, patches, components) view, so that writing the file needs
+        no transposed copy (1.7 s for an annual MF:4 matrix on a 2-core EPYC). Without it the
+        matrix is allocated in the same order.
 
     Returns
     -------
