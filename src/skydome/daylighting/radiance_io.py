@@ -122,16 +122,15 @@ def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = Fa
 def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", info=(),
                 overwrite: bool = False):
     """A binary Radiance matrix file filled in place: yields its data as a zero-filled
-    (nrows, ncols, ncomp) array in the file's order and dtype, to be filled (e.g.
-    ``perez_sky_matrix(..., out=...)``); when the block ends without an exception and the data
-    is finite, the header and the array are written in one write to a temporary file beside
-    ``path``, renamed to ``path``. Nothing is on disk before that, nothing is left if it fails.
+    (nrows, ncols, ncomp) memory map, to be filled (e.g. ``perez_sky_matrix(..., out=...)``).
 
-    The array is anonymous memory (transparent huge pages where the kernel gives them), not a
-    memory map of the file: filling a file-backed map costs a page fault per 4 KiB page,
-    while one write of the finished buffer costs a copy; on a 2-core EPYC the map took 1.2-1.3
-    s CPU for an annual MF:4 matrix (kernel included) and the buffer 0.7-1.2 s, in the same
-    run. No transposed copy either way: the filler writes the file's order.
+    The file is a temporary one beside ``path`` (header, then a sparse zero body), renamed to
+    ``path`` when the block ends without an exception and the data is finite; otherwise it
+    is removed, nothing is left. Writing through the map costs no copy and no second pass.
+
+    Measured against an anonymous buffer written once at the end (annual MF:4 float matrix,
+    242 MB, kernel included, 2-core EPYC, three runs each): the map's page faults cost
+    0.34-0.38 s of system time, the buffer's one write 0.58-1.33 s (user time alike).
     """
     from skydome._validate import check_choice
 
@@ -143,13 +142,29 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
         raise ValueError(f"out = {str(path)!r}: folder {str(path.parent)!r} does not exist")
     head = _header(nrows, ncols, ncomp, fmt, list(info))
     dtype = np.dtype(np.float32 if fmt == "float" else np.float64)
-    body = np.zeros((nrows, ncols, ncomp), dtype=dtype)
-    yield body
-    block = max(1, (1 << 22) // max(1, ncols * ncomp))
-    for r0 in range(0, nrows, block):
-        if not np.all(np.isfinite(body[r0:r0 + block])):
-            raise ValueError("matrix holds nan or inf values")
-    atomic_write_stream(path, [head, memoryview(body).cast("B")])
+    size = nrows * ncols * ncomp * dtype.itemsize
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    mm = None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(head)
+            f.truncate(len(head) + size)  # a sparse body of zeros
+        mm = np.memmap(tmp, dtype=dtype, mode="r+", offset=len(head),
+                       shape=(nrows, ncols, ncomp))
+        yield mm.view(np.ndarray)
+        block = max(1, (1 << 22) // max(1, ncols * ncomp))
+        for r0 in range(0, nrows, block):
+            if not np.all(np.isfinite(mm[r0:r0 + block])):
+                raise ValueError("matrix holds nan or inf values")
+        del mm  # no msync: the page cache is coherent, as for a written file
+        mm = None
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        del mm
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 def atomic_write_stream(path, chunks) -> None:

@@ -153,7 +153,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         of an annual MF:4 RGB matrix (485 MB -> 242 MB) and is what a "float" file holds.
     out : numpy.ndarray, optional
         A zero-filled C-contiguous (patches, hours, components) array of ``dtype`` in
-        Radiance's file order, e.g. the body of the output file
+        Radiance's file order, e.g. the memory map of the output file's body
         (:func:`~skydome.daylighting.radiance_io.matrix_file`): the matrix is filled into it
         and ``sky`` is its (hours, patches, components) view, so that writing the file needs
         no transposed copy (1.7 s for an annual MF:4 matrix on a 2-core EPYC). Without it the
