@@ -11,8 +11,13 @@ each round (gendaymtx, then each skydome case):
   definition (the same .wea, Radiance's solar position, one point per patch);
 - the same from the TMY3 file (pvlib.iotools read, pandas and pvlib imported);
 - skydome's defaults from the TMY3 file (order 4 patch means, SPA suns);
-- in process (kernels compiled, weather parsed): the order-0 matrix filled into the file's
-  memory map, the part of a run that is the matrix and its file.
+- in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun) and the
+  default one (order 4, SPA suns) filled into the file's memory map, the part of a run that
+  is the matrix and its file;
+- the start-up floor of any such run, each a fresh process: ``python -c pass``, ``import
+  numpy``, ``import numba``, ``import pvlib`` (what a TMY3/EPW input adds), and the skydome
+  modules with the cached sky-matrix kernel loaded and called on two hours (everything a
+  run pays before its first hour of work).
 
 Outputs are deleted before each timed run (freeing a 242 MB file is not counted for either
 program). Each figure is the best of ``--repeat`` rounds, as wall-clock time and as CPU time
@@ -40,6 +45,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_single_scattering import machine, write_section  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The floor: skydome's sky-matrix modules imported and the cached kernel (float32, as a
+#: "float" file takes) loaded and run on two hours of the Tregenza patches.
+_FLOOR = ("import numpy as np; from skydome.daylighting.skymatrix import perez_sky_matrix; "
+          "perez_sky_matrix([600.0, 0.0], [100.0, 0.0], [[0.0, -0.5, 0.75 ** 0.5]] * 2, [172, 172], "
+          "order=0, dtype=np.float32, out=np.zeros((146, 2, 3), np.float32))")
 
 
 def _radiance():
@@ -75,7 +85,7 @@ def main(argv=None):
 
     from skydome.daylighting.patches import patches
     from skydome.daylighting.radiance_io import matrix_file
-    from skydome.daylighting.skymatrix import perez_sky_matrix_from_weather
+    from skydome.daylighting.skymatrix import perez_sky_matrix_from_weather, warm_kernels
     from skydome.daylighting.weather import read_weather, sample_weather_path, write_wea
 
     tmy3 = sample_weather_path()
@@ -86,11 +96,10 @@ def main(argv=None):
     rows, loads = [], []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        w = read_weather(tmy3, sun_position="radiance")
-        write_wea(w, tmp / "y.wea")
-        small = w.select(slice(0, 48))
-        for o in (0, 4):  # compile (or load) the kernels before timing
-            perez_sky_matrix_from_weather(small, order=o, sun_position="radiance")
+        write_wea(read_weather(tmy3, sun_position="radiance"), tmp / "y.wea")
+        w = read_weather(tmp / "y.wea", sun_position="radiance")  # what the .wea run reads
+        w_spa = read_weather(tmy3)  # what the default run reads (its dew points, SPA suns)
+        warm_kernels()  # compile (or load) the kernels before timing
         for mf in args.mf:
             spec = "tregenza" if mf == 1 else f"reinhart:{mf}"
             cases = {
@@ -108,6 +117,17 @@ def main(argv=None):
                     sky + ["--weather", str(tmy3), "--patches", spec, "--out",
                            str(tmp / "s.mtx")], senv, False),
             }
+            if mf == args.mf[-1]:  # the floor does not depend on the patches
+                py = [sys.executable, "-c"]
+                cases.update({
+                    "start-up floor: python -c pass": (py + ["pass"], senv, False),
+                    "start-up floor: import numpy": (py + ["import numpy"], senv, False),
+                    "start-up floor: import numba": (py + ["import numba"], senv, False),
+                    "start-up floor: import pvlib (TMY3/EPW input)": (
+                        py + ["import pvlib"], senv, False),
+                    "start-up floor: skydome + cached kernel, 2 hours": (
+                        py + [_FLOOR], senv, False),
+                })
             for cmd, e, _ in list(cases.values())[1:2]:  # numba cache of this tree, warm
                 _timed(cmd, tmp / "s.mtx", e, False)
             best: dict = {}
@@ -118,30 +138,36 @@ def main(argv=None):
                     b = best.setdefault(name, [1e9, 1e9])
                     b[0], b[1] = min(b[0], wall), min(b[1], cpu)
                     loads.append(os.getloadavg()[0])
-                (tmp / "s.mtx").unlink(missing_ok=True)
-                c0 = time.process_time()
-                t = time.perf_counter()
-                with matrix_file(tmp / "s.mtx", len(patches(spec)), len(w), 3) as body:
-                    m = perez_sky_matrix_from_weather(w, patches=spec, order=0,
-                                                      sun_position="radiance",
-                                                      dew_point_c=11.0, dtype=np.float32,
-                                                      out=body)
-                wall, cpu = time.perf_counter() - t, time.process_time() - c0
-                del m
-                b = best.setdefault("skydome in process, matrix + file, order 0", [1e9, 1e9])
-                b[0], b[1] = min(b[0], wall), min(b[1], cpu)
+                for name, wx, o, sp in (
+                        ("skydome in process, matrix + file, order 0, Radiance sun", w, 0,
+                         "radiance"),
+                        ("skydome in process, matrix + file, defaults (order 4, SPA)", w_spa,
+                         4, "spa")):
+                    (tmp / "s.mtx").unlink(missing_ok=True)
+                    c0 = time.process_time()
+                    t = time.perf_counter()
+                    with matrix_file(tmp / "s.mtx", len(patches(spec)), len(wx), 3) as body:
+                        m = perez_sky_matrix_from_weather(wx, patches=spec, order=o,
+                                                          sun_position=sp, dtype=np.float32,
+                                                          out=body)
+                    wall, cpu = time.perf_counter() - t, time.process_time() - c0
+                    del m
+                    b = best.setdefault(name, [1e9, 1e9])
+                    b[0], b[1] = min(b[0], wall), min(b[1], cpu)
             gw, gc = best["gendaymtx -of (.wea)"]
             for name, (bw, bc) in best.items():
                 rows.append((spec, name, bw, gw / bw, bc, gc / bc))
-                print(f"{spec:11s} {name:44s} wall {bw:6.2f} s x{gw / bw:5.1f}   "
+                print(f"{spec:11s} {name:58s} wall {bw:6.2f} s x{gw / bw:5.1f}   "
                       f"cpu {bc:6.2f} s x{gc / bc:5.1f}", flush=True)
     load = f"{min(loads):.1f}-{max(loads):.1f}"
     print(f"1-min load average during the runs: {load}")
     if args.write:
         lines = [f"Annual sky matrices, 8760 h of the Greensboro TMY3 (benchmarks/bench_skymatrix.py; "
                  f"{machine()}; 1-min load average {load} during the run: the machine was "
-                 "shared). Every row but the last of each patch set is a whole program run from a fresh process "
-                 "to the finished float matrix file (242 MB at MF:4); best of "
+                 "shared). Every CLI row is a whole program run from a fresh process "
+                 "to the finished float matrix file (242 MB at MF:4); the in-process rows "
+                 "are the matrix and its file alone (kernels loaded, weather read); the "
+                 "start-up rows are fresh processes doing only that; best of "
                  f"{args.repeat} rounds, programs interleaved. CPU time is user + system of "
                  "the process over all its threads (gendaymtx is single-threaded); ratio = "
                  "gendaymtx / skydome.",

@@ -47,6 +47,30 @@ def test_refuses_existing_and_nan(tmp_path):
     assert not (tmp_path / "n.mtx").exists()
 
 
+@pytest.mark.parametrize("fmt", ["float", "double"])
+def test_matrix_file_filled_in_place(tmp_path, fmt):
+    """matrix_file: the filled body gives the same file as write_matrix of the same matrix;
+    a nan, or an exception inside the block, leaves nothing on disk (no temporary either)."""
+    from skydome.daylighting.radiance_io import matrix_file
+
+    m = np.arange(5 * 7 * 3, dtype=float).reshape(5, 7, 3) * 1.5 + 0.25
+    write_matrix(tmp_path / "w.mtx", m, fmt=fmt, info=["test"])
+    with matrix_file(tmp_path / "f.mtx", 5, 7, 3, fmt=fmt, info=["test"]) as body:
+        assert not (tmp_path / "f.mtx").exists()
+        body[...] = m
+    assert (tmp_path / "f.mtx").read_bytes() == (tmp_path / "w.mtx").read_bytes()
+    with pytest.raises(ValueError, match="nan"):
+        with matrix_file(tmp_path / "n.mtx", 2, 2, 3, fmt=fmt) as body:
+            body[1, 1, 1] = np.nan
+    with pytest.raises(RuntimeError):
+        with matrix_file(tmp_path / "e.mtx", 2, 2, 3, fmt=fmt) as body:
+            raise RuntimeError("interrupted")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.mtx", "w.mtx"]
+    with pytest.raises(ValueError, match="exists"):
+        with matrix_file(tmp_path / "f.mtx", 5, 7, 3, fmt=fmt):
+            pass
+
+
 def _cli(args):
     from typer.testing import CliRunner
 

@@ -155,3 +155,56 @@ def test_bad_arguments(days, kw, message):
         perez_sky_matrix_from_weather(days, **kw)
     with pytest.raises(ValueError, match="dni"):
         perez_sky_matrix(-np.ones(2), np.ones(2), [[0, 0, 1.0]] * 2, [1, 1])
+
+
+def test_kernel_independent_of_thread_count_and_storage(days):
+    """The hours are split into one run per numba thread: one thread or all give the same
+    bits, and filling a caller's (patches, hours, components) array (a file's memory map)
+    equals the matrix the function allocates itself."""
+    import numba
+
+    from skydome.daylighting.patches import patches
+
+    ps = patches("reinhart:2")
+    n0 = numba.get_num_threads()
+    ref = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32)
+    try:
+        numba.set_num_threads(1)
+        one = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32)
+    finally:
+        numba.set_num_threads(n0)
+    assert np.array_equal(one.sky, ref.sky)
+    out = np.zeros((len(ps), len(days), 3), dtype=np.float32)
+    m = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32, out=out)
+    assert np.shares_memory(m.sky, out) and np.array_equal(out, ref.radiance_layout())
+    assert np.any(out > 0.0)
+
+
+def test_read_only_inputs_same_bits_and_no_new_compilation(days):
+    """Read-only arguments (a broadcast albedo, arrays received by a Dask worker) reach the
+    kernel as the function's own writable copies: the same compiled specialisation, the same
+    bits."""
+    from skydome.daylighting import _kernels as DK
+
+    sd = days.radiance_sun_directions()
+    rho = np.full(len(days), 0.25)
+    ref = perez_sky_matrix(days.dni, days.dhi, sd, days.day_of_year, patches="tregenza",
+                           order=1, ground_reflectance=rho)
+    n_sig = len(DK.fill_perez_sky.signatures)
+    ro = [np.array(a) for a in (days.dni, days.dhi, sd, rho)]
+    for a in ro:
+        a.flags.writeable = False
+    m = perez_sky_matrix(ro[0], ro[1], ro[2], days.day_of_year, patches="tregenza", order=1,
+                         ground_reflectance=np.broadcast_to(ro[3], ro[3].shape))
+    assert np.array_equal(m.sky, ref.sky)
+    assert len(DK.fill_perez_sky.signatures) == n_sig
+
+
+def test_out_must_be_a_c_contiguous_file_order_array(days):
+    n = len(days)
+    sd = days.radiance_sun_directions()
+    for bad in (np.zeros((n, 146, 3)).swapaxes(0, 1),  # right shape, not contiguous
+                np.zeros((146, n, 3), dtype=np.float32),  # wrong dtype for float64
+                np.zeros((n, 146, 3))):  # (hours, patches): not Radiance's order
+        with pytest.raises(ValueError, match="out must be"):
+            perez_sky_matrix(days.dni, days.dhi, sd, days.day_of_year, out=bad)

@@ -12,8 +12,9 @@ import time
 
 
 def warm(verbose: bool = True) -> float:
-    """Build the default precomputed tables (cached) and render a tiny image with the
-    default model and the analytic models' kernels; returns the seconds it took."""
+    """Build the default precomputed tables (cached), render a tiny image with the default
+    model and the analytic models' kernels, and compile the sky-matrix kernel (``skydome
+    skymatrix``); returns the seconds it took."""
     import skydome as sd
     from skydome.imaging import make_projection
 
@@ -26,6 +27,12 @@ def warm(verbose: bool = True) -> float:
         sd.render(sd.model(name, sun=sun, **params), proj, output="xyz")
         if verbose:
             print(f"warm: {name} ready ({time.perf_counter() - t:.1f} s)", flush=True)
+    t = time.perf_counter()
+    from skydome.daylighting.skymatrix import warm_kernels
+
+    warm_kernels()
+    if verbose:
+        print(f"warm: sky matrices ready ({time.perf_counter() - t:.1f} s)", flush=True)
     return time.perf_counter() - t0
 
 

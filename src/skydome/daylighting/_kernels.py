@@ -26,8 +26,9 @@ TILE_HOURS = 32
 
 @njit(cache=True)  # strict IEEE: see perez1993_patch_row
 def _perez_hour(dest, h, nodes, weights, offsets, centres, dom, s_dist, s_true, coef, e_diff,
-                e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min, means):
-    """One hour's patch values (ground first) into ``dest`` (P + 1, C)."""
+                e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min, means, near, ndot):
+    """One hour's patch values (ground first) into ``dest`` (P + 1, C); ``means`` (P,),
+    ``near`` and ``ndot`` (MAX_SUN_PATCHES,) are work space of the caller's thread."""
     n_patch = offsets.shape[0] - 1
     ncomp = dest.shape[1]
     horiz = perez1993_patch_row(nodes, weights, offsets, s_dist[h], coef[h], cz_min, means)
@@ -50,11 +51,14 @@ def _perez_hour(dest, h, nodes, weights, offsets, centres, dom, s_dist, s_true, 
     if nsuns == 0 or e_dir[h] <= 1e-4:
         return
     # gendaymtx AddDirect: the nsuns patches nearest the sun, weight 1 / (1.002 - cos)
-    near = np.full(MAX_SUN_PATCHES, -1)
-    ndot = np.full(MAX_SUN_PATCHES, -2.0)
+    for j in range(MAX_SUN_PATCHES):
+        near[j] = -1
+        ndot[j] = -2.0
     sx, sy, szz = s_true[h, 0], s_true[h, 1], s_true[h, 2]
     for k in range(n_patch):
         d = centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * szz
+        if d <= ndot[nsuns - 1]:  # not among the nearest so far (the common case)
+            continue
         for j in range(nsuns):
             if d > ndot[j]:
                 for jj in range(nsuns - 1, j, -1):
@@ -76,36 +80,47 @@ def _perez_hour(dest, h, nodes, weights, offsets, centres, dom, s_dist, s_true, 
 
 @njit(parallel=True, cache=True)  # strict IEEE: see perez1993_patch_row
 def fill_perez_sky(out, day, nodes, weights, offsets, centres, dom, s_dist, s_true, coef,
-                   e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min):
-    """Fill ``out[h]`` (P + 1, C) for each hour h with ``day[h]``; other hours are left as
+                   e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min,
+                   n_threads):
+    """Fill ``out[:, h]`` (P + 1, C) for each hour h with ``day[h]``; other hours are left as
     they are (zero).
 
-    ``out`` (H, P + 1, C) may be a strided view (e.g. of a (P + 1, H, C) file-order array);
-    hours are computed in tiles of TILE_HOURS in parallel. s_dist (H, 3): sun vector of the
-    distribution (zenith clamped); s_true (H, 3): the true sun (ground term, nearest patches);
-    coef (H, 5); e_diff, e_dir (H,) [lx]; rho (H,); tint, grey (C,); nsuns 0 = no sun in the
-    matrix; fixed_sa > 0 replaces the patches' solid angles for the sun (gendaymtx -5)."""
-    n_h = out.shape[0]
-    n_row = out.shape[1]
+    ``out`` (P + 1, H, C) is in Radiance's file order (rows = patches), e.g. the memory map
+    of the output file, or a (P + 1, H, C) view of an (H, P + 1, C) array. The hours are
+    split into ``n_threads`` contiguous runs (numba.get_num_threads()); each thread computes tiles of TILE_HOURS hours
+    into one float64 work buffer of its own (allocated once) and copies a tile out patch by
+    patch, in runs of TILE_HOURS contiguous hours. s_dist (H, 3): sun vector of the
+    distribution (zenith clamped); s_true (H, 3): the true sun (ground term, nearest
+    patches); coef (H, 5); e_diff, e_dir (H,) [lx]; rho (H,); tint, grey (C,); nsuns 0 = no
+    sun in the matrix; fixed_sa > 0 replaces the patches' solid angles for the sun
+    (gendaymtx -5)."""
+    n_row = out.shape[0]
+    n_h = out.shape[1]
     ncomp = out.shape[2]
     n_tiles = (n_h + TILE_HOURS - 1) // TILE_HOURS
-    for t in prange(n_tiles):
-        h0 = t * TILE_HOURS
-        h1 = min(n_h, h0 + TILE_HOURS)
-        any_day = False
-        for h in range(h0, h1):
-            any_day = any_day or day[h]
-        if not any_day:
-            continue
-        buf = np.zeros((h1 - h0, n_row, ncomp))
+    n_run = max(1, min(n_tiles, n_threads))
+    for r in prange(n_run):
+        t_a = r * n_tiles // n_run
+        t_b = (r + 1) * n_tiles // n_run
+        buf = np.empty((TILE_HOURS, n_row, ncomp))
         means = np.empty(n_row - 1)
-        for h in range(h0, h1):
-            if day[h]:
-                _perez_hour(buf[h - h0], h, nodes, weights, offsets, centres, dom, s_dist,
-                            s_true, coef, e_diff, e_dir, rho, tint, grey, out_scale, nsuns,
-                            fixed_sa, cz_min, means)
-        for k in range(n_row):  # patch by patch: runs of hours in the file order
-            for j in range(h1 - h0):
-                if day[h0 + j]:
-                    for c in range(ncomp):
-                        out[h0 + j, k, c] = buf[j, k, c]
+        near = np.empty(MAX_SUN_PATCHES, dtype=np.int64)
+        ndot = np.empty(MAX_SUN_PATCHES)
+        for t in range(t_a, t_b):
+            h0 = t * TILE_HOURS
+            h1 = min(n_h, h0 + TILE_HOURS)
+            any_day = False
+            for h in range(h0, h1):
+                any_day = any_day or day[h]
+            if not any_day:
+                continue
+            for h in range(h0, h1):
+                if day[h]:
+                    _perez_hour(buf[h - h0], h, nodes, weights, offsets, centres, dom,
+                                s_dist, s_true, coef, e_diff, e_dir, rho, tint, grey,
+                                out_scale, nsuns, fixed_sa, cz_min, means, near, ndot)
+            for k in range(n_row):  # patch by patch: runs of hours in the file order
+                for j in range(h1 - h0):
+                    if day[h0 + j]:
+                        for c in range(ncomp):
+                            out[k, h0 + j, c] = buf[j, k, c]

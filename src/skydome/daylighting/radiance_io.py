@@ -127,6 +127,10 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
     The file is a temporary one beside ``path`` (header, then a sparse zero body), renamed to
     ``path`` when the block ends without an exception and the data is finite; otherwise it
     is removed, nothing is left. Writing through the map costs no copy and no second pass.
+
+    Measured against an anonymous buffer written once at the end (annual MF:4 float matrix,
+    242 MB, kernel included, 2-core EPYC, three runs each): the map's page faults cost
+    0.34-0.38 s of system time, the buffer's one write 0.58-1.33 s (user time alike).
     """
     from skydome._validate import check_choice
 

@@ -47,7 +47,7 @@ from skydome.daylighting.patches import PatchSet, patches as _patches
 __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_option",
            "weather_model_sky_matrix", "parse_components", "weather_aod",
            "GENDAYMTX_SKY_COLOR",
-           "SUN_ANGLE_DEG", "DEFAULT_ORDER"]
+           "SUN_ANGLE_DEG", "DEFAULT_ORDER", "warm_kernels"]
 
 #: gendaymtx's default sky colour (its -c default, Radiance 5.4).
 GENDAYMTX_SKY_COLOR = (0.96, 1.004, 1.118)
@@ -69,7 +69,8 @@ class SkyMatrix:
     patches : PatchSet
     sky : numpy.ndarray
         (n_hours, n_patches, n_components) [W sr^-1 m^-2] (``rgb``) or [cd m^-2]
-        (``luminance``).
+        (``luminance``); from :func:`perez_sky_matrix` a view of an array stored in
+        Radiance's file order (patches, hours, components).
     components : str
     sun : numpy.ndarray or None
         (n_hours, n_components) radiance of the solar disc, same units (``sun="separate"``).
@@ -87,7 +88,8 @@ class SkyMatrix:
     sun_solid_angle_sr: float
 
     def radiance_layout(self) -> np.ndarray:
-        """The sky matrix in Radiance's file order: (n_patches, n_hours, n_components)."""
+        """The sky matrix in Radiance's file order: (n_patches, n_hours, n_components) (no
+        copy for a matrix from :func:`perez_sky_matrix`, which is stored in that order)."""
         return np.ascontiguousarray(np.swapaxes(self.sky, 0, 1))
 
 
@@ -150,11 +152,12 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         Storage of the matrix (computed in float64 either way); float32 halves the memory
         of an annual MF:4 RGB matrix (485 MB -> 242 MB) and is what a "float" file holds.
     out : numpy.ndarray, optional
-        A zero-filled (patches, hours, components) array of ``dtype`` in Radiance's file order,
-        e.g. the memory map of the output file (:func:`~skydome.daylighting.radiance_io.
-        matrix_file`): the matrix is filled into it and ``sky`` is its (hours, patches,
-        components) view, so that writing the file needs no transposed copy (1.7 s for an
-        annual MF:4 matrix on a 2-core EPYC) and no second pass.
+        A zero-filled C-contiguous (patches, hours, components) array of ``dtype`` in
+        Radiance's file order, e.g. the memory map of the output file's body
+        (:func:`~skydome.daylighting.radiance_io.matrix_file`): the matrix is filled into it
+        and ``sky`` is its (hours, patches, components) view, so that writing the file needs
+        no transposed copy (1.7 s for an annual MF:4 matrix on a 2-core EPYC). Without it the
+        matrix is allocated in the same order.
 
     Returns
     -------
@@ -172,7 +175,9 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     check_choice("components", components, ("rgb", "luminance"))
     dni = np.atleast_1d(np.asarray(dni, dtype=np.float64))
     dhi = np.atleast_1d(np.asarray(dhi, dtype=np.float64))
-    sd = np.asarray(sun_directions, dtype=np.float64).reshape(-1, 3)
+    # Own (writable) copies of what reaches the kernel: a read-only argument (a broadcast,
+    # an array from a Dask worker) would make numba compile another specialisation.
+    sd = np.array(sun_directions, dtype=np.float64).reshape(-1, 3)
     n = dni.shape[0]
     if dni.shape != (n,) or dhi.shape != (n,) or sd.shape != (n, 3):
         raise ValueError(f"dni {dni.shape}, dhi {dhi.shape} and sun_directions {sd.shape} "
@@ -192,7 +197,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     td = np.broadcast_to(np.asarray(dew_point_c, dtype=np.float64), (n,))
     if np.any(~np.isfinite(td)) or np.any(td < -70.0) or np.any(td > 40.0):
         raise ValueError("dew_point_c must be finite, in [-70, 40] degC")
-    rho = np.broadcast_to(np.asarray(ground_reflectance, dtype=np.float64), (n,))
+    rho = np.array(np.broadcast_to(np.asarray(ground_reflectance, dtype=np.float64), (n,)))
     if np.any(~np.isfinite(rho)) or np.any(rho < 0.0) or np.any(rho > 1.0):
         raise ValueError("ground_reflectance must be in [0, 1]")
     tint = np.asarray(sky_color, dtype=np.float64)
@@ -221,30 +226,50 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     dtype = np.dtype(dtype)
     if dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
         raise ValueError(f"dtype = {dtype} must be float64 or float32")
-    if out is not None:  # (P, H, C) in memory, seen as (H, P, C); the kernel writes strided
+    # The kernel fills a C-contiguous (P, H, C) array in Radiance's file order (one compiled
+    # specialisation per dtype); ``sky`` is its (H, P, C) view.
+    if out is not None:
         if not isinstance(out, np.ndarray) or out.shape != (npatch, n, ncomp) or \
-                out.dtype != dtype:
-            raise ValueError(f"out must be a ({npatch}, {n}, {ncomp}) {dtype} array, got "
-                             f"{getattr(out, 'shape', None)} {getattr(out, 'dtype', None)}")
-        sky = np.swapaxes(out, 0, 1)
+                out.dtype != dtype or not out.flags.c_contiguous or not out.flags.writeable:
+            raise ValueError(f"out must be a writeable C-contiguous ({npatch}, {n}, {ncomp}) "
+                             f"{dtype} array, got {getattr(out, 'shape', None)} "
+                             f"{getattr(out, 'dtype', None)}")
+        file_order = out
     else:
-        sky = np.zeros((n, npatch, ncomp), dtype=dtype)
+        file_order = np.zeros((npatch, n, ncomp), dtype=dtype)
+    sky = np.swapaxes(file_order, 0, 1)
     sun_sa = math.pi * math.radians(SUN_ANGLE_DEG / 2.0) ** 2
     fixed_sa = math.pi * math.radians(disc_deg / 2.0) ** 2 if mode == "disc" else 0.0
+    import numba
+
     from skydome.daylighting import _kernels as DK
 
-    DK.fill_perez_sky(sky, np.ascontiguousarray(day), nodes, weights, offsets,
+    DK.fill_perez_sky(file_order, np.ascontiguousarray(day), nodes, weights, offsets,
                       np.ascontiguousarray(ps.centres[1:]), ps.solid_angle_sr[1:],
                       np.ascontiguousarray(s_dist), np.ascontiguousarray(sd),
                       np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),
                       np.ascontiguousarray(sky_tint * np.ones(ncomp)), grey, out_scale,
-                      nsuns if mode in ("spread", "disc") else 0, fixed_sa, COS_ZETA_MIN)
+                      nsuns if mode in ("spread", "disc") else 0, fixed_sa, COS_ZETA_MIN,
+                      numba.get_num_threads())
     sun_mat = None
     if mode == "separate":
         up = day & (alt > -math.radians(SUN_ANGLE_DEG / 2.0))  # gendaymtx -D: sun in the sky
         sun_mat = (np.where(up, e_dir, 0.0) * out_scale / sun_sa)[:, None] * grey[None, :]
     return SkyMatrix(ps, sky, components, sun_mat, sd.copy(),
                      sun_sa if mode == "separate" else fixed_sa)
+
+
+def warm_kernels() -> None:
+    """Compile (or load from numba's on-disk cache) the sky-matrix kernel in both storage
+    types, float32 (a "float" matrix file, filled in place) and float64 (the default), on
+    two hours of a tiny patch set, so that a first ``skydome skymatrix`` loads compiled code
+    instead of compiling it (about 4 s per type on a 2-core EPYC)."""
+    sd = np.array([[0.0, -0.5, math.sqrt(0.75)]] * 2)
+    for dtype in (np.float32, np.float64):
+        ps = _patches("tregenza")
+        out = np.zeros((len(ps), 2, 3), dtype=dtype)
+        perez_sky_matrix([600.0, 0.0], [100.0, 0.0], sd, [172, 172], patches=ps, order=0,
+                         dtype=dtype, out=out)
 
 
 def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) -> SkyMatrix:
