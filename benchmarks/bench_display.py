@@ -1,5 +1,7 @@
 """Display path: SkyImage.to_srgb() per display transform, with and without the Hunt-effect
-chroma gain, on a synthetic sky-coloured XYZ image (no model: the display step alone).
+chroma gain, on a synthetic sky-coloured XYZ image (no model: the display step alone), and
+the chroma gain by itself in process CPU time (run it from another tree's root with that
+tree's src on PYTHONPATH to compare).
 
     PYTHONPATH=src python benchmarks/bench_display.py [WIDTH]     # default 2048 (x WIDTH/2)
 """
@@ -15,6 +17,12 @@ from skydome.imaging import SkyImage
 from skydome.imaging.display import DISPLAY_TRANSFORMS
 
 
+def _cpu(f) -> float:
+    t0 = time.process_time()
+    f()
+    return time.process_time() - t0
+
+
 def main(width: int = 2048) -> None:
     h = width // 2
     rng = np.random.default_rng(1)
@@ -25,6 +33,13 @@ def main(width: int = 2048) -> None:
     xyz = np.stack([x / y * Y, Y, (1.0 - x - y) / y * Y], axis=-1)
     im = SkyImage(xyz, "xyz")
     k = im.auto_exposure()
+    # the Hunt-effect chroma gain alone: process CPU time, best of 5 (after a first call)
+    from skydome.imaging.display import scale_chroma
+
+    rgb = im.linear_srgb() * k
+    scale_chroma(rgb, 1.5)
+    best = min(_cpu(lambda: scale_chroma(rgb, 1.5)) for _ in range(5))
+    print(f"scale_chroma (gain 1.5) of a {width} x {h} image: {best:.3f} s CPU (best of 5)")
     print(f"to_srgb of a {width} x {h} image (time of the second of two calls)")
     for tm in DISPLAY_TRANSFORMS:
         for hunt in (False, True):

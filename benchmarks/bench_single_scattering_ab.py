@@ -10,6 +10,7 @@ difference where the radiance exceeds 1e-12 of its maximum) and, with ``--models
 the other models that share the transport core the same way.
 
 Run:  python benchmarks/bench_single_scattering_ab.py OLD_TREE NEW_TREE [--repeat 7]
+      [--models hillaire2020_luts] [--no-gases]
 """
 
 from __future__ import annotations
@@ -38,8 +39,10 @@ d = np.ascontiguousarray(sd.Equirect(w, h).directions()[0].reshape(-1, 3))
 wl = np.linspace(380.0, 780.0, cfg["n_wl"])
 sun = sd.Sun(elevation_deg=cfg["elevation"], azimuth_deg=135.0)
 name = cfg["model"]
+atm = (sd.Atmosphere.earth() if cfg.get("gases", True)
+       else sd.Atmosphere.earth(precipitable_water_cm=0.0, mixed_gases=False))
 if name == "single_scattering":
-    sky = sd.model(name, sun=sun)
+    sky = sd.model(name, sun=sun, atmosphere=atm)
     ss = sky._integrator(wl)
     e = np.ascontiguousarray(sky._solar(wl))
     s = np.ascontiguousarray(sun.direction, dtype=np.float64).reshape(3)
@@ -48,8 +51,15 @@ if name == "single_scattering":
         K.single_scattering(d, ss.r0, s, ss.medium, e, ss.table.table, ss.view_samples,
                             ss.scale_m, ss.light_exact, ss.light_samples, out)
         return out
+elif name == "hillaire2020_luts":
+    # the per-sun cost of hillaire2020: its transmittance, multiple-scattering and sky-view
+    # tables at the model's default sizes (the radiance of the directions then read from them)
+    sky = sd.model("hillaire2020", sun=sun, atmosphere=atm)
+    def call():
+        sky._tables.clear()
+        return sky.radiance(d, wl)
 else:
-    sky = sd.model(name, sun=sun)
+    sky = sd.model(name, sun=sun, atmosphere=atm)
     def call():
         return sky.radiance(d, wl)
 res = np.array(call())
@@ -103,7 +113,11 @@ def main(argv=None):
     ap.add_argument("--size", type=int, nargs=2, default=(512, 256))
     ap.add_argument("--wavelengths", type=int, default=16)
     ap.add_argument("--elevations", type=float, nargs="+", default=(30.0, -4.0))
-    ap.add_argument("--models", nargs="*", default=())
+    ap.add_argument("--models", nargs="*", default=(),
+                    help="other models to time by radiance(); hillaire2020_luts times the "
+                         "build of hillaire2020's tables")
+    ap.add_argument("--no-gases", action="store_true",
+                    help="Atmosphere.earth() without water vapour and mixed gases")
     args = ap.parse_args(argv)
     n = args.size[0] * args.size[1]
     print(f"load average before: {os.getloadavg()[0]:.1f}")
@@ -111,7 +125,8 @@ def main(argv=None):
     print("|---|---|---|---|---|---|")
     for model in ("single_scattering", *args.models):
         for elev in args.elevations:
-            cfg = dict(model=model, size=list(args.size), n_wl=args.wavelengths, elevation=elev)
+            cfg = dict(model=model, size=list(args.size), n_wl=args.wavelengths, elevation=elev,
+                       gases=not args.no_gases)
             (t_old, t_new), rel = ab([args.old, args.new], cfg, args.repeat)
             print(f"| {model} | {elev:g} deg | {n / t_old:,.0f} | {n / t_new:,.0f} | "
                   f"{t_old / t_new:.2f}x | {rel:.1e} |", flush=True)

@@ -618,8 +618,17 @@ class Atmosphere:
                 return c
         raise KeyError(f"no constituent named {name!r}; have {[c.name for c in self.constituents]}")
 
-    def optical_properties(self, wavelengths_nm) -> OpticalProperties:
-        """Evaluate every coefficient on a wavelength grid [nm] for the kernels."""
+    def optical_properties(self, wavelengths_nm, fold: bool = False) -> OpticalProperties:
+        """Evaluate every coefficient on a wavelength grid [nm] for the kernels.
+
+        With ``fold`` the purely absorbing constituents that share an earlier constituent's
+        density profile are folded into it (:func:`fold_absorbers`; exact): what every
+        physically based model hands its kernels, so that, for example, the uniformly mixed
+        gases cost nothing beyond Rayleigh's constituent. Without it (the default) there is
+        one row per entry of :attr:`constituents`, in order.
+        """
+        if not isinstance(fold, (bool, np.bool_)):
+            raise TypeError(f"fold must be True or False, got {fold!r}")
         wl = as_wavelengths(wavelengths_nm)
         nc, nl = len(self.constituents), wl.size
         sca = np.zeros((nc, nl))
@@ -644,8 +653,9 @@ class Atmosphere:
             for i, c in enumerate(self.constituents):
                 if c.phase == "tabulated":
                     table[i] = c.phase_table.on_grid(wl, PHASE_TABLE_ANGLES)
-        return OpticalProperties(wl, self.planet_radius_m, self.top_radius_m, code, p0, p1, sca, ext,
-                                 ph, pp, albedo, table)
+        props = OpticalProperties(wl, self.planet_radius_m, self.top_radius_m, code, p0, p1, sca, ext,
+                                  ph, pp, albedo, table)
+        return fold_absorbers(props)[0] if fold else props
 
     def extinction(self, altitude_m, wavelengths_nm) -> np.ndarray:
         """Total extinction coefficient [m^-1] at altitudes (...) and wavelengths: (..., nl)."""

@@ -83,11 +83,12 @@ def single_scattering_true_phase(atmosphere, directions, sun, wavelengths_nm, *,
         Names of the constituents whose scattering is counted (all by default); the
         extinction of every constituent is always applied.
     """
-    from skydome.atmosphere import PHASE_CODES, PHASE_TABLE_ANGLES
+    from skydome.atmosphere import PHASE_CODES, PHASE_TABLE_ANGLES, fold_absorbers
     from skydome.atmosphere.mie import MieConstituent, mie_phase_table
     from skydome.spectra import solar_irradiance
     from skydome.transport import _kernels as K
     from skydome.transport._medium import medium_from_properties
+    from skydome.transport.optical_depth import ColumnTable
     from skydome.transport.single import SingleScattering
 
     sun = _sun(sun)
@@ -96,7 +97,7 @@ def single_scattering_true_phase(atmosphere, directions, sun, wavelengths_nm, *,
     ss = SingleScattering(atmosphere, wl, observer_altitude_m, check_int("view_samples", view_samples, 2, 4096),
                           check_int("light_samples", light_samples, 2, 4096), False,
                           tuple(table_size), check_number("quadrature_scale_m", quadrature_scale_m, 1.0, 1e6, "m"))
-    p = ss.props
+    p = atmosphere.optical_properties(wl)      # one row per constituent, to choose from
     names = [c.name for c in atmosphere.constituents]
     if constituents is not None:
         for n in constituents:
@@ -114,12 +115,15 @@ def single_scattering_true_phase(atmosphere, directions, sun, wavelengths_nm, *,
         if isinstance(c, MieConstituent) and c.aerosol is not None and c.phase != "tabulated":
             codes[ci] = PHASE_CODES["tabulated"]
             table[ci] = mie_phase_table(c.aerosol).on_grid(wl, PHASE_TABLE_ANGLES)
-    medium = medium_from_properties(p._replace(scattering=beta_s, phase_code=codes, phase_table=table,
-                                               ground_albedo=np.zeros(wl.size)))
+    # the constituents left without scattering are folded as the kernels' media are (exact)
+    p = fold_absorbers(p._replace(scattering=beta_s, phase_code=codes, phase_table=table,
+                                  ground_albedo=np.zeros(wl.size)))[0]
+    medium = medium_from_properties(p)
+    columns = ColumnTable.cached(p, ss.table.n_r, ss.table.n_mu, ss.light_samples, ss.scale_m)
     e_sun = np.ascontiguousarray(solar_irradiance(wl) * sun.irradiance_scale)
     flat = np.ascontiguousarray(d.reshape(-1, 3))
     total = np.empty((flat.shape[0], wl.size))
-    K.single_scattering(flat, ss.r0, sun.direction, medium, e_sun, ss.table.table,
+    K.single_scattering(flat, ss.r0, sun.direction, medium, e_sun, columns.table,
                         ss.view_samples, ss.scale_m, False, ss.light_samples, total)
     np.maximum(total, 0.0, out=total)
     return total.reshape(d.shape[:-1] + (wl.size,))

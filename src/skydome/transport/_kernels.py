@@ -407,6 +407,8 @@ def _single_ray(i, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, n_li
                                 t0, t1, nbrk, w)
     # phase functions and scattering coefficients
     for c in range(nc):
+        if w.scat[c] == 0.0:
+            continue                 # absorbs only: no scattering term
         phase_fill(m, c, nu, w_phs)
         for l in range(nl):
             out[i, l] += e_sun[l] * m_scattering[c, l] * w_phs[l] * w_acc[c, l]

@@ -73,6 +73,23 @@ def densities(m, h, out):
 
 
 @njit(cache=True)
+def scatterer_indices(m):
+    """Indices (int64) of the constituents of the medium that scatter at some wavelength
+    (beta_s > 0): the only ones whose scattering terms a per-step loop needs (the others,
+    such as ozone or water vapour, only add to the extinction)."""
+    nc = m.scattering.shape[0]
+    idx = np.empty(nc, dtype=np.int64)
+    n = 0
+    for c in range(nc):
+        for l in range(m.scattering.shape[1]):
+            if m.scattering[c, l] > 0.0:
+                idx[n] = c
+                n += 1
+                break
+    return idx[:n]
+
+
+@njit(cache=True)
 def n_constituents(m):
     return m.profile_code.shape[0]
 

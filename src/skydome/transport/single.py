@@ -68,7 +68,7 @@ class SingleScattering:
         self.light_exact = bool(light_exact)
         self.scale_m = check_number("quadrature_scale_m", quadrature_scale_m, 1.0, 1e6, "m")
         self.atmosphere = atmosphere
-        self.props = atmosphere.optical_properties(self.wavelengths_nm)
+        self.props = atmosphere.optical_properties(self.wavelengths_nm, fold=True)
         self.medium = medium_from_properties(self.props)
         n_r, n_mu = table_size
         self.table = ColumnTable.cached(self.props, n_r, n_mu, self.light_samples, self.scale_m)

@@ -36,7 +36,7 @@ from numba import njit, prange
 
 from skydome.transport._geometry import (clamp_cosine, radius_along_above, ray_hits_ground,
                                         ray_segment, safe_sqrt)
-from skydome.transport._medium import profile_density
+from skydome.transport._medium import profile_density, scatterer_indices
 from skydome.transport._phase import INV_4PI, phase_fill
 from skydome.transport._quadrature import (geometric_edge, geometric_node, geometric_step,
                                            medium_columns, piece_bounds)
@@ -47,8 +47,11 @@ from skydome.transport._tables import (bilerp_last, irradiance_cell, lookup_rmu,
 # -- the ray march ---------------------------------------------------------------------------
 @njit(cache=True)
 def fill_phases(m, nu, phs):
-    """phs[c, l] = phase function of every constituent at cosine nu [sr^-1]."""
+    """phs[c, l] = phase function of every scattering constituent at cosine nu [sr^-1]
+    (0 for those that only absorb: :func:`march` never reads them)."""
     for c in range(m.profile_code.shape[0]):
+        phs[c, :] = 0.0
+    for c in scatterer_indices(m):
         phase_fill(m, c, nu, phs[c])
 
 
@@ -87,6 +90,8 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
     n_mu = tlut.shape[1]
     n_h = mslut.shape[0]
     n_m = mslut.shape[1]
+    sidx = scatterer_indices(m)          # the scattering terms of these only
+    ns = sidx.shape[0]
     for l in range(nl):
         L[l] = 0.0
         T[l] = 1.0
@@ -123,6 +128,8 @@ def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground
                 ps = 0.0
                 for c in range(nc):
                     se += beta_e[c, l] * rho[c]
+                for k in range(ns):
+                    c = sidx[k]
                     sc = beta_s[c, l] * rho[c]
                     ss += sc
                     ps += sc * phs[c, l]

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.transport._geometry import clamp_cosine, radius_along_above, ray_hits_ground, safe_sqrt
-from skydome.transport._medium import profile_density
+from skydome.transport._medium import profile_density, scatterer_indices
 from skydome.transport._phase import phase_fill
 from skydome.transport._quadrature import column_quadrature, medium_columns
 
@@ -322,6 +322,8 @@ def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
     n_pts, hits = _nodes(r0, mu, R, m_Rt, lt_sph_r, lt_substeps, wk_t_nodes)
     if n_pts < 2:
         return n_pts, hits
+    sidx = scatterer_indices(m)          # the scattering terms of these only
+    ns = sidx.shape[0]
     for c in range(nc):
         wk_dcol[c] = 0.0
         for l in range(nl):
@@ -348,7 +350,8 @@ def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
                 for c in range(nc):
                     tau += m_extinction[c, l] * (wk_dcol[c] + wk_scol[c])
                 e = math.exp(-tau) if lit else 0.0
-                for c in range(nc):
+                for k in range(ns):
+                    c = sidx[k]
                     f = wk_rho[c] * e
                     if not first:
                         wk_acc[c, l] += 0.5 * h * (wk_f_prev[c, l] + f)        # [NSTN93] eq. 1
@@ -357,7 +360,8 @@ def _in_scattering(d, r0, sun, m, e_sun, lt, wk):
                 wk_rho_prev[c] = wk_rho[c]
             t_prev = t
             first = False
-    for c in range(nc):
+    for k in range(ns):
+        c = sidx[k]
         phase_fill(m, c, nu, wk_phs)
         for l in range(nl):
             wk_res[l] += e_sun[l] * m_scattering[c, l] * wk_phs[l] * wk_acc[c, l]

@@ -42,7 +42,7 @@ class _Tables:
 
         m = model
         self.grid = grid
-        p = m.atmosphere.optical_properties(grid)
+        p = m.atmosphere.optical_properties(grid, fold=True)
         self.props = p
         self.R = float(p.planet_radius_m)
         self.Rt = float(p.top_radius_m)

@@ -136,7 +136,7 @@ class MonteCarlo(SkyModel):
         from skydome.transport._medium import medium_from_properties
         from skydome.transport.optical_depth import DEFAULT_QUADRATURE_SCALE_M, ColumnTable
 
-        props = self.atmosphere.optical_properties(wl)
+        props = self.atmosphere.optical_properties(wl, fold=True)
         table = ColumnTable.cached(props, 256, 512, 128, DEFAULT_QUADRATURE_SCALE_M)
         e_sun = solar_irradiance(wl) * self.sun.irradiance_scale
         zen_ref, _ = stokes_frame(d)

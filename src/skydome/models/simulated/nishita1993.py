@@ -293,7 +293,7 @@ class Nishita1993(SkyModel):
         from skydome.data import load_table
         from skydome.spectra import solar_irradiance
 
-        props = self.atmosphere.optical_properties(wl)
+        props = self.atmosphere.optical_properties(wl, fold=True)
         self._build_table(props)
         e_sun = np.ascontiguousarray(solar_irradiance(wl) * self.sun.irradiance_scale)
         if self.surface == "albedo":

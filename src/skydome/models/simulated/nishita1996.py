@@ -160,7 +160,7 @@ class Nishita1996(SkyModel):
         from skydome.spectra import solar_irradiance
         from skydome.transport._medium import medium_from_properties, profile_density
 
-        pr = self.atmosphere.optical_properties(wl)
+        pr = self.atmosphere.optical_properties(wl, fold=True)
         med = medium_from_properties(pr)
         R, Rt = float(pr.planet_radius_m), float(pr.top_radius_m)
         lo, hi = K.build_cylinder_table(med, 128, 128, 512, 8)

@@ -167,7 +167,7 @@ class PrecomputedSky(SkyModel):
         from skydome.models.simulated.precomputed._precompute import precompute
 
         # tabulated phase functions are evaluated on the table wavelengths here, once
-        props = atm.optical_properties(wl)
+        props = atm.optical_properties(wl, fold=True)   # absorbers folded (exact)
         if not use_cache:
             return precompute(props, wl, p), False
         settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}

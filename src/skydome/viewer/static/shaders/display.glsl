@@ -78,7 +78,7 @@ vec3 aces_hill(vec3 rgb) {
                       dot(vec3(-0.00327, -0.07276, 1.07602), v)), 0.0, 1.0);
 }
 
-// display._lab_f, _lab_f_inv: the CIELAB function and its inverse [CIE15]
+// imaging._kernels_display._lab_f, _lab_f_inv: the CIELAB function and its inverse [CIE15]
 float lab_f(float t) {
     const float d = 6.0 / 29.0;
     return t > d * d * d ? pow(t, 1.0 / 3.0) : t / (3.0 * d * d) + 4.0 / 29.0;
