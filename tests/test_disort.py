@@ -139,7 +139,7 @@ def test_precomputed_equals_disort_plane_parallel():
 
     Measured: precomputed / DISORT - 1 from -1.56 % (view zenith 70 deg, 180 deg from the
     sun, sun zenith 60 deg) to +0.54 %, RMS 0.64 % over the 36 points (ground albedo 0:
-    max ALB0_MAX %, RMS ALB0_RMS %; not run here, to keep the test to one table build, about 60 s).
+    max 1.43 %, RMS 0.53 %; not run here, to keep the test to one table build, about 60 s).
     With Bruneton's mu mapping (linear in the distance to the top of the atmosphere, which
     put view zenith 0-70 deg in the first 1.2 % of its sky half at this radius) it was
     -0.7 % at view zenith 10 deg, sun zenith 0, falling to -10.1 % at view zenith 50 deg,
