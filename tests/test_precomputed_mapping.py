@@ -86,3 +86,17 @@ def test_thin_atmosphere_on_a_large_planet_against_monte_carlo():
                       seed=3).radiance_with_error(d, wl)
     assert np.all(err / m < 0.01)
     assert np.all(np.abs(p - m) <= 0.02 * m + 3.0 * err), np.c_[p / m - 1, err / m]
+
+
+def test_viewer_shader_uses_the_same_mu_knee():
+    """The browser shader's copy of the knee width (precomputed.glsl: MU_WIDTH) is the
+    model's (``_mapping.MU_WIDTH``, 2 deg): the page and the CPU model index the same
+    nodes (the viewer tests compare their skies)."""
+    import re
+    from importlib import resources
+
+    src = (resources.files("skydome.viewer") / "static" / "shaders" / "precomputed.glsl").read_text()
+    m = re.search(r"const float MU_WIDTH = ([0-9.eE+-]+);", src)
+    assert m is not None
+    assert float(m.group(1)) == pytest.approx(math.radians(2.0), rel=1e-12)
+    assert _mapping.MU_WIDTH == pytest.approx(math.radians(2.0), rel=1e-12)
