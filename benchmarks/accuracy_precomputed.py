@@ -45,6 +45,8 @@ SETTINGS = {
     # one of the two at a time
     "grid2_sphere32": dict(order_table_divisor=2, high_order_sphere_samples=32),
     "grid1_sphere16": dict(order_table_divisor=1, high_order_sphere_samples=16),
+    # the default with half the mu nodes (the mu axis on the angle from the horizon)
+    "mu64": dict(scattering_mu_size=64),
 }
 
 

@@ -14,7 +14,7 @@ from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_
                                                              distance_to_top, hits_ground, point_along)
 from skydome.models.simulated.precomputed._lookup import (columns_at, columns_segment,
                                                            irradiance_lookup_acc, sky_lookup_acc)
-from skydome.models.simulated.precomputed._mapping import _split, mu_index
+from skydome.models.simulated.precomputed._mapping import _split, mu_frame, mu_index_framed
 from skydome.models.simulated.precomputed._multiple import slice_index
 from skydome.transport._kernels import exp_neg_array
 from skydome.transport._phase import phase_fill_coded
@@ -50,6 +50,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
     nl = out.shape[1]
     nc = col.shape[0]
     mu_s = sun[2]
+    frame = mu_frame(r, R)
     block = 256
     for ib in prange((n + block - 1) // block):
         w1 = np.empty(nc)
@@ -65,7 +66,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
             mu = dirs[i, 2]
             nu = clamp_cos(dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2])
             ground = hits_ground(r, mu, R)
-            im, b = mu_index(r, mu, ground, n_mu, R, Rt)
+            im, b = mu_index_framed(mu, ground, n_mu, frame)
             inu, e = _split((nu + 1.0) * 0.5 * (n_nu - 1), n_nu)
             w00 = (1.0 - b) * (1.0 - e)
             w01 = (1.0 - b) * e
@@ -79,7 +80,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
                 jm, bm = slice_index(mu, cphi, ground, geom)
                 jn, f = _split(math.acos(cphi) / math.pi * (n_nu_ms - 1), n_nu_ms)
             else:
-                jm, bm = mu_index(r, mu, ground, n_mu_ms, R, Rt)
+                jm, bm = mu_index_framed(mu, ground, n_mu_ms, frame)
                 jn, f = _split((nu + 1.0) * 0.5 * (n_nu_ms - 1), n_nu_ms)
             for l in range(nl):
                 acc[l] = ((1.0 - bm) * ((1.0 - f) * ms_slice[jm, jn, l] + f * ms_slice[jm, jn + 1, l])
