@@ -88,14 +88,17 @@ def _disort_sky(sun_zenith, rho):
     return ref, v, p
 
 
-def _montecarlo(sun_zenith, rho, seeds, samples, radius=1e8):
+def _montecarlo(sun_zenith, rho, seeds, samples, radius=1e8, atmosphere=_atmosphere,
+                directions=None, wavelength_nm=550.0):
+    """Monte Carlo radiance per unit solar flux normal to the beam, one row per seed, in
+    ``directions`` (default _directions()) on ``atmosphere(rho, radius)``."""
     from skydome.spectra import solar_irradiance
 
     sun = sd.Sun(90.0 - sun_zenith, 180.0)
-    d, _, _ = _directions()
-    wl = np.array([550.0])
+    d = _directions()[0] if directions is None else directions
+    wl = np.array([wavelength_nm])
     e0 = solar_irradiance(wl)[0] * sun.irradiance_scale
-    return np.array([sd.model("montecarlo", sun=sun, atmosphere=_atmosphere(rho, radius),
+    return np.array([sd.model("montecarlo", sun=sun, atmosphere=atmosphere(rho, radius),
                               samples=samples, seed=s).radiance(d, wl)[:, 0] / e0 for s in seeds])
 
 
@@ -314,14 +317,8 @@ def _atmosphere_tab(rho, radius=1e8):
 
 
 def _montecarlo_tab(sun_zenith, rho, seeds, samples, radius=1e8):
-    from skydome.spectra import solar_irradiance
-
-    sun = sd.Sun(90.0 - sun_zenith, 180.0)
-    d, _, _, _ = _tab_directions(sun_zenith)
-    wl = np.array([WL_TAB])
-    e0 = solar_irradiance(wl)[0] * sun.irradiance_scale
-    return np.array([sd.model("montecarlo", sun=sun, atmosphere=_atmosphere_tab(rho, radius),
-                              samples=samples, seed=s).radiance(d, wl)[:, 0] / e0 for s in seeds])
+    return _montecarlo(sun_zenith, rho, seeds, samples, radius, _atmosphere_tab,
+                       _tab_directions(sun_zenith)[0], WL_TAB)
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.3])
@@ -372,10 +369,14 @@ def _precomputed_tab_over_disort(rho):
     return np.array(out)
 
 
+#: The strict xfail's reason of the Henyey-Greenstein precomputed test, word for word.
+PC_MU_TABLE_REASON = ("precomputed's mu table (Bruneton's distance-to-top mapping) puts view "
+                      "zenith 0-70 deg in its first 1.2 % at planet radius 1e8 m and an 8 km top: "
+                      "up to 10.7 % low against DISORT (docs/validation_measured.md)")
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="precomputed's mu table (Bruneton's distance-to-top "
-                   "mapping) puts view zenith 0-70 deg in its first 1.2 % at planet radius "
-                   "1e8 m and an 8 km top: up to 10.7 % low against DISORT (docs/validation_measured.md)")
+@pytest.mark.xfail(strict=True, reason=PC_MU_TABLE_REASON)
 def test_precomputed_equals_disort_measured_phase():
     """The measured aerosol phase function (674 nm), ground albedo 0.3, the directions and
     suns of the Monte Carlo comparison: the precomputed model at its default settings (one
