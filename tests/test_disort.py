@@ -339,6 +339,7 @@ def test_montecarlo_equals_disort_measured_phase(sun_zenith, rho):
 
 
 @pytest.mark.slow
+@pytest.mark.filterwarnings("ignore:`NFourier` is large")  # 160 modes: checked by this test
 def test_disort_measured_phase_converged():
     """DISORT's radiance in the comparison above has converged in the streams: 160 streams
     and 160 Fourier modes (delta-M f = chi_160, NT corrections, interpolated in mu to the
