@@ -170,7 +170,8 @@ def main(argv=None):
                  "start-up rows are fresh processes doing only that; best of "
                  f"{args.repeat} rounds, programs interleaved. CPU time is user + system of "
                  "the process over all its threads (gendaymtx is single-threaded); ratio = "
-                 "gendaymtx / skydome.",
+                 "gendaymtx / skydome (for a start-up row: the most a run paying that "
+                 "start-up could reach were its work free).",
                  "",
                  "| patches | program | wall [s] | wall ratio | CPU [s] | CPU ratio |",
                  "|---|---|---|---|---|---|"]
