@@ -26,6 +26,7 @@ SMALL_PRECOMPUTED = dict(scattering_r_size=8, scattering_mu_size=32, scattering_
 MODELS = {
     "single_scattering": dict(),
     "hillaire2020": dict(use_skyview=False),
+    "kaneda1991": dict(),
     "nishita1996": dict(orders=2, lattice_size=5, sky_directions=12),
     "montecarlo": dict(samples=200, seed=3),
     "precomputed": dict(table_wavelengths_nm=WL, **SMALL_PRECOMPUTED),

@@ -90,14 +90,17 @@ def _dens(codes, p0s, p1s, h, rho):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_dtau, max_sub, acc,
-                trans):
+def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_dtau, max_sub, bmax,
+                acc, trans):
     """For every ray i: ``acc[i, c, l]`` = integral over the view ray of rho_c(t)
     exp(-tau_view(t) - tau_sun(t)) dt [m] and ``trans[i, l]`` = exp(-tau_view(t_max)).
 
     dirs (n, 3) with dirs[i, 2] >= 0; t_end (n,) path length limit (inf: to the top);
     shells: ascending altitudes [m] from 0 to Rt - R; the medium m holds every constituent
-    (the fog last when fog_code >= 0); table: column table of the first nc_a constituents.
+    (the fog last when fog_code >= 0); table: column table of the first nc_a constituents;
+    bmax (nc,): the largest extinction of each row [m^-1], which sizes the pieces (for a row
+    that folds several constituents, the sum of theirs, so that folding leaves the pieces
+    as they were).
     """
     R = m.R
     Rt = m.Rt
@@ -109,11 +112,6 @@ def kaneda_rays(dirs, t_end, sun, m, shells, table, nc_a, fog_code, fog_h, max_d
     nc = codes.shape[0]
     nl = beta_e.shape[1]
     ns = shells.shape[0]
-    # largest extinction per constituent (used to size the pieces)
-    bmax = np.zeros(nc)
-    for c in range(nc):
-        for l in range(nl):
-            bmax[c] = max(bmax[c], beta_e[c, l])
     for i in prange(n):
         mu = dirs[i, 2]
         nu = dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2]

@@ -80,6 +80,23 @@ def _horizon_clamp(d):
     return d
 
 
+def _piece_extinction(full, keep) -> np.ndarray:
+    """Largest extinction coefficient [m^-1] of each row of the folded properties (``keep``:
+    the rows of ``full`` that :func:`skydome.atmosphere.fold_absorbers` kept): for a row that
+    absorbers were folded into, the sum of its members' own maxima (an absorber joins the
+    first kept row on its density profile), so that the kernel cuts the pieces of the
+    unfolded medium."""
+    own = full.extinction.max(axis=1)
+    out = np.zeros(keep.size)
+    for j in range(full.profile_code.size):
+        profile = (full.profile_code[j], full.profile_p0[j], full.profile_p1[j])
+        k = next(k for k, i in enumerate(keep)
+                 if i == j or (i < j and profile == (full.profile_code[i], full.profile_p0[i],
+                                                     full.profile_p1[i])))
+        out[k] += own[j]
+    return np.ascontiguousarray(out)
+
+
 def _shell_altitudes(props, top, n_shells, fog):
     """Sample-shell altitudes [m]: equal density decrements of each exponential profile
     (with at most H/2 between shells up to 14 H), the edges of bounded layers (ozone tent,
@@ -177,6 +194,7 @@ class Kaneda1991(SkyModel):
 
     def _setup(self, wl):
         """Optical properties (+ fog row), shells and column table for a wavelength grid."""
+        from skydome.atmosphere import fold_absorbers
         from skydome.transport._medium import medium_from_properties, phase_cdf_table
         from skydome.transport.optical_depth import ColumnTable
 
@@ -185,9 +203,11 @@ class Kaneda1991(SkyModel):
             return self._cache[key]
         if len(self._cache) > 4:
             self._cache.clear()
-        props = self.atmosphere.optical_properties(wl)
+        full = self.atmosphere.optical_properties(wl)
+        props, keep = fold_absorbers(full)  # absorbers folded (exact), as in every kernel
         table = ColumnTable.cached(props)   # the reference model's table (shared)
         nc_a = props.profile_code.size
+        bmax = _piece_extinction(full, keep)
         codes, p0s, p1s = props.profile_code, props.profile_p0, props.profile_p1
         beta_s, beta_e = props.scattering, props.extinction
         fog = None
@@ -199,6 +219,7 @@ class Kaneda1991(SkyModel):
             p0s = np.append(p0s, self.fog_height_m)
             p1s = np.append(p1s, 0.0)
             row = np.full((1, wl.size), self.fog_density)
+            bmax = np.append(bmax, self.fog_density)
             beta_s = np.vstack([beta_s, row])
             beta_e = np.vstack([beta_e, row])
         top = props.top_radius_m - props.planet_radius_m
@@ -217,7 +238,7 @@ class Kaneda1991(SkyModel):
             phase_param=np.ascontiguousarray(np.append(base.phase_param, [0.0] * n_fog)),
             phase_table=np.ascontiguousarray(table_ph),
             phase_cdf=np.ascontiguousarray(phase_cdf_table(table_ph)))
-        setup = dict(props=props, table=table.table, nc_a=nc_a, medium=medium,
+        setup = dict(props=props, table=table.table, nc_a=nc_a, medium=medium, bmax=bmax,
                      beta_s=medium.scattering, fog_code=fog_code, shells=shells)
         self._cache[key] = setup
         return setup
@@ -259,7 +280,8 @@ class Kaneda1991(SkyModel):
         trans = np.empty((n, wl.size))
         KK.kaneda_rays(d, np.ascontiguousarray(t_end, dtype=np.float64), self.sun.direction,
                        s["medium"], s["shells"], s["table"], s["nc_a"], s["fog_code"],
-                       float(self.fog_height_m), float(self.max_dtau), 4096, acc, trans)
+                       float(self.fog_height_m), float(self.max_dtau), 4096, s["bmax"], acc,
+                       trans)
         nu = np.clip(d @ self.sun.direction, -1.0, 1.0)
         ph = self._phases(s, nu)                                     # (n, nc, nl)
         L = self._solar(wl) * np.einsum("ncl,cl,ncl->nl", ph, s["beta_s"], acc)
