@@ -45,6 +45,8 @@ SETTINGS = {
     # one of the two at a time
     "grid2_sphere32": dict(order_table_divisor=2, high_order_sphere_samples=32),
     "grid1_sphere16": dict(order_table_divisor=1, high_order_sphere_samples=16),
+    # the computed orders alone (what the geometric remainder adds)
+    "no_remainder": dict(remaining_orders="none"),
 }
 
 
