@@ -47,6 +47,8 @@ SETTINGS = {
     "grid1_sphere16": dict(order_table_divisor=1, high_order_sphere_samples=16),
     # the default with half the mu nodes (the mu axis on the angle from the horizon)
     "mu64": dict(scattering_mu_size=64),
+    # the computed orders alone (what the geometric remainder adds)
+    "no_remainder": dict(remaining_orders="none"),
 }
 
 

@@ -4,8 +4,9 @@ Prints, for one precomputation (cache off, 20 table wavelengths, ``Atmosphere.ea
 per stage (each numba kernel and the numpy matrix products of the scattering density) the
 wall and CPU time (``time.process_time``: all threads of this process, so that figures
 taken on a machine shared with other jobs stay comparable), the process's peak resident
-memory (``ru_maxrss``), and per scattering order the share of the multiple-scattering
-table's total that the order adds (how much orders >= 3 weigh).
+memory (``ru_maxrss``), and per scattering order its share of the source strength of
+orders 2..N (``_precompute.source_total``, the quantity whose ratio gives the geometric
+remainder: how much orders >= 3 weigh).
 
 The idle wall time on a 2-core machine is estimated as CPU time / 2 x (share of the time
 in parallel kernels) + CPU time x (the rest); both figures are printed.
@@ -26,7 +27,7 @@ import numpy as np
 
 STAGES = ("build_column_table", "single_scattering_table", "incident_radiance",
           "incident_radiance_rays", "indirect_irradiance", "indirect_irradiance_rays",
-          "multiple_scattering_table", "density_products")
+          "multiple_scattering_table", "density_products", "source_total")
 
 
 def _parse(text):
@@ -46,8 +47,9 @@ def _parse(text):
 @contextlib.contextmanager
 def _instrument(rec, order_totals):
     """Wrap the kernels that the precomputation calls through their modules; record wall
-    and CPU time per call, and the total of each order's scattering density (the calls of
-    the matrix products come batch by batch of wavelengths, orders 2..N within each)."""
+    and CPU time per call, and each order's source strength (``_precompute.source_total``,
+    summed over the wavelengths; the calls come batch by batch of wavelengths, orders 2..N
+    within each)."""
     from skydome.models.simulated.precomputed import (_density, _irradiance, _multiple,
                                                       _precompute, _single)
     from skydome.transport import _kernels as K
@@ -65,8 +67,8 @@ def _instrument(rec, order_totals):
                 r = _f(*a)
                 rec.setdefault(_n, []).append((time.perf_counter() - w0,
                                                time.process_time() - c0))
-                if _n == "density_products":
-                    order_totals.append(float(np.asarray(a[5]).mean(dtype=np.float64)))
+                if _n == "source_total":
+                    order_totals.append(float(np.sum(r)))
                 return r
 
             setattr(mod, name, g)
@@ -124,10 +126,9 @@ def main(argv=None):
     print(f"estimated idle wall on 2 cores: {par / 2 + (cpu - par):.1f} s")
     n_orders = int(kw.get("orders", 6)) - 1
     if totals and n_orders > 0:
-        # mean scattering density of each order (over its outgoing grid), summed over the
-        # wavelength batches
+        # each order's source strength, summed over the wavelength batches
         tot = np.array(totals).reshape(-1, n_orders).sum(axis=0)
-        print("scattering density per order (share of orders 2..N, without the remainder):")
+        print("source strength per order (share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
             print(f"  order {i + 2}: {100 * t / tot.sum():5.2f} %")
 

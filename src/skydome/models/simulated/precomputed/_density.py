@@ -16,12 +16,30 @@ from skydome.models.simulated.precomputed._irradiance import direct_irradiance_a
 from skydome.models.simulated.precomputed._lookup import (columns_segment, irradiance_lookup_acc,
                                                            sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import cell_r, mu_s_frame, mu_s_from_unit
-from skydome.models.simulated.precomputed._multiple import ray_integral
+from skydome.models.simulated.precomputed._multiple import ray_integral, ray_scratch
 from skydome.transport._kernels import phase_value
 from skydome.transport._phase import phase_coded
 
 INV_PI = 1.0 / math.pi
 
+
+
+@njit(cache=True)
+def density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min):
+    """(r, mu_s, sin theta_s) of the scattering density's node (ir, ims)."""
+    r = cell_r(ir, n_r, R, Rt)
+    mu_s = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
+    return r, mu_s, math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+
+
+@njit(cache=True)
+def incident_direction(th, ph, r, mu_s, sin_s, R):
+    """(nu, mu, hits_ground) of the incident direction at angle th from the sun and azimuth
+    ph about it (from the sun's vertical plane, zenith side), at radius r with the sun at
+    mu_s."""
+    nu = math.cos(th)
+    mu = clamp_cos(nu * mu_s + math.sin(th) * math.cos(ph) * sin_s)
+    return nu, mu, hits_ground(r, mu, R)
 
 
 @njit(cache=True, fastmath=True)
@@ -75,16 +93,11 @@ def incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, 
         cs = np.empty(nc)
         tg = np.empty(nl)
         eg = np.empty(nl)
-        r = cell_r(ir, n_r, R, Rt)
-        mu_s = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
-        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        r, mu_s, sin_s = density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
         for a in range(n_th):
-            nu = math.cos(th_in[a])
-            sg = math.sin(th_in[a])
             for b in range(n_ph):
                 i = a * n_ph + b
-                ct = clamp_cos(nu * mu_s + sg * math.cos(ph_in[b]) * sin_s)
-                ground = hits_ground(r, ct, R)
+                nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
                 o = out[i, ir, ims]
                 o[:] = 0.0
                 sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, ground, R, Rt, mu_s_min,
@@ -114,24 +127,14 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
     for idx in prange(n_r * n_ms):
         ir = idx // n_ms
         ims = idx % n_ms
-        tq = np.empty(2 * n_q)
-        wq = np.empty(2 * n_q)
-        w1 = np.empty(nc)
-        w2 = np.empty(nc)
-        cs = np.empty(nc)
-        tw = np.empty((nsc, nl))
+        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
         acc = np.empty(nl)
         tg = np.empty(nl)
         eg = np.empty(nl)
-        r = cell_r(ir, n_r, R, Rt)
-        mu_s = mu_s_from_unit(ims / (n_ms - 1.0), mu_s_min)
-        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        r, mu_s, sin_s = density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
         for a in range(n_th):
-            nu = math.cos(th_in[a])
-            sg = math.sin(th_in[a])
             for b in range(n_ph):
-                ct = clamp_cos(nu * mu_s + sg * math.cos(ph_in[b]) * sin_s)
-                ground = hits_ground(r, ct, R)
+                nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
                 acc[:] = 0.0
                 ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
                              nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, acc)

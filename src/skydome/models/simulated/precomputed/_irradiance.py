@@ -13,7 +13,7 @@ from numba import njit, prange
 from skydome.models.simulated.precomputed._geometry import clamp_cos
 from skydome.models.simulated.precomputed._lookup import columns_at, sky_lookup_acc
 from skydome.models.simulated.precomputed._mapping import mu_s_frame
-from skydome.models.simulated.precomputed._multiple import ray_integral
+from skydome.models.simulated.precomputed._multiple import ray_integral, ray_scratch
 
 
 
@@ -72,12 +72,7 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     for idx in prange(n_r * n_m):
         ir = idx // n_m
         im = idx % n_m
-        tq = np.empty(2 * n_q)
-        wq = np.empty(2 * n_q)
-        w1 = np.empty(nc)
-        w2 = np.empty(nc)
-        cs = np.empty(nc)
-        tw = np.empty((nsc, nl))
+        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
         acc = np.zeros(nl)
         one = np.empty(nl)
         r = R + (Rt - R) * ir / (n_r - 1.0)

@@ -46,6 +46,14 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
 
 
 
+@njit(cache=True)
+def ray_scratch(n_q, nc, nsc, nl):
+    """Scratch arrays of one work item's ray integrals: (tq, wq) for 2 n_q quadrature
+    nodes, (w1, w2, cs) per column constituent, tw [k, l] (float64)."""
+    return (np.empty(2 * n_q), np.empty(2 * n_q), np.empty(nc), np.empty(nc), np.empty(nc),
+            np.empty((nsc, nl)))
+
+
 @njit(cache=True, fastmath=True)
 def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, mu_s, nu, ground,
                  n_q, ts, tq, wq, w1, w2, cs, tw, acc):
@@ -179,12 +187,7 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
-        tq = np.empty(2 * n_q)
-        wq = np.empty(2 * n_q)
-        w1 = np.empty(nc)
-        w2 = np.empty(nc)
-        cs = np.empty(nc)
-        tw = np.empty((nsc, nl))
+        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
         acc = np.zeros((n_nu, nl))
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]

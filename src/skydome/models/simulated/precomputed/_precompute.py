@@ -284,14 +284,13 @@ def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, a
             J_sum[...] = J
         else:
             add_density(J_sum, J, q2, q)
-        # totals of this order's density per wavelength (mean over its grid, so that grids
-        # of different sizes compare), for the geometric remainder
-        tot_prev, tot = tot, J.reshape(-1, nl).mean(axis=0, dtype=np.float64)
+        # this order's source strength per wavelength, for the geometric remainder
+        tot_prev, tot = tot, source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt)
         report("precomputing tables: scattering orders", progress[0] + order,
                progress[1] or p["orders"])
     if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
         # the orders beyond N as a geometric series whose ratio f is that of the last two
-        # orders' scattering density, per wavelength (the idea of [Hil20] eq. 10; the
+        # orders' source strengths, per wavelength (the idea of [Hil20] eq. 10; the
         # radiance of an order is a linear integral of its density): J_N f / (1 - f) added
         # to the summed density in place. (A per-cell ratio was tried: it is unstable in
         # cells where the ground reflection enters.)
@@ -370,6 +369,27 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
             np.matmul(q.right[k], lin, out=out)
             np.matmul(left, out, out=Jk)
         Jk *= w_col[k]
+
+
+def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
+    """Per wavelength, sum over J's nodes of sum_k rho_k(r) J_k sin(theta): the scattering
+    density of one order times each constituent's number density, over the sphere of
+    outgoing directions (theta uniform: sin theta the solid angle per node), the (r, mu_s)
+    nodes counted alike; the ratio of two orders' totals is the geometric remainder's
+    ratio (comparable across outgoing grids of different sizes: divided by the node count)."""
+    from skydome.models.simulated.precomputed._mapping import cell_r
+    from skydome.transport._kernels import profile_density
+
+    nsc, n_t, n_p, n_r = J.shape[:4]
+    nl = J.shape[-1]
+    w_t = np.sin(q.th_out) / (n_t * n_p)
+    out = np.zeros(nl)
+    for k in range(nsc):
+        c = int(sc_idx[k])
+        rho = np.array([profile_density(int(codes[c]), float(p0s[c]), float(p1s[c]),
+                                        cell_r(i, n_r, R, Rt) - R) for i in range(n_r)])
+        out += np.einsum("t,r,tprml->l", w_t, rho, J[k], dtype=np.float64, optimize=True)
+    return out
 
 
 def _series_factor(tot, tot_prev):
