@@ -69,12 +69,14 @@ def ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, alpha, r, ct, mu
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, Rt, mu_s_min, alpha,
-                      n_r, n_ms, th_in, ph_in, out):
-    """Radiance of the previous order arriving at each (r, mu_s) node of the 4-D table
-    from the incident directions, including the light reflected once more by the ground
-    ([Bru17] ComputeScatteringDensity, inner loop): out[i, r, mu_s, l] (the incident
-    direction first: the right-hand side of the matrix product that gives J).
+def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alpha, n_r, n_ms,
+                      th_in, ph_in, out):
+    """Single scattering arriving at each (r, mu_s) node of the scattering density from the
+    incident directions (looked up in the single-scattering table ``ss``), plus the direct
+    sun's light reflected by the ground: the source of order 2 ([Bru17]
+    ComputeScatteringDensity, inner loop; orders >= 3: :func:`incident_radiance_rays`):
+    out[i, r, mu_s, l] (the incident direction first: the right-hand side of the matrix
+    product that gives J).
 
     The incident directions are given in the sun's frame: th_in the angle from the sun
     (so nu = cos th_in), ph_in the azimuth about the sun measured from the sun's vertical
@@ -100,11 +102,13 @@ def incident_radiance(first, ss, pc, pp, pt, delta, dE, col, beta_e, albedo, R, 
                 nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
                 o = out[i, ir, ims]
                 o[:] = 0.0
-                sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, ground, R, Rt, mu_s_min,
-                               1.0, o)
+                # first=True: only ss is read (ss[0] stands in for the unused order table)
+                sky_lookup_acc(True, ss, pc, pp, pt, ss[0], r, ct, mu_s, nu, ground, R, Rt,
+                               mu_s_min, 1.0, o)
                 if ground:
-                    ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, alpha, r, ct, mu_s,
-                                         nu, w1, w2, cs, tg, eg, o)
+                    # the direct sun's irradiance (eg is its unused irradiance table)
+                    ground_reflected_acc(True, eg.reshape(1, 1, -1), col, beta_e, albedo, R, Rt,
+                                         alpha, r, ct, mu_s, nu, w1, w2, cs, tg, eg, o)
 
 
 @njit(parallel=True, cache=True, fastmath=True)

@@ -36,10 +36,11 @@ def direct_irradiance_acc(col, beta_e, r, mu_s, R, Rt, alpha, scale, cs, out):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th, ph, d_omega, out):
-    """Irradiance on a horizontal surface from the sky of one scattering order ([Bru17]
-    ComputeIndirectIrradiance, [BN08] eq. 9 for one order): out[r, mu_s, l] =
-    sum over the upper hemisphere of L(w) cos(theta) dOmega (phi over [0, pi], doubled)."""
+def indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th, ph, d_omega, out):
+    """Irradiance on a horizontal surface from the single-scattered sky (table ``ss``), the
+    ground irradiance of order 2 ([Bru17] ComputeIndirectIrradiance, [BN08] eq. 9 for one
+    order; orders >= 3: :func:`indirect_irradiance_rays`): out[r, mu_s, l] = sum over the
+    upper hemisphere of L(w) cos(theta) dOmega (phi over [0, pi], doubled)."""
     n_r, n_m, nl = out.shape
     for idx in prange(n_r * n_m):
         ir = idx // n_m
@@ -54,7 +55,8 @@ def indirect_irradiance(first, ss, pc, pp, pt, delta, R, Rt, mu_s_min, th, ph, d
             st = math.sin(th[a])
             for b in range(ph.shape[0]):
                 nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)
-                sky_lookup_acc(first, ss, pc, pp, pt, delta, r, ct, mu_s, nu, False, R, Rt, mu_s_min,
+                # first=True: only ss is read (ss[0] stands in for the unused order table)
+                sky_lookup_acc(True, ss, pc, pp, pt, ss[0], r, ct, mu_s, nu, False, R, Rt, mu_s_min,
                                2.0 * ct * d_omega[a], o)
 
 

@@ -243,7 +243,6 @@ def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, a
     pt = np.ascontiguousarray(pt)
     dE = np.zeros(E.shape, dtype=np.float64)
     dE_prev = None
-    no_table = np.zeros((2, 2, 2, 2, nl), dtype=np.float32)   # (order 2 reads ss)
     J = None
     tot = tot_prev = None
     q = q2
@@ -252,9 +251,8 @@ def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, a
         if first:
             # 3a. single scattering arriving at each node + ground reflection of the sun
             L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-            _density.incident_radiance(True, ss, pc, pp, pt, no_table, dE, col, beta_e,
-                                       albedo, R, Rt, mu_s_min, alpha, n_r, n_ms_j, q.th_in,
-                                       q.ph_in, L_in)
+            _density.incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min,
+                                       alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
         else:
             if q is not q3:
                 q = q3
@@ -267,8 +265,8 @@ def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, a
         # 3c. ground irradiance of order-1 ([BN08] eq. 9), from the same source
         dE_new = np.empty_like(dE)
         if first:
-            _irradiance.indirect_irradiance(True, ss, pc, pp, pt, no_table, R, Rt,
-                                            mu_s_min, th_i, ph_i, dom_i, dE_new)
+            _irradiance.indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th_i, ph_i, dom_i,
+                                            dE_new)
         else:
             _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
                                                  mu_s_min, n_q, ts, th_h, ph_h, dom_h, dE_new)
