@@ -124,13 +124,18 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
     """A binary Radiance matrix file filled in place: yields its data as a zero-filled
     (nrows, ncols, ncomp) memory map, to be filled (e.g. ``perez_sky_matrix(..., out=...)``).
 
-    The file is a temporary one beside ``path`` (header, then a sparse zero body), renamed to
-    ``path`` when the block ends without an exception and the data is finite; otherwise it
-    is removed, nothing is left. Writing through the map costs no copy and no second pass.
+    The file is a temporary one beside ``path`` (header, then a body of zeros written
+    sequentially), renamed to ``path`` when the block ends without an exception and the data
+    is finite; otherwise it is removed, nothing is left. Writing through the map costs no
+    copy and no second pass.
 
-    Measured against an anonymous buffer written once at the end (annual MF:4 float matrix,
-    242 MB, kernel included, 2-core EPYC, three runs each): the map's page faults cost
-    0.34-0.38 s of system time, the buffer's one write 0.58-1.33 s (user time alike).
+    The body is written as zeros first, in 1 MiB blocks, rather than left sparse: a sky
+    matrix kernel fills the map in runs of hours scattered over every patch row, and on a
+    sparse file each first touch of a page is a page fault that allocates it out of order
+    (annual MF:4 float matrix, 242 MB, 2-core EPYC, ext4: 0.32-0.39 s of system time and
+    0.2-0.3 s more user time in the kernel). Writing the zeros costs 0.06-0.11 s, after which
+    the kernel's faults find their pages in the page cache (0.01 s); a sequential ``dd`` of
+    the same 242 MB costs 0.05-0.06 s.
     """
     from skydome._validate import check_choice
 
@@ -146,9 +151,11 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     mm = None
     try:
-        with os.fdopen(fd, "wb") as f:
+        with os.fdopen(fd, "wb", buffering=0) as f:
             f.write(head)
-            f.truncate(len(head) + size)  # a sparse body of zeros
+            zeros = bytes(min(size, 1 << 20))
+            for a in range(0, size, len(zeros) or 1):  # the body's pages, in file order
+                f.write(zeros[:min(len(zeros), size - a)])
         mm = np.memmap(tmp, dtype=dtype, mode="r+", offset=len(head),
                        shape=(nrows, ncols, ncomp))
         yield mm.view(np.ndarray)
