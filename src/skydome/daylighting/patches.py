@@ -32,7 +32,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["PatchSet", "patches", "TREGENZA_BAND_COUNTS"]
+__all__ = ["PatchSet", "patches", "AdaptiveRule", "TREGENZA_BAND_COUNTS"]
 
 #: Patches per Tregenza band from the horizon up (the zenith cap not counted) [T87].
 TREGENZA_BAND_COUNTS = (30, 30, 24, 24, 18, 12, 6)
@@ -176,41 +176,124 @@ def _nodes(name: str, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ps = patches(name)
     if order < 0 or order > 16:
         raise ValueError(f"order = {order} is out of range [0, 16]")
-    sl = slice(1, None)
     if order == 0:
-        d = ps.centres[sl]
-        w = ps.solid_angle_sr[sl].copy()
+        d = ps.centres[1:]
+        w = ps.solid_angle_sr[1:].copy()
         offsets = np.arange(ps.n_sky + 1)
-    else:
-        x, wx = np.polynomial.legendre.leggauss(order)
-        u, wu = 0.5 * (x + 1.0), 0.5 * wx  # on [0, 1]
-        slo = np.sin(ps.altitude_low_rad[sl])
-        shi = np.sin(ps.altitude_high_rad[sl])
-        n = ps.n_sky
-        ring = slice(0, n - 1)
-        # ring patches: q x q tensor rule in (sin a, phi)
-        s = slo[ring, None] + (shi - slo)[ring, None] * u[None, :]  # (p, q)
-        ws = (shi - slo)[ring, None] * wu[None, :]
-        h = ps.azimuth_half_width_rad[sl][ring]
-        phi = ps.azimuth_centre_rad[sl][ring, None] + h[:, None] * x[None, :]  # (p, q)
-        wp = h[:, None] * wx[None, :]
-        alt = np.arcsin(s)
-        dr = _vector(alt[:, :, None], phi[:, None, :]).reshape(n - 1, order * order, 3)
-        wr = (ws[:, :, None] * wp[:, None, :]).reshape(n - 1, order * order)
-        # zenith cap: q nodes in sin a times 6 q azimuths (periodic trapezoid)
-        m = 6 * order
-        sc = slo[-1] + (shi[-1] - slo[-1]) * u
-        wsc = (shi[-1] - slo[-1]) * wu
-        phic = 2.0 * math.pi * (np.arange(m) + 0.5) / m
-        dc = _vector(np.arcsin(sc)[:, None], phic[None, :]).reshape(1, order * m, 3)
-        wc = (wsc[:, None] * np.full(m, 2.0 * math.pi / m)[None, :]).reshape(1, order * m)
-        d = np.concatenate([dr.reshape(-1, 3), dc.reshape(-1, 3)])
-        w = np.concatenate([wr.reshape(-1), wc.reshape(-1)])
-        offsets = np.concatenate([np.arange(n) * order * order,
-                                  [(n - 1) * order * order + order * m]])
+        return _frozen(d, w, offsets)
+    n_rows = len(_row_counts(ps.mf)) + 1
+    return _row_rule(name, (order,) * n_rows, (order,) * n_rows)
+
+
+def _frozen(d, w, offsets):
     d = np.ascontiguousarray(d)
     w = np.ascontiguousarray(w)
     offsets = np.ascontiguousarray(offsets, dtype=np.int64)
     for a in (d, w, offsets):
         a.setflags(write=False)
     return d, w, offsets
+
+
+@lru_cache(maxsize=32)
+def _row_rule(name: str, q_alt: tuple, q_az: tuple) -> tuple[np.ndarray, np.ndarray,
+                                                               np.ndarray]:
+    """Nodes of a rule with q_alt[i] x q_az[i] Gauss-Legendre nodes in (sin a, phi) on each
+    patch of row i, and q_alt x 6 q_az (periodic trapezoid in azimuth) on the zenith cap
+    (the last entry); nodes of a patch altitude-major (runs of equal altitude)."""
+    ps = patches(name)
+    counts = _row_counts(ps.mf)
+    sl = slice(1, None)
+    slo = np.sin(ps.altitude_low_rad[sl])
+    shi = np.sin(ps.altitude_high_rad[sl])
+    azc = ps.azimuth_centre_rad[sl]
+    azh = ps.azimuth_half_width_rad[sl]
+    first = np.concatenate([[0], np.cumsum(counts)])
+    parts_d, parts_w, sizes = [], [], []
+    for i in range(len(counts) + 1):
+        qa, qz = int(q_alt[i]), int(q_az[i])
+        xa, wxa = np.polynomial.legendre.leggauss(qa)
+        u, wu = 0.5 * (xa + 1.0), 0.5 * wxa  # on [0, 1]
+        if i < len(counts):  # ring patches: tensor rule in (sin a, phi)
+            ring = slice(first[i], first[i + 1])
+            xz, wxz = np.polynomial.legendre.leggauss(qz)
+            s = slo[ring, None] + (shi - slo)[ring, None] * u[None, :]  # (p, qa)
+            ws = (shi - slo)[ring, None] * wu[None, :]
+            h = azh[ring]
+            phi = azc[ring, None] + h[:, None] * xz[None, :]  # (p, qz)
+            wp = h[:, None] * wxz[None, :]
+            p_n, m = counts[i], qz
+        else:  # zenith cap: qa nodes in sin a times 6 qz azimuths (periodic trapezoid)
+            m = 6 * qz
+            s = (slo[-1] + (shi[-1] - slo[-1]) * u)[None, :]
+            ws = ((shi[-1] - slo[-1]) * wu)[None, :]
+            phi = (2.0 * math.pi * (np.arange(m) + 0.5) / m)[None, :]
+            wp = np.full(m, 2.0 * math.pi / m)[None, :]
+            p_n = 1
+        d = _vector(np.arcsin(s)[:, :, None], phi[:, None, :]).reshape(p_n, qa * m, 3)
+        w = (ws[:, :, None] * wp[:, None, :]).reshape(p_n, qa * m)
+        parts_d.append(d.reshape(-1, 3))
+        parts_w.append(w.reshape(-1))
+        sizes.append(np.full(p_n, qa * m))
+    offsets = np.concatenate([[0], np.cumsum(np.concatenate(sizes))])
+    return _frozen(np.concatenate(parts_d), np.concatenate(parts_w), offsets)
+
+
+@dataclass(frozen=True)
+class AdaptiveRule:
+    """A patch quadrature that spends nodes where the Perez integrand needs them.
+
+    Each hour, patch k takes ``near_order`` x ``near_order`` Gauss-Legendre nodes if the sun
+    is within ``near_angle_deg`` of the patch's nearest point (its centre's angle to the sun
+    less the patch's angular radius, the angle from its centre to its farthest corner); every
+    other patch takes ``far_order`` x ``far_order`` nodes, except the rows whose lower
+    altitude is below ``horizon_deg``, where the gradation term 1 + a exp(b / cos zeta)
+    changes fastest: ``horizon_order`` nodes in sin(altitude) x ``far_order`` in azimuth.
+    The zenith cap takes q_alt x 6 q_az nodes as in :meth:`PatchSet.nodes`.
+    """
+
+    near_order: int = 8
+    near_angle_deg: float = 10.0
+    far_order: int = 2
+    horizon_order: int = 6
+    horizon_deg: float = 6.0
+
+    def __post_init__(self):
+        for name in ("near_order", "far_order", "horizon_order"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not 1 <= v <= 16:
+                raise ValueError(f"{name} = {v!r} must be an integer in [1, 16]")
+        for name, hi in (("near_angle_deg", 180.0), ("horizon_deg", 90.0)):
+            v = getattr(self, name)
+            if not isinstance(v, (int, float)) or not math.isfinite(v) or not 0.0 <= v <= hi:
+                raise ValueError(f"{name} = {v!r} must be a number in [0, {hi:g}]")
+
+    def nodes(self, ps: "PatchSet"):
+        """(far nodes, far weights, far offsets, near nodes, near weights, near offsets,
+        cos_near (n_sky,)): patch k takes the near rule when the cosine of the angle between
+        its centre and the sun exceeds cos_near[k]."""
+        n_rows = len(_row_counts(ps.mf)) + 1
+        alpha = 90.0 / (7 * ps.mf + 0.5)
+        row_lo = alpha * np.arange(n_rows - 1)
+        q_alt = tuple(self.horizon_order if lo < self.horizon_deg else self.far_order
+                      for lo in row_lo) + (self.far_order,)
+        far = _row_rule(ps.name, q_alt, (self.far_order,) * n_rows)
+        near = _nodes(ps.name, self.near_order)
+        ang = np.minimum(self.near_angle_deg + np.degrees(_patch_radius(ps.name)), 180.0)
+        return (*far, *near, np.cos(np.radians(ang)))
+
+
+@lru_cache(maxsize=None)
+def _patch_radius(name: str) -> np.ndarray:
+    """Angle [rad] from each sky patch's centre (gendaymtx's) to its farthest corner."""
+    ps = patches(name)
+    sl = slice(1, None)
+    c = ps.centres[sl]
+    r = np.zeros(ps.n_sky)
+    for alt in (ps.altitude_low_rad[sl], ps.altitude_high_rad[sl]):
+        for sign in (-1.0, 1.0):
+            corner = _vector(alt, ps.azimuth_centre_rad[sl] + sign * ps.azimuth_half_width_rad[sl])
+            cosang = np.clip(np.sum(corner * c, axis=-1), -1.0, 1.0)
+            r = np.maximum(r, np.arccos(cosang))
+    r[-1] = math.pi / 2 - ps.altitude_low_rad[-1]  # the zenith cap: its rim
+    r.setflags(write=False)
+    return r

@@ -42,12 +42,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from skydome.constants import RADIANCE_SUN_ANGLE_DEG, RADIANCE_WHITE_EFFICACY
-from skydome.daylighting.patches import PatchSet, patches as _patches
+from skydome.daylighting.patches import AdaptiveRule, PatchSet, patches as _patches
 
 __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_option",
            "weather_model_sky_matrix", "parse_components", "weather_aod",
            "GENDAYMTX_SKY_COLOR",
-           "SUN_ANGLE_DEG", "DEFAULT_ORDER", "warm_kernels"]
+           "SUN_ANGLE_DEG", "DEFAULT_ORDER", "PEREZ_DEFAULT_ORDER", "quadrature_rule",
+           "warm_kernels"]
 
 #: gendaymtx's default sky colour (its -c default, Radiance 5.4).
 GENDAYMTX_SKY_COLOR = (0.96, 1.004, 1.118)
@@ -55,8 +56,11 @@ GENDAYMTX_SKY_COLOR = (0.96, 1.004, 1.118)
 WHITE_EFFICACY = RADIANCE_WHITE_EFFICACY
 #: Full angle of the solar disc in gendaymtx (SUN_ANG_DEG) [deg].
 SUN_ANGLE_DEG = RADIANCE_SUN_ANGLE_DEG  # Radiance's disc, full angle [deg]
-#: Default quadrature order per patch (q x q Gauss-Legendre nodes; see patches).
+#: Default quadrature order per patch of a model's sky matrix (q x q Gauss-Legendre nodes;
+#: see patches).
 DEFAULT_ORDER = 4
+#: Default patch quadrature of the Perez sky matrices: the adaptive rule (AdaptiveRule()).
+PEREZ_DEFAULT_ORDER = "adaptive"
 _NSUNPATCH = 4
 
 
@@ -115,8 +119,27 @@ def parse_sun_option(sun: str) -> tuple[str, int, float]:
                      "'disc:ANGLE' (full angle in (0, 20] deg), 'separate' or 'none'")
 
 
+def quadrature_rule(ps: PatchSet, order):
+    """The node sets the Perez kernel takes for ``order``: an int 0..16 (q x q nodes on every
+    patch, 0 = the centre), "adaptive" (:class:`~skydome.daylighting.patches.AdaptiveRule`'s
+    defaults) or an AdaptiveRule. Returns (nodes, weights, offsets, near_nodes,
+    near_weights, near_offsets, cos_near); a fixed order has no near rule (cos_near 2)."""
+    from skydome._validate import check_int
+
+    if isinstance(order, str) and order.strip().lower() == "adaptive":
+        order = AdaptiveRule()
+    if isinstance(order, AdaptiveRule):
+        return order.nodes(ps)
+    if isinstance(order, str):
+        raise ValueError(f"order = {order!r} is unknown; use an integer in [0, 16] or "
+                         "'adaptive'")
+    order = check_int("order", order, 0, 16)
+    nodes, weights, offsets = ps.nodes(order)
+    return nodes, weights, offsets, nodes, weights, offsets, np.full(ps.n_sky, 2.0)
+
+
 def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza",
-                     order: int = DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
+                     order=PEREZ_DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
                      sky_color=GENDAYMTX_SKY_COLOR, dtype=np.float64,
                      out=None) -> SkyMatrix:
@@ -132,13 +155,14 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         (n,) 1..366 (sun-earth distance).
     patches : str or PatchSet
         "tregenza" or "reinhart:MF".
-    order : int
-        Quadrature order per patch, 0..16: 0 = gendaymtx's point sample at each patch centre,
-        q >= 1 = q x q Gauss-Legendre nodes (see :mod:`skydome.daylighting.patches`).
-        Default 4: over every hour of the sample year (Greensboro TMY3) the patch means are
-        within 0.93 % of order 8 for Tregenza (99th percentile 0.07 %) and within 0.22 % for
-        MF:4; point sampling (order 0) errs by up to 41 % (Tregenza) and 10 % (MF:4), in the
-        circumsolar patches.
+    order : int, "adaptive" or AdaptiveRule
+        Patch quadrature: an int 0..16 takes q x q Gauss-Legendre nodes on every patch (0 =
+        gendaymtx's point sample at each patch centre); "adaptive" (default) takes
+        :class:`~skydome.daylighting.patches.AdaptiveRule`'s defaults, order 8 on the
+        circumsolar patches and order 2 elsewhere (6 in altitude near the horizon). Over
+        the sample year (Greensboro TMY3) against order 16, see docs/daylighting.md,
+        section 2; point sampling (order 0) errs by up to 41 % (Tregenza) and 10 % (MF:4), in
+        the circumsolar patches.
     sun : str
         "spread" (default, gendaymtx), "spread:N", "disc:ANGLE", "separate" or "none".
     components : {"rgb", "luminance"}
@@ -163,14 +187,13 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     -------
     SkyMatrix
     """
-    from skydome._validate import check_choice, check_int
-    from skydome.models.analytic import _kernels_analytic as K
+    from skydome._validate import check_choice
     from skydome.models.analytic.perez1993 import (COS_ZETA_MIN,
                                                     perez1993_coefficients_many,
                                                     perez1993_sky_parameters)
 
     ps = patches if isinstance(patches, PatchSet) else _patches(patches)
-    order = check_int("order", order, 0, 16)
+    rule = quadrature_rule(ps, order)
     mode, nsuns, disc_deg = parse_sun_option(sun)
     check_choice("components", components, ("rgb", "luminance"))
     dni = np.atleast_1d(np.asarray(dni, dtype=np.float64))
@@ -221,7 +244,6 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     e_dir = np.maximum(par.direct_illuminance, 0.0)
     day = (dni + dhi) > 1e-4  # gendaymtx: "effectively nighttime" below
 
-    nodes, weights, offsets = ps.nodes(order)
     npatch = len(ps)
     dtype = np.dtype(dtype)
     if dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
@@ -244,7 +266,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
 
     from skydome.daylighting import _kernels as DK
 
-    DK.fill_perez_sky(file_order, np.ascontiguousarray(day), nodes, weights, offsets,
+    DK.fill_perez_sky(file_order, np.ascontiguousarray(day), *rule,
                       np.ascontiguousarray(ps.centres[1:]), ps.solid_angle_sr[1:],
                       np.ascontiguousarray(s_dist), np.ascontiguousarray(sd),
                       np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),

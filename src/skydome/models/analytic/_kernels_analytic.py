@@ -296,6 +296,31 @@ def hosek_wilkie(d, s, cfg, rad):
 # reorder differently in each compilation, and a matrix chunk compiled in a Dask worker then
 # differs from the serial run in the last bit; without it every compilation gives the same bits.
 @njit(cache=True)
+def _perez_patch_nodes(nodes, weights, m0, m1, sx, sy, sz, a, b, c, dd, e, cz_min, tot,
+                       z_last, grad):
+    """Mean of lv over nodes m0:m1 (one patch) and ``tot`` + its sum of w lv cos(zeta); the
+    gradation term is computed once per run of nodes of equal altitude (``z_last``, ``grad``
+    carried from patch to patch). Returns (mean, tot, z_last, grad)."""
+    acc = 0.0
+    wsum = 0.0
+    for m in range(m0, m1):
+        x, y, z = nodes[m, 0], nodes[m, 1], nodes[m, 2]
+        if z != z_last:  # nodes come in runs of equal altitude: one gradation per run
+            z_last = z
+            grad = 1.0 + a * math.exp(b / max(z, cz_min))
+        cg = _clamp1(x * sx + y * sy + z * sz)
+        gamma = math.acos(cg)
+        lv = grad * (1.0 + c * math.exp(dd * gamma) + e * cg * cg)
+        if lv < 0.0:
+            lv = 0.0
+        w = weights[m]
+        acc += w * lv
+        wsum += w
+        tot += w * lv * z
+    return acc / wsum, tot, z_last, grad
+
+
+@njit(cache=True)
 def perez1993_patch_row(nodes, weights, offsets, s, coef, cz_min, means):
     """Patch means of the relative luminance lv of one sky into ``means`` (P,).
 
@@ -310,23 +335,34 @@ def perez1993_patch_row(nodes, weights, offsets, s, coef, cz_min, means):
     z_last = 2.0
     grad = 0.0
     for k in range(offsets.shape[0] - 1):
-        acc = 0.0
-        wsum = 0.0
-        for m in range(offsets[k], offsets[k + 1]):
-            x, y, z = nodes[m, 0], nodes[m, 1], nodes[m, 2]
-            if z != z_last:  # nodes come in runs of equal altitude: one gradation per run
-                z_last = z
-                grad = 1.0 + a * math.exp(b / max(z, cz_min))
-            cg = _clamp1(x * sx + y * sy + z * sz)
-            gamma = math.acos(cg)
-            lv = grad * (1.0 + c * math.exp(dd * gamma) + e * cg * cg)
-            if lv < 0.0:
-                lv = 0.0
-            w = weights[m]
-            acc += w * lv
-            wsum += w
-            tot += w * lv * z
-        means[k] = acc / wsum
+        means[k], tot, z_last, grad = _perez_patch_nodes(
+            nodes, weights, offsets[k], offsets[k + 1], sx, sy, sz, a, b, c, dd, e, cz_min,
+            tot, z_last, grad)
+    return tot
+
+
+@njit(cache=True)
+def perez1993_patch_row_adaptive(nodes, weights, offsets, near_nodes, near_weights,
+                                 near_offsets, centres, cos_near, s, coef, cz_min, means):
+    """:func:`perez1993_patch_row` with two rules per patch: patch k takes the nodes of the
+    ``near_*`` rule where the cosine of the angle between its centre (``centres`` (P, 3)) and
+    the sun ``s`` exceeds ``cos_near[k]`` (the circumsolar patches), the base rule
+    (``nodes``, ``weights``, ``offsets``) elsewhere. With every ``cos_near`` above 1 it is
+    :func:`perez1993_patch_row`, bit for bit."""
+    sx, sy, sz = s[0], s[1], s[2]
+    a, b, c, dd, e = coef[0], coef[1], coef[2], coef[3], coef[4]
+    tot = 0.0
+    z_last = 2.0
+    grad = 0.0
+    for k in range(offsets.shape[0] - 1):
+        if centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * sz > cos_near[k]:
+            means[k], tot, z_last, grad = _perez_patch_nodes(
+                near_nodes, near_weights, near_offsets[k], near_offsets[k + 1], sx, sy, sz,
+                a, b, c, dd, e, cz_min, tot, z_last, grad)
+        else:
+            means[k], tot, z_last, grad = _perez_patch_nodes(
+                nodes, weights, offsets[k], offsets[k + 1], sx, sy, sz, a, b, c, dd, e,
+                cz_min, tot, z_last, grad)
     return tot
 
 
