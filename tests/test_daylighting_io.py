@@ -136,3 +136,47 @@ def test_cli_skymatrix_bad_weather_and_existing_output(tmp_path):
     assert r.exit_code == 2 and "exists" in r.output
     assert (tmp_path / "a.mtx").read_text() == "keep"
     assert r.output.count("\n") == 1
+
+
+def test_cli_float_file_equals_one_pass_matrix(tmp_path):
+    """The CLI's float file (the kernel fills the file's map in place) holds the bytes that
+    writing the whole matrix in one pass holds (write_matrix of the in-memory matrix)."""
+    from skydome.daylighting.skymatrix import perez_sky_matrix_from_weather
+    from skydome.daylighting.weather import read_weather
+
+    w = _days_tmy3(tmp_path)
+    out = tmp_path / "cli.mtx"
+    r = _cli(["skymatrix", "--weather", str(w), "--patches", "reinhart:2", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    m = perez_sky_matrix_from_weather(read_weather(w), patches="reinhart:2", dtype=np.float32)
+    write_matrix(tmp_path / "one.mtx", m.sky, fmt="float", transpose=True)
+    a, b = out.read_bytes(), (tmp_path / "one.mtx").read_bytes()
+    body_a, body_b = a[a.index(b"\n\n") + 2:], b[b.index(b"\n\n") + 2:]
+    assert len(body_a) == 578 * 48 * 3 * 4 and body_a == body_b
+    assert np.count_nonzero(np.frombuffer(body_a, np.float32)) > 1000
+
+
+def test_cli_error_inside_the_kernel_leaves_nothing(tmp_path, monkeypatch):
+    """A failure after part of the body is written: one line, exit 2, no file, no
+    temporary."""
+    from skydome.daylighting import skymatrix
+
+    def fail_half_way(weather, out=None, **kw):
+        out[: out.shape[0] // 2] = 1.0
+        raise ValueError("interrupted half way")
+
+    monkeypatch.setattr(skymatrix, "perez_sky_matrix_from_weather", fail_half_way)
+    w = _days_tmy3(tmp_path)
+    r = _cli(["skymatrix", "--weather", str(w), "--patches", "reinhart:2", "--out",
+              str(tmp_path / "x.mtx")])
+    assert r.exit_code == 2 and "interrupted half way" in r.output
+    assert list(tmp_path.iterdir()) == [w]
+
+
+@pytest.mark.parametrize("order", ["fine", "17", "-1"])
+def test_cli_bad_order(tmp_path, order):
+    w = _days_tmy3(tmp_path)
+    r = _cli(["skymatrix", "--weather", str(w), "--order", order, "--out",
+              str(tmp_path / "x.mtx")])
+    assert r.exit_code == 2 and "order" in r.output
+    assert list(tmp_path.iterdir()) == [w]

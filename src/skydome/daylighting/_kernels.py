@@ -1,8 +1,8 @@
 """numba kernels of the sky matrices (private; validated and broadcast by skymatrix.py).
 
 One call fills every hour of a sky matrix: the Perez patch means of
-:func:`skydome.models.analytic._kernels_analytic.perez1993_patch_row_adaptive` (a base rule
-and a finer one for the circumsolar patches; a fixed order is the base rule alone), the
+:func:`skydome.models.analytic._kernels_analytic.perez1993_patch_row_tiered` (finer rules for
+the patches nearer the sun; a fixed order is one rule for all), the
 normalisation to
 the diffuse horizontal illuminance, the sky tint, the ground patch and gendaymtx's sun
 spreading, in parallel over hours. Units and conventions: see skymatrix.py.
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.models.analytic._kernels_analytic import perez1993_patch_row_adaptive
+from skydome.models.analytic._kernels_analytic import perez1993_patch_row_tiered
 
 MAX_SUN_PATCHES = 4
 
@@ -27,16 +27,15 @@ TILE_HOURS = 32
 
 
 @njit(cache=True)  # strict IEEE: see perez1993_patch_row
-def _perez_hour(dest, h, nodes, weights, offsets, near_nodes, near_weights, near_offsets,
-                cos_near, centres, dom, s_dist, s_true, coef, e_diff, e_dir, rho, tint, grey,
-                out_scale, nsuns, fixed_sa, cz_min, means, near, ndot):
+def _perez_hour(dest, h, nodes, weights, offsets, cos_tier, centres, dom, s_dist, s_true,
+                coef, e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min, means,
+                near, ndot):
     """One hour's patch values (ground first) into ``dest`` (P + 1, C); ``means`` (P,),
     ``near`` and ``ndot`` (MAX_SUN_PATCHES,) are work space of the caller's thread."""
-    n_patch = offsets.shape[0] - 1
+    n_patch = offsets.shape[1] - 1
     ncomp = dest.shape[1]
-    horiz = perez1993_patch_row_adaptive(nodes, weights, offsets, near_nodes, near_weights,
-                                         near_offsets, centres, cos_near, s_dist[h], coef[h],
-                                         cz_min, means)
+    horiz = perez1993_patch_row_tiered(nodes, weights, offsets, centres, cos_tier, s_dist[h],
+                                       coef[h], cz_min, means)
     if horiz <= 1e-6:  # gendaymtx: a zero sky is made uniform, normalised by pi
         for k in range(n_patch):
             means[k] = 1.0
@@ -84,9 +83,9 @@ def _perez_hour(dest, h, nodes, weights, offsets, near_nodes, near_weights, near
 
 
 @njit(parallel=True, cache=True)  # strict IEEE: see perez1993_patch_row
-def fill_perez_sky(out, day, nodes, weights, offsets, near_nodes, near_weights, near_offsets,
-                   cos_near, centres, dom, s_dist, s_true, coef, e_diff, e_dir, rho, tint,
-                   grey, out_scale, nsuns, fixed_sa, cz_min, n_threads):
+def fill_perez_sky(out, day, nodes, weights, offsets, cos_tier, centres, dom, s_dist, s_true,
+                   coef, e_diff, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa, cz_min,
+                   n_threads):
     """Fill ``out[:, h]`` (P + 1, C) for each hour h with ``day[h]``; other hours are left as
     they are (zero).
 
@@ -94,9 +93,9 @@ def fill_perez_sky(out, day, nodes, weights, offsets, near_nodes, near_weights, 
     of the output file, or a (P + 1, H, C) view of an (H, P + 1, C) array. The hours are
     split into ``n_threads`` contiguous runs (numba.get_num_threads()); each thread computes tiles of TILE_HOURS hours
     into one float64 work buffer of its own (allocated once) and copies a tile out patch by
-    patch, in runs of TILE_HOURS contiguous hours. Patch k's mean takes the ``near_*`` rule
-    where its centre is within the angle of ``cos_near[k]`` from s_dist, the base rule
-    otherwise (see perez1993_patch_row_adaptive). s_dist (H, 3): sun vector of the
+    patch, in runs of TILE_HOURS contiguous hours. Patch k's mean takes rule t of ``offsets``
+    (T, P + 1) by its angle to s_dist and ``cos_tier`` (T, P) (see
+    perez1993_patch_row_tiered). s_dist (H, 3): sun vector of the
     distribution (zenith clamped); s_true (H, 3): the true sun (ground term, nearest
     patches); coef (H, 5); e_diff, e_dir (H,) [lx]; rho (H,); tint, grey (C,); nsuns 0 = no
     sun in the matrix; fixed_sa > 0 replaces the patches' solid angles for the sun
@@ -123,10 +122,9 @@ def fill_perez_sky(out, day, nodes, weights, offsets, near_nodes, near_weights, 
                 continue
             for h in range(h0, h1):
                 if day[h]:
-                    _perez_hour(buf[h - h0], h, nodes, weights, offsets, near_nodes,
-                                near_weights, near_offsets, cos_near, centres, dom, s_dist,
-                                s_true, coef, e_diff, e_dir, rho, tint, grey, out_scale,
-                                nsuns, fixed_sa, cz_min, means, near, ndot)
+                    _perez_hour(buf[h - h0], h, nodes, weights, offsets, cos_tier, centres,
+                                dom, s_dist, s_true, coef, e_diff, e_dir, rho, tint, grey,
+                                out_scale, nsuns, fixed_sa, cz_min, means, near, ndot)
             for k in range(n_row):  # patch by patch: runs of hours in the file order
                 for j in range(h1 - h0):
                     if day[h0 + j]:

@@ -80,7 +80,9 @@ def skymatrix_cmd(
         "(models with an atmosphere)"),
     param: list[str] = typer.Option([], "--param",
                                     help="model parameter NAME=VALUE (repeat; other models)"),
-    order: int = typer.Option(4, "--order", help="quadrature order per patch (0 = centre)"),
+    order: Optional[str] = typer.Option(
+        None, "--order", help="patch quadrature: adaptive (perez1993 default) or an order "
+        "0..16 (0 = the centre; other models' default 4)"),
     sun_position: str = typer.Option("spa", "--sun-position",
                                      help="spa | radiance (gendaymtx's approximate sun)"),
     fmt: str = typer.Option("float", "--format", help="ascii | float | double"),
@@ -108,8 +110,12 @@ def skymatrix_cmd(
     # -- validate everything before any work -------------------------------------------------
     ps = _guard(make_patches, patches)
     if model != "perez1993":
+        if order is None:
+            order = "4"
+        if not order.isdigit():
+            _fail(f"order = {order!r} must be an integer in [0, 16] for model {model!r}")
         return _model_matrix(weather, out, ps, model, components or "spectral:16", sun,
-                             aod_from, param, order, sun_position, overwrite, scheduler,
+                             aod_from, param, int(order), sun_position, overwrite, scheduler,
                              workers, chunk_hours)
     if aod_from is not None or param:
         _fail("--aod-from and --param apply to physically based models, not perez1993")
@@ -122,8 +128,11 @@ def skymatrix_cmd(
         _fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
     if sun_position not in ("spa", "radiance"):
         _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
-    if not 0 <= order <= 16:
-        _fail(f"order = {order} is out of range [0, 16]")
+    order = (order or "adaptive").strip().lower()
+    if order != "adaptive":
+        if not order.isdigit() or not 0 <= int(order) <= 16:
+            _fail(f"order = {order!r} must be 'adaptive' or an integer in [0, 16]")
+        order = int(order)
     if workers < 0 or chunk_hours < 1:
         _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
     distributed = scheduler is not None or workers > 0
@@ -147,6 +156,10 @@ def skymatrix_cmd(
             _fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
     from skydome.daylighting.weather import read_weather
 
+    if not distributed:  # this process runs only the Perez kernels: no BLAS probe
+        from skydome.daylighting.skymatrix import start_numba_without_blas
+
+        start_numba_without_blas()
     w = _guard(read_weather, weather, sun_position=sun_position)
     if rho is None:
         rho_v = w.albedo if w.albedo is not None else np.full(len(w), 0.2)

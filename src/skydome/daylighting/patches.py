@@ -32,7 +32,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["PatchSet", "patches", "AdaptiveRule", "TREGENZA_BAND_COUNTS"]
+__all__ = ["PatchSet", "patches", "AdaptiveRule", "tiered_nodes", "TREGENZA_BAND_COUNTS"]
 
 #: Patches per Tregenza band from the horizon up (the zenith cap not counted) [T87].
 TREGENZA_BAND_COUNTS = (30, 30, 24, 24, 18, 12, 6)
@@ -242,44 +242,88 @@ def _row_rule(name: str, q_alt: tuple, q_az: tuple) -> tuple[np.ndarray, np.ndar
 class AdaptiveRule:
     """A patch quadrature that spends nodes where the Perez integrand needs them.
 
-    Each hour, patch k takes ``near_order`` x ``near_order`` Gauss-Legendre nodes if the sun
-    is within ``near_angle_deg`` of the patch's nearest point (its centre's angle to the sun
-    less the patch's angular radius, the angle from its centre to its farthest corner); every
-    other patch takes ``far_order`` x ``far_order`` nodes, except the rows whose lower
-    altitude is below ``horizon_deg``, where the gradation term 1 + a exp(b / cos zeta)
-    changes fastest: ``horizon_order`` nodes in sin(altitude) x ``far_order`` in azimuth.
-    The zenith cap takes q_alt x 6 q_az nodes as in :meth:`PatchSet.nodes`.
+    Three rules, chosen each hour for each patch by the angle between the sun and the
+    patch's nearest point (its centre's angle to the sun less the patch's angular radius,
+    the angle from its centre to its farthest corner):
+
+    - within ``near_angle_deg``: ``near_order`` x ``near_order`` Gauss-Legendre nodes (the
+      circumsolar peak and the cusp of exp(d gamma) at the sun);
+    - within ``mid_angle_deg``: ``mid_order`` x ``mid_order``;
+    - elsewhere: ``far_order`` nodes in sin(altitude) x ``far_az_order`` in azimuth.
+
+    In the rows whose lower altitude is below ``horizon_deg``, where the gradation term
+    1 + a exp(b / cos zeta) changes fastest, every rule takes at least ``horizon_order``
+    nodes in sin(altitude). The zenith cap takes q_alt x 6 q_az nodes as in
+    :meth:`PatchSet.nodes`. The defaults (:meth:`default_for`) are chosen against order 16
+    over the sample year (docs/daylighting.md, section 2).
     """
 
     near_order: int = 8
-    near_angle_deg: float = 10.0
+    near_angle_deg: float = 5.0
+    mid_order: int = 3
+    mid_angle_deg: float = 10.0
     far_order: int = 2
-    horizon_order: int = 6
+    far_az_order: int = 2
+    horizon_order: int = 4
     horizon_deg: float = 6.0
 
+    @classmethod
+    def default_for(cls, ps: "PatchSet") -> "AdaptiveRule":
+        """The default rule of a patch set: the class defaults for Reinhart MF >= 2; for
+        Tregenza's 12-degree patches finer rules (near 12, mid 4, far 3 x 3, horizon 10),
+        which its cusp patch and horizon row need to stay within 0.1 % of order 16."""
+        if ps.mf == 1:
+            return cls(near_order=12, mid_order=4, far_order=3, far_az_order=3,
+                       horizon_order=10)
+        return cls()
+
     def __post_init__(self):
-        for name in ("near_order", "far_order", "horizon_order"):
+        for name in ("near_order", "mid_order", "far_order", "far_az_order", "horizon_order"):
             v = getattr(self, name)
             if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not 1 <= v <= 16:
                 raise ValueError(f"{name} = {v!r} must be an integer in [1, 16]")
-        for name, hi in (("near_angle_deg", 180.0), ("horizon_deg", 90.0)):
+        for name, hi in (("near_angle_deg", 180.0), ("mid_angle_deg", 180.0),
+                         ("horizon_deg", 90.0)):
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or not 0.0 <= v <= hi:
                 raise ValueError(f"{name} = {v!r} must be a number in [0, {hi:g}]")
 
     def nodes(self, ps: "PatchSet"):
-        """(far nodes, far weights, far offsets, near nodes, near weights, near offsets,
-        cos_near (n_sky,)): patch k takes the near rule when the cosine of the angle between
-        its centre and the sun exceeds cos_near[k]."""
+        """(nodes, weights, offsets (3, n_sky + 1), cos_tier (3, n_sky)) of the near, mid and
+        far rules (see :func:`tiered_nodes`)."""
         n_rows = len(_row_counts(ps.mf)) + 1
         alpha = 90.0 / (7 * ps.mf + 0.5)
-        row_lo = alpha * np.arange(n_rows - 1)
-        q_alt = tuple(self.horizon_order if lo < self.horizon_deg else self.far_order
-                      for lo in row_lo) + (self.far_order,)
-        far = _row_rule(ps.name, q_alt, (self.far_order,) * n_rows)
-        near = _nodes(ps.name, self.near_order)
-        ang = np.minimum(self.near_angle_deg + np.degrees(_patch_radius(ps.name)), 180.0)
-        return (*far, *near, np.cos(np.radians(ang)))
+        low = np.append(alpha * np.arange(n_rows - 1), 90.0) < self.horizon_deg
+        rules = []
+        for qa, qz in ((self.near_order,) * 2, (self.mid_order,) * 2,
+                       (self.far_order, self.far_az_order)):
+            q_alt = tuple(max(qa, self.horizon_order) if lo else qa for lo in low)
+            rules.append((q_alt, (qz,) * n_rows))
+        return tiered_nodes(ps.name, tuple(rules), (self.near_angle_deg, self.mid_angle_deg))
+
+
+@lru_cache(maxsize=16)
+def tiered_nodes(name: str, rules: tuple, angles_deg: tuple):
+    """Several rules over the same patches, for a kernel that picks one per patch and hour.
+
+    ``rules``: T pairs (q_alt per row, q_az per row) (see :func:`_row_rule`; the last entry
+    of each tuple is the zenith cap); ``angles_deg``: T - 1 angles: rule t < T - 1 applies
+    where the sun is within angles_deg[t] of the patch's nearest point. Returns nodes (M,
+    3), weights (M,) [sr], offsets (T, n_sky + 1) into them, cos_tier (T, n_sky) (the
+    cosine of the angle from the patch centre below which rule t does not apply; -2 for
+    the last rule, which applies everywhere else)."""
+    ps = patches(name)
+    parts = [_row_rule(name, qa, qz) for qa, qz in rules]
+    starts = np.cumsum([0] + [p[0].shape[0] for p in parts[:-1]])
+    offsets = np.stack([p[2] + s0 for p, s0 in zip(parts, starts)])
+    radius = np.degrees(_patch_radius(name))
+    cos_tier = np.full((len(rules), ps.n_sky), -2.0)
+    for t, ang in enumerate(angles_deg):
+        cos_tier[t] = np.cos(np.radians(np.minimum(ang + radius, 180.0)))
+    d, w, o = _frozen(np.concatenate([p[0] for p in parts]),
+                      np.concatenate([p[1] for p in parts]), offsets)
+    cos_tier.setflags(write=False)
+    return d, w, o, cos_tier
 
 
 @lru_cache(maxsize=None)

@@ -46,7 +46,7 @@ from skydome.daylighting.patches import AdaptiveRule, PatchSet, patches as _patc
 
 __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_option",
            "weather_model_sky_matrix", "parse_components", "weather_aod",
-           "GENDAYMTX_SKY_COLOR",
+           "GENDAYMTX_SKY_COLOR", "start_numba_without_blas",
            "SUN_ANGLE_DEG", "DEFAULT_ORDER", "PEREZ_DEFAULT_ORDER", "quadrature_rule",
            "warm_kernels"]
 
@@ -121,13 +121,13 @@ def parse_sun_option(sun: str) -> tuple[str, int, float]:
 
 def quadrature_rule(ps: PatchSet, order):
     """The node sets the Perez kernel takes for ``order``: an int 0..16 (q x q nodes on every
-    patch, 0 = the centre), "adaptive" (:class:`~skydome.daylighting.patches.AdaptiveRule`'s
-    defaults) or an AdaptiveRule. Returns (nodes, weights, offsets, near_nodes,
-    near_weights, near_offsets, cos_near); a fixed order has no near rule (cos_near 2)."""
+    patch, 0 = the centre), "adaptive" (``AdaptiveRule.default_for(ps)``, see
+    :class:`~skydome.daylighting.patches.AdaptiveRule`) or an AdaptiveRule. Returns (nodes, weights, offsets (T, n_sky + 1), cos_tier
+    (T, n_sky)); a fixed order is one rule (T = 1)."""
     from skydome._validate import check_int
 
     if isinstance(order, str) and order.strip().lower() == "adaptive":
-        order = AdaptiveRule()
+        order = AdaptiveRule.default_for(ps)
     if isinstance(order, AdaptiveRule):
         return order.nodes(ps)
     if isinstance(order, str):
@@ -135,7 +135,7 @@ def quadrature_rule(ps: PatchSet, order):
                          "'adaptive'")
     order = check_int("order", order, 0, 16)
     nodes, weights, offsets = ps.nodes(order)
-    return nodes, weights, offsets, nodes, weights, offsets, np.full(ps.n_sky, 2.0)
+    return nodes, weights, offsets[None, :], np.full((1, ps.n_sky), -2.0)
 
 
 def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza",
@@ -158,10 +158,11 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     order : int, "adaptive" or AdaptiveRule
         Patch quadrature: an int 0..16 takes q x q Gauss-Legendre nodes on every patch (0 =
         gendaymtx's point sample at each patch centre); "adaptive" (default) takes
-        :class:`~skydome.daylighting.patches.AdaptiveRule`'s defaults, order 8 on the
-        circumsolar patches and order 2 elsewhere (6 in altitude near the horizon). Over
-        the sample year (Greensboro TMY3) against order 16, see docs/daylighting.md,
-        section 2; point sampling (order 0) errs by up to 41 % (Tregenza) and 10 % (MF:4), in
+        ``AdaptiveRule.default_for(patches)``: at MF >= 2 order 8 on the patches within 5 deg
+        of the sun, 3 within 10 deg, 2 elsewhere (4 in altitude below 6 deg); over every
+        lit hour of the sample year (Greensboro TMY3) every patch mean is within 0.07 % of
+        order 16 at Tregenza and MF:4 for 1/3 (MF:4) to 1 (Tregenza) times order 4's nodes
+        (docs/daylighting.md, section 2); point sampling (order 0) errs by up to 41 % (Tregenza) and 10 % (MF:4), in
         the circumsolar patches.
     sun : str
         "spread" (default, gendaymtx), "spread:N", "disc:ANGLE", "separate" or "none".
@@ -279,6 +280,34 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         sun_mat = (np.where(up, e_dir, 0.0) * out_scale / sun_sa)[:, None] * grey[None, :]
     return SkyMatrix(ps, sky, components, sun_mat, sd.copy(),
                      sun_sa if mode == "separate" else fixed_sa)
+
+
+def start_numba_without_blas() -> bool:
+    """Initialise numba's CPU target without importing SciPy's BLAS bindings (for a process
+    that only runs the sky-matrix kernels, e.g. ``skydome skymatrix``); True if it did.
+
+    Numba's target initialisation imports ``numba.np.arraymath``, which probes for BLAS by
+    importing ``scipy.linalg.cython_blas`` and with it all of ``scipy.linalg`` (0.25-0.30 s
+    of CPU on a 2-core EPYC, a quarter of a run's start-up). The Perez kernels use no BLAS.
+    The import is made to fail during the initialisation only (the module entry is set to
+    None and removed again), so that numba records "no BLAS" for ``np.correlate`` and
+    ``np.convolve`` (it then compiles them as plain loops) while ``np.dot`` and
+    ``np.linalg`` still find SciPy when a kernel that uses them is compiled later. Does
+    nothing if numba's target or SciPy's BLAS bindings are loaded already."""
+    import sys
+
+    name = "scipy.linalg.cython_blas"
+    if "numba.np.arraymath" in sys.modules or name in sys.modules:
+        return False
+    sys.modules[name] = None  # ``import`` of a None entry raises ImportError
+    try:
+        from numba.core.registry import cpu_target
+
+        cpu_target.target_context.refresh()  # loads the registries: numba.np.arraymath
+    finally:
+        if sys.modules.get(name, 0) is None:
+            del sys.modules[name]
+    return True
 
 
 def warm_kernels() -> None:

@@ -342,27 +342,29 @@ def perez1993_patch_row(nodes, weights, offsets, s, coef, cz_min, means):
 
 
 @njit(cache=True)
-def perez1993_patch_row_adaptive(nodes, weights, offsets, near_nodes, near_weights,
-                                 near_offsets, centres, cos_near, s, coef, cz_min, means):
-    """:func:`perez1993_patch_row` with two rules per patch: patch k takes the nodes of the
-    ``near_*`` rule where the cosine of the angle between its centre (``centres`` (P, 3)) and
-    the sun ``s`` exceeds ``cos_near[k]`` (the circumsolar patches), the base rule
-    (``nodes``, ``weights``, ``offsets``) elsewhere. With every ``cos_near`` above 1 it is
-    :func:`perez1993_patch_row`, bit for bit."""
+def perez1993_patch_row_tiered(nodes, weights, offsets, centres, cos_tier, s, coef, cz_min,
+                               means):
+    """:func:`perez1993_patch_row` with a rule per patch chosen by its angle to the sun.
+
+    ``offsets`` (T, P + 1): T rules over the same patches, their nodes in ``nodes`` /
+    ``weights``; patch k takes the first rule t < T - 1 with cos(angle between its centre
+    ``centres[k]`` and the sun ``s``) > ``cos_tier[t, k]`` (finest, nearest rule first), the
+    last rule otherwise. With T = 1 it is :func:`perez1993_patch_row`, bit for bit."""
     sx, sy, sz = s[0], s[1], s[2]
     a, b, c, dd, e = coef[0], coef[1], coef[2], coef[3], coef[4]
+    n_t = offsets.shape[0]
     tot = 0.0
     z_last = 2.0
     grad = 0.0
-    for k in range(offsets.shape[0] - 1):
-        if centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * sz > cos_near[k]:
-            means[k], tot, z_last, grad = _perez_patch_nodes(
-                near_nodes, near_weights, near_offsets[k], near_offsets[k + 1], sx, sy, sz,
-                a, b, c, dd, e, cz_min, tot, z_last, grad)
-        else:
-            means[k], tot, z_last, grad = _perez_patch_nodes(
-                nodes, weights, offsets[k], offsets[k + 1], sx, sy, sz, a, b, c, dd, e,
-                cz_min, tot, z_last, grad)
+    for k in range(offsets.shape[1] - 1):
+        t = 0
+        if n_t > 1:
+            d = centres[k, 0] * sx + centres[k, 1] * sy + centres[k, 2] * sz
+            while t < n_t - 1 and not d > cos_tier[t, k]:
+                t += 1
+        means[k], tot, z_last, grad = _perez_patch_nodes(
+            nodes, weights, offsets[t, k], offsets[t, k + 1], sx, sy, sz, a, b, c, dd, e,
+            cz_min, tot, z_last, grad)
     return tot
 
 
