@@ -10,14 +10,16 @@ each round (gendaymtx, then each skydome case):
 - ``skydome skymatrix --weather y.wea --order 0 --sun-position radiance``: gendaymtx's
   definition (the same .wea, Radiance's solar position, one point per patch);
 - the same from the TMY3 file (pvlib.iotools read, pandas and pvlib imported);
-- skydome's defaults from the TMY3 file (order 4 patch means, SPA suns);
-- in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun) and the
-  default one (order 4, SPA suns) filled into the file's memory map, the part of a run that
-  is the matrix and its file;
+- skydome's defaults from the TMY3 file (adaptive patch means, SPA suns), and the same with
+  the former default, order 4;
+- in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun), the
+  default one (adaptive, SPA suns) and order 4 (SPA suns) filled into the file's memory map,
+  the part of a run that is the matrix and its file;
 - the start-up floor of any such run, each a fresh process: ``python -c pass``, ``import
   numpy``, ``import numba``, ``import pvlib`` (what a TMY3/EPW input adds), and the skydome
   modules with the cached sky-matrix kernel loaded and called on two hours (everything a
-  run pays before its first hour of work).
+  run pays before its first hour of work), with numba's target started as the CLI starts
+  it (``start_numba_without_blas``) and as numba starts it by itself (SciPy's BLAS probe).
 
 Outputs are deleted before each timed run (freeing a 242 MB file is not counted for either
 program). Each figure is the best of ``--repeat`` rounds, as wall-clock time and as CPU time
@@ -47,7 +49,8 @@ from bench_single_scattering import machine, write_section  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 #: The floor: skydome's sky-matrix modules imported and the cached kernel (float32, as a
 #: "float" file takes) loaded and run on two hours of the Tregenza patches.
-_FLOOR = ("import numpy as np; from skydome.daylighting.skymatrix import perez_sky_matrix; "
+_FLOOR = ("import numpy as np; from skydome.daylighting.skymatrix import perez_sky_matrix, "
+          "start_numba_without_blas; {start}"
           "perez_sky_matrix([600.0, 0.0], [100.0, 0.0], [[0.0, -0.5, 0.75 ** 0.5]] * 2, [172, 172], "
           "order=0, dtype=np.float32, out=np.zeros((146, 2, 3), np.float32))")
 
@@ -113,8 +116,11 @@ def main(argv=None):
                     sky + ["--weather", str(tmy3), "--patches", spec, "--order", "0",
                            "--sun-position", "radiance", "--out", str(tmp / "s.mtx")],
                     senv, False),
-                "skydome CLI, TMY3, defaults (order 4, SPA)": (
+                "skydome CLI, TMY3, defaults (adaptive, SPA)": (
                     sky + ["--weather", str(tmy3), "--patches", spec, "--out",
+                           str(tmp / "s.mtx")], senv, False),
+                "skydome CLI, TMY3, order 4, SPA": (
+                    sky + ["--weather", str(tmy3), "--patches", spec, "--order", "4", "--out",
                            str(tmp / "s.mtx")], senv, False),
             }
             if mf == args.mf[-1]:  # the floor does not depend on the patches
@@ -125,8 +131,11 @@ def main(argv=None):
                     "start-up floor: import numba": (py + ["import numba"], senv, False),
                     "start-up floor: import pvlib (TMY3/EPW input)": (
                         py + ["import pvlib"], senv, False),
-                    "start-up floor: skydome + cached kernel, 2 hours": (
-                        py + [_FLOOR], senv, False),
+                    "start-up floor: skydome + cached kernel, 2 hours (as the CLI)": (
+                        py + [_FLOOR.format(start="start_numba_without_blas(); ")], senv,
+                        False),
+                    "start-up floor: the same, numba's own start (SciPy BLAS probe)": (
+                        py + [_FLOOR.format(start="")], senv, False),
                 })
             for cmd, e, _ in list(cases.values())[1:2]:  # numba cache of this tree, warm
                 _timed(cmd, tmp / "s.mtx", e, False)
@@ -141,8 +150,9 @@ def main(argv=None):
                 for name, wx, o, sp in (
                         ("skydome in process, matrix + file, order 0, Radiance sun", w, 0,
                          "radiance"),
-                        ("skydome in process, matrix + file, defaults (order 4, SPA)", w_spa,
-                         4, "spa")):
+                        ("skydome in process, matrix + file, defaults (adaptive, SPA)", w_spa,
+                         "adaptive", "spa"),
+                        ("skydome in process, matrix + file, order 4, SPA", w_spa, 4, "spa")):
                     (tmp / "s.mtx").unlink(missing_ok=True)
                     c0 = time.process_time()
                     t = time.perf_counter()

@@ -117,13 +117,18 @@ def test_adaptive_rule_spends_fewer_nodes_at_mf4(days):
 def test_tiers_of_one_order_are_that_order_bit_for_bit(days):
     """A tiered rule whose three tiers are all order q computes, node for node, what order
     q computes: the same bits (the tier choice changes which copy of the nodes is read)."""
+    from skydome.daylighting import _kernels as DK
+
     ps = patches("reinhart:2")
+    perez_sky_matrix_from_weather(days, patches=ps, order=2)
+    n_sig = len(DK.fill_perez_sky.signatures)
     for q in (1, 3):
         rule = AdaptiveRule(near_order=q, mid_order=q, far_order=q, far_az_order=q,
                             horizon_order=1)
         a = perez_sky_matrix_from_weather(days, patches=ps, order=rule)
         b = perez_sky_matrix_from_weather(days, patches=ps, order=q)
         assert np.array_equal(a.sky, b.sky)
+    assert len(DK.fill_perez_sky.signatures) == n_sig  # one compiled kernel for every rule
 
 
 @pytest.mark.parametrize("kw, message", [

@@ -135,7 +135,9 @@ def quadrature_rule(ps: PatchSet, order):
                          "'adaptive'")
     order = check_int("order", order, 0, 16)
     nodes, weights, offsets = ps.nodes(order)
-    return nodes, weights, offsets[None, :], np.full((1, ps.n_sky), -2.0)
+    cos_tier = np.full((1, ps.n_sky), -2.0)
+    cos_tier.setflags(write=False)  # read-only as the tiered rules': one compiled kernel
+    return nodes, weights, offsets[None, :], cos_tier
 
 
 def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza",
