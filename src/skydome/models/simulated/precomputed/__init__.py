@@ -81,6 +81,15 @@ class PrecomputedSky(SkyModel):
         least twice, are smooth; None: ``sphere_samples``).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
+    order4_sphere_samples : int, optional
+        Zenith-angle samples of the incident directions in the scattering density of
+        orders >= 4, at most ``high_order_sphere_samples`` (default 8; None:
+        ``high_order_sphere_samples``).
+    high_order_r_size, high_order_mu_s_size : int, optional
+        A faster approximation, opt-in: the (r, mu_s) nodes of the scattering density of
+        orders >= 3 on a coarser grid of the same mappings, interpolated into the summed
+        density (None, the default: the full grid, ``scattering_r_size`` x
+        ``density_mu_s_size``). 16 x 24 costs up to 10 % in twilight (docs/models.md).
     order_table_divisor : int
         1 (default): the scattering density of every order on the full outgoing grid.
         2, ...: a faster approximation: the density of orders >= 3 on an outgoing grid this
@@ -127,6 +136,15 @@ class PrecomputedSky(SkyModel):
                   kind="int"),
         Parameter("density_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
+        Parameter("order4_sphere_samples", "", 8, 4, 256,
+                  "zenith samples of the scattering density of orders >= 4 (None: "
+                  "high_order_sphere_samples)", kind="int"),
+        Parameter("high_order_r_size", "", None, 2, 512,
+                  "r nodes of the scattering density of orders >= 3 (None: the full grid)",
+                  kind="int"),
+        Parameter("high_order_mu_s_size", "", None, 2, 512,
+                  "mu_s nodes of the scattering density of orders >= 3 (None: the full grid)",
+                  kind="int"),
         Parameter("order_table_divisor", "", 1, 1, 8,
                   "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
@@ -504,7 +522,8 @@ _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "trans
                    "scattering_r_size", "scattering_mu_size", "scattering_mu_s_size",
                    "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
                    "integration_samples", "sphere_samples", "high_order_sphere_samples",
-                   "density_mu_s_size",
+                   "density_mu_s_size", "high_order_r_size", "high_order_mu_s_size",
+                   "order4_sphere_samples",
                    "order_table_divisor", "max_sun_zenith_deg")
 
 

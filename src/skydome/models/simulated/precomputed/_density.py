@@ -121,7 +121,8 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
     profiles of :func:`._multiple.multiple_scattering_table`) instead of interpolated from
     a 4-D table of that order, plus the light the ground reflects once more (irradiance
     table ``dE`` of the order before). out[i, r, mu_s, l] (float32), directions as in
-    :func:`incident_radiance`. One work item per (r, mu_s) node (no per-ray allocation)."""
+    :func:`incident_radiance`. One work item per (r, mu_s) node (no per-ray allocation);
+    the sums in float32."""
     n_th = th_in.shape[0]
     n_ph = ph_in.shape[0]
     nl = out.shape[3]
@@ -131,8 +132,11 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
     for idx in prange(n_r * n_ms):
         ir = idx // n_ms
         ims = idx % n_ms
-        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
-        acc = np.empty(nl)
+        tq, wq, w1, w2, cs, _ = ray_scratch(n_q, nc, nsc, nl)
+        # float32 weights and sums (the precision of J and of the output; 20-40 positive
+        # terms per value): the wavelength loops of density_acc vectorise 8-wide
+        tw = np.empty((nsc, nl), dtype=np.float32)
+        acc = np.empty(nl, dtype=np.float32)
         tg = np.empty(nl)
         eg = np.empty(nl)
         r, mu_s, sin_s = density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
