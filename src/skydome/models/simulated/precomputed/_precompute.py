@@ -195,10 +195,10 @@ def precompute(props, wl, p):
 
 # working memory of one batch of wavelengths of order 2 [bytes] (see precompute)
 ORDER_BATCH_BYTES = 400_000_000
-# working memory of one batch of wavelengths of the orders >= 3 [bytes]: their arrays are on
-# the coarse grid, so at the defaults all 20 table wavelengths are one batch (the ray
-# integrals' geometry is the same for every wavelength: fewer batches, less time)
-HIGH_ORDER_BATCH_BYTES = 320_000_000
+# working memory of one batch of wavelengths of the orders >= 3 [bytes] (2 batches of 10 at
+# the defaults; on the opt-in coarse (r, mu_s) grid all 20 wavelengths are one batch: the ray
+# integrals' geometry is the same for every wavelength, fewer batches take less time)
+HIGH_ORDER_BATCH_BYTES = 400_000_000
 
 
 def _batches(per_wl, nl, budget):
@@ -229,14 +229,17 @@ def high_order_grid(p):
 
 
 def high_order_batch_size(p, nl, nsc):
-    """Wavelengths per batch of the orders >= 3: two densities on the coarse grid (the
-    order's and the sum of the orders >= 3) and the incident radiance on the coarse
-    sphere (float32), within ``HIGH_ORDER_BATCH_BYTES``."""
+    """Wavelengths per batch of the orders >= 3: the order's density (and, on a coarse
+    (r, mu_s) grid, the sum of the orders >= 3 there) and the incident radiance on the
+    coarse sphere (float32), within ``HIGH_ORDER_BATCH_BYTES``."""
     n = p["sphere_samples"]
     n_o = min(n, max(ORDER_DENSITY_MIN, n // p["order_table_divisor"]))
     n_i = min(p["high_order_sphere_samples"] or n, n)
     n_r, n_ms = high_order_grid(p)
-    per_wl = 4 * n_r * n_ms * (2 * (2 * n_o + 1) * (n_o + 1) * nsc + n_i * n_i + 10)
+    full = (n_r, n_ms, n_o) == (p["scattering_r_size"],
+                                p["density_mu_s_size"] or p["scattering_mu_s_size"], n)
+    n_j = 1 if full else 2
+    per_wl = 4 * n_r * n_ms * (n_j * (2 * n_o + 1) * (n_o + 1) * nsc + n_i * n_i + 10)
     return _batches(per_wl, nl, HIGH_ORDER_BATCH_BYTES)
 
 
@@ -330,7 +333,9 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     shape = (nsc, q3.th_out.size, q3.ph_out.size, n_r, n_ms, nl)
     L_in = np.empty((q3.n_in, n_r, n_ms, nl), dtype=np.float32)
     J = np.empty(shape, dtype=np.float32)
-    J_hi = np.zeros(shape, dtype=np.float32)   # orders 3..N on the coarse grid
+    # orders 3..N: added straight into J2 on its own grid (J2 is no longer needed as order
+    # 3's source once order 3's J is computed), else summed on the coarse grid first
+    J_hi = J2 if shape == J2.shape else np.zeros(shape, dtype=np.float32)
     src = J2                                   # J of the order before
     dE, dE_prev = dE1, np.zeros_like(dE1)
     tot, tot_prev = tot2, None
@@ -365,7 +370,7 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         ea = tuple(range(dE.ndim - 1))
         E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
     del J, L_in
-    if p["orders"] >= 3:
+    if p["orders"] >= 3 and J_hi is not J2:
         add_density(J2, J_hi, q2, q3)
 
 
