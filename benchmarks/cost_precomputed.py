@@ -100,9 +100,10 @@ def main(argv=None):
     t0 = time.perf_counter()
     # one wavelength per batch, so that the kernels taking a batch's view of the
     # single-scattering table (not contiguous) are compiled here too
-    budget, _precompute.ORDER_BATCH_BYTES = _precompute.ORDER_BATCH_BYTES, 1
+    budget = _precompute.ORDER_BATCH_BYTES, _precompute.HIGH_ORDER_BATCH_BYTES
+    _precompute.ORDER_BATCH_BYTES = _precompute.HIGH_ORDER_BATCH_BYTES = 1
     sd.model("precomputed", sun=sun, n_wavelengths=2, orders=3, cache=False, **small)
-    _precompute.ORDER_BATCH_BYTES = budget
+    _precompute.ORDER_BATCH_BYTES, _precompute.HIGH_ORDER_BATCH_BYTES = budget
     print(f"kernel compile/load: {time.perf_counter() - t0:.1f} s")
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     rec, totals = {}, []

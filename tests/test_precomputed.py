@@ -486,26 +486,3 @@ def test_irradiance_rays_share_geometry_exactly():
     np.testing.assert_allclose(out, ref, rtol=1e-5, atol=1e-12 * ref.max())
     np.testing.assert_allclose(out[:, 1:-1], ref[:, 1:-1], rtol=1e-12, atol=1e-12 * ref.max())
 
-
-def test_coarse_sphere_of_orders_from_4_against_the_full_sphere():
-    """The incident directions of orders >= 4 on a sphere half as fine as order 3's (the
-    default: 8 zenith samples against 16) against the same tables with every order >= 3 on
-    order 3's sphere (the reference: ``order4_sphere_samples=None``), small tables, AOD 0.5,
-    sun 10 and -4 deg, 550 nm, over the upper hemisphere and the horizon. Measured
-    (small tables, 16 against 8 zenith samples): see the assertion; the full-size
-    comparison is in docs/models.md."""
-    atm = Atmosphere.earth(aerosol_optical_depth=0.5)
-    kw = dict(scattering_r_size=12, scattering_mu_size=48, scattering_mu_s_size=24,
-              scattering_nu_size=8, irradiance_mu_s_size=32, irradiance_r_size=8,
-              transmittance_mu_size=128, transmittance_r_size=32, sphere_samples=16,
-              high_order_sphere_samples=16, table_wavelengths_nm=[550.0], cache=False)
-    ref = sd.model("precomputed", sun=sun(10.0), atmosphere=atm, order4_sphere_samples=None,
-                   **kw)
-    got = sd.model("precomputed", sun=sun(10.0), atmosphere=atm, order4_sphere_samples=8, **kw)
-    d = hemisphere(n_el=10, n_az=12, low=0.0)
-    for elev in (10.0, -4.0):
-        a = ref.with_sun(sun(elev)).radiance(d, [550.0])[:, 0]
-        b = got.with_sun(sun(elev)).radiance(d, [550.0])[:, 0]
-        rel = b / a - 1.0
-        print(elev, np.sqrt(np.mean(rel ** 2)), np.abs(rel).max())
-        assert np.sqrt(np.mean(rel ** 2)) < 0.003 and np.abs(rel).max() < 0.01, rel

@@ -81,10 +81,6 @@ class PrecomputedSky(SkyModel):
         least twice, are smooth; None: ``sphere_samples``).
     density_mu_s_size : int, optional
         mu_s nodes of the scattering density J (default: ``scattering_mu_s_size``).
-    order4_sphere_samples : int, optional
-        Zenith-angle samples of the incident directions in the scattering density of
-        orders >= 4, at most ``high_order_sphere_samples`` (default 8; None:
-        ``high_order_sphere_samples``).
     high_order_r_size, high_order_mu_s_size : int, optional
         A faster approximation, opt-in: the (r, mu_s) nodes of the scattering density of
         orders >= 3 on a coarser grid of the same mappings, interpolated into the summed
@@ -136,9 +132,6 @@ class PrecomputedSky(SkyModel):
                   kind="int"),
         Parameter("density_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density (default: scattering_mu_s_size)", kind="int"),
-        Parameter("order4_sphere_samples", "", 8, 4, 256,
-                  "zenith samples of the scattering density of orders >= 4 (None: "
-                  "high_order_sphere_samples)", kind="int"),
         Parameter("high_order_r_size", "", None, 2, 512,
                   "r nodes of the scattering density of orders >= 3 (None: the full grid)",
                   kind="int"),
@@ -523,7 +516,6 @@ _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "trans
                    "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
                    "integration_samples", "sphere_samples", "high_order_sphere_samples",
                    "density_mu_s_size", "high_order_r_size", "high_order_mu_s_size",
-                   "order4_sphere_samples",
                    "order_table_divisor", "max_sun_zenith_deg")
 
 

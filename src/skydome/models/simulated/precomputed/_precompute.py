@@ -152,9 +152,6 @@ def precompute(props, wl, p):
         n_out_high = min(p["sphere_samples"], max(ORDER_DENSITY_MIN, p["sphere_samples"] // div))
         q3 = q2 if (n_high, n_out_high) == (p["sphere_samples"],) * 2 else _DensityQuadrature(
             pc, pp, pt, n_high, n_out_high)
-        # orders >= 4 (sources scattered at least three times) on a sphere coarser again
-        n4 = min(p.get("order4_sphere_samples") or n_high, n_high)
-        q4 = q3 if n4 == n_high else _DensityQuadrature(pc, pp, pt, n4, n_out_high)
         # the scattering density's own mu_s axis (same mapping, its own node count)
         n_ms_j = p["density_mu_s_size"] or p["scattering_mu_s_size"]
         J_sum = np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
@@ -171,7 +168,7 @@ def precompute(props, wl, p):
         for b, l0 in enumerate(range(0, nl, nb_hi)):
             sl = slice(l0, min(nl, l0 + nb_hi))
             higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s, sc_idx,
-                          beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min, q2, (q3, q4), hi,
+                          beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min, q2, q3, hi,
                           n_q_ms, p, E[..., sl], (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
@@ -302,7 +299,7 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
 
 
 def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
-                  mu_s_min, q2, qs, hi, n_q, p, E, progress=(0, None), l0=0):
+                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0):
     """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
     ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
     (the source of order 3), ``dE1`` the ground irradiance of order 1, ``tot2`` order 2's
@@ -312,11 +309,11 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     J_k is integrated along each incident ray from J_(k-1)
     (:func:`._density.incident_radiance_rays`, [BN08] eq. 8), and so is the ground
     irradiance (:func:`._irradiance.indirect_irradiance_rays`, [BN08] eq. 9). J of the
-    orders >= 3 lives on the coarse grid ``hi`` = (r, mu_s) nodes of the same mappings, on
-    the outgoing grid of ``qs`` = (q3, q4), the quadratures of order 3 and of the orders
-    >= 4 (the same outgoing grid, q4's sphere of incident directions coarser): their sources are scattered at least twice and are smooth
-    in r (per unit density) and mu_s. The orders >= 3 are summed there, and that sum (with
-    the remainder) is interpolated into ``J2`` once, at the end."""
+    orders >= 3 lives on the grid ``hi`` = (r, mu_s) nodes of the same mappings, on the
+    outgoing grid of ``q3``: by default J2's own (r, mu_s) grid, each order's J added
+    into ``J2`` once order 3's source is no longer needed; on the opt-in coarser grid
+    (``high_order_r_size``, ``high_order_mu_s_size``) the orders >= 3 are summed there
+    and that sum (with the remainder) is interpolated into ``J2`` once, at the end."""
     from skydome.models.simulated.precomputed import _density, _irradiance
 
     nl = J2.shape[-1]
@@ -329,7 +326,6 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     w_col = _column_weights(beta_s, n_r, n_ms, nl)
     beta_e = np.ascontiguousarray(beta_e)
     albedo = np.ascontiguousarray(albedo)
-    q3, q4 = qs
     shape = (nsc, q3.th_out.size, q3.ph_out.size, n_r, n_ms, nl)
     L_in = np.empty((q3.n_in, n_r, n_ms, nl), dtype=np.float32)
     J = np.empty(shape, dtype=np.float32)
@@ -340,12 +336,10 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     dE, dE_prev = dE1, np.zeros_like(dE1)
     tot, tot_prev = tot2, None
     for order in range(3, p["orders"] + 1):
-        q = q3 if order == 3 else q4
-        L_in = L_in[:q.n_in]
         # 3a. radiance of order-1 arriving at each node, integrated along the incident rays
         # from J of order-1, + ground reflection of the irradiance of order-2
         _density.incident_radiance_rays(src, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
-                                        R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q.th_in, q.ph_in,
+                                        R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q3.th_in, q3.ph_in,
                                         L_in)
         # 3c. ground irradiance of order-1 ([BN08] eq. 9), from the same source
         dE_new = np.empty(E.shape)
@@ -354,10 +348,10 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         E += dE_new
         dE_prev, dE = dE, dE_new
         # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
-        density_products(q, L_in, w_col, beta_s, rhs, J, l0)
+        density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
         J_hi += J
         src = J
-        tot_prev, tot = tot, source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt)
+        tot_prev, tot = tot, source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt)
         report("precomputing tables: scattering orders", progress[0] + order - 2,
                progress[1] or p["orders"])
     if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
@@ -460,7 +454,7 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
         Jk *= w_col[k]
 
 
-def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
+def source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt):
     """Per wavelength, sum over J's nodes of sum_k rho_k(r) J_k sin(theta): the scattering
     density of one order times each constituent's number density, over the sphere of
     outgoing directions (theta uniform: sin theta the solid angle per node), the (r, mu_s)
