@@ -100,10 +100,13 @@ def main(argv=None):
     t0 = time.perf_counter()
     # one wavelength per batch, so that the kernels taking a batch's view of the
     # single-scattering table (not contiguous) are compiled here too
-    budget = _precompute.ORDER_BATCH_BYTES, _precompute.HIGH_ORDER_BATCH_BYTES
-    _precompute.ORDER_BATCH_BYTES = _precompute.HIGH_ORDER_BATCH_BYTES = 1
+    budgets = {k: getattr(_precompute, k) for k in ("ORDER_BATCH_BYTES", "HIGH_ORDER_BATCH_BYTES")
+               if hasattr(_precompute, k)}
+    for k in budgets:
+        setattr(_precompute, k, 1)
     sd.model("precomputed", sun=sun, n_wavelengths=2, orders=3, cache=False, **small)
-    _precompute.ORDER_BATCH_BYTES, _precompute.HIGH_ORDER_BATCH_BYTES = budget
+    for k, v in budgets.items():
+        setattr(_precompute, k, v)
     print(f"kernel compile/load: {time.perf_counter() - t0:.1f} s")
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     rec, totals = {}, []

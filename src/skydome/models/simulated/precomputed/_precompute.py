@@ -454,7 +454,7 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
         Jk *= w_col[k]
 
 
-def source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt):
+def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
     """Per wavelength, sum over J's nodes of sum_k rho_k(r) J_k sin(theta): the scattering
     density of one order times each constituent's number density, over the sphere of
     outgoing directions (theta uniform: sin theta the solid angle per node), the (r, mu_s)
