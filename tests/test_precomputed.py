@@ -486,3 +486,46 @@ def test_irradiance_rays_share_geometry_exactly():
     np.testing.assert_allclose(out, ref, rtol=1e-5, atol=1e-12 * ref.max())
     np.testing.assert_allclose(out[:, 1:-1], ref[:, 1:-1], rtol=1e-12, atol=1e-12 * ref.max())
 
+
+
+def test_incident_radiance_rays_against_one_ray_integral_per_ray():
+    """``incident_radiance_rays`` (float32 sums, work items ordered by the angle from the
+    sun) against one float64 ``_multiple.ray_integral`` per incident ray, computed here in
+    Python, on a small random density (rays to the top and to the ground; a black ground, so
+    no reflected term): equal within float32 rounding."""
+    from skydome.models.simulated.precomputed import _density, _multiple, _precompute as PC
+    from skydome.models.simulated.precomputed._mapping import mu_s_frame
+
+    props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(np.array(WL3), fold=True)
+    R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
+    p = dict(transmittance_r_size=16, transmittance_mu_size=64)
+    col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1, R, Rt, p)
+    sc = np.array([0, 1], dtype=np.int64)
+    J = np.random.default_rng(5).uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
+    mu_s_min = float(np.cos(np.radians(108.0)))
+    n_r, n_ms, n_th = 3, 4, 4
+    th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
+    beta_e = np.ascontiguousarray(props.extinction)
+    args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e)
+    out = np.empty((n_th * n_th, n_r, n_ms, 3), dtype=np.float32)
+    dE = np.zeros((4, 8, 3))
+    _density.incident_radiance_rays(J, dE, *args, np.zeros(3), R, Rt, mu_s_min, 5, 500.0,
+                                    n_r, n_ms, th_in, th_in, out)
+    frame = mu_s_frame(mu_s_min)
+    ref = np.empty(out.shape)
+    n_ground = 0
+    for ir in range(n_r):
+        for ims in range(n_ms):
+            r, mu_s, sin_s = _density.density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
+            for a in range(n_th):
+                for b in range(n_th):
+                    nu, ct, ground = _density.incident_direction(th_in[a], th_in[b], r, mu_s,
+                                                                 sin_s, R)
+                    n_ground += ground
+                    one = np.zeros(3)
+                    _multiple.ray_integral(J, *args, R, Rt, frame, r, ct, mu_s, nu, ground, 5,
+                                           500.0, *_multiple.ray_scratch(5, col.shape[0], 2, 3),
+                                           one)
+                    ref[a * n_th + b, ir, ims] = one
+    assert 0 < n_ground < ref.size // 3
+    np.testing.assert_allclose(out, ref, rtol=2e-6, atol=1e-6 * ref.max())
