@@ -12,7 +12,7 @@ The idle wall time on a 2-core machine is estimated as CPU time / 2 x (share of 
 in parallel kernels) + CPU time x (the rest); both figures are printed.
 
 Run: python benchmarks/cost_precomputed.py [--aod A] [--settings key=value,...]
-(e.g. ``--settings orders=4,sphere_samples=16``)
+(e.g. ``--settings orders=4,sphere_samples=16``; ``None`` for an optional setting)
 """
 
 from __future__ import annotations
@@ -27,13 +27,16 @@ import numpy as np
 
 STAGES = ("build_column_table", "single_scattering_table", "incident_radiance",
           "incident_radiance_rays", "indirect_irradiance", "indirect_irradiance_rays",
-          "multiple_scattering_table", "density_products", "source_total")
+          "multiple_scattering_table", "density_products", "add_density", "source_total")
 
 
 def _parse(text):
     out = {}
     for item in [s for s in text.split(",") if s]:
         k, v = item.split("=", 1)
+        if v == "None":
+            out[k] = None
+            continue
         for conv in (int, float):
             try:
                 v = conv(v)
@@ -97,9 +100,13 @@ def main(argv=None):
     t0 = time.perf_counter()
     # one wavelength per batch, so that the kernels taking a batch's view of the
     # single-scattering table (not contiguous) are compiled here too
-    budget, _precompute.ORDER_BATCH_BYTES = _precompute.ORDER_BATCH_BYTES, 1
+    budgets = {k: getattr(_precompute, k) for k in ("ORDER_BATCH_BYTES", "HIGH_ORDER_BATCH_BYTES")
+               if hasattr(_precompute, k)}
+    for k in budgets:
+        setattr(_precompute, k, 1)
     sd.model("precomputed", sun=sun, n_wavelengths=2, orders=3, cache=False, **small)
-    _precompute.ORDER_BATCH_BYTES = budget
+    for k, v in budgets.items():
+        setattr(_precompute, k, v)
     print(f"kernel compile/load: {time.perf_counter() - t0:.1f} s")
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     rec, totals = {}, []
@@ -126,12 +133,20 @@ def main(argv=None):
     print(f"estimated idle wall on 2 cores: {par / 2 + (cpu - par):.1f} s")
     n_orders = int(kw.get("orders", 6)) - 1
     if totals and n_orders > 0:
-        # each order's source strength, summed over the wavelength batches
-        tot = np.array(totals).reshape(-1, n_orders).sum(axis=0)
+        # each order's source strength, summed over the wavelength batches: order 2 batch by
+        # batch, then orders 3..N per batch of the higher orders
+        from skydome.models.simulated.precomputed import PrecomputedSky
+
+        p = PrecomputedSky._validate_params(kw)
+        n_sc = 2   # Atmosphere.earth: Rayleigh and aerosol
+        n2 = -(-20 // _precompute.order_batch_size(p, 20, n_sc))
+        tot = np.zeros(n_orders)
+        tot[0] = sum(totals[:n2])
+        if n_orders > 1:
+            tot[1:] = np.array(totals[n2:]).reshape(-1, n_orders - 1).sum(axis=0)
         print("source strength per order (share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
             print(f"  order {i + 2}: {100 * t / tot.sum():5.2f} %")
-
 
 if __name__ == "__main__":
     main()

@@ -414,3 +414,118 @@ def test_order_table_shape_halves_and_keeps_floors():
     assert order_table_shape((12, 48, 12, 6), 2) == (12, 32, 12, 6)
     assert order_table_shape((8, 256, 64, 32), 8) == (8, 32, 16, 8)
     assert order_table_shape((8, 100, 64, 32), 3) == (8, 32, 22, 11)   # (n - 1) // 3 + 1
+
+
+def test_coarse_density_grid_of_higher_orders_is_interpolated_in_r_and_mu_s():
+    """The scattering density of orders >= 3 on its coarse (r, mu_s) grid is added into the
+    summed density on the full grid bilinearly in the unit coordinates of both axes (the
+    interpolation of ``_multiple.density_acc``): a density linear in them (a, b, c chosen
+    here) must come out exactly on every full-grid node, with and without a coarser
+    outgoing grid."""
+    from skydome.models.simulated.precomputed import _precompute as PC
+
+    class Grid:
+        def __init__(self, n):
+            self.th_out = np.linspace(0.0, np.pi, 2 * n + 1)
+            self.ph_out = np.linspace(0.0, np.pi, n + 1)
+
+    a, b, c, d = 0.5, 2.0, -0.25, 0.75
+
+    def linear(g, n_r, n_ms):
+        T, P, X, Y = np.meshgrid(g.th_out, g.ph_out, np.linspace(0, 1, n_r),
+                                 np.linspace(0, 1, n_ms), indexing="ij")
+        v = (a + b * X + c * Y + d * T - c * P).astype(np.float32)
+        return np.ascontiguousarray(np.broadcast_to(v[None, ..., None], (2,) + v.shape + (3,)))
+
+    fine, coarse = Grid(8), Grid(4)
+    for q in (fine, coarse):
+        J_sum = np.zeros_like(linear(fine, 32, 48))
+        PC.add_density(J_sum, linear(q, 16, 24), fine, q)
+        np.testing.assert_allclose(J_sum, linear(fine, 32, 48), rtol=1e-5, atol=1e-5)
+
+
+def test_irradiance_rays_share_geometry_exactly():
+    """``indirect_irradiance_rays`` shares each hemisphere ray's nodes, columns and
+    exponentials between the sun positions and azimuths: it must equal the plain sum of one
+    ``_multiple.ray_integral`` per ray (computed here in Python, ray by ray) on a small
+    random density."""
+    from skydome.models.simulated.precomputed import _irradiance, _multiple, _precompute as PC
+    from skydome.models.simulated.precomputed._mapping import mu_s_frame
+
+    props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(np.array(WL3), fold=True)
+    R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
+    p = dict(transmittance_r_size=16, transmittance_mu_size=64)
+    col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1, R, Rt, p)
+    sc = np.array([0, 1], dtype=np.int64)
+    rng = np.random.default_rng(3)
+    J = rng.uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
+    mu_s_min = float(np.cos(np.radians(108.0)))
+    th, ph, dom = PC._hemisphere(3)
+    beta_e = np.ascontiguousarray(props.extinction)
+    args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e, R, Rt)
+    out = np.empty((3, 5, 3))
+    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, 5, 500.0, th, ph, dom, out)
+    ref = np.zeros_like(out)
+    frame = mu_s_frame(mu_s_min)
+    for ir in range(3):
+        r = R + (Rt - R) * ir / 2.0
+        for im in range(5):
+            mu_s = -1.0 + 2.0 * im / 4.0
+            for a in range(th.size):
+                for b in range(ph.size):
+                    nu = np.clip(np.sqrt(1 - mu_s ** 2) * np.sin(th[a]) * np.cos(ph[b])
+                                 + mu_s * np.cos(th[a]), -1, 1)
+                    one = np.zeros(3)
+                    sc_ = _multiple.ray_scratch(5, col.shape[0], 2, 3)
+                    _multiple.ray_integral(J, *args, frame, r,
+                                           np.cos(th[a]), mu_s, nu, False, 5, 500.0, *sc_, one)
+                    ref[ir, im] += 2 * np.cos(th[a]) * dom[a] * one
+    # equal to rounding: 1e-15 relative in general, up to 2.5e-6 with the sun at the zenith
+    # or the nadir (the azimuth about the sun is singular there), and at the top (r = Rt)
+    # the rays have no length (values of 1e-15)
+    np.testing.assert_allclose(out, ref, rtol=1e-5, atol=1e-12 * ref.max())
+    np.testing.assert_allclose(out[:, 1:-1], ref[:, 1:-1], rtol=1e-12, atol=1e-12 * ref.max())
+
+
+
+def test_incident_radiance_rays_against_one_ray_integral_per_ray():
+    """``incident_radiance_rays`` (float32 sums, work items ordered by the angle from the
+    sun) against one float64 ``_multiple.ray_integral`` per incident ray, computed here in
+    Python, on a small random density (rays to the top and to the ground; a black ground, so
+    no reflected term): equal within float32 rounding."""
+    from skydome.models.simulated.precomputed import _density, _multiple, _precompute as PC
+    from skydome.models.simulated.precomputed._mapping import mu_s_frame
+
+    props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(np.array(WL3), fold=True)
+    R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
+    p = dict(transmittance_r_size=16, transmittance_mu_size=64)
+    col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1, R, Rt, p)
+    sc = np.array([0, 1], dtype=np.int64)
+    J = np.random.default_rng(5).uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
+    mu_s_min = float(np.cos(np.radians(108.0)))
+    n_r, n_ms, n_th = 3, 4, 4
+    th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
+    beta_e = np.ascontiguousarray(props.extinction)
+    args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e)
+    out = np.empty((n_th * n_th, n_r, n_ms, 3), dtype=np.float32)
+    dE = np.zeros((4, 8, 3))
+    _density.incident_radiance_rays(J, dE, *args, np.zeros(3), R, Rt, mu_s_min, 5, 500.0,
+                                    n_r, n_ms, th_in, th_in, out)
+    frame = mu_s_frame(mu_s_min)
+    ref = np.empty(out.shape)
+    n_ground = 0
+    for ir in range(n_r):
+        for ims in range(n_ms):
+            r, mu_s, sin_s = _density.density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
+            for a in range(n_th):
+                for b in range(n_th):
+                    nu, ct, ground = _density.incident_direction(th_in[a], th_in[b], r, mu_s,
+                                                                 sin_s, R)
+                    n_ground += ground
+                    one = np.zeros(3)
+                    _multiple.ray_integral(J, *args, R, Rt, frame, r, ct, mu_s, nu, ground, 5,
+                                           500.0, *_multiple.ray_scratch(5, col.shape[0], 2, 3),
+                                           one)
+                    ref[a * n_th + b, ir, ims] = one
+    assert 0 < n_ground < ref.size // 3
+    np.testing.assert_allclose(out, ref, rtol=2e-6, atol=1e-6 * ref.max())

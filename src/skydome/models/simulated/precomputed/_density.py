@@ -121,33 +121,41 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
     profiles of :func:`._multiple.multiple_scattering_table`) instead of interpolated from
     a 4-D table of that order, plus the light the ground reflects once more (irradiance
     table ``dE`` of the order before). out[i, r, mu_s, l] (float32), directions as in
-    :func:`incident_radiance`. One work item per (r, mu_s) node (no per-ray allocation)."""
+    :func:`incident_radiance`. One work item per (theta, r, mu_s), theta outermost (no
+    per-ray allocation); the sums in float32."""
     n_th = th_in.shape[0]
     n_ph = ph_in.shape[0]
     nl = out.shape[3]
     nc = col.shape[0]
     nsc = J.shape[0]
     frame = mu_s_frame(mu_s_min)
-    for idx in prange(n_r * n_ms):
-        ir = idx // n_ms
+    n_nodes = n_r * n_ms
+    # work items ordered by the angle from the sun first: every ray of one theta reads
+    # J's two theta slabs only (the angle from the sun is constant along a ray), which
+    # then stay in cache over all the (r, mu_s) nodes of that theta
+    for idx in prange(n_th * n_nodes):
+        a = idx // n_nodes
+        ir = (idx % n_nodes) // n_ms
         ims = idx % n_ms
-        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
-        acc = np.empty(nl)
+        tq, wq, w1, w2, cs, _ = ray_scratch(n_q, nc, nsc, nl)
+        # float32 weights and sums (the precision of J and of the output; 20-40 positive
+        # terms per value): the wavelength loops of density_acc vectorise 8-wide
+        tw = np.empty((nsc, nl), dtype=np.float32)
+        acc = np.empty(nl, dtype=np.float32)
         tg = np.empty(nl)
         eg = np.empty(nl)
         r, mu_s, sin_s = density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
-        for a in range(n_th):
-            for b in range(n_ph):
-                nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
-                acc[:] = 0.0
-                ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
-                             nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, acc)
-                if ground:
-                    ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
-                                         nu, w1, w2, cs, tg, eg, acc)
-                o = out[a * n_ph + b, ir, ims]
-                for l in range(nl):
-                    o[l] = acc[l]
+        for b in range(n_ph):
+            nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
+            acc[:] = 0.0
+            ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
+                         nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, acc)
+            if ground:
+                ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
+                                     nu, w1, w2, cs, tg, eg, acc)
+            o = out[a * n_ph + b, ir, ims]
+            for l in range(nl):
+                o[l] = acc[l]
 
 
 @njit(parallel=True, cache=True)

@@ -10,10 +10,13 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.models.simulated.precomputed._geometry import clamp_cos
-from skydome.models.simulated.precomputed._lookup import columns_at, sky_lookup_acc
-from skydome.models.simulated.precomputed._mapping import mu_s_frame
-from skydome.models.simulated.precomputed._multiple import ray_integral, ray_scratch
+from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_top,
+                                                             point_along, ray_nodes)
+from skydome.models.simulated.precomputed._lookup import (columns_at, sky_lookup_acc,
+                                                           weights_from_columns)
+from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
+                                                            density_phi_index, mu_s_frame, r_index)
+from skydome.models.simulated.precomputed._multiple import density_acc, ray_scratch
 
 
 
@@ -66,30 +69,61 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     """:func:`indirect_irradiance` for an order >= 2 whose radiance is not tabulated: the
     radiance of each hemisphere direction integrated along its ray from that order's
     scattering density ``J`` ([BN08] eq. 8 and 9, :func:`._multiple.ray_integral`, the
-    quadrature of the multiple-scattering table), on the irradiance table's nodes."""
+    quadrature of the multiple-scattering table), on the irradiance table's nodes.
+
+    A hemisphere direction's ray, its quadrature nodes, their radii, local zenith cosines
+    and transmittance-weighted density weights depend on (r, theta) alone, not on the sun
+    (mu_s) nor on the azimuth from it: they are computed once per (r, theta) work item and
+    shared by its n_mu_s x n_phi rays (the same sums as one :func:`._multiple.ray_integral`
+    per ray, without its per-ray columns and exponentials)."""
     n_r, n_m, nl = out.shape
+    n_th = th.shape[0]
+    n_ph = ph.shape[0]
     nc = col.shape[0]
-    nsc = J.shape[0]
+    nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     frame = mu_s_frame(mu_s_min)
-    for idx in prange(n_r * n_m):
-        ir = idx // n_m
-        im = idx % n_m
+    part = np.zeros((n_r * n_th, n_m, nl))
+    for idx in prange(n_r * n_th):
+        ir = idx // n_th
+        a = idx % n_th
         tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
-        acc = np.zeros(nl)
-        one = np.empty(nl)
         r = R + (Rt - R) * ir / (n_r - 1.0)
-        mu_s = -1.0 + 2.0 * im / (n_m - 1.0)
-        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        for a in range(th.shape[0]):
-            ct = math.cos(th[a])
-            st = math.sin(th[a])
-            w = 2.0 * ct * d_omega[a]
-            for b in range(ph.shape[0]):
+        ct = math.cos(th[a])
+        st = math.sin(th[a])
+        w = 2.0 * ct * d_omega[a]
+        nq = ray_nodes(r, ct, distance_to_top(r, ct, Rt), n_q, ts, tq, wq)
+        rts = np.empty(nq)
+        mts = np.empty(nq)
+        jrs = np.empty(nq, dtype=np.int64)
+        jas = np.empty(nq)
+        tws = np.empty((nq, nsc, nl))
+        columns_at(col, r, ct, R, Rt, w2)
+        for q in range(nq):
+            rt = point_along(r, ct, tq[q], R, Rt)
+            mt = clamp_cos((r * ct + tq[q]) / rt)
+            rts[q] = rt
+            mts[q] = mt
+            jrs[q], jas[q] = r_index(rt, n_rj, R, Rt)
+            columns_at(col, rt, mt, R, Rt, w1)
+            for kc in range(nc):
+                cs[kc] = max(w2[kc] - w1[kc], 0.0)
+            weights_from_columns(cs, rt, w * wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tws[q])
+        acc = part[idx]
+        for im in range(n_m):
+            mu_s = -1.0 + 2.0 * im / (n_m - 1.0)
+            sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+            for b in range(n_ph):
                 nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)
-                one[:] = 0.0
-                ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
-                             nu, False, n_q, ts, tq, wq, w1, w2, cs, tw, one)
-                for l in range(nl):
-                    acc[l] += w * one[l]
-        for l in range(nl):
-            out[ir, im, l] = acc[l]
+                jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
+                for q in range(nq):
+                    mu_s_t = clamp_cos((r * mu_s + tq[q] * nu) / rts[q])
+                    ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
+                    ip, e = density_phi_index(nu, mu_s_t, mts[q], n_pj)
+                    density_acc(J, tws[q], jt, jb, ip, e, jrs[q], jas[q], ims_j, c, acc[im])
+    for ir in range(n_r):
+        for im in range(n_m):
+            for l in range(nl):
+                s = 0.0
+                for a in range(n_th):
+                    s += part[ir * n_th + a, im, l]
+                out[ir, im, l] = s

@@ -128,11 +128,16 @@ def precompute(props, wl, p):
     # 1. transmittance; 2. single scattering
     col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
     ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
-    # the orders of each wavelength are independent of the other wavelengths': all orders of
-    # one batch of wavelengths at a time (progress: order 1, then orders 2..N per batch)
+    # the orders of each wavelength are independent of the other wavelengths': order 2 one
+    # batch of wavelengths at a time (its working arrays are on the full grids), then the
+    # orders >= 3 on their coarser grids, all wavelengths at once where they fit (the ray
+    # geometry is the same for every wavelength)
     nb = order_batch_size(p, nl, nsc)
     n_batch = -(-nl // nb)
-    n_steps = 1 + n_batch * (p["orders"] - 1)
+    hi = high_order_grid(p)
+    nb_hi = high_order_batch_size(p, nl, nsc)
+    n_batch_hi = -(-nl // nb_hi)
+    n_steps = 1 + n_batch + max(p["orders"] - 2, 0) * n_batch_hi
     report("precomputing tables: scattering orders", 1, n_steps)
     ms = None   # orders 2..N (step 4)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
@@ -150,12 +155,21 @@ def precompute(props, wl, p):
         # the scattering density's own mu_s axis (same mapping, its own node count)
         n_ms_j = p["density_mu_s_size"] or p["scattering_mu_s_size"]
         J_sum = np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+        dE1 = np.zeros(E.shape)   # ground irradiance of order 1 (reflected into order 3)
+        tot2 = np.zeros(nl)
         for b, l0 in enumerate(range(0, nl, nb)):
             sl = slice(l0, min(nl, l0 + nb))
-            orders_batch(ss[..., sl], col, codes, p0s, p1s, sc_idx, beta_e[:, sl],
-                         beta_s[:, sl], pc, pp, pt[..., sl], albedo[sl], R, Rt, mu_s_min,
-                         alpha, q2, q3, l0, n_ms_j, n_q_ms, p, J_sum[..., sl], E[..., sl],
-                         (b * (p["orders"] - 1), n_steps))
+            tot2[sl] = second_order_batch(ss[..., sl], col, codes, p0s, p1s, sc_idx, beta_e[:, sl],
+                                          beta_s[:, sl], pc, pp, pt[..., sl], albedo[sl], R, Rt,
+                                          mu_s_min, alpha, q2, l0, n_ms_j, J_sum[..., sl],
+                                          dE1[..., sl])
+            report("precomputing tables: scattering orders", 2 + b, n_steps)
+        E += dE1
+        for b, l0 in enumerate(range(0, nl, nb_hi)):
+            sl = slice(l0, min(nl, l0 + nb_hi))
+            higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s, sc_idx,
+                          beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min, q2, q3, hi,
+                          n_q_ms, p, E[..., sl], (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
         ms = np.empty(ss.shape[1:], dtype=np.float32)
@@ -176,23 +190,57 @@ def precompute(props, wl, p):
                   precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
 
 
-# working memory of one batch of wavelengths in the order loop [bytes] (see precompute)
+# working memory of one batch of wavelengths of order 2 [bytes] (see precompute)
 ORDER_BATCH_BYTES = 400_000_000
+# working memory of one batch of wavelengths of the orders >= 3 [bytes] (2 batches of 10 at
+# the defaults; on the opt-in coarse (r, mu_s) grid all 20 wavelengths are one batch: the ray
+# integrals' geometry is the same for every wavelength, fewer batches take less time)
+HIGH_ORDER_BATCH_BYTES = 400_000_000
 
 
-def order_batch_size(p, nl, nsc):
-    """Wavelengths per batch of the order loop: the fewest batches of equal size whose
-    working arrays (one order's J on the full outgoing grid, order 2's incident radiance,
-    the matrix right-hand side; float32) fit ``ORDER_BATCH_BYTES`` (the ray integrals'
-    geometry is the same for every wavelength and is recomputed per batch)."""
-    n = p["sphere_samples"]
-    n_cols = p["scattering_r_size"] * (p["density_mu_s_size"] or p["scattering_mu_s_size"])
-    per_wl = 4 * n_cols * ((2 * n + 1) * (n + 1) * nsc + n * n + 10)
-    n_batch = -(-nl // int(min(nl, max(1, ORDER_BATCH_BYTES // per_wl))))
+def _batches(per_wl, nl, budget):
+    """The fewest batches of equal size whose working arrays (``per_wl`` bytes per
+    wavelength) fit ``budget``: wavelengths per batch."""
+    n_batch = -(-nl // int(min(nl, max(1, budget // per_wl))))
     return -(-nl // n_batch)
 
 
-# zenith samples of the hemisphere of the ground irradiance of orders >= 2 (see orders_batch)
+def order_batch_size(p, nl, nsc):
+    """Wavelengths per batch of order 2: its J on the full outgoing grid, its incident
+    radiance on the full sphere, the matrix right-hand side (float32), within
+    ``ORDER_BATCH_BYTES``."""
+    n = p["sphere_samples"]
+    n_cols = p["scattering_r_size"] * (p["density_mu_s_size"] or p["scattering_mu_s_size"])
+    per_wl = 4 * n_cols * ((2 * n + 1) * (n + 1) * nsc + n * n + 10)
+    return _batches(per_wl, nl, ORDER_BATCH_BYTES)
+
+
+def high_order_grid(p):
+    """(r, mu_s) nodes of the scattering density of orders >= 3: ``high_order_r_size`` x
+    ``high_order_mu_s_size`` on the density's own mappings, at most the full grid's
+    (None: the full grid)."""
+    n_r = p["scattering_r_size"]
+    n_ms = p["density_mu_s_size"] or p["scattering_mu_s_size"]
+    return (min(p.get("high_order_r_size") or n_r, n_r),
+            min(p.get("high_order_mu_s_size") or n_ms, n_ms))
+
+
+def high_order_batch_size(p, nl, nsc):
+    """Wavelengths per batch of the orders >= 3: the order's density (and, on a coarse
+    (r, mu_s) grid, the sum of the orders >= 3 there) and the incident radiance on the
+    coarse sphere (float32), within ``HIGH_ORDER_BATCH_BYTES``."""
+    n = p["sphere_samples"]
+    n_o = min(n, max(ORDER_DENSITY_MIN, n // p["order_table_divisor"]))
+    n_i = min(p["high_order_sphere_samples"] or n, n)
+    n_r, n_ms = high_order_grid(p)
+    full = (n_r, n_ms, n_o) == (p["scattering_r_size"],
+                                p["density_mu_s_size"] or p["scattering_mu_s_size"], n)
+    n_j = 1 if full else 2
+    per_wl = 4 * n_r * n_ms * (n_j * (2 * n_o + 1) * (n_o + 1) * nsc + n_i * n_i + 10)
+    return _batches(per_wl, nl, HIGH_ORDER_BATCH_BYTES)
+
+
+# zenith samples of the hemisphere of the ground irradiance of orders >= 2 (see higher_orders)
 IRRADIANCE_HIGH_ORDER_SAMPLES = 8
 
 
@@ -205,97 +253,119 @@ def _hemisphere(n):
     return th, ph, np.sin(th) * (0.5 * np.pi / n) * (np.pi / (2 * n))
 
 
-def orders_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, albedo, R, Rt,
-                 mu_s_min, alpha, q2, q3, l0, n_ms_j, n_q, p, J_sum, E, progress=(0, None)):
-    """Steps 3a-3c for orders 2..N of one batch of wavelengths (every array given on the
-    batch's wavelengths; ``l0`` the index of its first table wavelength): the scattering
-    density of each order into ``J_sum`` (written by order 2, then summed; J_sum on the
-    outgoing grid of ``q2``) and the ground irradiance of orders 1..N-1 into ``E``, with the
-    geometric remainder.
+def _column_weights(beta_s, n_r, n_ms, nl):
+    """Weight of each constituent at every (r, mu_s, l) column of the incident radiance: its
+    scattering coefficient at reference density (the density profile is applied exactly
+    along each ray: J_k / rho_k is smooth in r, rho_k J_k is not)."""
+    return [np.ascontiguousarray(np.broadcast_to(beta_s[k].astype(np.float32),
+                                                 (n_r, n_ms, nl)).reshape(-1))
+            for k in range(beta_s.shape[0])]
 
-    No order's radiance is tabulated: order 2's incident radiance comes from the
-    single-scattering table ([Bru17] ComputeScatteringDensity), that of every later order
-    is integrated along each incident ray from the previous order's J
-    (:func:`._density.incident_radiance_rays`), and so is the ground irradiance of orders
-    >= 2 (:func:`._irradiance.indirect_irradiance_rays`); only the last order's J is kept.
-    ``progress``: (steps done before this batch, total steps) of the progress report."""
+
+def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, albedo, R,
+                       Rt, mu_s_min, alpha, q2, l0, n_ms_j, J_out, dE_out):
+    """Steps 3a-3c of order 2 for one batch of wavelengths (every array given on the batch's
+    wavelengths; ``l0`` the index of its first table wavelength): the incident radiance
+    from the single-scattering table ([Bru17] ComputeScatteringDensity) and the direct
+    sun's ground reflection, J of order 2 into ``J_out`` (on the full grids of ``q2``), the
+    ground irradiance of order 1 into ``dE_out``; returns order 2's source strength per
+    wavelength (:func:`source_total`)."""
     from skydome.models.simulated.precomputed import _density, _irradiance
 
     nl = ss.shape[-1]
     nsc = sc_idx.size
     n_r = ss.shape[1]
-    ts = QUADRATURE_SCALE_M
     # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
-    # hemisphere; phi on [0, pi] doubled) for the sky of order 1 (table lookups); the
-    # smooth skies of orders >= 2, each direction a ray integral, on 8 x 32
+    # hemisphere; phi on [0, pi] doubled) for the sky of order 1 (table lookups)
     th_i, ph_i, dom_i = _hemisphere(16)
-    th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
-    # right-hand sides of the factored (polynomial) phase functions only
     rhs = np.empty((10, n_r * n_ms_j * nl), dtype=np.float32)
-    # weight of each constituent at every (r, mu_s, l) column of L_in: its scattering
-    # coefficient at reference density (the density profile is applied exactly along each
-    # ray: J_k / rho_k is smooth in r, rho_k J_k is not)
-    w_col = [np.ascontiguousarray(np.broadcast_to(beta_s[k].astype(np.float32),
-                                                  (n_r, n_ms_j, nl)).reshape(-1))
-             for k in range(nsc)]
+    w_col = _column_weights(beta_s, n_r, n_ms_j, nl)
+    # 3a. single scattering arriving at each node + ground reflection of the sun
+    L_in = np.empty((q2.n_in, n_r, n_ms_j, nl), dtype=np.float32)
+    _density.incident_radiance(ss, pc, pp, pt, col, np.ascontiguousarray(beta_e),
+                               np.ascontiguousarray(albedo), R, Rt, mu_s_min, alpha, n_r, n_ms_j,
+                               q2.th_in, q2.ph_in, L_in)
+    # 3c. ground irradiance of order 1 ([BN08] eq. 9), from the same source
+    dE = np.empty(dE_out.shape)
+    _irradiance.indirect_irradiance(ss, pc, pp, np.ascontiguousarray(pt), R, Rt, mu_s_min, th_i,
+                                    ph_i, dom_i, dE)
+    dE_out[...] = dE
+    # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid
+    J = np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+    density_products(q2, L_in, w_col, beta_s, rhs, J, l0)
+    del L_in
+    J_out[...] = J
+    return source_total(J, q2, codes, p0s, p1s, sc_idx, R, Rt)
+
+
+def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
+                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0):
+    """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
+    ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
+    (the source of order 3), ``dE1`` the ground irradiance of order 1, ``tot2`` order 2's
+    source strength; the ground irradiance of orders 2..N-1 is added to ``E``.
+
+    No order's radiance is tabulated: the radiance of order k-1 arriving at every node of
+    J_k is integrated along each incident ray from J_(k-1)
+    (:func:`._density.incident_radiance_rays`, [BN08] eq. 8), and so is the ground
+    irradiance (:func:`._irradiance.indirect_irradiance_rays`, [BN08] eq. 9). J of the
+    orders >= 3 lives on the grid ``hi`` = (r, mu_s) nodes of the same mappings, on the
+    outgoing grid of ``q3``: by default J2's own (r, mu_s) grid, each order's J added
+    into ``J2`` once order 3's source is no longer needed; on the opt-in coarser grid
+    (``high_order_r_size``, ``high_order_mu_s_size``) the orders >= 3 are summed there
+    and that sum (with the remainder) is interpolated into ``J2`` once, at the end."""
+    from skydome.models.simulated.precomputed import _density, _irradiance
+
+    nl = J2.shape[-1]
+    nsc = sc_idx.size
+    n_r, n_ms = hi
+    ts = QUADRATURE_SCALE_M
+    # the smooth skies of orders >= 2, each direction a ray integral, on 8 x 32
+    th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
+    rhs = np.empty((10, n_r * n_ms * nl), dtype=np.float32)
+    w_col = _column_weights(beta_s, n_r, n_ms, nl)
     beta_e = np.ascontiguousarray(beta_e)
     albedo = np.ascontiguousarray(albedo)
-    pt = np.ascontiguousarray(pt)
-    dE = np.zeros(E.shape, dtype=np.float64)
-    dE_prev = None
-    J = None
-    tot = tot_prev = None
-    q = q2
-    for order in range(2, p["orders"] + 1):
-        first = order == 2
-        if first:
-            # 3a. single scattering arriving at each node + ground reflection of the sun
-            L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-            _density.incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min,
-                                       alpha, n_r, n_ms_j, q.th_in, q.ph_in, L_in)
-        else:
-            if q is not q3:
-                q = q3
-                L_in = np.empty((q.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-            # 3a. order-1 radiance arriving at each node, integrated along the incident rays
-            # from J of order-1, + ground reflection of the order-2 irradiance
-            _density.incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
-                                            R, Rt, mu_s_min, n_q, ts, n_r, n_ms_j, q.th_in,
-                                            q.ph_in, L_in)
+    shape = (nsc, q3.th_out.size, q3.ph_out.size, n_r, n_ms, nl)
+    L_in = np.empty((q3.n_in, n_r, n_ms, nl), dtype=np.float32)
+    J = np.empty(shape, dtype=np.float32)
+    # orders 3..N: added straight into J2 on its own grid (J2 is no longer needed as order
+    # 3's source once order 3's J is computed), else summed on the coarse grid first
+    J_hi = J2 if shape == J2.shape else np.zeros(shape, dtype=np.float32)
+    src = J2                                   # J of the order before
+    dE, dE_prev = dE1, np.zeros_like(dE1)
+    tot, tot_prev = tot2, None
+    for order in range(3, p["orders"] + 1):
+        # 3a. radiance of order-1 arriving at each node, integrated along the incident rays
+        # from J of order-1, + ground reflection of the irradiance of order-2
+        _density.incident_radiance_rays(src, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
+                                        R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q3.th_in, q3.ph_in,
+                                        L_in)
         # 3c. ground irradiance of order-1 ([BN08] eq. 9), from the same source
-        dE_new = np.empty_like(dE)
-        if first:
-            _irradiance.indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th_i, ph_i, dom_i,
-                                            dE_new)
-        else:
-            _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                                 mu_s_min, n_q, ts, th_h, ph_h, dom_h, dE_new)
+        dE_new = np.empty(E.shape)
+        _irradiance.indirect_irradiance_rays(src, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                             mu_s_min, n_q, ts, th_h, ph_h, dom_h, dE_new)
         E += dE_new
         dE_prev, dE = dE, dE_new
-        # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid (J of order-1 is no
-        # longer needed: its buffer is reused where the grids agree)
-        shape = (nsc, q.th_out.size, q.ph_out.size, n_r, n_ms_j, nl)
-        if J is None or J.shape != shape:
-            J = np.empty(shape, dtype=np.float32)
-        density_products(q, L_in, w_col, beta_s, rhs, J, l0)
-        if first:
-            J_sum[...] = J
-        else:
-            add_density(J_sum, J, q2, q)
-        # this order's source strength per wavelength, for the geometric remainder
-        tot_prev, tot = tot, source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt)
-        report("precomputing tables: scattering orders", progress[0] + order,
+        # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
+        density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
+        J_hi += J
+        src = J
+        tot_prev, tot = tot, source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt)
+        report("precomputing tables: scattering orders", progress[0] + order - 2,
                progress[1] or p["orders"])
     if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
         # the orders beyond N as a geometric series whose ratio f is that of the last two
         # orders' source strengths, per wavelength (the idea of [Hil20] eq. 10; the
         # radiance of an order is a linear integral of its density): J_N f / (1 - f) added
-        # to the summed density in place. (A per-cell ratio was tried: it is unstable in
-        # cells where the ground reflection enters.)
-        g = _series_factor(tot, tot_prev).astype(np.float32)
-        add_density(J_sum, np.multiply(J, g, out=J), q2, q)
+        # to the summed density. (A per-cell ratio was tried: it is unstable in cells where
+        # the ground reflection enters.)
+        J_hi += np.multiply(J, _series_factor(tot, tot_prev).astype(np.float32), out=J)
         ea = tuple(range(dE.ndim - 1))
         E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
+    del J, L_in
+    if p["orders"] >= 3 and J_hi is not J2:
+        add_density(J2, J_hi, q2, q3)
 
 
 # the per-order grids of orders >= 3 are never coarser than these (nor finer than the full
@@ -316,27 +386,42 @@ def order_table_shape(shape, divisor):
             min(n_ms, max(m_ms, (n_ms - 1) // d + 1)), min(n_nu, max(m_nu, (n_nu - 1) // d + 1)))
 
 
+def _cells(n_fine, n_coarse):
+    """Interpolation cells (node, fraction) on an axis of ``n_coarse`` nodes of the nodes of
+    the same axis with ``n_fine`` nodes (both uniform in the axis' unit coordinate)."""
+    x = np.arange(n_fine) * ((n_coarse - 1) / max(n_fine - 1, 1))
+    i = np.minimum(x.astype(np.int64), max(n_coarse - 2, 0))
+    return i, (x - i).astype(np.float32)
+
+
 def add_density(J_sum, J, q_sum, q):
     """J_sum += J, J on the outgoing grid of ``q`` and J_sum on that of ``q_sum``
-    (:class:`_DensityQuadrature`, both uniform in theta and phi over [0, pi]): bilinear in
-    (theta, phi) where the grids differ, one theta row of J_sum at a time (no temporary
-    of the whole table)."""
+    (:class:`_DensityQuadrature`, both uniform in theta and phi over [0, pi]), and J on its
+    own (r, mu_s) nodes of the same mappings (uniform in their unit coordinates, as
+    :func:`._multiple.density_acc` interpolates): bilinear in (theta, phi) and in (r, mu_s)
+    where the grids differ, one theta row of J_sum at a time (no temporary of the whole
+    table)."""
     if J.shape == J_sum.shape:
         J_sum += J
         return
-
-    def cells(fine, coarse):
-        x = fine / np.pi * (coarse.size - 1)
-        i = np.minimum(x.astype(np.int64), coarse.size - 2)
-        return i, (x - i).astype(np.float32)
-
-    it, ft = cells(q_sum.th_out, q.th_out)
-    ip, fp = cells(q_sum.ph_out, q.ph_out)
+    it, ft = _cells(J_sum.shape[1], J.shape[1])
+    ip, fp = _cells(J_sum.shape[2], J.shape[2])
+    ir, fr = _cells(J_sum.shape[3], J.shape[3])
+    im, fm = _cells(J_sum.shape[4], J.shape[4])
+    same_p, same_r, same_m = (J_sum.shape[a] == J.shape[a] for a in (2, 3, 4))
     wp = fp[:, None, None, None]
+    wr = fr[None, :, None, None]
+    wm = fm[None, None, :, None]
     for a in range(J_sum.shape[1]):
         for k in range(J_sum.shape[0]):
-            row = (1.0 - ft[a]) * J[k, it[a]] + ft[a] * J[k, it[a] + 1]   # (phi, r, mu_s, l)
-            J_sum[k, a] += (1.0 - wp) * row[ip] + wp * row[ip + 1]
+            row = J[k, it[a]] if ft[a] == 0.0 else (1.0 - ft[a]) * J[k, it[a]] + ft[a] * J[k, it[a] + 1]
+            if not same_r:      # row: (phi, r, mu_s, l)
+                row = (1.0 - wr) * row[:, ir] + wr * row[:, ir + 1]
+            if not same_m:
+                row = (1.0 - wm) * row[:, :, im] + wm * row[:, :, im + 1]
+            if not same_p:
+                row = (1.0 - wp) * row[ip] + wp * row[ip + 1]
+            J_sum[k, a] += row
 
 
 def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
@@ -374,13 +459,14 @@ def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
     density of one order times each constituent's number density, over the sphere of
     outgoing directions (theta uniform: sin theta the solid angle per node), the (r, mu_s)
     nodes counted alike; the ratio of two orders' totals is the geometric remainder's
-    ratio (comparable across outgoing grids of different sizes: divided by the node count)."""
+    ratio (comparable across grids of different sizes: divided by the node count of
+    the outgoing grid and of the (r, mu_s) grid)."""
     from skydome.models.simulated.precomputed._mapping import cell_r
     from skydome.transport._kernels import profile_density
 
-    nsc, n_t, n_p, n_r = J.shape[:4]
+    nsc, n_t, n_p, n_r, n_ms = J.shape[:5]
     nl = J.shape[-1]
-    w_t = np.sin(q.th_out) / (n_t * n_p)
+    w_t = np.sin(q.th_out) / (n_t * n_p * n_r * n_ms)
     out = np.zeros(nl)
     for k in range(nsc):
         c = int(sc_idx[k])
