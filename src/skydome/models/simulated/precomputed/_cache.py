@@ -24,7 +24,7 @@ import shutil
 import numpy as np
 
 # bump when the tables' meaning or layout changes (mapping, units, fields)
-CACHE_FORMAT = "skydome.precomputed-cache/4"   # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches
+CACHE_FORMAT = "skydome.precomputed-cache/5"   # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches; 5: the stored multiple-scattering table integrated on a subset of its nodes
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 
