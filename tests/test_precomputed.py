@@ -430,13 +430,13 @@ def test_stored_table_nodes_keep_the_horizon_and_both_ends():
     cell, frac = PC.node_brackets(mu, 128)
     assert np.all(mu[cell] <= np.arange(128)) and np.all(np.arange(128) <= mu[cell + 1])
     assert np.all(frac[mu[:-1]] == 0.0) and frac[mu[-1]] == 1.0
-    # no bracket straddles the horizon (nodes 63 | 64)
-    assert not np.any((mu[cell] <= 63) & (mu[cell + 1] >= 64))
+    # no node is interpolated across the split between the halves (nodes 63 | 64)
+    assert not np.any((mu[cell] <= 63) & (mu[cell + 1] >= 64) & (frac > 0.0))
 
 
 def test_table_from_coarse_identity_and_exact_for_exponentials():
     """:func:`table_from_coarse` returns the computed nodes as they are (all nodes computed:
-    the table itself) and, interpolating the logarithm, reproduces a table that is
+    the table itself) and, given the logarithm, reproduces a table that is
     exponential in the mu and mu_s node indices and constant in nu exactly (the model's
     multiple scattering falls off about exponentially with the sun's depression)."""
     from skydome.models.simulated.precomputed import _multiple, _precompute as PC
@@ -451,15 +451,15 @@ def test_table_from_coarse_identity_and_exact_for_exponentials():
     all_nodes = np.arange(16), np.arange(12)
     mc, mf = PC.node_brackets(all_nodes[0], 16)
     sc, sf = PC.node_brackets(all_nodes[1], 12)
-    _multiple.table_from_coarse(full, False, all_nodes[0], mc, mf, all_nodes[1], sc, sf, R, Rt,
+    _multiple.table_from_coarse(full, all_nodes[0], mc, mf, all_nodes[1], sc, sf, R, Rt,
                                 mu_s_min, out)
     np.testing.assert_array_equal(out, full)
     mu_n, ms_n = PC.stored_table_nodes(16, 12, ((0.5, 2), (1.0, 3)), 3)
     coarse = np.log(np.ascontiguousarray(full[:, mu_n][:, :, ms_n][:, :, :, :3]))
     mc, mf = PC.node_brackets(mu_n, 16)
     sc, sf = PC.node_brackets(ms_n, 12)
-    _multiple.table_from_coarse(coarse, True, mu_n, mc, mf, ms_n, sc, sf, R, Rt, mu_s_min, out)
-    np.testing.assert_allclose(out, full, rtol=2e-5)
+    _multiple.table_from_coarse(coarse, mu_n, mc, mf, ms_n, sc, sf, R, Rt, mu_s_min, out)
+    np.testing.assert_allclose(np.exp(out), full, rtol=2e-5)
 
 
 @pytest.fixture(scope="module")

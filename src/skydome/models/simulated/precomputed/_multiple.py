@@ -192,8 +192,8 @@ def _nu_range(mu, mu_s):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def table_from_coarse(coarse, log_interp, mu_nodes, mu_cell, mu_frac, mu_s_nodes_sel, ms_cell,
-                      ms_frac, R, Rt, mu_s_min, out):
+def table_from_coarse(coarse, mu_nodes, mu_cell, mu_frac, mu_s_nodes_sel, ms_cell, ms_frac, R,
+                      Rt, mu_s_min, out):
     """out[r, mu, mu_s, nu, l]: the table ``coarse`` of :func:`multiple_scattering_table`
     (computed at the mu nodes ``mu_nodes`` and mu_s nodes ``mu_s_nodes_sel`` of ``out``'s
     axes and on fewer uniform nu nodes) interpolated at every node of ``out``: along mu and
@@ -203,7 +203,8 @@ def table_from_coarse(coarse, log_interp, mu_nodes, mu_cell, mu_frac, mu_s_nodes
     same relative position in each corner's own range of nu (the same azimuth from the
     sun), piecewise linear through that corner's samples (its nodes clamped to the range
     as :func:`._mapping.cell_nu` clamps them). A node that was computed is returned as it
-    is. ``log_interp``: ``coarse`` holds logarithms, and out their interpolated exp."""
+    is. (The caller passes the logarithms of the values and takes the exponential of the
+    result, :func:`._precompute.stored_multiple_scattering`.)"""
     n_r, n_mu, n_ms, n_nu, nl = out.shape
     n_nuc = coarse.shape[3]
     mus = mu_s_nodes(n_ms, mu_s_min)
@@ -245,7 +246,7 @@ def table_from_coarse(coarse, log_interp, mu_nodes, mu_cell, mu_frac, mu_s_nodes
                             acc[l] += w * ((1.0 - e) * row0[l] + e * row1[l])
                 o = out[ir, imu, ims, inu]
                 for l in range(nl):
-                    o[l] = math.exp(acc[l]) if log_interp else acc[l]
+                    o[l] = acc[l]
 
 
 @njit(parallel=True, cache=True, fastmath=True)

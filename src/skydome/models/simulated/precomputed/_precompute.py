@@ -239,8 +239,8 @@ def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, R
     np.log(np.maximum(c, floor), out=c)
     mc, mf = node_brackets(mu_n, n_mu)
     sc, sf = node_brackets(ms_n, n_ms)
-    _multiple.table_from_coarse(c, True, mu_n, mc, mf, ms_n, sc, sf, R, Rt, mu_s_min, out)
-    return out
+    _multiple.table_from_coarse(c, mu_n, mc, mf, ms_n, sc, sf, R, Rt, mu_s_min, out)
+    return np.exp(out, out=out)
 
 
 # working memory of one batch of wavelengths in the order loop [bytes] (see precompute)
@@ -452,8 +452,12 @@ def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
     for k in range(nsc):
         c = int(sc_idx[k])
         rho = np.array([profile_density(int(codes[c]), float(p0s[c]), float(p1s[c]),
-                                        cell_r(i, n_r, R, Rt) - R) for i in range(n_r)])
-        out += np.einsum("t,r,tprml->l", w_t, rho, J[k], dtype=np.float64, optimize=True)
+                                        cell_r(i, n_r, R, Rt) - R) for i in range(n_r)],
+                       dtype=np.float32)
+        # the sum over r first, one float32 pass over J (a matrix-vector product per
+        # (theta, phi) row: 32 positive terms each), the rest in float64
+        s = np.matmul(rho, np.ascontiguousarray(J[k]).reshape(n_t * n_p, n_r, -1))
+        out += np.einsum("t,tpml->l", w_t, s.reshape(n_t, n_p, -1, nl), dtype=np.float64)
     return out
 
 
