@@ -13,7 +13,8 @@ from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_to_ground, hits_ground
 from skydome.models.simulated.precomputed._irradiance import direct_irradiance_acc
-from skydome.models.simulated.precomputed._lookup import columns_segment, irradiance_lookup_acc
+from skydome.models.simulated.precomputed._lookup import (_quad_acc, columns_segment,
+                                                           irradiance_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import (_split, cell_r, mu_frame,
                                                             mu_index_framed, mu_s_frame,
                                                             mu_s_from_unit, mu_s_unit_framed,
@@ -89,8 +90,8 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
     The quadrilinear lookup of :func:`._lookup.sky_lookup_acc` with its fixed parts
     hoisted: the phase functions and the nu cell depend on th_in alone (once per kernel),
     the r and mu_s cells and the mu mapping's constants on the node alone (once per node);
-    per direction, the 16 corners are summed per constituent in float64 and multiplied by
-    the phase function once (the result equals the lookup's to float32 rounding)."""
+    per direction, the 16 corners (:func:`._lookup._quad_acc`) are summed per constituent in
+    float64 and multiplied by the phase function once (the result equals the lookup's to float32 rounding)."""
     n_th = th_in.shape[0]
     n_ph = ph_in.shape[0]
     nl = out.shape[3]
@@ -116,6 +117,7 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
         tg = np.empty(nl)
         eg = np.empty(nl)
         acc = np.empty(nl)
+        ones = np.ones(nl)
         r, mu_s, sin_s = density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
         jr, fa = r_index(r, n_rt, R, Rt)
         js, fc = _split(mu_s_unit_framed(mu_s, frame_s) * (n_mst - 1), n_mst)
@@ -131,26 +133,7 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
                 o[:] = 0.0
                 for k in range(nsc):
                     acc[:] = 0.0
-                    tab = ss[k]
-                    for dr in range(2):
-                        wr = fa if dr else 1.0 - fa
-                        if wr == 0.0:
-                            continue
-                        for dm in range(2):
-                            wm = fb if dm else 1.0 - fb
-                            if wm == 0.0:
-                                continue
-                            for ds in range(2):
-                                ws = fc if ds else 1.0 - fc
-                                if ws == 0.0:
-                                    continue
-                                w3 = wr * wm * ws
-                                row0 = tab[jr + dr, jm + dm, js + ds, inu]
-                                row1 = tab[jr + dr, jm + dm, js + ds, inu + 1]
-                                wa = w3 * (1.0 - fe)
-                                wb = w3 * fe
-                                for l in range(nl):
-                                    acc[l] += wa * row0[l] + wb * row1[l]
+                    _quad_acc(ss[k], jr, fa, jm, fb, js, fc, inu, fe, 1.0, ones, acc)
                     pk = pw[a, k]
                     for l in range(nl):
                         o[l] += pk[l] * acc[l]
