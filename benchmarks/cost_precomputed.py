@@ -27,7 +27,8 @@ import numpy as np
 
 STAGES = ("build_column_table", "single_scattering_table", "incident_radiance",
           "incident_radiance_rays", "indirect_irradiance", "indirect_irradiance_rays",
-          "multiple_scattering_table", "density_products", "add_density", "source_total")
+          "multiple_scattering_table", "table_from_coarse", "density_products",
+          "add_density", "source_total")
 
 
 def _parse(text):

@@ -13,12 +13,15 @@ from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_to_ground, hits_ground
 from skydome.models.simulated.precomputed._irradiance import direct_irradiance_acc
-from skydome.models.simulated.precomputed._lookup import (columns_segment, irradiance_lookup_acc,
-                                                           sky_lookup_acc)
-from skydome.models.simulated.precomputed._mapping import cell_r, mu_s_frame, mu_s_from_unit
+from skydome.models.simulated.precomputed._lookup import (_quad_acc, columns_segment,
+                                                           irradiance_lookup_acc)
+from skydome.models.simulated.precomputed._mapping import (_split, cell_r, mu_frame,
+                                                            mu_index_framed, mu_s_frame,
+                                                            mu_s_from_unit, mu_s_unit_framed,
+                                                            r_index)
 from skydome.models.simulated.precomputed._multiple import ray_integral, ray_scratch
 from skydome.transport._kernels import phase_value
-from skydome.transport._phase import phase_coded
+from skydome.transport._phase import phase_coded, phase_fill_coded
 
 INV_PI = 1.0 / math.pi
 
@@ -82,11 +85,29 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
     (so nu = cos th_in), ph_in the azimuth about the sun measured from the sun's vertical
     plane, on the zenith side (so that mu = cos th mu_s + sin th cos ph sin theta_s). The
     aerosol aureole (the forward peak of the previous order) is then resolved along one
-    axis of the grid, at every sun elevation alike."""
+    axis of the grid, at every sun elevation alike.
+
+    The quadrilinear lookup of :func:`._lookup.sky_lookup_acc` with its fixed parts
+    hoisted: the phase functions and the nu cell depend on th_in alone (once per kernel),
+    the r and mu_s cells and the mu mapping's constants on the node alone (once per node);
+    per direction, the 16 corners (:func:`._lookup._quad_acc`) are summed per constituent in
+    float64 and multiplied by the phase function once (the result equals the lookup's to float32 rounding)."""
     n_th = th_in.shape[0]
     n_ph = ph_in.shape[0]
     nl = out.shape[3]
     nc = col.shape[0]
+    nsc = ss.shape[0]
+    n_rt, n_mu, n_mst, n_nu = ss.shape[1], ss.shape[2], ss.shape[3], ss.shape[4]
+    # per angle from the sun: phase functions [a, k, l] and nu cell
+    pw = np.empty((n_th, nsc, nl))
+    inus = np.empty(n_th, dtype=np.int64)
+    es = np.empty(n_th)
+    for a in range(n_th):
+        nu = math.cos(th_in[a])
+        for k in range(nsc):
+            phase_fill_coded(pc, pp, pt, k, nu, pw[a, k])
+        inus[a], es[a] = _split((nu + 1.0) * 0.5 * (n_nu - 1), n_nu)
+    frame_s = mu_s_frame(mu_s_min)
     for idx in prange(n_r * n_ms):
         ir = idx // n_ms
         ims = idx % n_ms
@@ -95,16 +116,27 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
         cs = np.empty(nc)
         tg = np.empty(nl)
         eg = np.empty(nl)
+        acc = np.empty(nl)
+        ones = np.ones(nl)
         r, mu_s, sin_s = density_node(ir, ims, n_r, n_ms, R, Rt, mu_s_min)
+        jr, fa = r_index(r, n_rt, R, Rt)
+        js, fc = _split(mu_s_unit_framed(mu_s, frame_s) * (n_mst - 1), n_mst)
+        frame = mu_frame(r, R)
         for a in range(n_th):
+            inu = inus[a]
+            fe = es[a]
             for b in range(n_ph):
                 i = a * n_ph + b
                 nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
+                jm, fb = mu_index_framed(ct, ground, n_mu, frame)
                 o = out[i, ir, ims]
                 o[:] = 0.0
-                # first=True: only ss is read (ss[0] stands in for the unused order table)
-                sky_lookup_acc(True, ss, pc, pp, pt, ss[0], r, ct, mu_s, nu, ground, R, Rt,
-                               mu_s_min, 1.0, o)
+                for k in range(nsc):
+                    acc[:] = 0.0
+                    _quad_acc(ss[k], jr, fa, jm, fb, js, fc, inu, fe, 1.0, ones, acc)
+                    pk = pw[a, k]
+                    for l in range(nl):
+                        o[l] += pk[l] * acc[l]
                 if ground:
                     # the direct sun's irradiance (eg is its unused irradiance table)
                     ground_reflected_acc(True, eg.reshape(1, 1, -1), col, beta_e, albedo, R, Rt,

@@ -1,6 +1,7 @@
-"""Multiple scattering ([Bru17] ComputeMultipleScattering, [BN08] eq. 8): one order on the 4-D
-table (its view rays from :func:`._mapping.table_ray`, mu on :func:`._mapping.mu_unit`), and
-orders 2..N on the observer's own sky map.
+"""Multiple scattering ([Bru17] ComputeMultipleScattering, [BN08] eq. 8): orders 2..N on a
+subset of the 4-D table's nodes (the view rays of :func:`._mapping.table_ray`, mu on
+:func:`._mapping.mu_unit`) interpolated onto the rest (:func:`table_from_coarse`), and on
+the observer's own sky map.
 """
 
 from __future__ import annotations
@@ -14,9 +15,10 @@ from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_
                                                              distance_to_top, point_along, ray_nodes)
 from skydome.models.simulated.precomputed._lookup import (columns_at, node_weights,
                                                            weights_from_columns)
-from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
+from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
+                                                            density_mu_s_index,
                                                             density_phi_index, mu_s_frame,
-                                                            mu_s_nodes, r_index, table_ray)
+                                                            mu_s_from_unit, mu_s_nodes, r_index)
 
 
 
@@ -88,7 +90,7 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
 
 @njit(parallel=True, cache=True, fastmath=True)
 def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q,
-                              ts, out):
+                              ts, mu_nodes, n_mu_full, mu_s_nodes_sel, n_ms_full, out):
     """One scattering order, full radiance ([Bru17] ComputeMultipleScattering, [BN08] eq. 8):
     out[r, mu, mu_s, nu, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt.
 
@@ -107,13 +109,22 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     the quadrature nodes outside (their r, theta, weights and view transmittance computed
     once and the J rows they touch staying in cache) and every (mu_s, nu) node inside; the
     wavelength axis innermost and contiguous, accumulated in float32 (at most 16 x 20
-    positive terms per value)."""
+    positive terms per value).
+
+    The table is computed on a subset of the nodes of a table of n_r x ``n_mu_full`` x
+    ``n_ms_full`` x n_nu nodes: its mu nodes ``mu_nodes`` and mu_s nodes
+    ``mu_s_nodes_sel`` (indices into the full axes, the same mappings) and n_nu uniform nu
+    nodes (out[r, j, k, inu, l] at mu node mu_nodes[j], mu_s node mu_s_nodes_sel[k]); all of
+    them (``arange``) give the full table. :func:`table_from_coarse` interpolates it onto
+    the full grid."""
     n_r, n_mu, n_ms, n_nu, nl = out.shape
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     nk = n_ms * n_nu
     frame = mu_s_frame(mu_s_min)
-    mus = mu_s_nodes(n_ms, mu_s_min)
+    mus = np.empty(n_ms)
+    for k in range(n_ms):
+        mus[k] = mu_s_from_unit(mu_s_nodes_sel[k] / (n_ms_full - 1.0), mu_s_min)
     for idx in prange(n_r * n_mu):
         tq = np.empty(2 * n_q)
         wq = np.empty(2 * n_q)
@@ -126,8 +137,14 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
         jts = np.empty(nk, dtype=np.int64)
         jbs = np.empty(nk)
         ks = np.empty(nk, dtype=np.int64)
-        ir, imu, r, mu, ground, nq = table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq,
-                                               wq, nus)
+        ir = idx // n_mu
+        imu = idx % n_mu
+        r = cell_r(ir, n_r, R, Rt)
+        mu, ground = cell_mu(mu_nodes[imu], n_mu_full, r, R, Rt)
+        for k in range(nk):
+            nus[k] = cell_nu(k % n_nu, n_nu, mu, mus[k // n_nu])
+        d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
         for k in range(nk):
             # the angle from the sun (acos nu) is the same at every node of the ray
             jts[k], jbs[k] = _split(math.acos(nus[k]) / math.pi * (n_tj - 1), n_tj)
@@ -165,6 +182,72 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
                 acc[k] = acc[k - 1]
             for l in range(nl):
                 out[ir, imu, k // n_nu, k % n_nu, l] = acc[k, l]
+
+
+@njit(cache=True)
+def _nu_range(mu, mu_s):
+    """(lo, hi): the range of nu of a ray of zenith cosine mu, the sun at mu_s (the clamp of
+    :func:`._mapping.cell_nu`)."""
+    s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    return mu * mu_s - s, mu * mu_s + s
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def table_from_coarse(coarse, mu_nodes, mu_cell, mu_frac, mu_s_nodes_sel, ms_cell, ms_frac, R,
+                      Rt, mu_s_min, out):
+    """out[r, mu, mu_s, nu, l]: the table ``coarse`` of :func:`multiple_scattering_table`
+    (computed at the mu nodes ``mu_nodes`` and mu_s nodes ``mu_s_nodes_sel`` of ``out``'s
+    axes and on fewer uniform nu nodes) interpolated at every node of ``out``: along mu and
+    mu_s between the computed nodes that bracket each node (fine node i between coarse
+    nodes mu_cell[i] and mu_cell[i] + 1 at fraction mu_frac[i], linear in the node index,
+    i.e. in the mappings' unit coordinates; never across the horizon), and in nu at the
+    same relative position in each corner's own range of nu (the same azimuth from the
+    sun), piecewise linear through that corner's samples (its nodes clamped to the range
+    as :func:`._mapping.cell_nu` clamps them). A node that was computed is returned as it
+    is. (The caller passes the logarithms of the values and takes the exponential of the
+    result, :func:`._precompute.stored_multiple_scattering`.)"""
+    n_r, n_mu, n_ms, n_nu, nl = out.shape
+    n_nuc = coarse.shape[3]
+    mus = mu_s_nodes(n_ms, mu_s_min)
+    for idx in prange(n_r * n_mu):
+        ir = idx // n_mu
+        imu = idx % n_mu
+        r = cell_r(ir, n_r, R, Rt)
+        mu = cell_mu(imu, n_mu, r, R, Rt)[0]
+        acc = np.empty(nl)
+        jm = mu_cell[imu]
+        b = mu_frac[imu]
+        mu_c0 = cell_mu(mu_nodes[jm], n_mu, r, R, Rt)[0]
+        mu_c1 = cell_mu(mu_nodes[jm + 1], n_mu, r, R, Rt)[0]
+        for ims in range(n_ms):
+            js = ms_cell[ims]
+            c = ms_frac[ims]
+            lo, hi = _nu_range(mu, mus[ims])
+            for inu in range(n_nu):
+                nu = cell_nu(inu, n_nu, mu, mus[ims])
+                sv = 0.5 if hi - lo < 1e-12 else (nu - lo) / (hi - lo)
+                acc[:] = 0.0
+                for dm in range(2):
+                    wm = b if dm else 1.0 - b
+                    mc = mu_c1 if dm else mu_c0
+                    for ds in range(2):
+                        ws = c if ds else 1.0 - c
+                        w = wm * ws
+                        if w == 0.0:
+                            continue
+                        lo_c, hi_c = _nu_range(mc, mus[mu_s_nodes_sel[js + ds]])
+                        x = lo_c + sv * (hi_c - lo_c)
+                        jn = min(max(int((x + 1.0) * 0.5 * (n_nuc - 1)), 0), n_nuc - 2)
+                        p0 = max(-1.0 + 2.0 * jn / (n_nuc - 1.0), lo_c)
+                        p1 = min(-1.0 + 2.0 * (jn + 1) / (n_nuc - 1.0), hi_c)
+                        e = 0.0 if p1 <= p0 else min(max((x - p0) / (p1 - p0), 0.0), 1.0)
+                        row0 = coarse[ir, jm + dm, js + ds, jn]
+                        row1 = coarse[ir, jm + dm, js + ds, jn + 1]
+                        for l in range(nl):
+                            acc[l] += w * ((1.0 - e) * row0[l] + e * row1[l])
+                o = out[ir, imu, ims, inu]
+                for l in range(nl):
+                    o[l] = acc[l]
 
 
 @njit(parallel=True, cache=True, fastmath=True)

@@ -98,7 +98,6 @@ class _DensityQuadrature:
 def precompute(props, wl, p):
     """Every table for the optical properties ``props`` (of the atmosphere on ``wl``) with
     the validated settings ``p`` (a dict of the model's parameters) -> :class:`._tables.Tables`."""
-    from skydome.models.simulated.precomputed import _multiple
     from skydome.models.simulated.precomputed._tables import Tables
 
     t_start = time.perf_counter()
@@ -172,9 +171,14 @@ def precompute(props, wl, p):
                           n_q_ms, p, E[..., sl], (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
         # the full table (the integral is linear in J: the same as the sum of the orders')
-        ms = np.empty(ss.shape[1:], dtype=np.float32)
-        _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R,
-                                            Rt, mu_s_min, n_q_ms, QUADRATURE_SCALE_M, ms)
+        # at every node by default; p["stored_table"] == "subset": the faster approximation
+        # on the nodes of stored_table_nodes, interpolated in the logarithm
+        n_mu_t, n_ms_t, n_nu_t = ss.shape[2:5]
+        full = p.get("stored_table", "full") == "full"
+        ms = stored_multiple_scattering(
+            J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms, ss.shape[1:],
+            nodes=(np.arange(n_mu_t), np.arange(n_ms_t)) if full else None,
+            n_nu=n_nu_t if full else MS_NU_SIZE)
     if ms is None:
         ms = np.zeros(ss.shape[1:], dtype=np.float32)
     dens = {}
@@ -188,6 +192,75 @@ def precompute(props, wl, p):
                   scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
                   mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
                   precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
+
+
+# the stored multiple-scattering table's computed nodes (see stored_table_nodes): per half
+# of the mu axis, (distance from the horizon in nodes, as a fraction of the half, below
+# which, step between computed nodes); every MS_MU_S_STEP-th mu_s node; MS_NU_SIZE nu nodes
+MS_MU_STEPS = ((0.25, 1), (0.5, 2), (1.0, 4))
+MS_MU_S_STEP = 2
+MS_NU_SIZE = 8
+
+
+def _steps(n, spec):
+    """Node indices 0 .. n-1 (0 and n-1 included) with the steps of ``spec`` ((fraction of
+    n below which, step), ...)."""
+    k, out = 0, [0]
+    while k < n - 1:
+        step = next((st for f, st in spec if k < f * n), spec[-1][1])
+        k = min(k + step, n - 1)
+        out.append(k)
+    return np.array(out, dtype=np.int64)
+
+
+def stored_table_nodes(n_mu, n_ms, mu_steps=MS_MU_STEPS, mu_s_step=MS_MU_S_STEP):
+    """The mu and mu_s nodes of the stored table at which :func:`._multiple.
+    multiple_scattering_table` integrates (the rest interpolated by
+    :func:`._multiple.table_from_coarse`): (mu nodes, mu_s nodes), indices into the full
+    axes, ascending, each half of the mu axis with its horizon node and its far end."""
+    half = n_mu // 2
+    k = _steps(half, mu_steps)            # from the horizon: ground half 0.., sky half n-1..
+    mu = np.unique(np.concatenate([k, n_mu - 1 - k]))
+    ms = np.unique(np.append(np.arange(0, n_ms, mu_s_step), n_ms - 1)).astype(np.int64)
+    return mu, ms
+
+
+def node_brackets(nodes, n):
+    """(cell, fraction) of every index 0 .. n-1 between the ascending ``nodes`` (linear in
+    the index): index i lies between nodes[cell[i]] and nodes[cell[i] + 1]."""
+    i = np.arange(n, dtype=np.float64)
+    cell = np.clip(np.searchsorted(nodes, i, side="right") - 1, 0, nodes.size - 2)
+    frac = (i - nodes[cell]) / (nodes[cell + 1] - nodes[cell])
+    return cell.astype(np.int64), frac
+
+
+def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min,
+                               n_q, shape, nodes=None, n_nu=MS_NU_SIZE):
+    """Step 4: the stored table of orders 2..N, shape ``shape`` (r, mu, mu_s, nu, l),
+    integrated from the summed density at the nodes of :func:`stored_table_nodes` (or
+    ``nodes`` = (mu nodes, mu_s nodes)) on ``n_nu`` nu nodes, and interpolated onto the
+    rest in the logarithm (docs/models.md, "precomputed": multiple scattering falls off
+    about exponentially with the sun's depression and towards the horizon)."""
+    from skydome.models.simulated.precomputed import _multiple
+
+    n_r, n_mu, n_ms, n_nu_f, nl = shape
+    mu_n, ms_n = stored_table_nodes(n_mu, n_ms) if nodes is None else nodes
+    n_nu = min(int(n_nu), n_nu_f)
+    full = mu_n.size == n_mu and ms_n.size == n_ms and n_nu == n_nu_f
+    out = np.empty(shape, dtype=np.float32)
+    c = out if full else np.empty((n_r, mu_n.size, ms_n.size, n_nu, nl), dtype=np.float32)
+    _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                        mu_s_min, n_q, QUADRATURE_SCALE_M, mu_n, n_mu, ms_n,
+                                        n_ms, c)
+    if full:
+        return out
+    # log of the computed values (>= 0; a floor of 1e-30 of each wavelength's largest)
+    floor = np.maximum(c.max(axis=(0, 1, 2, 3)), 1e-300) * 1e-30
+    np.log(np.maximum(c, floor), out=c)
+    mc, mf = node_brackets(mu_n, n_mu)
+    sc, sf = node_brackets(ms_n, n_ms)
+    _multiple.table_from_coarse(c, mu_n, mc, mf, ms_n, sc, sf, R, Rt, mu_s_min, out)
+    return np.exp(out, out=out)
 
 
 # working memory of one batch of wavelengths of order 2 [bytes] (see precompute)
@@ -471,8 +544,12 @@ def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
     for k in range(nsc):
         c = int(sc_idx[k])
         rho = np.array([profile_density(int(codes[c]), float(p0s[c]), float(p1s[c]),
-                                        cell_r(i, n_r, R, Rt) - R) for i in range(n_r)])
-        out += np.einsum("t,r,tprml->l", w_t, rho, J[k], dtype=np.float64, optimize=True)
+                                        cell_r(i, n_r, R, Rt) - R) for i in range(n_r)],
+                       dtype=np.float32)
+        # the sum over r first, one float32 pass over J (a matrix-vector product per
+        # (theta, phi) row: 32 positive terms each), the rest in float64
+        s = np.matmul(rho, np.ascontiguousarray(J[k]).reshape(n_t * n_p, n_r, -1))
+        out += np.einsum("t,tpml->l", w_t, s.reshape(n_t, n_p, -1, nl), dtype=np.float64)
     return out
 
 
