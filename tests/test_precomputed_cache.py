@@ -76,6 +76,8 @@ def test_every_table_setting_changes_the_key(name):
     v = base[name]
     if name == "remaining_orders":
         changed[name] = "geometric" if v == "none" else "none"
+    elif name == "stored_table":
+        changed[name] = "subset" if v == "full" else "full"
     elif v is None:
         changed[name] = 64
     else:
