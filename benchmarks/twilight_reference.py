@@ -53,7 +53,13 @@ SETTINGS = {
     "default": {},
     "wl6": WL6,
     "orders10": dict(WL6, orders=10),
+    "mu_s64": dict(WL6, scattering_mu_s_size=64),
     "mu_s96": dict(WL6, scattering_mu_s_size=96),
+    "mu_s128": dict(WL6, scattering_mu_s_size=128),
+    # the 4-D tables' mu_s axis alone (the scattering density's stays at 48 nodes), and the
+    # density's alone
+    "table_mu_s96": dict(WL6, scattering_mu_s_size=96, density_mu_s_size=48),
+    "density_mu_s96": dict(WL6, density_mu_s_size=96),
     "nu32": dict(WL6, scattering_nu_size=32),
     "mu256": dict(WL6, scattering_mu_size=256),
     "r64": dict(WL6, scattering_r_size=64),
@@ -61,6 +67,9 @@ SETTINGS = {
     "int60": dict(WL6, integration_samples=60),
     "irr128": dict(WL6, irradiance_mu_s_size=128, irradiance_r_size=32),
     "trans": dict(WL6, transmittance_mu_size=1024, transmittance_r_size=256),
+    # candidates on the default's 20 table wavelengths
+    "default_mu_s64": dict(scattering_mu_s_size=64),
+    "default_mu_s96": dict(scattering_mu_s_size=96),
 }
 
 
@@ -85,6 +94,22 @@ def twilight_directions():
     return np.array(dirs), np.array(w)
 
 
+# the few directions of tests/test_precomputed_twilight.py: (elevation, azimuth from the sun)
+# [deg]: the twilight arch low towards the sun, the earth's shadow low opposite it, the side
+# 30 deg up, 50 deg up opposite the sun, the zenith
+TEST_DIRECTIONS_DEG = ((10.0, 0.0), (10.0, 180.0), (30.0, 90.0), (50.0, 180.0), (90.0, 0.0))
+
+
+def test_directions():
+    """The test's directions (unit vectors, sun at azimuth 180 deg); weights 1 sr each (a
+    placeholder: the test compares direction by direction)."""
+    from skydome.transport.geometry import direction_from_angles
+
+    d = np.array([direction_from_angles(e, (SUN_AZIMUTH_DEG + a) % 360.0)
+                  for e, a in TEST_DIRECTIONS_DEG])
+    return d, np.ones(len(d))
+
+
 def key(elev):
     return f"{elev:g}"
 
@@ -93,7 +118,9 @@ def run_reference(args):
     import skydome as sd
     from skydome.atmosphere import Atmosphere
 
-    dirs, w = twilight_directions()
+    dirs, w = test_directions() if args.test_set else twilight_directions()
+    wl = np.array([float(x) for x in args.wavelengths.split(",")]) if args.wavelengths \
+        else WAVELENGTHS_NM
     out = {}
     if os.path.exists(args.out):
         out = dict(np.load(args.out, allow_pickle=False))
@@ -103,9 +130,9 @@ def run_reference(args):
                       samples=args.samples, seed=args.seed, max_order=args.max_order)
         t0 = time.perf_counter()
         c0 = time.process_time()
-        L, E = mc.radiance_with_error(dirs, WAVELENGTHS_NM)
+        L, E = mc.radiance_with_error(dirs, wl)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        rate = args.samples * dirs.shape[0] * WAVELENGTHS_NM.size / max(cpu, 1e-9)
+        rate = args.samples * dirs.shape[0] * wl.size / max(cpu, 1e-9)
         k = key(elev)
         run = {k: L, k + "_err": E, k + "_samples": np.float64(args.samples),
                k + "_seeds": np.str_(str(args.seed)), k + "_cpu_s": np.float64(cpu)}
@@ -113,19 +140,22 @@ def run_reference(args):
             run = pool(out, run, k)
         out.update(run)
         samples, seeds = float(out[k + "_samples"]), str(out[k + "_seeds"])
-        c = compare_lum(out[k], out[k + "_err"], out[k], WAVELENGTHS_NM, w)
+        noise = np.sqrt(np.mean((out[k + "_err"] / out[k]) ** 2)) if wl.size < 3 else \
+            compare_lum(out[k], out[k + "_err"], out[k], wl, w)["noise"]
         print(f"sun {elev:g}: {args.samples} paths per direction and wavelength, {wall:.0f} s wall, "
               f"{cpu:.0f} s CPU, {rate:.0f} paths per CPU second; luminance noise "
-              f"{100 * c['noise']:.2f} % "
+              f"{100 * noise:.2f} % (RMS relative standard error) "
               f"(file total {samples:.0f} paths, seeds {seeds})", flush=True)
-        out.update(directions=dirs, weights_sr=w, wavelengths_nm=WAVELENGTHS_NM,
+        out.update(directions=dirs, weights_sr=w, wavelengths_nm=wl,
                    provenance=np.str_(
                        "skydome montecarlo (backward path tracing, all orders, next-event "
                        "estimation towards the sun), benchmarks/twilight_reference.py reference; "
                        f"Atmosphere.earth(aerosol_optical_depth={AOD}); sun azimuth "
                        f"{SUN_AZIMUTH_DEG:g} deg; max_order {args.max_order}; keys '<elev>' "
                        "radiance [W m^-2 sr^-1 nm^-1] (directions, wavelengths), '<elev>_err' its standard error, "
-                       "'<elev>_samples' paths per direction and wavelength, '<elev>_seeds'"))
+                       "'<elev>_samples' paths per direction and wavelength, '<elev>_seeds'"),
+                   command=np.str_(" ".join(["python benchmarks/twilight_reference.py",
+                                             *sys.argv[1:]])))
         tmp = args.out + ".tmp.npz"
         np.savez(tmp, **out)
         os.replace(tmp, args.out)
@@ -247,6 +277,8 @@ def main(argv=None):
     r.add_argument("--max-order", type=int, default=None,
                    help="highest scattering order (a diagnostic: where the noise comes from)")
     r.add_argument("--out", required=True)
+    r.add_argument("--test-set", action="store_true", help="the test's 5 directions")
+    r.add_argument("--wavelengths", default="", help="e.g. 550 (default: 6 over 400-700 nm)")
     c = sub.add_parser("compare")
     c.add_argument("--refs", default="", help="the reference file (none: tables only)")
     c.add_argument("--elevations", default="-2,-4,-6")
