@@ -38,6 +38,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from validate_multiple_scattering import compare as compare_lum  # noqa: E402
+from validate_multiple_scattering import luminance_xy  # noqa: E402
 
 RING_EDGES_DEG = (0.0, 20.0, 40.0, 60.0, 80.0)
 AZIMUTHS_FROM_SUN_DEG = (0.0, 45.0, 90.0, 135.0, 180.0)
@@ -253,17 +254,11 @@ def run_compare(args):
             if args.verbose and k in refs:
                 el = np.degrees(np.arcsin(np.clip(dirs[:, 2], -1, 1)))
                 az = (np.degrees(np.arctan2(dirs[:, 0], dirs[:, 1])) - SUN_AZIMUTH_DEG) % 360
-                Yr = luminance(refs[k], wl)
-                Ye = luminance(refs[k + "_err"], wl)
+                Yr = luminance_xy(refs[k], wl)[0]
+                Ye = luminance_xy(refs[k + "_err"], wl)[0]
                 for i in range(dirs.shape[0]):
                     print(f"    el {el[i]:4.0f} az-from-sun {az[i]:5.0f}: {100 * c['rel'][i]:+6.2f} %"
                           f" (MC {Yr[i]:.4g} cd/m2 +- {100 * Ye[i] / Yr[i]:.1f} %)")
-
-
-def luminance(L, wl):
-    from skydome.spectra import spectrum_to_xyz
-
-    return spectrum_to_xyz(L, wl)[..., 1]
 
 
 def main(argv=None):
