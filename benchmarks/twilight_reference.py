@@ -68,6 +68,9 @@ SETTINGS = {
     "int60": dict(WL6, integration_samples=60),
     "irr128": dict(WL6, irradiance_mu_s_size=128, irradiance_r_size=32),
     "trans": dict(WL6, transmittance_mu_size=1024, transmittance_r_size=256),
+    # the discretisations that move the twilight sky, finer together
+    "fine": dict(WL6, scattering_mu_s_size=128, integration_samples=60, orders=10,
+                 scattering_nu_size=32),
     # candidates on the default's 20 table wavelengths
     "default_mu_s64": dict(scattering_mu_s_size=64),
     "default_mu_s96": dict(scattering_mu_s_size=96),
