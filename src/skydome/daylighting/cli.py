@@ -109,13 +109,10 @@ def skymatrix_cmd(
 
     # -- validate everything before any work -------------------------------------------------
     ps = _guard(make_patches, patches)
+    order = _order_option(order, model)
     if model != "perez1993":
-        if order is None:
-            order = "4"
-        if not order.isdigit():
-            _fail(f"order = {order!r} must be an integer in [0, 16] for model {model!r}")
         return _model_matrix(weather, out, ps, model, components or "spectral:16", sun,
-                             aod_from, param, int(order), sun_position, overwrite, scheduler,
+                             aod_from, param, order, sun_position, overwrite, scheduler,
                              workers, chunk_hours)
     if aod_from is not None or param:
         _fail("--aod-from and --param apply to physically based models, not perez1993")
@@ -128,11 +125,6 @@ def skymatrix_cmd(
         _fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
     if sun_position not in ("spa", "radiance"):
         _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
-    order = (order or "adaptive").strip().lower()
-    if order != "adaptive":
-        if not order.isdigit() or not 0 <= int(order) <= 16:
-            _fail(f"order = {order!r} must be 'adaptive' or an integer in [0, 16]")
-        order = int(order)
     if workers < 0 or chunk_hours < 1:
         _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
     distributed = scheduler is not None or workers > 0
@@ -231,6 +223,20 @@ def skymatrix_cmd(
                f"x {m.sky.shape[2]} components")
 
 
+def _order_option(order, model):
+    """``--order``: "adaptive" (perez1993's default) or an integer in [0, 16] (the other
+    models' default 4); a bad value fails with one line."""
+    perez = model == "perez1993"
+    text = (order or ("adaptive" if perez else "4")).strip().lower()
+    if perez and text == "adaptive":
+        return text
+    if not text.isdigit() or not 0 <= int(text) <= 16:
+        valid = "'adaptive' or an integer in [0, 16]" if perez else \
+            f"an integer in [0, 16] for model {model!r}"
+        _fail(f"order = {order!r} must be {valid}")
+    return int(text)
+
+
 def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, order,
                   sun_position, overwrite, scheduler, workers, chunk_hours):
     """``skymatrix --model NAME`` for any model but perez1993: a Zarr array (hours, patches,
@@ -250,8 +256,6 @@ def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, ord
               "or leave it out)")
     if scheduler is not None or workers > 0:
         _fail(f"--scheduler/--workers are available for perez1993 matrices only, not {model!r}")
-    if not 0 <= order <= 16:
-        _fail(f"order = {order} is out of range [0, 16]")
     if sun_position not in ("spa", "radiance"):
         _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
     if chunk_hours < 1:
