@@ -1,7 +1,7 @@
-"""Multiple scattering ([Bru17] ComputeMultipleScattering, [BN08] eq. 8): orders 2..N on a
-subset of the 4-D table's nodes (the view rays of :func:`._mapping.table_ray`, mu on
-:func:`._mapping.mu_unit`) interpolated onto the rest (:func:`table_from_coarse`), and on
-the observer's own sky map.
+"""Multiple scattering ([Bru17] ComputeMultipleScattering, [BN08] eq. 8): orders 2..N on the
+4-D table's nodes (the view rays of :func:`._mapping.table_ray`, mu on
+:func:`._mapping.mu_unit`; every node by default, or, opt-in, a subset interpolated onto
+the rest by :func:`table_from_coarse`), and on the observer's own sky map.
 """
 
 from __future__ import annotations
