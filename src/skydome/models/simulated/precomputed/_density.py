@@ -251,3 +251,43 @@ def quadratic_phase_factors(code, param, th_out, ph_out, th_in, ph_in, d_omega, 
     if np.abs(left @ right - P).max() > 1e-9 * np.abs(P).max():
         return None
     return left, right
+
+
+@njit(parallel=True, cache=True)
+def azimuth_modes(codes, params, table, k, l, th_out, th_in, d_omega, n_ph, shift, out):
+    """The phase matrix of :func:`phase_matrix` in the azimuthal Fourier basis:
+    out[n, o, a] = dOmega_a sum_{d=0}^{2 N - 1} P(cos th_o cos th_a + sin th_o sin th_a
+    cos psi_d) cos(n psi_d), psi_d = (d + shift) pi / N, N = ``n_ph`` incident azimuths on
+    [0, pi], n = 0 .. out.shape[0] - 1 (P the phase function of constituent k at wavelength
+    index l, as in :func:`phase_matrix`).
+
+    The incident azimuths (b + 1/2) pi / N, mirrored onto (pi, 2 pi), are a cyclic group of
+    2 N; where an outgoing azimuth minus every incident one runs over the same 2 N angles
+    psi_d (shift 1/2: the outgoing azimuth a multiple of pi / N; shift 0: an odd multiple of
+    pi / (2 N)), the sum over incident azimuths is a cyclic convolution, diagonal in the
+    discrete cosine modes cos(n phi) of the (mirror-symmetric) incident field: J(th_o, ph_o)
+    = sum_n cos(n ph_o) sum_a out[n, o, a] c_n(a), c_n the incident radiance's cosine
+    coefficients (docs/models.md, "precomputed", "The scattering density's azimuthal
+    modes")."""
+    n_m = out.shape[0]
+    n_to = th_out.shape[0]
+    n_ti = th_in.shape[0]
+    n_d = 2 * n_ph
+    cos_nd = np.empty((n_m, n_d))
+    for n in range(n_m):
+        for d in range(n_d):
+            cos_nd[n, d] = math.cos(n * (d + shift) * math.pi / n_ph)
+    for idx in prange(n_to * n_ti):
+        o = idx // n_ti
+        a = idx % n_ti
+        cc = math.cos(th_out[o]) * math.cos(th_in[a])
+        ss = math.sin(th_out[o]) * math.sin(th_in[a])
+        h = np.empty(n_d)
+        for d in range(n_d):
+            h[d] = phase_coded(codes, params, table, k, l,
+                               clamp_cos(cc + ss * math.cos((d + shift) * math.pi / n_ph)))
+        for n in range(n_m):
+            s = 0.0
+            for d in range(n_d):
+                s += h[d] * cos_nd[n, d]
+            out[n, o, a] = d_omega[a] * s

@@ -51,24 +51,78 @@ def single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_
 
 class _DensityQuadrature:
     """Step 3b's fixed parts: incident directions (Bruneton's n x 2n over the sphere in the
-    sun's frame, kept on phi in [0, pi]), the outgoing grid of J, and the phase matrices,
-    factored where the phase function is a polynomial of degree <= 2 in the cosine; a
-    tabulated phase function has one matrix per table wavelength (``per_wavelength[k]``)."""
+    sun's frame, kept on phi in [0, pi]), the outgoing grid of J, and the phase matrices.
 
-    def __init__(self, pc, pp, pt, n_th, n_th_out=None):
-        from skydome.models.simulated.precomputed import _density
+    Where 2 n_in is a multiple of the outgoing grid's azimuth steps n_out (the defaults:
+    32/32 for order 2, 16/32 for the orders >= 3) the phase matrices are kept in the
+    azimuthal Fourier basis (``modes``, :func:`._density.azimuth_modes`: exact, the sum over
+    incident azimuths is a cyclic convolution), n_in modes per constituent, 3 for a phase
+    function of degree <= 2 in the cosine (Rayleigh, isotropic: its higher modes are zero);
+    a tabulated phase function has one set per table wavelength. Otherwise the dense
+    matrices of :func:`._density.phase_matrix`, factored where the phase function is a
+    polynomial of degree <= 2 in the cosine (``left``, ``right``), a tabulated phase
+    function one matrix per table wavelength (``per_wavelength[k]``; ``azimuthal=False``
+    forces these, for the tests)."""
 
+    def __init__(self, pc, pp, pt, n_th, n_th_out=None, azimuthal=True):
         n_th_out = n_th if n_th_out is None else n_th_out
 
         self.th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
         self.ph_in = (np.arange(n_th) + 0.5) * np.pi / n_th
-        d_omega = np.sin(self.th_in) * (np.pi / n_th) ** 2
+        self.d_omega = np.sin(self.th_in) * (np.pi / n_th) ** 2
         # outgoing grid of the scattering density, in the sun's frame: theta (angle from the
         # sun) and phi (azimuth about the sun) in [0, pi]
         self.th_out = np.linspace(0.0, np.pi, 2 * n_th_out + 1)
         self.ph_out = np.linspace(0.0, np.pi, n_th_out + 1)
         self.n_in = self.th_in.size * self.ph_in.size
         self.n_out = self.th_out.size * self.ph_out.size
+        self.modes = None
+        if azimuthal and (2 * n_th) % n_th_out == 0:
+            self._azimuthal(pc, pp, pt, n_th, n_th_out)
+        else:
+            self._dense(pc, pp, pt)
+
+    def _azimuthal(self, pc, pp, pt, n_th, n_th_out):
+        """The phase matrices in the azimuthal Fourier basis (see the class)."""
+        from skydome.models.simulated.precomputed import _density
+
+        n = np.arange(n_th)
+        # incident radiance -> its cosine coefficients over the incident azimuths phi_b:
+        # L_b = sum_n c_n cos(n phi_b), c_n = eps_n / N sum_b L_b cos(n phi_b), eps_0 = 1,
+        # eps_n = 2 (the orthogonality of the DCT-II basis on the N midpoint azimuths)
+        eps = np.where(n == 0, 1.0, 2.0)
+        self.analysis = np.ascontiguousarray(
+            eps[:, None] / n_th * np.cos(np.outer(n, self.ph_in)), dtype=np.float32)
+        # outgoing azimuths m pi / n_out: m n_th / n_out an integer (shift 1/2 of the
+        # differences psi_d), else a half integer (shift 0): every other m when
+        # 2 n_th / n_out is odd
+        if (2 * n_th // n_th_out) % 2 == 0:
+            cls = [(slice(None), 0.5)]
+        else:
+            cls = [(slice(0, None, 2), 0.5), (slice(1, None, 2), 0.0)]
+        self.classes = [sel for sel, _ in cls]
+        self.synthesis = [np.ascontiguousarray(np.cos(np.outer(self.ph_out[sel], n)),
+                                               dtype=np.float32) for sel, _ in cls]
+        self.modes = []
+        for k in range(pc.size):
+            code = int(pc[k])
+            n_m = 3 if code in (0, 3) else n_th
+            n_l = pt.shape[2] if code == TABULATED else 1
+            sets = []
+            for l in range(n_l):
+                per_cls = []
+                for _, shift in cls:
+                    G = np.empty((n_m, self.th_out.size, n_th))
+                    _density.azimuth_modes(pc, pp, pt, k, l, self.th_out, self.th_in,
+                                           self.d_omega, n_th, shift, G)
+                    per_cls.append(np.ascontiguousarray(G, dtype=np.float32))
+                sets.append(per_cls)
+            self.modes.append(sets)
+
+    def _dense(self, pc, pp, pt):
+        """The dense phase matrices (see the class)."""
+        from skydome.models.simulated.precomputed import _density
+
         # P(o.i) = a0 + a1 o.i + a2 (o.i)^2 is exactly left(o) . right(i) with 10 terms, so
         # the Rayleigh part of the product costs 10/256 of the full one (checked against the
         # full matrix to 1e-9 of its largest entry, else the full matrix is used):
@@ -77,18 +131,19 @@ class _DensityQuadrature:
         for k in range(pc.size):
             P = np.empty((self.n_out, self.n_in))
             _density.phase_matrix(pc, pp, pt, k, 0, self.th_out, self.ph_out, self.th_in,
-                                  self.ph_in, d_omega, P)
+                                  self.ph_in, self.d_omega, P)
             self.per_wavelength.append(None)
             if int(pc[k]) == TABULATED:
                 mats = [P.astype(np.float32)]
                 for l in range(1, pt.shape[2]):
                     _density.phase_matrix(pc, pp, pt, k, l, self.th_out, self.ph_out,
-                                          self.th_in, self.ph_in, d_omega, P)
+                                          self.th_in, self.ph_in, self.d_omega, P)
                     mats.append(P.astype(np.float32))
                 self.per_wavelength[k] = mats
                 P = np.zeros((self.n_out, 0))
             fac = _density.quadratic_phase_factors(int(pc[k]), float(pp[k]), self.th_out,
-                                                   self.ph_out, self.th_in, self.ph_in, d_omega, P)
+                                                   self.ph_out, self.th_in, self.ph_in,
+                                                   self.d_omega, P)
             left.append(P if fac is None else fac[0])
             self.right.append(None if fac is None else np.ascontiguousarray(fac[1], np.float32))
         self.left = np.ascontiguousarray(np.hstack(left), dtype=np.float32)
@@ -279,13 +334,16 @@ def _batches(per_wl, nl, budget):
 
 
 def order_batch_size(p, nl, nsc):
-    """Wavelengths per batch of order 2: its J on the full outgoing grid, its incident
-    radiance on the full sphere, the matrix right-hand side (float32), within
-    ``ORDER_BATCH_BYTES``."""
+    """Wavelengths per batch of order 2 within ``ORDER_BATCH_BYTES``: its incident radiance
+    on the full sphere and the matrix right-hand side (float32) per wavelength, and, where
+    the wavelengths take more than one batch, its J on the full outgoing grid (one batch
+    of every wavelength writes J straight into the summed density)."""
     n = p["sphere_samples"]
     n_cols = p["scattering_r_size"] * (p["density_mu_s_size"] or p["scattering_mu_s_size"])
-    per_wl = 4 * n_cols * ((2 * n + 1) * (n + 1) * nsc + n * n + 10)
-    return _batches(per_wl, nl, ORDER_BATCH_BYTES)
+    per_wl = 4 * n_cols * (n * n + 10)
+    if per_wl * nl <= ORDER_BATCH_BYTES:
+        return nl
+    return _batches(per_wl + 4 * n_cols * (2 * n + 1) * (n + 1) * nsc, nl, ORDER_BATCH_BYTES)
 
 
 def high_order_grid(p):
@@ -351,7 +409,7 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
     # irradiance quadrature ([Bru17] ComputeIndirectIrradiance: 16 x 64 over the upper
     # hemisphere; phi on [0, pi] doubled) for the sky of order 1 (table lookups)
     th_i, ph_i, dom_i = _hemisphere(16)
-    rhs = np.empty((10, n_r * n_ms_j * nl), dtype=np.float32)
+    rhs = None if q2.modes is not None else np.empty((10, n_r * n_ms_j * nl), dtype=np.float32)
     w_col = _column_weights(beta_s, n_r, n_ms_j, nl)
     # 3a. single scattering arriving at each node + ground reflection of the sun
     L_in = np.empty((q2.n_in, n_r, n_ms_j, nl), dtype=np.float32)
@@ -363,11 +421,14 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
     _irradiance.indirect_irradiance(ss, pc, pp, np.ascontiguousarray(pt), R, Rt, mu_s_min, th_i,
                                     ph_i, dom_i, dE)
     dE_out[...] = dE
-    # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid
-    J = np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32)
+    # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid, straight into J_out
+    # where it is one block of memory (a batch of all the wavelengths)
+    J = (J_out if J_out.flags.c_contiguous else
+         np.empty((nsc, q2.th_out.size, q2.ph_out.size, n_r, n_ms_j, nl), dtype=np.float32))
     density_products(q2, L_in, w_col, beta_s, rhs, J, l0)
     del L_in
-    J_out[...] = J
+    if J is not J_out:
+        J_out[...] = J
     return source_total(J, q2, codes, p0s, p1s, sc_idx, R, Rt)
 
 
@@ -497,15 +558,26 @@ def add_density(J_sum, J, q_sum, q):
             J_sum[k, a] += row
 
 
+# columns (r, mu_s, wavelength) of the incident radiance per block of the azimuthal
+# products (the block's coefficient arrays stay in cache)
+DENSITY_BLOCK_COLUMNS = 2048
+
+
 def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
     """Step 3b: the scattering density J ([BN08] eq. 7) on the outgoing grid of ``q``
     (:class:`_DensityQuadrature`), laid out [k, theta, phi, r, mu_s, l], from the incident
-    radiance ``L_in`` [i, r, mu_s, l]: one float32 matrix product (BLAS) per scattering
-    constituent over all (r, mu_s, l) columns, each column weighted by the constituent's
-    scattering coefficient ``w_col[k]`` after the product (J = P (L w) = (P L) w: no scaled
-    copy of L_in); factored phase functions through their 10-row right-hand side ``rhs``;
-    tabulated ones one product per wavelength (``l0``: the table index of J's first
-    wavelength)."""
+    radiance ``L_in`` [i, r, mu_s, l] over all (r, mu_s, l) columns, each column weighted
+    by the constituent's scattering coefficient ``w_col[k]`` after the product (J = P (L w)
+    = (P L) w: no scaled copy of L_in); a tabulated phase function per wavelength (``l0``:
+    the table index of J's first wavelength). With the phase matrices in the azimuthal
+    Fourier basis (``q.modes``) three float32 matrix products (BLAS) per block of columns:
+    the incident radiance's cosine coefficients (shared by the constituents), per mode the
+    product with the constituent's theta matrix, the sum over the modes at every outgoing
+    azimuth; else one dense product per constituent, factored phase functions through
+    their 10-row right-hand side ``rhs``."""
+    if q.modes is not None:
+        _azimuthal_products(q, L_in, w_col, beta_s, J, l0)
+        return
     nsc, nl = J.shape[0], J.shape[-1]
     lin = L_in.reshape(q.n_in, -1)
     for k in range(nsc):
@@ -525,6 +597,50 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
             np.matmul(q.right[k], lin, out=out)
             np.matmul(left, out, out=Jk)
         Jk *= w_col[k]
+
+
+def _modes_to_density(q, G_cls, C, D, out):
+    """out[theta, phi, c] = sum_n cos(n phi) sum_a G[n, theta, a] C[a, n, c] per class of
+    outgoing azimuths (:class:`_DensityQuadrature`), D the scratch of the per-mode products."""
+    for sel, G, S in zip(q.classes, G_cls, q.synthesis):
+        n_m = G.shape[0]
+        d = D[:n_m, :, :C.shape[2]]
+        np.matmul(G, C.transpose(1, 0, 2)[:n_m], out=d)
+        np.matmul(S[:, :n_m], d.transpose(1, 0, 2), out=out[:, sel])
+
+
+def _azimuthal_products(q, L_in, w_col, beta_s, J, l0):
+    """:func:`density_products` with the phase matrices in the azimuthal Fourier basis."""
+    nsc, nl = J.shape[0], J.shape[-1]
+    n_ti, n_pi = q.th_in.size, q.ph_in.size
+    n_to, n_po = q.th_out.size, q.ph_out.size
+    n_col = L_in[0].size
+    L3 = L_in.reshape(n_ti, n_pi, n_col)
+    block = nl * max(1, DENSITY_BLOCK_COLUMNS // nl)     # whole wavelengths per block
+    n_m = q.analysis.shape[0]
+    C = np.empty((n_ti, n_m, min(block, n_col)), dtype=np.float32)
+    D = np.empty((n_m, n_to, C.shape[2]), dtype=np.float32)
+    tab = any(len(m) > 1 for m in q.modes)
+    if tab:
+        nb = C.shape[2] // nl
+        C1 = np.empty((n_ti, n_m, nb), dtype=np.float32)
+        J1 = np.empty((n_to, n_po, nb), dtype=np.float32)
+    for c0 in range(0, n_col, block):
+        c1 = min(n_col, c0 + block)
+        c = C[:, :, :c1 - c0]
+        np.matmul(q.analysis, L3[:, :, c0:c1], out=c)
+        for k in range(nsc):
+            Jk = J[k].reshape(n_to, n_po, n_col)[:, :, c0:c1]
+            if len(q.modes[k]) == 1:
+                _modes_to_density(q, q.modes[k][0], c, D, Jk)
+                Jk *= w_col[k][c0:c1]
+                continue
+            for l in range(nl):
+                cl = C1[:, :, :(c1 - c0) // nl]
+                cl[...] = c[:, :, l::nl]
+                jl = J1[:, :, :cl.shape[2]]
+                _modes_to_density(q, q.modes[k][l0 + l], cl, D, jl)
+                np.multiply(jl, np.float32(beta_s[k, l]), out=Jk[:, :, l::nl])
 
 
 def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):

@@ -44,7 +44,16 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
     H = math.sqrt(Rt * Rt - R * R)
     nk = n_ms * n_nu
     mus = mu_s_nodes(n_ms, mu_s_min)
-    for idx in prange(n_r * n_mu):
+    # the rays interleaved over the threads' static shares of the loop (the cost varies
+    # with r and mu): work item j is ray (j % g) * s + j // g, s = 16 rays per group
+    n_rays = n_r * n_mu
+    s_grp = 16 if n_rays % 16 == 0 else 1
+    n_grp = n_rays // s_grp
+    order = np.empty(n_rays, dtype=np.int64)
+    for j in range(n_rays):
+        order[j] = (j % n_grp) * s_grp + j // n_grp
+    for jdx in prange(n_rays):
+        idx = order[jdx]
         tq = np.empty(2 * n_q)
         wq = np.empty(2 * n_q)
         w1 = np.empty(nc)
@@ -53,6 +62,7 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
         tview = np.empty(nl, dtype=np.float32)
         dens = np.empty(nsc, dtype=np.float32)
         tsun = np.empty(nl, dtype=np.float32)
+        trow = np.empty((n_muT, nl), dtype=np.float32)
         acc = np.zeros((nk, nsc, nl), dtype=np.float32)
         nus = np.empty(nk)
         ir, imu, r, mu, ground, nq = table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq,
@@ -81,6 +91,13 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
             cos_h = -math.sqrt(max(1.0 - sin_h * sin_h, 0.0))
             eps = sin_h * alpha
             inv_rt = 1.0 / rt
+            # the transmittance table's row at rt (linear in r), times the view ray's
+            # transmittance and quadrature weight: every sun geometry of this node reads it
+            fa = np.float32(a)
+            fa1 = np.float32(1.0 - a)
+            for jj in range(n_muT):
+                for l in range(nl):
+                    trow[jj, l] = tview[l] * (fa1 * trans[i, jj, l] + fa * trans[i + 1, jj, l])
             for k in range(nk):
                 if k % n_nu and nus[k] == nus[k - 1]:
                     continue    # a nu node clamped to its neighbour's nu: copied below
@@ -95,13 +112,10 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
                 fm = x_mu * (n_muT - 1)
                 j = min(int(fm), n_muT - 2)
                 b = fm - j
-                w00 = np.float32(vis * (1.0 - a) * (1.0 - b))
-                w01 = np.float32(vis * (1.0 - a) * b)
-                w10 = np.float32(vis * a * (1.0 - b))
-                w11 = np.float32(vis * a * b)
+                u0 = np.float32(vis * (1.0 - b))
+                u1 = np.float32(vis * b)
                 for l in range(nl):
-                    tsun[l] = tview[l] * (w00 * trans[i, j, l] + w01 * trans[i, j + 1, l]
-                                          + w10 * trans[i + 1, j, l] + w11 * trans[i + 1, j + 1, l])
+                    tsun[l] = u0 * trow[j, l] + u1 * trow[j + 1, l]
                 for kk in range(nsc):
                     dk = dens[kk]
                     o = acc[k, kk]
