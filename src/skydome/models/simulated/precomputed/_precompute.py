@@ -204,8 +204,6 @@ def stored_table_of(t, r_range=None):
                          "tables do not say how to integrate the stored table (>= 1)")
     n_mu_t, n_ms_t, n_nu_t = shape[1:4]
     full = t.stored_table == "full"
-    if r_range is not None and not full:
-        raise ValueError("r_range is for the full stored table only")
     return stored_multiple_scattering(
         t.scattering_density, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
         t.columns, t.beta_e, t.planet_radius_m, t.top_radius_m, t.mu_s_min,
