@@ -436,19 +436,6 @@ def test_coarse_density_of_higher_orders_is_interpolated_bilinearly():
     np.testing.assert_allclose(J_sum, 2 * linear(fine), rtol=1e-6, atol=1e-6)
 
 
-def test_order_table_shape_halves_and_keeps_floors():
-    """The per-order table of orders >= 3: mu, mu_s and nu halved at the default sizes
-    (128 x 48 x 16 -> 64 x 24 x 8), r kept, never below 32 x 16 x 8 nor above the full
-    table, mu even."""
-    from skydome.models.simulated.precomputed._precompute import order_table_shape
-
-    assert order_table_shape((32, 128, 48, 16), 2) == (32, 64, 24, 8)
-    assert order_table_shape((32, 128, 48, 16), 1) == (32, 128, 48, 16)
-    assert order_table_shape((12, 48, 12, 6), 2) == (12, 32, 12, 6)
-    assert order_table_shape((8, 256, 64, 32), 8) == (8, 32, 16, 8)
-    assert order_table_shape((8, 100, 64, 32), 3) == (8, 32, 22, 11)   # (n - 1) // 3 + 1
-
-
 def test_coarse_density_grid_of_higher_orders_is_interpolated_in_r_and_mu_s():
     """The scattering density of orders >= 3 on its coarse (r, mu_s) grid is added into the
     summed density on the full grid bilinearly in the unit coordinates of both axes (the

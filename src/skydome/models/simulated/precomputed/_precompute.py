@@ -546,22 +546,9 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         add_density(J2, J_hi, q2, q3)
 
 
-# the per-order grids of orders >= 3 are never coarser than these (nor finer than the full
-# ones): mu, mu_s and nu nodes of the per-order table, zenith samples of J's outgoing grid
-ORDER_TABLE_MIN = (32, 16, 8)
+# the outgoing grid of the scattering density of orders >= 3 never has fewer zenith
+# samples than this (order_table_divisor)
 ORDER_DENSITY_MIN = 16
-
-
-def order_table_shape(shape, divisor):
-    """(n_r, n_mu, n_mu_s, n_nu) of the per-order table: ``shape`` (of the stored 4-D
-    table) with mu, mu_s and nu ``divisor`` times coarser (n_mu kept even), but not below
-    ``ORDER_TABLE_MIN``; r is kept, so that the scattering density's r nodes fall on nodes
-    of the table."""
-    n_r, n_mu, n_ms, n_nu = shape
-    d = int(divisor)
-    m_mu, m_ms, m_nu = ORDER_TABLE_MIN
-    return (n_r, min(n_mu, max(m_mu, 2 * ((n_mu // d) // 2))),
-            min(n_ms, max(m_ms, (n_ms - 1) // d + 1)), min(n_nu, max(m_nu, (n_nu - 1) // d + 1)))
 
 
 def _cells(n_fine, n_coarse):
