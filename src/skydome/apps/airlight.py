@@ -91,7 +91,7 @@ def _side_by_side(before, after, path, labels, cols: int = 1):
 
     imgs = [srgb_encode(np.clip(x, 0, 1)) for x in (before, *after)]
     h, w = imgs[0].shape[:2]
-    contact_sheet(list(zip(imgs, labels)), path, cols=cols, tile=(w, h), labels_above=True, line_height=16,
+    contact_sheet(list(zip(imgs, labels)), path, cols=cols, tile=(w, h), labels_above=True, line_height=16, font_size=13,
                   background=(20, 20, 20), text_colours=((230, 230, 230),))
 
 

@@ -137,7 +137,7 @@ def _effects(out_dir: Path) -> list[Path]:
                 tiles += [(p, "aerial perspective: no air / turbidity 2 / 4 / 8") for p in files]
             else:
                 twilight_files = files
-    # 5.5 Bishop's ring (a ~1 um volcanic layer) and the blue sun (volcanic ash): close-ups
+    # 5.5 Bishop's ring (a ~1 um volcanic layer) and the volcanic-ash aureole: close-ups
     # of the sun at 100 x 60 deg; each exposed as the square close-up of the same field
     # height (60 and 50 deg, 161 px) is by automatic exposure
     from skydome.apps.aureole import render_closeup
@@ -146,7 +146,7 @@ def _effects(out_dir: Path) -> list[Path]:
 
     for name, atm, elev, square_fov, label in (
             ("bishops_ring.png", bishops_ring_atmosphere(), 45.0, 60.0, "Bishop's ring (1 um ash layer, Mie)"),
-            ("blue_sun.png", Atmosphere.volcanic_ash(), 30.0, 50.0, "blue sun through volcanic ash (Mie)")):
+            ("volcanic_ash_aureole.png", Atmosphere.volcanic_ash(), 30.0, 50.0, "aureole of volcanic ash, sun 30 deg (Mie)")):
         sun = sd.Sun(elevation_deg=elev, azimuth_deg=180.0)
         k = render_closeup(atm, sun, fov_deg=square_fov, size=161).auto_exposure()
         render_closeup(atm, sun, fov_deg=100.0, size=400, height=195).save(eff / name, exposure=k)

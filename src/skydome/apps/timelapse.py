@@ -208,7 +208,8 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
         for _, img, name in images:
             img.save(tmp / name, exposure=k)
         contact_sheet([(img.to_srgb(exposure=k), t.strftime("%H:%M")) for t, img, _ in images],
-                      tmp / "contact_sheet.png", cols=sheet_cols, tile=min(128, int(size)))
+                      tmp / "contact_sheet.png", cols=sheet_cols, tile=min(128, int(size)),
+                      line_height=15, font_size=12)
         _write_csv(frames, tmp / "colours.csv")
         plot_day_colours(frames, tmp / "colours.png", _display_colour)
     if chunk_dir is not None:

@@ -137,7 +137,7 @@ def _sheet(frames, path: Path, tile, cols: int, header: str | None = None) -> No
     if frames:
         contact_sheet([(p, [f"sun {-dep + 0.0:g} deg", f"zenith {zen:.2g} cd/m2"])
                        for dep, zen, p in frames], path, cols=cols, tile=tile, background=(12, 12, 12),
-                      column_labels=None if header is None else [header])
+                      column_labels=None if header is None else [header], line_height=15, font_size=12)
 
 
 def demo_effects(out_dir) -> list[Path]:
