@@ -138,8 +138,9 @@ def _effects(out_dir: Path) -> list[Path]:
             else:
                 twilight_files = files
     # 5.5 Bishop's ring (a ~1 um volcanic layer) and the volcanic-ash aureole: close-ups
-    # of the sun at 100 x 60 deg; each exposed as the square close-up of the same field
-    # height (60 and 50 deg, 161 px) is by automatic exposure
+    # of the sun 100 x 60 deg at the cell's size, each at the automatic exposure of the
+    # square 161 px close-up it stands for (60 deg for the ring, as the demo had it; 50 deg
+    # for the ash, as `skydome aureole` writes it), so the wider field keeps the exposure
     from skydome.apps.aureole import render_closeup
     from skydome.atmosphere import Atmosphere
     from skydome.effects.aureole import bishops_ring_atmosphere
@@ -149,7 +150,7 @@ def _effects(out_dir: Path) -> list[Path]:
             ("volcanic_ash_aureole.png", Atmosphere.volcanic_ash(), 30.0, 50.0, "aureole of volcanic ash, sun 30 deg (Mie)")):
         sun = sd.Sun(elevation_deg=elev, azimuth_deg=180.0)
         k = render_closeup(atm, sun, fov_deg=square_fov, size=161).auto_exposure()
-        render_closeup(atm, sun, fov_deg=100.0, size=400, height=195).save(eff / name, exposure=k)
+        render_closeup(atm, sun, fov_deg=100.0, size=800, height=390).save(eff / name, exposure=k)
         written.append(eff / name)
         tiles.append((eff / name, label))
     # 5.7 polarisation: single-scattering Rayleigh field (analytic)
