@@ -85,13 +85,13 @@ def _display_gain(x) -> float:
     return 0.85 / max(float(np.percentile(y, 99.0)), 1e-12)
 
 
-def _side_by_side(before, after, path, labels):
+def _side_by_side(before, after, path, labels, cols: int = 1):
     from skydome.imaging.sheets import contact_sheet
     from skydome.spectra import srgb_encode
 
     imgs = [srgb_encode(np.clip(x, 0, 1)) for x in (before, *after)]
     h, w = imgs[0].shape[:2]
-    contact_sheet(list(zip(imgs, labels)), path, cols=1, tile=(w, h), labels_above=True, line_height=16,
+    contact_sheet(list(zip(imgs, labels)), path, cols=cols, tile=(w, h), labels_above=True, line_height=16, font_size=13,
                   background=(20, 20, 20), text_colours=((230, 230, 230),))
 
 
@@ -128,23 +128,27 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
 
 
 def demo_effects(out_dir):
-    """Clear and hazy air over the synthetic mountains (precomputed tables), for the demo."""
+    """Clear, moderate and hazy air over the synthetic mountains (precomputed tables), for
+    the demo: four 368 x 164 panels in a 2 x 2 grid (about 2:1 like the gallery's cells)."""
     import skydome as sd
     from skydome.effects.dobashi2002 import synthetic_mountains
 
     sun = sd.Sun(elevation_deg=20.0, azimuth_deg=120.0)
-    img, dep, _ = synthetic_mountains(320, 180, sun=sun)
+    img, dep, _ = synthetic_mountains(368, 164, sun=sun)
     # half-size tables (a few seconds each)
     small = dict(scattering_r_size=16, scattering_mu_size=64, scattering_mu_s_size=16, orders=3,
                  n_wavelengths=12)
     kw = dict(method="precomputed", model_params=small, fill_sky=True)
     clear = apply_airlight(img, dep, sun, turbidity=2.0, **kw)
+    moderate = apply_airlight(img, dep, sun, turbidity=4.0, **kw)
     hazy = apply_airlight(img, dep, sun, turbidity=8.0, **kw)
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     path = Path(out_dir) / "airlight_mountains.png"
 
     g_clear = _display_gain(clear)
-    _side_by_side(g_clear * img, [g_clear * clear, _display_gain(hazy) * hazy], path,
+    _side_by_side(g_clear * img, [g_clear * clear, _display_gain(moderate) * moderate,
+                                  _display_gain(hazy) * hazy], path,
                   ["no air (sky pixels black), exposure of the next", "clear air (turbidity 2), sky from the model",
-                   "haze (turbidity 8), sky from the model"])
+                   "moderate haze (turbidity 4), sky from the model", "haze (turbidity 8), sky from the model"],
+                  cols=2)
     return [path]

@@ -18,16 +18,19 @@ AEROSOLS = ("earth", "volcanic_ash", "forest_fire_smoke", "bishops_ring")
 
 
 def render_closeup(atmosphere, sun, wavelengths_nm=None, *, fov_deg: float = 50.0, size: int = 161,
-                   with_sun: bool = True, **kwargs):
+                   height: int | None = None, with_sun: bool = True, **kwargs):
     """A narrow-field (gnomonic) image centred on the sun: SkyImage of spectral radiance,
-    ``size`` x ``size`` pixels over ``fov_deg`` (in (1, 120) deg). The sun disc is drawn
-    with :func:`sun_disc_radiance` where ``with_sun``."""
+    ``size`` pixels wide over the horizontal field ``fov_deg`` (in (1, 120) deg) and
+    ``height`` pixels high (default ``size``: square), with square pixels (the vertical
+    field follows from the aspect). The sun disc is drawn with :func:`sun_disc_radiance`
+    where ``with_sun``."""
     from skydome.effects.aureole import _sun
     from skydome.imaging.image import SkyImage
 
     sun = _sun(sun)
     fov = check_number("fov_deg", fov_deg, 1.0, 120.0, "deg", low_open=True, high_open=True)
     n = check_int("size", size, 8, 2048)
+    h = n if height is None else check_int("height", height, 8, 2048)
     wl = np.linspace(380.0, 780.0, 21) if wavelengths_nm is None else as_wavelengths(wavelengths_nm)
     f = sun.direction
     up = np.array([0.0, 0.0, 1.0])
@@ -37,7 +40,8 @@ def render_closeup(atmosphere, sun, wavelengths_nm=None, *, fov_deg: float = 50.
     right /= np.linalg.norm(right)
     upv = np.cross(right, f)
     t = np.tan(np.radians(fov / 2.0)) * np.linspace(-1.0, 1.0, n)
-    u, v = np.meshgrid(t, -t)
+    tv = np.tan(np.radians(fov / 2.0)) * (h - 1) / (n - 1) * np.linspace(-1.0, 1.0, h)
+    u, v = np.meshgrid(t, -tv)
     dirs = f + u[..., None] * right + v[..., None] * upv
     dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
     L = single_scattering_true_phase(atmosphere, dirs, sun, wl, **kwargs)

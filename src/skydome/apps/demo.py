@@ -94,8 +94,17 @@ def run(out_dir: Path, only: list[str] | None = None) -> list[Path]:
     return written
 
 
+# the effects gallery: 2 columns of equal cells, each a (width, height) box [pixels] that
+# every composite fills (each is made at about this 2.05:1 aspect where it is rendered)
+EFFECTS_COLS = 2
+EFFECTS_CELL = (800, 390)
+EFFECTS_CAPTION = 24   # caption band under each cell [pixels] (18 px font)
+
+
 def _effects(out_dir: Path) -> list[Path]:
-    """Small versions of the atmospheric effects (survey section 5) into out/effects/."""
+    """Small versions of the atmospheric effects (survey section 5) into out/effects/, and
+    ``effects_gallery.png``: 8 composites in a grid of ``EFFECTS_COLS`` columns of equal
+    ``EFFECTS_CELL`` cells with a caption under each."""
     import importlib
 
     import skydome as sd
@@ -103,22 +112,47 @@ def _effects(out_dir: Path) -> list[Path]:
     eff = out_dir / "effects"
     eff.mkdir(exist_ok=True)
     written: list[Path] = []
+    tiles: list[tuple[Path, str]] = []
     t0 = time.perf_counter()
-    # 5.1 the colour of the sky through a day (Vienna, summer solstice, hourly)
+    # 5.1 the colour of the sky through a day (Vienna, summer solstice, every 50 min from
+    # civil dawn: 21 frames, 7 x 3 at 112 px, about 2:1)
     from skydome.apps.timelapse import day_times, run_timelapse
 
-    times = day_times("2026-06-21", "+02:00", 60.0)
+    times = day_times("2026-06-21", "+02:00", 50.0, start="04:20")
     run_timelapse(lambda sun: sd.model("precomputed", sun=sun), 48.21, 16.37, times,
-                  eff / "timelapse", size=96, wavelengths=12)
+                  eff / "timelapse", size=112, wavelengths=12, sheet_cols=7)
     written.append(eff / "timelapse" / "contact_sheet.png")
-    # 5.5 Bishop's ring: a close-up of the sun through a ~1 um volcanic layer
+    tiles.append((written[-1], "the sky through a day, Vienna 21 June (one exposure)"))
+    # aerial perspective, where that module provides a demo
+    twilight_files: list[Path] = []
+    for mod in ("skydome.apps.airlight", "skydome.apps.twilight"):
+        try:
+            m = importlib.import_module(mod)
+        except ImportError:
+            continue
+        if hasattr(m, "demo_effects"):
+            files = list(m.demo_effects(eff) or [])
+            written += files
+            if mod.endswith("airlight"):
+                tiles += [(p, "aerial perspective: no air / turbidity 2 / 4 / 8") for p in files]
+            else:
+                twilight_files = files
+    # 5.5 Bishop's ring (a ~1 um volcanic layer) and the volcanic-ash aureole: close-ups
+    # of the sun 100 x 60 deg at the cell's size, each at the automatic exposure of the
+    # square 161 px close-up it stands for (60 deg for the ring, as the demo had it; 50 deg
+    # for the ash, as `skydome aureole` writes it), so the wider field keeps the exposure
     from skydome.apps.aureole import render_closeup
+    from skydome.atmosphere import Atmosphere
     from skydome.effects.aureole import bishops_ring_atmosphere
 
-    img = render_closeup(bishops_ring_atmosphere(), sd.Sun(elevation_deg=45.0, azimuth_deg=180.0),
-                         fov_deg=60.0, size=161)
-    img.save(eff / "bishops_ring.png")
-    written.append(eff / "bishops_ring.png")
+    for name, atm, elev, square_fov, label in (
+            ("bishops_ring.png", bishops_ring_atmosphere(), 45.0, 60.0, "Bishop's ring (1 um ash layer, Mie)"),
+            ("volcanic_ash_aureole.png", Atmosphere.volcanic_ash(), 30.0, 50.0, "aureole of volcanic ash, sun 30 deg (Mie)")):
+        sun = sd.Sun(elevation_deg=elev, azimuth_deg=180.0)
+        k = render_closeup(atm, sun, fov_deg=square_fov, size=161).auto_exposure()
+        render_closeup(atm, sun, fov_deg=100.0, size=800, height=390).save(eff / name, exposure=k)
+        written.append(eff / name)
+        tiles.append((eff / name, label))
     # 5.7 polarisation: single-scattering Rayleigh field (analytic)
     from skydome.effects.polarisation_maps import polarisation_maps
     from skydome.imaging.plots import plot_polarisation_maps
@@ -126,28 +160,14 @@ def _effects(out_dir: Path) -> list[Path]:
     pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
     plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")
     written.append(eff / "polarisation_rayleigh.png")
-    # twilight and aerial perspective, where those modules provide a demo
-    for mod in ("skydome.apps.twilight", "skydome.apps.airlight"):
-        try:
-            m = importlib.import_module(mod)
-        except ImportError:
-            continue
-        if hasattr(m, "demo_effects"):
-            written += list(m.demo_effects(eff) or [])
-    labels = {"contact_sheet.png": "", "bishops_ring.png": "Bishop's ring (1 um ash, Mie)",
-              "polarisation_rayleigh.png": "polarisation (single Rayleigh)",
-              "twilight.png": "twilight: zenith luminance, Belt of Venus",
-              "horizon_sheet.png": "twilight horizon, sun side | anti-sun side",
-              "airlight_mountains.png": "airlight: none / clear / haze"}
-    tiles = []
-    for p in written:
-        label = labels.get(p.name, p.name)
-        if p.name == "contact_sheet.png":
-            label = "timelapse, Vienna 21 June" if "timelapse" in str(p) else "twilight 0..-18 deg"
-        tiles.append((p, label))
+    tiles.append((written[-1], "polarisation of the sky (single Rayleigh scattering)"))
+    labels = {"twilight.png": "twilight: zenith luminance, illuminance, Belt of Venus",
+              "contact_sheet.png": "twilight 0 .. -18 deg (exposure ramp)",
+              "horizon_sheet.png": "twilight horizon: sun side above, anti-sun side below"}
+    tiles += [(p, labels.get(p.name, p.name)) for p in sorted(twilight_files, key=lambda p: p.name != "twilight.png")]
     sheet = eff / "effects_gallery.png"
-    cols = min((3, 4), key=lambda c: (-len(tiles) % c, -c))   # fewest empty cells
-    _contact_sheet(tiles, sheet, tile=(320, 240), cols=cols)
+    _contact_sheet(tiles, sheet, tile=EFFECTS_CELL, cols=EFFECTS_COLS, line_height=EFFECTS_CAPTION,
+                   font_size=18)
     written.append(sheet)
     for p in written:
         print(p)
@@ -155,13 +175,14 @@ def _effects(out_dir: Path) -> list[Path]:
     return written
 
 
-def _contact_sheet(tiles, path: Path, tile=256, cols: int = 3) -> None:
+def _contact_sheet(tiles, path: Path, tile=256, cols: int = 3, line_height: int = 18,
+                   font_size: int | None = None) -> None:
     """A grid of equal cells (``tile`` box, each image letterboxed into it), a caption under
     each, ``cols`` across."""
     from skydome.imaging.sheets import contact_sheet
 
-    contact_sheet(tiles, path, cols=cols, tile=tile, line_height=18, background=(24, 24, 24),
-                  text_colours=((230, 230, 230),), letterbox=True)
+    contact_sheet(tiles, path, cols=cols, tile=tile, line_height=line_height, background=(24, 24, 24),
+                  text_colours=((230, 230, 230),), letterbox=True, font_size=font_size)
 
 
 def main(argv=None) -> None:

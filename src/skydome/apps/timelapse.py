@@ -125,7 +125,7 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
                   min_elevation_deg: float = -6.0, size: int = 256, wavelengths: int = 16,
                   projection: str = "fisheye", progress: Callable | None = None,
                   scheduler: str | None = None, workers: int = 0,
-                  client=None) -> list[TimelapseFrame]:
+                  client=None, sheet_cols: int = 8) -> list[TimelapseFrame]:
     """Render ``build(sun)`` at each time with the sun above ``min_elevation_deg``.
 
     Everything is written into a temporary folder beside ``out_dir`` and moved in at the
@@ -136,6 +136,9 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     :func:`skydome.distributed.run_chunks`, kept in ``OUT.chunks/`` until the folder is
     written: a rerun after an interruption renders only the missing frames. ``build`` must
     then be picklable (:func:`model_builder`).
+
+    ``contact_sheet.png`` has ``sheet_cols`` frames a row, each in a box of
+    min(128, ``size``) pixels.
     """
     from skydome._validate import check_int, check_number
     from skydome.imaging import make_projection, render
@@ -145,6 +148,7 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     check_number("lon", lon_deg, -180.0, 180.0, "deg")
     min_el = check_number("min_elevation_deg", min_elevation_deg, -90.0, 90.0, "deg")
     check_int("size", size, 16, 4096)
+    check_int("sheet_cols", sheet_cols, 1, 64)
     wl = wavelength_grid(380.0, 780.0, n=check_int("wavelengths", wavelengths, 3, 401))
     proj = make_projection(projection, str(size))
     out_dir = check_output_folder(out_dir)
@@ -204,7 +208,8 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
         for _, img, name in images:
             img.save(tmp / name, exposure=k)
         contact_sheet([(img.to_srgb(exposure=k), t.strftime("%H:%M")) for t, img, _ in images],
-                      tmp / "contact_sheet.png", cols=8, tile=128)
+                      tmp / "contact_sheet.png", cols=sheet_cols, tile=min(128, int(size)),
+                      line_height=15, font_size=12)
         _write_csv(frames, tmp / "colours.csv")
         plot_day_colours(frames, tmp / "colours.png", _display_colour)
     if chunk_dir is not None:

@@ -47,8 +47,9 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
                  **params) -> dict:
     """Render the twilight sequence 0..-18 deg into ``out_dir`` (written atomically):
     ``frame_sun_minus_DDD.png`` fisheyes and ``horizon_sun_minus_DDD.png`` horizon views
-    (towards the sun | away from it, see :func:`horizon_views`) (DDD in tenths of a degree),
-    ``contact_sheet.png`` (fisheyes), ``horizon_sheet.png`` (horizon views), ``twilight.png``
+    (towards the sun above the view away from it, see :func:`horizon_views`) (DDD in tenths
+    of a degree), ``contact_sheet.png`` (fisheyes) and ``horizon_sheet.png`` (horizon views),
+    both 5 frames a row, ``twilight.png``
     (zenith luminance and horizontal illuminance against depression, the anti-solar
     profiles) and ``twilight.csv``.
 
@@ -97,16 +98,18 @@ def run_twilight(out_dir, model: str = "precomputed", step_deg: float = 2.0, siz
                 img.save(tmp / f"frame_{tag}", exposure=k)
                 frames.append((dep, zen, tmp / f"frame_{tag}"))
                 halves = [render(sky, c, wl, draw_sun=False).to_srgb(exposure=k) for c in cams]
-                gap = np.zeros((halves[0].shape[0], 2, 3))
-                _save_srgb(np.concatenate([halves[0], gap, halves[1]], axis=1), tmp / f"horizon_{tag}")
+                gap = np.zeros((2, halves[0].shape[1], 3))
+                _save_srgb(np.concatenate([halves[0], gap, halves[1]], axis=0), tmp / f"horizon_{tag}")
                 horizons.append((dep, zen, tmp / f"horizon_{tag}"))
             belt = belt_of_venus(prof_el, rb, lum) if (zen > 0 and dep <= 6.0) else None
             rows.append((dep, zen, eh, lum, rb, belt if belt is not None and belt["found"] else None))
             if progress is not None:
                 progress(n + 1, len(deps))
-        _sheet(frames, tmp / "contact_sheet.png", tile=160, cols=5)
-        _sheet(horizons, tmp / "horizon_sheet.png", tile=2 * max(16, size) + 2, cols=2,
-               caption="sun side | anti-sun side")
+        # both sheets 5 frames a row (10 frames at the default step: about 2:1)
+        _sheet(frames, tmp / "contact_sheet.png", tile=min(160, size), cols=5)
+        hv = max(16, size)
+        _sheet(horizons, tmp / "horizon_sheet.png", tile=(hv, 2 * max(2, hv // 2) + 2), cols=5,
+               header="each: sun side above, anti-sun side below")
         plot_twilight(rows, prof_el, tmp / "twilight.png")
         with open(tmp / "twilight.csv", "w", newline="") as fh:
             w = csv.writer(fh)
@@ -128,18 +131,21 @@ def _save_srgb(rgb, path: Path) -> None:
     Image.fromarray(to_uint8(rgb)).save(path)
 
 
-def _sheet(frames, path: Path, tile: int, cols: int, caption: str = "") -> None:
-    """Frames (depression, zenith luminance, png) as a contact sheet with both in the label."""
+def _sheet(frames, path: Path, tile, cols: int, header: str | None = None) -> None:
+    """Frames (depression, zenith luminance, png) as a contact sheet with both in the label
+    and an optional ``header`` line above the grid."""
     if frames:
-        contact_sheet([(p, [f"sun {-dep + 0.0:g} deg  {caption}", f"zenith {zen:.2g} cd/m2"])
-                       for dep, zen, p in frames], path, cols=cols, tile=tile, background=(12, 12, 12))
+        contact_sheet([(p, [f"sun {-dep + 0.0:g} deg", f"zenith {zen:.2g} cd/m2"])
+                       for dep, zen, p in frames], path, cols=cols, tile=tile, background=(12, 12, 12),
+                      column_labels=None if header is None else [header], line_height=15, font_size=12)
 
 
 def demo_effects(out_dir) -> list[Path]:
-    """A small twilight sequence for ./scripts/demo (steps of 3 deg, 112 px)."""
+    """A small twilight sequence for ./scripts/demo (steps of 2 deg, 156 px: 10 frames, two
+    rows of 5, so both sheets are about 2:1 like the demo's gallery cells)."""
     target = Path(out_dir) / "twilight"
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     # half-size precomputed tables (the docs figures use the defaults)
-    run_twilight(target, step_deg=3.0, size=112, wavelengths=10, scattering_r_size=16,
+    run_twilight(target, step_deg=2.0, size=156, wavelengths=10, scattering_r_size=16,
                  scattering_mu_size=64, scattering_mu_s_size=16, orders=3, n_wavelengths=10)
     return [target / "contact_sheet.png", target / "horizon_sheet.png", target / "twilight.png"]

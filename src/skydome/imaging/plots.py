@@ -217,7 +217,7 @@ def plot_twilight(rows, prof_el, path) -> None:
     plt = _pyplot()
 
     deps = np.array([r[0] for r in rows])
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    fig, ax = plt.subplots(1, 3, figsize=(11, 5.4))   # about 2:1, like the demo's gallery cells
     ax[0].semilogy(-deps, [max(r[1], 1e-12) for r in rows], "o-", label="zenith luminance [cd/m$^2$]")
     ax[0].semilogy(-deps, [max(r[2], 1e-12) for r in rows], "s-", label="horizontal illuminance [lx]")
     # published clear-sky horizontal illuminance (AMS Glossary of Meteorology, "civil

@@ -36,7 +36,7 @@ def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, l
                   line_height: int = 14, upscale: bool = False, background=(16, 16, 16),
                   column_labels: Sequence[str] | None = None, row_labels: Sequence[str] | None = None,
                   row_label_width: int = 150, text_colours=((220, 220, 220), (170, 170, 170)),
-                  letterbox: bool = False) -> Path:
+                  letterbox: bool = False, font_size: int | None = None) -> Path:
     """Write a grid of images with text lines under (or above) each one to ``path`` (PNG).
 
     Parameters
@@ -62,6 +62,9 @@ def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, l
         Height of one label line [pixels]; the band holds the most lines of any tile.
     background : (int, int, int)
         Sheet colour.
+    font_size : int, optional
+        Height of the label font [pixels] (default: Pillow's default font, about 10 px);
+        keep ``line_height`` a few pixels above it.
     column_labels, row_labels : sequence of str, optional
         A header row above the grid (one text per column) and a label column on its left
         (one text per row, ``row_label_width`` pixels wide).
@@ -95,6 +98,10 @@ def contact_sheet(tiles: Sequence, path, *, cols: int | None = None, tile=128, l
     top = line_height + 4 if column_labels is not None else 0
     sheet = Image.new("RGB", (left + cols * tw, top + rows * (cell_h + band)), tuple(background))
     draw = ImageDraw.Draw(sheet)
+    if font_size is not None:
+        from PIL import ImageFont
+
+        draw.font = ImageFont.load_default(size=int(font_size))
     if column_labels is not None:
         for j, text in enumerate(column_labels):
             draw.text((left + j * tw + 4, 3), str(text), fill=text_colours[0])
