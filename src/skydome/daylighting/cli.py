@@ -79,6 +79,9 @@ def skymatrix_cmd(
     workers: int = typer.Option(D["workers"], "--workers",
                                 help="run on a local Dask cluster of N processes (0: in process)"),
     chunk_hours: int = typer.Option(D["chunk_hours"], "--chunk-hours", help="hours per Dask chunk"),
+    backend: str = typer.Option(D["backend"], "--backend",
+                                help="numba (default) | numpy (a fixed --order, no numba "
+                                "start-up; equal to rounding) | auto (perez1993)"),
 ):
     """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible.
 
@@ -99,7 +102,7 @@ def skymatrix_cmd(
                         sun_position=sun_position, fmt=fmt, albedo=albedo,
                         overwrite=overwrite, scheduler=scheduler, workers=workers,
                         chunk_hours=chunk_hours, model=model, fail=_fail, guard=_guard,
-                        echo=typer.echo)
+                        echo=typer.echo, backend=backend)
 
 
 def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, order,

@@ -144,7 +144,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                      order=PEREZ_DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
                      sky_color=GENDAYMTX_SKY_COLOR, dtype=np.float64,
-                     out=None, backend: str = "auto", _write_rows=None) -> SkyMatrix:
+                     out=None, backend: str = "numba", _write_rows=None) -> SkyMatrix:
     """Perez (1993) sky matrix of many hours in one vectorised pass.
 
     Parameters
@@ -189,9 +189,9 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         "numba": the parallel kernel of :mod:`skydome.daylighting._kernels` (every rule);
         "numpy": the same arithmetic vectorised with numpy over blocks of hours
         (:mod:`skydome.daylighting._numpy_sky`; a fixed order only), which needs no numba
-        (its import is 0.4-0.5 s of a run's start-up) and is faster for one rule; "auto"
-        (default) takes numpy for a fixed order and numba for the adaptive rule. Both give
-        the same matrix to rounding (relative 1e-12; docs/daylighting.md, "Speed").
+        (its import is 0.4-0.5 s of a run's start-up); "auto" takes numpy for a fixed order
+        and numba for the adaptive rule. Both give the same matrix to rounding (relative
+        1e-12), not bit for bit; the default "numba" keeps every earlier result's bits.
 
     Returns
     -------
@@ -380,14 +380,14 @@ def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str 
     written sequentially (:func:`~skydome.daylighting.radiance_io.write_matrix_rows`); with
     the adaptive rule (numba kernel) it is filled into the memory map of the file's
     zero-filled body (:func:`~skydome.daylighting.radiance_io.matrix_file`). The file appears
-    only when complete. ``kwargs`` as :func:`perez_sky_matrix` (not ``dtype``/``out``/
-    ``backend``: the format gives the type). Returns the SkyMatrix; its ``sky`` is a
+    only when complete. ``kwargs`` as :func:`perez_sky_matrix` (not ``dtype``/``out``:
+    the format gives the type). Returns the SkyMatrix; its ``sky`` is a
     read-only memory map of the written file."""
     from skydome._validate import check_choice
     from skydome.daylighting.radiance_io import matrix_file, write_matrix_rows
 
     check_choice("fmt", fmt, ("float", "double"))
-    for k in ("dtype", "out", "backend", "_write_rows"):
+    for k in ("dtype", "out", "_write_rows"):
         if k in kwargs:
             raise TypeError(f"perez_sky_matrix_file() takes no {k!r}")
     dtype = np.float32 if fmt == "float" else np.float64
@@ -396,7 +396,8 @@ def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str 
     ncomp = 3 if kwargs.get("components", "rgb") == "rgb" else 1
     shape = (len(ps), len(weather), ncomp)
     fixed = quadrature_rule(ps, kwargs.get("order", PEREZ_DEFAULT_ORDER))[2].shape[0] == 1
-    if fixed:  # numpy: written row block by row block
+    backend = kwargs.get("backend", "numba")
+    if backend == "numpy" or (backend == "auto" and fixed):  # numpy: written row block by row block
         head = []
 
         def rows(shape, blocks):

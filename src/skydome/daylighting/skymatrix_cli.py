@@ -22,13 +22,13 @@ SKYMATRIX_DEFAULTS = {
     "weather": None, "out": None, "patches": "tregenza", "model": "perez1993",
     "components": None, "sun": None, "aod_from": None, "param": [], "order": None,
     "sun_position": "spa", "fmt": "float", "albedo": "0.2", "overwrite": False,
-    "scheduler": None, "workers": 0, "chunk_hours": 730,
+    "scheduler": None, "workers": 0, "chunk_hours": 730, "backend": "numba",
 }
 #: Long option -> parameter, for the options :func:`fast_skymatrix` parses (string values).
 _FAST_OPTIONS = {"--weather": "weather", "--out": "out", "--patches": "patches",
                  "--model": "model", "--components": "components", "--sun": "sun",
                  "--order": "order", "--sun-position": "sun_position", "--format": "fmt",
-                 "--albedo": "albedo"}
+                 "--albedo": "albedo", "--backend": "backend"}
 
 
 def order_option(order, model, fail):
@@ -47,7 +47,7 @@ def order_option(order, model, fail):
 
 def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, order,
                         sun_position, fmt, albedo, overwrite, scheduler, workers, chunk_hours,
-                        model, fail, guard, echo):
+                        model, fail, guard, echo, backend="numba"):
     """The perez1993 ``skymatrix`` command with parsed options (``ps`` the PatchSet, ``order``
     from :func:`order_option`): validates everything, then computes and writes the matrix
     (and with ``--sun separate`` the sun matrix and the suns' scene). ``fail(message)``
@@ -72,6 +72,10 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
         fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
     if sun_position not in ("spa", "radiance"):
         fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    if backend not in ("numba", "numpy", "auto"):
+        fail(f"backend = {backend!r} is unknown (choices: numba, numpy, auto)")
+    if backend == "numpy" and order == "adaptive":
+        fail("backend = 'numpy' takes a fixed --order (0..16), not the adaptive rule")
     if workers < 0 or chunk_hours < 1:
         fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
     distributed = scheduler is not None or workers > 0
@@ -95,7 +99,7 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
             fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
     from skydome.daylighting.weather import read_weather
 
-    if not distributed and order == "adaptive":  # only the Perez kernels run: no BLAS probe
+    if not distributed and (backend == "numba" or order == "adaptive"):  # only the Perez kernels run: no BLAS probe
         from skydome.daylighting.skymatrix import start_numba_without_blas
 
         start_numba_without_blas()
@@ -141,10 +145,11 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
         if not distributed and fmt != "ascii" and out_p.suffix.lower() != ".npy":
             # written in Radiance's order as it is computed: no copy, one pass
             m = guard(perez_sky_matrix_file, out_p, w, fmt=fmt, info=info,
-                      overwrite=overwrite, **kw)
+                      overwrite=overwrite, backend=backend, **kw)
         else:
             if not distributed:
-                m = guard(perez_sky_matrix_from_weather, w, dtype=dtype, **kw)
+                m = guard(perez_sky_matrix_from_weather, w, dtype=dtype, backend=backend,
+                          **kw)
             write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
                          transpose=out_p.suffix.lower() != ".npy")
         written.append(out_p)
