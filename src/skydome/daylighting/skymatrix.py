@@ -404,12 +404,12 @@ def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str 
             head.append(write_matrix_rows(path, *shape, blocks, fmt=fmt, info=info,
                                           overwrite=overwrite))
 
-        m = perez_sky_matrix_from_weather(weather, sun_position, dtype=dtype,
+        m = perez_sky_matrix_from_weather(weather, sun_position=sun_position, dtype=dtype,
                                           _write_rows=rows, **kwargs)
         offset = head[0]
     else:  # the numba kernel fills the file's memory map in place
         with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite) as body:
-            m = perez_sky_matrix_from_weather(weather, sun_position, dtype=dtype, out=body,
+            m = perez_sky_matrix_from_weather(weather, sun_position=sun_position, dtype=dtype, out=body,
                                               **kwargs)
         offset = None
     body = np.memmap(path, dtype=dtype, mode="r", shape=shape,
