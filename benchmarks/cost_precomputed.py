@@ -11,7 +11,20 @@ remainder: how much orders >= 3 weigh).
 The idle wall time on a 2-core machine is estimated as CPU time / 2 x (share of the time
 in parallel kernels) + CPU time x (the rest); both figures are printed.
 
-Run: python benchmarks/cost_precomputed.py [--aod A] [--settings key=value,...]
+Then, separately, the stored 4-D table of orders 2..N, which the precomputation leaves to
+its first read: the first aerial-perspective call of the same model (64 x 32 directions
+at 5 km), which builds it in memory (cache off): wall, CPU and the peak resident memory
+during the call (``VmHWM`` of /proc/self/status, reset to the current resident size
+before the call: what the build adds on top of the tables already held; the process's
+peak so far is printed too).
+
+``--cache``: the same in fresh processes with the cache on (a temporary cache folder):
+(1) precompute, write the entry, first aerial perspective (the table written slab by slab
+into the entry); (2) a later process with a cache hit: the first aerial perspective reads
+the table's file; (3) the same entry without the table's file: a later process builds it
+from the memory-mapped tables. Each prints its figures.
+
+Run: python benchmarks/cost_precomputed.py [--aod A] [--settings key=value,...] [--cache]
 (e.g. ``--settings orders=4,sphere_samples=16``; ``None`` for an optional setting)
 """
 
@@ -19,8 +32,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import resource
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -83,31 +100,136 @@ def _instrument(rec, order_totals):
             setattr(mod, name, f)
 
 
+def _status_kb(field):
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1])
+    return 0
+
+
+def _reset_peak():
+    """Reset the process's peak resident size (VmHWM) to its current one (Linux >= 4.0)."""
+    with open("/proc/self/clear_refs", "w") as f:
+        f.write("5")
+
+
+def _ap_directions():
+    from skydome.transport.geometry import direction_from_angles
+
+    el, az = np.meshgrid(np.linspace(-10.0, 60.0, 32), np.linspace(0.0, 360.0, 64, endpoint=False),
+                         indexing="ij")
+    return direction_from_angles(el.ravel(), az.ravel())
+
+
+def first_aerial_perspective(model):
+    """The model's first aerial-perspective call (the stored table's first read): (wall s,
+    CPU s, resident GB before, peak resident GB during) and whether it built the table."""
+    t = model._t
+    built_before = t.has_multiple_scattering
+    rss_before = _status_kb("VmRSS") / 1e6
+    _reset_peak()
+    w0, c0 = time.perf_counter(), time.process_time()
+    model.aerial_perspective(_ap_directions(), 5e3, [450.0, 550.0, 650.0])
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    return dict(wall=wall, cpu=cpu, rss_before=rss_before, peak=_status_kb("VmHWM") / 1e6,
+                built=not built_before)
+
+
+def _print_first_use(label, r):
+    print(f"{label}: {r['wall']:.1f} s wall, {r['cpu']:.1f} s CPU; resident {r['rss_before']:.2f} GB "
+          f"before, peak {r['peak']:.2f} GB during the call")
+
+
+def _warm(sd, sun, small):
+    """Compile or load every kernel on a tiny table set (the precomputation's and the
+    stored table's, aerial perspective's)."""
+    from skydome.models.simulated.precomputed import _precompute
+
+    budgets = {k: getattr(_precompute, k) for k in ("ORDER_BATCH_BYTES", "HIGH_ORDER_BATCH_BYTES")
+               if hasattr(_precompute, k)}
+    for k in budgets:
+        setattr(_precompute, k, 1)
+    m = sd.model("precomputed", sun=sun, n_wavelengths=2, orders=3, cache=False, **small)
+    for k, v in budgets.items():
+        setattr(_precompute, k, v)
+    m.aerial_perspective(_ap_directions()[:4], 5e3, [450.0, 550.0])
+    m.radiance(_ap_directions()[:4], [450.0, 550.0])
+
+
+SMALL = dict(scattering_r_size=4, scattering_mu_size=8, scattering_mu_s_size=4,
+             scattering_nu_size=2, irradiance_mu_s_size=4, irradiance_r_size=4,
+             transmittance_mu_size=8, transmittance_r_size=4)
+
+
+def child(kw, aod):
+    """One fresh process of ``--cache`` (the cache folder from $SKYDOME_CACHE_DIR): prints a
+    JSON line of its figures."""
+    import skydome as sd
+    from skydome.atmosphere import Atmosphere
+
+    sun = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
+    _warm(sd, sun, SMALL)
+    # peaks from VmHWM (this process's own: ru_maxrss would carry the parent's over the exec)
+    out = {"rss_warm": _status_kb("VmHWM") / 1e6}
+    w0, c0 = time.perf_counter(), time.process_time()
+    m = sd.model("precomputed", sun=sun, atmosphere=Atmosphere.earth(aerosol_optical_depth=aod),
+                 n_wavelengths=20, **kw)
+    out.update(model_wall=time.perf_counter() - w0, model_cpu=time.process_time() - c0,
+               from_cache=m.from_cache, peak_model=_status_kb("VmHWM") / 1e6,
+               table_cached=m._t.has_multiple_scattering)
+    r = first_aerial_perspective(m)
+    out.update(first_ap=r, peak_process=max(out["peak_model"], r["peak"]))
+    print("RESULT " + json.dumps(out))
+
+
+def run_cache_scenarios(args):
+    from skydome.models.simulated.precomputed import _cache
+
+    with tempfile.TemporaryDirectory() as folder:
+        env = dict(os.environ, SKYDOME_CACHE_DIR=folder)
+        for stage, label in (("store", "(1) precompute + store, first aerial perspective"),
+                             ("hit", "(2) later process, cache hit with the table's file"),
+                             ("rebuild", "(3) later process, cache hit without the table's file")):
+            if stage == "rebuild":
+                for d in os.listdir(folder):
+                    f = os.path.join(folder, d, _cache._STORED + ".npy")
+                    if os.path.exists(f):
+                        os.remove(f)
+            res = subprocess.run([sys.executable, __file__, "--child", stage, "--aod",
+                                  str(args.aod), "--settings", args.settings], env=env,
+                                 capture_output=True, text=True, check=True)
+            line = next(x for x in res.stdout.splitlines() if x.startswith("RESULT "))
+            o = json.loads(line[7:])
+            print(f"{label}:")
+            print(f"  model: {o['model_wall']:.1f} s wall, {o['model_cpu']:.1f} s CPU, from cache "
+                  f"{o['from_cache']}, stored table already there {o['table_cached']}; peak "
+                  f"{o['peak_model']:.2f} GB (after the kernels: {o['rss_warm']:.2f} GB)")
+            _print_first_use(f"  first aerial perspective (built the table: {o['first_ap']['built']})",
+                             o["first_ap"])
+            print(f"  process peak (VmHWM): {o['peak_process']:.2f} GB")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--aod", type=float, default=0.2)
     ap.add_argument("--settings", default="")
+    ap.add_argument("--cache", action="store_true")
+    ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.child:
+        return child(_parse(args.settings), args.aod)
     import skydome as sd
     from skydome.atmosphere import Atmosphere
 
     kw = _parse(args.settings)
     sun = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
-    small = dict(scattering_r_size=4, scattering_mu_size=8, scattering_mu_s_size=4,
-                 scattering_nu_size=2, irradiance_mu_s_size=4, irradiance_r_size=4,
-                 transmittance_mu_size=8, transmittance_r_size=4)
     from skydome.models.simulated.precomputed import _precompute
 
     t0 = time.perf_counter()
     # one wavelength per batch, so that the kernels taking a batch's view of the
     # single-scattering table (not contiguous) are compiled here too
-    budgets = {k: getattr(_precompute, k) for k in ("ORDER_BATCH_BYTES", "HIGH_ORDER_BATCH_BYTES")
-               if hasattr(_precompute, k)}
-    for k in budgets:
-        setattr(_precompute, k, 1)
-    sd.model("precomputed", sun=sun, n_wavelengths=2, orders=3, cache=False, **small)
-    for k, v in budgets.items():
-        setattr(_precompute, k, v)
+    _warm(sd, sun, SMALL)
     print(f"kernel compile/load: {time.perf_counter() - t0:.1f} s")
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     rec, totals = {}, []
@@ -115,7 +237,8 @@ def main(argv=None):
     load0 = os.getloadavg()[0]
     with _instrument(rec, totals):
         w0, c0 = time.perf_counter(), time.process_time()
-        sd.model("precomputed", sun=sun, atmosphere=atm, n_wavelengths=20, cache=False, **kw)
+        model = sd.model("precomputed", sun=sun, atmosphere=atm, n_wavelengths=20, cache=False,
+                         **kw)
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     print(f"settings {kw or 'default'}, aod {args.aod:g}, 20 wavelengths; load average "
@@ -148,6 +271,21 @@ def main(argv=None):
         print("source strength per order (share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
             print(f"  order {i + 2}: {100 * t / tot.sum():5.2f} %")
+    if hasattr(model._t, "has_multiple_scattering"):
+        print("the stored table of orders 2..N, first use (cache off: built in memory):")
+        peak_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
+        rec.clear()
+        with _instrument(rec, []):
+            r = first_aerial_perspective(model)
+        _print_first_use("  first aerial perspective", r)
+        for name in ("multiple_scattering_table", "table_from_coarse"):
+            if name in rec:
+                v = np.array(rec[name])
+                print(f"  {name:28s} {v[:, 0].sum():7.1f} s wall {v[:, 1].sum():7.1f} s CPU "
+                      f"x{len(v)}")
+        print(f"  process peak: {max(peak_before, r['peak']):.2f} GB")
+    if args.cache:
+        run_cache_scenarios(args)
 
 if __name__ == "__main__":
     main()

@@ -195,3 +195,161 @@ def test_cli_cache_info_and_clear():
     res = runner.invoke(app, ["cache", "clear"])
     assert res.exit_code == 0, res.output
     assert files() == []
+
+
+# -- the stored table of orders 2..N: built on first use, added to the entry -----------------
+STORED = _cache._STORED + ".npy"
+AP = (direction_from_angles([30.0, 5.0], [0.0, 180.0]), 2e3, [550.0])
+
+
+def entry():
+    (name,) = files()
+    return os.path.join(_cache.cache_dir(), name)
+
+
+def no_kernel(monkeypatch):
+    from skydome.models.simulated.precomputed import _multiple
+
+    def fail(*a, **k):
+        raise AssertionError("the stored table was integrated although it is cached")
+
+    monkeypatch.setattr(_multiple, "multiple_scattering_table", fail)
+
+
+def test_stored_table_joins_the_entry_and_a_hit_reads_it(monkeypatch):
+    first = tiny()
+    path = entry()
+    assert not os.path.exists(os.path.join(path, STORED))
+    size0 = _cache._size(path)
+    assert not first._t.has_multiple_scattering
+    ref_ap = first.aerial_perspective(*AP)          # builds the table, adds it to the entry
+    assert first._t.has_multiple_scattering
+    table = np.array(first._t.multiple_scattering)
+    on_disk = np.load(os.path.join(path, STORED))
+    assert on_disk.dtype == np.float32 and np.array_equal(on_disk, table)
+    assert _cache._size(path) == size0 + os.path.getsize(os.path.join(path, STORED))
+    assert [n for n in os.listdir(path) if n.startswith(".")] == []   # no temporary left
+    # a later model (as a later process): a hit for both parts, nothing recomputed
+    no_kernel(monkeypatch)
+    monkeypatch.setattr(_precompute, "precompute", lambda *a, **k: 1 / 0)
+    second = tiny()
+    assert second.from_cache and second._t.has_multiple_scattering
+    assert np.array_equal(second._t.multiple_scattering, table)
+    for x, y in zip(second.aerial_perspective(*AP), ref_ap):
+        assert np.array_equal(x, y)
+
+
+def test_hit_without_the_stored_table_builds_and_adds_it(monkeypatch, tmp_path):
+    tiny()
+    m = tiny()
+    assert m.from_cache and not m._t.has_multiple_scattering
+    m.radiance(AP[0], [550.0])                      # the sky alone: not built
+    assert not os.path.exists(os.path.join(entry(), STORED))
+    m.export_textures(tmp_path / "tex")
+    assert os.path.exists(os.path.join(entry(), STORED))
+    no_kernel(monkeypatch)
+    assert tiny()._t.has_multiple_scattering
+
+
+@pytest.mark.parametrize("damage", ["missing", "garbage", "truncated", "empty", "wrong shape",
+                                    "float64"])
+def test_corrupt_or_missing_stored_table_is_rebuilt(damage):
+    ref = tiny()
+    ref.aerial_perspective(*AP)
+    table = np.array(ref._t.multiple_scattering)
+    file = os.path.join(entry(), STORED)
+    data = open(file, "rb").read()
+    if damage == "missing":
+        os.remove(file)
+    elif damage == "wrong shape":
+        np.save(file, table[:1])
+    elif damage == "float64":
+        np.save(file, table.astype(np.float64))
+    else:
+        with open(file, "wb") as f:
+            f.write({"garbage": b"not a table file" * 100, "truncated": data[: len(data) // 2],
+                     "empty": b""}[damage])
+    again = tiny()
+    assert again.from_cache                          # the rest of the entry is still a hit
+    assert not again._t.has_multiple_scattering and not os.path.exists(file)
+    assert np.array_equal(again._t.multiple_scattering, table)      # rebuilt: the same table
+    assert np.array_equal(np.load(file), table)                     # and written again
+    assert tiny()._t.has_multiple_scattering
+
+
+def test_stored_table_written_slab_by_slab_is_the_table(monkeypatch):
+    ref = tiny(cache=False)
+    table = np.array(ref._t.multiple_scattering)      # built in memory, in one piece
+    monkeypatch.setattr(_precompute, "STORED_SLAB_BYTES", 1)   # one r node per slab
+    m = tiny()
+    calls = []
+    real = _precompute.stored_table_of
+    monkeypatch.setattr(_precompute, "stored_table_of",
+                        lambda t, r_range=None: calls.append(r_range) or real(t, r_range))
+    m.aerial_perspective(*AP)
+    assert calls == [(0, 1), (1, 2), (2, 3), (3, 4)]
+    assert np.array_equal(np.load(os.path.join(entry(), STORED)), table)
+    assert np.array_equal(m._t.multiple_scattering, table)
+
+
+def test_interrupted_stored_table_write_leaves_nothing_partial(monkeypatch):
+    m = tiny()
+    before = sorted(os.listdir(entry()))
+    monkeypatch.setattr(_precompute, "STORED_SLAB_BYTES", 1)   # one r node per slab
+    real = _precompute.stored_table_of
+    calls = []
+
+    def interrupted(t, r_range=None):
+        calls.append(r_range)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(t, r_range)
+
+    monkeypatch.setattr(_precompute, "stored_table_of", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        m.aerial_perspective(*AP)
+    assert calls[:2] == [(0, 1), (1, 2)]          # two slabs were written before
+    assert sorted(os.listdir(entry())) == before   # no partial file, no temporary
+    assert not m._t.has_multiple_scattering
+    monkeypatch.setattr(_precompute, "stored_table_of", real)
+    m.aerial_perspective(*AP)                        # built again, and now stored
+    assert os.path.exists(os.path.join(entry(), STORED))
+
+
+def test_unwritable_entry_builds_the_table_in_memory(monkeypatch):
+    m = tiny()
+    ref = np.array(tiny(cache=False)._t.multiple_scattering)
+
+    def full_disk(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    from skydome import _io
+
+    monkeypatch.setattr(_io, "atomic_file", full_disk)
+    assert np.array_equal(m._t.multiple_scattering, ref)
+    assert not os.path.exists(os.path.join(entry(), STORED))
+
+
+def test_size_limit_and_clear_count_the_stored_table(monkeypatch):
+    a = tiny()
+    (name_a,) = files()
+    b = tiny(orders=3)
+    (name_b,) = set(files()) - {name_a}
+    paths = [os.path.join(_cache.cache_dir(), n) for n in files()]
+    path_b = os.path.join(_cache.cache_dir(), name_b)
+    old = os.path.getmtime(os.path.join(path_b, "meta.json")) - 100
+    for p in paths:
+        if p != path_b:
+            os.utime(os.path.join(p, "meta.json"), (old, old))   # a: least recently used
+    table_bytes = b._t.single_scattering[0].nbytes
+    total = sum(_cache._size(p) for p in paths)
+    # room for both entries but not for b's stored table as well: adding it evicts a
+    monkeypatch.setenv("SKYDOME_CACHE_LIMIT_BYTES", str(total + table_bytes // 2))
+    b.aerial_perspective(*AP)
+    assert [os.path.join(_cache.cache_dir(), n) for n in files()] == [path_b]
+    assert os.path.exists(os.path.join(path_b, STORED))
+    monkeypatch.delenv("SKYDOME_CACHE_LIMIT_BYTES")
+    size_b = _cache._size(path_b)
+    assert size_b > table_bytes
+    assert P.clear_cache() == size_b and files() == []
+    del a

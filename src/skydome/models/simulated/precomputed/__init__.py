@@ -90,7 +90,10 @@ class PrecomputedSky(SkyModel):
     stored_table : {"full", "subset"}
         "full" (default): the stored 4-D table of orders 2..N (read by aerial perspective,
         the texture/LUT export and the viewer; not by ``radiance()``, which integrates
-        orders 2..N at the observer) integrated at every node. "subset": a faster
+        orders 2..N at the observer) integrated at every node. The table is not built in
+        the precomputation but on its first read (about 13 s CPU at the defaults), from
+        the summed scattering density the precomputation keeps; with the cache on it is
+        written into the cache entry as it is built, and a later cache hit reads it. "subset": a faster
         approximation, opt-in: integrated at 66 x 25 x 8 of its 128 x 48 x 16 (mu, mu_s,
         nu) nodes and interpolated in the logarithm (the table's integral 6-8x cheaper,
         about 12 s less CPU at the defaults), up to 3 % RMS (16 % max) off the full table
@@ -197,11 +200,15 @@ class PrecomputedSky(SkyModel):
         settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}
         k = _cache.key(props, settings)
         tables = _cache.load(k)
-        if tables is not None:
-            return tables, True
-        tables = precompute(props, wl, p)
-        _cache.store(k, tables)
-        return tables, False
+        hit = tables is not None
+        if not hit:
+            tables = precompute(props, wl, p)
+            _cache.store(k, tables)
+        if not tables.has_multiple_scattering:
+            # the stored table, built on first use, is written into the entry then
+            tables.set_multiple_scattering_sink(
+                lambda shape, slabs: _cache.add_stored_table(k, shape, slabs))
+        return tables, hit
 
     # -- tables helpers -----------------------------------------------------------------------------
     @property
@@ -255,8 +262,8 @@ class PrecomputedSky(SkyModel):
         from skydome.models.simulated.precomputed import _mapping, _multiple
 
         R, Rt = self._R, self._Rt
-        ss, ms = self._t.single_scattering, self._t.multiple_scattering
-        n_r, n_ms = ms.shape[0], ms.shape[2]
+        ss = self._t.single_scattering
+        n_r, n_ms = ss.shape[1], ss.shape[3]     # the stored table's (r, mu, mu_s, nu) too
         ir, a = _mapping.r_index(self._r0, n_r, R, Rt)
         x = _mapping.mu_s_unit(float(self.sun.direction[2]), self._mu_s_min)
         ims, c = _mapping._split(x * (n_ms - 1), n_ms)
@@ -268,7 +275,8 @@ class PrecomputedSky(SkyModel):
 
         mu_s = float(self.sun.direction[2])
         if table_only or not self._t.has_density or mu_s < self._mu_s_min:
-            return sl(ss), sl(ms)
+            # the stored table (built here on its first read)
+            return sl(ss), sl(self._t.multiple_scattering)
         # orders 2..N integrated at the observer's own r and mu_s (the aureole of the
         # multiply scattered light is too sharp for the table's mu_s and nu nodes), cached
         cache = self.__dict__.setdefault("_slice_cache", {})
@@ -281,7 +289,7 @@ class PrecomputedSky(SkyModel):
                                  th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
             ground = np.arange(n_g + n_s) < n_g
             cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
-            out = np.empty((n_g + n_s, _SLICE_PHI, ms.shape[-1]))
+            out = np.empty((n_g + n_s, _SLICE_PHI, ss.shape[-1]))
             _multiple.multiple_scattering_slice(t.scattering_density, t.profile_code, t.profile_p0,
                                          t.profile_p1, t.scattering_index, t.columns,
                                          t.beta_e, R, Rt, self._mu_s_min, self._r0, mu_s,

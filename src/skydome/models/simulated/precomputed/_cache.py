@@ -1,12 +1,20 @@
 """On-disk cache of precomputed tables.
 
-One folder per table set (an ``.npy`` file per array and ``meta.json``), named by a SHA-256 hash of everything the precomputation
-reads: the cache format version, the table wavelengths, the atmosphere's optical properties
+One folder per table set (an ``.npy`` file per array and ``meta.json``), named by a
+SHA-256 hash of everything the precomputation reads: the cache format version, the table wavelengths, the atmosphere's optical properties
 on them (radii, density profiles, scattering and extinction coefficients, phase functions,
 ground albedo) and every table setting. A different atmosphere field or setting gives a
 different key; an entry that cannot be read (truncated, corrupt, another format) is deleted
 and the tables are recomputed. The arrays are memory-mapped when read, so a cached start-up
 does not read the (hundreds of MB of) tables up front.
+
+The stored 4-D table of orders 2..N is built after the precomputation, on its first read
+(:meth:`._tables.Tables.build_multiple_scattering`); it is then added to the same entry as
+its own file, ``multiple_scattering.npy`` (:func:`add_stored_table`: built slab by slab of
+r nodes straight into a temporary file in the entry, renamed when complete), and a later
+cache hit memory-maps it. An entry
+without that file (not built yet, or an unreadable file, which is removed) is still a hit:
+the table is built again on first use.
 
 Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydome")`` /
 ``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); after each
@@ -24,9 +32,13 @@ import shutil
 import numpy as np
 
 # bump when the tables' meaning or layout changes (mapping, units, fields)
-CACHE_FORMAT = "skydome.precomputed-cache/5"   # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches; 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset
+# 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches;
+# 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset;
+# 6: the stored table of orders 2..N in its own file, added on first use
+CACHE_FORMAT = "skydome.precomputed-cache/6"
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
+_STORED = "multiple_scattering"       # the lazily added table's file (without .npy)
 
 
 def cache_dir() -> str:
@@ -92,12 +104,13 @@ def load(k: str):
             raise ValueError("key mismatch")
         arrays = dict(meta["scalars"])
         for name in meta["arrays"]:
-            arrays[name] = np.asarray(np.load(os.path.join(path, name + ".npy"), mmap_mode="c",
-                                              allow_pickle=False))
+            arrays[name] = _map(os.path.join(path, name + ".npy"))
         tables = Tables.from_arrays(arrays)
     except Exception:
         _remove(path)
         return None
+    if not tables.has_multiple_scattering:
+        _load_stored_table(path, tables)
     try:
         os.utime(os.path.join(path, _META))   # least recently used: the meta file's mtime
     except OSError:
@@ -105,11 +118,72 @@ def load(k: str):
     return tables
 
 
+def _map(file):
+    return np.asarray(np.load(file, mmap_mode="c", allow_pickle=False))
+
+
+def _load_stored_table(path, tables):
+    """Memory-map the entry's stored table into ``tables`` where the file is there and
+    matches the tables (float32, the single-scattering table's shape without its first
+    axis); an unreadable or mismatched file is removed (the table is built again on use)."""
+    file = os.path.join(path, _STORED + ".npy")
+    if not os.path.exists(file):
+        return
+    try:
+        ms = _map(file)
+        if ms.dtype != np.float32 or ms.shape != tables.single_scattering.shape[1:]:
+            raise ValueError(f"stored table of shape {ms.shape}, {ms.dtype}")
+    except Exception:
+        _remove(file)
+        return
+    tables.multiple_scattering = ms
+
+
+def add_stored_table(k: str, shape, slabs):
+    """Write the stored table of orders 2..N into entry ``k`` as its own file, from its
+    consecutive r slabs ``slabs`` (float32; one slab in memory at a time), to a temporary
+    name in the entry renamed when complete (nothing partial under the final name if the
+    write is interrupted), then trim the cache to the size limit; returns the table
+    memory-mapped from that file, or None where the entry is gone or cannot be written
+    (the caller then builds the table in memory)."""
+    from skydome._io import atomic_file
+
+    path = _path(k)
+    file = os.path.join(path, _STORED + ".npy")
+    shape = tuple(int(n) for n in shape)
+    try:
+        with open(os.path.join(path, _META)) as f:
+            meta = json.load(f)
+        if meta.get("cache_key") != k or meta.get("cache_format") != CACHE_FORMAT:
+            return None
+        with atomic_file(file, suffix=".npy") as tmp:
+            with open(tmp, "wb") as f:
+                np.lib.format.write_array_header_1_0(
+                    f, {"descr": np.lib.format.dtype_to_descr(np.dtype(np.float32)),
+                        "fortran_order": False, "shape": shape})
+                rows = 0
+                for slab in slabs:
+                    slab = np.ascontiguousarray(slab, dtype=np.float32)
+                    if slab.shape[1:] != shape[1:]:
+                        raise ValueError(f"slab of shape {slab.shape} for a table {shape}")
+                    f.write(memoryview(slab).cast("B"))
+                    rows += slab.shape[0]
+                if rows != shape[0]:
+                    raise ValueError(f"{rows} r rows written for a table {shape}")
+        out = _map(file)
+    except (OSError, ValueError):
+        return None
+    _evict(cache_dir(), limit_bytes(), keep=path)
+    return out
+
+
 def store(k: str, tables) -> str | None:
     """Write ``tables`` under key ``k`` (a folder of ``.npy`` files and ``meta.json``,
-    written under a temporary name and renamed) and trim the cache to the size limit;
-    returns the path, or None where the folder cannot be written or the tables alone exceed
-    the limit (the cache is a convenience: a failure to write it is not an error)."""
+    written under a temporary name and renamed; the stored table of orders 2..N only where
+    it is built, else :func:`add_stored_table` adds it later) and trim the cache to the
+    size limit; returns the path, or None where the folder cannot be written or the tables
+    alone exceed the limit (the cache is a convenience: a failure to write it is not an
+    error)."""
     limit = limit_bytes()
     arrays = tables.arrays()
     if sum(a.nbytes for a in arrays.values()) > limit:

@@ -30,9 +30,11 @@ def meta(model) -> dict:
 
 
 def save(model, path) -> None:
-    """Write the tables and parameters to an ``.npz`` file (atomically)."""
+    """Write the tables and parameters to an ``.npz`` file (atomically); the stored table of
+    orders 2..N is built first where it is not yet, so that the file holds every table."""
     from skydome._io import atomic_write
 
+    model._t.build_multiple_scattering()
     atomic_write(path, lambda tmp: np.savez(
         tmp, meta=np.array(json.dumps(meta(model), default=_json_default)), **model._t.arrays()),
         suffix=".npz")

@@ -90,7 +90,8 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
 
 @njit(parallel=True, cache=True, fastmath=True)
 def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q,
-                              ts, mu_nodes, n_mu_full, mu_s_nodes_sel, n_ms_full, out):
+                              ts, mu_nodes, n_mu_full, mu_s_nodes_sel, n_ms_full, r_first,
+                              n_r_full, out):
     """One scattering order, full radiance ([Bru17] ComputeMultipleScattering, [BN08] eq. 8):
     out[r, mu, mu_s, nu, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt.
 
@@ -116,7 +117,9 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     ``mu_s_nodes_sel`` (indices into the full axes, the same mappings) and n_nu uniform nu
     nodes (out[r, j, k, inu, l] at mu node mu_nodes[j], mu_s node mu_s_nodes_sel[k]); all of
     them (``arange``) give the full table. :func:`table_from_coarse` interpolates it onto
-    the full grid."""
+    the full grid. ``out`` holds the r nodes ``r_first`` .. ``r_first + out.shape[0] - 1``
+    of the table's ``n_r_full`` (0 and n_r for the whole table: the rows are independent,
+    so a table built slab by slab is the same to the bit)."""
     n_r, n_mu, n_ms, n_nu, nl = out.shape
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
@@ -139,7 +142,7 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
         ks = np.empty(nk, dtype=np.int64)
         ir = idx // n_mu
         imu = idx % n_mu
-        r = cell_r(ir, n_r, R, Rt)
+        r = cell_r(r_first + ir, n_r_full, R, Rt)
         mu, ground = cell_mu(mu_nodes[imu], n_mu_full, r, R, Rt)
         for k in range(nk):
             nus[k] = cell_nu(k % n_nu, n_nu, mu, mus[k // n_nu])

@@ -5,7 +5,8 @@ Each step is one function here calling its numba kernel (modules ``_single``, ``
 ``_irradiance``, ``_multiple``; called through the module so that a benchmark can time
 them). No order's radiance is tabulated: the incident radiance and ground irradiance of
 orders >= 3 are ray integrals of the previous order's scattering density, and the stored
-multiple-scattering table is one integral of the summed density. Working memory: float32
+multiple-scattering table is one integral of the summed density, built on its first read
+(:func:`stored_table_of`), not here: the sky's ``radiance()`` does not read it. Working memory: float32
 throughout, the orders computed one batch of wavelengths at a time (only the batch's last
 order's density kept), the geometric remainder added in place.
 """
@@ -138,7 +139,6 @@ def precompute(props, wl, p):
     n_batch_hi = -(-nl // nb_hi)
     n_steps = 1 + n_batch + max(p["orders"] - 2, 0) * n_batch_hi
     report("precomputing tables: scattering orders", 1, n_steps)
-    ms = None   # orders 2..N (step 4)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
     J_sum = None
     if p["orders"] >= 2:
@@ -169,18 +169,11 @@ def precompute(props, wl, p):
             higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s, sc_idx,
                           beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min, q2, q3, hi,
                           n_q_ms, p, E[..., sl], (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
-        # 4. the stored orders 2..N (+ remainder): one integral of the summed density over
-        # the full table (the integral is linear in J: the same as the sum of the orders')
-        # at every node by default; p["stored_table"] == "subset": the faster approximation
-        # on the nodes of stored_table_nodes, interpolated in the logarithm
-        n_mu_t, n_ms_t, n_nu_t = ss.shape[2:5]
-        full = p.get("stored_table", "full") == "full"
-        ms = stored_multiple_scattering(
-            J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q_ms, ss.shape[1:],
-            nodes=(np.arange(n_mu_t), np.arange(n_ms_t)) if full else None,
-            n_nu=n_nu_t if full else MS_NU_SIZE)
-    if ms is None:
-        ms = np.zeros(ss.shape[1:], dtype=np.float32)
+    # 4. the stored orders 2..N (+ remainder) are not integrated here: the sky's radiance()
+    # integrates them at the observer from J_sum; the stored table is built from J_sum on
+    # its first read (Tables.build_multiple_scattering -> stored_table_of), with the
+    # quadrature and node choice recorded here
+    ms = None if J_sum is not None else np.zeros(ss.shape[1:], dtype=np.float32)
     dens = {}
     if J_sum is not None:
         dens = dict(scattering_density=J_sum, profile_code=np.asarray(codes),
@@ -191,7 +184,53 @@ def precompute(props, wl, p):
                   phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
                   scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
                   mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
-                  precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab, **dens)
+                  precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab,
+                  stored_table_samples=n_q_ms, stored_table=p.get("stored_table", "full"), **dens)
+
+
+def stored_table_of(t, r_range=None):
+    """Step 4 for the tables ``t`` (:class:`._tables.Tables`): the stored table of orders
+    2..N (+ remainder), one integral of the summed density over the full table (the
+    integral is linear in J: the same as the sum of the orders'), at every node by default;
+    ``t.stored_table == "subset"``: the faster approximation on the nodes of
+    stored_table_nodes, interpolated in the logarithm. Zeros where the tables hold no
+    density (orders < 2). ``r_range`` = (first, end): only those r nodes of the full table
+    (the default table only), the same values as the whole table's rows."""
+    shape = t.single_scattering.shape[1:]
+    if not t.has_density:
+        return np.zeros(shape, dtype=np.float32)
+    if t.stored_table_samples < 1:
+        raise ValueError(f"stored_table_samples = {t.stored_table_samples} is not valid: the "
+                         "tables do not say how to integrate the stored table (>= 1)")
+    n_mu_t, n_ms_t, n_nu_t = shape[1:4]
+    full = t.stored_table == "full"
+    return stored_multiple_scattering(
+        t.scattering_density, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
+        t.columns, t.beta_e, t.planet_radius_m, t.top_radius_m, t.mu_s_min,
+        int(t.stored_table_samples), shape,
+        nodes=(np.arange(n_mu_t), np.arange(n_ms_t)) if full else None,
+        n_nu=n_nu_t if full else MS_NU_SIZE, r_range=r_range)
+
+
+# working memory of one slab of r nodes of the stored table written straight to a file
+# (stored_table_slabs) [bytes]
+STORED_SLAB_BYTES = 32_000_000
+
+
+def stored_table_slabs(t, slab_bytes=None):
+    """The stored table of :func:`stored_table_of` as consecutive slabs of r nodes (float32,
+    C order; concatenated along r they are the table), each within ``slab_bytes`` (at least
+    one r node; default ``STORED_SLAB_BYTES``), so that a writer holds one slab at a time;
+    the subset table in one piece (its interpolation reads every r node)."""
+    shape = t.single_scattering.shape[1:]
+    slab_bytes = STORED_SLAB_BYTES if slab_bytes is None else slab_bytes
+    if t.stored_table != "full" or not t.has_density:
+        yield stored_table_of(t)
+        return
+    per_r = 4 * int(np.prod(shape[1:]))
+    step = max(1, int(slab_bytes) // per_r)
+    for a in range(0, shape[0], step):
+        yield stored_table_of(t, (a, min(shape[0], a + step)))
 
 
 # the stored multiple-scattering table's computed nodes (see stored_table_nodes): per half
@@ -235,23 +274,28 @@ def node_brackets(nodes, n):
 
 
 def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min,
-                               n_q, shape, nodes=None, n_nu=MS_NU_SIZE):
+                               n_q, shape, nodes=None, n_nu=MS_NU_SIZE, r_range=None):
     """Step 4: the stored table of orders 2..N, shape ``shape`` (r, mu, mu_s, nu, l),
     integrated from the summed density at the nodes of :func:`stored_table_nodes` (or
     ``nodes`` = (mu nodes, mu_s nodes)) on ``n_nu`` nu nodes, and interpolated onto the
     rest in the logarithm (docs/models.md, "precomputed": multiple scattering falls off
-    about exponentially with the sun's depression and towards the horizon)."""
+    about exponentially with the sun's depression and towards the horizon). ``r_range`` =
+    (first, end), every node only: the rows first .. end-1 of the table."""
     from skydome.models.simulated.precomputed import _multiple
 
     n_r, n_mu, n_ms, n_nu_f, nl = shape
     mu_n, ms_n = stored_table_nodes(n_mu, n_ms) if nodes is None else nodes
     n_nu = min(int(n_nu), n_nu_f)
     full = mu_n.size == n_mu and ms_n.size == n_ms and n_nu == n_nu_f
-    out = np.empty(shape, dtype=np.float32)
+    r0, r1 = (0, n_r) if r_range is None else (int(r_range[0]), int(r_range[1]))
+    if not (0 <= r0 < r1 <= n_r) or (not full and (r0, r1) != (0, n_r)):
+        raise ValueError(f"r_range = {r_range} is not valid: 0 <= first < end <= {n_r}, and "
+                         "the whole table where it is integrated on a subset of its nodes")
+    out = np.empty((r1 - r0,) + tuple(shape[1:]), dtype=np.float32)
     c = out if full else np.empty((n_r, mu_n.size, ms_n.size, n_nu, nl), dtype=np.float32)
     _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
                                         mu_s_min, n_q, QUADRATURE_SCALE_M, mu_n, n_mu, ms_n,
-                                        n_ms, c)
+                                        n_ms, r0, n_r, c)
     if full:
         return out
     # log of the computed values (>= 0; a floor of 1e-30 of each wavelength's largest)

@@ -7,6 +7,11 @@ scatters, ``scattering_index`` into the constituents), ``r``, ``mu``, ``mu_s``, 
 (Bruneton's coordinates, mappings in :mod:`._mapping`), ``theta``/``phi`` (the scattering
 density's outgoing directions in the sun's frame) and ``wavelength`` (the table
 wavelengths, innermost).
+
+The stored 4-D table of orders 2..N (``multiple_scattering``) is built on first use from
+the summed scattering density and the column table (:meth:`Tables.build_multiple_scattering`):
+the sky's ``radiance()`` integrates orders 2..N at the observer and never reads it; aerial
+perspective, the texture/LUT export and the viewer do.
 """
 
 from __future__ import annotations
@@ -22,6 +27,14 @@ def _axes(*names, dtype="float32", optional=False):
     return field(default=None, metadata=meta) if optional else field(metadata=meta)
 
 
+def _scalar(kind, default):
+    return field(default=default, metadata={"scalar": kind})
+
+
+# the lazily built field (see Tables.multiple_scattering)
+_LAZY = "multiple_scattering"
+
+
 @dataclass
 class Tables:
     """The arrays of one precomputation ([Bru17] Model::Precompute), with their axes in
@@ -35,8 +48,6 @@ class Tables:
     beta_e: np.ndarray = _axes("constituent", "wavelength", dtype="float64")
     # single scattering per scattering constituent, without its phase function
     single_scattering: np.ndarray = _axes("scattering", "r", "mu", "mu_s", "nu", "wavelength")
-    # orders 2..N (+ the geometric remainder), full radiance [sr^-1]
-    multiple_scattering: np.ndarray = _axes("r", "mu", "mu_s", "nu", "wavelength")
     # sky irradiance on a horizontal surface, orders 1..N-1 (dimensionless)
     irradiance: np.ndarray = _axes("r", "mu_s", "wavelength", dtype="float64")
     phase_code: np.ndarray = _axes("scattering", dtype="int64")
@@ -60,6 +71,14 @@ class Tables:
     # uniform in the scattering angle over [0, pi]) on the table wavelengths [sr^-1]
     phase_table: np.ndarray | None = _axes("scattering", "angle", "wavelength", dtype="float64",
                                            optional=True)
+    # orders 2..N (+ the geometric remainder), full radiance [sr^-1]: None until first read
+    # (built then from scattering_density, see build_multiple_scattering; zeros without it)
+    multiple_scattering: np.ndarray | None = _axes("r", "mu", "mu_s", "nu", "wavelength",
+                                                   optional=True)
+    # how the stored table is integrated: quadrature nodes per ray piece, and "full" (every
+    # node) or "subset" (_precompute.stored_table_nodes, interpolated)
+    stored_table_samples: int = _scalar("int", 0)
+    stored_table: str = _scalar("str", "full")
 
     @property
     def has_density(self) -> bool:
@@ -73,12 +92,43 @@ class Tables:
             return self.phase_table
         return np.zeros((self.phase_code.size, 2, self.table_wavelengths_nm.size))
 
+    @property
+    def has_multiple_scattering(self) -> bool:
+        """Whether the stored table of orders 2..N is built (or was read)."""
+        return self.__dict__.get("_" + _LAZY) is not None
+
+    def build_multiple_scattering(self) -> np.ndarray:
+        """The stored table of orders 2..N: built now if it is not yet (the same integral
+        of the summed density as the precomputation's step 4, :func:`._precompute.
+        stored_table_of`). Where :meth:`set_multiple_scattering_sink` gave a sink (the
+        on-disk cache), the table is built slab by slab of r nodes straight into it and
+        the array it returns is kept; without one, or where it returns None (it could not
+        write), the table is built in memory."""
+        ms = self.__dict__.get("_" + _LAZY)
+        if ms is not None:
+            return ms
+        from skydome.models.simulated.precomputed import _precompute
+
+        sink = self.__dict__.get("_sink")
+        if sink is not None:
+            ms = sink(self.single_scattering.shape[1:], _precompute.stored_table_slabs(self))
+        if ms is None:
+            ms = _precompute.stored_table_of(self)
+        self.multiple_scattering = ms
+        return ms
+
+    def set_multiple_scattering_sink(self, sink) -> None:
+        """``sink(shape, slabs) -> array or None``: called when the stored table is built,
+        with its shape and an iterator of its consecutive r slabs (float32); returns the
+        whole table (e.g. memory-mapped from the file the slabs went to), or None."""
+        self.__dict__["_sink"] = sink
+
     def arrays(self) -> dict:
-        """Every field as a numpy array (scalars as 0-d arrays; absent optional fields left
-        out), for ``np.savez``."""
+        """Every field as a numpy array (scalars as 0-d arrays; absent optional fields and
+        the stored table of orders 2..N while it is not built left out), for ``np.savez``."""
         out = {}
         for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
+            v = self.__dict__.get("_" + _LAZY) if f.name == _LAZY else getattr(self, f.name)
             if v is not None:
                 out[f.name] = np.asarray(v)
         return out
@@ -89,12 +139,14 @@ class Tables:
         kw = {}
         for f in dataclasses.fields(cls):
             if f.name not in arrays:
-                if f.default is None:
-                    kw[f.name] = None
+                if f.default is not dataclasses.MISSING:
+                    kw[f.name] = f.default
                     continue
                 raise ValueError(f"table {f.name!r} is missing")
             v = np.asarray(arrays[f.name])
-            if "axes" in f.metadata:
+            if "scalar" in f.metadata:
+                v = {"int": int, "str": str}[f.metadata["scalar"]](v.item() if v.ndim == 0 else v)
+            elif "axes" in f.metadata:
                 if v.ndim != len(f.metadata["axes"]):
                     raise ValueError(f"table {f.name!r} has {v.ndim} axes, expected "
                                      f"{len(f.metadata['axes'])} {f.metadata['axes']}")
@@ -103,6 +155,24 @@ class Tables:
                 v = float(v)
             kw[f.name] = v
         return cls(**kw)
+
+
+def _get_multiple_scattering(self):
+    ms = self.__dict__.get("_" + _LAZY)
+    return ms if ms is not None else self.build_multiple_scattering()
+
+
+def _set_multiple_scattering(self, value):
+    self.__dict__["_" + _LAZY] = (None if value is None
+                                  else np.ascontiguousarray(value, dtype=np.float32))
+
+
+# the field as a property (set after @dataclass, which took its default None for __init__):
+# reading it builds the table on first use; None (the default) leaves it to be built
+Tables.multiple_scattering = property(
+    _get_multiple_scattering, _set_multiple_scattering,
+    doc="orders 2..N (+ the geometric remainder), full radiance per unit solar irradiance "
+        "[sr^-1], axes (r, mu, mu_s, nu, wavelength); built on first read")
 
 
 def axes(name: str) -> tuple:
