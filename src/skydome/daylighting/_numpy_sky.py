@@ -13,9 +13,11 @@ the node's value (the kernel's (w lv) / w may differ from it in the last bit); t
 nearest patches are chosen by the kernel's own dot products, in its order of operations,
 with its tie-break (the lower patch index first).
 
-The matrix is produced patch row by patch row in Radiance's file order (patches, hours,
-components), so that a matrix file is written sequentially, with no zero-filled body and no
-memory map (:func:`skydome.daylighting.radiance_io.write_matrix_rows`).
+The matrix is written run of lit hours by run of lit hours into a zero-filled array in
+Radiance's file order (patches, hours, components), e.g. the memory map of a matrix file's body
+(:func:`skydome.daylighting.radiance_io.matrix_file`), as the kernel does: no intermediate
+matrix of patch values is held (an annual MF:4 one is 161 MB of float64, whose first touch
+alone cost 0.06-0.4 s of system time on the 2-core EPYC of docs/performance.md).
 """
 
 from __future__ import annotations
@@ -24,9 +26,6 @@ import numpy as np
 
 #: Nodes x hours per vectorised block (the work arrays stay in the cache).
 _BLOCK = 1 << 16
-#: Patch rows per block of the output.
-_ROWS = 64
-_ROWS = 64
 
 
 def _runs(mask, longest):
@@ -40,16 +39,15 @@ def _runs(mask, longest):
 
 def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_scale,
                        cz_min):
-    """The sky patches' values of every hour, normalised to the diffuse illuminance.
+    """The sky patches' values of the lit hours, normalised to the diffuse illuminance, run
+    of lit hours by run.
 
     ``nodes`` (M, 3), ``weights`` (M,) [sr], ``offsets`` (P + 1,): one rule for all patches
     (patch k owns nodes offsets[k]:offsets[k + 1]); ``s_dist`` (H, 3) the sun vector of the
     distribution, ``coef`` (H, 5) (a, b, c, d, e), ``lit`` (H,) bool, ``e_diff`` (H,) [lx].
-    Returns v (P, H): patch mean of lv times e_diff / (its horizontal integral) times
-    ``out_scale`` (the kernel's ``v``; zero in unlit hours). The hours are taken in runs of
-    consecutive lit hours (a day's), each run's (hours x nodes) values in one pass per
-    operation."""
-    n_h = s_dist.shape[0]
+    Yields (h0, h1, v) for runs of consecutive lit hours (a day's, split to blocks of about
+    ``_BLOCK`` values), v (h1 - h0, P): the patch mean of lv times e_diff / (its horizontal
+    integral) times ``out_scale`` (the kernel's ``v``); v is overwritten by the next run."""
     n_p = offsets.shape[0] - 1
     m = nodes.shape[0]
     one = m == n_p  # one node per patch (order 0): the mean is lv itself
@@ -62,7 +60,6 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
     wz = weights * z
     starts = offsets[:-1]
     wsum = np.add.reduceat(weights, starts)
-    v = np.zeros((n_p, n_h))
     for h0, h1 in _runs(lit, max(1, _BLOCK // m)):
         s = s_dist[h0:h1]
         a, b, c, dd, e = (coef[h0:h1, i][:, None] for i in range(5))
@@ -95,8 +92,7 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
             horiz[flat] = np.pi
         scale = e_diff[h0:h1] / horiz * out_scale  # the sky's horizontal illuminance is Dh
         means *= scale[:, None]
-        v[:, h0:h1] = means.T
-    return v
+        yield h0, h1, means
 
 
 def nearest_patches(centres, s_true, hours, nsuns):
@@ -130,47 +126,42 @@ def nearest_patches(centres, s_true, hours, nsuns):
     return near, ndot
 
 
-def perez_rows(v, lit, centres, dom, s_true, e_diff, e_dir, rho, tint, grey, out_scale,
-               nsuns, fixed_sa, dtype, rows=_ROWS):
-    """The sky matrix in Radiance's file order, as blocks of patch rows.
-
-    Takes :func:`perez_patch_values`' ``v`` (P, H) and the kernel's per-hour inputs (see
-    :func:`skydome.daylighting._kernels.fill_perez_sky`); yields (r0, block) with ``block``
-    (r1 - r0, H, C) of ``dtype`` for rows r0:r1 (row 0 the ground): v tint, the ground and
-    the sun, computed in float64 as the kernel does and rounded to ``dtype`` once."""
-    n_p, n_h = v.shape
+def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_min, centres,
+                   dom, s_true, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa):
+    """Fill the sky matrix ``out`` (P + 1, H, C), zero-filled, in Radiance's file order (row
+    0 the ground): the patch values of :func:`perez_patch_values` times the tint, the ground
+    and the sun, with the kernel's per-hour inputs (see
+    :func:`skydome.daylighting._kernels.fill_perez_sky`), computed in float64 as the kernel
+    does and rounded to ``out``'s type once. Unlit hours are not touched (they stay zero)."""
     ncomp = tint.shape[0]
     hours = np.flatnonzero(lit)
-    # the ground, patch 0: rho (Dh + Dn sin a) / pi
-    g = np.where(s_true[:, 2] > 0.0, e_diff + e_dir * s_true[:, 2], e_diff)
-    g = np.where(lit, g * (rho / np.pi * out_scale), 0.0)
     # the sun: the nsuns patches nearest it, weight 1 / (1.002 - cos) (gendaymtx AddDirect)
     sun_h = hours[e_dir[hours] > 1e-4] if nsuns > 0 else hours[:0]
     near, ndot = nearest_patches(centres, s_true, sun_h, max(nsuns, 1))
     near, ndot = near[:, :nsuns], ndot[:, :nsuns]
-    wt = 1.0 / (1.002 - ndot)
-    wtot = np.zeros(sun_h.size)
-    for j in range(nsuns):           # summed in the kernel's order
-        wtot += wt[:, j]
-    sa = np.full(near.shape, fixed_sa) if fixed_sa > 0.0 else dom[near]
-    v_sun = ((wt * e_dir[sun_h][:, None]) * out_scale / (wtot[:, None] * sa)).ravel()
-    sun_row = (near + 1).ravel()     # file rows of the sun's patches
-    sun_col = np.repeat(sun_h, nsuns)
-    order = np.argsort(sun_row, kind="stable")
-    sun_row, sun_col, v_sun = sun_row[order], sun_col[order], v_sun[order]
-    r_starts = list(range(0, n_p + 1, rows))
-    bounds = np.searchsorted(sun_row, r_starts + [n_p + 1])
-    for bi, r0 in enumerate(r_starts):
-        r1 = min(n_p + 1, r0 + rows)
-        blk = np.empty((r1 - r0, n_h, ncomp), dtype=dtype)
-        k0 = max(r0, 1)              # first sky row of the block
-        vb = v[k0 - 1:r1 - 1]
-        for c in range(ncomp):       # v tint[c], in float64, rounded to dtype once
-            np.multiply(vb, tint[c], out=blk[k0 - r0:, :, c], casting="unsafe")
-            if r0 == 0:
-                blk[0, :, c] = g * grey[c]
-        a, b = bounds[bi], bounds[bi + 1]
-        if b > a:                    # the sun's patches in this block (distinct per hour)
-            rr, cc = sun_row[a:b], sun_col[a:b]
-            blk[rr - r0, cc] = v[rr - 1, cc][:, None] * tint + v_sun[a:b, None] * grey
-        yield r0, blk
+    at = np.full(lit.shape[0], -1)
+    at[sun_h] = np.arange(sun_h.size)
+    v_near = np.empty(near.shape)    # the sky values of the sun's patches, in float64
+    for h0, h1, v in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff,
+                                        out_scale, cz_min):
+        vt = v.T
+        for c in range(ncomp):       # v tint[c], in float64, rounded to out's type once
+            np.multiply(vt, tint[c], out=out[1:, h0:h1, c], casting="unsafe")
+        k = at[h0:h1]
+        j = np.flatnonzero(k >= 0)
+        if j.size:
+            v_near[k[j]] = v[j[:, None], near[k[j]]]
+    # the ground, patch 0: rho (Dh + Dn sin a) / pi
+    g = np.where(s_true[:, 2] > 0.0, e_diff + e_dir * s_true[:, 2], e_diff)
+    g = np.where(lit, g * (rho / np.pi * out_scale), 0.0)
+    for c in range(ncomp):
+        out[0, :, c] = g * grey[c]
+    if sun_h.size and nsuns > 0:
+        wt = 1.0 / (1.002 - ndot)
+        wtot = np.zeros(sun_h.size)
+        for j in range(nsuns):       # summed in the kernel's order
+            wtot += wt[:, j]
+        sa = np.full(near.shape, fixed_sa) if fixed_sa > 0.0 else dom[near]
+        v_sun = (wt * e_dir[sun_h][:, None]) * out_scale / (wtot[:, None] * sa)
+        # the sun's patches (distinct within an hour): sky value plus the sun's share
+        out[near + 1, sun_h[:, None]] = v_near[..., None] * tint + v_sun[..., None] * grey

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_matrix", "read_matrix", "matrix_file", "write_matrix_rows", "atomic_write_bytes",
+__all__ = ["write_matrix", "read_matrix", "matrix_file", "atomic_write_bytes",
            "atomic_write_stream", "FORMATS"]
 
 FORMATS = ("ascii", "float", "double")
@@ -172,46 +172,6 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
-
-
-def write_matrix_rows(path, nrows: int, ncols: int, ncomp: int, blocks, fmt: str = "float",
-                      info=(), overwrite: bool = False) -> int:
-    """Write a binary Radiance matrix file from consecutive blocks of rows, sequentially.
-
-    ``blocks`` yields (r0, block) with ``block`` (n, ncols, ncomp) of the format's type
-    (float32 for "float", float64 for "double") holding rows r0:r0 + n, in order; each
-    block is checked for nan/inf and appended to a temporary file beside ``path``, renamed
-    to ``path`` when all ``nrows`` rows are written (nothing is left if anything fails). No
-    zero-filled body and no memory map: one sequential pass of the data. Returns the length
-    of the header [bytes] (the offset of the data)."""
-    from skydome._validate import check_choice
-
-    check_choice("fmt", fmt, ("float", "double"))
-    path = Path(path)
-    if path.exists() and not overwrite:
-        raise ValueError(f"out = {str(path)!r} exists (pass overwrite to replace it)")
-    if not path.parent.is_dir():
-        raise ValueError(f"out = {str(path)!r}: folder {str(path.parent)!r} does not exist")
-    head = _header(nrows, ncols, ncomp, fmt, list(info))
-    dtype = np.dtype(np.float32 if fmt == "float" else np.float64)
-
-    def chunks():
-        yield head
-        done = 0
-        for r0, blk in blocks:
-            if r0 != done or blk.shape[1:] != (ncols, ncomp) or blk.dtype != dtype:
-                raise ValueError(f"row block at {r0} of shape {blk.shape} {blk.dtype} does not "
-                                 f"continue the ({nrows}, {ncols}, {ncomp}) {dtype} matrix "
-                                 f"at row {done}")
-            if not np.all(np.isfinite(blk)):
-                raise ValueError("matrix holds nan or inf values")
-            yield np.ascontiguousarray(blk).data
-            done += blk.shape[0]
-        if done != nrows:
-            raise ValueError(f"{done} rows written, {nrows} expected")
-
-    atomic_write_stream(path, chunks())
-    return len(head)
 
 
 #: Bytes per ``write`` call of a streamed file. Linux 6.x fills the page cache of a larger

@@ -144,7 +144,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                      order=PEREZ_DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
                      sky_color=GENDAYMTX_SKY_COLOR, dtype=np.float64,
-                     out=None, backend: str = "numba", _write_rows=None) -> SkyMatrix:
+                     out=None, backend: str = "numba") -> SkyMatrix:
     """Perez (1993) sky matrix of many hours in one vectorised pass.
 
     Parameters
@@ -263,9 +263,8 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     dtype = np.dtype(dtype)
     if dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
         raise ValueError(f"dtype = {dtype} must be float64 or float32")
-    # Both backends fill a C-contiguous (P, H, C) array in Radiance's file order; ``sky`` is
-    # its (H, P, C) view. ``_write_rows(shape, blocks)`` (numpy only) takes the (r0, block)
-    # row blocks instead, e.g. to write a file sequentially.
+    # Both backends fill a zero-filled C-contiguous (P, H, C) array in Radiance's file order
+    # (unlit hours stay zero); ``sky`` is its (H, P, C) view.
     if out is not None:
         if not isinstance(out, np.ndarray) or out.shape != (npatch, n, ncomp) or \
                 out.dtype != dtype or not out.flags.c_contiguous or not out.flags.writeable:
@@ -273,8 +272,8 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                              f"{dtype} array, got {getattr(out, 'shape', None)} "
                              f"{getattr(out, 'dtype', None)}")
         file_order = out
-    elif _write_rows is None or not use_numpy:
-        file_order = (np.empty if use_numpy else np.zeros)((npatch, n, ncomp), dtype=dtype)
+    else:
+        file_order = np.zeros((npatch, n, ncomp), dtype=dtype)
     sun_sa = math.pi * math.radians(SUN_ANGLE_DEG / 2.0) ** 2
     fixed_sa = math.pi * math.radians(disc_deg / 2.0) ** 2 if mode == "disc" else 0.0
     n_sun_patches = nsuns if mode in ("spread", "disc") else 0
@@ -282,17 +281,9 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     if use_numpy:
         from skydome.daylighting import _numpy_sky as NS
 
-        v = NS.perez_patch_values(rule[0], rule[1], rule[2][0], s_dist, coef, day, e_diff,
-                                  out_scale, COS_ZETA_MIN)
-        blocks = NS.perez_rows(v, day, ps.centres[1:], ps.solid_angle_sr[1:], sd, e_diff,
-                               e_dir, rho, tints, grey, out_scale, n_sun_patches, fixed_sa,
-                               dtype)
-        if _write_rows is not None and out is None:
-            sky = _write_rows((npatch, n, ncomp), blocks)
-        else:
-            for r0, blk in blocks:
-                file_order[r0:r0 + blk.shape[0]] = blk
-            sky = np.swapaxes(file_order, 0, 1)
+        NS.fill_perez_sky(file_order, day, rule[0], rule[1], rule[2][0], s_dist, coef, e_diff,
+                          COS_ZETA_MIN, ps.centres[1:], ps.solid_angle_sr[1:], sd, e_dir, rho,
+                          tints, grey, out_scale, n_sun_patches, fixed_sa)
     else:
         import numba
 
@@ -304,7 +295,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                           np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),
                           tints, grey, out_scale, n_sun_patches, fixed_sa, COS_ZETA_MIN,
                           numba.get_num_threads())
-        sky = np.swapaxes(file_order, 0, 1)
+    sky = np.swapaxes(file_order, 0, 1)
     sun_mat = None
     if mode == "separate":
         up = day & (alt > -math.radians(SUN_ANGLE_DEG / 2.0))  # gendaymtx -D: sun in the sky
@@ -374,20 +365,17 @@ def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) 
 def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str = "float",
                           info=(), overwrite: bool = False, **kwargs) -> SkyMatrix:
     """:func:`perez_sky_matrix_from_weather` written to a binary Radiance matrix file
-    (``fmt`` "float" or "double"), without holding a second copy of it.
-
-    With a fixed order (numpy backend) the matrix is produced patch row by patch row and
-    written sequentially (:func:`~skydome.daylighting.radiance_io.write_matrix_rows`); with
-    the adaptive rule (numba kernel) it is filled into the memory map of the file's
-    zero-filled body (:func:`~skydome.daylighting.radiance_io.matrix_file`). The file appears
-    only when complete. ``kwargs`` as :func:`perez_sky_matrix` (not ``dtype``/``out``:
-    the format gives the type). Returns the SkyMatrix; its ``sky`` is a
-    read-only memory map of the written file."""
+    (``fmt`` "float" or "double"), without holding a second copy of it: either backend fills
+    the memory map of the file's zero-filled body
+    (:func:`~skydome.daylighting.radiance_io.matrix_file`) in place. The file appears only
+    when complete. ``kwargs`` as :func:`perez_sky_matrix` (not ``dtype``/``out``: the format
+    gives the type). Returns the SkyMatrix; its ``sky`` is a read-only memory map of the
+    written file."""
     from skydome._validate import check_choice
-    from skydome.daylighting.radiance_io import matrix_file, write_matrix_rows
+    from skydome.daylighting.radiance_io import matrix_file
 
     check_choice("fmt", fmt, ("float", "double"))
-    for k in ("dtype", "out", "_write_rows"):
+    for k in ("dtype", "out"):
         if k in kwargs:
             raise TypeError(f"perez_sky_matrix_file() takes no {k!r}")
     dtype = np.float32 if fmt == "float" else np.float64
@@ -395,25 +383,10 @@ def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str 
     ps = kwargs["patches"] = ps if isinstance(ps, PatchSet) else _patches(ps)
     ncomp = 3 if kwargs.get("components", "rgb") == "rgb" else 1
     shape = (len(ps), len(weather), ncomp)
-    fixed = quadrature_rule(ps, kwargs.get("order", PEREZ_DEFAULT_ORDER))[2].shape[0] == 1
-    backend = kwargs.get("backend", "numba")
-    if backend == "numpy" or (backend == "auto" and fixed):  # numpy: written row block by row block
-        head = []
-
-        def rows(shape, blocks):
-            head.append(write_matrix_rows(path, *shape, blocks, fmt=fmt, info=info,
-                                          overwrite=overwrite))
-
+    with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite) as body:
         m = perez_sky_matrix_from_weather(weather, sun_position=sun_position, dtype=dtype,
-                                          _write_rows=rows, **kwargs)
-        offset = head[0]
-    else:  # the numba kernel fills the file's memory map in place
-        with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite) as body:
-            m = perez_sky_matrix_from_weather(weather, sun_position=sun_position, dtype=dtype, out=body,
-                                              **kwargs)
-        offset = None
-    body = np.memmap(path, dtype=dtype, mode="r", shape=shape,
-                     offset=offset if offset is not None else _data_offset(path))
+                                          out=body, **kwargs)
+    body = np.memmap(path, dtype=dtype, mode="r", shape=shape, offset=_data_offset(path))
     m.sky = np.swapaxes(body, 0, 1)
     return m
 
