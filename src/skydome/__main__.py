@@ -1,8 +1,9 @@
 """``skydome`` / ``python -m skydome``: the command line.
 
 A plain perez1993 ``skymatrix`` command line is run without the CLI framework
-(:func:`skydome.daylighting.skymatrix_cli.fast_skymatrix`: no typer, no numba for a fixed
-order, the start-up of a gendaymtx-like run); every other command line, and any that the
+(:func:`skydome.daylighting.skymatrix_cli.fast_skymatrix`: no typer, and with ``--backend
+numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run); every other
+command line, and any that the
 fast path does not take, goes to the typer application :mod:`skydome.cli`.
 """
 
