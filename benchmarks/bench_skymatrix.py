@@ -8,13 +8,15 @@ each round (gendaymtx, then each skydome case):
 
 - ``gendaymtx -m MF -of y.wea > g.mtx``;
 - ``skydome skymatrix --weather y.wea --order 0 --sun-position radiance``: gendaymtx's
-  definition (the same .wea, Radiance's solar position, one point per patch);
+  definition (the same .wea, Radiance's solar position, one point per patch), with the
+  default backend (numba) and with ``--backend numpy`` (no numba start-up); both through
+  ``python -m skydome``, whose typer-free path takes these command lines;
 - the same from the TMY3 file (pvlib.iotools read, pandas and pvlib imported);
 - skydome's defaults from the TMY3 file (adaptive patch means, SPA suns), and the same with
   the former default, order 4;
-- in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun), the
-  default one (adaptive, SPA suns) and order 4 (SPA suns) filled into the file's memory map,
-  the part of a run that is the matrix and its file;
+- in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun; numba
+  and numpy backends), the default one (adaptive, SPA suns) and order 4 (SPA suns) filled
+  into the file's memory map, the part of a run that is the matrix and its file;
 - the start-up floor of any such run, each a fresh process: ``python -c pass``, ``import
   numpy``, ``import numba``, ``import pvlib`` (what a TMY3/EPW input adds), and the skydome
   modules with the cached sky-matrix kernel loaded and called on two hours (everything a
@@ -24,8 +26,11 @@ each round (gendaymtx, then each skydome case):
 Outputs are deleted before each timed run (freeing a 242 MB file is not counted for either
 program). Each figure is the best of ``--repeat`` rounds, as wall-clock time and as CPU time
 (user + system of the process, all threads; gendaymtx is single-threaded, skydome's kernel
-uses every numba thread): on a shared machine CPU time is the steadier figure. The ratio
-printed is gendaymtx / skydome. With --write the table goes into docs/performance.md.
+uses every numba thread), with the user and system parts of the best CPU round: on a shared
+machine CPU time is the steadier figure. The ratio printed is gendaymtx / skydome. The
+children run with Python's bytecode cache on (``PYTHONDONTWRITEBYTECODE`` removed from their
+environment; the skydome runs are warmed once), as an installed package has it.
+``uptime`` is printed before and after. With --write the table goes into docs/performance.md.
 
 Run:  .venv/bin/python benchmarks/bench_skymatrix.py [--write] [--repeat N] [--mf 1 4]
 """
@@ -64,7 +69,7 @@ def _radiance():
 
 
 def _timed(cmd, out: Path, env, stdout_to_out: bool):
-    """(wall, cpu) seconds of one child run; ``out`` removed first."""
+    """(wall, cpu, user, sys) seconds of one child run; ``out`` removed first."""
     out.unlink(missing_ok=True)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
@@ -75,8 +80,16 @@ def _timed(cmd, out: Path, env, stdout_to_out: bool):
         subprocess.run(cmd, stdout=subprocess.DEVNULL, env=env, check=True)
     wall = time.perf_counter() - t
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-    return wall, cpu
+    user, system = r1.ru_utime - r0.ru_utime, r1.ru_stime - r0.ru_stime
+    return wall, user + system, user, system
+
+
+def _keep_best(best, name, wall, cpu, user, system):
+    """Best wall and best CPU of a case, with the user/system parts of the best CPU round."""
+    b = best.setdefault(name, [1e9, 1e9, 0.0, 0.0])
+    b[0] = min(b[0], wall)
+    if cpu < b[1]:
+        b[1:] = [cpu, user, system]
 
 
 def main(argv=None):
@@ -95,8 +108,11 @@ def main(argv=None):
     gendaymtx, env = _radiance()
     senv = dict(env, PYTHONPATH=os.pathsep.join([str(ROOT / "src"),
                                                  env.get("PYTHONPATH", "")]).rstrip(os.pathsep))
-    sky = [sys.executable, "-m", "skydome.cli", "skymatrix"]
+    senv.pop("PYTHONDONTWRITEBYTECODE", None)  # bytecode cached, as an installed package's
+    sky = [sys.executable, "-m", "skydome", "skymatrix"]
     rows, loads = [], []
+    print("uptime before:", subprocess.run(["uptime"], capture_output=True,
+                                           text=True).stdout.strip(), flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         write_wea(read_weather(tmy3, sun_position="radiance"), tmp / "y.wea")
@@ -112,6 +128,10 @@ def main(argv=None):
                     sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--order", "0",
                            "--sun-position", "radiance", "--out", str(tmp / "s.mtx")],
                     senv, False),
+                "skydome CLI, .wea, order 0, Radiance sun, --backend numpy": (
+                    sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--order", "0",
+                           "--sun-position", "radiance", "--backend", "numpy", "--out",
+                           str(tmp / "s.mtx")], senv, False),
                 "skydome CLI, TMY3, order 0, Radiance sun": (
                     sky + ["--weather", str(tmy3), "--patches", spec, "--order", "0",
                            "--sun-position", "radiance", "--out", str(tmp / "s.mtx")],
@@ -137,40 +157,45 @@ def main(argv=None):
                     "start-up floor: the same, numba's own start (SciPy BLAS probe)": (
                         py + [_FLOOR.format(start="")], senv, False),
                 })
-            for cmd, e, _ in list(cases.values())[1:2]:  # numba cache of this tree, warm
+            for cmd, e, _ in list(cases.values())[1:3]:  # numba and bytecode caches, warm
                 _timed(cmd, tmp / "s.mtx", e, False)
             best: dict = {}
             for _ in range(args.repeat):
                 for name, (cmd, e, to_out) in cases.items():
                     out = tmp / ("g.mtx" if to_out else "s.mtx")
-                    wall, cpu = _timed(cmd, out, e, to_out)
-                    b = best.setdefault(name, [1e9, 1e9])
-                    b[0], b[1] = min(b[0], wall), min(b[1], cpu)
+                    _keep_best(best, name, *_timed(cmd, out, e, to_out))
                     loads.append(os.getloadavg()[0])
-                for name, wx, o, sp in (
+                for name, wx, o, sp, be in (
                         ("skydome in process, matrix + file, order 0, Radiance sun", w, 0,
-                         "radiance"),
+                         "radiance", "numba"),
+                        ("skydome in process, matrix + file, order 0, Radiance sun, numpy "
+                         "backend", w, 0, "radiance", "numpy"),
                         ("skydome in process, matrix + file, defaults (adaptive, SPA)", w_spa,
-                         "adaptive", "spa"),
-                        ("skydome in process, matrix + file, order 4, SPA", w_spa, 4, "spa")):
+                         "adaptive", "spa", "numba"),
+                        ("skydome in process, matrix + file, order 4, SPA", w_spa, 4, "spa",
+                         "numba")):
                     (tmp / "s.mtx").unlink(missing_ok=True)
-                    c0 = time.process_time()
+                    r0 = resource.getrusage(resource.RUSAGE_SELF)
                     t = time.perf_counter()
                     with matrix_file(tmp / "s.mtx", len(patches(spec)), len(wx), 3) as body:
                         m = perez_sky_matrix_from_weather(wx, patches=spec, order=o,
                                                           sun_position=sp, dtype=np.float32,
-                                                          out=body)
-                    wall, cpu = time.perf_counter() - t, time.process_time() - c0
+                                                          out=body, backend=be)
+                    wall = time.perf_counter() - t
+                    r1 = resource.getrusage(resource.RUSAGE_SELF)
                     del m
-                    b = best.setdefault(name, [1e9, 1e9])
-                    b[0], b[1] = min(b[0], wall), min(b[1], cpu)
-            gw, gc = best["gendaymtx -of (.wea)"]
-            for name, (bw, bc) in best.items():
-                rows.append((spec, name, bw, gw / bw, bc, gc / bc))
-                print(f"{spec:11s} {name:58s} wall {bw:6.2f} s x{gw / bw:5.1f}   "
-                      f"cpu {bc:6.2f} s x{gc / bc:5.1f}", flush=True)
+                    user, system = r1.ru_utime - r0.ru_utime, r1.ru_stime - r0.ru_stime
+                    _keep_best(best, name, wall, user + system, user, system)
+            gw, gc = best["gendaymtx -of (.wea)"][:2]
+            for name, (bw, bc, bu, bs) in best.items():
+                rows.append((spec, name, bw, gw / bw, bc, gc / bc, bu, bs))
+                print(f"{spec:11s} {name:66s} wall {bw:6.2f} s x{gw / bw:5.1f}   "
+                      f"cpu {bc:6.2f} s x{gc / bc:5.1f} (user {bu:.2f} sys {bs:.2f})",
+                      flush=True)
     load = f"{min(loads):.1f}-{max(loads):.1f}"
     print(f"1-min load average during the runs: {load}")
+    print("uptime after:", subprocess.run(["uptime"], capture_output=True,
+                                          text=True).stdout.strip())
     if args.write:
         lines = [f"Annual sky matrices, 8760 h of the Greensboro TMY3 (benchmarks/bench_skymatrix.py; "
                  f"{machine()}; 1-min load average {load} during the run: the machine was "
@@ -183,10 +208,12 @@ def main(argv=None):
                  "gendaymtx / skydome (for a start-up row: the most a run paying that "
                  "start-up could reach were its work free).",
                  "",
-                 "| patches | program | wall [s] | wall ratio | CPU [s] | CPU ratio |",
-                 "|---|---|---|---|---|---|"]
-        for spec, name, bw, rw, bc, rc in rows:
-            lines.append(f"| {spec} | {name} | {bw:.2f} | {rw:.1f}x | {bc:.2f} | {rc:.1f}x |")
+                 "| patches | program | wall [s] | wall ratio | CPU [s] | CPU ratio | "
+                 "user / sys [s] |",
+                 "|---|---|---|---|---|---|---|"]
+        for spec, name, bw, rw, bc, rc, bu, bs in rows:
+            lines.append(f"| {spec} | {name} | {bw:.2f} | {rw:.1f}x | {bc:.2f} | {rc:.1f}x | "
+                         f"{bu:.2f} / {bs:.2f} |")
         write_section(ROOT / "docs" / "performance.md", "skymatrix", "\n".join(lines))
 
 

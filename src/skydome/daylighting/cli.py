@@ -11,6 +11,8 @@ from typing import Optional
 
 import typer
 
+from skydome.daylighting.skymatrix_cli import SKYMATRIX_DEFAULTS as D
+
 weather_app = typer.Typer(no_args_is_help=True, help="Hourly weather files (EPW, TMY3).")
 
 
@@ -46,195 +48,61 @@ def weather_info(path: str = typer.Argument(..., help="EPW or TMY3 file")):
                f"DHI {s['annual_dhi_kwh_m2']:.1f} kWh/m^2")
 
 
-def _sun_scene(m, hours_minute, alt_ok) -> str:
-    """gendaymtx -D style scene: one light + source per hour with the sun in the sky."""
-    from skydome.daylighting.skymatrix import SUN_ANGLE_DEG
-
-    out = []
-    for k in range(m.sky.shape[0]):
-        if not alt_ok[k]:
-            continue
-        r = m.sun[k]
-        d = m.sun_directions[k]
-        i = int(hours_minute[k])
-        rgb = " ".join(f"{v:.6e}" for v in (list(r) * 3 if r.size == 1 else r))
-        out.append(f"\nvoid light solar{i}\n0\n0\n3 {rgb}\n\nsolar{i} source sun{i}\n0\n0\n"
-                   f"4 {d[0]:.6f} {d[1]:.6f} {d[2]:.6f} {SUN_ANGLE_DEG:.4f}\n")
-    return "".join(out)
-
-
 def skymatrix_cmd(
     weather: str = typer.Option(..., "--weather", help="EPW, TMY3 or Radiance .wea file"),
     out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
-    patches: str = typer.Option("tregenza", "--patches", help="tregenza | reinhart:MF"),
-    model: str = typer.Option("perez1993", "--model",
+    patches: str = typer.Option(D["patches"], "--patches", help="tregenza | reinhart:MF"),
+    model: str = typer.Option(D["model"], "--model",
                               help="perez1993, or any skydome model (e.g. precomputed; .zarr)"),
     components: Optional[str] = typer.Option(
-        None, "--components", help="rgb | luminance (perez1993, default rgb); luminance | "
+        D["components"], "--components", help="rgb | luminance (perez1993, default rgb); luminance | "
         "spectral | spectral:N (other models, default spectral:16)"),
-    sun: Optional[str] = typer.Option(None, "--sun",
+    sun: Optional[str] = typer.Option(D["sun"], "--sun",
                                       help="spread (default) | spread:N | disc:ANGLE | "
                                       "separate | none (perez1993)"),
     aod_from: Optional[str] = typer.Option(
-        None, "--aod-from", help="aerosol optical depth per hour: 'weather' or a number "
+        D["aod_from"], "--aod-from", help="aerosol optical depth per hour: 'weather' or a number "
         "(models with an atmosphere)"),
-    param: list[str] = typer.Option([], "--param",
+    param: list[str] = typer.Option(D["param"], "--param",
                                     help="model parameter NAME=VALUE (repeat; other models)"),
     order: Optional[str] = typer.Option(
-        None, "--order", help="patch quadrature: adaptive (perez1993 default) or an order "
+        D["order"], "--order", help="patch quadrature: adaptive (perez1993 default) or an order "
         "0..16 (0 = the centre; other models' default 4)"),
-    sun_position: str = typer.Option("spa", "--sun-position",
+    sun_position: str = typer.Option(D["sun_position"], "--sun-position",
                                      help="spa | radiance (gendaymtx's approximate sun)"),
-    fmt: str = typer.Option("float", "--format", help="ascii | float | double"),
-    albedo: str = typer.Option("0.2", "--albedo", help="ground reflectance, or 'weather'"),
-    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler",
+    fmt: str = typer.Option(D["fmt"], "--format", help="ascii | float | double"),
+    albedo: str = typer.Option(D["albedo"], "--albedo", help="ground reflectance, or 'weather'"),
+    overwrite: bool = typer.Option(D["overwrite"], "--overwrite",
+                                   help="replace existing outputs"),
+    scheduler: Optional[str] = typer.Option(D["scheduler"], "--scheduler",
                                             help="run on a Dask cluster (tcp://HOST:8786)"),
-    workers: int = typer.Option(0, "--workers",
+    workers: int = typer.Option(D["workers"], "--workers",
                                 help="run on a local Dask cluster of N processes (0: in process)"),
-    chunk_hours: int = typer.Option(730, "--chunk-hours", help="hours per Dask chunk"),
+    chunk_hours: int = typer.Option(D["chunk_hours"], "--chunk-hours", help="hours per Dask chunk"),
+    backend: str = typer.Option(D["backend"], "--backend",
+                                help="numba (default) | numpy (a fixed --order, no numba "
+                                "start-up; equal to rounding) | auto (perez1993)"),
 ):
     """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible.
 
     With --scheduler or --workers the hours are computed as chunks on Dask, kept in
     OUT.chunks/ until the matrix is written: an interrupted run, rerun, reuses them."""
-    import numpy as np
-
     from skydome.daylighting.patches import patches as make_patches
-    from skydome.daylighting.radiance_io import (FORMATS, atomic_write_bytes, matrix_file,
-                                                 write_matrix)
-    from skydome.constants import SUN_ANGULAR_RADIUS_DEG
-    from skydome.daylighting.skymatrix import (SUN_ANGLE_DEG, parse_sun_option,
-                                               perez_sky_matrix_from_weather)
+    from skydome.daylighting.skymatrix_cli import order_option, run_perez_skymatrix
 
     # -- validate everything before any work -------------------------------------------------
     ps = _guard(make_patches, patches)
-    order = _order_option(order, model)
+    order = order_option(order, model, _fail)
     if model != "perez1993":
         return _model_matrix(weather, out, ps, model, components or "spectral:16", sun,
                              aod_from, param, order, sun_position, overwrite, scheduler,
                              workers, chunk_hours)
-    if aod_from is not None or param:
-        _fail("--aod-from and --param apply to physically based models, not perez1993")
-    components = components or "rgb"
-    sun = sun or "spread"
-    mode = _guard(parse_sun_option, sun)[0]
-    if components not in ("rgb", "luminance"):
-        _fail(f"components = {components!r} is unknown (choices: rgb, luminance)")
-    if fmt not in FORMATS:
-        _fail(f"format = {fmt!r} is unknown (choices: {', '.join(FORMATS)})")
-    if sun_position not in ("spa", "radiance"):
-        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
-    if workers < 0 or chunk_hours < 1:
-        _fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
-    distributed = scheduler is not None or workers > 0
-    rho: Optional[float] = None
-    if albedo != "weather":
-        try:
-            rho = float(albedo)
-        except ValueError:
-            _fail(f"albedo = {albedo!r} must be a number in [0, 1] or 'weather'")
-        if not 0.0 <= rho <= 1.0:
-            _fail(f"albedo = {albedo!r} is out of range [0, 1]")
-    out_p = Path(out)
-    targets = [out_p]
-    if mode == "separate":
-        stem = out_p.with_suffix("")
-        targets += [Path(f"{stem}.sun{out_p.suffix or '.mtx'}"), Path(f"{stem}.suns.rad")]
-    for t in targets:
-        if t.exists() and not overwrite:
-            _fail(f"out = {str(t)!r} exists (use --overwrite)")
-        if not t.parent.is_dir():
-            _fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
-    from skydome.daylighting.weather import read_weather
-
-    if not distributed:  # this process runs only the Perez kernels: no BLAS probe
-        from skydome.daylighting.skymatrix import start_numba_without_blas
-
-        start_numba_without_blas()
-    w = _guard(read_weather, weather, sun_position=sun_position)
-    if rho is None:
-        rho_v = w.albedo if w.albedo is not None else np.full(len(w), 0.2)
-        rho_v = np.where(np.isfinite(rho_v), rho_v, 0.2)
-    else:
-        rho_v = rho
-    dtype = np.float32 if fmt == "float" else np.float64
-    chunk_dir = None
-    if distributed:
-        import shutil
-
-        from skydome.distributed import distributed_sky_matrix
-
-        chunk_dir = Path(f"{out_p}.chunks")
-        sky, rep = _guard(distributed_sky_matrix, w, chunk_dir, chunk_hours=chunk_hours,
-                          scheduler=scheduler, n_workers=max(workers, 1), progress=True,
-                          sun_position=sun_position, ground_reflectance=rho_v, patches=ps.name,
-                          order=order, sun=sun, components=components, dtype=dtype)
-        typer.echo(f"chunks: {len(rep.computed)} computed, {len(rep.verified)} reused",
-                   err=True)
-
-        class _M:  # the parts of a SkyMatrix the writer needs
-            pass
-
-        m = _M()
-        m.sky = sky
-        if mode == "separate":
-            from skydome.distributed import split_sun
-
-            m.sky, m.sun = split_sun(sky)
-            m.sun_directions = (w.spa_sun_directions() if sun_position == "spa" else
-                                w.radiance_sun_directions())
-    info = [f"skydome skymatrix --weather {Path(weather).name} --patches {ps.name} "
-            f"--model {model} --components {components} --sun {sun} --order {order} "
-            f"--sun-position {sun_position}",
-            f"LATLONG= {w.site.latitude_deg:.8f} {w.site.longitude_deg:.8f}"]
-    written = []
-    kw = dict(sun_position=sun_position, patches=ps, order=order, sun=sun,
-              components=components, ground_reflectance=rho_v, dtype=dtype)
-    try:
-        if not distributed and fmt != "ascii" and out_p.suffix.lower() != ".npy":
-            # the kernel fills the file's memory map in Radiance's order: no copy, one pass
-            ncomp = 3 if components == "rgb" else 1
-            with matrix_file(out_p, len(ps), len(w), ncomp, fmt=fmt, info=info,
-                             overwrite=overwrite) as body:
-                m = _guard(perez_sky_matrix_from_weather, w, out=body, **kw)
-        else:
-            if not distributed:
-                m = _guard(perez_sky_matrix_from_weather, w, **kw)
-            write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
-                         transpose=out_p.suffix.lower() != ".npy")
-        written.append(out_p)
-        if mode == "separate":
-            write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,
-                         info=info + [f"sun matrix: radiance of the {SUN_ANGLE_DEG} deg solar disc"],
-                         overwrite=overwrite)
-            written.append(targets[1])
-            minute = 24 * 60 * (w.day_of_year - 1) + (w.hour * 60.0 + 0.5).astype(int)
-            up = m.sun_directions[:, 2] > -np.sin(np.radians(SUN_ANGULAR_RADIUS_DEG))
-            atomic_write_bytes(targets[2], _sun_scene(m, minute, up).encode())
-            written.append(targets[2])
-    except BaseException:
-        for t in written:
-            t.unlink(missing_ok=True)
-        raise
-    if chunk_dir is not None:
-        shutil.rmtree(chunk_dir, ignore_errors=True)
-    typer.echo(f"wrote {', '.join(str(t) for t in written)}: {len(ps)} patches x {len(w)} hours "
-               f"x {m.sky.shape[2]} components")
-
-
-def _order_option(order, model):
-    """``--order``: "adaptive" (perez1993's default) or an integer in [0, 16] (the other
-    models' default 4); a bad value fails with one line."""
-    perez = model == "perez1993"
-    text = (order or ("adaptive" if perez else "4")).strip().lower()
-    if perez and text == "adaptive":
-        return text
-    if not text.isdigit() or not 0 <= int(text) <= 16:
-        valid = "'adaptive' or an integer in [0, 16]" if perez else \
-            f"an integer in [0, 16] for model {model!r}"
-        _fail(f"order = {order!r} must be {valid}")
-    return int(text)
+    run_perez_skymatrix(weather=weather, out=out, ps=ps, components=components, sun=sun,
+                        aod_from=aod_from, param=param, order=order,
+                        sun_position=sun_position, fmt=fmt, albedo=albedo,
+                        overwrite=overwrite, scheduler=scheduler, workers=workers,
+                        chunk_hours=chunk_hours, model=model, fail=_fail, guard=_guard,
+                        echo=typer.echo, backend=backend)
 
 
 def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, order,

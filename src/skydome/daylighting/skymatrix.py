@@ -48,7 +48,7 @@ __all__ = ["SkyMatrix", "perez_sky_matrix", "model_sky_matrix", "parse_sun_optio
            "weather_model_sky_matrix", "parse_components", "weather_aod",
            "GENDAYMTX_SKY_COLOR", "start_numba_without_blas",
            "SUN_ANGLE_DEG", "DEFAULT_ORDER", "PEREZ_DEFAULT_ORDER", "quadrature_rule",
-           "warm_kernels"]
+           "warm_kernels", "perez_sky_matrix_file"]
 
 #: gendaymtx's default sky colour (its -c default, Radiance 5.4).
 GENDAYMTX_SKY_COLOR = (0.96, 1.004, 1.118)
@@ -144,7 +144,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                      order=PEREZ_DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
                      sky_color=GENDAYMTX_SKY_COLOR, dtype=np.float64,
-                     out=None) -> SkyMatrix:
+                     out=None, backend: str = "numba") -> SkyMatrix:
     """Perez (1993) sky matrix of many hours in one vectorised pass.
 
     Parameters
@@ -185,6 +185,13 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         and ``sky`` is its (hours, patches, components) view, so that writing the file needs
         no transposed copy (1.7 s for an annual MF:4 matrix on a 2-core EPYC). Without it the
         matrix is allocated in the same order.
+    backend : {"auto", "numpy", "numba"}
+        "numba": the parallel kernel of :mod:`skydome.daylighting._kernels` (every rule);
+        "numpy": the same arithmetic vectorised with numpy over blocks of hours
+        (:mod:`skydome.daylighting._numpy_sky`; a fixed order only), which needs no numba
+        (its import is 0.4-0.5 s of a run's start-up); "auto" takes numpy for a fixed order
+        and numba for the adaptive rule. Both give the same matrix to rounding (relative
+        1e-12), not bit for bit; the default "numba" keeps every earlier result's bits.
 
     Returns
     -------
@@ -197,6 +204,11 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
 
     ps = patches if isinstance(patches, PatchSet) else _patches(patches)
     rule = quadrature_rule(ps, order)
+    fixed = rule[2].shape[0] == 1  # one rule for every patch (a fixed order)
+    backend = check_choice("backend", backend, ("auto", "numpy", "numba"))
+    if backend == "numpy" and not fixed:
+        raise ValueError(f"backend = 'numpy' takes a fixed order (0..16), not order = {order!r}")
+    use_numpy = backend == "numpy" or (backend == "auto" and fixed)
     mode, nsuns, disc_deg = parse_sun_option(sun)
     check_choice("components", components, ("rgb", "luminance"))
     dni = np.atleast_1d(np.asarray(dni, dtype=np.float64))
@@ -251,8 +263,8 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
     dtype = np.dtype(dtype)
     if dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
         raise ValueError(f"dtype = {dtype} must be float64 or float32")
-    # The kernel fills a C-contiguous (P, H, C) array in Radiance's file order (one compiled
-    # specialisation per dtype); ``sky`` is its (H, P, C) view.
+    # Both backends fill a zero-filled C-contiguous (P, H, C) array in Radiance's file order
+    # (unlit hours stay zero); ``sky`` is its (H, P, C) view.
     if out is not None:
         if not isinstance(out, np.ndarray) or out.shape != (npatch, n, ncomp) or \
                 out.dtype != dtype or not out.flags.c_contiguous or not out.flags.writeable:
@@ -262,20 +274,28 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         file_order = out
     else:
         file_order = np.zeros((npatch, n, ncomp), dtype=dtype)
-    sky = np.swapaxes(file_order, 0, 1)
     sun_sa = math.pi * math.radians(SUN_ANGLE_DEG / 2.0) ** 2
     fixed_sa = math.pi * math.radians(disc_deg / 2.0) ** 2 if mode == "disc" else 0.0
-    import numba
+    n_sun_patches = nsuns if mode in ("spread", "disc") else 0
+    tints = np.ascontiguousarray(sky_tint * np.ones(ncomp))
+    if use_numpy:
+        from skydome.daylighting import _numpy_sky as NS
 
-    from skydome.daylighting import _kernels as DK
+        NS.fill_perez_sky(file_order, day, rule[0], rule[1], rule[2][0], s_dist, coef, e_diff,
+                          COS_ZETA_MIN, ps.centres[1:], ps.solid_angle_sr[1:], sd, e_dir, rho,
+                          tints, grey, out_scale, n_sun_patches, fixed_sa)
+    else:
+        import numba
 
-    DK.fill_perez_sky(file_order, np.ascontiguousarray(day), *rule,
-                      np.ascontiguousarray(ps.centres[1:]), ps.solid_angle_sr[1:],
-                      np.ascontiguousarray(s_dist), np.ascontiguousarray(sd),
-                      np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),
-                      np.ascontiguousarray(sky_tint * np.ones(ncomp)), grey, out_scale,
-                      nsuns if mode in ("spread", "disc") else 0, fixed_sa, COS_ZETA_MIN,
-                      numba.get_num_threads())
+        from skydome.daylighting import _kernels as DK
+
+        DK.fill_perez_sky(file_order, np.ascontiguousarray(day), *rule,
+                          np.ascontiguousarray(ps.centres[1:]), ps.solid_angle_sr[1:],
+                          np.ascontiguousarray(s_dist), np.ascontiguousarray(sd),
+                          np.ascontiguousarray(coef), e_diff, e_dir, np.ascontiguousarray(rho),
+                          tints, grey, out_scale, n_sun_patches, fixed_sa, COS_ZETA_MIN,
+                          numba.get_num_threads())
+    sky = np.swapaxes(file_order, 0, 1)
     sun_mat = None
     if mode == "separate":
         up = day & (alt > -math.radians(SUN_ANGLE_DEG / 2.0))  # gendaymtx -D: sun in the sky
@@ -340,6 +360,45 @@ def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) 
         td = np.where(np.isfinite(weather.dew_point_c), weather.dew_point_c, 11.0)
         kw["dew_point_c"] = td
     return perez_sky_matrix(weather.dni, weather.dhi, sd, weather.day_of_year, **kw)
+
+
+def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str = "float",
+                          info=(), overwrite: bool = False, **kwargs) -> SkyMatrix:
+    """:func:`perez_sky_matrix_from_weather` written to a binary Radiance matrix file
+    (``fmt`` "float" or "double"), without holding a second copy of it: either backend fills
+    the memory map of the file's zero-filled body
+    (:func:`~skydome.daylighting.radiance_io.matrix_file`) in place. The file appears only
+    when complete. ``kwargs`` as :func:`perez_sky_matrix` (not ``dtype``/``out``: the format
+    gives the type). Returns the SkyMatrix; its ``sky`` is a read-only memory map of the
+    written file."""
+    from skydome._validate import check_choice
+    from skydome.daylighting.radiance_io import matrix_file
+
+    check_choice("fmt", fmt, ("float", "double"))
+    for k in ("dtype", "out"):
+        if k in kwargs:
+            raise TypeError(f"perez_sky_matrix_file() takes no {k!r}")
+    dtype = np.float32 if fmt == "float" else np.float64
+    ps = kwargs.get("patches", "tregenza")
+    ps = kwargs["patches"] = ps if isinstance(ps, PatchSet) else _patches(ps)
+    ncomp = 3 if kwargs.get("components", "rgb") == "rgb" else 1
+    shape = (len(ps), len(weather), ncomp)
+    with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite) as body:
+        m = perez_sky_matrix_from_weather(weather, sun_position=sun_position, dtype=dtype,
+                                          out=body, **kwargs)
+    body = np.memmap(path, dtype=dtype, mode="r", shape=shape, offset=_data_offset(path))
+    m.sky = np.swapaxes(body, 0, 1)
+    return m
+
+
+def _data_offset(path) -> int:
+    """Offset of a binary Radiance matrix file's data: after its header's blank line."""
+    with open(path, "rb") as f:
+        head = f.read(1 << 16)
+    k = head.find(b"\n\n")
+    if k < 0:
+        raise ValueError(f"{str(path)!r}: no end of header in its first 64 KiB")
+    return k + 2
 
 
 def model_sky_matrix(make_model, n_hours: int, *, patches="tregenza",

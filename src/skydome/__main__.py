@@ -1,0 +1,38 @@
+"""``skydome`` / ``python -m skydome``: the command line.
+
+A plain perez1993 ``skymatrix`` command line is run without the CLI framework
+(:func:`skydome.daylighting.skymatrix_cli.fast_skymatrix`: no typer, and with ``--backend
+numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run); every other
+command line, and any that the
+fast path does not take, goes to the typer application :mod:`skydome.cli`.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+
+def main() -> None:  # console-script entry point
+    argv = sys.argv[1:]
+    if argv[:1] == ["skymatrix"]:
+        # Before numpy is imported: no transparent huge pages for its large arrays (the
+        # 161 MB of patch values of an annual MF:4 matrix). On the 2-core EPYC virtual machine
+        # of docs/performance.md the first touch of a 2 MiB page is slow: 0.37-0.44 s of
+        # system time for those 161 MB, 0.06-0.09 s with 4 KiB pages. A value set by the
+        # user is kept.
+        os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+        from skydome.daylighting.skymatrix_cli import fast_skymatrix
+
+        try:
+            if fast_skymatrix(argv[1:]):
+                sys.exit(0)
+        except KeyboardInterrupt:  # pragma: no cover
+            sys.exit(130)
+    from skydome.cli import main as cli_main
+
+    cli_main()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

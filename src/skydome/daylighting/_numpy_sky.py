@@ -1,0 +1,167 @@
+"""The Perez sky matrix in numpy, for a process that need not start numba (private).
+
+The same arithmetic as :func:`skydome.daylighting._kernels.fill_perez_sky` with a fixed
+patch rule (one quadrature rule for every patch, e.g. order 0, gendaymtx's one point at each
+patch centre), in the same order of operations per value, but vectorised over blocks of
+lit hours x nodes with numpy's ufuncs instead of one numba loop per hour. It needs no
+``import numba`` (0.4-0.5 s of CPU on a 2-core EPYC, the start-up floor of any numba path),
+and numpy's vectorised ``arccos``/``exp`` are faster than the scalar libm calls of the strict
+IEEE kernel. Results equal the kernel's to rounding (relative 1e-12): ``arccos``/``exp``
+differ from libm's by a few units in the last place, cos(gamma) and the horizontal sums are
+matrix products (added in another order, fused multiply-adds), and a one-node patch mean is
+the node's value (the kernel's (w lv) / w may differ from it in the last bit); the sun's
+nearest patches are chosen by the kernel's own dot products, in its order of operations,
+with its tie-break (the lower patch index first).
+
+The matrix is written run of lit hours by run of lit hours into a zero-filled array in
+Radiance's file order (patches, hours, components), e.g. the memory map of a matrix file's body
+(:func:`skydome.daylighting.radiance_io.matrix_file`), as the kernel does: no intermediate
+matrix of patch values is held (an annual MF:4 one is 161 MB of float64, whose first touch
+alone cost 0.06-0.4 s of system time on the 2-core EPYC of docs/performance.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Nodes x hours per vectorised block (the work arrays stay in the cache).
+_BLOCK = 1 << 16
+
+
+def _runs(mask, longest):
+    """(start, stop) of the runs of True in ``mask``, split to at most ``longest``."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.view(np.int8), [0]])))
+    out = []
+    for a, b in zip(edges[::2], edges[1::2]):
+        out += [(h, min(b, h + longest)) for h in range(a, b, longest)]
+    return out
+
+
+def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_scale,
+                       cz_min):
+    """The sky patches' values of the lit hours, normalised to the diffuse illuminance, run
+    of lit hours by run.
+
+    ``nodes`` (M, 3), ``weights`` (M,) [sr], ``offsets`` (P + 1,): one rule for all patches
+    (patch k owns nodes offsets[k]:offsets[k + 1]); ``s_dist`` (H, 3) the sun vector of the
+    distribution, ``coef`` (H, 5) (a, b, c, d, e), ``lit`` (H,) bool, ``e_diff`` (H,) [lx].
+    Yields (h0, h1, v) for runs of consecutive lit hours (a day's, split to blocks of about
+    ``_BLOCK`` values), v (h1 - h0, P): the patch mean of lv times e_diff / (its horizontal
+    integral) times ``out_scale`` (the kernel's ``v``); v is overwritten by the next run."""
+    n_p = offsets.shape[0] - 1
+    m = nodes.shape[0]
+    one = m == n_p  # one node per patch (order 0): the mean is lv itself
+    nodes_t = np.ascontiguousarray(nodes.T)
+    z = np.ascontiguousarray(nodes[:, 2])
+    # the nodes come in runs of equal altitude: one gradation term per run
+    first = np.flatnonzero(np.concatenate([[True], z[1:] != z[:-1]]))
+    reps = np.diff(np.append(first, m))
+    zc = np.maximum(z[first], cz_min)
+    wz = weights * z
+    starts = offsets[:-1]
+    wsum = np.add.reduceat(weights, starts)
+    for h0, h1 in _runs(lit, max(1, _BLOCK // m)):
+        s = s_dist[h0:h1]
+        a, b, c, dd, e = (coef[h0:h1, i][:, None] for i in range(5))
+        cg = s @ nodes_t             # cos(gamma), (hours, nodes)
+        np.clip(cg, -1.0, 1.0, out=cg)
+        lv = np.arccos(cg)
+        lv *= dd
+        np.exp(lv, out=lv)
+        lv *= c
+        lv += 1.0                    # [PSM93] eq. 1: 1 + c exp(d gamma) + e cos^2(gamma)
+        q = cg * e
+        q *= cg
+        lv += q
+        grad = np.exp(b / zc)        # 1 + a exp(b / cos zeta), once per run of equal altitude
+        grad *= a
+        grad += 1.0
+        lv *= np.repeat(grad, reps, axis=1)
+        np.maximum(lv, 0.0, out=lv)  # a negative lv is clipped to 0 (per node)
+        if one:
+            horiz = lv @ wz          # sum of w lv cos(zeta) [sr]
+            means = lv
+        else:
+            lv *= weights
+            horiz = lv @ z
+            means = np.add.reduceat(lv, starts, axis=1)
+            means /= wsum
+        flat = horiz <= 1e-6         # gendaymtx: a zero sky is made uniform, normalised by pi
+        if flat.any():
+            means[flat] = 1.0
+            horiz[flat] = np.pi
+        scale = e_diff[h0:h1] / horiz * out_scale  # the sky's horizontal illuminance is Dh
+        means *= scale[:, None]
+        yield h0, h1, means
+
+
+def nearest_patches(centres, s_true, hours, nsuns):
+    """Indices (len(hours), nsuns) and dot products of the ``nsuns`` patch centres nearest
+    the sun of each of ``hours`` (gendaymtx AddDirect), nearest first, as the kernel chooses
+    them: its dot products (cx sx + cy sy + cz sz, in that order, no fused multiply-add),
+    among equal ones the lower index first (its insertion takes strictly greater ones). The
+    candidates are the nsuns + 2 nearest by a matrix product (rounded otherwise), re-ranked
+    by the kernel's dot products."""
+    n_c = nsuns + 2
+    near = np.empty((hours.size, nsuns), dtype=np.int64)
+    ndot = np.empty((hours.size, nsuns))
+    c_t = np.ascontiguousarray(centres.T)
+    step = max(1, _BLOCK // centres.shape[0])
+    for i0 in range(0, hours.size, step):
+        s = s_true[hours[i0:i0 + step]]
+        d = s @ c_t
+        r = np.arange(d.shape[0])[:, None]
+        cand = np.empty((d.shape[0], n_c), dtype=np.int64)
+        for j in range(n_c):
+            cand[:, j] = np.argmax(d, axis=1)
+            d[r[:, 0], cand[:, j]] = -np.inf
+        cand.sort(axis=1)            # index order: a stable sort by dot keeps it for ties
+        c = centres[cand]            # (hours, n_c, 3)
+        exact = c[..., 0] * s[:, 0:1]
+        exact += c[..., 1] * s[:, 1:2]
+        exact += c[..., 2] * s[:, 2:3]
+        pick = np.argsort(-exact, axis=1, kind="stable")[:, :nsuns]
+        near[i0:i0 + step] = cand[r, pick]
+        ndot[i0:i0 + step] = exact[r, pick]
+    return near, ndot
+
+
+def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_min, centres,
+                   dom, s_true, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa):
+    """Fill the sky matrix ``out`` (P + 1, H, C), zero-filled, in Radiance's file order (row
+    0 the ground): the patch values of :func:`perez_patch_values` times the tint, the ground
+    and the sun, with the kernel's per-hour inputs (see
+    :func:`skydome.daylighting._kernels.fill_perez_sky`), computed in float64 as the kernel
+    does and rounded to ``out``'s type once. Unlit hours are not touched (they stay zero)."""
+    ncomp = tint.shape[0]
+    hours = np.flatnonzero(lit)
+    # the sun: the nsuns patches nearest it, weight 1 / (1.002 - cos) (gendaymtx AddDirect)
+    sun_h = hours[e_dir[hours] > 1e-4] if nsuns > 0 else hours[:0]
+    near, ndot = nearest_patches(centres, s_true, sun_h, max(nsuns, 1))
+    near, ndot = near[:, :nsuns], ndot[:, :nsuns]
+    at = np.full(lit.shape[0], -1)
+    at[sun_h] = np.arange(sun_h.size)
+    v_near = np.empty(near.shape)    # the sky values of the sun's patches, in float64
+    for h0, h1, v in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff,
+                                        out_scale, cz_min):
+        vt = v.T
+        for c in range(ncomp):       # v tint[c], in float64, rounded to out's type once
+            np.multiply(vt, tint[c], out=out[1:, h0:h1, c], casting="unsafe")
+        k = at[h0:h1]
+        j = np.flatnonzero(k >= 0)
+        if j.size:
+            v_near[k[j]] = v[j[:, None], near[k[j]]]
+    # the ground, patch 0: rho (Dh + Dn sin a) / pi
+    g = np.where(s_true[:, 2] > 0.0, e_diff + e_dir * s_true[:, 2], e_diff)
+    g = np.where(lit, g * (rho / np.pi * out_scale), 0.0)
+    for c in range(ncomp):
+        out[0, :, c] = g * grey[c]
+    if sun_h.size and nsuns > 0:
+        wt = 1.0 / (1.002 - ndot)
+        wtot = np.zeros(sun_h.size)
+        for j in range(nsuns):       # summed in the kernel's order
+            wtot += wt[:, j]
+        sa = np.full(near.shape, fixed_sa) if fixed_sa > 0.0 else dom[near]
+        v_sun = (wt * e_dir[sun_h][:, None]) * out_scale / (wtot[:, None] * sa)
+        # the sun's patches (distinct within an hour): sky value plus the sun's share
+        out[near + 1, sun_h[:, None]] = v_near[..., None] * tint + v_sun[..., None] * grey
