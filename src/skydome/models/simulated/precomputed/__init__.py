@@ -87,6 +87,12 @@ class PrecomputedSky(SkyModel):
         density (None, the default: the full grid, ``scattering_r_size`` x
         ``density_mu_s_size``). 16 x 24 is up to 10 % RMS (19 % max) off the full grid in
         twilight, r 16 alone 0.6-0.9 % RMS (docs/models.md, "Orders >= 3, cheaper").
+    high_order_wavelengths : int, optional
+        Number of table wavelengths (spread evenly over the table, both ends included) at
+        which the orders >= 3 are computed; at the others they are order 2's scattering
+        density (and order 1's ground irradiance) times the ratio of the orders >= 3 to it,
+        interpolated in wavelength (docs/models.md, "Orders >= 3 at a subset of the table
+        wavelengths"). None: every table wavelength (exact).
     stored_table : {"full", "subset"}
         "full" (default): the stored 4-D table of orders 2..N (read by aerial perspective,
         the texture/LUT export and the viewer; not by ``radiance()``, which integrates
@@ -148,6 +154,8 @@ class PrecomputedSky(SkyModel):
         Parameter("high_order_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density of orders >= 3 (None: the full grid)",
                   kind="int"),
+        Parameter("high_order_wavelengths", "", None, 2, 400,
+                  "table wavelengths at which orders >= 3 are computed (None: all)", kind="int"),
         Parameter("stored_table", "", "full", doc="stored table of orders 2..N: full, or "
                   "subset (faster approximation: integrated on a subset of its nodes)",
                   kind="choice", choices=("full", "subset")),
@@ -529,7 +537,8 @@ _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "trans
                    "scattering_nu_size", "irradiance_mu_s_size", "irradiance_r_size",
                    "integration_samples", "sphere_samples", "high_order_sphere_samples",
                    "density_mu_s_size", "high_order_r_size", "high_order_mu_s_size",
-                   "stored_table", "order_table_divisor", "max_sun_zenith_deg")
+                   "high_order_wavelengths", "stored_table", "order_table_divisor",
+                   "max_sun_zenith_deg")
 
 
 def clear_cache() -> int:

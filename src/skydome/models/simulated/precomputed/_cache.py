@@ -24,7 +24,7 @@ import shutil
 import numpy as np
 
 # bump when the tables' meaning or layout changes (mapping, units, fields)
-CACHE_FORMAT = "skydome.precomputed-cache/5"   # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches; 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset
+CACHE_FORMAT = "skydome.precomputed-cache/6"   # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches; 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset; 6: orders >= 3 at a subset of the table wavelengths
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 
