@@ -190,8 +190,18 @@ def precompute(props, wl, p):
     nb = order_batch_size(p, nl, nsc)
     n_batch = -(-nl // nb)
     hi = high_order_grid(p)
-    nb_hi = high_order_batch_size(p, nl, nsc)
-    n_batch_hi = -(-nl // nb_hi)
+    # the table wavelengths at which the orders >= 3 are computed (all by default with
+    # high_order_wavelengths=None; else a subset, the rest from order 2 x the interpolated
+    # ratio, see _spectral)
+    from skydome.models.simulated.precomputed import _spectral
+
+    absorption = props.extinction - props.scattering      # per row, absorbers folded
+    l_hi, l_nodes = _spectral.subset_indices(nl, p.get("high_order_wavelengths"), absorption,
+                                             col[:, 0, 0], wl)
+    band = _spectral.band_depth(absorption, col[:, 0, 0], props.scattering)
+    nl_hi = l_hi.size
+    nb_hi = high_order_batch_size(p, nl_hi, nsc)
+    n_batch_hi = -(-nl_hi // nb_hi)
     n_steps = 1 + n_batch + max(p["orders"] - 2, 0) * n_batch_hi
     report("precomputing tables: scattering orders", 1, n_steps)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
@@ -219,11 +229,17 @@ def precompute(props, wl, p):
                                           dE1[..., sl])
             report("precomputing tables: scattering orders", 2 + b, n_steps)
         E += dE1
-        for b, l0 in enumerate(range(0, nl, nb_hi)):
-            sl = slice(l0, min(nl, l0 + nb_hi))
-            higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s, sc_idx,
-                          beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min, q2, q3, hi,
-                          n_q_ms, p, E[..., sl], (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
+        if nl_hi == nl:
+            for b, l0 in enumerate(range(0, nl, nb_hi)):
+                sl = slice(l0, min(nl, l0 + nb_hi))
+                higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s,
+                              sc_idx, beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min,
+                              q2, q3, hi, n_q_ms, p, E[..., sl],
+                              (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
+        elif p["orders"] >= 3:
+            higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, nb_hi, col, codes,
+                                 p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
+                                 q3, hi, n_q_ms, p, E, (1 + n_batch, n_steps))
     # 4. the stored orders 2..N (+ remainder) are not integrated here: the sky's radiance()
     # integrates them at the observer from J_sum; the stored table is built from J_sum on
     # its first read (Tables.build_multiple_scattering -> stored_table_of), with the
@@ -546,6 +562,51 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         add_density(J2, J_hi, q2, q3)
 
 
+# the interpolant of the orders >= 3's ratio to order 2 in wavelength (_spectral.spread_ratio):
+# monotone cubic in log rho against log lambda (True) or linear
+SPREAD_CUBIC = True
+# ... with the band absorber's part taken out first (_spectral.spread_ratio)
+SPREAD_BAND = True
+
+
+def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, nb_hi, col, codes, p0s, p1s, sc_idx,
+                         beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, n_q, p, E,
+                         progress=(0, None)):
+    """:func:`higher_orders` at the table wavelengths ``l_hi`` only (batches of ``nb_hi``),
+    spread onto every table wavelength ``wl`` (:mod:`._spectral`): ``J_sum`` holds order 2
+    at every wavelength on entry and orders 2..N (+ remainder) on return; ``E`` holds order
+    1's ground irradiance ``dE1`` on entry, orders 2..N-1 (+ remainder) are added. The
+    orders >= 3 of J and of E are interpolated as ratios to order 2's J and to ``dE1``."""
+    from skydome.models.simulated.precomputed import _spectral
+
+    k = l_hi.size
+    # order 2 at the subset (a copy: the orders >= 3 are summed into it, then the copy
+    # minus order 2 is their sum); their ground irradiance summed on its own
+    J_hi = np.ascontiguousarray(J_sum[..., l_hi])
+    E_hi = np.zeros(E.shape[:-1] + (k,))
+    dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
+    for b, i0 in enumerate(range(0, k, nb_hi)):
+        sl = slice(i0, min(k, i0 + nb_hi))
+        ls = l_hi[sl]
+        higher_orders(J_hi[..., sl], dE1_hi[..., sl], tot2[ls], col, codes, p0s, p1s, sc_idx,
+                      beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, n_q,
+                      p, E_hi[..., sl], (progress[0] + b * (p["orders"] - 2), progress[1]), ls)
+    j2_max = 0.0
+    for i, l in enumerate(l_hi):      # one wavelength at a time: no temporary of the subset
+        J_hi[..., i] -= J_sum[..., l]
+        j2_max = max(j2_max, float(J_sum[..., l].max(initial=0.0)))
+    plan = _spectral.spread_plan(wl, l_hi, l_nodes, band if SPREAD_BAND else None)
+    nl = wl.size
+    # below this, order 2 (or order 1's irradiance) is too small to divide by: 1e-12 of
+    # its largest value (the orders >= 3 interpolated directly there)
+    jf = J_sum.reshape(-1, nl)
+    _spectral.spread_ratio(jf, J_hi.reshape(-1, k), *plan, SPREAD_CUBIC, np.float32(1e-12 * j2_max),
+                           jf)
+    del J_hi
+    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, k), *plan,
+                           SPREAD_CUBIC, 1e-12 * float(dE1_hi.max(initial=0.0)), E.reshape(-1, nl))
+
+
 # the per-order grids of orders >= 3 are never coarser than these (nor finer than the full
 # ones): mu, mu_s and nu nodes of the per-order table, zenith samples of J's outgoing grid
 ORDER_TABLE_MIN = (32, 16, 8)
@@ -615,16 +676,19 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
     radiance ``L_in`` [i, r, mu_s, l] over all (r, mu_s, l) columns, each column weighted
     by the constituent's scattering coefficient ``w_col[k]`` after the product (J = P (L w)
     = (P L) w: no scaled copy of L_in); a tabulated phase function per wavelength (``l0``:
-    the table index of J's first wavelength). With the phase matrices in the azimuthal
+    the table index of J's first wavelength, or the table indices of all of J's
+    wavelengths). With the phase matrices in the azimuthal
     Fourier basis (``q.modes``) three float32 matrix products (BLAS) per block of columns:
     the incident radiance's cosine coefficients (shared by the constituents), per mode the
     product with the constituent's theta matrix, the sum over the modes at every outgoing
     azimuth; else one dense product per constituent, factored phase functions through
     their 10-row right-hand side ``rhs``."""
-    if q.modes is not None:
-        _azimuthal_products(q, L_in, w_col, beta_s, J, l0)
-        return
     nsc, nl = J.shape[0], J.shape[-1]
+    # the table index of each of J's wavelengths (``l0`` an int: consecutive from it)
+    l_tab = np.arange(nl) + l0 if np.ndim(l0) == 0 else np.asarray(l0)
+    if q.modes is not None:
+        _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab)
+        return
     lin = L_in.reshape(q.n_in, -1)
     for k in range(nsc):
         Jk = J[k].reshape(q.n_out, -1)
@@ -633,7 +697,7 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
             J3 = J[k].reshape(q.n_out, -1, nl)
             for l in range(nl):
                 x = np.ascontiguousarray(lin3[:, :, l]) * np.float32(beta_s[k, l])
-                J3[:, :, l] = q.per_wavelength[k][l0 + l] @ x
+                J3[:, :, l] = q.per_wavelength[k][l_tab[l]] @ x
             continue
         left = q.left[:, q.rows[k]:q.rows[k + 1]]
         if q.right[k] is None:
@@ -655,8 +719,9 @@ def _modes_to_density(q, G_cls, C, D, out):
         np.matmul(S[:, :n_m], d.transpose(1, 0, 2), out=out[:, sel])
 
 
-def _azimuthal_products(q, L_in, w_col, beta_s, J, l0):
-    """:func:`density_products` with the phase matrices in the azimuthal Fourier basis."""
+def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
+    """:func:`density_products` with the phase matrices in the azimuthal Fourier basis
+    (``l_tab``: the table index of each of J's wavelengths)."""
     nsc, nl = J.shape[0], J.shape[-1]
     n_ti, n_pi = q.th_in.size, q.ph_in.size
     n_to, n_po = q.th_out.size, q.ph_out.size
@@ -694,7 +759,7 @@ def _azimuthal_products(q, L_in, w_col, beta_s, J, l0):
                 cl = C1[:, :, :(c1 - c0) // nl]
                 cl[...] = c[:, :, l::nl]
                 jl = J1[:, :, :cl.shape[2]]
-                _modes_to_density(q, q.modes[k][l0 + l], cl, D, jl)
+                _modes_to_density(q, q.modes[k][l_tab[l]], cl, D, jl)
                 np.multiply(jl, np.float32(beta_s[k, l]), out=Jk[:, :, l::nl])
 
 
