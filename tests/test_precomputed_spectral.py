@@ -116,7 +116,8 @@ def _sky(m, elev):
 def test_high_order_wavelengths_against_all_wavelengths_small_tables():
     """The approximation against the all-wavelength computation on a small table set
     (Atmosphere.earth, 20 table wavelengths, 6 orders + remainder), ground observer: at the
-    computed wavelengths the same radiance (float32 rounding), elsewhere within the errors
+    computed wavelengths the same radiance (float32 rounding; at the interpolation nodes
+    float16 rounding of the orders >= 3, see below), elsewhere within the errors
     measured for this table set with the default 7 interpolation nodes (per-wavelength
     RMS / max at sun 60, 10, -4 deg: 0.01 / 0.02, 0.05 / 0.08, 0.07 / 0.12 %; bounds
     generous against those), and the ground irradiance likewise."""
@@ -126,7 +127,8 @@ def test_high_order_wavelengths_against_all_wavelengths_small_tables():
     fast = sd.model("precomputed", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=180.0), **SMALL)
     props, column = _props_and_columns(wl)
     # the model picks its nodes evenly in log lambda (the wavelengths given)
-    computed, _ = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
+    computed, nodes = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
+    lines = np.setdiff1d(computed, nodes)
     el, az = np.meshgrid([1.0, 5.0, 15.0, 40.0, 89.0], np.arange(0.0, 181.0, 30.0))
     d = sd.direction_from_angles(el.ravel(), az.ravel() + 180.0)
     for elev, (rms_b, max_b) in ((60.0, (0.0005, 0.001)), (10.0, (0.0015, 0.0025)),
@@ -134,7 +136,10 @@ def test_high_order_wavelengths_against_all_wavelengths_small_tables():
         a, b = _sky(exact, elev).radiance(d, wl), _sky(fast, elev).radiance(d, wl)
         assert np.all(np.isfinite(b)) and np.all(b >= 0.0)
         r = b / a - 1.0
-        np.testing.assert_allclose(b[:, computed], a[:, computed], rtol=2e-5)
+        np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=2e-5)
+        # at the nodes the ratio (orders >= 3) / (order 2) is kept in float16: the orders
+        # >= 3 rounded to within 2^-11 of their value, at most 2^-11 of the radiance
+        np.testing.assert_allclose(b[:, nodes], a[:, nodes], rtol=2.0 ** -11)
         assert np.sqrt(np.mean(r * r, axis=0)).max() < rms_b, elev
         assert np.abs(r).max() < max_b, elev
     Ea, Eb = exact._t.irradiance, fast._t.irradiance

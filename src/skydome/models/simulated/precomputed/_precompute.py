@@ -202,6 +202,10 @@ def precompute(props, wl, p):
     nl_hi = l_hi.size
     nb_hi = high_order_batch_size(p, nl_hi, nsc)
     n_batch_hi = -(-nl_hi // nb_hi)
+    batches = None
+    if nl_hi < nl and p["orders"] >= 3:
+        batches = subset_batches(p, l_hi, l_nodes, nsc)
+        n_batch_hi = len(batches)
     n_steps = 1 + n_batch + max(p["orders"] - 2, 0) * n_batch_hi
     report("precomputing tables: scattering orders", 1, n_steps)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
@@ -237,7 +241,7 @@ def precompute(props, wl, p):
                               q2, q3, hi, n_q_ms, p, E[..., sl],
                               (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         elif p["orders"] >= 3:
-            higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, nb_hi, col, codes,
+            higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes,
                                  p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
                                  q3, hi, n_q_ms, p, E, (1 + n_batch, n_steps))
     # 4. the stored orders 2..N (+ remainder) are not integrated here: the sky's radiance()
@@ -493,7 +497,8 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
 
 
 def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
-                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0):
+                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0, sink=None,
+                  work=None):
     """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
     ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
     (the source of order 3), ``dE1`` the ground irradiance of order 1, ``tot2`` order 2's
@@ -507,7 +512,13 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     outgoing grid of ``q3``: by default J2's own (r, mu_s) grid, each order's J added
     into ``J2`` once order 3's source is no longer needed; on the opt-in coarser grid
     (``high_order_r_size``, ``high_order_mu_s_size``) the orders >= 3 are summed there
-    and that sum (with the remainder) is interpolated into ``J2`` once, at the end."""
+    and that sum (with the remainder) is interpolated into ``J2`` once, at the end.
+
+    ``sink``: instead, a function called with each order's J (and the remainder's) on the
+    grid of orders >= 3, which takes their sum (``J2`` then is order 2 alone, read as order
+    3's source); ``work``: the array (of that grid's shape) that holds each order's J,
+    which may be ``J2`` itself where nothing else reads it (it is read as order 3's source
+    before order 3's J is written)."""
     from skydome.models.simulated.precomputed import _density, _irradiance
 
     nl = J2.shape[-1]
@@ -522,10 +533,15 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     albedo = np.ascontiguousarray(albedo)
     shape = (nsc, q3.th_out.size, q3.ph_out.size, n_r, n_ms, nl)
     L_in = np.empty((q3.n_in, n_r, n_ms, nl), dtype=np.float32)
-    J = np.empty(shape, dtype=np.float32)
-    # orders 3..N: added straight into J2 on its own grid (J2 is no longer needed as order
-    # 3's source once order 3's J is computed), else summed on the coarse grid first
-    J_hi = J2 if shape == J2.shape else np.zeros(shape, dtype=np.float32)
+    J = np.empty(shape, dtype=np.float32) if work is None else work
+    sink_is_own = sink is None
+    if sink_is_own:
+        # orders 3..N: added straight into J2 on its own grid (J2 is no longer needed as
+        # order 3's source once order 3's J is computed), else summed on the coarse grid
+        J_hi = J2 if shape == J2.shape else np.zeros(shape, dtype=np.float32)
+
+        def sink(x):
+            np.add(J_hi, x, out=J_hi)
     src = J2                                   # J of the order before
     dE, dE_prev = dE1, np.zeros_like(dE1)
     tot, tot_prev = tot2, None
@@ -543,7 +559,7 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         dE_prev, dE = dE, dE_new
         # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
         density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
-        J_hi += J
+        sink(J)
         src = J
         tot_prev, tot = tot, source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt)
         report("precomputing tables: scattering orders", progress[0] + order - 2,
@@ -554,11 +570,11 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         # radiance of an order is a linear integral of its density): J_N f / (1 - f) added
         # to the summed density. (A per-cell ratio was tried: it is unstable in cells where
         # the ground reflection enters.)
-        J_hi += np.multiply(J, _series_factor(tot, tot_prev).astype(np.float32), out=J)
+        sink(np.multiply(J, _series_factor(tot, tot_prev).astype(np.float32), out=J))
         ea = tuple(range(dE.ndim - 1))
         E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
     del J, L_in
-    if p["orders"] >= 3 and J_hi is not J2:
+    if p["orders"] >= 3 and sink_is_own and J_hi is not J2:
         add_density(J2, J_hi, q2, q3)
 
 
@@ -569,42 +585,139 @@ SPREAD_CUBIC = True
 SPREAD_BAND = True
 
 
-def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, nb_hi, col, codes, p0s, p1s, sc_idx,
-                         beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, n_q, p, E,
-                         progress=(0, None)):
-    """:func:`higher_orders` at the table wavelengths ``l_hi`` only (batches of ``nb_hi``),
-    spread onto every table wavelength ``wl`` (:mod:`._spectral`): ``J_sum`` holds order 2
-    at every wavelength on entry and orders 2..N (+ remainder) on return; ``E`` holds order
-    1's ground irradiance ``dE1`` on entry, orders 2..N-1 (+ remainder) are added. The
-    orders >= 3 of J and of E are interpolated as ratios to order 2's J and to ``dE1``."""
+def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes, p0s,
+                         p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, n_q,
+                         p, E, progress=(0, None)):
+    """:func:`higher_orders` at the table wavelengths ``l_hi`` only (in the ``batches`` of
+    :func:`subset_batches`), spread onto every table wavelength ``wl`` (:mod:`._spectral`):
+    ``J_sum`` holds order 2 at every wavelength on entry and orders 2..N (+ remainder) on
+    return; ``E`` holds order 1's ground irradiance ``dE1`` on entry, orders 2..N-1
+    (+ remainder) are added. The orders >= 3 of J and of E are interpolated as ratios to
+    order 2's J and to ``dE1`` through the interpolation nodes ``l_nodes``.
+
+    Working memory: the computed wavelengths that are not nodes (the line-absorbed ones)
+    get their orders >= 3 added straight into ``J_sum``; at the nodes only the ratio
+    rho = (orders >= 3) / (order 2) is kept, in float16 (relative rounding <= 2^-11 in rho,
+    < 2^-11 rho / (1 + rho) in the total; docs/models.md, "precomputed"), J of order 2
+    read from ``J_sum`` at the end; per batch, order 2 at its wavelengths (order 3's
+    source, then each order's J) and the orders >= 3's sum at its nodes (float32)."""
     from skydome.models.simulated.precomputed import _spectral
 
     k = l_hi.size
-    # order 2 at the subset (a copy: the orders >= 3 are summed into it, then the copy
-    # minus order 2 is their sum); their ground irradiance summed on its own
-    J_hi = np.ascontiguousarray(J_sum[..., l_hi])
+    node_of = {int(l): j for j, l in enumerate(l_nodes)}
+    coarse = (J_sum.shape[0], q3.th_out.size, q3.ph_out.size) + tuple(hi)
+    same = coarse == J_sum.shape[:-1]
+    # the ratio at the nodes, float16 (its largest finite value where order 2 vanishes)
+    rho = np.zeros(J_sum.shape[:-1] + (l_nodes.size,), dtype=np.float16)
+    rho_max = np.float32(np.finfo(np.float16).max)
+    col_of = {int(l): j for j, l in enumerate(l_hi)}
     E_hi = np.zeros(E.shape[:-1] + (k,))
     dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
-    for b, i0 in enumerate(range(0, k, nb_hi)):
-        sl = slice(i0, min(k, i0 + nb_hi))
-        ls = l_hi[sl]
-        higher_orders(J_hi[..., sl], dE1_hi[..., sl], tot2[ls], col, codes, p0s, p1s, sc_idx,
+    tmp = np.empty(J_sum.shape[:-1], dtype=np.float32)
+    for b, ls in enumerate(batches):
+        cs = np.array([col_of[int(l)] for l in ls], dtype=np.int64)
+        # order 2 at the batch's wavelengths: order 3's source, then (on the same grid) the
+        # array of each order's J
+        J_b = np.ascontiguousarray(J_sum[..., ls])
+        # the sum of the orders >= 3: at the nodes (on the coarse grid: at every one) in
+        # H_b, float32; elsewhere straight into J_sum
+        acc = [i for i, l in enumerate(ls) if not same or int(l) in node_of]
+        H_b = np.zeros(coarse + (len(acc),), dtype=np.float32)
+        into = [(i, None) for i in range(len(ls))]
+        for j, i in enumerate(acc):
+            into[i] = (i, j)
+
+        def sink(Jo, ls=ls, into=into, H_b=H_b):
+            for i, j in into:
+                if j is None:
+                    J_sum[..., ls[i]] += Jo[..., i]
+                else:
+                    H_b[..., j] += Jo[..., i]
+
+        E_b = np.zeros(E.shape[:-1] + (len(ls),))
+        higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
                       beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, n_q,
-                      p, E_hi[..., sl], (progress[0] + b * (p["orders"] - 2), progress[1]), ls)
-    j2_max = 0.0
-    for i, l in enumerate(l_hi):      # one wavelength at a time: no temporary of the subset
-        J_hi[..., i] -= J_sum[..., l]
-        j2_max = max(j2_max, float(J_sum[..., l].max(initial=0.0)))
-    plan = _spectral.spread_plan(wl, l_hi, l_nodes, band if SPREAD_BAND else None)
+                      p, E_b,
+                      (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
+                      work=J_b if same else None)
+        E_hi[..., cs] = E_b
+        del J_b
+        for i, j in ((i, j) for i, j in into if j is not None):
+            l = int(ls[i])
+            if same:
+                h = H_b[..., j]
+            else:           # the coarse grid's sum onto J_sum's grid
+                h = np.zeros(J_sum.shape[:-1] + (1,), dtype=np.float32)
+                add_density(h, np.ascontiguousarray(H_b[..., j:j + 1]), q2, q3)
+                h = h[..., 0]
+            if l not in node_of:
+                J_sum[..., l] += h
+                continue
+            J2 = J_sum[..., l]
+            tmp[...] = 0.0
+            np.divide(h, J2, out=tmp, where=J2 > 0.0)
+            np.clip(tmp, 0.0, rho_max, out=tmp)
+            rho[..., node_of[l]] = tmp
+        del H_b
+    del tmp
     nl = wl.size
-    # below this, order 2 (or order 1's irradiance) is too small to divide by: 1e-12 of
-    # its largest value (the orders >= 3 interpolated directly there)
+    # J: the ratio at the nodes, the computed wavelengths that are not nodes final already
+    # (-2: nothing added); below 1e-12 of order 2's largest value the orders >= 3 are
+    # interpolated directly (their values, ratio x order 2)
+    plan = list(_spectral.spread_plan(wl, l_nodes, l_nodes, band if SPREAD_BAND else None))
+    plan[0][[int(l) for l in l_hi if int(l) not in node_of]] = -2
     jf = J_sum.reshape(-1, nl)
-    _spectral.spread_ratio(jf, J_hi.reshape(-1, k), *plan, SPREAD_CUBIC, np.float32(1e-12 * j2_max),
-                           jf)
-    del J_hi
-    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, k), *plan,
-                           SPREAD_CUBIC, 1e-12 * float(dE1_hi.max(initial=0.0)), E.reshape(-1, nl))
+    rf = rho.reshape(-1, l_nodes.size)
+    floor = np.float32(1e-12 * max(float(J_sum[..., l].max(initial=0.0)) for l in l_nodes))
+    for a in range(0, jf.shape[0], SPREAD_ROWS):
+        e = min(jf.shape[0], a + SPREAD_ROWS)
+        _spectral.spread_ratio(jf[a:e], rf[a:e].astype(np.float32), *plan, SPREAD_CUBIC, floor,
+                               jf[a:e], True)
+    del rho
+    # E (small): the orders >= 3 at every computed wavelength, float64
+    plan_e = _spectral.spread_plan(wl, l_hi, l_nodes, band if SPREAD_BAND else None)
+    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, k),
+                           *plan_e, SPREAD_CUBIC, 1e-12 * float(dE1_hi.max(initial=0.0)),
+                           E.reshape(-1, nl), False)
+
+
+# rows (nodes of J) per call of the spread of the ratio (its float32 copy of the ratio)
+SPREAD_ROWS = 1 << 20
+# working memory of the orders >= 3 at a subset of the wavelengths [bytes]: the ratio at the
+# nodes (float16) and one batch (see subset_batches)
+HIGH_ORDER_SUBSET_BYTES = 280_000_000
+
+
+def subset_batches(p, l_hi, l_nodes, nsc):
+    """The batches of :func:`higher_orders_subset` (arrays of table indices), the nodes
+    first: each within ``HIGH_ORDER_SUBSET_BYTES`` less the float16 ratio at the nodes, a
+    wavelength costing its order 2 / each order's J (float32) and its incident radiance,
+    a node (on the coarse grid: every one) its sum of the orders >= 3 too; at least one
+    wavelength per batch."""
+    n = p["sphere_samples"]
+    n_o = min(n, max(ORDER_DENSITY_MIN, n // p["order_table_divisor"]))
+    n_i = min(p["high_order_sphere_samples"] or n, n)
+    n_r, n_ms = high_order_grid(p)
+    n_rf, n_msf = p["scattering_r_size"], p["density_mu_s_size"] or p["scattering_mu_s_size"]
+    same = (n_r, n_ms, n_o) == (n_rf, n_msf, n)
+    j_fine = 4 * nsc * (2 * n + 1) * (n + 1) * n_rf * n_msf
+    j_hi = 4 * nsc * (2 * n_o + 1) * (n_o + 1) * n_r * n_ms
+    per_wl = (0 if same else j_fine) + j_hi + 4 * n_r * n_ms * (n_i * n_i + 10)
+    # less the float16 ratio at the nodes and the float32 quotient of one wavelength
+    budget = HIGH_ORDER_SUBSET_BYTES - (j_fine // 2) * l_nodes.size - j_fine
+    nodes = set(int(l) for l in l_nodes)
+    order = [int(l) for l in l_hi if int(l) in nodes] + [int(l) for l in l_hi
+                                                         if int(l) not in nodes]
+    out, cur, used = [], [], 0
+    for l in order:
+        c = per_wl + (j_hi if (l in nodes or not same) else 0)
+        if cur and used + c > budget:
+            out.append(np.array(cur, dtype=np.int64))
+            cur, used = [], 0
+        cur.append(l)
+        used += c
+    out.append(np.array(cur, dtype=np.int64))
+    return out
 
 
 # the per-order grids of orders >= 3 are never coarser than these (nor finer than the full

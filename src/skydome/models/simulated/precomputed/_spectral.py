@@ -144,7 +144,8 @@ def _end_slope(ha, hb, sa, sb):
 
 
 @njit(cache=True, parallel=True)
-def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic, floor, out):
+def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic, floor, out,
+                 ratio=False):
     """out[n, l] += the orders >= 3 at node n and table wavelength l, from ``hi`` [n, j]
     (their value at the computed wavelengths) and ``base`` [n, l] (order 2, or order 1's
     ground irradiance, at every wavelength): at a computed wavelength its own value, else
@@ -155,7 +156,9 @@ def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic,
     the second divided differences of s over the nodes (least squares). Where
     any node's base is <= ``floor`` or its ``hi`` <= 0, the ratio is not defined or not to
     be trusted: there ``hi`` itself is interpolated linearly between the cell's two nodes
-    (non-negative). ``out`` may be ``base``."""
+    (non-negative). ``out`` may be ``base``. ``ratio``: ``hi`` holds the ratio rho itself
+    at its columns (the value: rho x base at the column's wavelength); ``own[l] == -2``:
+    nothing is added at l (its value is final already)."""
     n, nl = base.shape
     k = node_col.shape[0]
     bb = 0.0
@@ -165,13 +168,15 @@ def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic,
     for b0 in prange((n + blk - 1) // blk):
         v = np.empty(nl)           # the node's values first: ``out`` may be ``base``
         y = np.empty(k)
+        hv = np.empty(k)
         d = np.zeros(k)
         d2 = np.empty(max(k - 2, 0))
         for i in range(b0 * blk, min(n, (b0 + 1) * blk)):
             ok = True
             for j in range(k):
                 bj = base[i, node_l[j]]
-                hj = hi[i, node_col[j]]
+                hj = hi[i, node_col[j]] * bj if ratio else hi[i, node_col[j]]
+                hv[j] = max(hj, 0.0)
                 if bj > floor and hj > 0.0:
                     y[j] = math.log(hj / bj)
                 else:
@@ -187,8 +192,11 @@ def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic,
             if ok and cubic:
                 pchip_slopes(xn, y, d)
             for l in range(nl):
+                if own[l] == -2:
+                    v[l] = 0.0
+                    continue
                 if own[l] >= 0:
-                    v[l] = max(hi[i, own[l]], 0.0)
+                    v[l] = max(hi[i, own[l]] * base[i, l] if ratio else hi[i, own[l]], 0.0)
                     continue
                 c = cell[l]
                 h = xn[c + 1] - xn[c]
@@ -203,7 +211,6 @@ def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic,
                         lr = (1.0 - s) * y[c] + s * y[c + 1]
                     v[l] = base[i, l] * math.exp(lr - dl * band[l])
                 else:
-                    v[l] = ((1.0 - s) * max(hi[i, node_col[c]], 0.0)
-                            + s * max(hi[i, node_col[c + 1]], 0.0))
+                    v[l] = (1.0 - s) * hv[c] + s * hv[c + 1]
             for l in range(nl):
                 out[i, l] += v[l]
