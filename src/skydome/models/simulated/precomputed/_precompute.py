@@ -597,103 +597,127 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
 
     Working memory: the computed wavelengths that are not nodes (the line-absorbed ones)
     get their orders >= 3 added straight into ``J_sum``; at the nodes only the ratio
-    rho = (orders >= 3) / (order 2) is kept, in float16 (relative rounding <= 2^-11 in rho,
-    < 2^-11 rho / (1 + rho) in the total; docs/models.md, "precomputed"), J of order 2
-    read from ``J_sum`` at the end; per batch, order 2 at its wavelengths (order 3's
-    source, then each order's J) and the orders >= 3's sum at its nodes (float32)."""
-    from skydome.models.simulated.precomputed import _spectral
-
-    k = l_hi.size
+    rho = (orders >= 3) / (order 2) is kept, float16, each order's share added to it (one
+    rounding of <= 2^-11 of rho per order and for the remainder; docs/models.md,
+    "precomputed"); the spread onto the other wavelengths follows the nodes' batches, which
+    frees rho before the line-absorbed wavelengths' batches. Per batch, order 2 at its
+    wavelengths (order 3's source, then each order's J: :func:`higher_orders` ``work``)."""
+    nl = wl.size
     node_of = {int(l): j for j, l in enumerate(l_nodes)}
+    col_of = {int(l): j for j, l in enumerate(l_hi)}
     coarse = (J_sum.shape[0], q3.th_out.size, q3.ph_out.size) + tuple(hi)
     same = coarse == J_sum.shape[:-1]
-    # the ratio at the nodes, float16 (its largest finite value where order 2 vanishes)
-    rho = np.zeros(J_sum.shape[:-1] + (l_nodes.size,), dtype=np.float16)
-    rho_max = np.float32(np.finfo(np.float16).max)
-    col_of = {int(l): j for j, l in enumerate(l_hi)}
-    E_hi = np.zeros(E.shape[:-1] + (k,))
+    E_hi = np.zeros(E.shape[:-1] + (l_hi.size,))
     dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
-    tmp = np.empty(J_sum.shape[:-1], dtype=np.float32)
+    jf = J_sum.reshape(-1, nl)
+    rho = np.zeros((l_nodes.size, jf.shape[0]), dtype=np.float16)
+    tmp = np.empty(min(jf.shape[0], SPREAD_ROWS), dtype=np.float32)
+
+    def add(l, h):
+        """The orders >= 3 ``h`` (flat, J_sum's grid) of table wavelength l into J_sum, at
+        a node into its ratio."""
+        if l in node_of:
+            _add_ratio(rho[node_of[l]], h, jf[:, l], tmp)
+        else:
+            jf[:, l] += h
+
     for b, ls in enumerate(batches):
+        if rho is not None and not any(int(l) in node_of for l in ls):
+            _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
+            rho = None
+        nb = ls.size
         cs = np.array([col_of[int(l)] for l in ls], dtype=np.int64)
-        # order 2 at the batch's wavelengths: order 3's source, then (on the same grid) the
-        # array of each order's J
         J_b = np.ascontiguousarray(J_sum[..., ls])
-        # the sum of the orders >= 3: at the nodes (on the coarse grid: at every one) in
-        # H_b, float32; elsewhere straight into J_sum
-        acc = [i for i, l in enumerate(ls) if not same or int(l) in node_of]
-        H_b = np.zeros(coarse + (len(acc),), dtype=np.float32)
-        into = [(i, None) for i in range(len(ls))]
-        for j, i in enumerate(acc):
-            into[i] = (i, j)
+        # the orders >= 3 on a coarser grid than J_sum's: summed there first
+        H_b = None if same else np.zeros(coarse + (nb,), dtype=np.float32)
 
-        def sink(Jo, ls=ls, into=into, H_b=H_b):
-            for i, j in into:
-                if j is None:
-                    J_sum[..., ls[i]] += Jo[..., i]
-                else:
-                    H_b[..., j] += Jo[..., i]
+        def sink(Jo, ls=ls, H_b=H_b):
+            if H_b is not None:
+                H_b += Jo
+                return
+            Jf = Jo.reshape(-1, ls.size)
+            for i, l in enumerate(ls):
+                add(int(l), Jf[:, i])
 
-        E_b = np.zeros(E.shape[:-1] + (len(ls),))
+        E_b = np.zeros(E.shape[:-1] + (nb,))
         higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
                       beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, n_q,
-                      p, E_b,
-                      (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
+                      p, E_b, (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
                       work=J_b if same else None)
         E_hi[..., cs] = E_b
-        del J_b
-        for i, j in ((i, j) for i, j in into if j is not None):
-            l = int(ls[i])
-            if same:
-                h = H_b[..., j]
-            else:           # the coarse grid's sum onto J_sum's grid
-                h = np.zeros(J_sum.shape[:-1] + (1,), dtype=np.float32)
-                add_density(h, np.ascontiguousarray(H_b[..., j:j + 1]), q2, q3)
-                h = h[..., 0]
-            if l not in node_of:
-                J_sum[..., l] += h
-                continue
-            J2 = J_sum[..., l]
-            tmp[...] = 0.0
-            np.divide(h, J2, out=tmp, where=J2 > 0.0)
-            np.clip(tmp, 0.0, rho_max, out=tmp)
-            rho[..., node_of[l]] = tmp
+        del J_b, sink
+        for i in range(nb if H_b is not None else 0):
+            h = np.zeros(J_sum.shape[:-1] + (1,), dtype=np.float32)
+            add_density(h, np.ascontiguousarray(H_b[..., i:i + 1]), q2, q3)
+            add(int(ls[i]), h.reshape(-1))
         del H_b
-    del tmp
-    nl = wl.size
-    # J: the ratio at the nodes, the computed wavelengths that are not nodes final already
-    # (-2: nothing added); below 1e-12 of order 2's largest value the orders >= 3 are
-    # interpolated directly (their values, ratio x order 2)
-    plan = list(_spectral.spread_plan(wl, l_nodes, l_nodes, band if SPREAD_BAND else None))
-    plan[0][[int(l) for l in l_hi if int(l) not in node_of]] = -2
-    jf = J_sum.reshape(-1, nl)
-    rf = rho.reshape(-1, l_nodes.size)
-    floor = np.float32(1e-12 * max(float(J_sum[..., l].max(initial=0.0)) for l in l_nodes))
-    for a in range(0, jf.shape[0], SPREAD_ROWS):
-        e = min(jf.shape[0], a + SPREAD_ROWS)
-        _spectral.spread_ratio(jf[a:e], rf[a:e].astype(np.float32), *plan, SPREAD_CUBIC, floor,
-                               jf[a:e], True)
-    del rho
+    if rho is not None:
+        _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
+    del rho, tmp
     # E (small): the orders >= 3 at every computed wavelength, float64
-    plan_e = _spectral.spread_plan(wl, l_hi, l_nodes, band if SPREAD_BAND else None)
-    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, k),
+    plan_e = _spectral_plan(wl, l_hi, l_nodes, band)
+    from skydome.models.simulated.precomputed import _spectral
+
+    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, l_hi.size),
                            *plan_e, SPREAD_CUBIC, 1e-12 * float(dE1_hi.max(initial=0.0)),
                            E.reshape(-1, nl), False)
 
 
-# rows (nodes of J) per call of the spread of the ratio (its float32 copy of the ratio)
+# rows (nodes of J) per chunk of the float16 ratio's updates and of its spread
 SPREAD_ROWS = 1 << 20
-# working memory of the orders >= 3 at a subset of the wavelengths [bytes]: the ratio at the
-# nodes (float16) and one batch (see subset_batches)
-HIGH_ORDER_SUBSET_BYTES = 280_000_000
+RHO_MAX = np.float32(np.finfo(np.float16).max)
+
+
+def _spectral_plan(wl, computed, nodes, band):
+    from skydome.models.simulated.precomputed import _spectral
+
+    return list(_spectral.spread_plan(wl, computed, nodes, band if SPREAD_BAND else None))
+
+
+def _add_ratio(r, h, j2, tmp):
+    """r += h / j2 (``r`` float16, flat as ``h`` and ``j2``; 0 where j2 is 0, at most
+    ``RHO_MAX``), in chunks of ``tmp``'s size (float32)."""
+    n = tmp.size
+    for a in range(0, r.size, n):
+        e = min(r.size, a + n)
+        t = tmp[:e - a]
+        d = j2[a:e]
+        t[...] = 0.0
+        np.divide(h[a:e], d, out=t, where=d > 0.0)
+        np.add(t, r[a:e], out=t)
+        np.minimum(t, RHO_MAX, out=t)
+        r[a:e] = t
+
+
+def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
+    """The orders >= 3 of J from their ratio ``rho`` [node, row] at the nodes onto every
+    table wavelength of ``jf`` [row, l] (order 2 there on entry) but the computed ones
+    that are not nodes (their orders >= 3 are added by their batches); below 1e-12 of
+    order 2's largest value at the nodes the orders >= 3 are interpolated directly
+    (ratio x order 2)."""
+    from skydome.models.simulated.precomputed import _spectral
+
+    plan = _spectral_plan(wl, l_nodes, l_nodes, band)
+    plan[0][[int(l) for l in l_hi if int(l) not in node_of]] = -2
+    floor = np.float32(1e-12 * max(float(jf[:, int(l)].max(initial=0.0)) for l in l_nodes))
+    for a in range(0, jf.shape[0], SPREAD_ROWS):
+        e = min(jf.shape[0], a + SPREAD_ROWS)
+        rf = np.ascontiguousarray(rho[:, a:e].T, dtype=np.float32)
+        _spectral.spread_ratio(jf[a:e], rf, *plan, SPREAD_CUBIC, floor, jf[a:e], True)
+
+
+# working memory of the orders >= 3 at a subset of the wavelengths [bytes]: per batch of
+# the nodes, the float16 ratio and the batch (see subset_batches); per batch of the other
+# computed wavelengths, the batch
+HIGH_ORDER_SUBSET_BYTES = 300_000_000
 
 
 def subset_batches(p, l_hi, l_nodes, nsc):
-    """The batches of :func:`higher_orders_subset` (arrays of table indices), the nodes
-    first: each within ``HIGH_ORDER_SUBSET_BYTES`` less the float16 ratio at the nodes, a
-    wavelength costing its order 2 / each order's J (float32) and its incident radiance,
-    a node (on the coarse grid: every one) its sum of the orders >= 3 too; at least one
-    wavelength per batch."""
+    """The batches of :func:`higher_orders_subset` (arrays of table indices): the nodes
+    first, in the fewest batches of equal size within ``HIGH_ORDER_SUBSET_BYTES`` less the
+    float16 ratio at the nodes, then the other computed wavelengths within
+    ``HIGH_ORDER_SUBSET_BYTES``; a wavelength costs its J (float32; on a coarser grid of the
+    orders >= 3, its sum there too) and its incident radiance; at least one per batch."""
     n = p["sphere_samples"]
     n_o = min(n, max(ORDER_DENSITY_MIN, n // p["order_table_divisor"]))
     n_i = min(p["high_order_sphere_samples"] or n, n)
@@ -702,21 +726,16 @@ def subset_batches(p, l_hi, l_nodes, nsc):
     same = (n_r, n_ms, n_o) == (n_rf, n_msf, n)
     j_fine = 4 * nsc * (2 * n + 1) * (n + 1) * n_rf * n_msf
     j_hi = 4 * nsc * (2 * n_o + 1) * (n_o + 1) * n_r * n_ms
-    per_wl = (0 if same else j_fine) + j_hi + 4 * n_r * n_ms * (n_i * n_i + 10)
-    # less the float16 ratio at the nodes and the float32 quotient of one wavelength
-    budget = HIGH_ORDER_SUBSET_BYTES - (j_fine // 2) * l_nodes.size - j_fine
+    per_wl = (0 if same else j_fine + j_hi) + j_hi + 4 * n_r * n_ms * (n_i * n_i + 10)
+    rho = (j_fine // 2) * l_nodes.size + 4 * min(j_fine // 4, SPREAD_ROWS)
     nodes = set(int(l) for l in l_nodes)
-    order = [int(l) for l in l_hi if int(l) in nodes] + [int(l) for l in l_hi
-                                                         if int(l) not in nodes]
-    out, cur, used = [], [], 0
-    for l in order:
-        c = per_wl + (j_hi if (l in nodes or not same) else 0)
-        if cur and used + c > budget:
-            out.append(np.array(cur, dtype=np.int64))
-            cur, used = [], 0
-        cur.append(l)
-        used += c
-    out.append(np.array(cur, dtype=np.int64))
+    out = []
+    for group, budget in (([int(l) for l in l_hi if int(l) in nodes],
+                           HIGH_ORDER_SUBSET_BYTES - rho),
+                          ([int(l) for l in l_hi if int(l) not in nodes], HIGH_ORDER_SUBSET_BYTES)):
+        if group:
+            nb = _batches(per_wl, len(group), max(budget, per_wl))
+            out += [np.array(group[a:a + nb], dtype=np.int64) for a in range(0, len(group), nb)]
     return out
 
 
