@@ -627,7 +627,8 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
             rho = None
         nb = ls.size
         cs = np.array([col_of[int(l)] for l in ls], dtype=np.int64)
-        J_b = np.ascontiguousarray(J_sum[..., ls])
+        J_b = np.empty(J_sum.shape[:-1] + (nb,), dtype=np.float32)
+        np.take(J_sum, ls, axis=-1, out=J_b, mode="clip")     # unbuffered: no temporary
         # the orders >= 3 on a coarser grid than J_sum's: summed there first
         H_b = None if same else np.zeros(coarse + (nb,), dtype=np.float32)
 
