@@ -115,7 +115,7 @@ def compare(args):
                   f"max {100 * mx:.3f} % mean {100 * mean:+.3f} %; per wavelength RMS max "
                   f"{100 * rms_l[lw]:.3f} % ({float(ref['wl'][lw]):.0f} nm)")
     print(f"  worst: luminance RMS {100 * worst[0]:.3f} %, max {100 * worst[1]:.3f} %, "
-          f"per-wavelength RMS {100 * worst[2]:.3f} % (bound 0.3 / 1 / 0.5 %)")
+          f"per-wavelength RMS {100 * worst[2]:.3f} % (bound 0.1 / 0.3 / 0.3 %)")
 
 
 def main(argv=None):

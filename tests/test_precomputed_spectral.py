@@ -146,3 +146,72 @@ def test_high_order_wavelengths_against_all_wavelengths_small_tables():
     rel = np.abs(Eb - Ea) / Ea.max(axis=(0, 1))
     assert rel.max() < 2e-3
     assert fast.high_order_wavelengths == 7 and exact.high_order_wavelengths is None
+
+
+def test_subset_on_the_coarse_high_order_grid_matches_all_wavelengths():
+    """With the orders >= 3 on the opt-in coarse (r, mu_s) grid, the subset path (their sum
+    per wavelength interpolated onto the full grid) gives at the computed wavelengths the
+    sky of the all-wavelength path on the same grid (the interpolation is linear in J, so
+    the same up to float32 rounding at the line-absorbed wavelengths, and the float16 ratio's
+    rounding, at most 2^-11 of the radiance, at the nodes)."""
+    wl = np.linspace(380.0, 780.0, 20)
+    kw = dict(SMALL, high_order_r_size=4, high_order_mu_s_size=8)
+    exact = sd.model("precomputed", sun=sd.Sun(elevation_deg=10.0, azimuth_deg=180.0),
+                     high_order_wavelengths=None, **kw)
+    fast = sd.model("precomputed", sun=sd.Sun(elevation_deg=10.0, azimuth_deg=180.0), **kw)
+    props, column = _props_and_columns(wl)
+    computed, nodes = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
+    lines = np.setdiff1d(computed, nodes)
+    d = sd.direction_from_angles([1.0, 5.0, 30.0, 89.0], [180.0, 0.0, 90.0, 0.0])
+    a, b = exact.radiance(d, wl), fast.radiance(d, wl)
+    np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=2e-5)
+    np.testing.assert_allclose(b[:, nodes], a[:, nodes], rtol=2.0 ** -11)
+
+
+def test_float16_ratio_sum_within_its_rounding_bound():
+    """PC._add_ratio (the nodes' ratio rho += h / j2, float16) against the float64 sum of
+    the same shares: 5 additions (4 orders and the remainder), each rounding to float16
+    (at most 2^-11 of the partial sum), so within 5 x 2^-11 of rho; 0 where j2 is 0;
+    clipped at float16's largest value."""
+    rng = np.random.default_rng(7)
+    n = 3000
+    j2 = rng.uniform(1e-3, 1.0, n).astype(np.float32)
+    j2[:10] = 0.0
+    shares = [rng.uniform(0.0, 2.0, n).astype(np.float32) * j2 * 0.5 ** k for k in range(5)]
+    shares[0][10] = 1e6 * j2[10]          # a ratio beyond float16's range
+    r = np.zeros(n, dtype=np.float16)
+    tmp = np.empty(1024, dtype=np.float32)   # smaller than n: several chunks
+    for h in shares:
+        PC._add_ratio(r, h, j2, tmp)
+    ok = j2 > 0
+    exact = np.zeros(n)
+    exact[ok] = sum(h[ok].astype(np.float64) / j2[ok] for h in shares)
+    assert np.all(r[~ok] == 0.0)
+    assert r[10] == np.finfo(np.float16).max
+    m = ok.copy()
+    m[10] = False
+    np.testing.assert_allclose(r[m].astype(np.float64), exact[m], rtol=5 * 2.0 ** -11)
+    assert np.abs(r[m] / exact[m] - 1.0).max() > 2.0 ** -14     # float16 rounding is there
+
+
+def test_subset_batches_cover_the_computed_wavelengths_within_the_budget():
+    """At the default settings each computed wavelength is in exactly one batch, the nodes'
+    batches come first and hold no other wavelength, and the nodes' batches with the
+    float16 ratio (7 nodes x 2 bytes per node of J) stay within HIGH_ORDER_SUBSET_BYTES:
+    J at the default sizes is 2 x 65 x 33 x 32 x 48 float32 (26.4 MB) per wavelength."""
+    p = sd.models.simulated.precomputed.PrecomputedSky._validate_params({})
+    wl = np.linspace(380.0, 780.0, 20)
+    props, column = _props_and_columns(wl)
+    computed, nodes = S.subset_indices(20, p["high_order_wavelengths"],
+                                       props.extinction - props.scattering, column, wl)
+    batches = PC.subset_batches(p, computed, nodes, 2)
+    flat = np.concatenate(batches)
+    assert sorted(flat.tolist()) == computed.tolist()
+    n_node_batches = sum(1 for b in batches if set(b.tolist()) <= set(nodes.tolist()))
+    assert all(set(b.tolist()) <= set(nodes.tolist()) for b in batches[:n_node_batches])
+    assert sum(b.size for b in batches[:n_node_batches]) == nodes.size
+    j = 2 * 65 * 33 * 32 * 48 * 4
+    l_in = 16 * 16 * 32 * 48 * 4
+    worst = max(b.size for b in batches[:n_node_batches]) * (j + l_in) + nodes.size * j // 2
+    assert worst <= PC.HIGH_ORDER_SUBSET_BYTES
+    assert len(batches) == 2          # the default: one batch of nodes, one of the rest
