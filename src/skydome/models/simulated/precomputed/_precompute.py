@@ -611,20 +611,14 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
     dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
     jf = J_sum.reshape(-1, nl)
     rho = np.zeros((l_nodes.size, jf.shape[0]), dtype=np.float16)
-    tmp = np.empty(min(jf.shape[0], SPREAD_ROWS), dtype=np.float32)
+    tmp = np.empty((l_nodes.size, min(jf.shape[0], SHARE_ROWS)), dtype=np.float32)
 
     def add(l, h):
         """The orders >= 3 ``h`` (flat, J_sum's grid) of table wavelength l into J_sum, at
         a node into its ratio."""
-        if l in node_of:
-            _add_ratio(rho[node_of[l]], h, jf[:, l], tmp)
-        else:
-            jf[:, l] += h
+        _add_order(h[:, None], np.array([l]), node_of, jf, rho, tmp)
 
     for b, ls in enumerate(batches):
-        if rho is not None and not any(int(l) in node_of for l in ls):
-            _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
-            rho = None
         nb = ls.size
         cs = np.array([col_of[int(l)] for l in ls], dtype=np.int64)
         J_b = np.empty(J_sum.shape[:-1] + (nb,), dtype=np.float32)
@@ -636,9 +630,7 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
             if H_b is not None:
                 H_b += Jo
                 return
-            Jf = Jo.reshape(-1, ls.size)
-            for i, l in enumerate(ls):
-                add(int(l), Jf[:, i])
+            _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho, tmp)
 
         E_b = np.zeros(E.shape[:-1] + (nb,))
         higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
@@ -652,8 +644,7 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
             add_density(h, np.ascontiguousarray(H_b[..., i:i + 1]), q2, q3)
             add(int(ls[i]), h.reshape(-1))
         del H_b
-    if rho is not None:
-        _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
+    _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
     del rho, tmp
     # E (small): the orders >= 3 at every computed wavelength, float64
     plan_e = _spectral_plan(wl, l_hi, l_nodes, band)
@@ -664,8 +655,9 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
                            E.reshape(-1, nl), False)
 
 
-# rows (nodes of J) per chunk of the float16 ratio's updates and of its spread
+# rows (nodes of J) per chunk of the float16 ratio's spread, and of its updates
 SPREAD_ROWS = 1 << 20
+SHARE_ROWS = 1 << 18
 RHO_MAX = np.float32(np.finfo(np.float16).max)
 
 
@@ -675,19 +667,25 @@ def _spectral_plan(wl, computed, nodes, band):
     return list(_spectral.spread_plan(wl, computed, nodes, band if SPREAD_BAND else None))
 
 
-def _add_ratio(r, h, j2, tmp):
-    """r += h / j2 (``r`` float16, flat as ``h`` and ``j2``; 0 where j2 is 0, at most
-    ``RHO_MAX``), in chunks of ``tmp``'s size (float32)."""
-    n = tmp.size
-    for a in range(0, r.size, n):
-        e = min(r.size, a + n)
-        t = tmp[:e - a]
-        d = j2[a:e]
-        t[...] = 0.0
-        np.divide(h[a:e], d, out=t, where=d > 0.0)
-        np.add(t, r[a:e], out=t)
-        np.minimum(t, RHO_MAX, out=t)
-        r[a:e] = t
+def _add_order(Jf, ls, node_of, jf, rho, T):
+    """One order's J ``Jf`` [row, i] of the table wavelengths ``ls`` (J_sum's grid) into
+    ``jf`` (J_sum [row, l]) at the wavelengths that are not nodes, and at the nodes its
+    share of order 2 into the float16 ratio ``rho`` [node, row] (the sum in float32,
+    rounded once; at most ``RHO_MAX``), in chunks of ``T``'s rows (float32 scratch
+    [node, row])."""
+    from skydome.models.simulated.precomputed import _spectral
+
+    dst = np.asarray(ls, dtype=np.int64)
+    node = np.array([node_of.get(int(l), -1) for l in ls], dtype=np.int64)
+    cols = np.arange(dst.size, dtype=np.int64)
+    for a in range(0, jf.shape[0], T.shape[1]):
+        e = min(jf.shape[0], a + T.shape[1])
+        _spectral.add_shares(Jf, cols, dst, node, jf, a, T)
+        for k in node[node >= 0]:
+            t = T[k, :e - a]
+            np.add(t, rho[k, a:e], out=t)
+            np.minimum(t, RHO_MAX, out=t)
+            rho[k, a:e] = t
 
 
 def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
@@ -707,18 +705,18 @@ def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
         _spectral.spread_ratio(jf[a:e], rf, *plan, SPREAD_CUBIC, floor, jf[a:e], True)
 
 
-# working memory of the orders >= 3 at a subset of the wavelengths [bytes]: per batch of
-# the nodes, the float16 ratio and the batch (see subset_batches); per batch of the other
-# computed wavelengths, the batch
-HIGH_ORDER_SUBSET_BYTES = 300_000_000
+# working memory of the orders >= 3 at a subset of the wavelengths [bytes]: one batch and
+# the float16 ratio of the nodes computed so far (see subset_batches)
+HIGH_ORDER_SUBSET_BYTES = 260_000_000
 
 
 def subset_batches(p, l_hi, l_nodes, nsc):
-    """The batches of :func:`higher_orders_subset` (arrays of table indices): the nodes
-    first, in the fewest batches of equal size within ``HIGH_ORDER_SUBSET_BYTES`` less the
-    float16 ratio at the nodes, then the other computed wavelengths within
-    ``HIGH_ORDER_SUBSET_BYTES``; a wavelength costs its J (float32; on a coarser grid of the
-    orders >= 3, its sum there too) and its incident radiance; at least one per batch."""
+    """The batches of :func:`higher_orders_subset` (arrays of table indices): the computed
+    wavelengths that are not nodes first, then the nodes, each batch as large as fits
+    ``HIGH_ORDER_SUBSET_BYTES`` with the float16 ratio of every node up to its end (its
+    pages are written as the nodes come); a wavelength costs its J (float32; on a coarser
+    grid of the orders >= 3, its sum there and J on the full grid too) and its incident
+    radiance; at least one per batch."""
     n = p["sphere_samples"]
     n_o = min(n, max(ORDER_DENSITY_MIN, n // p["order_table_divisor"]))
     n_i = min(p["high_order_sphere_samples"] or n, n)
@@ -728,15 +726,19 @@ def subset_batches(p, l_hi, l_nodes, nsc):
     j_fine = 4 * nsc * (2 * n + 1) * (n + 1) * n_rf * n_msf
     j_hi = 4 * nsc * (2 * n_o + 1) * (n_o + 1) * n_r * n_ms
     per_wl = (0 if same else j_fine + j_hi) + j_hi + 4 * n_r * n_ms * (n_i * n_i + 10)
-    rho = (j_fine // 2) * l_nodes.size + 4 * min(j_fine // 4, SPREAD_ROWS)
+    rho = j_fine // 2                      # a node's ratio, float16
     nodes = set(int(l) for l in l_nodes)
-    out = []
-    for group, budget in (([int(l) for l in l_hi if int(l) in nodes],
-                           HIGH_ORDER_SUBSET_BYTES - rho),
-                          ([int(l) for l in l_hi if int(l) not in nodes], HIGH_ORDER_SUBSET_BYTES)):
-        if group:
-            nb = _batches(per_wl, len(group), max(budget, per_wl))
-            out += [np.array(group[a:a + nb], dtype=np.int64) for a in range(0, len(group), nb)]
+    order = ([int(l) for l in l_hi if int(l) not in nodes]
+             + [int(l) for l in l_hi if int(l) in nodes])
+    out, cur, n_done = [], [], 0
+    for l in order:
+        n_new = n_done + (l in nodes)
+        if cur and per_wl * (len(cur) + 1) + rho * n_new > HIGH_ORDER_SUBSET_BYTES:
+            out.append(np.array(cur, dtype=np.int64))
+            cur = []
+        cur.append(l)
+        n_done = n_new
+    out.append(np.array(cur, dtype=np.int64))
     return out
 
 

@@ -214,3 +214,23 @@ def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic,
                     v[l] = (1.0 - s) * hv[c] + s * hv[c + 1]
             for l in range(nl):
                 out[i, l] += v[l]
+
+
+@njit(cache=True, parallel=True)
+def add_shares(Jo, cols, dst, node, jf, a, T):
+    """One order's J of a batch of the computed wavelengths (``Jo`` [row, column], on the
+    summed density's grid) over the rows a .. a + T.shape[1] - 1: column c = cols[m] added
+    into jf[:, dst[m]] where node[m] < 0; else its share of order 2 at that wavelength,
+    Jo[row, c] / jf[row, dst[m]] (0 where order 2 is 0), written to T[node[m], row - a].
+    One pass over the rows of the summed density (its columns are strided)."""
+    n = min(T.shape[1], jf.shape[0] - a)
+    for q in prange(n):
+        i = a + q
+        for m in range(cols.shape[0]):
+            v = Jo[i, cols[m]]
+            l = dst[m]
+            if node[m] < 0:
+                jf[i, l] += v
+            else:
+                d = jf[i, l]
+                T[node[m], q] = v / d if d > 0.0 else 0.0
