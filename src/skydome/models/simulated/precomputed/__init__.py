@@ -96,8 +96,8 @@ class PrecomputedSky(SkyModel):
         ozone's Chappuis band taken out); at the nodes the ratio is kept in float16 (the
         orders >= 3 there within 0.24 % of their value). What it gives up: the orders >= 3
         at the other wavelengths are interpolated, not computed. At the default 20 table
-        wavelengths: 13 computed, the precomputation about 20 % less CPU at the same peak
-        memory (1.49 GB), the sky within 0.02 % RMS (luminance, max 0.06 %) and 0.15 % RMS
+        wavelengths: 13 computed, the precomputation about 15 % less CPU at the same peak
+        memory (1.47 GB), the sky within 0.02 % RMS (luminance, max 0.06 %) and 0.15 % RMS
         (any table wavelength) of every wavelength computed, sun 60 to -6 deg, AOD 0.2; at
         AOD 0.5 0.03 % RMS, max 0.08 %, 0.20 % per wavelength
         (docs/models.md, "Orders >= 3 at a subset of the table wavelengths"). None: every

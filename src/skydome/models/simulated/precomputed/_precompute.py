@@ -599,9 +599,9 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
     get their orders >= 3 added straight into ``J_sum``; at the nodes only the ratio
     rho = (orders >= 3) / (order 2) is kept, float16, each order's share added to it (one
     rounding of <= 2^-11 of rho per order and for the remainder; docs/models.md,
-    "precomputed"); the spread onto the other wavelengths follows the nodes' batches, which
-    frees rho before the line-absorbed wavelengths' batches. Per batch, order 2 at its
-    wavelengths (order 3's source, then each order's J: :func:`higher_orders` ``work``)."""
+    "precomputed"), and spread onto the other wavelengths after the last batch. Per batch,
+    order 2 at its wavelengths (order 3's source, then each order's J:
+    :func:`higher_orders` ``work``)."""
     nl = wl.size
     node_of = {int(l): j for j, l in enumerate(l_nodes)}
     col_of = {int(l): j for j, l in enumerate(l_hi)}
