@@ -25,6 +25,9 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cost_precomputed import _parse  # noqa: E402  (--settings key=value,...)
+
 SUN_ELEVATIONS = (60.0, 10.0, 2.0, -4.0, -6.0)
 OBSERVER_ALTITUDES_M = (0.0, 10_000.0)
 
@@ -41,23 +44,6 @@ def sky_directions():
     e, a = np.radians(E.ravel()), np.radians(A.ravel() + 180.0)   # the sun at azimuth 180
     d = np.stack([np.cos(e) * np.sin(a), np.cos(e) * np.cos(a), np.sin(e)], axis=-1)
     return d, w.ravel(), E.ravel()
-
-
-def _parse(text):
-    out = {}
-    for item in [s for s in text.split(",") if s]:
-        k, v = item.split("=", 1)
-        if v == "None":
-            out[k] = None
-            continue
-        for conv in (int, float):
-            try:
-                v = conv(v)
-                break
-            except ValueError:
-                pass
-        out[k] = v
-    return out
 
 
 def run(args):

@@ -113,6 +113,28 @@ def _sky(m, elev):
     return m.with_sun(sd.Sun(elevation_deg=elev, azimuth_deg=180.0))
 
 
+def _exact_and_fast(elev, **kw):
+    """(all wavelengths, the default subset, the computed line-absorbed wavelengths, the
+    nodes, the 20 table wavelengths) on the small tables ``SMALL`` updated by ``kw``; the
+    computed wavelengths as the model picks them (nodes evenly in log lambda)."""
+    wl = np.linspace(380.0, 780.0, 20)
+    sun = sd.Sun(elevation_deg=elev, azimuth_deg=180.0)
+    exact = sd.model("precomputed", sun=sun, **dict(SMALL, high_order_wavelengths=None, **kw))
+    fast = sd.model("precomputed", sun=sun, **dict(SMALL, **kw))
+    props, column = _props_and_columns(wl)
+    computed, nodes = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
+    return exact, fast, np.setdiff1d(computed, nodes), nodes, wl
+
+
+def _assert_computed_match(a, b, lines, nodes):
+    """The subset's radiance ``b`` against every wavelength's ``a`` at the computed
+    wavelengths: float32 rounding at the line-absorbed ones; at the nodes the ratio
+    (orders >= 3) / (order 2) is kept in float16, so the orders >= 3 are rounded to within
+    2^-11 of their value (per order; well within 2^-11 of the radiance in practice)."""
+    np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=2e-5)
+    np.testing.assert_allclose(b[:, nodes], a[:, nodes], rtol=2.0 ** -11)
+
+
 def test_high_order_wavelengths_against_all_wavelengths_small_tables():
     """The approximation against the all-wavelength computation on a small table set
     (Atmosphere.earth, 20 table wavelengths, 6 orders + remainder), ground observer: at the
@@ -121,14 +143,7 @@ def test_high_order_wavelengths_against_all_wavelengths_small_tables():
     measured for this table set with the default 7 interpolation nodes (per-wavelength
     RMS / max at sun 60, 10, -4 deg: 0.01 / 0.02, 0.05 / 0.08, 0.07 / 0.12 %; bounds
     generous against those), and the ground irradiance likewise."""
-    wl = np.linspace(380.0, 780.0, 20)
-    exact = sd.model("precomputed", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=180.0),
-                     high_order_wavelengths=None, **SMALL)
-    fast = sd.model("precomputed", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=180.0), **SMALL)
-    props, column = _props_and_columns(wl)
-    # the model picks its nodes evenly in log lambda (the wavelengths given)
-    computed, nodes = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
-    lines = np.setdiff1d(computed, nodes)
+    exact, fast, lines, nodes, wl = _exact_and_fast(30.0)
     el, az = np.meshgrid([1.0, 5.0, 15.0, 40.0, 89.0], np.arange(0.0, 181.0, 30.0))
     d = sd.direction_from_angles(el.ravel(), az.ravel() + 180.0)
     for elev, (rms_b, max_b) in ((60.0, (0.0005, 0.001)), (10.0, (0.0015, 0.0025)),
@@ -136,10 +151,7 @@ def test_high_order_wavelengths_against_all_wavelengths_small_tables():
         a, b = _sky(exact, elev).radiance(d, wl), _sky(fast, elev).radiance(d, wl)
         assert np.all(np.isfinite(b)) and np.all(b >= 0.0)
         r = b / a - 1.0
-        np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=2e-5)
-        # at the nodes the ratio (orders >= 3) / (order 2) is kept in float16: the orders
-        # >= 3 rounded to within 2^-11 of their value, at most 2^-11 of the radiance
-        np.testing.assert_allclose(b[:, nodes], a[:, nodes], rtol=2.0 ** -11)
+        _assert_computed_match(a, b, lines, nodes)
         assert np.sqrt(np.mean(r * r, axis=0)).max() < rms_b, elev
         assert np.abs(r).max() < max_b, elev
     Ea, Eb = exact._t.irradiance, fast._t.irradiance
@@ -154,18 +166,10 @@ def test_subset_on_the_coarse_high_order_grid_matches_all_wavelengths():
     sky of the all-wavelength path on the same grid (the interpolation is linear in J, so
     the same up to float32 rounding at the line-absorbed wavelengths, and the float16 ratio's
     rounding, at most 2^-11 of the radiance, at the nodes)."""
-    wl = np.linspace(380.0, 780.0, 20)
-    kw = dict(SMALL, high_order_r_size=4, high_order_mu_s_size=8)
-    exact = sd.model("precomputed", sun=sd.Sun(elevation_deg=10.0, azimuth_deg=180.0),
-                     high_order_wavelengths=None, **kw)
-    fast = sd.model("precomputed", sun=sd.Sun(elevation_deg=10.0, azimuth_deg=180.0), **kw)
-    props, column = _props_and_columns(wl)
-    computed, nodes = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
-    lines = np.setdiff1d(computed, nodes)
+    exact, fast, lines, nodes, wl = _exact_and_fast(10.0, high_order_r_size=4,
+                                                    high_order_mu_s_size=8)
     d = sd.direction_from_angles([1.0, 5.0, 30.0, 89.0], [180.0, 0.0, 90.0, 0.0])
-    a, b = exact.radiance(d, wl), fast.radiance(d, wl)
-    np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=2e-5)
-    np.testing.assert_allclose(b[:, nodes], a[:, nodes], rtol=2.0 ** -11)
+    _assert_computed_match(exact.radiance(d, wl), fast.radiance(d, wl), lines, nodes)
 
 
 def test_float16_ratio_sum_within_its_rounding_bound():
