@@ -39,6 +39,8 @@ SETTINGS = {
                           scattering_nu_size=16, scattering_mu_s_size=64, density_mu_s_size=64,
                           integration_samples=20),
     "default": {},
+    # the orders >= 3 at every table wavelength (the default computes them at a subset)
+    "all_wavelengths": dict(high_order_wavelengths=None),
     # the default with every order on the full table and sphere (what the coarser grids of
     # orders >= 3 give up)
     "full_orders": dict(order_table_divisor=1, high_order_sphere_samples=32),

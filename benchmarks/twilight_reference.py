@@ -52,6 +52,8 @@ AOD = 0.2
 WL6 = dict(table_wavelengths_nm=WAVELENGTHS_NM)
 SETTINGS = {
     "default": {},
+    # the orders >= 3 at every table wavelength (the default computes them at a subset)
+    "all_wavelengths": dict(high_order_wavelengths=None),
     "wl6": WL6,
     "orders10": dict(WL6, orders=10),
     "mu_s64": dict(WL6, scattering_mu_s_size=64),

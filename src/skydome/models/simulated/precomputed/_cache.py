@@ -34,8 +34,10 @@ import numpy as np
 # bump when the tables' meaning or layout changes (mapping, units, fields)
 # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches;
 # 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset;
-# 6: the stored table of orders 2..N in its own file, added on first use
-CACHE_FORMAT = "skydome.precomputed-cache/6"
+# 6: the stored table of orders 2..N in its own file, added on first use;
+# 7: orders >= 3 at a subset of the table wavelengths; 8: their ratio to order 2 at the
+# interpolation nodes kept in float16
+CACHE_FORMAT = "skydome.precomputed-cache/8"
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 _STORED = "multiple_scattering"       # the lazily added table's file (without .npy)

@@ -190,8 +190,22 @@ def precompute(props, wl, p):
     nb = order_batch_size(p, nl, nsc)
     n_batch = -(-nl // nb)
     hi = high_order_grid(p)
-    nb_hi = high_order_batch_size(p, nl, nsc)
-    n_batch_hi = -(-nl // nb_hi)
+    # the table wavelengths at which the orders >= 3 are computed (all by default with
+    # high_order_wavelengths=None; else a subset, the rest from order 2 x the interpolated
+    # ratio, see _spectral)
+    from skydome.models.simulated.precomputed import _spectral
+
+    absorption = props.extinction - props.scattering      # per row, absorbers folded
+    l_hi, l_nodes = _spectral.subset_indices(nl, p.get("high_order_wavelengths"), absorption,
+                                             col[:, 0, 0], wl)
+    band = _spectral.band_depth(absorption, col[:, 0, 0], props.scattering)
+    nl_hi = l_hi.size
+    nb_hi = high_order_batch_size(p, nl_hi, nsc)
+    n_batch_hi = -(-nl_hi // nb_hi)
+    batches = None
+    if nl_hi < nl and p["orders"] >= 3:
+        batches = subset_batches(p, l_hi, l_nodes, nsc)
+        n_batch_hi = len(batches)
     n_steps = 1 + n_batch + max(p["orders"] - 2, 0) * n_batch_hi
     report("precomputing tables: scattering orders", 1, n_steps)
     E = np.zeros((p["irradiance_r_size"], p["irradiance_mu_s_size"], nl))
@@ -219,11 +233,17 @@ def precompute(props, wl, p):
                                           dE1[..., sl])
             report("precomputing tables: scattering orders", 2 + b, n_steps)
         E += dE1
-        for b, l0 in enumerate(range(0, nl, nb_hi)):
-            sl = slice(l0, min(nl, l0 + nb_hi))
-            higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s, sc_idx,
-                          beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min, q2, q3, hi,
-                          n_q_ms, p, E[..., sl], (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
+        if nl_hi == nl:
+            for b, l0 in enumerate(range(0, nl, nb_hi)):
+                sl = slice(l0, min(nl, l0 + nb_hi))
+                higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s,
+                              sc_idx, beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min,
+                              q2, q3, hi, n_q_ms, p, E[..., sl],
+                              (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
+        elif p["orders"] >= 3:
+            higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes,
+                                 p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
+                                 q3, hi, n_q_ms, p, E, (1 + n_batch, n_steps))
     # 4. the stored orders 2..N (+ remainder) are not integrated here: the sky's radiance()
     # integrates them at the observer from J_sum; the stored table is built from J_sum on
     # its first read (Tables.build_multiple_scattering -> stored_table_of), with the
@@ -477,7 +497,8 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
 
 
 def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
-                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0):
+                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0, sink=None,
+                  work=None):
     """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
     ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
     (the source of order 3), ``dE1`` the ground irradiance of order 1, ``tot2`` order 2's
@@ -491,7 +512,13 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     outgoing grid of ``q3``: by default J2's own (r, mu_s) grid, each order's J added
     into ``J2`` once order 3's source is no longer needed; on the opt-in coarser grid
     (``high_order_r_size``, ``high_order_mu_s_size``) the orders >= 3 are summed there
-    and that sum (with the remainder) is interpolated into ``J2`` once, at the end."""
+    and that sum (with the remainder) is interpolated into ``J2`` once, at the end.
+
+    ``sink``: instead, a function called with each order's J (and the remainder's) on the
+    grid of orders >= 3, which takes their sum (``J2`` then is order 2 alone, read as order
+    3's source); ``work``: the array (of that grid's shape) that holds each order's J,
+    which may be ``J2`` itself where nothing else reads it (it is read as order 3's source
+    before order 3's J is written)."""
     from skydome.models.simulated.precomputed import _density, _irradiance
 
     nl = J2.shape[-1]
@@ -506,10 +533,15 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     albedo = np.ascontiguousarray(albedo)
     shape = (nsc, q3.th_out.size, q3.ph_out.size, n_r, n_ms, nl)
     L_in = np.empty((q3.n_in, n_r, n_ms, nl), dtype=np.float32)
-    J = np.empty(shape, dtype=np.float32)
-    # orders 3..N: added straight into J2 on its own grid (J2 is no longer needed as order
-    # 3's source once order 3's J is computed), else summed on the coarse grid first
-    J_hi = J2 if shape == J2.shape else np.zeros(shape, dtype=np.float32)
+    J = np.empty(shape, dtype=np.float32) if work is None else work
+    sink_is_own = sink is None
+    if sink_is_own:
+        # orders 3..N: added straight into J2 on its own grid (J2 is no longer needed as
+        # order 3's source once order 3's J is computed), else summed on the coarse grid
+        J_hi = J2 if shape == J2.shape else np.zeros(shape, dtype=np.float32)
+
+        def sink(x):
+            np.add(J_hi, x, out=J_hi)
     src = J2                                   # J of the order before
     dE, dE_prev = dE1, np.zeros_like(dE1)
     tot, tot_prev = tot2, None
@@ -527,7 +559,7 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         dE_prev, dE = dE, dE_new
         # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
         density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
-        J_hi += J
+        sink(J)
         src = J
         tot_prev, tot = tot, source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt)
         report("precomputing tables: scattering orders", progress[0] + order - 2,
@@ -538,12 +570,176 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         # radiance of an order is a linear integral of its density): J_N f / (1 - f) added
         # to the summed density. (A per-cell ratio was tried: it is unstable in cells where
         # the ground reflection enters.)
-        J_hi += np.multiply(J, _series_factor(tot, tot_prev).astype(np.float32), out=J)
+        sink(np.multiply(J, _series_factor(tot, tot_prev).astype(np.float32), out=J))
         ea = tuple(range(dE.ndim - 1))
         E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
     del J, L_in
-    if p["orders"] >= 3 and J_hi is not J2:
+    if p["orders"] >= 3 and sink_is_own and J_hi is not J2:
         add_density(J2, J_hi, q2, q3)
+
+
+# the interpolant of the orders >= 3's ratio to order 2 in wavelength (_spectral.spread_ratio):
+# monotone cubic in log rho against log lambda (True) or linear
+SPREAD_CUBIC = True
+# ... with the band absorber's part taken out first (_spectral.spread_ratio)
+SPREAD_BAND = True
+
+
+def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes, p0s,
+                         p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, n_q,
+                         p, E, progress=(0, None)):
+    """:func:`higher_orders` at the table wavelengths ``l_hi`` only (in the ``batches`` of
+    :func:`subset_batches`), spread onto every table wavelength ``wl`` (:mod:`._spectral`):
+    ``J_sum`` holds order 2 at every wavelength on entry and orders 2..N (+ remainder) on
+    return; ``E`` holds order 1's ground irradiance ``dE1`` on entry, orders 2..N-1
+    (+ remainder) are added. The orders >= 3 of J and of E are interpolated as ratios to
+    order 2's J and to ``dE1`` through the interpolation nodes ``l_nodes``.
+
+    Working memory: the computed wavelengths that are not nodes (the line-absorbed ones)
+    get their orders >= 3 added straight into ``J_sum``; at the nodes only the ratio
+    rho = (orders >= 3) / (order 2) is kept, float16, each order's share added to it (one
+    rounding of <= 2^-11 of rho per order and for the remainder; docs/models.md,
+    "precomputed"), and spread onto the other wavelengths after the last batch. Per batch,
+    order 2 at its wavelengths (order 3's source, then each order's J:
+    :func:`higher_orders` ``work``)."""
+    nl = wl.size
+    node_of = {int(l): j for j, l in enumerate(l_nodes)}
+    col_of = {int(l): j for j, l in enumerate(l_hi)}
+    coarse = (J_sum.shape[0], q3.th_out.size, q3.ph_out.size) + tuple(hi)
+    same = coarse == J_sum.shape[:-1]
+    E_hi = np.zeros(E.shape[:-1] + (l_hi.size,))
+    dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
+    jf = J_sum.reshape(-1, nl)
+    rho = np.zeros((l_nodes.size, jf.shape[0]), dtype=np.float16)
+    tmp = np.empty((l_nodes.size, min(jf.shape[0], SHARE_ROWS)), dtype=np.float32)
+
+    def add(l, h):
+        """The orders >= 3 ``h`` (flat, J_sum's grid) of table wavelength l into J_sum, at
+        a node into its ratio."""
+        _add_order(h[:, None], np.array([l]), node_of, jf, rho, tmp)
+
+    for b, ls in enumerate(batches):
+        nb = ls.size
+        cs = np.array([col_of[int(l)] for l in ls], dtype=np.int64)
+        J_b = np.empty(J_sum.shape[:-1] + (nb,), dtype=np.float32)
+        np.take(J_sum, ls, axis=-1, out=J_b, mode="clip")     # unbuffered: no temporary
+        # the orders >= 3 on a coarser grid than J_sum's: summed there first
+        H_b = None if same else np.zeros(coarse + (nb,), dtype=np.float32)
+
+        def sink(Jo, ls=ls, H_b=H_b):
+            if H_b is not None:
+                H_b += Jo
+                return
+            _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho, tmp)
+
+        E_b = np.zeros(E.shape[:-1] + (nb,))
+        higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
+                      beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, n_q,
+                      p, E_b, (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
+                      work=J_b if same else None)
+        E_hi[..., cs] = E_b
+        del J_b, sink
+        for i in range(nb if H_b is not None else 0):
+            h = np.zeros(J_sum.shape[:-1] + (1,), dtype=np.float32)
+            add_density(h, np.ascontiguousarray(H_b[..., i:i + 1]), q2, q3)
+            add(int(ls[i]), h.reshape(-1))
+        del H_b
+    _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
+    del rho, tmp
+    # E (small): the orders >= 3 at every computed wavelength, float64
+    plan_e = _spectral_plan(wl, l_hi, l_nodes, band)
+    from skydome.models.simulated.precomputed import _spectral
+
+    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, l_hi.size),
+                           *plan_e, SPREAD_CUBIC, 1e-12 * float(dE1_hi.max(initial=0.0)),
+                           E.reshape(-1, nl), False)
+
+
+# rows (nodes of J) per chunk of the float16 ratio's spread, and of its updates
+SPREAD_ROWS = 1 << 20
+SHARE_ROWS = 1 << 18
+RHO_MAX = np.float32(np.finfo(np.float16).max)
+
+
+def _spectral_plan(wl, computed, nodes, band):
+    from skydome.models.simulated.precomputed import _spectral
+
+    return list(_spectral.spread_plan(wl, computed, nodes, band if SPREAD_BAND else None))
+
+
+def _add_order(Jf, ls, node_of, jf, rho, T):
+    """One order's J ``Jf`` [row, i] of the table wavelengths ``ls`` (J_sum's grid) into
+    ``jf`` (J_sum [row, l]) at the wavelengths that are not nodes, and at the nodes its
+    share of order 2 into the float16 ratio ``rho`` [node, row] (the sum in float32,
+    rounded once; at most ``RHO_MAX``), in chunks of ``T``'s rows (float32 scratch
+    [node, row])."""
+    from skydome.models.simulated.precomputed import _spectral
+
+    dst = np.asarray(ls, dtype=np.int64)
+    node = np.array([node_of.get(int(l), -1) for l in ls], dtype=np.int64)
+    cols = np.arange(dst.size, dtype=np.int64)
+    for a in range(0, jf.shape[0], T.shape[1]):
+        e = min(jf.shape[0], a + T.shape[1])
+        _spectral.add_shares(Jf, cols, dst, node, jf, a, T)
+        for k in node[node >= 0]:
+            t = T[k, :e - a]
+            np.add(t, rho[k, a:e], out=t)
+            np.minimum(t, RHO_MAX, out=t)
+            rho[k, a:e] = t
+
+
+def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
+    """The orders >= 3 of J from their ratio ``rho`` [node, row] at the nodes onto every
+    table wavelength of ``jf`` [row, l] (order 2 there on entry) but the computed ones
+    that are not nodes (their orders >= 3 are added by their batches); below 1e-12 of
+    order 2's largest value at the nodes the orders >= 3 are interpolated directly
+    (ratio x order 2)."""
+    from skydome.models.simulated.precomputed import _spectral
+
+    plan = _spectral_plan(wl, l_nodes, l_nodes, band)
+    plan[0][[int(l) for l in l_hi if int(l) not in node_of]] = -2
+    floor = np.float32(1e-12 * max(float(jf[:, int(l)].max(initial=0.0)) for l in l_nodes))
+    for a in range(0, jf.shape[0], SPREAD_ROWS):
+        e = min(jf.shape[0], a + SPREAD_ROWS)
+        rf = np.ascontiguousarray(rho[:, a:e].T, dtype=np.float32)
+        _spectral.spread_ratio(jf[a:e], rf, *plan, SPREAD_CUBIC, floor, jf[a:e], True)
+
+
+# working memory of the orders >= 3 at a subset of the wavelengths [bytes]: one batch and
+# the float16 ratio of the nodes computed so far (see subset_batches)
+HIGH_ORDER_SUBSET_BYTES = 260_000_000
+
+
+def subset_batches(p, l_hi, l_nodes, nsc):
+    """The batches of :func:`higher_orders_subset` (arrays of table indices): the computed
+    wavelengths that are not nodes first, then the nodes, each batch as large as fits
+    ``HIGH_ORDER_SUBSET_BYTES`` with the float16 ratio of every node up to its end (its
+    pages are written as the nodes come); a wavelength costs its J (float32; on a coarser
+    grid of the orders >= 3, its sum there and J on the full grid too) and its incident
+    radiance; at least one per batch."""
+    n = p["sphere_samples"]
+    n_o = min(n, max(ORDER_DENSITY_MIN, n // p["order_table_divisor"]))
+    n_i = min(p["high_order_sphere_samples"] or n, n)
+    n_r, n_ms = high_order_grid(p)
+    n_rf, n_msf = p["scattering_r_size"], p["density_mu_s_size"] or p["scattering_mu_s_size"]
+    same = (n_r, n_ms, n_o) == (n_rf, n_msf, n)
+    j_fine = 4 * nsc * (2 * n + 1) * (n + 1) * n_rf * n_msf
+    j_hi = 4 * nsc * (2 * n_o + 1) * (n_o + 1) * n_r * n_ms
+    per_wl = (0 if same else j_fine + j_hi) + j_hi + 4 * n_r * n_ms * (n_i * n_i + 10)
+    rho = j_fine // 2                      # a node's ratio, float16
+    nodes = set(int(l) for l in l_nodes)
+    order = ([int(l) for l in l_hi if int(l) not in nodes]
+             + [int(l) for l in l_hi if int(l) in nodes])
+    out, cur, n_done = [], [], 0
+    for l in order:
+        n_new = n_done + (l in nodes)
+        if cur and per_wl * (len(cur) + 1) + rho * n_new > HIGH_ORDER_SUBSET_BYTES:
+            out.append(np.array(cur, dtype=np.int64))
+            cur = []
+        cur.append(l)
+        n_done = n_new
+    out.append(np.array(cur, dtype=np.int64))
+    return out
 
 
 # the outgoing grid of the scattering density of orders >= 3 never has fewer zenith
@@ -602,16 +798,19 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
     radiance ``L_in`` [i, r, mu_s, l] over all (r, mu_s, l) columns, each column weighted
     by the constituent's scattering coefficient ``w_col[k]`` after the product (J = P (L w)
     = (P L) w: no scaled copy of L_in); a tabulated phase function per wavelength (``l0``:
-    the table index of J's first wavelength). With the phase matrices in the azimuthal
+    the table index of J's first wavelength, or the table indices of all of J's
+    wavelengths). With the phase matrices in the azimuthal
     Fourier basis (``q.modes``) three float32 matrix products (BLAS) per block of columns:
     the incident radiance's cosine coefficients (shared by the constituents), per mode the
     product with the constituent's theta matrix, the sum over the modes at every outgoing
     azimuth; else one dense product per constituent, factored phase functions through
     their 10-row right-hand side ``rhs``."""
-    if q.modes is not None:
-        _azimuthal_products(q, L_in, w_col, beta_s, J, l0)
-        return
     nsc, nl = J.shape[0], J.shape[-1]
+    # the table index of each of J's wavelengths (``l0`` an int: consecutive from it)
+    l_tab = np.arange(nl) + l0 if np.ndim(l0) == 0 else np.asarray(l0)
+    if q.modes is not None:
+        _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab)
+        return
     lin = L_in.reshape(q.n_in, -1)
     for k in range(nsc):
         Jk = J[k].reshape(q.n_out, -1)
@@ -620,7 +819,7 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
             J3 = J[k].reshape(q.n_out, -1, nl)
             for l in range(nl):
                 x = np.ascontiguousarray(lin3[:, :, l]) * np.float32(beta_s[k, l])
-                J3[:, :, l] = q.per_wavelength[k][l0 + l] @ x
+                J3[:, :, l] = q.per_wavelength[k][l_tab[l]] @ x
             continue
         left = q.left[:, q.rows[k]:q.rows[k + 1]]
         if q.right[k] is None:
@@ -642,8 +841,9 @@ def _modes_to_density(q, G_cls, C, D, out):
         np.matmul(S[:, :n_m], d.transpose(1, 0, 2), out=out[:, sel])
 
 
-def _azimuthal_products(q, L_in, w_col, beta_s, J, l0):
-    """:func:`density_products` with the phase matrices in the azimuthal Fourier basis."""
+def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
+    """:func:`density_products` with the phase matrices in the azimuthal Fourier basis
+    (``l_tab``: the table index of each of J's wavelengths)."""
     nsc, nl = J.shape[0], J.shape[-1]
     n_ti, n_pi = q.th_in.size, q.ph_in.size
     n_to, n_po = q.th_out.size, q.ph_out.size
@@ -681,7 +881,7 @@ def _azimuthal_products(q, L_in, w_col, beta_s, J, l0):
                 cl = C1[:, :, :(c1 - c0) // nl]
                 cl[...] = c[:, :, l::nl]
                 jl = J1[:, :, :cl.shape[2]]
-                _modes_to_density(q, q.modes[k][l0 + l], cl, D, jl)
+                _modes_to_density(q, q.modes[k][l_tab[l]], cl, D, jl)
                 np.multiply(jl, np.float32(beta_s[k, l]), out=Jk[:, :, l::nl])
 
 
