@@ -89,7 +89,7 @@ def _instrument(rec, order_totals):
                 rec.setdefault(_n, []).append((time.perf_counter() - w0,
                                                time.process_time() - c0))
                 if _n == "source_total":
-                    order_totals.append(float(np.sum(r)))
+                    order_totals.append((float(np.sum(r)), np.size(r)))
                 return r
 
             setattr(mod, name, g)
@@ -257,18 +257,23 @@ def main(argv=None):
     print(f"estimated idle wall on 2 cores: {par / 2 + (cpu - par):.1f} s")
     n_orders = int(kw.get("orders", 6)) - 1
     if totals and n_orders > 0:
-        # each order's source strength, summed over the wavelength batches: order 2 batch by
-        # batch, then orders 3..N per batch of the higher orders
+        # each order's source strength per computed wavelength (the mean over the wavelength
+        # batches: order 2 batch by batch at every table wavelength, then orders 3..N per
+        # batch of the higher orders, at the wavelengths they are computed at: with
+        # high_order_wavelengths, the subset of _spectral.subset_indices)
         from skydome.models.simulated.precomputed import PrecomputedSky
 
         p = PrecomputedSky._validate_params(kw)
         n_sc = 2   # Atmosphere.earth: Rayleigh and aerosol
         n2 = -(-20 // _precompute.order_batch_size(p, 20, n_sc))
         tot = np.zeros(n_orders)
-        tot[0] = sum(totals[:n2])
+        t2 = np.array(totals[:n2])
+        tot[0] = t2[:, 0].sum() / t2[:, 1].sum()
         if n_orders > 1:
-            tot[1:] = np.array(totals[n2:]).reshape(-1, n_orders - 1).sum(axis=0)
-        print("source strength per order (share of orders 2..N, without the remainder):")
+            th = np.array(totals[n2:]).reshape(-1, n_orders - 1, 2)
+            tot[1:] = th[..., 0].sum(axis=0) / th[..., 1].sum(axis=0)
+        print("source strength per order, mean over the wavelengths each is computed at "
+              "(share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
             print(f"  order {i + 2}: {100 * t / tot.sum():5.2f} %")
     if hasattr(model._t, "has_multiple_scattering"):
