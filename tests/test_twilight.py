@@ -87,6 +87,19 @@ def test_no_belt_in_a_uniform_profile():
     assert not belt_of_venus(el, np.full(el.shape, 0.6))["found"]
 
 
+def test_no_belt_where_the_redness_still_rises_at_the_top():
+    """A profile bluer near the horizon whose R/B rises to the top of the profile (as the
+    default sky's at sun -6 deg: 0.14 at the shadow, 0.23 at 39 deg) has no band: its maximum
+    is the profile's end, so no belt is found; the same profile with a maximum inside it and
+    falling above (a band) is one."""
+    el = np.arange(0.5, 40.1, 0.5)
+    rising = 0.14 + 0.09 * (el / 40.0)
+    assert not belt_of_venus(el, rising)["found"]
+    band = 0.14 + 0.09 * np.exp(-((el - 12.0) / 6.0) ** 2)
+    b = belt_of_venus(el, band)
+    assert b["found"] and b["belt_deg"] == 12.0
+
+
 def test_belt_of_venus_rejects_profile_without_data():
     with pytest.raises(ValueError, match="elevations_deg"):
         belt_of_venus([0.5, 1.0], [1.0, 1.0])

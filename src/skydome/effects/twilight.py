@@ -122,7 +122,9 @@ def belt_of_venus(elevations_deg, red_blue, luminance=None) -> dict:
         minimum R/B below the belt), ``contrast`` (belt_rb - shadow_rb), ``shadow_top_deg``
         (where R/B, rising from the shadow towards the belt, passes half way between the two
         [deg]), ``found`` (True where the belt is at least 0.05 redder than the shadow, lies
-        above the profile's lowest point above 2 deg and the shadow band has a top); with ``luminance`` also ``belt_luminance`` and ``shadow_luminance`` (mean
+        above the profile's lowest point above 2 deg and below its highest point (a band,
+        not R/B still rising at the profile's top) and the shadow band has a top); with
+        ``luminance`` also ``belt_luminance`` and ``shadow_luminance`` (mean
         luminance below ``shadow_top_deg``) [cd m^-2].
     """
     e = np.asarray(elevations_deg, dtype=float)
@@ -142,7 +144,10 @@ def belt_of_venus(elevations_deg, red_blue, luminance=None) -> dict:
         shadow, top = float("nan"), float("nan")
     out = {"belt_deg": float(e[i]), "belt_rb": float(rb[i]), "shadow_rb": shadow,
            "contrast": float(rb[i] - shadow), "shadow_top_deg": top}
-    out["found"] = bool(out["contrast"] >= 0.05 and i > int(np.flatnonzero(ok)[0]) and np.isfinite(top))
+    # a band: the R/B maximum inside the profile (above its lowest point above 2 deg and
+    # below its top, where R/B that still rises is no band), 0.05 redder than the shadow
+    inner = int(np.flatnonzero(ok)[0]) < i < int(np.flatnonzero(ok)[-1])
+    out["found"] = bool(out["contrast"] >= 0.05 and inner and np.isfinite(top))
     if luminance is not None:
         lum = np.asarray(luminance, dtype=float)
         out["belt_luminance"] = float(lum[i])
