@@ -16,11 +16,11 @@ import sys
 def main() -> None:  # console-script entry point
     argv = sys.argv[1:]
     if argv[:1] == ["skymatrix"]:
-        # Before numpy is imported: no transparent huge pages for its large arrays (the
-        # 161 MB of patch values of an annual MF:4 matrix). On the 2-core EPYC virtual machine
-        # of docs/performance.md the first touch of a 2 MiB page is slow: 0.37-0.44 s of
-        # system time for those 161 MB, 0.06-0.09 s with 4 KiB pages. A value set by the
-        # user is kept.
+        # Before numpy is imported: no transparent huge pages for its large arrays (a
+        # matrix held whole for a .npy or ascii output, the Perez work arrays). On the 2-core
+        # EPYC virtual machine of docs/performance.md the first touch of a 2 MiB page is
+        # slow: filling a new 161 MB array cost 0.37-0.44 s of system time with them,
+        # 0.06-0.09 s with 4 KiB pages. A value set by the user is kept.
         os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
         from skydome.daylighting.skymatrix_cli import fast_skymatrix
 
