@@ -3,12 +3,21 @@ render path and build the default ``precomputed`` tables into the on-disk cache.
 
 Run once by ``./scripts/demo``'s set-up (``python -m skydome.apps.warmup``), so that the
 first ``skydome render`` starts from compiled kernels and cached tables instead of paying
-the compilation (about 10 s) and the precomputation (about half a minute on 2 cores).
+the compilation (about 10 s) and the precomputation (about 25 s on 2 cores).
 """
 
 from __future__ import annotations
 
 import time
+
+
+#: Table sizes of the precomputation that compiles its kernels when the default tables
+#: are cached already (:func:`warm`): small grids, the default 20 wavelengths (so that the
+#: orders >= 3 run at a subset of them, as at the defaults).
+PRECOMPUTE_WARM_SIZES = dict(scattering_r_size=8, scattering_mu_size=32, scattering_mu_s_size=16,
+                             scattering_nu_size=8, transmittance_mu_size=64,
+                             transmittance_r_size=16, irradiance_mu_s_size=16,
+                             irradiance_r_size=8, sphere_samples=8, high_order_sphere_samples=8)
 
 
 def warm(verbose: bool = True) -> float:
@@ -24,9 +33,17 @@ def warm(verbose: bool = True) -> float:
     for name, params in (("precomputed", {}), ("single_scattering", {}), ("preetham1999", {}),
                          ("perez1993", {"dni": 650.0, "dhi": 120.0}), ("cie2003", {"sky_type": 12})):
         t = time.perf_counter()
-        image = sd.render(sd.model(name, sun=sun, **params), proj, output="xyz")
+        model = sd.model(name, sun=sun, **params)
+        image = sd.render(model, proj, output="xyz")
         if name == "precomputed":
             image.to_srgb()    # the picture's display path (the Hunt-gain kernel)
+            if model.from_cache:
+                # the default tables came from the cache, so the precomputation's kernels
+                # were not compiled: a small precomputation of the default atmosphere and
+                # wavelengths (the same kernel specialisations, table sizes aside) compiles
+                # them, so that a first new atmosphere (turbidity, AOD, ...) does not pay
+                # 1-1.5 min of compilation on top of its precomputation
+                sd.model(name, sun=sun, cache=False, **PRECOMPUTE_WARM_SIZES)
         if verbose:
             print(f"warm: {name} ready ({time.perf_counter() - t:.1f} s)", flush=True)
     t = time.perf_counter()
