@@ -190,9 +190,8 @@ def test_float16_ratio_sum_within_its_rounding_bound():
               for k in range(5)]
     orders[0][10, 0] = 1e6 * j2[10, 1]        # a ratio beyond float16's range
     rho = np.zeros((2, n), dtype=np.float16)
-    T = np.empty((2, 1024), dtype=np.float32)    # fewer rows than n: several chunks
     for Jo in orders:
-        PC._add_order(Jo, ls, node_of, jf, rho, T)
+        PC._add_order(Jo, ls, node_of, jf, rho)
     total = sum(Jo.astype(np.float64) for Jo in orders)
     np.testing.assert_allclose(jf[:, 2], j2[:, 2] + total[:, 1], rtol=1e-6)
     np.testing.assert_array_equal(jf[:, [0, 1, 3]], j2[:, [0, 1, 3]])   # nodes: order 2 kept
@@ -205,6 +204,38 @@ def test_float16_ratio_sum_within_its_rounding_bound():
         exact = total[m, l - 1] / j2[m, l]
         np.testing.assert_allclose(rho[k, m].astype(np.float64), exact, rtol=5 * 2.0 ** -11)
         assert np.abs(rho[k, m] / exact - 1.0).max() > 2.0 ** -14   # float16 rounding is there
+
+
+def test_float16_bits_in_the_kernels_are_numpys_cast():
+    """The kernels' binary16 (numba has no float16 on the CPU): the decoding table is the
+    value of every bit pattern as numpy reads it, and ``half_bits`` rounds float32 values
+    to the same bits as numpy's cast (IEEE 754 round to nearest, ties to even): at every
+    binary16 value in [0, 65504], at the float32 values next to it and at every midpoint
+    between neighbours (the ties), and at 200 000 random float32 values (and their 2^-30 multiples, deep in the
+    subnormal range) spread over the
+    subnormal and normal ranges."""
+    from numba import njit
+
+    table = S.half_table()
+    h = np.arange(1 << 16, dtype=np.uint32).astype(np.uint16)
+    np.testing.assert_array_equal(table.view(np.uint32),
+                                  h.view(np.float16).astype(np.float32).view(np.uint32))
+
+    @njit
+    def bits(u, out):
+        for i in range(u.size):
+            out[i] = S.half_bits(u[i])
+
+    v = table[:0x7C00].astype(np.float64)            # 0 .. 65504, every finite value >= 0
+    mid = 0.5 * (v[1:] + v[:-1])                      # exact ties (in float32 too)
+    x = np.concatenate([v, mid, np.nextafter(mid, 0.0), np.nextafter(mid, 1e6),
+                        np.exp(np.random.default_rng(3).uniform(np.log(1e-9), np.log(65504.0),
+                                                                200_000))]).astype(np.float32)
+    x = np.concatenate([x, x * np.float32(2.0 ** -30)])
+    x = x[x <= 65504.0]
+    out = np.empty(x.size, dtype=np.uint16)
+    bits(x.view(np.uint32), out)
+    np.testing.assert_array_equal(out, x.astype(np.float16).view(np.uint16))
 
 
 def test_subset_batches_cover_the_computed_wavelengths_within_the_budget():

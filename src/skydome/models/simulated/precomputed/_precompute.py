@@ -611,12 +611,11 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
     dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
     jf = J_sum.reshape(-1, nl)
     rho = np.zeros((l_nodes.size, jf.shape[0]), dtype=np.float16)
-    tmp = np.empty((l_nodes.size, min(jf.shape[0], SHARE_ROWS)), dtype=np.float32)
 
     def add(l, h):
         """The orders >= 3 ``h`` (flat, J_sum's grid) of table wavelength l into J_sum, at
         a node into its ratio."""
-        _add_order(h[:, None], np.array([l]), node_of, jf, rho, tmp)
+        _add_order(h[:, None], np.array([l]), node_of, jf, rho)
 
     for b, ls in enumerate(batches):
         nb = ls.size
@@ -630,7 +629,7 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
             if H_b is not None:
                 H_b += Jo
                 return
-            _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho, tmp)
+            _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho)
 
         E_b = np.zeros(E.shape[:-1] + (nb,))
         higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
@@ -645,7 +644,7 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
             add(int(ls[i]), h.reshape(-1))
         del H_b
     _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
-    del rho, tmp
+    del rho
     # E (small): the orders >= 3 at every computed wavelength, float64
     plan_e = _spectral_plan(wl, l_hi, l_nodes, band)
     from skydome.models.simulated.precomputed import _spectral
@@ -655,9 +654,8 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
                            E.reshape(-1, nl), False)
 
 
-# rows (nodes of J) per chunk of the float16 ratio's spread, and of its updates
+# rows (nodes of J) per chunk of the float16 ratio's spread
 SPREAD_ROWS = 1 << 20
-SHARE_ROWS = 1 << 18
 RHO_MAX = np.float32(np.finfo(np.float16).max)
 
 
@@ -667,25 +665,31 @@ def _spectral_plan(wl, computed, nodes, band):
     return list(_spectral.spread_plan(wl, computed, nodes, band if SPREAD_BAND else None))
 
 
-def _add_order(Jf, ls, node_of, jf, rho, T):
+def _add_order(Jf, ls, node_of, jf, rho):
     """One order's J ``Jf`` [row, i] of the table wavelengths ``ls`` (J_sum's grid) into
     ``jf`` (J_sum [row, l]) at the wavelengths that are not nodes, and at the nodes its
     share of order 2 into the float16 ratio ``rho`` [node, row] (the sum in float32,
-    rounded once; at most ``RHO_MAX``), in chunks of ``T``'s rows (float32 scratch
-    [node, row])."""
+    rounded once; at most ``RHO_MAX``): one parallel pass of
+    :func:`._spectral.add_shares` over the rows."""
     from skydome.models.simulated.precomputed import _spectral
 
     dst = np.asarray(ls, dtype=np.int64)
     node = np.array([node_of.get(int(l), -1) for l in ls], dtype=np.int64)
     cols = np.arange(dst.size, dtype=np.int64)
-    for a in range(0, jf.shape[0], T.shape[1]):
-        e = min(jf.shape[0], a + T.shape[1])
-        _spectral.add_shares(Jf, cols, dst, node, jf, a, T)
-        for k in node[node >= 0]:
-            t = T[k, :e - a]
-            np.add(t, rho[k, a:e], out=t)
-            np.minimum(t, RHO_MAX, out=t)
-            rho[k, a:e] = t
+    _spectral.add_shares(Jf, cols, dst, node, jf, rho.view(np.uint16), _half_table(), RHO_MAX)
+
+
+def _half_table():
+    """:func:`._spectral.half_table`, made once per process (256 KB)."""
+    global _HALF_TABLE
+    if _HALF_TABLE is None:
+        from skydome.models.simulated.precomputed import _spectral
+
+        _HALF_TABLE = _spectral.half_table()
+    return _HALF_TABLE
+
+
+_HALF_TABLE = None
 
 
 def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
@@ -701,7 +705,8 @@ def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
     floor = np.float32(1e-12 * max(float(jf[:, int(l)].max(initial=0.0)) for l in l_nodes))
     for a in range(0, jf.shape[0], SPREAD_ROWS):
         e = min(jf.shape[0], a + SPREAD_ROWS)
-        rf = np.ascontiguousarray(rho[:, a:e].T, dtype=np.float32)
+        rf = np.empty((e - a, rho.shape[0]), dtype=np.float32)
+        _spectral.half_rows(rho.view(np.uint16), _half_table(), a, rf)
         _spectral.spread_ratio(jf[a:e], rf, *plan, SPREAD_CUBIC, floor, jf[a:e], True)
 
 
@@ -843,7 +848,10 @@ def _modes_to_density(q, G_cls, C, D, out):
 
 def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
     """:func:`density_products` with the phase matrices in the azimuthal Fourier basis
-    (``l_tab``: the table index of each of J's wavelengths)."""
+    (``l_tab``: the table index of each of J's wavelengths). The blocks of columns are
+    independent (each writes its own columns of J): they are shared out between
+    :func:`product_threads` threads, each with its own scratch arrays and single-threaded
+    BLAS (:func:`_blocks_in_threads`)."""
     nsc, nl = J.shape[0], J.shape[-1]
     n_ti, n_pi = q.th_in.size, q.ph_in.size
     n_to, n_po = q.th_out.size, q.ph_out.size
@@ -851,38 +859,73 @@ def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
     L3 = L_in.reshape(n_ti, n_pi, n_col)
     block = nl * max(1, DENSITY_BLOCK_COLUMNS // nl)     # whole wavelengths per block
     n_m = q.analysis.shape[0]
-    C = np.empty((n_ti, n_m, min(block, n_col)), dtype=np.float32)
-    Lb = np.empty((n_ti, n_pi, C.shape[2]), dtype=np.float32)
-    D = np.empty((n_m, n_to, C.shape[2]), dtype=np.float32)
+    width = min(block, n_col)
     tab = any(len(m) > 1 for m in q.modes)
-    if tab:
-        nb = C.shape[2] // nl
-        C1 = np.empty((n_ti, n_m, nb), dtype=np.float32)
-        J1 = np.empty((n_to, n_po, nb), dtype=np.float32)
-    for c0 in range(0, n_col, block):
-        c1 = min(n_col, c0 + block)
-        c = C[:, :, :c1 - c0]
-        # a contiguous copy of the block with radiances below FLUSH_BELOW set to 0: the
-        # night side's incident radiance decays to float32 subnormals (< 1.2e-38), and
-        # products with subnormal operands run 10-50x slower on x86 (no flush-to-zero in
-        # numpy's BLAS); 1e-30 W m^-2 sr^-1 nm^-1 is ~30 orders of magnitude below any
-        # radiance the tables resolve, so the density is unchanged to float32 rounding
-        lb = Lb[:, :, :c1 - c0]
-        lb[...] = L3[:, :, c0:c1]
-        lb[lb < FLUSH_BELOW] = 0.0
-        np.matmul(q.analysis, lb, out=c)
-        for k in range(nsc):
-            Jk = J[k].reshape(n_to, n_po, n_col)[:, :, c0:c1]
-            if len(q.modes[k]) == 1:
-                _modes_to_density(q, q.modes[k][0], c, D, Jk)
-                Jk *= w_col[k][c0:c1]
-                continue
-            for l in range(nl):
-                cl = C1[:, :, :(c1 - c0) // nl]
-                cl[...] = c[:, :, l::nl]
-                jl = J1[:, :, :cl.shape[2]]
-                _modes_to_density(q, q.modes[k][l_tab[l]], cl, D, jl)
-                np.multiply(jl, np.float32(beta_s[k, l]), out=Jk[:, :, l::nl])
+
+    def worker(starts):
+        C = np.empty((n_ti, n_m, width), dtype=np.float32)
+        Lb = np.empty((n_ti, n_pi, width), dtype=np.float32)
+        D = np.empty((n_m, n_to, width), dtype=np.float32)
+        if tab:
+            nb = width // nl
+            C1 = np.empty((n_ti, n_m, nb), dtype=np.float32)
+            J1 = np.empty((n_to, n_po, nb), dtype=np.float32)
+        for c0 in starts:
+            c1 = min(n_col, c0 + block)
+            c = C[:, :, :c1 - c0]
+            # a contiguous copy of the block with radiances below FLUSH_BELOW set to 0: the
+            # night side's incident radiance decays to float32 subnormals (< 1.2e-38), and
+            # products with subnormal operands run 10-50x slower on x86 (no flush-to-zero in
+            # numpy's BLAS); 1e-30 W m^-2 sr^-1 nm^-1 is ~30 orders of magnitude below any
+            # radiance the tables resolve, so the density is unchanged to float32 rounding
+            lb = Lb[:, :, :c1 - c0]
+            lb[...] = L3[:, :, c0:c1]
+            lb[lb < FLUSH_BELOW] = 0.0
+            np.matmul(q.analysis, lb, out=c)
+            for k in range(nsc):
+                Jk = J[k].reshape(n_to, n_po, n_col)[:, :, c0:c1]
+                if len(q.modes[k]) == 1:
+                    _modes_to_density(q, q.modes[k][0], c, D, Jk)
+                    Jk *= w_col[k][c0:c1]
+                    continue
+                for l in range(nl):
+                    cl = C1[:, :, :(c1 - c0) // nl]
+                    cl[...] = c[:, :, l::nl]
+                    jl = J1[:, :, :cl.shape[2]]
+                    _modes_to_density(q, q.modes[k][l_tab[l]], cl, D, jl)
+                    np.multiply(jl, np.float32(beta_s[k, l]), out=Jk[:, :, l::nl])
+
+    _blocks_in_threads(worker, list(range(0, n_col, block)))
+
+
+def product_threads():
+    """Threads of the scattering density's matrix products: numba's thread count (the
+    kernels' own; ``NUMBA_NUM_THREADS``)."""
+    import numba
+
+    return max(1, int(numba.get_num_threads()))
+
+
+def _blocks_in_threads(worker, starts):
+    """``worker(starts[t::n])`` in n = :func:`product_threads` Python threads (numpy's
+    products and ufuncs release the GIL), BLAS limited to one thread meanwhile.
+
+    The products are many small sgemm calls (a few hundred columns each): with BLAS's own
+    thread pool their cost swung between 2.5 and 22 s of CPU for one order's products
+    (OpenBLAS's threads spin-waiting against numba's between the kernels), with one BLAS
+    thread per Python thread 1.6-2.5 s (docs/performance.md)."""
+    from threadpoolctl import threadpool_limits
+
+    n = min(product_threads(), len(starts))
+    with threadpool_limits(limits=1, user_api="blas"):
+        if n <= 1:
+            worker(starts)
+            return
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(max_workers=n) as pool:
+            for f in [pool.submit(worker, starts[t::n]) for t in range(n)]:
+                f.result()
 
 
 def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):

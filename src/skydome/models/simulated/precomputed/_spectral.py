@@ -216,21 +216,84 @@ def spread_ratio(base, hi, own, cell, node_col, node_l, xn, x, band, d2b, cubic,
                 out[i, l] += v[l]
 
 
+# float16 in numba kernels (numba has no float16 type on the CPU): the ratio rho of the
+# subset's nodes is kept as IEEE binary16 bits (uint16), read through a table of the 65536
+# values and written by :func:`half_bits` (round to nearest, ties to even, as numpy's cast)
+
+
+def half_table():
+    """float32 value of every binary16 bit pattern (index = the bits): the exact decoding."""
+    return np.arange(1 << 16, dtype=np.uint32).astype(np.uint16).view(np.float16).astype(np.float32)
+
+
+@njit(cache=True)
+def half_bits(u):
+    """The binary16 bits (uint16) of the float32 with bits ``u`` (uint32; a finite value in
+    [0, 65504]) rounded to nearest, ties to even (IEEE 754; numpy's float32 -> float16
+    cast). Normal in binary16 (float32 exponent field >= 113): exponent rebiased, the 23-bit
+    mantissa rounded to 10 bits (a mantissa rounded up to 2^10 carries into the exponent
+    by itself); below, subnormal: the full significand (implicit bit) shifted to units of
+    2^-24 and rounded the same way."""
+    u = np.uint32(u)
+    e = np.int64((u >> np.uint32(23)) & np.uint32(0xFF))
+    m = np.int64(u & np.uint32(0x7FFFFF))
+    if e >= 113:
+        h = ((e - 112) << 10) | (m >> 13)
+        rem = m & 0x1FFF
+        if rem > 0x1000 or (rem == 0x1000 and (h & 1) == 1):
+            h += 1
+        return np.uint16(h)
+    if e == 0:
+        return np.uint16(0)        # zero, or a float32 subnormal (< 2^-126): rounds to 0
+    m |= 0x800000
+    sh = 126 - e                   # >= 14
+    if sh > 25:
+        return np.uint16(0)        # below half the smallest binary16 subnormal
+    h = m >> sh
+    rem = m & ((1 << sh) - 1)
+    half = 1 << (sh - 1)
+    if rem > half or (rem == half and (h & 1) == 1):
+        h += 1
+    return np.uint16(h)
+
+
+# rows per work item of add_shares
+SHARE_BLOCK = 4096
+
+
 @njit(cache=True, parallel=True)
-def add_shares(Jo, cols, dst, node, jf, a, T):
+def add_shares(Jo, cols, dst, node, jf, rho, table, top):
     """One order's J of a batch of the computed wavelengths (``Jo`` [row, column], on the
-    summed density's grid) over the rows a .. a + T.shape[1] - 1: column c = cols[m] added
-    into jf[:, dst[m]] where node[m] < 0; else its share of order 2 at that wavelength,
-    Jo[row, c] / jf[row, dst[m]] (0 where order 2 is 0), written to T[node[m], row - a].
-    One pass over the rows of the summed density (its columns are strided)."""
-    n = min(T.shape[1], jf.shape[0] - a)
-    for q in prange(n):
-        i = a + q
-        for m in range(cols.shape[0]):
-            v = Jo[i, cols[m]]
-            l = dst[m]
-            if node[m] < 0:
-                jf[i, l] += v
-            else:
-                d = jf[i, l]
-                T[node[m], q] = v / d if d > 0.0 else 0.0
+    summed density's grid) over every row: column c = cols[m] added into jf[:, dst[m]]
+    where node[m] < 0; else its share of order 2 at that wavelength, s = Jo[row, c] /
+    jf[row, dst[m]] (0 where order 2 is 0), added to the float16 ratio ``rho`` [node[m],
+    row] (binary16 bits, decoded by ``table`` = :func:`half_table`): the float32 sum
+    min(rho + s, top), rounded to binary16 once (:func:`half_bits`). One pass over the
+    rows of the summed density (its columns are strided), in blocks of rows."""
+    n = jf.shape[0]
+    for b in prange((n + SHARE_BLOCK - 1) // SHARE_BLOCK):
+        i0 = b * SHARE_BLOCK
+        i1 = min(n, i0 + SHARE_BLOCK)
+        t = np.empty(1, dtype=np.float32)
+        tu = t.view(np.uint32)
+        for i in range(i0, i1):
+            for m in range(cols.shape[0]):
+                v = Jo[i, cols[m]]
+                l = dst[m]
+                k = node[m]
+                if k < 0:
+                    jf[i, l] += v
+                else:
+                    d = jf[i, l]
+                    s = np.float32(v / d) if d > 0.0 else np.float32(0.0)
+                    t[0] = min(np.float32(table[rho[k, i]] + s), top)
+                    rho[k, i] = half_bits(tu[0])
+
+
+@njit(cache=True, parallel=True)
+def half_rows(rho, table, a, out):
+    """out[i, k] = the float32 value of the binary16 bits rho[k, a + i] (``table`` =
+    :func:`half_table`): the ratio of rows a .. a + out.shape[0] - 1, transposed."""
+    for i in prange(out.shape[0]):
+        for k in range(out.shape[1]):
+            out[i, k] = table[rho[k, a + i]]
