@@ -233,6 +233,12 @@ def precompute(props, wl, p):
                                           dE1[..., sl])
             report("precomputing tables: scattering orders", 2 + b, n_steps)
         E += dE1
+        if p["orders"] >= 3:
+            # single scattering is read by order 2 only: its table (0.50 GB at the defaults)
+            # is freed for the working arrays of the orders >= 3 (one batch of them then
+            # fits: a ray integral's cost is nearly all geometry, shared by a batch's
+            # wavelengths) and computed again after them (the same kernel: the same bits)
+            ss = None
         if nl_hi == nl:
             for b, l0 in enumerate(range(0, nl, nb_hi)):
                 sl = slice(l0, min(nl, l0 + nb_hi))
@@ -244,6 +250,9 @@ def precompute(props, wl, p):
             higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes,
                                  p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
                                  q3, hi, n_q_ms, p, E, (1 + n_batch, n_steps))
+    if ss is None:
+        ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min,
+                               alpha, p)
     # 4. the stored orders 2..N (+ remainder) are not integrated here: the sky's radiance()
     # integrates them at the observer from J_sum; the stored table is built from J_sum on
     # its first read (Tables.build_multiple_scattering -> stored_table_of), with the
@@ -711,8 +720,10 @@ def _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl):
 
 
 # working memory of the orders >= 3 at a subset of the wavelengths [bytes]: one batch and
-# the float16 ratio of the nodes computed so far (see subset_batches)
-HIGH_ORDER_SUBSET_BYTES = 260_000_000
+# the float16 ratio of the nodes computed so far (see subset_batches); at the defaults the 13
+# computed wavelengths in one batch (456 MB with the ratio), while the single-scattering
+# table (0.50 GB) is not held (see precompute)
+HIGH_ORDER_SUBSET_BYTES = 480_000_000
 
 
 def subset_batches(p, l_hi, l_nodes, nsc):
