@@ -114,13 +114,14 @@ def _sky(m, elev):
 
 
 def _exact_and_fast(elev, **kw):
-    """(all wavelengths, the default subset, the computed line-absorbed wavelengths, the
-    nodes, the 20 table wavelengths) on the small tables ``SMALL`` updated by ``kw``; the
-    computed wavelengths as the model picks them (nodes evenly in log lambda)."""
+    """(all wavelengths (the default), the subset of 7 nodes, the computed line-absorbed
+    wavelengths, the nodes, the 20 table wavelengths) on the small tables ``SMALL`` updated
+    by ``kw``; the computed wavelengths as the model picks them (nodes evenly in log
+    lambda)."""
     wl = np.linspace(380.0, 780.0, 20)
     sun = sd.Sun(elevation_deg=elev, azimuth_deg=180.0)
-    exact = sd.model("precomputed", sun=sun, **dict(SMALL, high_order_wavelengths=None, **kw))
-    fast = sd.model("precomputed", sun=sun, **dict(SMALL, **kw))
+    exact = sd.model("precomputed", sun=sun, **dict(SMALL, **kw))
+    fast = sd.model("precomputed", sun=sun, **dict(SMALL, high_order_wavelengths=7, **kw))
     props, column = _props_and_columns(wl)
     computed, nodes = S.subset_indices(20, 7, props.extinction - props.scattering, column, wl)
     return exact, fast, np.setdiff1d(computed, nodes), nodes, wl
@@ -239,14 +240,14 @@ def test_float16_bits_in_the_kernels_are_numpys_cast():
 
 
 def test_subset_batches_cover_the_computed_wavelengths_within_the_budget():
-    """At the default settings each computed wavelength is in exactly one batch, the
+    """With 7 interpolation nodes each computed wavelength is in exactly one batch, the
     line-absorbed ones first, then the nodes, and every batch with the float16 ratio of the
     nodes done by its end (2 bytes per node of J) stays within HIGH_ORDER_SUBSET_BYTES: J at
     the default sizes is 2 x 65 x 33 x 32 x 48 float32 (26.4 MB) per wavelength."""
     p = sd.models.simulated.precomputed.PrecomputedSky._validate_params({})
     wl = np.linspace(380.0, 780.0, 20)
     props, column = _props_and_columns(wl)
-    computed, nodes = S.subset_indices(20, p["high_order_wavelengths"],
+    computed, nodes = S.subset_indices(20, 7,
                                        props.extinction - props.scattering, column, wl)
     batches = PC.subset_batches(p, computed, nodes, 2)
     flat = np.concatenate(batches)
@@ -259,7 +260,20 @@ def test_subset_batches_cover_the_computed_wavelengths_within_the_budget():
     for b in batches:
         done += int(np.isin(b, nodes).sum())
         assert b.size * (j + l_in) + done * j // 2 <= PC.HIGH_ORDER_SUBSET_BYTES
-    assert len(batches) == 1          # the default: the 13 wavelengths in one batch
+    assert len(batches) == 1          # the 13 computed wavelengths in one batch
+
+
+def test_default_orders_above_two_in_one_batch():
+    """At the default settings the orders >= 3 are computed at every table wavelength
+    (``high_order_wavelengths`` None), the 20 of the default grid in one batch of the
+    all-wavelength path within HIGH_ORDER_BATCH_BYTES: J (2 x 65 x 33 x 32 x 48 float32,
+    26.4 MB per wavelength) and the incident radiance on 16 x 16 directions with its 10
+    columns of matrix right-hand side (1.6 MB per wavelength)."""
+    p = sd.models.simulated.precomputed.PrecomputedSky._validate_params({})
+    assert p["high_order_wavelengths"] is None
+    assert PC.high_order_batch_size(p, 20, 2) == 20
+    per_wl = 4 * 32 * 48 * (2 * 65 * 33 + 16 * 16 + 10)
+    assert 20 * per_wl <= PC.HIGH_ORDER_BATCH_BYTES
 
 
 def test_subset_batches_of_one_wavelength_give_the_one_batch_tables(monkeypatch):
@@ -272,9 +286,10 @@ def test_subset_batches_of_one_wavelength_give_the_one_batch_tables(monkeypatch)
     wl = np.linspace(380.0, 780.0, 20)
     atm = Atmosphere.earth(aerosol_optical_depth=0.3)
     sun = sd.Sun(elevation_deg=20.0, azimuth_deg=180.0)
-    one = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **SMALL)
+    kw = dict(SMALL, high_order_wavelengths=7)
+    one = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
     monkeypatch.setattr(PC, "HIGH_ORDER_SUBSET_BYTES", 1)
-    many = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **SMALL)
+    many = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
     t1, t2 = one._t, many._t
     np.testing.assert_array_equal(t1.single_scattering, t2.single_scattering)
     np.testing.assert_allclose(t2.scattering_density, t1.scattering_density, rtol=2e-6,

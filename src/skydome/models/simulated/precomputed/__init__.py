@@ -88,20 +88,21 @@ class PrecomputedSky(SkyModel):
         ``density_mu_s_size``). 16 x 24 is up to 10 % RMS (19 % max) off the full grid in
         twilight, r 16 alone 0.6-0.9 % RMS (docs/models.md, "Orders >= 3, cheaper").
     high_order_wavelengths : int, optional
-        Interpolation nodes of the orders >= 3 in wavelength (default 7): the orders >= 3
-        are computed at that many table wavelengths (spread evenly in log wavelength, both
-        ends included) and at every table wavelength in a water-vapour or oxygen band; at
-        the others they are order 2's scattering density (and order 1's ground irradiance)
-        times the ratio of the orders >= 3 to it, interpolated (monotone cubic in log-log,
-        ozone's Chappuis band taken out); at the nodes the ratio is kept in float16 (the
-        orders >= 3 there within 0.24 % of their value). What it gives up: the orders >= 3
-        at the other wavelengths are interpolated, not computed. At the default 20 table
-        wavelengths: 13 computed, the precomputation about 15 % less CPU at the same peak
-        memory (1.47 GB), the sky within 0.02 % RMS (luminance, max 0.06 %) and 0.15 % RMS
-        (any table wavelength) of every wavelength computed, sun 60 to -6 deg, AOD 0.2; at
-        AOD 0.5 0.03 % RMS, max 0.08 %, 0.20 % per wavelength
-        (docs/models.md, "Orders >= 3 at a subset of the table wavelengths"). None: every
-        table wavelength (exact).
+        None (the default): the orders >= 3 are computed at every table wavelength, all in
+        one batch (the cost of their ray integrals is nearly all geometry, shared by the
+        batch's wavelengths). An integer k (opt-in): interpolation nodes of the orders >= 3
+        in wavelength: they are computed at k table wavelengths (spread evenly in log
+        wavelength, both ends included) and at every table wavelength in a water-vapour or
+        oxygen band; at the others they are order 2's scattering density (and order 1's
+        ground irradiance) times the ratio of the orders >= 3 to it, interpolated (monotone
+        cubic in log-log, ozone's Chappuis band taken out); at the nodes the ratio is kept
+        in float16 (the orders >= 3 there within 0.24 % of their value). What it gives up:
+        the orders >= 3 at the other wavelengths are interpolated, not computed (with k = 7
+        at 20 table wavelengths: the sky within 0.02 % RMS, max 0.06 %, of every wavelength
+        computed, sun 60 to -6 deg, AOD 0.2; 0.03 % / 0.08 % at AOD 0.5); it saves time
+        only where every wavelength would not fit one batch (many table wavelengths):
+        at the default 20 it costs more CPU than computing them all (docs/models.md,
+        "Orders >= 3 at a subset of the table wavelengths").
     stored_table : {"full", "subset"}
         "full" (default): the stored 4-D table of orders 2..N (read by aerial perspective,
         the texture/LUT export and the viewer; not by ``radiance()``, which integrates
@@ -166,7 +167,7 @@ class PrecomputedSky(SkyModel):
         Parameter("high_order_mu_s_size", "", None, 2, 512,
                   "mu_s nodes of the scattering density of orders >= 3 (None: the full grid)",
                   kind="int"),
-        Parameter("high_order_wavelengths", "", 7, 2, 400,
+        Parameter("high_order_wavelengths", "", None, 2, 400,
                   "table wavelengths at which orders >= 3 are computed (None: all)", kind="int"),
         Parameter("stored_table", "", "full", doc="stored table of orders 2..N: full, or "
                   "subset (faster approximation: integrated on a subset of its nodes)",

@@ -393,10 +393,12 @@ def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, R
 
 # working memory of one batch of wavelengths of order 2 [bytes] (see precompute)
 ORDER_BATCH_BYTES = 400_000_000
-# working memory of one batch of wavelengths of the orders >= 3 [bytes] (2 batches of 10 at
-# the defaults; on the opt-in coarse (r, mu_s) grid all 20 wavelengths are one batch: the ray
-# integrals' geometry is the same for every wavelength, fewer batches take less time)
-HIGH_ORDER_BATCH_BYTES = 400_000_000
+# working memory of one batch of wavelengths of the orders >= 3 [bytes]: at the defaults all
+# 20 wavelengths are one batch (560 MB, while the single-scattering table of 0.50 GB is not
+# held, see precompute): the ray integrals' geometry is the same for every wavelength, and a
+# ray integral of 20 wavelengths costs little more than one of 5 (nearly all its time is the
+# geometry and the latency of J's gathers), so fewer batches take less time
+HIGH_ORDER_BATCH_BYTES = 600_000_000
 
 
 def _batches(per_wl, nl, budget):
