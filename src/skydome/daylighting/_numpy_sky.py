@@ -39,60 +39,60 @@ def _runs(mask, longest):
 
 def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_scale,
                        cz_min):
-    """The sky patches' values of the lit hours, normalised to the diffuse illuminance, run
-    of lit hours by run.
+    """The sky patches' unnormalised means and their per-hour scale, run of lit hours by run.
 
     ``nodes`` (M, 3), ``weights`` (M,) [sr], ``offsets`` (P + 1,): one rule for all patches
     (patch k owns nodes offsets[k]:offsets[k + 1]); ``s_dist`` (H, 3) the sun vector of the
     distribution, ``coef`` (H, 5) (a, b, c, d, e), ``lit`` (H,) bool, ``e_diff`` (H,) [lx].
-    Yields (h0, h1, v) for runs of consecutive lit hours (a day's, split to blocks of about
-    ``_BLOCK`` values), v (h1 - h0, P): the patch mean of lv times e_diff / (its horizontal
-    integral) times ``out_scale`` (the kernel's ``v``); v is overwritten by the next run."""
+    Yields (h0, h1, means, scale) for runs of consecutive lit hours (a day's, split to blocks
+    of about ``_BLOCK`` values): ``means`` (P, h1 - h0), patch k's mean of lv in row k (the
+    layout of the file's rows: a run of hours is contiguous), and ``scale`` (h1 - h0,), e_diff
+    / (the horizontal integral) times ``out_scale``; the kernel's ``v`` is means * scale.
+    Both are overwritten by the next run."""
     n_p = offsets.shape[0] - 1
     m = nodes.shape[0]
     one = m == n_p  # one node per patch (order 0): the mean is lv itself
-    nodes_t = np.ascontiguousarray(nodes.T)
     z = np.ascontiguousarray(nodes[:, 2])
     # the nodes come in runs of equal altitude: one gradation term per run
     first = np.flatnonzero(np.concatenate([[True], z[1:] != z[:-1]]))
     reps = np.diff(np.append(first, m))
-    zc = np.maximum(z[first], cz_min)
+    zc = np.maximum(z[first], cz_min)[:, None]
     wz = weights * z
     starts = offsets[:-1]
-    wsum = np.add.reduceat(weights, starts)
+    wsum = np.add.reduceat(weights, starts)[:, None]
+    coef_t = np.ascontiguousarray(coef.T)
+    s_t = np.ascontiguousarray(s_dist.T)
     for h0, h1 in _runs(lit, max(1, _BLOCK // m)):
-        s = s_dist[h0:h1]
-        a, b, c, dd, e = (coef[h0:h1, i][:, None] for i in range(5))
-        cg = s @ nodes_t             # cos(gamma), (hours, nodes)
+        a, b, c, dd, e = coef_t[:, h0:h1]
+        cg = nodes @ s_t[:, h0:h1]   # cos(gamma), (nodes, hours)
         np.clip(cg, -1.0, 1.0, out=cg)
         lv = np.arccos(cg)
         lv *= dd
         np.exp(lv, out=lv)
         lv *= c
         lv += 1.0                    # [PSM93] eq. 1: 1 + c exp(d gamma) + e cos^2(gamma)
-        q = cg * e
-        q *= cg
-        lv += q
+        cg *= cg
+        cg *= e
+        lv += cg
         grad = np.exp(b / zc)        # 1 + a exp(b / cos zeta), once per run of equal altitude
         grad *= a
         grad += 1.0
-        lv *= np.repeat(grad, reps, axis=1)
+        lv *= np.repeat(grad, reps, axis=0)
         np.maximum(lv, 0.0, out=lv)  # a negative lv is clipped to 0 (per node)
         if one:
-            horiz = lv @ wz          # sum of w lv cos(zeta) [sr]
+            horiz = wz @ lv          # sum of w lv cos(zeta) [sr]
             means = lv
         else:
-            lv *= weights
-            horiz = lv @ z
-            means = np.add.reduceat(lv, starts, axis=1)
+            lv *= weights[:, None]
+            horiz = z @ lv
+            means = np.add.reduceat(lv, starts, axis=0)
             means /= wsum
         flat = horiz <= 1e-6         # gendaymtx: a zero sky is made uniform, normalised by pi
         if flat.any():
-            means[flat] = 1.0
+            means[:, flat] = 1.0
             horiz[flat] = np.pi
         scale = e_diff[h0:h1] / horiz * out_scale  # the sky's horizontal illuminance is Dh
-        means *= scale[:, None]
-        yield h0, h1, means
+        yield h0, h1, means, scale
 
 
 def nearest_patches(centres, s_true, hours, nsuns):
@@ -132,8 +132,17 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     0 the ground): the patch values of :func:`perez_patch_values` times the tint, the ground
     and the sun, with the kernel's per-hour inputs (see
     :func:`skydome.daylighting._kernels.fill_perez_sky`), computed in float64 as the kernel
-    does and rounded to ``out``'s type once. Unlit hours are not touched (they stay zero)."""
+    does. Unlit hours are not touched (they stay zero).
+
+    A float64 ``out`` takes the float64 products (rounded once, as the kernel's). A float32
+    ``out`` (a "float" file) takes the float32 product of the patch mean rounded to float32
+    and the hour's factor scale x tint rounded to float32: up to about 2 units in the last
+    place of float32 from the kernel's once-rounded value (2.4e-7 relative). A float64 product
+    written into the float32 map goes through numpy's buffered casting loop: in a profile of
+    the annual MF:4 matrix + file that cast and its copies took a third of the samples. The
+    sun's patches keep the kernel's rounding (their float64 sum is rounded once)."""
     ncomp = tint.shape[0]
+    single = out.dtype == np.float32
     hours = np.flatnonzero(lit)
     # the sun: the nsuns patches nearest it, weight 1 / (1.002 - cos) (gendaymtx AddDirect)
     sun_h = hours[e_dir[hours] > 1e-4] if nsuns > 0 else hours[:0]
@@ -142,15 +151,19 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     at = np.full(lit.shape[0], -1)
     at[sun_h] = np.arange(sun_h.size)
     v_near = np.empty(near.shape)    # the sky values of the sun's patches, in float64
-    for h0, h1, v in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff,
-                                        out_scale, cz_min):
-        vt = v.T
-        for c in range(ncomp):       # v tint[c], in float64, rounded to out's type once
-            np.multiply(vt, tint[c], out=out[1:, h0:h1, c], casting="unsafe")
+    for h0, h1, means, scale in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit,
+                                                   e_diff, out_scale, cz_min):
+        if single:                   # float32 products of float32 factors (see above)
+            m32 = means.astype(np.float32)
+            for c in range(ncomp):
+                np.multiply(m32, (scale * tint[c]).astype(np.float32), out=out[1:, h0:h1, c])
+        else:                        # means (scale tint[c]) in float64
+            for c in range(ncomp):
+                np.multiply(means, scale * tint[c], out=out[1:, h0:h1, c])
         k = at[h0:h1]
         j = np.flatnonzero(k >= 0)
         if j.size:
-            v_near[k[j]] = v[j[:, None], near[k[j]]]
+            v_near[k[j]] = means[near[k[j]], j[:, None]] * scale[j, None]
     # the ground, patch 0: rho (Dh + Dn sin a) / pi
     g = np.where(s_true[:, 2] > 0.0, e_diff + e_dir * s_true[:, 2], e_diff)
     g = np.where(lit, g * (rho / np.pi * out_scale), 0.0)
