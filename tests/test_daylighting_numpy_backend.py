@@ -131,20 +131,30 @@ def test_streamed_files_are_written_in_bounded_calls(tmp_path, monkeypatch):
 
 
 def test_skymatrix_entry_point_turns_off_numpy_huge_pages(monkeypatch):
-    """`skydome skymatrix ...` sets NUMPY_MADVISE_HUGEPAGE=0 before numpy is imported (unless
-    the user set it); other commands leave it alone."""
+    """`skydome skymatrix ...` sets NUMPY_MADVISE_HUGEPAGE=0 before numpy is imported, and
+    OPENBLAS_NUM_THREADS=1 for a perez1993 command line the fast path parses (unless the user
+    set them); other command lines leave OPENBLAS_NUM_THREADS alone."""
     import os
 
     import skydome.__main__ as entry
     from skydome.daylighting import skymatrix_cli
 
     monkeypatch.setattr(skymatrix_cli, "fast_skymatrix", lambda argv: True)
-    for user_value, expected in ((None, "0"), ("1", "1")):
-        if user_value is None:
-            monkeypatch.delenv("NUMPY_MADVISE_HUGEPAGE", raising=False)
-        else:
-            monkeypatch.setenv("NUMPY_MADVISE_HUGEPAGE", user_value)
-        monkeypatch.setattr(sys, "argv", ["skydome", "skymatrix", "--weather", "w", "--out", "o"])
+    args = ["skydome", "skymatrix", "--weather", "w", "--out", "o"]
+    for user_value in (None, "4"):
+        for name in ("NUMPY_MADVISE_HUGEPAGE", "OPENBLAS_NUM_THREADS"):
+            if user_value is None:
+                monkeypatch.delenv(name, raising=False)
+            else:
+                monkeypatch.setenv(name, user_value)
+        monkeypatch.setattr(sys, "argv", args)
         with pytest.raises(SystemExit) as e:
             entry.main()
-        assert e.value.code == 0 and os.environ["NUMPY_MADVISE_HUGEPAGE"] == expected
+        assert e.value.code == 0
+        assert os.environ["NUMPY_MADVISE_HUGEPAGE"] == (user_value or "0")
+        assert os.environ["OPENBLAS_NUM_THREADS"] == (user_value or "1")
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    monkeypatch.setattr(sys, "argv", args + ["--model", "precomputed"])
+    with pytest.raises(SystemExit):
+        entry.main()
+    assert "OPENBLAS_NUM_THREADS" not in os.environ
