@@ -158,3 +158,28 @@ def test_skymatrix_entry_point_turns_off_numpy_huge_pages(monkeypatch):
     with pytest.raises(SystemExit):
         entry.main()
     assert "OPENBLAS_NUM_THREADS" not in os.environ
+
+
+def test_numpy_backend_checks_the_values_it_writes(tmp_path):
+    """The numpy backend raises on a value that is not finite in the matrix's type (here a
+    diffuse irradiance whose sky overflows float32), so that its file needs no second reading
+    of the memory map (``matrix_file(check_finite=False)``); the map check itself still
+    catches a nan written by any other filler."""
+    from skydome.daylighting.radiance_io import matrix_file
+    from skydome.daylighting.skymatrix import perez_sky_matrix
+
+    sd = [[0.0, -0.5, 0.75 ** 0.5]]
+    kw = dict(patches="tregenza", order=0, backend="numpy")
+    ok = perez_sky_matrix([600.0], [100.0], sd, [172], dtype=np.float32, **kw).sky
+    assert np.all(np.isfinite(ok)) and ok.max() > 0.0
+    with pytest.raises(ValueError, match="nan or inf"):
+        perez_sky_matrix([600.0], [1e300], sd, [172], dtype=np.float32, **kw)
+    with pytest.raises(ValueError, match="nan or inf"):
+        perez_sky_matrix([1e300], [100.0], sd, [172], dtype=np.float32, **kw)
+    with pytest.raises(ValueError, match="nan or inf"):
+        with matrix_file(tmp_path / "a.mtx", 2, 2, 1) as body:
+            body[1, 1, 0] = np.nan
+    assert not list(tmp_path.iterdir())
+    with matrix_file(tmp_path / "b.mtx", 2, 2, 1, check_finite=False) as body:
+        body[1, 1, 0] = np.nan  # the caller's responsibility
+    assert (tmp_path / "b.mtx").exists()

@@ -140,9 +140,17 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     place of float32 from the kernel's once-rounded value (2.4e-7 relative). A float64 product
     written into the float32 map goes through numpy's buffered casting loop: in a profile of
     the annual MF:4 matrix + file that cast and its copies took a third of the samples. The
-    sun's patches keep the kernel's rounding (their float64 sum is rounded once)."""
+    sun's patches keep the kernel's rounding (their float64 sum is rounded once).
+
+    Every value is checked before it is written (each run's largest, in cache): a value that
+    is not finite in ``out``'s type raises ValueError, so that a file filled this way needs
+    no second reading of its memory map for nan or inf."""
     ncomp = tint.shape[0]
     single = out.dtype == np.float32
+    # every value written is checked (finite, and representable in out's type): the largest
+    # of each run, in float64, against half the type's largest (a margin for the rounding)
+    limit = 0.5 * float(np.finfo(out.dtype).max)
+    t_max = float(tint.max()) if ncomp else 0.0
     hours = np.flatnonzero(lit)
     # the sun: the nsuns patches nearest it, weight 1 / (1.002 - cos) (gendaymtx AddDirect)
     sun_h = hours[e_dir[hours] > 1e-4] if nsuns > 0 else hours[:0]
@@ -153,6 +161,8 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     v_near = np.empty(near.shape)    # the sky values of the sun's patches, in float64
     for h0, h1, means, scale in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit,
                                                    e_diff, out_scale, cz_min):
+        if not means.max() * scale.max() * t_max <= limit:  # False for a nan
+            raise ValueError("matrix holds nan or inf values")
         if single:                   # float32 products of float32 factors (see above)
             m32 = means.astype(np.float32)
             for c in range(ncomp):
@@ -167,6 +177,7 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     # the ground, patch 0: rho (Dh + Dn sin a) / pi
     g = np.where(s_true[:, 2] > 0.0, e_diff + e_dir * s_true[:, 2], e_diff)
     g = np.where(lit, g * (rho / np.pi * out_scale), 0.0)
+    _check(g[:, None] * grey, limit)
     for c in range(ncomp):
         out[0, :, c] = g * grey[c]
     if sun_h.size and nsuns > 0:
@@ -177,4 +188,12 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
         sa = np.full(near.shape, fixed_sa) if fixed_sa > 0.0 else dom[near]
         v_sun = (wt * e_dir[sun_h][:, None]) * out_scale / (wtot[:, None] * sa)
         # the sun's patches (distinct within an hour): sky value plus the sun's share
-        out[near + 1, sun_h[:, None]] = v_near[..., None] * tint + v_sun[..., None] * grey
+        v = v_near[..., None] * tint + v_sun[..., None] * grey
+        _check(v, limit)
+        out[near + 1, sun_h[:, None]] = v
+
+
+def _check(values, limit):
+    """Raise ValueError unless every value is finite and within +-limit."""
+    if values.size and not np.abs(values).max() <= limit:
+        raise ValueError("matrix holds nan or inf values")
