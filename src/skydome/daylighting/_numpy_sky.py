@@ -26,6 +26,10 @@ import numpy as np
 
 #: Nodes x hours per vectorised block (the work arrays stay in the cache).
 _BLOCK = 1 << 16
+#: Multiply-adds (m n k) per thread of an OpenBLAS matrix product (numpy's BLAS): it gives a
+#: product m n k / (65536 x GEMM_MULTITHREAD_THRESHOLD, 4 by default) threads
+#: (interface/gemm.c), so one of at most 2^18 runs on one thread.
+_BLAS_ONE_THREAD = 1 << 18
 
 
 def _runs(mask, longest):
@@ -177,8 +181,15 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
         n = h1 - h0
         diag = np.zeros((n, n, ncomp), dtype=out.dtype)
         diag[ar[:n], ar[:n]] = scale[:, None] * tint
-        np.matmul(means.astype(out.dtype, copy=False), diag.reshape(n, n * ncomp),
-                  out=rows[:, h0 * ncomp:h1 * ncomp])
+        m_t = means.astype(out.dtype, copy=False)
+        d2 = diag.reshape(n, n * ncomp)
+        # in blocks of patches of at most 2^18 multiply-adds, each on one thread: as one
+        # product per run, OpenBLAS took both cores, and in a process without
+        # OPENBLAS_NUM_THREADS=1 the MF:4 matrix + file cost 1.2-1.9 s of CPU against
+        # 0.3-0.4 s (3 rounds each, 2-core EPYC shared with another load)
+        step = max(16, _BLAS_ONE_THREAD // (n * n * ncomp))
+        for k0 in range(0, m_t.shape[0], step):
+            np.matmul(m_t[k0:k0 + step], d2, out=rows[k0:k0 + step, h0 * ncomp:h1 * ncomp])
         k = at[h0:h1]
         j = np.flatnonzero(k >= 0)
         if j.size:
