@@ -48,12 +48,25 @@ def _umask() -> int:
     return m
 
 
+#: A binary file's data starts at a multiple of this many bytes (the item size of a double).
+DATA_ALIGN = 8
+
+
 def _header(nrows: int, ncols: int, ncomp: int, fmt: str, info: list[str]) -> bytes:
+    """The header, ending with its blank line. For a binary format the NCOMP line is padded
+    with trailing spaces so that the data starts at a multiple of :data:`DATA_ALIGN` bytes
+    (Radiance and ``int()`` read the value and ignore them): a memory map of the body is then
+    aligned, which numpy needs to write into it in place; into a misaligned float32 map (a
+    238-byte header) every ufunc and matrix product went through a copy, and the annual MF:4
+    matrix + file cost 0.29-0.30 s of CPU against 0.25 s aligned (best of 6, interleaved)."""
     lines = ["#?RADIANCE"] + [s.replace("\n", " ") for s in info]
     lines += [f"NROWS={nrows}", f"NCOLS={ncols}", f"NCOMP={ncomp}"]
     if fmt != "ascii":
         lines.append(f"BigEndian={int(sys.byteorder == 'big')}")
     lines.append(f"FORMAT={fmt}")
+    size = len(("\n".join(lines) + "\n\n").encode())
+    if fmt != "ascii" and size % DATA_ALIGN:
+        lines[-3] += " " * (DATA_ALIGN - size % DATA_ALIGN)  # NCOMP=, BigEndian=, FORMAT=
     return ("\n".join(lines) + "\n\n").encode()
 
 
