@@ -133,13 +133,18 @@ def test_streamed_files_are_written_in_bounded_calls(tmp_path, monkeypatch):
 def test_skymatrix_entry_point_turns_off_numpy_huge_pages(monkeypatch):
     """`skydome skymatrix ...` sets NUMPY_MADVISE_HUGEPAGE=0 before numpy is imported, and
     OPENBLAS_NUM_THREADS=1 for a perez1993 command line the fast path parses (unless the user
-    set them); other command lines leave OPENBLAS_NUM_THREADS alone."""
+    set them), whose run it makes with Python's cyclic garbage collector off; other command
+    lines leave both alone."""
     import os
 
     import skydome.__main__ as entry
     from skydome.daylighting import skymatrix_cli
 
-    monkeypatch.setattr(skymatrix_cli, "fast_skymatrix", lambda argv: True)
+    import gc
+
+    seen = []
+    monkeypatch.setattr(skymatrix_cli, "fast_skymatrix",
+                        lambda argv: seen.append(gc.isenabled()) or True)
     args = ["skydome", "skymatrix", "--weather", "w", "--out", "o"]
     for user_value in (None, "4"):
         for name in ("NUMPY_MADVISE_HUGEPAGE", "OPENBLAS_NUM_THREADS"):
@@ -158,6 +163,8 @@ def test_skymatrix_entry_point_turns_off_numpy_huge_pages(monkeypatch):
     with pytest.raises(SystemExit):
         entry.main()
     assert "OPENBLAS_NUM_THREADS" not in os.environ
+    # the cyclic collector is off during a perez1993 run only, and on again afterwards
+    assert seen == [False, False, True] and gc.isenabled()
 
 
 def test_numpy_backend_checks_the_values_it_writes(tmp_path):

@@ -9,6 +9,7 @@ fast path does not take, goes to the typer application :mod:`skydome.cli`.
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 
@@ -26,19 +27,24 @@ def main() -> None:  # console-script entry point
 
         opts = parse_fast_options(argv[1:])  # no numpy imported yet
         if opts is not None and opts["model"] == "perez1993":
-            # A perez1993 matrix makes no BLAS call worth a second thread (its products have
-            # 3 or a few thousand terms). Started with a thread per core, numpy's OpenBLAS
-            # cost 0.16 s of CPU for `import numpy` against 0.10 s with one (best of ten
-            # fresh processes each, interleaved, 2-core EPYC); the whole run (MF:4, numpy
-            # backend, .wea) took 0.56 s of CPU against 0.46 s (best of eight, interleaved).
-            # A value set by the user is kept.
+            # A perez1993 matrix makes no BLAS call worth a second thread (its matrix
+            # products are of at most 2^18 multiply-adds). Started with a thread per core,
+            # numpy's OpenBLAS cost 0.16 s of CPU for `import numpy` against 0.10 s with one
+            # (best of ten fresh processes each, interleaved, 2-core EPYC); the whole run
+            # (MF:4, numpy backend, .wea) took 0.56 s of CPU against 0.46 s (best of eight,
+            # interleaved). A value set by the user is kept.
             os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
+            # A short run that leaves no reference cycles worth collecting: Python's cyclic
+            # collector, triggered by the allocations of the imports, took 4 % of the
+            # samples of a profiled run (perf, five runs)
+            gc.disable()
         try:
             if fast_skymatrix(argv[1:]):
                 sys.exit(0)
         except KeyboardInterrupt:  # pragma: no cover
             sys.exit(130)
+        finally:
+            gc.enable()
     from skydome.cli import main as cli_main
 
     cli_main()
