@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skydome.daylighting.skymatrix import perez_sky_matrix_from_weather
+from skydome.daylighting.skymatrix import perez_sky_matrix, perez_sky_matrix_from_weather
 from skydome.daylighting.weather import read_weather, sample_weather_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -190,3 +190,23 @@ def test_numpy_backend_checks_the_values_it_writes(tmp_path):
     with matrix_file(tmp_path / "b.mtx", 2, 2, 1, check_finite=False) as body:
         body[1, 1, 0] = np.nan  # the caller's responsibility
     assert (tmp_path / "b.mtx").exists()
+
+
+@pytest.mark.parametrize("dtype,rtol", [(np.float64, 1e-11), (np.float32, 2.5e-7)])
+def test_numpy_backend_long_runs_of_lit_hours(dtype, rtol):
+    """Polar days: 100 consecutive lit hours (more than a block of lit hours at MF:4, 56, and
+    than a written run, 32), then a night hour and 3 lit hours; the same matrix as the
+    kernel's."""
+    n = 104
+    t = np.arange(n) * (2.0 * np.pi / 24.0)
+    alt = np.radians(20.0 + 10.0 * np.sin(t))
+    sd = np.stack([np.cos(alt) * np.sin(t), np.cos(alt) * np.cos(t), np.sin(alt)], axis=-1)
+    dni = 300.0 + 200.0 * np.cos(t) ** 2
+    dhi = 80.0 + 40.0 * np.sin(t) ** 2
+    dni[100], dhi[100] = 0.0, 0.0
+    kw = dict(patches="reinhart:4", order=0, dtype=dtype)
+    a = perez_sky_matrix(dni, dhi, sd, np.full(n, 172), backend="numba", **kw).sky
+    b = perez_sky_matrix(dni, dhi, sd, np.full(n, 172), backend="numpy", **kw).sky
+    assert np.array_equal(a == 0.0, b == 0.0) and np.all(b[100] == 0.0)
+    np.testing.assert_allclose(np.asarray(b, np.float64), np.asarray(a, np.float64),
+                               rtol=rtol, atol=0.0)

@@ -13,8 +13,9 @@ the node's value (the kernel's (w lv) / w may differ from it in the last bit); t
 nearest patches are chosen by the kernel's own dot products, in its order of operations,
 with its tie-break (the lower patch index first).
 
-The matrix is written run of lit hours by run of lit hours into a zero-filled array in
-Radiance's file order (patches, hours, components), e.g. the memory map of a matrix file's body
+The values are computed for blocks of lit hours (several days', gathered) and written run of
+consecutive hours by run into a zero-filled array in Radiance's file order (patches, hours,
+components), e.g. the memory map of a matrix file's body
 (:func:`skydome.daylighting.radiance_io.matrix_file`), as the kernel does: no intermediate
 matrix of patch values is held (an annual MF:4 one is 161 MB of float64, whose first touch
 alone cost 0.06-0.4 s of system time on the 2-core EPYC of docs/performance.md).
@@ -24,35 +25,43 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Nodes x hours per vectorised block (the work arrays stay in the cache).
-_BLOCK = 1 << 16
+#: Nodes x lit hours per vectorised block (the work arrays stay in the cache): about four days
+#: at MF:4. An annual MF:4 matrix's values took 0.07-0.084 s in such blocks of lit hours,
+#: 0.103-0.108 s day by day (one run of lit hours per block, 2^16), and 0.15-0.18 s in blocks
+#: of 2^18 (out of the cache): 2-core EPYC, three rounds each.
+_BLOCK = 1 << 17
+#: Most hours per matrix product that writes a run of hours (its diagonal factor matrix
+#: holds run x run x components values).
+_RUN = 32
 #: Multiply-adds (m n k) per thread of an OpenBLAS matrix product (numpy's BLAS): it gives a
 #: product m n k / (65536 x GEMM_MULTITHREAD_THRESHOLD, 4 by default) threads
 #: (interface/gemm.c), so one of at most 2^18 runs on one thread.
 _BLAS_ONE_THREAD = 1 << 18
 
 
-def _runs(mask, longest):
-    """(start, stop) of the runs of True in ``mask``, split to at most ``longest``."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.view(np.int8), [0]])))
+def _runs(hours):
+    """(start, stop) positions in ``hours`` (ascending indices) of its runs of consecutive
+    hours, split to at most ``_RUN`` hours."""
+    cuts = np.flatnonzero(np.diff(hours) != 1) + 1
     out = []
-    for a, b in zip(edges[::2], edges[1::2]):
-        out += [(h, min(b, h + longest)) for h in range(a, b, longest)]
+    for a, b in zip(np.append(0, cuts).tolist(), np.append(cuts, hours.size).tolist()):
+        out += [(j, min(b, j + _RUN)) for j in range(a, b, _RUN)]
     return out
 
 
 def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_scale,
                        cz_min):
-    """The sky patches' unnormalised means and their per-hour scale, run of lit hours by run.
+    """The sky patches' unnormalised means and their per-hour scale, block of lit hours by
+    block.
 
     ``nodes`` (M, 3), ``weights`` (M,) [sr], ``offsets`` (P + 1,): one rule for all patches
     (patch k owns nodes offsets[k]:offsets[k + 1]); ``s_dist`` (H, 3) the sun vector of the
     distribution, ``coef`` (H, 5) (a, b, c, d, e), ``lit`` (H,) bool, ``e_diff`` (H,) [lx].
-    Yields (h0, h1, means, scale) for runs of consecutive lit hours (a day's, split to blocks
-    of about ``_BLOCK`` values): ``means`` (P, h1 - h0), patch k's mean of lv in row k (the
-    layout of the file's rows: a run of hours is contiguous), and ``scale`` (h1 - h0,), e_diff
-    / (the horizontal integral) times ``out_scale``; the kernel's ``v`` is means * scale.
-    Both are overwritten by the next run."""
+    Yields (hours, means, scale) for blocks of lit hours (of about ``_BLOCK`` node values,
+    several days' lit hours, in order): ``hours`` (n,) their indices, ``means`` (P, n), patch
+    k's mean of lv in row k (the layout of the file's rows), and ``scale`` (n,), e_diff / (the
+    horizontal integral) times ``out_scale``; the kernel's ``v`` is means * scale. Both are
+    overwritten by the next block."""
     n_p = offsets.shape[0] - 1
     m = nodes.shape[0]
     one = m == n_p  # one node per patch (order 0): the mean is lv itself
@@ -64,11 +73,15 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
     wz = weights * z
     starts = offsets[:-1]
     wsum = np.add.reduceat(weights, starts)[:, None]
-    coef_t = np.ascontiguousarray(coef.T)
-    s_t = np.ascontiguousarray(s_dist.T)
-    for h0, h1 in _runs(lit, max(1, _BLOCK // m)):
-        a, b, c, dd, e = coef_t[:, h0:h1]
-        cg = nodes @ s_t[:, h0:h1]   # cos(gamma), (nodes, hours)
+    lit_h = np.flatnonzero(lit)
+    coef_t = np.ascontiguousarray(coef[lit_h].T)  # the lit hours only, gathered
+    s_t = np.ascontiguousarray(s_dist[lit_h].T)
+    e_lit = e_diff[lit_h]
+    step = max(1, _BLOCK // m)
+    for i0 in range(0, lit_h.size, step):
+        i1 = min(i0 + step, lit_h.size)
+        a, b, c, dd, e = coef_t[:, i0:i1]
+        cg = nodes @ s_t[:, i0:i1]   # cos(gamma), (nodes, hours)
         np.clip(cg, -1.0, 1.0, out=cg)
         lv = np.arccos(cg)
         lv *= dd
@@ -95,8 +108,8 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
         if flat.any():
             means[:, flat] = 1.0
             horiz[flat] = np.pi
-        scale = e_diff[h0:h1] / horiz * out_scale  # the sky's horizontal illuminance is Dh
-        yield h0, h1, means, scale
+        scale = e_lit[i0:i1] / horiz * out_scale  # the sky's horizontal illuminance is Dh
+        yield lit_h[i0:i1], means, scale
 
 
 def nearest_patches(centres, s_true, hours, nsuns):
@@ -152,12 +165,12 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     relative). The sun's patches keep the kernel's rounding (their float64 sum is rounded
     once).
 
-    Every value is checked before it is written (each run's largest, in cache): a value that
+    Every value is checked before it is written (each block's largest, in cache): a value that
     is not finite in ``out``'s type raises ValueError, so that a file filled this way needs
     no second reading of its memory map for nan or inf."""
     ncomp = tint.shape[0]
     # every value written is checked (finite, and representable in out's type): the largest
-    # of each run, in float64, against half the type's largest (a margin for the rounding)
+    # of each block, in float64, against half the type's largest (a margin for the rounding)
     limit = 0.5 * float(np.finfo(out.dtype).max)
     t_max = float(tint.max()) if ncomp else 0.0
     hours = np.flatnonzero(lit)
@@ -170,27 +183,31 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     v_near = np.empty(near.shape)    # the sky values of the sun's patches, in float64
     rows = out.reshape(out.shape[0], -1)[1:]  # the sky patches' rows, a view (C-contiguous)
     ar = np.arange(_BLOCK)
-    for h0, h1, means, scale in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit,
-                                                   e_diff, out_scale, cz_min):
+    for hrs, means, scale in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit,
+                                                e_diff, out_scale, cz_min):
         if not means.max() * scale.max() * t_max <= limit:  # False for a nan
             raise ValueError("matrix holds nan or inf values")
-        # value (k, h, c) = means[k, h] x (scale[h] tint[c]): one product per run whose result
-        # is the run's block of the file, rows of (hours x components) contiguous values, with
-        # the factors on the diagonal of (hours, hours x components): every sum has one nonzero
-        # term, so each value is the rounded product (the same bits as a multiply)
-        n = h1 - h0
-        diag = np.zeros((n, n, ncomp), dtype=out.dtype)
-        diag[ar[:n], ar[:n]] = scale[:, None] * tint
+        # value (k, h, c) = means[k, h] x (scale[h] tint[c]), written run of consecutive
+        # hours by run (a day's) by one matrix product whose result is the run's block of the
+        # file, rows of (hours x components) contiguous values, with the factors on the
+        # diagonal of (hours, hours x components): every sum has one nonzero term, so each
+        # value is the rounded product (the same bits as a multiply)
         m_t = means.astype(out.dtype, copy=False)
-        d2 = diag.reshape(n, n * ncomp)
-        # in blocks of patches of at most 2^18 multiply-adds, each on one thread: as one
-        # product per run, OpenBLAS took both cores, and in a process without
-        # OPENBLAS_NUM_THREADS=1 the MF:4 matrix + file cost 1.2-1.9 s of CPU against
-        # 0.3-0.4 s (3 rounds each, 2-core EPYC shared with another load)
-        step = max(16, _BLAS_ONE_THREAD // (n * n * ncomp))
-        for k0 in range(0, m_t.shape[0], step):
-            np.matmul(m_t[k0:k0 + step], d2, out=rows[k0:k0 + step, h0 * ncomp:h1 * ncomp])
-        k = at[h0:h1]
+        for j0, j1 in _runs(hrs):
+            n = j1 - j0
+            h0 = hrs[j0]
+            diag = np.zeros((n, n, ncomp), dtype=out.dtype)
+            diag[ar[:n], ar[:n]] = scale[j0:j1, None] * tint
+            d2 = diag.reshape(n, n * ncomp)
+            # in blocks of patches of at most 2^18 multiply-adds, each on one thread: as one
+            # product per run, OpenBLAS took both cores, and in a process without
+            # OPENBLAS_NUM_THREADS=1 the MF:4 matrix + file cost 1.2-1.9 s of CPU against
+            # 0.3-0.4 s (3 rounds each, 2-core EPYC shared with another load)
+            step = max(16, _BLAS_ONE_THREAD // (n * n * ncomp))
+            for k0 in range(0, m_t.shape[0], step):
+                np.matmul(m_t[k0:k0 + step, j0:j1], d2,
+                          out=rows[k0:k0 + step, h0 * ncomp:(h0 + n) * ncomp])
+        k = at[hrs]
         j = np.flatnonzero(k >= 0)
         if j.size:
             v_near[k[j]] = means[near[k[j]], j[:, None]] * scale[j, None]
