@@ -156,7 +156,8 @@ def _patches(mf: int) -> PatchSet:
     n_of = np.repeat(counts, counts).astype(np.float64)
 
     def per_patch(ground, rows, cap):
-        return np.concatenate([[ground], np.repeat(np.asarray(rows, np.float64), counts), [cap]])
+        rows = np.repeat(np.asarray(rows, np.float64), counts)
+        return np.concatenate([[ground], rows, [cap]])
 
     alo = per_patch(-math.pi / 2, lo, math.pi / 2 - 0.5 * alpha)
     ahi = per_patch(0.0, hi, math.pi / 2)

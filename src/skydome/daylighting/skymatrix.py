@@ -190,8 +190,12 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         "numpy": the same arithmetic vectorised with numpy over blocks of hours
         (:mod:`skydome.daylighting._numpy_sky`; a fixed order only), which needs no numba
         (its import is 0.4-0.5 s of a run's start-up); "auto" takes numpy for a fixed order
-        and numba for the adaptive rule. Both give the same matrix to rounding (relative
-        1e-12), not bit for bit; the default "numba" keeps every earlier result's bits.
+        and numba for the adaptive rule. Both give the same float64 matrix to rounding
+        (relative 1e-12), not bit for bit; a float32 matrix from "numpy" is the float32
+        product of the float32-rounded patch mean and hour factor, within 2.4e-7 relative
+        of the kernel's once-rounded value (docs/daylighting.md, "Backends and the fast
+        command line"), and "numpy" raises ValueError on a value that is not finite in
+        ``dtype``. The default "numba" keeps every earlier result's bits.
 
     Returns
     -------
