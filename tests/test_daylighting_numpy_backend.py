@@ -210,3 +210,25 @@ def test_numpy_backend_long_runs_of_lit_hours(dtype, rtol):
     assert np.array_equal(a == 0.0, b == 0.0) and np.all(b[100] == 0.0)
     np.testing.assert_allclose(np.asarray(b, np.float64), np.asarray(a, np.float64),
                                rtol=rtol, atol=0.0)
+
+
+@pytest.mark.parametrize("spec", ["tregenza", "reinhart:4"])
+def test_nearest_patches_equal_a_search_over_every_patch(spec):
+    """The sun's nearest patch centres, sought first in the rows near the sun's altitude, are
+    those of a search over every patch with the kernel's dot products and tie-break (the
+    lower index first), for suns all over the sky (the zenith, the horizon, between rows)."""
+    from skydome.daylighting._numpy_sky import nearest_patches
+    from skydome.daylighting.patches import patches
+
+    c = patches(spec).centres[1:]
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(3000, 3))
+    v[:, 2] = np.abs(v[:, 2])
+    v[:3] = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 1e-3]]
+    v /= np.linalg.norm(v, axis=1)[:, None]
+    for nsuns in (1, 4):
+        near, ndot = nearest_patches(c, v, np.arange(len(v)), nsuns)
+        dots = c[None, :, 0] * v[:, 0:1] + c[None, :, 1] * v[:, 1:2] + c[None, :, 2] * v[:, 2:3]
+        ref = np.argsort(-dots, axis=1, kind="stable")[:, :nsuns]
+        np.testing.assert_array_equal(near, ref)
+        np.testing.assert_array_equal(ndot, np.take_along_axis(dots, ref, axis=1))

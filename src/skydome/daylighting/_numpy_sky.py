@@ -33,6 +33,9 @@ _BLOCK = 1 << 17
 #: Most hours per matrix product that writes a run of hours (its diagonal factor matrix
 #: holds run x run x components values).
 _RUN = 32
+#: Rows of patches below and above the sun's altitude where its nearest patches are sought
+#: first (see :func:`nearest_patches`).
+_NEAR_ROWS = 2
 #: Multiply-adds (m n k) per thread of an OpenBLAS matrix product (numpy's BLAS): it gives a
 #: product m n k / (65536 x GEMM_MULTITHREAD_THRESHOLD, 4 by default) threads
 #: (interface/gemm.c), so one of at most 2^18 runs on one thread.
@@ -112,35 +115,78 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
         yield lit_h[i0:i1], means, scale
 
 
+def _candidates(s, c_t, n_c):
+    """Indices of the ``n_c`` largest of s @ c_t in each row (rounded dot products), and the
+    ``n_c``-th largest of each row."""
+    d = s @ c_t
+    r = np.arange(d.shape[0])
+    cand = np.empty((d.shape[0], n_c), dtype=np.int64)
+    last = None
+    for j in range(n_c):
+        cand[:, j] = np.argmax(d, axis=1)
+        last = d[r, cand[:, j]]
+        d[r, cand[:, j]] = -np.inf
+    return cand, last
+
+
 def nearest_patches(centres, s_true, hours, nsuns):
     """Indices (len(hours), nsuns) and dot products of the ``nsuns`` patch centres nearest
     the sun of each of ``hours`` (gendaymtx AddDirect), nearest first, as the kernel chooses
     them: its dot products (cx sx + cy sy + cz sz, in that order, no fused multiply-add),
     among equal ones the lower index first (its insertion takes strictly greater ones). The
     candidates are the nsuns + 2 nearest by a matrix product (rounded otherwise), re-ranked
-    by the kernel's dot products."""
+    by the kernel's dot products.
+
+    The candidates are sought first among the patches of the ``_NEAR_ROWS`` rows below and
+    above the sun's altitude (the patches come row by row, upwards): a patch of any other row
+    is at least the altitude gap to the nearest row left out from the sun, so the search is
+    kept for an hour whose last candidate's dot product exceeds the cosine of that gap (by
+    1e-9, far above the products' rounding), and made over every patch otherwise. At MF:4 the
+    rows searched hold about a fifth of the patches."""
     n_c = nsuns + 2
-    near = np.empty((hours.size, nsuns), dtype=np.int64)
-    ndot = np.empty((hours.size, nsuns))
+    s_all = s_true[hours]
     c_t = np.ascontiguousarray(centres.T)
+    cand = np.empty((hours.size, n_c), dtype=np.int64)
+    z = centres[:, 2]
+    first = np.flatnonzero(np.concatenate([[True], z[1:] != z[:-1]]))
+    bounds = np.append(first, z.size)
+    n_rows = first.size
+    alt_row = np.arcsin(np.clip(z[first], -1.0, 1.0))
+    alt_sun = np.arcsin(np.clip(s_all[:, 2], -1.0, 1.0))
+    row = np.searchsorted(alt_row, alt_sun)  # the first row at or above the sun
+    lo = np.maximum(row - _NEAR_ROWS, 0)     # rows lo .. hi - 1 are searched
+    hi = np.minimum(row + _NEAR_ROWS, n_rows)
+    gap = np.full(hours.size, np.pi)
+    j = lo > 0
+    gap[j] = alt_sun[j] - alt_row[lo[j] - 1]
+    j = hi < n_rows
+    gap[j] = np.minimum(gap[j], alt_row[hi[j]] - alt_sun[j])
+    bound = np.cos(gap) + 1e-9
+    done = np.zeros(hours.size, dtype=bool)
     step = max(1, _BLOCK // centres.shape[0])
-    for i0 in range(0, hours.size, step):
-        s = s_true[hours[i0:i0 + step]]
-        d = s @ c_t
-        r = np.arange(d.shape[0])[:, None]
-        cand = np.empty((d.shape[0], n_c), dtype=np.int64)
-        for j in range(n_c):
-            cand[:, j] = np.argmax(d, axis=1)
-            d[r[:, 0], cand[:, j]] = -np.inf
-        cand.sort(axis=1)            # index order: a stable sort by dot keeps it for ties
-        c = centres[cand]            # (hours, n_c, 3)
-        exact = c[..., 0] * s[:, 0:1]
-        exact += c[..., 1] * s[:, 1:2]
-        exact += c[..., 2] * s[:, 2:3]
-        pick = np.argsort(-exact, axis=1, kind="stable")[:, :nsuns]
-        near[i0:i0 + step] = cand[r, pick]
-        ndot[i0:i0 + step] = exact[r, pick]
-    return near, ndot
+    for key in np.unique(row):
+        g = np.flatnonzero(row == key)
+        k0, k1 = bounds[lo[g[0]]], bounds[hi[g[0]]]
+        if k1 - k0 < n_c:
+            continue
+        for i0 in range(0, g.size, 4 * step):
+            gi = g[i0:i0 + 4 * step]
+            cg, last = _candidates(s_all[gi], c_t[:, k0:k1], n_c)
+            ok = last > bound[gi]
+            cand[gi[ok]] = cg[ok] + k0
+            done[gi[ok]] = True
+    rest = np.flatnonzero(~done)
+    for i0 in range(0, rest.size, step):
+        gi = rest[i0:i0 + step]
+        cand[gi] = _candidates(s_all[gi], c_t, n_c)[0]
+    cand.sort(axis=1)                # index order: a stable sort by dot keeps it for ties
+    c = centres[cand]                # (hours, n_c, 3)
+    exact = c[..., 0] * s_all[:, 0:1]
+    exact += c[..., 1] * s_all[:, 1:2]
+    exact += c[..., 2] * s_all[:, 2:3]
+    pick = np.argsort(-exact, axis=1, kind="stable")[:, :nsuns]
+    r = np.arange(hours.size)[:, None]
+    return cand[r, pick], exact[r, pick]
 
 
 def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_min, centres,
