@@ -180,3 +180,23 @@ def test_cli_bad_order(tmp_path, order):
               str(tmp_path / "x.mtx")])
     assert r.exit_code == 2 and "order" in r.output
     assert list(tmp_path.iterdir()) == [w]
+
+
+@pytest.mark.parametrize("fmt", ["float", "double"])
+def test_binary_data_starts_aligned(tmp_path, fmt):
+    """A binary file's data starts at a multiple of 8 bytes whatever the header's text (the
+    NCOMP line carries the padding), so the memory map matrix_file yields is aligned (numpy
+    writes into a misaligned one through copies); the file reads back unchanged."""
+    from skydome.daylighting.radiance_io import matrix_file
+
+    m = np.arange(2 * 3 * 3, dtype=float).reshape(2, 3, 3)
+    for k in range(1, 10):
+        info = ["x" * k]
+        with matrix_file(tmp_path / f"f{k}.mtx", 2, 3, 3, fmt=fmt, info=info) as body:
+            assert body.flags.aligned and body.ctypes.data % 8 == 0
+            body[...] = m
+        raw = (tmp_path / f"f{k}.mtx").read_bytes()
+        assert raw.find(b"\n\n") % 8 == 6  # data at find + 2
+        back, head = read_matrix(tmp_path / f"f{k}.mtx")
+        np.testing.assert_array_equal(back, m)
+        assert int(head["NCOMP"]) == 3 and head["lines"][1] == info[0]

@@ -48,15 +48,20 @@ def test_radiance_sun_formula_matches_gendaymtx(days, wea, tmp_path):
     np.testing.assert_allclose(ours, dirs, atol=2e-6)
 
 
-@pytest.mark.parametrize("mf", [1, 4])
-def test_matches_gendaymtx_every_hour_and_patch(days, wea, tmp_path, mf):
+@pytest.mark.parametrize("mf,backend,dtype", [(1, "numba", np.float64),
+                                              (4, "numba", np.float64),
+                                              (1, "numpy", np.float32),
+                                              (4, "numpy", np.float32)])
+def test_matches_gendaymtx_every_hour_and_patch(days, wea, tmp_path, mf, backend, dtype):
     """Same inputs as gendaymtx (its sun positions, dew point 11 deg C for a .wea, ground 0.2,
     point sampling at the patch centres, the sun spread over the 4 nearest patches): every
-    hour and patch of the RGB matrix within 1e-4 (gendaymtx computes in float)."""
+    hour and patch of the RGB matrix within 1e-4 (gendaymtx computes in float), with the
+    numba kernel (float64) and with the numpy backend's float32 matrix (a "float" file's)."""
     g, head = _gendaymtx(wea, ["-m", mf], tmp_path)
     assert head["NCOMP"] == "3"
     m = perez_sky_matrix(days.dni, days.dhi, days.radiance_sun_directions(), days.day_of_year,
-                         patches="tregenza" if mf == 1 else f"reinhart:{mf}", order=0)
+                         patches="tregenza" if mf == 1 else f"reinhart:{mf}", order=0,
+                         backend=backend, dtype=dtype)
     assert m.sky.shape == g.shape
     tol = 1e-4 * np.maximum(g, 1e-3)
     assert np.all(np.abs(m.sky - g) <= tol)

@@ -150,3 +150,19 @@ def test_cli_weather_info_and_bad_file(tmp_path):
     r = CliRunner().invoke(app, ["weather", "info", str(bad)])
     assert r.exit_code == 2
     assert "time step" in r.output
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda f: f[:3], "record 2: 3 of 5 fields"),
+    (lambda f: f + ["7"], "record 2: 6 of 5 fields"),
+    (lambda f: f[:3] + ["x", f[4]], "not numeric"),
+])
+def test_bad_wea_records(tmy3, tmp_path, edit, message):
+    """A .wea record without its 5 fields is named; a field that is not a number is refused."""
+    write_wea(tmy3.select(np.arange(len(tmy3)) < 48), tmp_path / "g.wea")
+    lines = (tmp_path / "g.wea").read_text().splitlines()
+    lines[7] = " ".join(edit(lines[7].split()))  # the header is 6 lines: record 2
+    (tmp_path / "b.wea").write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=message):
+        read_weather(tmp_path / "b.wea")
+    assert len(read_weather(tmp_path / "g.wea")) == 48

@@ -146,25 +146,26 @@ def patches(spec: str = "tregenza") -> PatchSet:
 def _patches(mf: int) -> PatchSet:
     alpha = (math.pi / 2.0) / (7 * mf + 0.5)  # gendaymtx rh_init: row width
     counts = _row_counts(mf)
-    alo, ahi, azc, azh, calt, dom = [-math.pi / 2], [0.0], [0.0], [math.pi], [-math.pi / 2], [
-        2.0 * math.pi]
-    for i, n in enumerate(counts):
-        lo, hi = alpha * i, alpha * (i + 1)
-        w = 2.0 * math.pi * (math.sin(hi) - math.sin(lo)) / n
-        for j in range(n):
-            alo.append(lo)
-            ahi.append(hi)
-            azc.append(2.0 * math.pi * j / n)
-            azh.append(math.pi / n)
-            calt.append(alpha * (i + 0.5))
-            dom.append(w)
-    alo.append(math.pi / 2 - 0.5 * alpha)  # zenith cap
-    ahi.append(math.pi / 2)
-    azc.append(0.0)
-    azh.append(math.pi)
-    calt.append(math.pi / 2)
-    dom.append(2.0 * math.pi * (1.0 - math.cos(0.5 * alpha)))
-    arr = [np.asarray(v, dtype=np.float64) for v in (alo, ahi, azc, azh, calt, dom)]
+    # per row (each value in the same float operations as a scalar loop over the patches,
+    # which took 0.011 s of a command line's start-up at MF:4), then one entry per patch:
+    # the ground first, the zenith cap last
+    lo = [alpha * i for i in range(len(counts))]
+    hi = [alpha * (i + 1) for i in range(len(counts))]
+    row_w = [2.0 * math.pi * (math.sin(h) - math.sin(a)) / n for a, h, n in zip(lo, hi, counts)]
+    j = np.concatenate([np.arange(n, dtype=np.float64) for n in counts])  # index in the row
+    n_of = np.repeat(counts, counts).astype(np.float64)
+
+    def per_patch(ground, rows, cap):
+        rows = np.repeat(np.asarray(rows, np.float64), counts)
+        return np.concatenate([[ground], rows, [cap]])
+
+    alo = per_patch(-math.pi / 2, lo, math.pi / 2 - 0.5 * alpha)
+    ahi = per_patch(0.0, hi, math.pi / 2)
+    azc = np.concatenate([[0.0], 2.0 * math.pi * j / n_of, [0.0]])
+    azh = per_patch(math.pi, [math.pi / n for n in counts], math.pi)
+    calt = per_patch(-math.pi / 2, [alpha * (i + 0.5) for i in range(len(counts))], math.pi / 2)
+    dom = per_patch(2.0 * math.pi, row_w, 2.0 * math.pi * (1.0 - math.cos(0.5 * alpha)))
+    arr = [np.ascontiguousarray(v) for v in (alo, ahi, azc, azh, calt, dom)]
     for a in arr:
         a.setflags(write=False)
     name = "tregenza" if mf == 1 else f"reinhart:{mf}"

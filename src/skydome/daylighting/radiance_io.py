@@ -48,12 +48,25 @@ def _umask() -> int:
     return m
 
 
+#: A binary file's data starts at a multiple of this many bytes (the item size of a double).
+DATA_ALIGN = 8
+
+
 def _header(nrows: int, ncols: int, ncomp: int, fmt: str, info: list[str]) -> bytes:
+    """The header, ending with its blank line. For a binary format the NCOMP line is padded
+    with trailing spaces so that the data starts at a multiple of :data:`DATA_ALIGN` bytes
+    (Radiance and ``int()`` read the value and ignore them): a memory map of the body is then
+    aligned, which numpy needs to write into it in place; into a misaligned float32 map (a
+    238-byte header) every ufunc and matrix product went through a copy, and the annual MF:4
+    matrix + file cost 0.29-0.30 s of CPU against 0.25 s aligned (best of 6, interleaved)."""
     lines = ["#?RADIANCE"] + [s.replace("\n", " ") for s in info]
     lines += [f"NROWS={nrows}", f"NCOLS={ncols}", f"NCOMP={ncomp}"]
     if fmt != "ascii":
         lines.append(f"BigEndian={int(sys.byteorder == 'big')}")
     lines.append(f"FORMAT={fmt}")
+    size = len(("\n".join(lines) + "\n\n").encode())
+    if fmt != "ascii" and size % DATA_ALIGN:
+        lines[-3] += " " * (DATA_ALIGN - size % DATA_ALIGN)  # NCOMP=, BigEndian=, FORMAT=
     return ("\n".join(lines) + "\n\n").encode()
 
 
@@ -120,14 +133,16 @@ def write_matrix(path, matrix, fmt: str = "float", info=(), overwrite: bool = Fa
 
 @contextlib.contextmanager
 def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", info=(),
-                overwrite: bool = False):
+                overwrite: bool = False, check_finite: bool = True):
     """A binary Radiance matrix file filled in place: yields its data as a zero-filled
     (nrows, ncols, ncomp) memory map, to be filled (e.g. ``perez_sky_matrix(..., out=...)``).
 
     The file is a temporary one beside ``path`` (header, then a body of zeros written
     sequentially), renamed to ``path`` when the block ends without an exception and the data
     is finite; otherwise it is removed, nothing is left. Writing through the map costs no
-    copy and no second pass.
+    copy and no second pass. ``check_finite=False`` skips the final reading of the whole map
+    for nan or inf (0.012-0.024 s for an annual MF:4 float matrix, 242 MB, on a 2-core EPYC):
+    for a filler that has checked every value it wrote and raises otherwise.
 
     The body is written as zeros first, in 1 MiB blocks, rather than left sparse: a sky
     matrix kernel fills the map in runs of hours scattered over every patch row, and on a
@@ -160,7 +175,7 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
                        shape=(nrows, ncols, ncomp))
         yield mm.view(np.ndarray)
         block = max(1, (1 << 22) // max(1, ncols * ncomp))
-        for r0 in range(0, nrows, block):
+        for r0 in range(0, nrows if check_finite else 0, block):
             if not np.all(np.isfinite(mm[r0:r0 + block])):
                 raise ValueError("matrix holds nan or inf values")
         del mm  # no msync: the page cache is coherent, as for a written file

@@ -190,8 +190,12 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         "numpy": the same arithmetic vectorised with numpy over blocks of hours
         (:mod:`skydome.daylighting._numpy_sky`; a fixed order only), which needs no numba
         (its import is 0.4-0.5 s of a run's start-up); "auto" takes numpy for a fixed order
-        and numba for the adaptive rule. Both give the same matrix to rounding (relative
-        1e-12), not bit for bit; the default "numba" keeps every earlier result's bits.
+        and numba for the adaptive rule. Both give the same float64 matrix to rounding
+        (relative 1e-12), not bit for bit; a float32 matrix from "numpy" is the float32
+        product of the float32-rounded patch mean and hour factor, within 2.4e-7 relative
+        of the kernel's once-rounded value (docs/daylighting.md, "Backends and the fast
+        command line"), and "numpy" raises ValueError on a value that is not finite in
+        ``dtype``. The default "numba" keeps every earlier result's bits.
 
     Returns
     -------
@@ -204,11 +208,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
 
     ps = patches if isinstance(patches, PatchSet) else _patches(patches)
     rule = quadrature_rule(ps, order)
-    fixed = rule[2].shape[0] == 1  # one rule for every patch (a fixed order)
-    backend = check_choice("backend", backend, ("auto", "numpy", "numba"))
-    if backend == "numpy" and not fixed:
-        raise ValueError(f"backend = 'numpy' takes a fixed order (0..16), not order = {order!r}")
-    use_numpy = backend == "numpy" or (backend == "auto" and fixed)
+    use_numpy = _numpy_backend(backend, rule, order)
     mode, nsuns, disc_deg = parse_sun_option(sun)
     check_choice("components", components, ("rgb", "luminance"))
     dni = np.atleast_1d(np.asarray(dni, dtype=np.float64))
@@ -304,6 +304,19 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                      sun_sa if mode == "separate" else fixed_sa)
 
 
+def _numpy_backend(backend, rule, order) -> bool:
+    """Whether ``backend`` ("auto", "numpy" or "numba") computes with the numpy backend for the
+    quadrature ``rule`` (of :func:`quadrature_rule`): "numpy" and "auto" for a fixed order
+    (one rule for every patch); "numpy" refuses any other."""
+    from skydome._validate import check_choice
+
+    fixed = rule[2].shape[0] == 1  # one rule for every patch (a fixed order)
+    backend = check_choice("backend", backend, ("auto", "numpy", "numba"))
+    if backend == "numpy" and not fixed:
+        raise ValueError(f"backend = 'numpy' takes a fixed order (0..16), not order = {order!r}")
+    return backend == "numpy" or (backend == "auto" and fixed)
+
+
 def start_numba_without_blas() -> bool:
     """Initialise numba's CPU target without importing SciPy's BLAS bindings (for a process
     that only runs the sky-matrix kernels, e.g. ``skydome skymatrix``); True if it did.
@@ -383,7 +396,12 @@ def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str 
     ps = kwargs["patches"] = ps if isinstance(ps, PatchSet) else _patches(ps)
     ncomp = 3 if kwargs.get("components", "rgb") == "rgb" else 1
     shape = (len(ps), len(weather), ncomp)
-    with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite) as body:
+    order = kwargs.get("order", PEREZ_DEFAULT_ORDER)
+    # the numpy backend checks every value it writes (and raises): no second reading of the map
+    backend = kwargs.get("backend", "numba")
+    checked = backend != "numba" and _numpy_backend(backend, quadrature_rule(ps, order), order)
+    with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite,
+                     check_finite=not checked) as body:
         m = perez_sky_matrix_from_weather(weather, sun_position=sun_position, dtype=dtype,
                                           out=body, **kwargs)
     body = np.memmap(path, dtype=dtype, mode="r", shape=shape, offset=_data_offset(path))

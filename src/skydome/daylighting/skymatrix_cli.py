@@ -7,8 +7,8 @@ command (:func:`skydome.daylighting.cli.skymatrix_cmd`) calls it, and so does
 ``--name=value``, ``--overwrite``) so that a run imports neither typer (with pydantic, 0.2-0.3
 s of CPU on a 2-core EPYC), nor numba with ``--backend numpy`` or ``auto`` and a fixed order
 (0.4-0.5 s): a whole gendaymtx-like run (``--order 0 --sun-position radiance --backend
-numpy``) is then numpy's start-up plus the work (3.7x gendaymtx's CPU time at MF:4,
-docs/performance.md). Anything
+numpy``) is then numpy's start-up plus the work (gendaymtx's CPU time / 5.3 at MF:4 by
+the best rounds, / 4.9 by the medians, docs/performance.md). Anything
 else (help, an unknown or repeated-list option, another model, Dask, a value it refuses)
 goes to the typer command, which parses it and reports an error as one line with exit code 2
 as every command does: the fast path reports nothing itself, and leaves nothing on disk.
