@@ -924,9 +924,10 @@ def _blocks_in_threads(worker, starts):
     products and ufuncs release the GIL), BLAS limited to one thread meanwhile.
 
     The products are many small sgemm calls (a few hundred columns each): with BLAS's own
-    thread pool their cost swung between 2.5 and 22 s of CPU for one order's products
-    (OpenBLAS's threads spin-waiting against numba's between the kernels), with one BLAS
-    thread per Python thread 1.6-2.5 s (docs/performance.md)."""
+    thread pool order 2's products alone swung between 2.5 and 22 s of CPU from run to run
+    (OpenBLAS's threads spin-waiting against numba's between the kernels), and all orders'
+    took 4.9-7.7 s wall; with one BLAS thread per Python thread 1.5-2.2 s wall, 2.6-4.3 s
+    CPU (2-core EPYC, docs/performance.md)."""
     from threadpoolctl import threadpool_limits
 
     n = min(product_threads(), len(starts))
