@@ -83,9 +83,9 @@ def _instrument(rec, order_totals):
             f = getattr(mod, name)
             saved.append((mod, name, f))
 
-            def g(*a, _f=f, _n=name):
+            def g(*a, _f=f, _n=name, **kw):
                 w0, c0 = time.perf_counter(), time.process_time()
-                r = _f(*a)
+                r = _f(*a, **kw)
                 rec.setdefault(_n, []).append((time.perf_counter() - w0,
                                                time.process_time() - c0))
                 if _n == "source_total":
@@ -98,6 +98,15 @@ def _instrument(rec, order_totals):
     finally:
         for mod, name, f in saved:
             setattr(mod, name, f)
+
+
+def summed_path(p):
+    """Whether the precomputation with the settings ``p`` takes the summed path of the
+    orders >= 3 (every table wavelength, the full grids: the conditions of
+    _precompute.precompute)."""
+    return (p["orders"] >= 3 and p.get("high_order_wavelengths") is None
+            and p.get("order_table_divisor", 1) == 1 and p.get("high_order_r_size") is None
+            and p.get("high_order_mu_s_size") is None)
 
 
 def _status_kb(field):
@@ -272,6 +281,11 @@ def main(argv=None):
         if n_orders > 1:
             th = np.array(totals[n2:]).reshape(-1, n_orders - 1, 2)
             tot[1:] = th[..., 0].sum(axis=0) / th[..., 1].sum(axis=0)
+            if summed_path(p):
+                # the default path sums the orders >= 3 into the summed density itself
+                # (_precompute.higher_orders_summed): its totals are those of the running
+                # sums S_3..S_N, each order the difference of two
+                tot[1:] = np.diff(np.concatenate([[tot[0]], tot[1:]]))
         print("source strength per order, mean over the wavelengths each is computed at "
               "(share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):

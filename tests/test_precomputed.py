@@ -484,7 +484,11 @@ def test_irradiance_rays_share_geometry_exactly():
     beta_e = np.ascontiguousarray(props.extinction)
     args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e, R, Rt)
     out = np.empty((3, 5, 3))
-    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, 5, 500.0, th, ph, dom, out)
+    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, 5, 500.0, th, ph, dom, out, 3)
+    # the ground's row alone (as the precomputation's orders ask for it): the same values
+    row0 = np.empty((1, 5, 3))
+    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, 5, 500.0, th, ph, dom, row0, 3)
+    np.testing.assert_array_equal(row0[0], out[0])
     ref = np.zeros_like(out)
     frame = mu_s_frame(mu_s_min)
     for ir in range(3):

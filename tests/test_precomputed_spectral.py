@@ -265,10 +265,12 @@ def test_subset_batches_cover_the_computed_wavelengths_within_the_budget():
 
 def test_default_orders_above_two_in_one_batch():
     """At the default settings the orders >= 3 are computed at every table wavelength
-    (``high_order_wavelengths`` None), the 20 of the default grid in one batch of the
-    all-wavelength path within HIGH_ORDER_BATCH_BYTES: J (2 x 65 x 33 x 32 x 48 float32,
-    26.4 MB per wavelength) and the incident radiance on 16 x 16 directions with its 10
-    columns of matrix right-hand side (1.6 MB per wavelength)."""
+    (``high_order_wavelengths`` None), by default summed into the summed density (no
+    batches, see test_summed_orders_give_the_per_order_tables); with one order's density
+    at a time (``SUMMED_ORDERS`` off), the 20 of the default grid are one batch within
+    HIGH_ORDER_BATCH_BYTES: J (2 x 65 x 33 x 32 x 48 float32, 26.4 MB per wavelength) and
+    the incident radiance on 16 x 16 directions with its 10 columns of matrix right-hand
+    side (1.6 MB per wavelength)."""
     p = sd.models.simulated.precomputed.PrecomputedSky._validate_params({})
     assert p["high_order_wavelengths"] is None
     assert PC.high_order_batch_size(p, 20, 2) == 20
@@ -296,3 +298,39 @@ def test_subset_batches_of_one_wavelength_give_the_one_batch_tables(monkeypatch)
                                atol=1e-6 * float(np.max(t1.scattering_density)))
     np.testing.assert_allclose(t2.irradiance, t1.irradiance, rtol=2e-6,
                                atol=1e-9 * float(np.max(t1.irradiance)))
+
+
+def test_summed_orders_give_the_per_order_tables(monkeypatch):
+    """The default path of the orders >= 3 (``higher_orders_summed``: each order's incident
+    radiance the difference of two ray integrals of the running sum, its density added into
+    the summed density, the single-scattering table kept) against one order's density at a
+    time (``higher_orders``, ``SUMMED_ORDERS`` off; the single-scattering table freed and
+    computed again): the same summed density and irradiance table within float32
+    rounding of the differences (order 5 is a few % of the sum), the same single-scattering
+    table, which the summed path computes once."""
+    from skydome.models.simulated.precomputed import _single
+
+    wl = np.linspace(380.0, 780.0, 6)
+    atm = Atmosphere.earth(aerosol_optical_depth=0.3)
+    sun = sd.Sun(elevation_deg=20.0, azimuth_deg=180.0)
+    kw = dict(SMALL, orders=5)
+    calls = []
+    table = _single.single_scattering_table
+
+    def counted(*a):
+        calls.append(1)
+        return table(*a)
+
+    monkeypatch.setattr(_single, "single_scattering_table", counted)
+    summed = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
+    n_summed = len(calls)
+    monkeypatch.setattr(PC, "SUMMED_ORDERS", False)
+    per_order = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
+    assert (n_summed, len(calls) - n_summed) == (1, 2)
+    t1, t2 = per_order._t, summed._t
+    np.testing.assert_array_equal(t2.single_scattering, t1.single_scattering)
+    np.testing.assert_allclose(t2.scattering_density, t1.scattering_density, rtol=2e-5,
+                               atol=1e-6 * float(np.max(t1.scattering_density)))
+    np.testing.assert_allclose(t2.irradiance, t1.irradiance, rtol=2e-5,
+                               atol=1e-9 * float(np.max(t1.irradiance)))
+    assert np.all(t2.scattering_density >= 0.0)

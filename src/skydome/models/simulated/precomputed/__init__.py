@@ -394,7 +394,8 @@ class PrecomputedSky(SkyModel):
     def irradiance_components(self, wavelengths_nm):
         """(direct, diffuse) spectral irradiance on a horizontal surface at the observer
         [W m^-2 nm^-1]: the transmitted sun (averaged over the disc, [Bru17]
-        ComputeDirectIrradiance) and the sky (the irradiance table, orders 1..N-1)."""
+        ComputeDirectIrradiance) and the sky (the irradiance table, orders 1..N and the
+        remainder)."""
         from skydome.models.simulated.precomputed import _irradiance, _lookup
 
         wl = as_wavelengths(wavelengths_nm)

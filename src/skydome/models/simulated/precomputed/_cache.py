@@ -36,8 +36,9 @@ import numpy as np
 # 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset;
 # 6: the stored table of orders 2..N in its own file, added on first use;
 # 7: orders >= 3 at a subset of the table wavelengths; 8: their ratio to order 2 at the
-# interpolation nodes kept in float16
-CACHE_FORMAT = "skydome.precomputed-cache/8"
+# interpolation nodes kept in float16; 9: the irradiance table of orders 2..N (+ remainder)
+# from the summed density (it held orders 2..N-1 and a remainder of its own)
+CACHE_FORMAT = "skydome.precomputed-cache/9"
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 _STORED = "multiple_scattering"       # the lazily added table's file (without .npy)

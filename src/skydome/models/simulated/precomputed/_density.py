@@ -169,7 +169,7 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
         a = idx // n_nodes
         ir = (idx % n_nodes) // n_ms
         ims = idx % n_ms
-        tq, wq, w1, w2, cs, _ = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, cs, _, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)
         # float32 weights and sums (the precision of J and of the output; 20-40 positive
         # terms per value): the wavelength loops of density_acc vectorise 8-wide
         tw = np.empty((nsc, nl), dtype=np.float32)
@@ -181,7 +181,7 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
             nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
             acc[:] = 0.0
             ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
-                         nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, acc)
+                         nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, xs, es, ib, acc)
             if ground:
                 ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
                                      nu, w1, w2, cs, tg, eg, acc)

@@ -90,8 +90,8 @@ def export_textures(model, folder) -> list:
                                 ["r", "mu", "mu_s", "nu", "wavelength"],
                                 "orders 2..N, radiance per unit solar irradiance [sr^-1]"),
         "irradiance": (t.irradiance.astype(np.float32), ["r", "mu_s", "wavelength"],
-                       "sky irradiance on a horizontal surface (orders 1..N-1) per unit "
-                       "solar irradiance (dimensionless); x_r = (r - R)/(Rt - R), "
+                       "sky irradiance on a horizontal surface (orders 1..N and the "
+                       "remainder) per unit solar irradiance (dimensionless); x_r = (r - R)/(Rt - R), "
                        "x_mu_s = (mu_s + 1)/2, node i at x = i/(n-1)"),
     }
     if t.phase_table is not None:

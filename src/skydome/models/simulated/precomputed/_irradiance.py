@@ -13,7 +13,7 @@ from numba import njit, prange
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_top,
                                                              point_along, ray_nodes)
 from skydome.models.simulated.precomputed._lookup import (columns_at, sky_lookup_acc,
-                                                           weights_from_columns)
+                                                           weights_from_columns_vexp)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
                                                             density_phi_index, mu_s_frame, r_index)
 from skydome.models.simulated.precomputed._multiple import density_acc, ray_scratch
@@ -65,7 +65,7 @@ def indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th, ph, d_omega, out):
 
 @njit(parallel=True, cache=True, fastmath=True)
 def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q, ts,
-                             th, ph, d_omega, out):
+                             th, ph, d_omega, out, n_r_table):
     """:func:`indirect_irradiance` for an order >= 2 whose radiance is not tabulated: the
     radiance of each hemisphere direction integrated along its ray from that order's
     scattering density ``J`` ([BN08] eq. 8 and 9, :func:`._multiple.ray_integral`, the
@@ -75,7 +75,10 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     and transmittance-weighted density weights depend on (r, theta) alone, not on the sun
     (mu_s) nor on the azimuth from it: they are computed once per (r, theta) work item and
     shared by its n_mu_s x n_phi rays (the same sums as one :func:`._multiple.ray_integral`
-    per ray, without its per-ray columns and exponentials)."""
+    per ray, without its per-ray columns and exponentials).
+
+    ``out`` holds the first out.shape[0] r rows of a table of ``n_r_table`` rows (the
+    precomputation's orders need the ground's row alone, the stored table every row)."""
     n_r, n_m, nl = out.shape
     n_th = th.shape[0]
     n_ph = ph.shape[0]
@@ -86,8 +89,8 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     for idx in prange(n_r * n_th):
         ir = idx // n_th
         a = idx % n_th
-        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
-        r = R + (Rt - R) * ir / (n_r - 1.0)
+        tq, wq, w1, w2, cs, tw, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)
+        r = R + (Rt - R) * ir / (n_r_table - 1.0)
         ct = math.cos(th[a])
         st = math.sin(th[a])
         w = 2.0 * ct * d_omega[a]
@@ -107,7 +110,8 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
             columns_at(col, rt, mt, R, Rt, w1)
             for kc in range(nc):
                 cs[kc] = max(w2[kc] - w1[kc], 0.0)
-            weights_from_columns(cs, rt, w * wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tws[q])
+            weights_from_columns_vexp(cs, rt, w * wq[q], R, codes, p0s, p1s, sc_idx, beta_e,
+                                      tws[q], xs, es, ib)
         acc = part[idx]
         for im in range(n_m):
             mu_s = -1.0 + 2.0 * im / (n_m - 1.0)

@@ -14,7 +14,7 @@ from numba import njit, prange
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along, ray_nodes)
 from skydome.models.simulated.precomputed._lookup import (columns_at, node_weights,
-                                                           weights_from_columns)
+                                                           weights_from_columns_vexp)
 from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
                                                             density_mu_s_index,
                                                             density_phi_index, mu_s_frame,
@@ -22,18 +22,26 @@ from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell
 
 
 
+# fraction of a theta cell of J within which a ray's angle from the sun is taken to be on
+# the node (ray_integral)
+THETA_SNAP = 1e-9
+
+
 @njit(cache=True, fastmath=True)
 def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
     """out[l] += sum_k tw[k, l] J_k(theta, phi, r, mu_s)[l]: the scattering density J
     [k, theta, phi, r, mu_s, l] interpolated quadrilinearly in the cell (jt + jb, ip + e,
     jr + ja, ims_j + c), weighted per constituent by ``tw`` (:func:`._lookup.node_weights`);
-    the weights in the precision of ``out``."""
+    the weights in the precision of ``out``; a theta row of weight 0 is not read (see
+    :func:`ray_integral`)."""
     nl = out.shape[0]
     for kk in range(J.shape[0]):
         twk = tw[kk]
         Jk = J[kk]
         for dt in range(2):
             wt = jb if dt else 1.0 - jb
+            if wt == 0.0:
+                continue
             for dr in range(2):
                 wr = ja if dr else 1.0 - ja
                 for ds in range(2):
@@ -51,25 +59,34 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
 @njit(cache=True)
 def ray_scratch(n_q, nc, nsc, nl):
     """Scratch arrays of one work item's ray integrals: (tq, wq) for 2 n_q quadrature
-    nodes, (w1, w2, cs) per column constituent, tw [k, l] (float64)."""
+    nodes, (w1, w2, cs) per column constituent, tw [k, l] (float64), and (xs, es, ib) of
+    :func:`._lookup.weights_from_columns_vexp`."""
     return (np.empty(2 * n_q), np.empty(2 * n_q), np.empty(nc), np.empty(nc), np.empty(nc),
-            np.empty((nsc, nl)))
+            np.empty((nsc, nl)), np.empty(nl), np.empty(nl), np.empty(nl, dtype=np.int64))
 
 
 @njit(cache=True, fastmath=True)
 def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, mu_s, nu, ground,
-                 n_q, ts, tq, wq, w1, w2, cs, tw, acc):
+                 n_q, ts, tq, wq, w1, w2, cs, tw, xs, es, ib, acc):
     """acc[l] += int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt along one
     ray ([BN08] eq. 8) from radius r in the direction of zenith cosine mu and sun cosine nu,
     the sun at zenith cosine mu_s, to the ground (``ground``) or the top: the quadrature of
     :func:`multiple_scattering_table` (nodes of :func:`._geometry.ray_nodes`, exact density
     profiles, J interpolated in the sun's frame) for a single ray, without per-ray
     allocations (``tq``, ``wq``: 2 n_q scratch; ``w1``, ``w2``, ``cs``: per column; ``tw``
-    [k, l] in the precision of ``acc``)."""
+    [k, l] in the precision of ``acc``; ``xs``, ``es``, ``ib``: :func:`ray_scratch`)."""
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
     nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
     jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
+    # an angle from the sun on a theta node of J to rounding (the incident directions of
+    # the orders >= 3: (2i + 1) pi / (2 n_in) is node (2i + 1) n_out / n_in of J's
+    # 2 n_out + 1 when n_in divides n_out, as at the defaults) reads that one theta row:
+    # half the gathers, the value changed by <= 1e-9 of the difference of two rows
+    if jb < THETA_SNAP:
+        jb = 0.0
+    elif jb > 1.0 - THETA_SNAP:
+        jt, jb = jt + 1, 0.0
     # the columns at the ray's start, once ([Bru17] GetTransmittance: for rays to the ground
     # both ends reversed, as in :func:`._lookup.columns_segment`)
     columns_at(col, r, -mu if ground else mu, R, Rt, w2)
@@ -81,7 +98,8 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
         columns_at(col, rt, -mt if ground else mt, R, Rt, w1)
         for kc in range(cs.shape[0]):
             cs[kc] = max(w1[kc] - w2[kc], 0.0) if ground else max(w2[kc] - w1[kc], 0.0)
-        weights_from_columns(cs, rt, wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tw)
+        weights_from_columns_vexp(cs, rt, wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es,
+                                  ib)
         mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
         ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
         ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
@@ -273,7 +291,7 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
-        tq, wq, w1, w2, cs, tw = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, cs, tw, _, _, _ = ray_scratch(n_q, nc, nsc, nl)
         acc = np.zeros((n_nu, nl))
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]

@@ -20,6 +20,9 @@ import numpy as np
 from skydome._progress import report
 
 QUADRATURE_SCALE_M = 500.0
+# the orders >= 3 summed into the summed density itself where the grids allow it
+# (higher_orders_summed; False: one order's density at a time, higher_orders)
+SUMMED_ORDERS = True
 TABULATED = 4       # skydome.transport._phase.TABULATED (not imported: it loads numba)
 # sun angular radius used for the earth's shadow edge [rad] ([Bru17] demo: 0.2666 deg)
 SUN_ANGULAR_RADIUS_RAD = float(np.radians(0.2666))
@@ -233,23 +236,38 @@ def precompute(props, wl, p):
                                           dE1[..., sl])
             report("precomputing tables: scattering orders", 2 + b, n_steps)
         E += dE1
-        if p["orders"] >= 3:
+        # the default grids: the orders >= 3 summed in J_sum itself (higher_orders_summed),
+        # with no table of one order's J, so the single-scattering table stays
+        summed = (SUMMED_ORDERS and p["orders"] >= 3 and nl_hi == nl and q3.modes is not None
+                  and (q3.th_out.size, q3.ph_out.size) == (q2.th_out.size, q2.ph_out.size)
+                  and tuple(hi) == (n_r, n_ms_j))
+        if p["orders"] >= 3 and not summed:
             # single scattering is read by order 2 only: its table (0.50 GB at the defaults)
             # is freed for the working arrays of the orders >= 3 (one batch of them then
             # fits: a ray integral's cost is nearly all geometry, shared by a batch's
             # wavelengths) and computed again after them (the same kernel: the same bits)
             ss = None
-        if nl_hi == nl:
+        if summed:
+            higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
+                                 beta_s, albedo, R, Rt, mu_s_min, q3, n_q_ms, p,
+                                 (1 + n_batch, n_steps))
+        elif nl_hi == nl:
             for b, l0 in enumerate(range(0, nl, nb_hi)):
                 sl = slice(l0, min(nl, l0 + nb_hi))
                 higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s,
                               sc_idx, beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min,
-                              q2, q3, hi, n_q_ms, p, E[..., sl],
+                              q2, q3, hi, n_q_ms, p,
                               (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         elif p["orders"] >= 3:
             higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes,
                                  p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
-                                 q3, hi, n_q_ms, p, E, (1 + n_batch, n_steps))
+                                 q3, hi, n_q_ms, p, (1 + n_batch, n_steps))
+        # 3c. the ground irradiance of orders 2..N (+ remainder) at every r node: one ray
+        # integral of the summed density (the irradiance is linear in J, as the stored
+        # table's radiance is); the orders' own ground reflections needed the ground's row
+        # of each order's irradiance only
+        E += irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                   mu_s_min, n_q_ms, E.shape)
     if ss is None:
         ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min,
                                alpha, p)
@@ -507,13 +525,101 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
     return source_total(J, q2, codes, p0s, p1s, sc_idx, R, Rt)
 
 
+def irradiance_of_density(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q, shape,
+                          rows=None):
+    """The ground irradiance (table of ``shape`` (r, mu_s, l); its first ``rows`` r rows
+    only, all by default) of the radiance whose scattering density is ``J``: a ray integral
+    along each direction of the hemisphere (:func:`._irradiance.indirect_irradiance_rays`,
+    [BN08] eq. 8 and 9, on IRRADIANCE_HIGH_ORDER_SAMPLES x 4 of them)."""
+    from skydome.models.simulated.precomputed import _irradiance
+
+    th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
+    out = np.empty((shape[0] if rows is None else rows,) + tuple(shape[1:]))
+    _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col,
+                                         np.ascontiguousarray(beta_e), R, Rt, mu_s_min, n_q,
+                                         QUADRATURE_SCALE_M, th_h, ph_h, dom_h, out, shape[0])
+    return out
+
+
+def _ground_row(E0):
+    """An irradiance table of two r rows, both the ground's row ``E0`` (mu_s, l): what the
+    ground reflection of :func:`._density.incident_radiance_rays` reads (at r = R, the
+    first row with weight 1)."""
+    return np.ascontiguousarray(np.broadcast_to(E0, (2,) + E0.shape))
+
+
+def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo,
+                         R, Rt, mu_s_min, q, n_q, p, progress=(0, None)):
+    """Steps 3a-3b for orders 3..N at every wavelength, and the geometric remainder, with
+    no table of one order's density: ``J_sum`` (on the outgoing grid of ``q``, float32)
+    holds order 2's density on entry and orders 2..N (+ remainder) on return; ``dE1`` the
+    ground irradiance of order 1, ``tot2`` order 2's source strength (:func:`source_total`).
+
+    Every step is linear in the density, so each order's incident radiance is a difference
+    of two ray integrals of the running sum: with S_k = J_2 + ... + J_k and G_k the ground
+    irradiance of orders 1..k, X_o = rays(S_(o-1)) + ground(G_(o-2)) (the kernel of
+    :func:`higher_orders`), order o's incident radiance is X_o - X_(o-1) (X_2 = 0; for
+    order 3 it is X_3 itself, the same bits as :func:`higher_orders`), and its density is
+    added into ``J_sum`` by the products (``add``). G_(o-1) = G_1 + the irradiance of
+    S_(o-1) at the ground's row. The differences lose float32 digits in proportion to an
+    order's share of the sum (about 1e-5 relative for order 6 at the defaults); negative
+    rounding residues are set to 0. Working memory: two incident-radiance arrays (31 MB at
+    the defaults) instead of a second density table (527 MB), so the single-scattering
+    table need not be freed and computed again.
+
+    The remainder: J_N f / (1 - f), f the ratio of the last two orders' source strengths
+    per wavelength (:func:`higher_orders`), is the last order's products once more with
+    its column weights scaled by f / (1 - f)."""
+    nl = J_sum.shape[-1]
+    n_r, n_ms = J_sum.shape[3], J_sum.shape[4]
+    ts = QUADRATURE_SCALE_M
+    from skydome.models.simulated.precomputed import _density
+
+    w_col = _column_weights(beta_s, n_r, n_ms, nl)
+    beta_e = np.ascontiguousarray(beta_e)
+    albedo = np.ascontiguousarray(albedo)
+    X = np.empty((q.n_in, n_r, n_ms, nl), dtype=np.float32)
+    X_prev = np.zeros_like(X)
+    ground = _ground_row(dE1[0])                # G_1 at the ground
+    tot_sum = tot2                              # source strength of S_2
+    tot, tot_prev = tot2, None
+    for order in range(3, p["orders"] + 1):
+        # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
+        # ground's reflection of orders 1..o-2
+        _density.incident_radiance_rays(J_sum, ground, codes, p0s, p1s, sc_idx, col, beta_e,
+                                        albedo, R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q.th_in,
+                                        q.ph_in, X)
+        # 3c. the ground irradiance of orders 2..o-1 at the ground's row: G_(o-1)
+        G = irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
+                                  mu_s_min, n_q, dE1.shape, rows=1)
+        ground = _ground_row(dE1[0] + G[0])
+        # order o's incident radiance X_o - X_(o-1), into X_prev's array; X becomes X_prev
+        np.subtract(X, X_prev, out=X_prev)
+        np.maximum(X_prev, 0.0, out=X_prev)
+        L_in, X_prev, X = X_prev, X, X_prev
+        # 3b. J of this order added into J_sum ([BN08] eq. 7)
+        density_products(q, L_in, w_col, beta_s, None, J_sum, 0, add=True)
+        tot_new = source_total(J_sum, q, codes, p0s, p1s, sc_idx, R, Rt)
+        tot_prev, tot = tot, tot_new - tot_sum
+        tot_sum = tot_new
+        report("precomputing tables: scattering orders", progress[0] + order - 2,
+               progress[1] or p["orders"])
+    if p["remaining_orders"] == "geometric":
+        # L_in (the array X now) holds order N's incident radiance
+        g = _series_factor(tot, tot_prev).astype(np.float32)
+        w_rem = [w * np.tile(g, n_r * n_ms) for w in w_col]
+        density_products(q, X, w_rem, beta_s * g[None, :], None, J_sum, 0, add=True)
+
+
 def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
-                  mu_s_min, q2, q3, hi, n_q, p, E, progress=(0, None), l0=0, sink=None,
+                  mu_s_min, q2, q3, hi, n_q, p, progress=(0, None), l0=0, sink=None,
                   work=None):
     """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
     ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
     (the source of order 3), ``dE1`` the ground irradiance of order 1, ``tot2`` order 2's
-    source strength; the ground irradiance of orders 2..N-1 is added to ``E``.
+    source strength. Each order's ground irradiance is computed at the ground's row only
+    (its next order's ground reflection reads that row); the irradiance table of orders
+    >= 2 is one integral of the summed density afterwards (:func:`irradiance_of_density`).
 
     No order's radiance is tabulated: the radiance of order k-1 arriving at every node of
     J_k is integrated along each incident ray from J_(k-1)
@@ -530,14 +636,12 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     3's source); ``work``: the array (of that grid's shape) that holds each order's J,
     which may be ``J2`` itself where nothing else reads it (it is read as order 3's source
     before order 3's J is written)."""
-    from skydome.models.simulated.precomputed import _density, _irradiance
+    from skydome.models.simulated.precomputed import _density
 
     nl = J2.shape[-1]
     nsc = sc_idx.size
     n_r, n_ms = hi
     ts = QUADRATURE_SCALE_M
-    # the smooth skies of orders >= 2, each direction a ray integral, on 8 x 32
-    th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
     rhs = np.empty((10, n_r * n_ms * nl), dtype=np.float32)
     w_col = _column_weights(beta_s, n_r, n_ms, nl)
     beta_e = np.ascontiguousarray(beta_e)
@@ -554,7 +658,7 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         def sink(x):
             np.add(J_hi, x, out=J_hi)
     src = J2                                   # J of the order before
-    dE, dE_prev = dE1, np.zeros_like(dE1)
+    dE = dE1
     tot, tot_prev = tot2, None
     for order in range(3, p["orders"] + 1):
         # 3a. radiance of order-1 arriving at each node, integrated along the incident rays
@@ -562,12 +666,9 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         _density.incident_radiance_rays(src, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
                                         R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q3.th_in, q3.ph_in,
                                         L_in)
-        # 3c. ground irradiance of order-1 ([BN08] eq. 9), from the same source
-        dE_new = np.empty(E.shape)
-        _irradiance.indirect_irradiance_rays(src, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                             mu_s_min, n_q, ts, th_h, ph_h, dom_h, dE_new)
-        E += dE_new
-        dE_prev, dE = dE, dE_new
+        # 3c. ground irradiance of order-1 ([BN08] eq. 9) at the ground, from the same source
+        dE = _ground_row(irradiance_of_density(src, codes, p0s, p1s, sc_idx, col, beta_e, R,
+                                               Rt, mu_s_min, n_q, dE1.shape, rows=1)[0])
         # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
         density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
         sink(J)
@@ -582,8 +683,6 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         # to the summed density. (A per-cell ratio was tried: it is unstable in cells where
         # the ground reflection enters.)
         sink(np.multiply(J, _series_factor(tot, tot_prev).astype(np.float32), out=J))
-        ea = tuple(range(dE.ndim - 1))
-        E += dE * _series_factor(dE.sum(axis=ea), dE_prev.sum(axis=ea))
     del J, L_in
     if p["orders"] >= 3 and sink_is_own and J_hi is not J2:
         add_density(J2, J_hi, q2, q3)
@@ -598,13 +697,13 @@ SPREAD_BAND = True
 
 def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes, p0s,
                          p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, n_q,
-                         p, E, progress=(0, None)):
+                         p, progress=(0, None)):
     """:func:`higher_orders` at the table wavelengths ``l_hi`` only (in the ``batches`` of
     :func:`subset_batches`), spread onto every table wavelength ``wl`` (:mod:`._spectral`):
     ``J_sum`` holds order 2 at every wavelength on entry and orders 2..N (+ remainder) on
-    return; ``E`` holds order 1's ground irradiance ``dE1`` on entry, orders 2..N-1
-    (+ remainder) are added. The orders >= 3 of J and of E are interpolated as ratios to
-    order 2's J and to ``dE1`` through the interpolation nodes ``l_nodes``.
+    return. The orders >= 3 of J are interpolated as ratios to order 2's J through the
+    interpolation nodes ``l_nodes`` (the irradiance table follows from J_sum: see
+    :func:`precompute`).
 
     Working memory: the computed wavelengths that are not nodes (the line-absorbed ones)
     get their orders >= 3 added straight into ``J_sum``; at the nodes only the ratio
@@ -618,7 +717,6 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
     col_of = {int(l): j for j, l in enumerate(l_hi)}
     coarse = (J_sum.shape[0], q3.th_out.size, q3.ph_out.size) + tuple(hi)
     same = coarse == J_sum.shape[:-1]
-    E_hi = np.zeros(E.shape[:-1] + (l_hi.size,))
     dE1_hi = np.ascontiguousarray(dE1[..., l_hi])
     jf = J_sum.reshape(-1, nl)
     rho = np.zeros((l_nodes.size, jf.shape[0]), dtype=np.float16)
@@ -642,12 +740,10 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
                 return
             _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho)
 
-        E_b = np.zeros(E.shape[:-1] + (nb,))
         higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
                       beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, n_q,
-                      p, E_b, (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
+                      p, (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
                       work=J_b if same else None)
-        E_hi[..., cs] = E_b
         del J_b, sink
         for i in range(nb if H_b is not None else 0):
             h = np.zeros(J_sum.shape[:-1] + (1,), dtype=np.float32)
@@ -656,13 +752,6 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
         del H_b
     _spread_nodes(jf, rho, l_hi, l_nodes, node_of, band, wl)
     del rho
-    # E (small): the orders >= 3 at every computed wavelength, float64
-    plan_e = _spectral_plan(wl, l_hi, l_nodes, band)
-    from skydome.models.simulated.precomputed import _spectral
-
-    _spectral.spread_ratio(np.ascontiguousarray(dE1.reshape(-1, nl)), E_hi.reshape(-1, l_hi.size),
-                           *plan_e, SPREAD_CUBIC, 1e-12 * float(dE1_hi.max(initial=0.0)),
-                           E.reshape(-1, nl), False)
 
 
 # rows (nodes of J) per chunk of the float16 ratio's spread
@@ -810,7 +899,7 @@ DENSITY_BLOCK_COLUMNS = 2048
 FLUSH_BELOW = np.float32(1e-30)
 
 
-def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
+def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0, add=False):
     """Step 3b: the scattering density J ([BN08] eq. 7) on the outgoing grid of ``q``
     (:class:`_DensityQuadrature`), laid out [k, theta, phi, r, mu_s, l], from the incident
     radiance ``L_in`` [i, r, mu_s, l] over all (r, mu_s, l) columns, each column weighted
@@ -822,13 +911,16 @@ def density_products(q, L_in, w_col, beta_s, rhs, J, l0=0):
     the incident radiance's cosine coefficients (shared by the constituents), per mode the
     product with the constituent's theta matrix, the sum over the modes at every outgoing
     azimuth; else one dense product per constituent, factored phase functions through
-    their 10-row right-hand side ``rhs``."""
+    their 10-row right-hand side ``rhs``. ``add``: J += the density instead (the azimuthal
+    basis only)."""
     nsc, nl = J.shape[0], J.shape[-1]
     # the table index of each of J's wavelengths (``l0`` an int: consecutive from it)
     l_tab = np.arange(nl) + l0 if np.ndim(l0) == 0 else np.asarray(l0)
     if q.modes is not None:
-        _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab)
+        _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab, add)
         return
+    if add:
+        raise ValueError("add=True needs the phase matrices in the azimuthal basis")
     lin = L_in.reshape(q.n_in, -1)
     for k in range(nsc):
         Jk = J[k].reshape(q.n_out, -1)
@@ -859,9 +951,10 @@ def _modes_to_density(q, G_cls, C, D, out):
         np.matmul(S[:, :n_m], d.transpose(1, 0, 2), out=out[:, sel])
 
 
-def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
+def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab, add=False):
     """:func:`density_products` with the phase matrices in the azimuthal Fourier basis
-    (``l_tab``: the table index of each of J's wavelengths). The blocks of columns are
+    (``l_tab``: the table index of each of J's wavelengths; ``add``: J += the density, each
+    block computed in a scratch array first). The blocks of columns are
     independent (each writes its own columns of J): they are shared out between
     :func:`product_threads` threads, each with its own scratch arrays and single-threaded
     BLAS (:func:`_blocks_in_threads`)."""
@@ -879,6 +972,7 @@ def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
         C = np.empty((n_ti, n_m, width), dtype=np.float32)
         Lb = np.empty((n_ti, n_pi, width), dtype=np.float32)
         D = np.empty((n_m, n_to, width), dtype=np.float32)
+        T = np.empty((n_to, n_po, width), dtype=np.float32) if add else None
         if tab:
             nb = width // nl
             C1 = np.empty((n_ti, n_m, nb), dtype=np.float32)
@@ -897,16 +991,19 @@ def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab):
             np.matmul(q.analysis, lb, out=c)
             for k in range(nsc):
                 Jk = J[k].reshape(n_to, n_po, n_col)[:, :, c0:c1]
+                dst = T[:, :, :c1 - c0] if add else Jk
                 if len(q.modes[k]) == 1:
-                    _modes_to_density(q, q.modes[k][0], c, D, Jk)
-                    Jk *= w_col[k][c0:c1]
-                    continue
-                for l in range(nl):
-                    cl = C1[:, :, :(c1 - c0) // nl]
-                    cl[...] = c[:, :, l::nl]
-                    jl = J1[:, :, :cl.shape[2]]
-                    _modes_to_density(q, q.modes[k][l_tab[l]], cl, D, jl)
-                    np.multiply(jl, np.float32(beta_s[k, l]), out=Jk[:, :, l::nl])
+                    _modes_to_density(q, q.modes[k][0], c, D, dst)
+                    dst *= w_col[k][c0:c1]
+                else:
+                    for l in range(nl):
+                        cl = C1[:, :, :(c1 - c0) // nl]
+                        cl[...] = c[:, :, l::nl]
+                        jl = J1[:, :, :cl.shape[2]]
+                        _modes_to_density(q, q.modes[k][l_tab[l]], cl, D, jl)
+                        np.multiply(jl, np.float32(beta_s[k, l]), out=dst[:, :, l::nl])
+                if add:
+                    Jk += dst
 
     _blocks_in_threads(worker, list(range(0, n_col, block)))
 

@@ -48,7 +48,7 @@ class Tables:
     beta_e: np.ndarray = _axes("constituent", "wavelength", dtype="float64")
     # single scattering per scattering constituent, without its phase function
     single_scattering: np.ndarray = _axes("scattering", "r", "mu", "mu_s", "nu", "wavelength")
-    # sky irradiance on a horizontal surface, orders 1..N-1 (dimensionless)
+    # sky irradiance on a horizontal surface, orders 1..N and the remainder (dimensionless)
     irradiance: np.ndarray = _axes("r", "mu_s", "wavelength", dtype="float64")
     phase_code: np.ndarray = _axes("scattering", dtype="int64")
     phase_param: np.ndarray = _axes("scattering", dtype="float64")
