@@ -130,13 +130,8 @@ def node_weights(col, r, mu, t, ground, rt, w_q, R, Rt, codes, p0s, p1s, sc_idx,
 def weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw):
     """tw[k, l] of :func:`node_weights` from the columns ``cs`` between the ray's start and
     the node (at radius rt)."""
-    nl = tw.shape[1]
-    nc = cs.shape[0]
-    for l in range(nl):
-        s = 0.0
-        for c in range(nc):
-            s += beta_e[c, l] * cs[c]
-        tw[0, l] = w_q * math.exp(-s)
+    for l in range(tw.shape[1]):
+        tw[0, l] = w_q * math.exp(-_optical_depth(beta_e, cs, l))
     _densities_into(rt, R, codes, p0s, p1s, sc_idx, tw)
 
 
@@ -148,16 +143,21 @@ def weights_from_columns_vexp(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, t
     per quadrature node (8 % of their time at 20 wavelengths); ``xs``, ``es`` (float64) and
     ``ib`` (int64) scratch of at least nl (:func:`._multiple.ray_scratch`)."""
     nl = tw.shape[1]
-    nc = cs.shape[0]
     for l in range(nl):
-        s = 0.0
-        for c in range(nc):
-            s += beta_e[c, l] * cs[c]
-        xs[l] = -s
+        xs[l] = -_optical_depth(beta_e, cs, l)
     exp_neg_array(xs[:nl], es[:nl], ib[:nl])
     for l in range(nl):
         tw[0, l] = w_q * es[l]
     _densities_into(rt, R, codes, p0s, p1s, sc_idx, tw)
+
+
+@njit(cache=True, inline="always")
+def _optical_depth(beta_e, cs, l):
+    """sum_c beta_e[c, l] cs[c]: the optical depth at wavelength l of the columns cs."""
+    s = 0.0
+    for c in range(cs.shape[0]):
+        s += beta_e[c, l] * cs[c]
+    return s
 
 
 @njit(cache=True, inline="always")
