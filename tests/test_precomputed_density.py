@@ -132,3 +132,34 @@ def test_order_two_in_one_batch_equals_several_batches(monkeypatch):
     for name in ("scattering_density", "multiple_scattering", "irradiance"):
         a, b = getattr(one, name), getattr(sep, name)
         np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6 * np.abs(b).max(), err_msg=name)
+
+
+@pytest.mark.parametrize("n_in, n_out, codes", [(16, 32, (RAYLEIGH, CS)), (12, 8, (ISO, TAB)),
+                                                (16, 16, (RAYLEIGH, TAB))])
+def test_source_functional_equals_the_source_total_of_the_products(n_in, n_out, codes):
+    """The source strength of the density made from an incident radiance, taken from the
+    radiance by ``_SourceFunctional`` (the summed path's remainder ratio, known before the
+    products), equals ``source_total`` of the density the products make (independent
+    path: the outgoing grid summed node by node), to float32 rounding."""
+    rng = np.random.default_rng(7)
+    nl, n_r, n_ms = 4, 5, 6
+    pc = np.array(codes)
+    pp = np.array([GAMMA, 0.76])
+    pt = _tabulated(nl)
+    q = _precompute._DensityQuadrature(pc, pp, pt, n_in, n_out)
+    th = np.repeat(q.th_in, q.ph_in.size)
+    peak = np.exp(-(th / 0.15) ** 2)[:, None, None, None]
+    L = (rng.random((q.n_in, n_r, n_ms, nl)) + 50.0 * peak).astype(np.float32)
+    beta_s = rng.random((2, nl)) * 1e-5
+    w = _precompute._column_weights(beta_s, n_r, n_ms, nl)
+    J = np.empty((2, q.th_out.size, q.ph_out.size, n_r, n_ms, nl), np.float32)
+    _precompute.density_products(q, L, w, beta_s, None, J, 0)
+    props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(
+        np.linspace(400.0, 700.0, nl), fold=True)
+    R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
+    sc = np.array([0, 1], dtype=np.int64)
+    args = (props.profile_code, props.profile_p0, props.profile_p1, sc)
+    ref = _precompute.source_total(J, q, *args, R, Rt)
+    got = _precompute._SourceFunctional(q, *args, beta_s, R, Rt, n_r, n_ms)(L)
+    assert np.all(ref > 0)
+    np.testing.assert_allclose(got, ref, rtol=1e-5)

@@ -179,8 +179,13 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
     # work items ordered by the angle from the sun first: every ray of one theta reads
     # J's two theta slabs only (the angle from the sun is constant along a ray), which
     # then stay in cache over all the (r, mu_s) nodes of that theta
+    # ... and the thetas in the order 0, 2, 4, ..., 1, 3, 5, ...: the threads' static
+    # shares of the loop (halves with 2 threads) then both hold small and large angles
+    # from the sun (the second half of the angles cost 15 % more than the first)
+    h = n_th // 2
     for idx in prange(n_th * n_nodes):
-        a = idx // n_nodes
+        k = idx // n_nodes
+        a = 2 * (k % h) + k // h if k < 2 * h else k
         ir = (idx % n_nodes) // n_ms
         ims = idx % n_ms
         tq, wq, w1, w2, cs, _, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)

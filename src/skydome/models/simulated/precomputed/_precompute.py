@@ -568,8 +568,10 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
     table need not be freed and computed again.
 
     The remainder: J_N f / (1 - f), f the ratio of the last two orders' source strengths
-    per wavelength (:func:`higher_orders`), is the last order's products once more with
-    its column weights scaled by f / (1 - f)."""
+    per wavelength (:func:`higher_orders`), goes in with the last order's products (its
+    column weights scaled by 1 + f / (1 - f)): an order's source strength is a linear
+    functional of its incident radiance (:class:`_SourceFunctional`), known before its
+    products."""
     nl = J_sum.shape[-1]
     n_r, n_ms = J_sum.shape[3], J_sum.shape[4]
     ts = QUADRATURE_SCALE_M
@@ -581,7 +583,7 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
     X = np.empty((q.n_in, n_r, n_ms, nl), dtype=np.float32)
     X_prev = np.zeros_like(X)
     ground = _ground_row(dE1[0])                # G_1 at the ground
-    tot_sum = tot2                              # source strength of S_2
+    strength = _SourceFunctional(q, codes, p0s, p1s, sc_idx, beta_s, R, Rt, n_r, n_ms)
     tot, tot_prev = tot2, None
     for order in range(3, p["orders"] + 1):
         # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
@@ -597,18 +599,17 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
         np.subtract(X, X_prev, out=X_prev)
         np.maximum(X_prev, 0.0, out=X_prev)
         L_in, X_prev, X = X_prev, X, X_prev
+        tot_prev, tot = tot, strength(L_in)
+        w_o, b_o = w_col, beta_s
+        if order == p["orders"] and p["remaining_orders"] == "geometric":
+            # the last order's density times 1 + f / (1 - f): with the remainder
+            g = (1.0 + _series_factor(tot, tot_prev)).astype(np.float32)
+            w_o = [w * np.tile(g, n_r * n_ms) for w in w_col]
+            b_o = beta_s * g[None, :]
         # 3b. J of this order added into J_sum ([BN08] eq. 7)
-        density_products(q, L_in, w_col, beta_s, None, J_sum, 0, add=True)
-        tot_new = source_total(J_sum, q, codes, p0s, p1s, sc_idx, R, Rt)
-        tot_prev, tot = tot, tot_new - tot_sum
-        tot_sum = tot_new
+        density_products(q, L_in, w_o, b_o, None, J_sum, 0, add=True)
         report("precomputing tables: scattering orders", progress[0] + order - 2,
                progress[1] or p["orders"])
-    if p["remaining_orders"] == "geometric":
-        # L_in (the array X now) holds order N's incident radiance
-        g = _series_factor(tot, tot_prev).astype(np.float32)
-        w_rem = [w * np.tile(g, n_r * n_ms) for w in w_col]
-        density_products(q, X, w_rem, beta_s * g[None, :], None, J_sum, 0, add=True)
 
 
 def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
@@ -1063,6 +1064,52 @@ def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
         s = np.matmul(rho, np.ascontiguousarray(J[k]).reshape(n_t * n_p, n_r, -1))
         out += np.einsum("t,tpml->l", w_t, s.reshape(n_t, n_p, -1, nl), dtype=np.float64)
     return out
+
+
+class _SourceFunctional:
+    """:func:`source_total` of the density that :func:`density_products` makes from an
+    incident radiance L (at every table wavelength; phase matrices in the azimuthal basis),
+    without making it: the source strength is linear in J, and J_k = P_k L w_k, so
+    tot[l] = sum_k beta_k,l sum_(r, mu_s) rho_k(r) sum_i u_k[i] L[i, r, mu_s, l], with
+    u_k[i] = sum_(theta, phi) w_t(theta) P_k[(theta, phi), i] computed once from the
+    azimuthal modes: the sum over the outgoing azimuths phi of a class picks
+    sum_phi cos(n phi) of each mode n (a tabulated phase function: one u per table
+    wavelength)."""
+
+    def __init__(self, q, codes, p0s, p1s, sc_idx, beta_s, R, Rt, n_r, n_ms):
+        from skydome.models.simulated.precomputed._mapping import cell_r
+        from skydome.transport._kernels import profile_density
+
+        n_t, n_p = q.th_out.size, q.ph_out.size
+        w_t = np.sin(q.th_out) / (n_t * n_p * n_r * n_ms)
+        self.u = []
+        for k in range(len(q.modes)):
+            sets = []
+            for per_cls in q.modes[k]:
+                u = np.zeros((q.th_in.size, q.ph_in.size))
+                for G, S in zip(per_cls, q.synthesis):
+                    n_m = G.shape[0]
+                    s_n = S[:, :n_m].astype(np.float64).sum(axis=0)          # sum_phi cos(n phi)
+                    g_n = np.einsum("t,nta->na", w_t, G.astype(np.float64))   # sum_theta w_t G
+                    u += np.einsum("n,na,nb->ab", s_n, g_n, q.analysis[:n_m].astype(np.float64))
+                sets.append(u.reshape(-1))
+            self.u.append(sets)
+        self.beta_s = beta_s
+        self.rho = [np.array([profile_density(int(codes[c]), float(p0s[c]), float(p1s[c]),
+                                              cell_r(i, n_r, R, Rt) - R) for i in range(n_r)])
+                    for c in (int(x) for x in sc_idx)]
+
+    def __call__(self, L):
+        """tot[l] of the density of the incident radiance L [i, r, mu_s, l] (float64)."""
+        n_in, n_r, n_ms, nl = L.shape
+        out = np.zeros(nl)
+        for k, sets in enumerate(self.u):
+            if len(sets) == 1:
+                a = (sets[0].astype(np.float32) @ L.reshape(n_in, -1)).reshape(n_r, n_ms, nl)
+            else:
+                a = np.einsum("li,irml->rml", np.array(sets, dtype=np.float32), L)
+            out += self.beta_s[k] * np.einsum("r,rml->l", self.rho[k], a, dtype=np.float64)
+        return out
 
 
 def _series_factor(tot, tot_prev):
