@@ -5,8 +5,9 @@ per stage (each numba kernel and the numpy matrix products of the scattering den
 wall and CPU time (``time.process_time``: all threads of this process, so that figures
 taken on a machine shared with other jobs stay comparable), the process's peak resident
 memory (``ru_maxrss``), and per scattering order its share of the source strength of
-orders 2..N (``_precompute.source_total``, the quantity whose ratio gives the geometric
-remainder: how much orders >= 3 weigh).
+orders 2..N (``_precompute.source_total``, or on the default's summed path
+``_precompute._SourceFunctional`` for the orders >= 3: the quantity whose ratio gives the
+geometric remainder, how much orders >= 3 weigh).
 
 The idle wall time on a 2-core machine is estimated as CPU time / 2 x (share of the time
 in parallel kernels) + CPU time x (the rest); both figures are printed.
@@ -68,8 +69,8 @@ def _parse(text):
 @contextlib.contextmanager
 def _instrument(rec, order_totals):
     """Wrap the kernels that the precomputation calls through their modules; record wall
-    and CPU time per call, and each order's source strength (``_precompute.source_total``,
-    summed over the wavelengths; the calls come batch by batch of wavelengths, orders 2..N
+    and CPU time per call, and each order's source strength (``_precompute.source_total`` or
+    ``_SourceFunctional``, summed over the wavelengths; the calls come batch by batch of wavelengths, orders 2..N
     within each)."""
     from skydome.models.simulated.precomputed import (_density, _irradiance, _multiple,
                                                       _precompute, _single)
@@ -93,20 +94,22 @@ def _instrument(rec, order_totals):
                 return r
 
             setattr(mod, name, g)
+    # the summed path takes the orders >= 3's source strengths from their incident radiance
+    # (_precompute._SourceFunctional), not from source_total
+    call = _precompute._SourceFunctional.__call__
+
+    def strength(self, L, _f=call):
+        r = _f(self, L)
+        order_totals.append((float(np.sum(r)), np.size(r)))
+        return r
+
+    _precompute._SourceFunctional.__call__ = strength
     try:
         yield
     finally:
         for mod, name, f in saved:
             setattr(mod, name, f)
-
-
-def summed_path(p):
-    """Whether the precomputation with the settings ``p`` takes the summed path of the
-    orders >= 3 (every table wavelength, the full grids: the conditions of
-    _precompute.precompute)."""
-    return (p["orders"] >= 3 and p.get("high_order_wavelengths") is None
-            and p.get("order_table_divisor", 1) == 1 and p.get("high_order_r_size") is None
-            and p.get("high_order_mu_s_size") is None)
+        _precompute._SourceFunctional.__call__ = call
 
 
 def _status_kb(field):
@@ -281,11 +284,7 @@ def main(argv=None):
         if n_orders > 1:
             th = np.array(totals[n2:]).reshape(-1, n_orders - 1, 2)
             tot[1:] = th[..., 0].sum(axis=0) / th[..., 1].sum(axis=0)
-            if summed_path(p):
-                # the default path sums the orders >= 3 into the summed density itself
-                # (_precompute.higher_orders_summed): its totals are those of the running
-                # sums S_3..S_N, each order the difference of two
-                tot[1:] = np.diff(np.concatenate([[tot[0]], tot[1:]]))
+
         print("source strength per order, mean over the wavelengths each is computed at "
               "(share of orders 2..N, without the remainder):")
         for i, t in enumerate(tot):
