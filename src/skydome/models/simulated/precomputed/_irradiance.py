@@ -13,7 +13,7 @@ from numba import njit, prange
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_top,
                                                              point_along, ray_nodes)
 from skydome.models.simulated.precomputed._lookup import (columns_at, sky_lookup_acc,
-                                                           weights_from_columns_vexp)
+                                                           weights_from_columns)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
                                                             density_phi_index, mu_s_frame, r_index)
 from skydome.models.simulated.precomputed._multiple import density_acc, ray_scratch
@@ -110,7 +110,7 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
             columns_at(col, rt, mt, R, Rt, w1)
             for kc in range(nc):
                 cs[kc] = max(w2[kc] - w1[kc], 0.0)
-            weights_from_columns_vexp(cs, rt, w * wq[q], R, codes, p0s, p1s, sc_idx, beta_e,
+            weights_from_columns(cs, rt, w * wq[q], R, codes, p0s, p1s, sc_idx, beta_e,
                                       tws[q], xs, es, ib)
         acc = part[idx]
         for im in range(n_m):

@@ -117,31 +117,24 @@ def irradiance_lookup_acc(E, r, mu_s, R, Rt, w, out):
 
 @njit(cache=True, fastmath=True)
 def node_weights(col, r, mu, t, ground, rt, w_q, R, Rt, codes, p0s, p1s, sc_idx, beta_e, w1, w2,
-                 cs, tw):
+                 cs, tw, xs, es, ib):
     """Quadrature weight x transmittance from the ray's start to the node at distance t, per
     scattering constituent k times its density at the node: tw[k, l] (the weights of J_k
     in the ray integrals of :func:`multiple_scattering_table` and
-    :func:`multiple_scattering_slice`)."""
+    :func:`multiple_scattering_slice`); ``xs``, ``es``, ``ib`` the scratch of
+    :func:`weights_from_columns`."""
     columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
-    weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw)
+    weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es, ib)
 
 
 @njit(cache=True, fastmath=True)
-def weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw):
+def weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es, ib):
     """tw[k, l] of :func:`node_weights` from the columns ``cs`` between the ray's start and
-    the node (at radius rt)."""
-    for l in range(tw.shape[1]):
-        tw[0, l] = w_q * math.exp(-_optical_depth(beta_e, cs, l))
-    _densities_into(rt, R, codes, p0s, p1s, sc_idx, tw)
-
-
-@njit(cache=True, fastmath=True)
-def weights_from_columns_vexp(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es, ib):
-    """:func:`weights_from_columns` with the transmittance of every wavelength in one
-    vectorised pass (:func:`skydome.transport._kernels.exp_neg_array`, relative error
-    < 1e-8; numba's math.exp is a scalar libm call), for the ray integrals that need one
-    per quadrature node (8 % of their time at 20 wavelengths); ``xs``, ``es`` (float64) and
-    ``ib`` (int64) scratch of at least nl (:func:`._multiple.ray_scratch`)."""
+    the node (at radius rt), the transmittance of every wavelength in one vectorised pass
+    (:func:`skydome.transport._kernels.exp_neg_array`, relative error < 1e-8; numba's
+    math.exp is a scalar libm call: 8 % of the orders' ray integrals at 20 wavelengths);
+    ``xs``, ``es`` (float64) and ``ib`` (int64) scratch of at least nl
+    (:func:`._multiple.ray_scratch`)."""
     nl = tw.shape[1]
     for l in range(nl):
         xs[l] = -_optical_depth(beta_e, cs, l)

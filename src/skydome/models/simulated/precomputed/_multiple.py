@@ -14,7 +14,7 @@ from numba import njit, prange
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along, ray_nodes)
 from skydome.models.simulated.precomputed._lookup import (columns_at, node_weights,
-                                                           weights_from_columns_vexp)
+                                                           weights_from_columns)
 from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
                                                             density_mu_s_index,
                                                             density_phi_index, mu_s_frame,
@@ -60,7 +60,7 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
 def ray_scratch(n_q, nc, nsc, nl):
     """Scratch arrays of one work item's ray integrals: (tq, wq) for 2 n_q quadrature
     nodes, (w1, w2, cs) per column constituent, tw [k, l] (float64), and (xs, es, ib) of
-    :func:`._lookup.weights_from_columns_vexp`."""
+    :func:`._lookup.weights_from_columns`."""
     return (np.empty(2 * n_q), np.empty(2 * n_q), np.empty(nc), np.empty(nc), np.empty(nc),
             np.empty((nsc, nl)), np.empty(nl), np.empty(nl), np.empty(nl, dtype=np.int64))
 
@@ -98,7 +98,7 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
         columns_at(col, rt, -mt if ground else mt, R, Rt, w1)
         for kc in range(cs.shape[0]):
             cs[kc] = max(w1[kc] - w2[kc], 0.0) if ground else max(w2[kc] - w1[kc], 0.0)
-        weights_from_columns_vexp(cs, rt, wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es,
+        weights_from_columns(cs, rt, wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es,
                                   ib)
         mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
         ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
@@ -153,6 +153,7 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
         w2 = np.empty(nc)
         cs = np.empty(nc)
         tw = np.empty((nsc, nl), dtype=np.float32)
+        xs, es, ib = np.empty(nl), np.empty(nl), np.empty(nl, dtype=np.int64)
         acc = np.zeros((nk, nl), dtype=np.float32)
         nus = np.empty(nk)
         jts = np.empty(nk, dtype=np.int64)
@@ -185,7 +186,7 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
             node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                         w1, w2, cs, tw)
+                         w1, w2, cs, tw, xs, es, ib)
             inv_rt = 1.0 / rt
             for iu in range(n_u):
                 k = ks[iu]
@@ -291,7 +292,7 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
-        tq, wq, w1, w2, cs, tw, _, _, _ = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, cs, tw, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)
         acc = np.zeros((n_nu, nl))
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]
@@ -304,7 +305,7 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
             node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                         w1, w2, cs, tw)
+                         w1, w2, cs, tw, xs, es, ib)
             for inu in range(n_nu):
                 nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
