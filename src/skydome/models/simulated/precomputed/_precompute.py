@@ -250,7 +250,7 @@ def precompute(props, wl, p):
         if summed:
             higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
                                  beta_s, albedo, R, Rt, mu_s_min, q3, n_q_ms, p,
-                                 (1 + n_batch, n_steps))
+                                 (1 + n_batch, 1 + n_batch + p["orders"] - 2))
         elif nl_hi == nl:
             for b, l0 in enumerate(range(0, nl, nb_hi)):
                 sl = slice(l0, min(nl, l0 + nb_hi))
