@@ -188,10 +188,10 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
         a = 2 * (k % h) + k // h if k < 2 * h else k
         ir = (idx % n_nodes) // n_ms
         ims = idx % n_ms
-        tq, wq, w1, w2, cs, _, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, _ = ray_scratch(n_q, nc, nsc, nl)
         # float32 weights and sums (the precision of J and of the output; 20-40 positive
         # terms per value): the wavelength loops of density_acc vectorise 8-wide
-        tw = np.empty((nsc, nl), dtype=np.float32)
+        tw = np.empty((2 * n_q, nsc, nl), dtype=np.float32)
         acc = np.empty(nl, dtype=np.float32)
         tg = np.empty(nl)
         eg = np.empty(nl)
@@ -200,10 +200,10 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
             nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
             acc[:] = 0.0
             ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
-                         nu, ground, n_q, ts, tq, wq, w1, w2, cs, tw, xs, es, ib, acc)
+                         nu, ground, n_q, ts, tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw, acc)
             if ground:
                 ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
-                                     nu, w1, w2, cs, tg, eg, acc)
+                                     nu, w1, w2, cs[0], tg, eg, acc)
             o = out[a * n_ph + b, ir, ims]
             for l in range(nl):
                 o[l] = acc[l]

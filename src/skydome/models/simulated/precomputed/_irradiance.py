@@ -11,9 +11,9 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_top,
-                                                             point_along, ray_nodes)
-from skydome.models.simulated.precomputed._lookup import (columns_at, sky_lookup_acc,
-                                                           weights_from_columns)
+                                                             ray_nodes)
+from skydome.models.simulated.precomputed._lookup import (columns_at, ray_weights,
+                                                           sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
                                                             density_phi_index, mu_s_frame, r_index)
 from skydome.models.simulated.precomputed._multiple import density_acc, ray_scratch
@@ -89,29 +89,19 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     for idx in prange(n_r * n_th):
         ir = idx // n_th
         a = idx % n_th
-        tq, wq, w1, w2, cs, tw, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tws = ray_scratch(n_q, nc, nsc, nl)
         r = R + (Rt - R) * ir / (n_r_table - 1.0)
         ct = math.cos(th[a])
         st = math.sin(th[a])
-        w = 2.0 * ct * d_omega[a]
         nq = ray_nodes(r, ct, distance_to_top(r, ct, Rt), n_q, ts, tq, wq)
-        rts = np.empty(nq)
+        ray_weights(col, r, ct, False, nq, tq, wq, 2.0 * ct * d_omega[a], R, Rt, codes, p0s,
+                    p1s, sc_idx, beta_e, w1, w2, rts, cs, xs, es, ib, dk, tws)
         mts = np.empty(nq)
         jrs = np.empty(nq, dtype=np.int64)
         jas = np.empty(nq)
-        tws = np.empty((nq, nsc, nl))
-        columns_at(col, r, ct, R, Rt, w2)
         for q in range(nq):
-            rt = point_along(r, ct, tq[q], R, Rt)
-            mt = clamp_cos((r * ct + tq[q]) / rt)
-            rts[q] = rt
-            mts[q] = mt
-            jrs[q], jas[q] = r_index(rt, n_rj, R, Rt)
-            columns_at(col, rt, mt, R, Rt, w1)
-            for kc in range(nc):
-                cs[kc] = max(w2[kc] - w1[kc], 0.0)
-            weights_from_columns(cs, rt, w * wq[q], R, codes, p0s, p1s, sc_idx, beta_e,
-                                      tws[q], xs, es, ib)
+            mts[q] = clamp_cos((r * ct + tq[q]) / rts[q])
+            jrs[q], jas[q] = r_index(rts[q], n_rj, R, Rt)
         acc = part[idx]
         for im in range(n_m):
             mu_s = -1.0 + 2.0 * im / (n_m - 1.0)

@@ -13,7 +13,7 @@ from numba import njit
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
-from skydome.transport._kernels import exp_neg_array, profile_density
+from skydome.transport._kernels import exp_neg_array, profile_density_many
 from skydome.transport._phase import phase_fill_coded
 from skydome.transport._tables import lookup_columns as columns_at
 
@@ -116,32 +116,49 @@ def irradiance_lookup_acc(E, r, mu_s, R, Rt, w, out):
 
 
 @njit(cache=True, fastmath=True)
-def node_weights(col, r, mu, t, ground, rt, w_q, R, Rt, codes, p0s, p1s, sc_idx, beta_e, w1, w2,
-                 cs, tw, xs, es, ib):
-    """Quadrature weight x transmittance from the ray's start to the node at distance t, per
-    scattering constituent k times its density at the node: tw[k, l] (the weights of J_k
-    in the ray integrals of :func:`multiple_scattering_table` and
-    :func:`multiple_scattering_slice`); ``xs``, ``es``, ``ib`` the scratch of
-    :func:`weights_from_columns`."""
-    columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cs)
-    weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es, ib)
+def ray_weights(col, r, mu, ground, nq, tq, wq, w, R, Rt, codes, p0s, p1s, sc_idx, beta_e, w1, w2,
+                rts, cs, xs, es, ib, dk, tw):
+    """The weights of the scattering density J_k at the ``nq`` quadrature nodes (distances
+    ``tq``, weights ``wq``) of one ray from radius r, zenith cosine mu (``ground``: the ray
+    ends on the ground): tw[q, k, l] = w wq[q] T(r, mu; tq[q])[l] rho_k(r_q), the
+    transmittance from the ray's start to the node times scattering constituent k's density
+    there (the weights of every ray integral: :func:`._multiple.ray_integral`,
+    :func:`._multiple.multiple_scattering_table`, :func:`._multiple.multiple_scattering_slice`,
+    :func:`._irradiance.indirect_irradiance_rays`), in the precision of ``tw``; rts[q] the
+    radius of node q.
 
-
-@njit(cache=True, fastmath=True)
-def weights_from_columns(cs, rt, w_q, R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es, ib):
-    """tw[k, l] of :func:`node_weights` from the columns ``cs`` between the ray's start and
-    the node (at radius rt), the transmittance of every wavelength in one vectorised pass
+    The whole ray at once: its columns node by node ([Bru17] GetTransmittance, for rays to
+    the ground both ends reversed, as in :func:`columns_segment`), then the optical depths
+    of every node and wavelength in one vectorised exp pass
     (:func:`skydome.transport._kernels.exp_neg_array`, relative error < 1e-8; numba's
-    math.exp is a scalar libm call: 8 % of the orders' ray integrals at 20 wavelengths);
-    ``xs``, ``es`` (float64) and ``ib`` (int64) scratch of at least nl
-    (:func:`._multiple.ray_scratch`)."""
-    nl = tw.shape[1]
-    for l in range(nl):
-        xs[l] = -_optical_depth(beta_e, cs, l)
-    exp_neg_array(xs[:nl], es[:nl], ib[:nl])
-    for l in range(nl):
-        tw[0, l] = w_q * es[l]
-    _densities_into(rt, R, codes, p0s, p1s, sc_idx, tw)
+    math.exp is a scalar libm call) and the densities of every node per constituent in one
+    more (:func:`skydome.transport._kernels.profile_density_many`): 18 % of the orders'
+    ray integrals against one node at a time. Scratch (:func:`._multiple.ray_scratch`):
+    w1, w2 per column constituent; rts, cs [q, c]; xs, es of nq x nl; ib (int64) of at
+    least nq x nl and nq; dk [k, q]."""
+    nl = tw.shape[2]
+    nc = col.shape[0]
+    columns_at(col, r, -mu if ground else mu, R, Rt, w2)
+    for q in range(nq):
+        rt = point_along(r, mu, tq[q], R, Rt)
+        rts[q] = rt
+        mt = clamp_cos((r * mu + tq[q]) / rt)
+        columns_at(col, rt, -mt if ground else mt, R, Rt, w1)
+        for c in range(nc):
+            cs[q, c] = max(w1[c] - w2[c], 0.0) if ground else max(w2[c] - w1[c], 0.0)
+    for q in range(nq):
+        for l in range(nl):
+            xs[q * nl + l] = -_optical_depth(beta_e, cs[q], l)
+    exp_neg_array(xs[:nq * nl], es, ib)
+    fb = ib.view(np.float64)
+    for kk in range(sc_idx.shape[0]):
+        c = sc_idx[kk]
+        profile_density_many(codes[c], p0s[c], p1s[c], rts, R, nq, dk[kk], ib, fb)
+    for q in range(nq):
+        for kk in range(sc_idx.shape[0]):
+            g = w * wq[q] * dk[kk, q]
+            for l in range(nl):
+                tw[q, kk, l] = g * es[q * nl + l]
 
 
 @njit(cache=True, inline="always")
@@ -151,14 +168,3 @@ def _optical_depth(beta_e, cs, l):
     for c in range(cs.shape[0]):
         s += beta_e[c, l] * cs[c]
     return s
-
-
-@njit(cache=True, inline="always")
-def _densities_into(rt, R, codes, p0s, p1s, sc_idx, tw):
-    """tw[k, l] = tw[0, l] x the density of scattering constituent k at radius rt."""
-    nl = tw.shape[1]
-    for kk in range(tw.shape[0] - 1, -1, -1):
-        c = sc_idx[kk]
-        dk = profile_density(codes[c], p0s[c], p1s[c], rt - R)
-        for l in range(nl):
-            tw[kk, l] = tw[0, l] * dk

@@ -12,9 +12,8 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
-                                                             distance_to_top, point_along, ray_nodes)
-from skydome.models.simulated.precomputed._lookup import (columns_at, node_weights,
-                                                           weights_from_columns)
+                                                             distance_to_top, ray_nodes)
+from skydome.models.simulated.precomputed._lookup import ray_weights
 from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
                                                             density_mu_s_index,
                                                             density_phi_index, mu_s_frame,
@@ -31,7 +30,7 @@ THETA_SNAP = 1e-9
 def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
     """out[l] += sum_k tw[k, l] J_k(theta, phi, r, mu_s)[l]: the scattering density J
     [k, theta, phi, r, mu_s, l] interpolated quadrilinearly in the cell (jt + jb, ip + e,
-    jr + ja, ims_j + c), weighted per constituent by ``tw`` (:func:`._lookup.node_weights`);
+    jr + ja, ims_j + c), weighted per constituent by ``tw`` (:func:`._lookup.ray_weights`);
     the weights in the precision of ``out``; a theta row of weight 0 is not read (see
     :func:`ray_integral`)."""
     nl = out.shape[0]
@@ -58,23 +57,25 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
 
 @njit(cache=True)
 def ray_scratch(n_q, nc, nsc, nl):
-    """Scratch arrays of one work item's ray integrals: (tq, wq) for 2 n_q quadrature
-    nodes, (w1, w2, cs) per column constituent, tw [k, l] (float64), and (xs, es, ib) of
-    :func:`._lookup.weights_from_columns`."""
-    return (np.empty(2 * n_q), np.empty(2 * n_q), np.empty(nc), np.empty(nc), np.empty(nc),
-            np.empty((nsc, nl)), np.empty(nl), np.empty(nl), np.empty(nl, dtype=np.int64))
+    """Scratch arrays of one work item's ray integrals (at most 2 n_q quadrature nodes):
+    (tq, wq) the nodes, (w1, w2) per column constituent and (rts, cs, xs, es, ib, dk) of
+    :func:`._lookup.ray_weights`, and tw [q, k, l] (float64) its weights."""
+    m = 2 * n_q
+    return (np.empty(m), np.empty(m), np.empty(nc), np.empty(nc), np.empty(m),
+            np.empty((m, nc)), np.empty(m * nl), np.empty(m * nl),
+            np.empty(m * max(nl, 1), dtype=np.int64), np.empty((nsc, m)), np.empty((m, nsc, nl)))
 
 
 @njit(cache=True, fastmath=True)
 def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, mu_s, nu, ground,
-                 n_q, ts, tq, wq, w1, w2, cs, tw, xs, es, ib, acc):
+                 n_q, ts, tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw, acc):
     """acc[l] += int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt along one
     ray ([BN08] eq. 8) from radius r in the direction of zenith cosine mu and sun cosine nu,
     the sun at zenith cosine mu_s, to the ground (``ground``) or the top: the quadrature of
     :func:`multiple_scattering_table` (nodes of :func:`._geometry.ray_nodes`, exact density
     profiles, J interpolated in the sun's frame) for a single ray, without per-ray
-    allocations (``tq``, ``wq``: 2 n_q scratch; ``w1``, ``w2``, ``cs``: per column; ``tw``
-    [k, l] in the precision of ``acc``; ``xs``, ``es``, ``ib``: :func:`ray_scratch`)."""
+    allocations (``tq`` .. ``dk``: :func:`ray_scratch`; ``tw`` [q, k, l] in the precision of
+    ``acc``)."""
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
     nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
@@ -87,23 +88,18 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
         jb = 0.0
     elif jb > 1.0 - THETA_SNAP:
         jt, jb = jt + 1, 0.0
-    # the columns at the ray's start, once ([Bru17] GetTransmittance: for rays to the ground
-    # both ends reversed, as in :func:`._lookup.columns_segment`)
-    columns_at(col, r, -mu if ground else mu, R, Rt, w2)
+    # the transmittance-weighted densities of every node of the ray, then J's gathers
+    ray_weights(col, r, mu, ground, nq, tq, wq, 1.0, R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                w1, w2, rts, cs, xs, es, ib, dk, tw)
     for q in range(nq):
         t = tq[q]
-        rt = point_along(r, mu, t, R, Rt)
+        rt = rts[q]
         mt = clamp_cos((r * mu + t) / rt)
         jr, ja = r_index(rt, n_rj, R, Rt)
-        columns_at(col, rt, -mt if ground else mt, R, Rt, w1)
-        for kc in range(cs.shape[0]):
-            cs[kc] = max(w1[kc] - w2[kc], 0.0) if ground else max(w2[kc] - w1[kc], 0.0)
-        weights_from_columns(cs, rt, wq[q], R, codes, p0s, p1s, sc_idx, beta_e, tw, xs, es,
-                                  ib)
         mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
         ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
         ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
-        density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, acc)
+        density_acc(J, tw[q], jt, jb, ip, e, jr, ja, ims_j, c, acc)
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -147,13 +143,8 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     for k in range(n_ms):
         mus[k] = mu_s_from_unit(mu_s_nodes_sel[k] / (n_ms_full - 1.0), mu_s_min)
     for idx in prange(n_r * n_mu):
-        tq = np.empty(2 * n_q)
-        wq = np.empty(2 * n_q)
-        w1 = np.empty(nc)
-        w2 = np.empty(nc)
-        cs = np.empty(nc)
-        tw = np.empty((nsc, nl), dtype=np.float32)
-        xs, es, ib = np.empty(nl), np.empty(nl), np.empty(nl, dtype=np.int64)
+        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, _ = ray_scratch(n_q, nc, nsc, nl)
+        tw = np.empty((2 * n_q, nsc, nl), dtype=np.float32)
         acc = np.zeros((nk, nl), dtype=np.float32)
         nus = np.empty(nk)
         jts = np.empty(nk, dtype=np.int64)
@@ -180,13 +171,13 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             if k % n_nu == 0 or nus[k] != nus[k - 1]:
                 ks[n_u] = k
                 n_u += 1
+        ray_weights(col, r, mu, ground, nq, tq, wq, 1.0, R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                    w1, w2, rts, cs, xs, es, ib, dk, tw)
         for q in range(nq):
             t = tq[q]
-            rt = point_along(r, mu, t, R, Rt)
+            rt = rts[q]
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
-            node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                         w1, w2, cs, tw, xs, es, ib)
             inv_rt = 1.0 / rt
             for iu in range(n_u):
                 k = ks[iu]
@@ -198,7 +189,7 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
                 jt = jts[k]
                 jb = jbs[k]
                 ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
-                density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, acc[k])
+                density_acc(J, tw[q], jt, jb, ip, e, jr, ja, ims_j, c, acc[k])
         for k in range(nk):
             if k % n_nu and nus[k] == nus[k - 1]:
                 acc[k] = acc[k - 1]
@@ -292,27 +283,27 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
-        tq, wq, w1, w2, cs, tw, xs, es, ib = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw = ray_scratch(n_q, nc, nsc, nl)
         acc = np.zeros((n_nu, nl))
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]
         s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
         nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+        ray_weights(col, r, mu, ground, nq, tq, wq, 1.0, R, Rt, codes, p0s, p1s, sc_idx, beta_e,
+                    w1, w2, rts, cs, xs, es, ib, dk, tw)
         for q in range(nq):
             t = tq[q]
-            rt = point_along(r, mu, t, R, Rt)
+            rt = rts[q]
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
-            node_weights(col, r, mu, t, ground, rt, wq[q], R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                         w1, w2, cs, tw, xs, es, ib)
             for inu in range(n_nu):
                 nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
                 ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
                 jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
                 ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
-                density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, acc[inu])
+                density_acc(J, tw[q], jt, jb, ip, e, jr, ja, ims_j, c, acc[inu])
         for inu in range(n_nu):
             for l in range(nl):
                 out[imu, inu, l] = acc[inu, l]

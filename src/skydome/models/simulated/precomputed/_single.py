@@ -65,6 +65,9 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
         trow = np.empty((n_muT, nl), dtype=np.float32)
         acc = np.zeros((nk, nsc, nl), dtype=np.float32)
         nus = np.empty(nk)
+        js = np.empty(nk, dtype=np.int64)
+        u0s = np.empty(nk, dtype=np.float32)
+        u1s = np.empty(nk, dtype=np.float32)
         ir, imu, r, mu, ground, nq = table_ray(idx, n_r, n_mu, R, Rt, mus, n_nu, n_q, ts, tq,
                                                wq, nus)
         for q in range(nq):
@@ -91,6 +94,8 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
             cos_h = -math.sqrt(max(1.0 - sin_h * sin_h, 0.0))
             eps = sin_h * alpha
             inv_rt = 1.0 / rt
+            inv_2eps = 1.0 / (2.0 * eps)
+            inv_span = 0.0 if span <= 0.0 else 1.0 / span
             # the transmittance table's row at rt (linear in r), times the view ray's
             # transmittance and quadrature weight: every sun geometry of this node reads it
             fa = np.float32(a)
@@ -98,22 +103,30 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
             for jj in range(n_muT):
                 for l in range(nl):
                     trow[jj, l] = tview[l] * (fa1 * trans[i, jj, l] + fa * trans[i + 1, jj, l])
+            # the sun's geometry of every (mu_s, nu) node at this point: one vectorisable
+            # pass (square roots and divisions 8-wide), then the gathers
             for k in range(nk):
-                if k % n_nu and nus[k] == nus[k - 1]:
-                    continue    # a nu node clamped to its neighbour's nu: copied below
                 mu_s_t = clamp_cos((r * mus[k // n_nu] + t * nus[k]) * inv_rt)
-                xv = (mu_s_t - cos_h + eps) / (2.0 * eps)
-                if xv <= 0.0:
-                    continue
-                vis = 1.0 if xv >= 1.0 else xv * xv * (3.0 - 2.0 * xv)
+                xv = (mu_s_t - cos_h + eps) * inv_2eps
+                vis = min(max(xv, 0.0), 1.0)
+                vis = vis * vis * (3.0 - 2.0 * vis)
                 disc = rt * rt * (mu_s_t * mu_s_t - 1.0) + Rt * Rt
                 dd = max(-rt * mu_s_t + math.sqrt(max(disc, 0.0)), 0.0)
-                x_mu = 0.0 if span <= 0.0 else min(max((dd - d_min) / span, 0.0), 1.0)
+                x_mu = min(max((dd - d_min) * inv_span, 0.0), 1.0)
                 fm = x_mu * (n_muT - 1)
-                j = min(int(fm), n_muT - 2)
-                b = fm - j
-                u0 = np.float32(vis * (1.0 - b))
-                u1 = np.float32(vis * b)
+                jk = min(int(fm), n_muT - 2)
+                bk = fm - jk
+                js[k] = jk
+                u0s[k] = np.float32(vis * (1.0 - bk))
+                u1s[k] = np.float32(vis * bk)
+            for k in range(nk):
+                if u0s[k] == 0.0 and u1s[k] == 0.0:
+                    continue
+                if k % n_nu and nus[k] == nus[k - 1]:
+                    continue    # a nu node clamped to its neighbour's nu: copied below
+                j = js[k]
+                u0 = u0s[k]
+                u1 = u1s[k]
                 for l in range(nl):
                     tsun[l] = u0 * trow[j, l] + u1 * trow[j + 1, l]
                 for kk in range(nsc):
