@@ -650,3 +650,34 @@ def test_stored_multiple_scattering_against_the_full_grid_integration(default_55
                 y = b.aerial_perspective(sky, dist, wl)[1][:, 0]
                 e = (x - y) / np.maximum(y, 0.01 * np.median(y))
                 assert np.sqrt(np.mean(e ** 2)) < 0.035, (alt, elev, dist, e)
+
+
+def test_precompute_runs_without_numpy_hugepage_advice_and_restores_it(monkeypatch):
+    """The precomputation runs with numpy's transparent-huge-page advice off (its tables on
+    small pages: docs/performance.md, "The weights of a whole ray; the tables on small
+    pages") and leaves numpy's setting as it found it, also when the precomputation fails."""
+    multiarray = pytest.importorskip("numpy._core.multiarray")
+    switch = getattr(multiarray, "_set_madvise_hugepage", None)
+    if switch is None:
+        pytest.skip("this numpy has no huge-page switch")
+    from skydome.models.simulated.precomputed import _precompute as PC
+
+    seen = []
+
+    def during(props, wl, p):
+        state = switch(False)       # the setting in force, put back at once
+        switch(state)
+        seen.append(state)
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(PC, "_precompute_tables", during)
+    original = switch(True)
+    try:
+        for start in (True, False):
+            switch(start)
+            with pytest.raises(RuntimeError, match="stop here"):
+                PC.precompute(None, None, None)
+            assert switch(start) == start
+    finally:
+        switch(original)
+    assert seen == [False, False]
