@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 import skydome as sd
 from skydome.atmosphere import Atmosphere
 from skydome.spectra import solar_irradiance
+from skydome.models.simulated.precomputed._geometry import gauss_rule
 from skydome.transport.geometry import direction_from_angles
 
 SMALL = dict(scattering_r_size=12, scattering_mu_size=48, scattering_mu_s_size=12,
@@ -478,15 +479,17 @@ def test_irradiance_rays_share_geometry_exactly():
     sc = np.array([0, 1], dtype=np.int64)
     rng = np.random.default_rng(3)
     J = rng.uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
+    rule = gauss_rule(5)
     mu_s_min = float(np.cos(np.radians(108.0)))
     th, ph, dom = PC._hemisphere(3)
     beta_e = np.ascontiguousarray(props.extinction)
     args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e, R, Rt)
     out = np.empty((3, 5, 3))
-    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, 5, 500.0, th, ph, dom, out, 3)
+    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, *rule, 500.0, th, ph, dom, out, 3)
     # the ground's row alone (as the precomputation's orders ask for it): the same values
     row0 = np.empty((1, 5, 3))
-    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, 5, 500.0, th, ph, dom, row0, 3)
+    _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, *rule, 500.0, th, ph, dom, row0,
+                                         3)
     np.testing.assert_array_equal(row0[0], out[0])
     ref = np.zeros_like(out)
     frame = mu_s_frame(mu_s_min)
@@ -501,7 +504,7 @@ def test_irradiance_rays_share_geometry_exactly():
                     one = np.zeros(3)
                     sc_ = _multiple.ray_scratch(5, col.shape[0], 2, 3)
                     _multiple.ray_integral(J, *args, frame, r,
-                                           np.cos(th[a]), mu_s, nu, False, 5, 500.0, *sc_, one)
+                                           np.cos(th[a]), mu_s, nu, False, *rule, 500.0, *sc_, one)
                     ref[ir, im] += 2 * np.cos(th[a]) * dom[a] * one
     # equal to rounding: 1e-15 relative in general, up to 2.5e-6 with the sun at the zenith
     # or the nadir (the azimuth about the sun is singular there), and at the top (r = Rt)
@@ -525,6 +528,7 @@ def test_incident_radiance_rays_against_one_ray_integral_per_ray():
     col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1, R, Rt, p)
     sc = np.array([0, 1], dtype=np.int64)
     J = np.random.default_rng(5).uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
+    rule = gauss_rule(5)
     mu_s_min = float(np.cos(np.radians(108.0)))
     n_r, n_ms, n_th = 3, 4, 4
     th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
@@ -532,7 +536,7 @@ def test_incident_radiance_rays_against_one_ray_integral_per_ray():
     args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e)
     out = np.empty((n_th * n_th, n_r, n_ms, 3), dtype=np.float32)
     dE = np.zeros((4, 8, 3))
-    _density.incident_radiance_rays(J, dE, *args, np.zeros(3), R, Rt, mu_s_min, 5, 500.0,
+    _density.incident_radiance_rays(J, dE, *args, np.zeros(3), R, Rt, mu_s_min, *rule, 500.0,
                                     n_r, n_ms, th_in, th_in, out)
     frame = mu_s_frame(mu_s_min)
     ref = np.empty(out.shape)
@@ -546,9 +550,9 @@ def test_incident_radiance_rays_against_one_ray_integral_per_ray():
                                                                  sin_s, R)
                     n_ground += ground
                     one = np.zeros(3)
-                    _multiple.ray_integral(J, *args, R, Rt, frame, r, ct, mu_s, nu, ground, 5,
-                                           500.0, *_multiple.ray_scratch(5, col.shape[0], 2, 3),
-                                           one)
+                    _multiple.ray_integral(J, *args, R, Rt, frame, r, ct, mu_s, nu, ground,
+                                           *rule, 500.0,
+                                           *_multiple.ray_scratch(5, col.shape[0], 2, 3), one)
                     ref[a * n_th + b, ir, ims] = one
     assert 0 < n_ground < ref.size // 3
     np.testing.assert_allclose(out, ref, rtol=2e-6, atol=1e-6 * ref.max())
@@ -681,3 +685,30 @@ def test_precompute_runs_without_numpy_hugepage_advice_and_restores_it(monkeypat
     finally:
         switch(original)
     assert seen == [False, False]
+
+
+def test_gauss_rule_in_v_integrates_length_and_density_profiles():
+    """``_geometry.ray_nodes_rule`` with ``gauss_rule`` against closed forms: the length of
+    a ray (a constant integrand) and the column of an exponential profile of scale height
+    H along a vertical ray, H (1 - exp(-L / H)), for the Rayleigh (8 km) and aerosol (1.2 km)
+    scale heights. The midpoint rule of ``ray_nodes`` in v = ln(1 + u / ts) is short on the
+    length by about V^2 / (24 n^2), V = ln(1 + L / ts) (the Jacobian e^v is convex): the
+    reason the precomputation's ray integrals use the Gauss rule."""
+    from skydome.models.simulated.precomputed import _geometry as G
+
+    R = 6.36e6
+    ts = 500.0
+    for L in (2e4, 1e5, 1.2e6):
+        t = np.empty(40)
+        w = np.empty(40)
+        rx, rw = G.gauss_rule(7)
+        n = G.ray_nodes_rule(R, 1.0, L, rx, rw, ts, t, w)     # upward: one piece
+        assert n == 7
+        assert abs(w[:n].sum() / L - 1.0) < 1e-7        # e^v to degree 13
+        for H in (8000.0, 1200.0) if L <= 1e5 else ():    # vertical rays: <= 100 km
+            exact = H * (1.0 - np.exp(-L / H))
+            assert abs(np.sum(w[:n] * np.exp(-t[:n] / H)) / exact - 1.0) < 2e-3
+        n = G.ray_nodes(R, 1.0, L, 10, ts, t, w)
+        V = np.log1p(L / ts)
+        short = 1.0 - w[:n].sum() / L
+        assert 0.5 * V ** 2 / (24 * 100) < short < 1.5 * V ** 2 / (24 * 100)

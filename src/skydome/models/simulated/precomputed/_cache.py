@@ -38,7 +38,9 @@ import numpy as np
 # 7: orders >= 3 at a subset of the table wavelengths; 8: their ratio to order 2 at the
 # interpolation nodes kept in float16; 9: the irradiance table of orders 2..N (+ remainder)
 # from the summed density (it held orders 2..N-1 and a remainder of its own)
-CACHE_FORMAT = "skydome.precomputed-cache/9"
+# 10: the precomputation's ray integrals of J (orders >= 3, ground irradiance of orders >= 2)
+# by Gauss-Legendre in v (7 nodes per piece; 10 midpoint nodes before)
+CACHE_FORMAT = "skydome.precomputed-cache/10"
 DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
 _META = "meta.json"
 _STORED = "multiple_scattering"       # the lazily added table's file (without .npy)

@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_top,
-                                                             ray_nodes)
+                                                             ray_nodes_rule)
 from skydome.models.simulated.precomputed._lookup import (columns_at, ray_weights,
                                                            sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
@@ -64,12 +64,13 @@ def indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th, ph, d_omega, out):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q, ts,
-                             th, ph, d_omega, out, n_r_table):
+def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, rx, rw,
+                             ts, th, ph, d_omega, out, n_r_table):
     """:func:`indirect_irradiance` for an order >= 2 whose radiance is not tabulated: the
     radiance of each hemisphere direction integrated along its ray from that order's
     scattering density ``J`` ([BN08] eq. 8 and 9, :func:`._multiple.ray_integral`, the
-    quadrature of the multiple-scattering table), on the irradiance table's nodes.
+    integrand of the multiple-scattering table on the nodes of the rule (rx, rw) in v per
+    piece of each ray, :func:`._geometry.ray_nodes_rule`), on the irradiance table's nodes.
 
     A hemisphere direction's ray, its quadrature nodes, their radii, local zenith cosines
     and transmittance-weighted density weights depend on (r, theta) alone, not on the sun
@@ -89,11 +90,11 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     for idx in prange(n_r * n_th):
         ir = idx // n_th
         a = idx % n_th
-        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tws = ray_scratch(n_q, nc, nsc, nl)
+        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tws = ray_scratch(rx.size, nc, nsc, nl)
         r = R + (Rt - R) * ir / (n_r_table - 1.0)
         ct = math.cos(th[a])
         st = math.sin(th[a])
-        nq = ray_nodes(r, ct, distance_to_top(r, ct, Rt), n_q, ts, tq, wq)
+        nq = ray_nodes_rule(r, ct, distance_to_top(r, ct, Rt), rx, rw, ts, tq, wq)
         ray_weights(col, r, ct, False, nq, tq, wq, 2.0 * ct * d_omega[a], R, Rt, codes, p0s,
                     p1s, sc_idx, beta_e, w1, w2, rts, cs, xs, es, ib, dk, tws)
         mts = np.empty(nq)

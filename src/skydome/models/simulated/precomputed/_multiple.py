@@ -12,7 +12,8 @@ import numpy as np
 from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
-                                                             distance_to_top, ray_nodes)
+                                                             distance_to_top, ray_nodes,
+                                                             ray_nodes_rule)
 from skydome.models.simulated.precomputed._lookup import ray_weights
 from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
                                                             density_mu_s_index,
@@ -68,17 +69,18 @@ def ray_scratch(n_q, nc, nsc, nl):
 
 @njit(cache=True, fastmath=True)
 def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, mu_s, nu, ground,
-                 n_q, ts, tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw, acc):
+                 rx, rw, ts, tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw, acc):
     """acc[l] += int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt along one
     ray ([BN08] eq. 8) from radius r in the direction of zenith cosine mu and sun cosine nu,
-    the sun at zenith cosine mu_s, to the ground (``ground``) or the top: the quadrature of
-    :func:`multiple_scattering_table` (nodes of :func:`._geometry.ray_nodes`, exact density
-    profiles, J interpolated in the sun's frame) for a single ray, without per-ray
-    allocations (``tq`` .. ``dk``: :func:`ray_scratch`; ``tw`` [q, k, l] in the precision of
-    ``acc``)."""
+    the sun at zenith cosine mu_s, to the ground (``ground``) or the top: the integrand of
+    :func:`multiple_scattering_table` (exact density profiles, J interpolated in the sun's
+    frame) on the nodes of the rule (rx, rw) in v = ln(1 + u / ts) per piece of the ray
+    (:func:`._geometry.ray_nodes_rule`), for a single ray, without per-ray allocations
+    (``tq`` .. ``dk``: :func:`ray_scratch` of rx.size nodes per piece; ``tw`` [q, k, l] in
+    the precision of ``acc``)."""
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
     d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
-    nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+    nq = ray_nodes_rule(r, mu, d, rx, rw, ts, tq, wq)
     jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
     # an angle from the sun on a theta node of J to rounding (the incident directions of
     # the orders >= 3: (2i + 1) pi / (2 n_in) is node (2i + 1) n_out / n_in of J's

@@ -21,6 +21,9 @@ import numpy as np
 from skydome._progress import report
 
 QUADRATURE_SCALE_M = 500.0
+# integration_samples per Gauss-Legendre node of the precomputation's ray integrals of J
+# (_precompute_tables)
+RAY_RULE_DIVISOR = 3
 # the orders >= 3 summed into the summed density itself where the grids allow it
 # (higher_orders_summed; False: one order's density at a time, higher_orders)
 SUMMED_ORDERS = True
@@ -215,6 +218,14 @@ def _precompute_tables(props, wl, p):
     n_r = p["scattering_r_size"]
     nsc = sc_idx.size
     n_q_ms = max(4, (p["integration_samples"] + 1) // 2)   # J is smooth along the ray
+    # the ray integrals of J in the precomputation (the orders >= 3's incident radiance, the
+    # ground irradiance of orders >= 2): Gauss-Legendre in v per piece of each ray
+    # (_geometry.ray_nodes_rule), RAY_RULE_DIVISOR times fewer nodes than
+    # integration_samples (7 at the default): closer to the converged integral than 20
+    # midpoint nodes (docs/models.md, "precomputed")
+    from skydome.models.simulated.precomputed._geometry import gauss_rule
+
+    rule = gauss_rule(max(4, -(-p["integration_samples"] // RAY_RULE_DIVISOR)))
 
     # 1. transmittance; 2. single scattering
     col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
@@ -282,25 +293,25 @@ def _precompute_tables(props, wl, p):
             ss = None
         if summed:
             higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
-                                 beta_s, albedo, R, Rt, mu_s_min, q3, n_q_ms, p,
+                                 beta_s, albedo, R, Rt, mu_s_min, q3, rule, p,
                                  (1 + n_batch, 1 + n_batch + p["orders"] - 2))
         elif nl_hi == nl:
             for b, l0 in enumerate(range(0, nl, nb_hi)):
                 sl = slice(l0, min(nl, l0 + nb_hi))
                 higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s,
                               sc_idx, beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min,
-                              q2, q3, hi, n_q_ms, p,
+                              q2, q3, hi, rule, p,
                               (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         elif p["orders"] >= 3:
             higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes,
                                  p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
-                                 q3, hi, n_q_ms, p, (1 + n_batch, n_steps))
+                                 q3, hi, rule, p, (1 + n_batch, n_steps))
         # 3c. the ground irradiance of orders 2..N (+ remainder) at every r node: one ray
         # integral of the summed density (the irradiance is linear in J, as the stored
         # table's radiance is); the orders' own ground reflections needed the ground's row
         # of each order's irradiance only
         E += irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                   mu_s_min, n_q_ms, E.shape)
+                                   mu_s_min, rule, E.shape)
     if ss is None:
         ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min,
                                alpha, p)
@@ -558,7 +569,7 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
     return source_total(J, q2, codes, p0s, p1s, sc_idx, R, Rt)
 
 
-def irradiance_of_density(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q, shape,
+def irradiance_of_density(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, rule, shape,
                           rows=None):
     """The ground irradiance (table of ``shape`` (r, mu_s, l); its first ``rows`` r rows
     only, all by default) of the radiance whose scattering density is ``J``: a ray integral
@@ -569,8 +580,9 @@ def irradiance_of_density(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_m
     th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
     out = np.empty((shape[0] if rows is None else rows,) + tuple(shape[1:]))
     _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col,
-                                         np.ascontiguousarray(beta_e), R, Rt, mu_s_min, n_q,
-                                         QUADRATURE_SCALE_M, th_h, ph_h, dom_h, out, shape[0])
+                                         np.ascontiguousarray(beta_e), R, Rt, mu_s_min, rule[0],
+                                         rule[1], QUADRATURE_SCALE_M, th_h, ph_h, dom_h, out,
+                                         shape[0])
     return out
 
 
@@ -582,7 +594,7 @@ def _ground_row(E0):
 
 
 def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo,
-                         R, Rt, mu_s_min, q, n_q, p, progress=(0, None)):
+                         R, Rt, mu_s_min, q, rule, p, progress=(0, None)):
     """Steps 3a-3b for orders 3..N at every wavelength, and the geometric remainder, with
     no table of one order's density: ``J_sum`` (on the outgoing grid of ``q``, float32)
     holds order 2's density on entry and orders 2..N (+ remainder) on return; ``dE1`` the
@@ -622,11 +634,11 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
         # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
         # ground's reflection of orders 1..o-2
         _density.incident_radiance_rays(J_sum, ground, codes, p0s, p1s, sc_idx, col, beta_e,
-                                        albedo, R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q.th_in,
+                                        albedo, R, Rt, mu_s_min, rule[0], rule[1], ts, n_r, n_ms, q.th_in,
                                         q.ph_in, X)
         # 3c. the ground irradiance of orders 2..o-1 at the ground's row: G_(o-1)
         G = irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                  mu_s_min, n_q, dE1.shape, rows=1)
+                                  mu_s_min, rule, dE1.shape, rows=1)
         ground = _ground_row(dE1[0] + G[0])
         # order o's incident radiance X_o - X_(o-1), into X_prev's array; X becomes X_prev
         np.subtract(X, X_prev, out=X_prev)
@@ -646,7 +658,7 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
 
 
 def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
-                  mu_s_min, q2, q3, hi, n_q, p, progress=(0, None), l0=0, sink=None,
+                  mu_s_min, q2, q3, hi, rule, p, progress=(0, None), l0=0, sink=None,
                   work=None):
     """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
     ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
@@ -698,11 +710,11 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         # 3a. radiance of order-1 arriving at each node, integrated along the incident rays
         # from J of order-1, + ground reflection of the irradiance of order-2
         _density.incident_radiance_rays(src, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
-                                        R, Rt, mu_s_min, n_q, ts, n_r, n_ms, q3.th_in, q3.ph_in,
+                                        R, Rt, mu_s_min, rule[0], rule[1], ts, n_r, n_ms, q3.th_in, q3.ph_in,
                                         L_in)
         # 3c. ground irradiance of order-1 ([BN08] eq. 9) at the ground, from the same source
         dE = _ground_row(irradiance_of_density(src, codes, p0s, p1s, sc_idx, col, beta_e, R,
-                                               Rt, mu_s_min, n_q, dE1.shape, rows=1)[0])
+                                               Rt, mu_s_min, rule, dE1.shape, rows=1)[0])
         # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
         density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
         sink(J)
@@ -730,7 +742,7 @@ SPREAD_BAND = True
 
 
 def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes, p0s,
-                         p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, n_q,
+                         p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, rule,
                          p, progress=(0, None)):
     """:func:`higher_orders` at the table wavelengths ``l_hi`` only (in the ``batches`` of
     :func:`subset_batches`), spread onto every table wavelength ``wl`` (:mod:`._spectral`):
@@ -775,7 +787,7 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
             _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho)
 
         higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
-                      beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, n_q,
+                      beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, rule,
                       p, (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
                       work=J_b if same else None)
         del J_b, sink
