@@ -3,7 +3,7 @@ render path and build the default ``precomputed`` tables into the on-disk cache.
 
 Run once by ``./scripts/demo``'s set-up (``python -m skydome.apps.warmup``), so that the
 first ``skydome render`` starts from compiled kernels and cached tables instead of paying
-the compilation (about 10 s) and the precomputation (about 10-12 s on 2 cores).
+the compilation (about 10 s) and the precomputation (about 7 s on 2 cores).
 """
 
 from __future__ import annotations
