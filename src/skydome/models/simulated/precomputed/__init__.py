@@ -71,10 +71,10 @@ class PrecomputedSky(SkyModel):
     irradiance_mu_s_size, irradiance_r_size : int
         Ground-irradiance table size, default 64 x 16.
     integration_samples : int
-        Quadrature nodes per ray piece for single scattering (default 20; midpoint nodes in
-        ln(1 + u / 500 m)); half as many for the stored table and the observer's slice of
-        orders 2..N, and a third as many Gauss-Legendre nodes (7) for the precomputation's
-        ray integrals of the scattering density.
+        Quadrature nodes per ray piece for single scattering and the observer's slice of
+        orders 2..N (default 20; midpoint nodes in ln(1 + u / 500 m)); half as many for the
+        stored table of orders 2..N, and a third as many Gauss-Legendre nodes (7) for the
+        precomputation's ray integrals of the scattering density.
     sphere_samples : int
         Zenith-angle samples of the incident directions in the scattering density
         (default 32, Bruneton's 16; azimuth gets twice as many over the full circle).
