@@ -278,6 +278,17 @@ def test_default_orders_above_two_in_one_batch():
     assert 20 * per_wl <= PC.HIGH_ORDER_BATCH_BYTES
 
 
+def _assert_same_tables(t_ref, t, rtol):
+    """``t``'s tables equal ``t_ref``'s: the single-scattering table to the bit, the summed
+    scattering density and the irradiance table within ``rtol`` (and 1e-6 / 1e-9 of their
+    largest values absolute)."""
+    np.testing.assert_array_equal(t.single_scattering, t_ref.single_scattering)
+    np.testing.assert_allclose(t.scattering_density, t_ref.scattering_density, rtol=rtol,
+                               atol=1e-6 * float(np.max(t_ref.scattering_density)))
+    np.testing.assert_allclose(t.irradiance, t_ref.irradiance, rtol=rtol,
+                               atol=1e-9 * float(np.max(t_ref.irradiance)))
+
+
 def test_subset_batches_of_one_wavelength_give_the_one_batch_tables(monkeypatch):
     """The orders >= 3 of the subset path in one batch (the default's plan) and in a batch
     per computed wavelength (``HIGH_ORDER_SUBSET_BYTES`` too small for two) compute the same
@@ -292,12 +303,7 @@ def test_subset_batches_of_one_wavelength_give_the_one_batch_tables(monkeypatch)
     one = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
     monkeypatch.setattr(PC, "HIGH_ORDER_SUBSET_BYTES", 1)
     many = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
-    t1, t2 = one._t, many._t
-    np.testing.assert_array_equal(t1.single_scattering, t2.single_scattering)
-    np.testing.assert_allclose(t2.scattering_density, t1.scattering_density, rtol=2e-6,
-                               atol=1e-6 * float(np.max(t1.scattering_density)))
-    np.testing.assert_allclose(t2.irradiance, t1.irradiance, rtol=2e-6,
-                               atol=1e-9 * float(np.max(t1.irradiance)))
+    _assert_same_tables(one._t, many._t, rtol=2e-6)
 
 
 def test_summed_orders_give_the_per_order_tables(monkeypatch):
@@ -327,10 +333,5 @@ def test_summed_orders_give_the_per_order_tables(monkeypatch):
     monkeypatch.setattr(PC, "SUMMED_ORDERS", False)
     per_order = sd.model("precomputed", sun=sun, atmosphere=atm, table_wavelengths_nm=wl, **kw)
     assert (n_summed, len(calls) - n_summed) == (1, 2)
-    t1, t2 = per_order._t, summed._t
-    np.testing.assert_array_equal(t2.single_scattering, t1.single_scattering)
-    np.testing.assert_allclose(t2.scattering_density, t1.scattering_density, rtol=2e-5,
-                               atol=1e-6 * float(np.max(t1.scattering_density)))
-    np.testing.assert_allclose(t2.irradiance, t1.irradiance, rtol=2e-5,
-                               atol=1e-9 * float(np.max(t1.irradiance)))
-    assert np.all(t2.scattering_density >= 0.0)
+    _assert_same_tables(per_order._t, summed._t, rtol=2e-5)
+    assert np.all(summed._t.scattering_density >= 0.0)

@@ -165,8 +165,8 @@ def _without_hugepage_advice():
 
     With the common kernel setting ``transparent_hugepage/defrag = madvise`` (Debian's and
     Ubuntu's default) an advised page fault compacts memory synchronously when no free huge
-    page is at hand: the precomputation's 1.2 GB of new tables then spent 3.5-3.9 s of
-    system time in its page faults against 0.8-1.0 s with small pages, for 1.2-1.4 s less
+    page is at hand: the precomputation's 1.2 GB of new tables then spent 3.1-3.9 s of
+    system time in its page faults against 0.7-1.4 s with small pages, for about 1.2 s less
     user time in the huge pages' gathers (2-core EPYC, docs/performance.md). numpy's switch
     is process-wide; arrays allocated meanwhile by other threads get small pages too (a
     matter of speed only). Without numpy's private switch (other numpy versions) nothing
@@ -580,9 +580,8 @@ def irradiance_of_density(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_m
     th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
     out = np.empty((shape[0] if rows is None else rows,) + tuple(shape[1:]))
     _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col,
-                                         np.ascontiguousarray(beta_e), R, Rt, mu_s_min, rule[0],
-                                         rule[1], QUADRATURE_SCALE_M, th_h, ph_h, dom_h, out,
-                                         shape[0])
+                                         np.ascontiguousarray(beta_e), R, Rt, mu_s_min, *rule,
+                                         QUADRATURE_SCALE_M, th_h, ph_h, dom_h, out, shape[0])
     return out
 
 
@@ -634,8 +633,8 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
         # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
         # ground's reflection of orders 1..o-2
         _density.incident_radiance_rays(J_sum, ground, codes, p0s, p1s, sc_idx, col, beta_e,
-                                        albedo, R, Rt, mu_s_min, rule[0], rule[1], ts, n_r, n_ms, q.th_in,
-                                        q.ph_in, X)
+                                        albedo, R, Rt, mu_s_min, *rule, ts, n_r, n_ms,
+                                        q.th_in, q.ph_in, X)
         # 3c. the ground irradiance of orders 2..o-1 at the ground's row: G_(o-1)
         G = irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
                                   mu_s_min, rule, dE1.shape, rows=1)
@@ -710,8 +709,8 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
         # 3a. radiance of order-1 arriving at each node, integrated along the incident rays
         # from J of order-1, + ground reflection of the irradiance of order-2
         _density.incident_radiance_rays(src, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
-                                        R, Rt, mu_s_min, rule[0], rule[1], ts, n_r, n_ms, q3.th_in, q3.ph_in,
-                                        L_in)
+                                        R, Rt, mu_s_min, *rule, ts, n_r, n_ms, q3.th_in,
+                                        q3.ph_in, L_in)
         # 3c. ground irradiance of order-1 ([BN08] eq. 9) at the ground, from the same source
         dE = _ground_row(irradiance_of_density(src, codes, p0s, p1s, sc_idx, col, beta_e, R,
                                                Rt, mu_s_min, rule, dE1.shape, rows=1)[0])
