@@ -355,7 +355,9 @@ def test_mitsuba_reads_the_map_in_its_convention(sky):
     512 x 256 map: within 3 % away from the circumsolar region and the horizon)."""
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
-    env = render_envmap(sky, "mitsuba", size="512x256", sun="separate")
+    # photometric units (683 lm/W) as the expectation below; Mitsuba's own units are
+    # checked in tests/test_mitsuba_units.py
+    env = render_envmap(sky, "mitsuba", size="512x256", sun="separate", units="photometric")
     bmp = mi.Bitmap(env.images["map"].astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
     em = mi.load_dict({"type": "envmap", "bitmap": bmp})
     conv = CONVENTIONS["mitsuba"]

@@ -38,8 +38,10 @@ def expected(sky):
 def test_mitsuba_planes(sky, expected):
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
-    env = render_envmap(sky, "mitsuba", size="512x256")
-    light = sun_light(sky, "mitsuba")
+    # photometric units (683 lm/W), as skydome's expectation; Mitsuba's own units (the
+    # convention's default) are checked in tests/test_mitsuba_units.py
+    env = render_envmap(sky, "mitsuba", size="512x256", units="photometric")
+    light = sun_light(sky, "mitsuba", units="photometric")
     conv = CONVENTIONS["mitsuba"]
     bitmap = mi.Bitmap(env.images["map"].astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
     for name, n in PLANES.items():

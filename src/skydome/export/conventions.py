@@ -9,9 +9,31 @@ Each :class:`Convention` has
   right and v in [0, 1] from the TOP row down (the orientation in which the image file is
   stored and viewed), transcribed from the tool's own lookup code (cited per convention).
 
+* ``units``: the name of the tool's own scale of RGB radiance (a :class:`Units` of
+  :data:`UNITS`), the default in which maps and sun lights are written for it.
+
 Which horizontal axis is north is not fixed by most tools (they have no geography); the
 choice made here is stated per convention and the sun light exported with the map
 (:mod:`skydome.export.sun`) uses the same axes, so map and sun always agree.
+
+Units
+-----
+``photometric`` (every convention but ``mitsuba``): RGB radiance in W m^-2 sr^-1 with
+luminance = 683 lm/W x Y(RGB), Y(RGB) = 0.2126 R + 0.7152 G + 0.0722 B; Blender's sun
+strength and world strength, three.js, Unity, Unreal and pbrt read it so (a white
+Lambertian plane's radiance x pi x 683 = its illuminance in lx).
+
+``mitsuba``: Mitsuba 3's own scale, in which its spectral emitters (``sunsky``, a
+``spectrum`` in W m^-2 sr^-1 nm^-1) and RGB maps meet. Its films turn spectral radiance L
+into Y = integral of L y-bar d(lambda) [nm] x ``MI_CIE_Y_NORMALIZATION`` with
+``MI_CIE_Y_NORMALIZATION = 1 / 106.7502593994140625`` ([Mitsuba3-spectrum]), and its
+``sunsky`` multiplies the Hosek-Wilkie RGB dataset (whose Y is integral L y-bar
+d(lambda)) by the same constant ([Mitsuba3-sunsky]). With luminance = 683 lm/W x
+integral L y-bar d(lambda), Mitsuba's Y = luminance / (683 x 106.7503): skydome's
+photometric values divided by :data:`MITSUBA_Y_NORMALIZATION_NM`. (The CIE 1931 y-bar,
+1 nm table 360-830 nm, integrates to 106.857 nm; Mitsuba's constant is 0.1 % below it, so
+in Mitsuba a spectrum of 1 W m^-2 sr^-1 nm^-1 has Y = 1.001; skydome follows Mitsuba's
+constant, which is what its renders divide by.)
 
 References
 ----------
@@ -40,6 +62,14 @@ References
    face selection; the same table as Direct3D and RenderMan).
 .. [Radiance] G. Ward, ``rpict`` manual: view type ``-vta`` (angular fisheye); Radiance
    scenes are Z-up with +Y north and +X east (``gensky``).
+.. [Mitsuba3-spectrum] Mitsuba 3.9, ``include/mitsuba/core/spectrum.h``:
+   ``MI_CIE_Y_NORMALIZATION (1.0 / 106.7502593994140625)``, applied in ``spectrum_to_xyz``
+   and ``spectrum_to_srgb``.
+.. [Mitsuba3-sunsky] Mitsuba 3.9, ``include/mitsuba/render/sunsky.h`` and
+   ``src/emitters/sunsky.cpp``: the RGB sky ``res *= MI_CIE_Y_NORMALIZATION``; the spectral
+   sky in W m^-2 sr^-1 nm^-1; the sky's frame is Z-up (``cos_theta`` of the emitter-local
+   direction), turned into the scene by ``to_world``; ``sun_direction`` is given in world
+   space.
 .. [Clarberg08] P. Clarberg, "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD",
    Journal of Graphics Tools 13(3), 2008.
 """
@@ -51,7 +81,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Convention", "CONVENTIONS", "get_convention", "equal_area_square_to_sphere",
-           "equal_area_sphere_to_square"]
+           "equal_area_sphere_to_square", "Units", "UNITS", "get_units", "resolve_units",
+           "MITSUBA_Y_NORMALIZATION_NM"]
 
 _TWO_PI = 2.0 * np.pi
 
@@ -208,6 +239,67 @@ def _dir_radiance(u, v):
     return out
 
 
+# -- units of RGB radiance ---------------------------------------------------------------------
+#: Luminous efficacy of skydome's photometric scale [lm/W] (the SI definition of the candela).
+_K_M = 683.0
+#: Mitsuba 3's normalisation of the CIE y-bar [nm]: ``1 / MI_CIE_Y_NORMALIZATION``
+#: ([Mitsuba3-spectrum]; 3.9.1 exposes it as ``mitsuba.MI_CIE_Y_NORMALIZATION``).
+MITSUBA_Y_NORMALIZATION_NM = 106.7502593994140625
+
+
+@dataclass(frozen=True)
+class Units:
+    """A scale of RGB radiance (see the module's Units section).
+
+    ``luminance_per_unit`` [cd m^-2]: the luminance of RGB values with Y(RGB) = 1
+    (Rec. 709 weights); the same number is the illuminance [lx] of an RGB irradiance with
+    Y = 1. ``scale`` multiplies skydome's photometric values (W m^-2 sr^-1, 683 lm/W)
+    into these units.
+    """
+
+    name: str
+    luminance_per_unit: float
+    description: str
+    reference: str
+
+    @property
+    def scale(self) -> float:
+        """Factor from skydome's photometric RGB (683 lm/W) to these units."""
+        return _K_M / self.luminance_per_unit
+
+    def describe(self) -> dict:
+        return {"units": self.name, "luminance_per_unit_cd_m2": self.luminance_per_unit,
+                "from_photometric": self.scale, "description": self.description,
+                "reference": self.reference}
+
+
+UNITS: dict[str, Units] = {u.name: u for u in (
+    Units("photometric", _K_M,
+          "RGB radiance [W m^-2 sr^-1], Rec. 709 primaries, luminance = 683 lm/W x Y(RGB)",
+          "the SI candela: 683 lm/W at 540 THz"),
+    Units("mitsuba", _K_M * MITSUBA_Y_NORMALIZATION_NM,
+          "Mitsuba 3 units: RGB radiance, Rec. 709 primaries, Y(RGB) = integral of spectral "
+          "radiance [W m^-2 sr^-1 nm^-1] x y-bar d(lambda) [nm] / 106.7503, i.e. luminance = "
+          "683 lm/W x 106.7503 nm x Y(RGB)",
+          "Mitsuba 3 include/mitsuba/core/spectrum.h MI_CIE_Y_NORMALIZATION "
+          "= 1 / 106.7502593994140625"),
+)}
+
+
+def get_units(name) -> Units:
+    """The :class:`Units` called ``name``; ValueError listing the names otherwise."""
+    if isinstance(name, Units):
+        return name
+    if name not in UNITS:
+        raise ValueError(f"units = {name!r} is not one of {', '.join(UNITS)}")
+    return UNITS[name]
+
+
+def resolve_units(convention, units=None) -> Units:
+    """``units`` if given, else the convention's own (:attr:`Convention.units`)."""
+    return get_units(get_convention(convention).units if units is None else units)
+
+
 @dataclass(frozen=True)
 class Convention:
     """One tool's environment-map convention (see the module docstring)."""
@@ -224,6 +316,7 @@ class Convention:
     _uv: object = None
     _dir: object = None
     cube_flip_x: bool = False    # the tool looks cube maps up with its x negated
+    units: str = "photometric"   # the tool's own scale of RGB radiance (a name of UNITS)
 
     @property
     def cube_matrix(self) -> np.ndarray:
@@ -238,6 +331,15 @@ class Convention:
     def matrix(self) -> np.ndarray:
         """3 x 3 matrix taking ENU vectors to the tool's axes (``tool = M @ enu``)."""
         return np.array(self.axes, dtype=np.float64)
+
+    @property
+    def matrix4(self) -> list:
+        """The 4 x 4 affine form of :attr:`matrix` as nested lists: a renderer's
+        ``to_world`` that turns an emitter defined in ENU-like axes (Z up, e.g. Mitsuba's
+        ``sunsky``) into the tool's world."""
+        m = np.eye(4)
+        m[:3, :3] = self.matrix
+        return m.tolist()
 
     def to_tool(self, enu) -> np.ndarray:
         """ENU vector(s) (..., 3) in the tool's axes."""
@@ -261,7 +363,8 @@ class Convention:
         return {"convention": self.name, "tool": self.tool, "up": self.up,
                 "handedness": self.handedness, "axes_in_enu": [list(r) for r in self.axes],
                 "image_centre": self.centre, "north": self.north,
-                "layouts": list(self.layouts), "reference": self.reference}
+                "layouts": list(self.layouts), "reference": self.reference,
+                "units": self.units}
 
 
 _E, _N, _U = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
@@ -277,7 +380,8 @@ CONVENTIONS: dict[str, Convention] = {c.name: c for c in (
                "[Cycles] kernel/camera/projection.h", _uv_blender, _dir_blender),
     Convention("mitsuba", "Mitsuba 3 envmap emitter", "+Y", "right", (_E, _U, _S),
                ("latlong",), "+Z = south; north (-Z) at the left edge, east (+X) a quarter in",
-               "-Z", "[Mitsuba3] src/emitters/envmap.cpp", _uv_mitsuba, _dir_mitsuba),
+               "-Z", "[Mitsuba3] src/emitters/envmap.cpp", _uv_mitsuba, _dir_mitsuba,
+               units="mitsuba"),
     Convention("pbrt", "pbrt-v4 imageinfinite light (equal-area octahedral square)", "+Z",
                "right", (_E, _N, _U), ("equiarea",),
                "the zenith (+Z); the four corners are the nadir", "+Y",

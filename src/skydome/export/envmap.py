@@ -7,7 +7,11 @@ W m^-2 sr^-1 on the photometric scale luminance = 683 lm/W x (0.2126 R + 0.7152 
 0.0722 B), so that a renderer's white Lambertian plane lit by the map has radiance x pi x 683
 = illuminance in lx, and a sun lamp of "strength" E in W m^-2 (Blender) or irradiance E
 (Mitsuba) matches the map when E = illuminance / 683 (:mod:`skydome.export.sun`). The
-``radiance`` convention's .hdr files use Radiance's own scale instead (179 lm/W).
+``radiance`` convention's .hdr files use Radiance's own scale instead (179 lm/W). These are
+the ``photometric`` units; a convention may name its tool's own units instead
+(:data:`skydome.export.conventions.UNITS`): the ``mitsuba`` convention writes Mitsuba 3's
+(luminance = 683 lm/W x 106.7503 nm x Y(RGB)), in which its spectral emitters and
+``sunsky`` meet the map; ``units=`` chooses either for any convention.
 
 The sky comes from :func:`skydome.imaging.render` through a :class:`MapProjection` (the
 convention's pixel layout as a skydome projection), without the sun; the sun is either
@@ -36,7 +40,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from skydome.export.conventions import Convention, get_convention
+from skydome.export.conventions import Convention, Units, get_convention, resolve_units
 from skydome.imaging.projections import Projection
 
 __all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envmap",
@@ -262,6 +266,8 @@ class EnvironmentMap:
     convention : Convention
     layout : str
     metadata : dict
+    units : Units
+        The scale of the RGB values (default: the convention's own).
     """
 
     images: dict
@@ -269,6 +275,10 @@ class EnvironmentMap:
     convention: Convention
     layout: str
     metadata: dict = field(default_factory=dict)
+    units: Units | None = None
+
+    def __post_init__(self):
+        self.units = resolve_units(self.convention, self.units)
 
     def directions(self) -> tuple[np.ndarray, np.ndarray]:
         """ENU directions (n, 3) and solid angles (n,) of every pixel of every image."""
@@ -350,10 +360,11 @@ class EnvironmentMap:
         dtype = np.float16 if half else np.float32
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
                   "chromaticities": _SRGB_CHROMATICITIES,
-                  # RGB (1, 1, 1) is 683 cd m^-2 (the photometric scale of the module docs)
-                  "whiteLuminance": K_M}
+                  # RGB (1, 1, 1) is 683 cd m^-2 on the photometric scale of the module
+                  # docs, 683 x 106.7503 cd m^-2 in Mitsuba's units
+                  "whiteLuminance": self.units.luminance_per_unit}
         header.update(self._header())
-        header["units"] = "RGB radiance [W m^-2 sr^-1], luminance = 683 lm/W x Y(RGB)"
+        header["units"] = self.units.description
         ch = {c: np.ascontiguousarray(im[..., i].astype(dtype)) for i, c in enumerate("RGB")}
         with OpenEXR.File(header, ch) as f:
             f.write(tmp)
@@ -427,12 +438,14 @@ def _sun_irradiance_rgb(sky) -> tuple[np.ndarray, Any]:
     return np.array(light["rgb_irradiance_W_m2"]), light
 
 
-def check_envmap_options(convention, layout, size, sun="separate", ground="lambertian"):
+def check_envmap_options(convention, layout, size, sun="separate", ground="lambertian",
+                         units=None):
     """Validate the options of :func:`render_envmap` before any work; returns
     (Convention, layout, (width, height))."""
     from skydome._validate import check_choice
 
     conv = get_convention(convention)
+    resolve_units(conv, units)                          # ValueError naming units
     layout = conv.layouts[0] if layout is None else layout
     check_choice("layout", layout, LAYOUTS)
     allowed = set(conv.layouts) | (set(_CUBE_LAYOUTS) if "cubemap" in conv.layouts else set())
@@ -447,7 +460,8 @@ def check_envmap_options(convention, layout, size, sun="separate", ground="lambe
 def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
                   layout: str | None = None, sun: str = "separate", ground: str = "lambertian",
                   ground_albedo: float | None = None, wavelengths_nm=None,
-                  progress: Callable[[int, int], None] | None = None) -> EnvironmentMap:
+                  progress: Callable[[int, int], None] | None = None,
+                  units: str | None = None) -> EnvironmentMap:
     """Render ``sky`` into an environment map in a tool's convention.
 
     Parameters
@@ -473,10 +487,14 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
         For spectral models (default: skydome.render()'s 16 samples 380-780 nm).
     progress : callable, optional
         ``progress(done, total)`` over all pixels.
+    units : str, optional
+        Scale of the RGB values, a name of :data:`skydome.export.conventions.UNITS`:
+        ``photometric`` (W m^-2 sr^-1, 683 lm/W) or ``mitsuba`` (Mitsuba 3's own); default
+        the convention's (``mitsuba`` for the mitsuba convention, else photometric).
     """
     from skydome.imaging import render
 
-    conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground)
+    conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground, units)
     if ground_albedo is None:
         ground_albedo = next((float(getattr(sky, a)) for a in ("albedo", "ground_albedo")
                               if isinstance(getattr(sky, a, None), (int, float))), 0.2)
@@ -503,7 +521,7 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
         images[name] = np.maximum(rgb, 0.0)            # out-of-gamut negatives clipped
         done[0] += proj.width * proj.height
 
-    env = EnvironmentMap(images, projections, conv, layout)
+    env = EnvironmentMap(images, projections, conv, layout, units=units)
     E_sun, light = _sun_irradiance_rgb(sky)
     d_all, w_all = env.directions()
     up = d_all[:, 2] > 0.0
@@ -532,7 +550,11 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
                     "sun": "in the map" if sun == "map" else "separate light",
                     "ground": ground, "ground_albedo": ground_albedo,
                     "horizontal_irradiance_rgb_W_m2": [float(x) for x in E_h],
-                    "units": "RGB radiance [W m^-2 sr^-1], Rec. 709 primaries, 683 lm/W"}
+                    "units": env.units.description, "units_name": env.units.name}
+    # everything above is on the photometric scale; the map leaves in its units
+    if env.units.scale != 1.0:
+        for name in images:
+            images[name] *= env.units.scale
     if sky.sun is not None:
         env.metadata["sun_position"] = {"elevation_deg": sky.sun.elevation_deg,
                                         "azimuth_deg": sky.sun.azimuth_deg}

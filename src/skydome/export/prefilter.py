@@ -210,7 +210,8 @@ def prefiltered_mips(env, levels: int = 6, progress=None) -> list:
             imgs = {"map": prefilter_latlong(base, rough[k], w, h,
                                              source=_source_for(base, alpha, w))}
             projs = {"map": MapProjection(env.convention, w, h)}
-        out.append(EnvironmentMap(imgs, projs, env.convention, env.layout, meta))
+        out.append(EnvironmentMap(imgs, projs, env.convention, env.layout, meta,
+                                  units=env.units))
         if progress is not None:
             progress(k, levels - 1)
     return out

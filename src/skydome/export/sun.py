@@ -9,14 +9,23 @@ primaries, W m^-2 with 683 lm/W), the normal illuminance [lx], and what each tar
   largest channel) with strength x color = the RGB irradiance, so that the lamp's
   illuminance is 683 lm/W x Y(strength x color) = ``illuminance_lx``; ``angle`` = the
   disc's angular diameter; the lamp shines along -direction.
-* Mitsuba 3 ``directional`` emitter: ``irradiance`` (RGB, W m^-2) and ``direction`` = the
-  direction the light travels (minus the direction to the sun), in Mitsuba's axes.
+* Mitsuba 3 ``directional`` emitter, in Mitsuba's units (the module docstring of
+  :mod:`skydome.export.conventions`, unless ``units`` says otherwise for the mitsuba
+  convention): ``irradiance_rgb`` (RGB irradiance / 106.7503 of the photometric one), and
+  ``irradiance_spectrum``, the spectral irradiance [W m^-2 nm^-1] itself as a Mitsuba
+  ``spectrum`` (wavelength, value) list, which Mitsuba's spectral and RGB variants both
+  take as it is; ``direction`` = the direction the light travels (minus the direction to
+  the sun) in Mitsuba's axes (+X east, +Y up, +Z south; Y-up like its ``envmap``).
 * glTF ``KHR_lights_punctual`` directional light: ``intensity`` [lx] and ``color`` with
   intensity x color = the illuminance per RGB channel (as three.js and most viewers
   multiply them); the light points along its node's local -Z, turned to -direction.
 
 The irradiance is ``sky.sun_radiance(wl) x sun.solid_angle_sr x visible fraction`` (the
 part of the disc above the horizon, flat circular-segment geometry as skydome.imaging).
+
+Physical forms (``spectral_irradiance_W_m2_nm``, ``rgb_irradiance_W_m2`` on the photometric
+scale, ``illuminance_lx``) are always given; ``rgb_irradiance_map_units`` is the RGB in the
+units of the map written with the light (``units``, default the convention's own).
 """
 
 from __future__ import annotations
@@ -26,20 +35,29 @@ from pathlib import Path
 
 import numpy as np
 
-from skydome.export.conventions import get_convention
+from skydome.export.conventions import get_convention, get_units, resolve_units
 
 __all__ = ["sun_light", "write_sun_json"]
 
 _K_M = 683.0
 
 
-def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | None:
+def sun_light(sky, convention: str = "skydome", wavelengths_nm=None,
+              units: str | None = None) -> dict | None:
     """The sun of ``sky`` as a light (see the module docstring); None if the model has no
-    sun with a radiance, or the sun is wholly below the horizon."""
+    sun with a radiance, or the sun is wholly below the horizon.
+
+    ``units``: the scale of the map the light goes with (a name of
+    :data:`skydome.export.conventions.UNITS`), default the convention's own; it sets
+    ``rgb_irradiance_map_units`` and, for the mitsuba convention, the Mitsuba target.
+    """
     from skydome.imaging.sun_disc import sun_light as render_sun_light
     from skydome.spectra import default_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
 
     conv = get_convention(convention)
+    map_units = resolve_units(conv, units)               # ValueError naming units
+    # Mitsuba's target is in Mitsuba's units, unless a mitsuba map is written in others
+    mi_units = map_units if conv.name == "mitsuba" else get_units("mitsuba")
     sun = getattr(sky, "sun", None)
     wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
     # the render layer's sun light: the limb-darkened disc's spectral normal irradiance,
@@ -58,6 +76,18 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | N
     colour = [float(c) / peak for c in rgb]            # strength x colour = RGB irradiance
     strength = peak
     mi = get_convention("mitsuba")
+    mitsuba = {"type": "directional",
+               "direction": [-float(x) for x in mi.to_tool(d_enu)],
+               "units": mi_units.name,
+               "irradiance_rgb": [float(c) * mi_units.scale for c in rgb],
+               "note": "Mitsuba axes: +X east, +Y up, +Z south (convention mitsuba); "
+                       f"irradiance in {mi_units.name} units"}
+    if mi_units.name == "mitsuba":
+        # Mitsuba's units are spectral radiometry: the physical spectral irradiance is its
+        # own value (Y = integral E y-bar dl / 106.7503 in its films)
+        mitsuba["irradiance_spectrum"] = {
+            "type": "spectrum", "value": [[float(w), float(e)] for w, e in zip(wl, E)],
+            "note": "W m^-2 nm^-1, the physical spectral irradiance above"}
     return {
         "convention": conv.name,
         "direction_to_sun": [float(x) for x in d_tool],
@@ -69,23 +99,23 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None) -> dict | N
         "spectral_irradiance_W_m2_nm": [float(e) for e in E],
         "rgb_irradiance_W_m2": [float(c) for c in rgb],
         "rgb_colour_space": "linear Rec. 709 / sRGB primaries, D65; 683 lm/W",
+        "map_units": map_units.name,
+        "rgb_irradiance_map_units": [float(c) * map_units.scale for c in rgb],
         "illuminance_lx": lux,
         "targets": {
             "blender": {"type": "SUN", "strength_W_m2": strength, "color": colour,
                         "angle_deg": 2.0 * float(sun.angular_radius_deg),
                         "points_along": [-float(x) for x in d_enu],
                         "note": "Blender axes: +X east, +Y north, +Z up (convention blender)"},
-            "mitsuba": {"type": "directional",
-                        "direction": [-float(x) for x in mi.to_tool(d_enu)],
-                        "irradiance_rgb": [float(c) for c in rgb],
-                        "note": "Mitsuba axes: +X east, +Y up, +Z south (convention mitsuba)"},
+            "mitsuba": mitsuba,
             "gltf_KHR_lights_punctual": {"type": "directional", "intensity_lx": _K_M * peak,
                                          "color": colour,
                                          "points_along": [-float(x) for x in d_tool],
                                          "note": "the light shines along its node's -Z"},
         },
         "units": {"spectral_irradiance": "W m^-2 nm^-1", "rgb_irradiance": "W m^-2",
-                  "illuminance": "lx", "angles": "deg"},
+                  "illuminance": "lx", "angles": "deg",
+                  "rgb_irradiance_map_units": map_units.description},
     }
 
 
