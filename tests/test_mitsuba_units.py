@@ -167,6 +167,11 @@ def test_units_choice_and_files(tmp_path):
     b = render_envmap(sky, "mitsuba", size="32x16", units="photometric")
     np.testing.assert_allclose(a.images["map"] * MITSUBA_Y_NORMALIZATION_NM, b.images["map"],
                                rtol=1e-12)
+    # the sun in the map (and the ground it lights) scale with the rest
+    a_sun = render_envmap(sky, "mitsuba", size="32x16", sun="map")
+    b_sun = render_envmap(sky, "mitsuba", size="32x16", sun="map", units="photometric")
+    np.testing.assert_allclose(a_sun.images["map"] * MITSUBA_Y_NORMALIZATION_NM,
+                               b_sun.images["map"], rtol=1e-12)
     a.write(tmp_path / "a.exr")
     b.write(tmp_path / "b.exr")
     with OpenEXR.File(str(tmp_path / "a.exr")) as f:
