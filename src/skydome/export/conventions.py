@@ -32,8 +32,8 @@ d(lambda)) by the same constant ([Mitsuba3-sunsky]). With luminance = 683 lm/W x
 integral L y-bar d(lambda), Mitsuba's Y = luminance / (683 x 106.7503): skydome's
 photometric values divided by :data:`MITSUBA_Y_NORMALIZATION_NM`. (The CIE 1931 y-bar,
 1 nm table 360-830 nm, integrates to 106.857 nm; Mitsuba's constant is 0.1 % below it, so
-in Mitsuba a spectrum of 1 W m^-2 sr^-1 nm^-1 has Y = 1.001; skydome follows Mitsuba's
-constant, which is what its renders divide by.)
+in Mitsuba's spectral variants a spectrum of 1 W m^-2 sr^-1 nm^-1 renders Y = 1.001;
+skydome follows Mitsuba's constant, which is what its renders divide by.)
 
 References
 ----------
