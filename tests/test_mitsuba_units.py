@@ -144,14 +144,14 @@ def test_sun_json_beside_the_map(case, variant):
     assert target["units"] == "mitsuba"
     want = sun_illuminance(sky) / sky_illuminance(sky)
     E_sky = _plane_irradiance({"sky": {"type": "envmap", "filename": str(path)}}, 256) @ Y_REC709
-    spectrum = [tuple(p) for p in target["irradiance_spectrum"]["value"]]
     for irradiance in ({"type": "rgb", "value": target["irradiance_rgb"]},
-                       {"type": "spectrum", "value": spectrum}):
+                       target["irradiance_spectrum"]):         # as sun.json has them
         sun = {"type": "directional", "direction": target["direction"], "irradiance": irradiance}
         E_sun = _plane_irradiance({"sun": sun}, 16) @ Y_REC709
         assert E_sun / E_sky == pytest.approx(want, rel=2e-2), irradiance["type"]
     # the spectral form is the physical spectral irradiance itself
-    np.testing.assert_array_equal([v for _, v in spectrum], light["spectral_irradiance_W_m2_nm"])
+    np.testing.assert_array_equal([v for _, v in target["irradiance_spectrum"]["value"]],
+                                  light["spectral_irradiance_W_m2_nm"])
 
 
 def test_sun_json_matches_sunskys_sun(case):
@@ -164,9 +164,8 @@ def test_sun_json_matches_sunskys_sun(case):
     sky, path, light = case
     mi.set_variant("scalar_spectral")
     target = light["targets"]["mitsuba"]
-    spectrum = [tuple(p) for p in target["irradiance_spectrum"]["value"]]
     mine = _plane_irradiance({"sun": {"type": "directional", "direction": target["direction"],
-                                      "irradiance": {"type": "spectrum", "value": spectrum}}}, 64)
+                                      "irradiance": target["irradiance_spectrum"]}}, 64)
     ref = _plane_irradiance({"sun": _sunsky(light, sky_scale=0.0)}, 512)
     assert mine @ Y_REC709 == pytest.approx(ref @ Y_REC709, rel=2e-2)
 

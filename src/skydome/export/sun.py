@@ -84,10 +84,12 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None,
                        f"irradiance in {mi_units.name} units"}
     if mi_units.name == "mitsuba":
         # Mitsuba's units are spectral radiometry: the physical spectral irradiance is its
-        # own value (Y = integral E y-bar dl / 106.7503 in its films)
+        # own value (Y = integral E y-bar dl / 106.7503 in its films); the dictionary is
+        # Mitsuba's as it stands (a 'spectrum' takes exactly 'type' and 'value')
         mitsuba["irradiance_spectrum"] = {
-            "type": "spectrum", "value": [[float(w), float(e)] for w, e in zip(wl, E)],
-            "note": "W m^-2 nm^-1, the physical spectral irradiance above"}
+            "type": "spectrum", "value": [[float(w), float(e)] for w, e in zip(wl, E)]}
+        mitsuba["note"] += ("; irradiance_spectrum: [nm, W m^-2 nm^-1] pairs, the physical "
+                            "spectral irradiance, for 'irradiance' as it stands")
     return {
         "convention": conv.name,
         "direction_to_sun": [float(x) for x in d_tool],
