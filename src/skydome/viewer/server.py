@@ -432,6 +432,7 @@ class _Handler(BaseHTTPRequestHandler):
             if queued:
                 bakes.leave()
         if queued and not client_alive(self.connection):
+            self.server.count("unsent")
             self.server.note(f"client gone during its {model} bake: answer not sent")
             return None
         return self._json(HTTPStatus.OK, out)
@@ -460,7 +461,7 @@ class ViewerServer(HTTPServer):
     #: listen backlog (a page's burst of module, shader and API requests fits many times)
     request_queue_size = LISTEN_BACKLOG = 128
     #: threads answering requests
-    WORKERS = 16
+    WORKERS = 32
     #: connections with a request waiting for a worker; beyond, 503 and closed
     READY_QUEUE = 256
     #: connections that have sent nothing yet; beyond, the oldest is closed
@@ -468,7 +469,7 @@ class ViewerServer(HTTPServer):
     #: seconds a connection may stay silent before its first byte
     IDLE_TIMEOUT_S = 5.0
     #: seconds for the whole request head (request line and headers) once begun
-    REQUEST_TIMEOUT_S = 10.0
+    REQUEST_TIMEOUT_S = 5.0
     #: seconds to write an answer
     WRITE_TIMEOUT_S = 30.0
     #: requests that may wait for a running bake; beyond, 503
@@ -491,7 +492,10 @@ class ViewerServer(HTTPServer):
         self.write_timeout_s = self.WRITE_TIMEOUT_S
         self.retry_after_s = self.RETRY_AFTER_S
         self.bake_queue = BakeQueue(self.BAKE_QUEUE)
-        self.counts = {"refused": 0, "idle_closed": 0, "dropped": 0, "overloaded": 0}
+        #: refused (403), idle connections closed, clients that dropped, connections turned
+        #: away by a full worker queue, bakes finished for a client that had gone
+        self.counts = {"refused": 0, "idle_closed": 0, "dropped": 0, "overloaded": 0,
+                       "unsent": 0}
         self._count_lock = threading.Lock()
         self._models: dict | None = None
         super().__init__((host, port), _Handler)
