@@ -498,3 +498,108 @@ def test_legit_bake_stays_in_memory_and_unsent_when_client_gone(server, cache_di
     assert q.started == started + 2 and _viewer_tables() == tables
     assert list(cache_dir.rglob("*")) == []
     print(f"viewer precomputed bake: {t_bake:.1f} s after the client left")
+
+
+# -- the attacks from a real browser -------------------------------------------------------------
+_ATTACK_PAGE = """<!doctype html><html><head><title>attack</title></head><body>
+<img src="{v}/api/scene?model=precomputed&turbidity=3.3">
+<iframe src="{v}/api/scene?model=precomputed&turbidity=3.4"></iframe>
+<script>
+const v = "{v}";
+window.done = 0;
+const tick = () => {{ window.done += 1; }};
+fetch(v + "/api/scene?model=precomputed&turbidity=3.5", {{ mode: "no-cors" }}).then(tick, tick);
+fetch(v + "/api/scene?model=precomputed&turbidity=3.6",
+      {{ headers: {{ "X-Skydome-Token": "guess" }} }}).then(tick, tick);
+fetch(v + "/").then((r) => r.text()).then((t) => {{ window.read = t; tick(); }}, tick);
+</script></body></html>"""
+
+
+@pytest.fixture(scope="module")
+def attacker_site(server):
+    """A page on another origin that fires the API at the viewer (served on 127.0.0.1 at
+    another port; the browser reaches it as http://evil.test:PORT/ by a resolver rule)."""
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    body = _ATTACK_PAGE.format(v=f"http://127.0.0.1:{_port(server)}").encode()
+
+    class Attacker(BaseHTTPRequestHandler):
+        def do_GET(self):  # noqa: N802
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *a):
+            pass
+
+    srv = ThreadingHTTPServer(("127.0.0.1", 0), Attacker)
+    t = threading.Thread(target=srv.serve_forever, daemon=True)
+    t.start()
+    yield srv.server_address[1]
+    srv.shutdown()
+    srv.server_close()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from _viewer import CHROMIUM, CHROMIUM_ARGS, have_browser
+
+    if not have_browser():
+        pytest.skip("headless Chromium or Playwright missing (scripts/_setup test installs them)")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS + [
+            "--host-resolver-rules=MAP evil.test 127.0.0.1"])
+        yield b
+        b.close()
+
+
+@pytest.mark.parametrize("site", ["evil.test", "127.0.0.1"], ids=["cross-site", "same-site"])
+def test_browser_page_elsewhere_cannot_drive_the_api(server, attacker_site, browser, site):
+    """A real page on another origin (another site, or another port of 127.0.0.1) fires
+    an <img>, an <iframe>, a no-cors fetch, a fetch with a guessed token and a read of
+    the viewer's page: no bake starts, the refused requests reach the server and are
+    refused, and the page cannot read the viewer's page (nor its token)."""
+    q = server.bake_queue
+    before = (q.started, _viewer_tables(), server.counts["refused"])
+    page = browser.new_page()
+    try:
+        page.goto(f"http://{site}:{attacker_site}/")
+        _wait(lambda: page.evaluate("() => window.done") >= 3, 30)
+        _wait(lambda: server.counts["refused"] >= before[2] + 3, 10)
+        assert page.evaluate("() => window.read === undefined")
+        html = page.content()
+    finally:
+        page.close()
+    assert server.token not in html
+    assert (q.started, _viewer_tables()) == before[:2]
+
+
+def test_browser_dns_rebinding_refused(server, browser):
+    """The viewer reached under another name (a DNS-rebinding page, here by a resolver
+    rule): the page and the API are 403, no token is served."""
+    page = browser.new_page()
+    try:
+        r = page.goto(f"http://evil.test:{_port(server)}/")
+        assert r.status == 403
+        assert server.token not in page.content()
+        r = page.goto(f"http://evil.test:{_port(server)}/api/models")
+        assert r.status == 403
+    finally:
+        page.close()
+
+
+def test_browser_own_page_sends_token(server, browser):
+    """The viewer's own page in the same browser: its API requests carry the token and
+    are answered (the model list fills the model menu)."""
+    page = browser.new_page()
+    try:
+        page.goto(server.url)
+        _wait(lambda: page.evaluate(
+            "() => document.getElementById('model').options.length") >= 6, 60)
+        assert page.evaluate("() => document.getElementById('error').textContent") == ""
+    finally:
+        page.close()
