@@ -286,7 +286,8 @@ class _Handler(BaseHTTPRequestHandler):
 
     def log_message(self, format, *args):  # noqa: A002 - the base class's name
         if getattr(self.server, "verbose", False):
-            super().log_message(format, *args)
+            self.server.write_line(f"{self.address_string()} - - [{self.log_date_time_string()}] "
+                                   f"{format % args}")
 
     # -- responses ------------------------------------------------------------------------
     def _send(self, status: int, body: bytes, ctype: str, *, cache: bool = False,
@@ -497,6 +498,7 @@ class ViewerServer(HTTPServer):
         self.counts = {"refused": 0, "idle_closed": 0, "dropped": 0, "overloaded": 0,
                        "unsent": 0}
         self._count_lock = threading.Lock()
+        self._log_lock = threading.Lock()
         self._models: dict | None = None
         super().__init__((host, port), _Handler)
         p = self.server_address[1]
@@ -526,10 +528,18 @@ class ViewerServer(HTTPServer):
         with self._count_lock:
             self.counts[what] += 1
 
+    def write_line(self, line: str) -> None:
+        """``line`` on stderr, whole (one write under a lock: lines of several threads
+        never interleave)."""
+        with self._log_lock:
+            with contextlib.suppress(OSError, ValueError):
+                sys.stderr.write(line.replace("\n", " ") + "\n")
+                sys.stderr.flush()
+
     def note(self, line: str) -> None:
         """One line on stderr, only with ``verbose``."""
         if self.verbose:
-            print(f"skydome view: {line}", file=sys.stderr, flush=True)
+            self.write_line(f"skydome view: {line}")
 
     def handle_error(self, request, client_address):
         exc = sys.exc_info()[1]
@@ -539,10 +549,11 @@ class ViewerServer(HTTPServer):
                       f"({type(exc).__name__})")
             return
         # not a client hanging up: one line, the traceback only with verbose
-        print(f"skydome view: error answering {client_address[0]}:{client_address[1]}: "
-              f"{type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
+        self.write_line(f"skydome view: error answering {client_address[0]}:"
+                        f"{client_address[1]}: {type(exc).__name__}: {exc}")
         if self.verbose:
-            super().handle_error(request, client_address)
+            with self._log_lock:
+                super().handle_error(request, client_address)
 
     # -- connections: idle ones in a selector, requests in a pool -------------------------
     def process_request(self, request, client_address):
