@@ -401,7 +401,8 @@ class _Handler(BaseHTTPRequestHandler):
         except (ConnectionError, TimeoutError):
             raise
         except Exception as exc:  # a fault of the server: one line, no traceback to the client
-            self.server.note(f"internal error on {path}: {type(exc).__name__}: {exc}")
+            self.server.write_line(f"skydome view: internal error on {path}: "
+                                   f"{type(exc).__name__}: {exc}")
             return self._error(HTTPStatus.INTERNAL_SERVER_ERROR,
                                f"internal error: {type(exc).__name__}")
         return self._error(HTTPStatus.NOT_FOUND, f"no API route {path[:200]}")
@@ -575,8 +576,8 @@ class ViewerServer(HTTPServer):
 
         while not self._closing:
             timeout = None
-            if idle:
-                timeout = max(0.0, min(d for d, _ in idle.values()) - time.monotonic())
+            if idle:      # one timeout for all: the oldest is the first to expire
+                timeout = max(0.0, next(iter(idle.values()))[0] - time.monotonic())
             for key, _ in sel.select(timeout):
                 if key.fileobj is self._wake_r:
                     with contextlib.suppress(OSError):
@@ -599,11 +600,15 @@ class ViewerServer(HTTPServer):
                     break
                 if len(idle) >= self.MAX_IDLE:
                     drop(next(iter(idle)))
+                try:
+                    sel.register(sock, selectors.EVENT_READ, None)
+                except (OSError, ValueError):     # closed or reset meanwhile
+                    self.shutdown_request(sock)
+                    continue
                 idle[sock] = (time.monotonic() + self.idle_timeout_s, addr)
-                sel.register(sock, selectors.EVENT_READ, None)
             now = time.monotonic()
-            for sock in [s for s, (d, _) in idle.items() if d <= now]:
-                drop(sock)
+            while idle and next(iter(idle.values()))[0] <= now:
+                drop(next(iter(idle)))
         for sock in list(idle):
             drop(sock, counted=False)
         sel.close()
