@@ -387,7 +387,8 @@ class _Handler(BaseHTTPRequestHandler):
         keys = [k for k, _ in pairs]
         dup = sorted({k for k in keys if keys.count(k) > 1})
         if dup:
-            return self._error(HTTPStatus.BAD_REQUEST, f"parameter(s) given twice: {', '.join(dup)}")
+            return self._error(HTTPStatus.BAD_REQUEST,
+                               f"parameter(s) given twice: {', '.join(dup)}")
         q = dict(pairs)
         try:
             if path == "/api/models":
