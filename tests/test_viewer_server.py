@@ -11,6 +11,7 @@ from __future__ import annotations
 import http.client
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -25,10 +26,26 @@ from _viewer import viewer_url  # noqa: F401 - fixture
 ROOT = Path(__file__).resolve().parents[1]
 
 
+_TOKENS: dict[str, str] = {}
+
+
+def _token(url: str) -> str:
+    """The API token the server wrote into its page, read as the page's own script does."""
+    if url not in _TOKENS:
+        status, _, body = _get(url, "/")
+        m = re.search(rb'<meta name="skydome-token" content="([A-Za-z0-9_-]+)">', body)
+        assert status == 200 and m, body[:200]
+        _TOKENS[url] = m.group(1).decode()
+    return _TOKENS[url]
+
+
 def _get(url: str, path: str, method: str = "GET"):
     host, port = url.split("//")[1].rstrip("/").rsplit(":", 1)
+    token = _token(url) if path.startswith("/api/") else None
     c = http.client.HTTPConnection(host, int(port), timeout=10)
     c.putrequest(method, path, skip_host=False, skip_accept_encoding=True)
+    if token is not None:
+        c.putheader("X-Skydome-Token", token)
     c.endheaders()
     r = c.getresponse()
     body = r.read()

@@ -49,7 +49,10 @@ VIEWER_MODELS: dict[str, tuple[str, ...]] = {
 #: a turbidity change bakes in about 10 s on two cores (the sun and the observer altitude
 #: never need a new bake: the tables hold every r and mu_s).
 PRECOMPUTED_VIEWER_SIZES = {"n_wavelengths": 8, "scattering_r_size": 16, "scattering_mu_size": 64,
-                            "scattering_mu_s_size": 16, "scattering_nu_size": 8, "orders": 4}
+                            "scattering_mu_s_size": 16, "scattering_nu_size": 8, "orders": 4,
+                            # the viewer's tables stay in memory: a request can never write
+                            # to (or evict entries from) the user's on-disk table cache
+                            "cache": False}
 
 #: Request keys that place the sun (by angles, or by place and time).
 SUN_KEYS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time")

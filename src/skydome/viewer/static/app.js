@@ -1,7 +1,7 @@
 // The viewer page: controls -> /api/scene (skydome computes the shader's numbers) ->
 // SkyRenderer (WebGL2) -> canvas. window.skydomeViewer exposes the same renderer to tests
 // and to the benchmark (renderFloat, benchmark).
-import { SkyRenderer, cameraAxes } from "./sky.js";
+import { SkyRenderer, apiFetch, cameraAxes } from "./sky.js";
 
 // false-colour stops, the same as ramp() in shaders/display.glsl
 const RAMP = [[0, 0, 0], [0.1, 0.1, 0.8], [0, 0.7, 0.9], [0.1, 0.8, 0.2], [0.95, 0.9, 0.1],
@@ -13,7 +13,7 @@ let renderer = null, models = {}, lastScenes = [], frameTimes = [], chromaGain =
 function showError(msg) { $("error").textContent = msg || ""; }
 
 async function getJSON(url) {
-  const r = await fetch(url);
+  const r = await apiFetch(url);
   const body = await r.json();
   if (!r.ok) throw new Error(body.error || `HTTP ${r.status}`);
   return body;

@@ -5,6 +5,14 @@ const VERT = `#version 300 es
 in vec2 a_pos;
 void main() { gl_Position = vec4(a_pos, 0.0, 1.0); }`;
 
+// apiFetch(url): GET an /api/ URL with the page's token (written into the page by the
+// server at each start); the server refuses /api/ requests without it (403).
+export function apiFetch(url) {
+  const meta = document.querySelector('meta[name="skydome-token"]');
+  return fetch(url, { headers: { "X-Skydome-Token": meta ? meta.content : "" },
+                      credentials: "same-origin", cache: "no-store" });
+}
+
 const sources = new Map();
 async function source(name) {
   if (!sources.has(name)) {
@@ -118,7 +126,7 @@ const PREPASSES = {
                       transmittance_spectral: 11, irradiance_spectral: 12 };
       const tex = [];
       for (const name of Object.keys(units).filter((n) => n in s.textures)) {
-        const resp = await fetch(`/api/lut?${new URLSearchParams({ key: s.lut_key, name })}`);
+        const resp = await apiFetch(`/api/lut?${new URLSearchParams({ key: s.lut_key, name })}`);
         if (!resp.ok) throw new Error(`table ${name}: ${(await resp.json()).error}`);
         const data = new Float32Array(await resp.arrayBuffer());
         const [d, h, w] = s.textures[name];
