@@ -226,11 +226,11 @@ def sample_weather_path() -> Path:
 
 
 # -- reading: bounded, line by line ---------------------------------------------------------
-#: Longest line read [bytes]. EPW records are about 150 bytes, TMY3 records about 300, their
+#: Longest line read [bytes]. EPW records are about 150 bytes, TMY3 records about 200, their
 #: headers (EPW DESIGN CONDITIONS, TMY3 column names) under 2 kB; a longer line is not a
 #: weather record and is refused before it is read whole.
 MAX_LINE_BYTES = 16384
-#: Most fields a data record may hold (EPW 35, TMY3 68, .wea 5).
+#: Most fields a data record may hold (EPW 35, TMY3 71, .wea 5).
 MAX_FIELDS = 128
 #: Most data records a file may hold: one leap year of hours. Files with more (sub-hourly or
 #: several years, or not weather at all) are refused at the first record past it.
@@ -420,7 +420,7 @@ def _parse_tmy3(p: Path, name: str):
             heads = text.split(",")
             if len(heads) > MAX_FIELDS:
                 raise ValueError(f"weather = {name!r}: line 2 has {len(heads)} column names; "
-                                 f"a TMY3 file has 68 (at most {MAX_FIELDS} are read)")
+                                 f"a TMY3 file has 71 (at most {MAX_FIELDS} are read)")
             index = {h.strip(): i for i, h in enumerate(heads)}
             need = len(heads)
             for col in ("Date (MM/DD/YYYY)", "Time (HH:MM)"):
