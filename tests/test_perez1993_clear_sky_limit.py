@@ -88,3 +88,35 @@ def test_illuminance_input_limit():
     r = subprocess.run([_tool("gendaylit"), "-ang", "40", "0", "-L", "128000", "15000"],
                        capture_output=True, env=_env(), timeout=60, text=True)
     assert "exceeds solar constant" in r.stderr
+
+
+def test_asrc_cie_refuses_the_same_beam():
+    sun = sd.Sun(elevation_deg=20.0, azimuth_deg=180.0)
+    with pytest.raises(ValueError, match="asrc_cie: dni = 1358 W/m\\^2 .* clear-sky limit"):
+        sd.model("asrc_cie", sun=sun, dni=1358.0, dhi=20.0)
+    sd.model("asrc_cie", sun=sun, dni=1358.0, dhi=100.0)
+
+
+def test_weather_hours_beyond_the_limit_flagged_in_the_sky_matrix(tmp_path):
+    """A year's sky matrix keeps such hours (as gendaymtx does) and one note counts them."""
+    import warnings
+
+    from skydome.daylighting.skymatrix import ClearSkyNote, perez_sky_matrix_from_weather
+    from skydome.daylighting.weather import read_weather, sample_weather_path
+
+    w = read_weather(sample_weather_path())
+    w = w.select(np.arange(len(w)) < 24 * 3)
+    noon = int(np.argmin(w.sun_zenith_deg[24:48])) + 24
+    dni = w.dni.copy()
+    dhi = w.dhi.copy()
+    dni[noon], dhi[noon] = 1366.0, 5.0  # beyond rule 2 at a winter noon (~33 deg)
+    import dataclasses
+
+    w = dataclasses.replace(w, dni=dni, dhi=dhi)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        m = perez_sky_matrix_from_weather(w, order=0)
+    notes = [str(r.message) for r in rec if issubclass(r.category, ClearSkyNote)]
+    assert len(notes) == 1 and f"1 hour(s) beyond the clear-sky limit (gendaylit's rule; " \
+        f"first: record {noon + 1}" in notes[0]
+    assert np.asarray(m.sky)[noon].max() > 0.0

@@ -372,7 +372,35 @@ def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) 
     if "dew_point_c" not in kw and weather.dew_point_c is not None:
         td = np.where(np.isfinite(weather.dew_point_c), weather.dew_point_c, 11.0)
         kw["dew_point_c"] = td
+    _note_beyond_clear_sky(weather, sd)
     return perez_sky_matrix(weather.dni, weather.dhi, sd, weather.day_of_year, **kw)
+
+
+class ClearSkyNote(UserWarning):
+    """One-line note: hours whose direct beam is beyond the clear-sky limit (gendaylit's
+    rule), kept as gendaymtx keeps them."""
+
+
+def _note_beyond_clear_sky(weather, sun_directions) -> np.ndarray:
+    """Flag the hours (sun up) whose DNI/DHI are beyond the clear-sky limit by gendaylit's
+    rule (:func:`~skydome.models.analytic.perez1993.clear_sky_limit_exceeded`) with one
+    :class:`ClearSkyNote` counting them; the matrix keeps them as gendaymtx does (it has no
+    such check). Returns the mask."""
+    from skydome.models.analytic.perez1993 import clear_sky_limit_exceeded
+
+    zen = np.degrees(np.arccos(np.clip(np.asarray(sun_directions)[:, 2], -1.0, 1.0)))
+    bad = (zen < 90.0) & clear_sky_limit_exceeded(weather.dni, weather.dhi, zen,
+                                                   weather.day_of_year)
+    n = int(np.sum(bad))
+    if n:
+        import warnings
+
+        k = int(np.argmax(bad))
+        warnings.warn(f"weather = {weather.path!r}: {n} hour(s) beyond the clear-sky limit "
+                      f"(gendaylit's rule; first: record {k + 1}, {weather.time[k]}, DNI "
+                      f"{weather.dni[k]:g} W/m^2, DHI {weather.dhi[k]:g} W/m^2), kept as "
+                      "gendaymtx keeps them", ClearSkyNote, stacklevel=3)
+    return bad
 
 
 def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str = "float",
