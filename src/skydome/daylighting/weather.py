@@ -304,6 +304,25 @@ def _integer(text: str, name: str, rec: int, line: int, field: str) -> int:
     return int(v)
 
 
+def _column(texts, line_of, name: str, field: str, integer: bool = False) -> np.ndarray:
+    """One field of every record as floats (numpy's conversion of the strings); where that
+    fails or meets a value that is not finite, the records are checked one by one so that
+    the refusal names the first bad record, its line and the field (an empty field is
+    missing: nan)."""
+    try:
+        v = np.array(texts, dtype=np.float64)
+        ok = bool(np.all(np.isfinite(v)))
+        if ok and integer:
+            ok = bool(np.all(v == np.round(v)))
+    except ValueError:
+        ok = False
+    if ok:
+        return v
+    one = _integer if integer else _number
+    return np.array([one(t, name, j + 1, int(line_of[j]), field) for j, t in enumerate(texts)],
+                    dtype=np.float64)
+
+
 def _header_number(text: str, name: str, line: int, field: str) -> float:
     s = text.strip().strip('"')
     try:
@@ -355,7 +374,8 @@ _LABELS = {"dni": "DNI", "dhi": "DHI", "ghi": "GHI", "dni_illuminance": "DNI ill
 def _parse_epw(p: Path, name: str):
     """Site, (month, day, hour) arrays, quantity arrays and line numbers of an EPW file."""
     site = None
-    cols: dict[str, list] = {k: [] for k in ("month", "day", "hour", *_EPW_FIELDS)}
+    want = (1, 2, 3, *_EPW_FIELDS.values())  # month, day, hour, then the quantities
+    rows: list[list[str]] = []
     lines: list[int] = []
     rec = 0
     for k, text in _iter_lines(p, name):
@@ -375,23 +395,23 @@ def _parse_epw(p: Path, name: str):
         if rec > MAX_RECORDS:
             raise _too_many(name, k)
         f = _split_record(text, ",", name, rec, k, 35)
-        cols["month"].append(_integer(f[1], name, rec, k, "month"))
-        cols["day"].append(_integer(f[2], name, rec, k, "day"))
-        cols["hour"].append(_integer(f[3], name, rec, k, "hour"))
-        for key, i in _EPW_FIELDS.items():
-            cols[key].append(_number(f[i], name, rec, k, _LABELS[key]))
+        rows.append([f[i] for i in want])
         lines.append(k)
     if site is None:
         raise ValueError(f"weather = {name!r}: empty file")
     if rec == 0:
         raise ValueError(f"weather = {name!r}: truncated, no data records")
-    values = {key: np.array(cols[key], dtype=np.float64) for key in _EPW_FIELDS}
+    line_of = np.array(lines, dtype=np.int64)
+    cols = list(zip(*rows))
+    ints = [_column(cols[j], line_of, name, lab, integer=True).astype(np.int64)
+            for j, lab in enumerate(("month", "day", "hour"))]
+    values = {key: _column(cols[3 + j], line_of, name, _LABELS[key])
+              for j, key in enumerate(_EPW_FIELDS)}
     for key, v in values.items():
         if key in _EPW_MISSING:
             v[v >= _EPW_MISSING[key]] = np.nan
     values["precipitable_water_cm"] = values["precipitable_water_cm"] / 10.0  # EPW: mm
-    ints = [np.array(cols[c], dtype=np.int64) for c in ("month", "day", "hour")]
-    return site, *ints, values, np.array(lines, dtype=np.int64)
+    return site, *ints, values, line_of
 
 
 def _parse_tmy3(p: Path, name: str):
@@ -400,9 +420,10 @@ def _parse_tmy3(p: Path, name: str):
 
     site = None
     index: dict[str, int] = {}
-    need = 0
-    dates: list[tuple[int, int, int]] = []
-    cols: dict[str, list] = {}
+    need = i_date = i_time = 0
+    keys: list[str] = []
+    want: list[int] = []
+    rows: list[list[str]] = []
     lines: list[int] = []
     rec = 0
     for k, text in _iter_lines(p, name):
@@ -426,7 +447,9 @@ def _parse_tmy3(p: Path, name: str):
             for col in ("Date (MM/DD/YYYY)", "Time (HH:MM)"):
                 if col not in index:
                     raise ValueError(f"weather = {name!r}: line 2 has no {col!r} column")
-            cols = {key: [] for key, col in _TMY3_FIELDS.items() if col in index}
+            i_date, i_time = index["Date (MM/DD/YYYY)"], index["Time (HH:MM)"]
+            keys = [key for key, col in _TMY3_FIELDS.items() if col in index]
+            want = [index[_TMY3_FIELDS[key]] for key in keys]
             continue
         if not text.strip():
             continue
@@ -434,26 +457,24 @@ def _parse_tmy3(p: Path, name: str):
         if rec > MAX_RECORDS:
             raise _too_many(name, k)
         f = _split_record(text, ",", name, rec, k, need)
-        d = f[index["Date (MM/DD/YYYY)"]].strip().split("/")
-        t = f[index["Time (HH:MM)"]].strip().split(":")
-        if len(d) < 2 or len(t) < 1:
-            raise ValueError(f"{_where(name, rec, k)}, field date/time = "
-                             f"{f[index['Date (MM/DD/YYYY)']][:20]!r} "
-                             f"{f[index['Time (HH:MM)']][:20]!r} is not MM/DD/YYYY HH:MM")
-        dates.append((_integer(d[0], name, rec, k, "date (month)"),
-                      _integer(d[1], name, rec, k, "date (day)"),
-                      _integer(t[0], name, rec, k, "time (hour)")))
-        for key in cols:
-            cols[key].append(_number(f[index[_TMY3_FIELDS[key]]], name, rec, k, _LABELS[key]))
+        d = f[i_date].strip().split("/")
+        t = f[i_time].strip().split(":")
+        if len(d) < 2:
+            raise ValueError(f"{_where(name, rec, k)}, field date = {f[i_date][:20]!r} is not "
+                             "MM/DD/YYYY")
+        rows.append([d[0], d[1], t[0], *(f[i] for i in want)])
         lines.append(k)
     if site is None or not index:
         raise ValueError(f"weather = {name!r}: truncated, no TMY3 header")
     if rec == 0:
         raise ValueError(f"weather = {name!r}: truncated, no data records")
-    values = {key: (np.array(cols[key], dtype=np.float64) if key in cols else None)
-              for key in _TMY3_FIELDS}
-    md = np.array(dates, dtype=np.int64)
-    return site, md[:, 0], md[:, 1], md[:, 2], values, np.array(lines, dtype=np.int64)
+    line_of = np.array(lines, dtype=np.int64)
+    cols = list(zip(*rows))
+    ints = [_column(cols[j], line_of, name, lab, integer=True).astype(np.int64)
+            for j, lab in enumerate(("date (month)", "date (day)", "time (hour)"))]
+    got = {key: _column(cols[3 + j], line_of, name, _LABELS[key]) for j, key in enumerate(keys)}
+    values = {key: got.get(key) for key in _TMY3_FIELDS}
+    return site, *ints, values, line_of
 
 
 def _detect_format(path: Path) -> str:
