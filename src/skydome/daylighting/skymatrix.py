@@ -612,8 +612,9 @@ def weather_model_sky_matrix(weather, model: str = "precomputed", *, aod_from=No
     outside it: preetham1999, hosek_wilkie2012, cie2003's skies, ... e.g. the twilight hours
     of a sun just below the horizon) gets a zero row too, as a night hour, and one
     :class:`SunRangeNote` warning counts them; models with their own handling (black outside
-    the range, or a twilight extension) get those hours as they define them; the weather's irradiances only select the lit
-    hours (a physically based model computes its own clear sky). With ``aod_from`` the model's
+    the range, or a twilight extension) get those hours as they define them. The weather's
+    irradiances only select the lit hours (a physically based model computes its own clear
+    sky). With ``aod_from`` the model's
     atmosphere is ``Atmosphere.earth(aerosol_optical_depth=AOD)`` per hour, the AOD rounded
     to the nearest multiple of ``aod_step`` so that hours share one set of tables (each
     distinct AOD costs one table build, ~35 s on a 2-core EPYC with the default settings; the

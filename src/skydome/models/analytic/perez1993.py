@@ -558,9 +558,10 @@ class Perez1993(SkyModel):
         # illuminance. (gendaylit -P applies it to the irradiances implied by epsilon and
         # Delta too; here (epsilon, Delta) describe a sky, not weather, and are not checked.)
         by_lux = self.input_mode == "dni_illuminance/dhi_illuminance"
-        if self.input_mode != "epsilon/delta" and bool(clear_sky_limit_exceeded(0.0 if by_lux else dni, dhi, self.sun.zenith_deg,
-                                         self.day_of_year, self.dew_point_c,
-                                         self.dni_illuminance if by_lux else None)):
+        beyond = self.input_mode != "epsilon/delta" and bool(clear_sky_limit_exceeded(
+            0.0 if by_lux else dni, dhi, self.sun.zenith_deg, self.day_of_year,
+            self.dew_point_c, self.dni_illuminance if by_lux else None))
+        if beyond:
             self.valid = False
             if self.invalid == "raise":
                 given = (f"dni_illuminance = {self.dni_illuminance:g} lx" if by_lux else
