@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["overcast_sky", "plane_daylight_factor", "room_daylight_factor", "radiance_tool",
-           "read_sensors", "DF_SKY_ILLUMINANCE_LX"]
+           "read_sensors", "check_rtrace_parameters", "RTRACE_PARAMETER_RANGES",
+           "DF_SKY_ILLUMINANCE_LX"]
 
 #: Horizontal illuminance of the overcast sky used for the ratio [lx] (DF does not depend on
 #: it; 10 klx keeps Radiance's values in a comfortable range).
@@ -108,23 +109,48 @@ def radiance_tool(name: str) -> tuple[str, dict]:
     return found, env
 
 
+#: Longest line of a sensor points file read [bytes] (six numbers need under 200).
+MAX_SENSOR_LINE_BYTES = 4096
+
+
 def read_sensors(path) -> np.ndarray:
-    """Sensor points of a Radiance points file: one ``x y z dx dy dz`` per line -> (n, 6)."""
+    """Sensor points of a Radiance points file: one ``x y z dx dy dz`` per line -> (n, 6).
+
+    Read line by line (at most MAX_SENSOR_LINE_BYTES a line); a binary file, a line that is
+    not text or not six numbers is refused naming the file and the line."""
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"sensors = {str(path)!r}: no such file")
     rows = []
-    for k, ln in enumerate(p.read_text().splitlines(), start=1):
-        if not ln.strip() or ln.lstrip().startswith("#"):
-            continue
-        try:
-            v = [float(x) for x in ln.split()]
-        except ValueError:
-            v = []
-        if len(v) != 6 or not np.all(np.isfinite(v)):
-            raise ValueError(f"sensors = {str(path)!r}: line {k} must be 6 numbers "
-                             "(x y z dx dy dz)")
-        rows.append(v)
+    with p.open("rb") as f:
+        k = 0
+        while True:
+            raw = f.readline(MAX_SENSOR_LINE_BYTES + 1)
+            if not raw:
+                break
+            k += 1
+            if len(raw) > MAX_SENSOR_LINE_BYTES and not raw.endswith(b"\n"):
+                raise ValueError(f"sensors = {str(path)!r}: line {k} is longer than "
+                                 f"{MAX_SENSOR_LINE_BYTES} bytes (not a points file)")
+            if k == 1 and raw.startswith(b"\xef\xbb\xbf"):
+                raw = raw[3:]
+            try:
+                ln = raw.decode("ascii")
+            except UnicodeDecodeError:
+                ln = None
+            if ln is None or "\x00" in ln:
+                raise ValueError(f"sensors = {str(path)!r}: line {k} is not text (a binary "
+                                 "file?); expected one 'x y z dx dy dz' a line")
+            if not ln.strip() or ln.lstrip().startswith("#"):
+                continue
+            try:
+                v = [float(x) for x in ln.split()]
+            except ValueError:
+                v = []
+            if len(v) != 6 or not np.all(np.isfinite(v)):
+                raise ValueError(f"sensors = {str(path)!r}: line {k} must be 6 numbers "
+                                 "(x y z dx dy dz)")
+            rows.append(v)
     if not rows:
         raise ValueError(f"sensors = {str(path)!r} holds no points")
     return _check_sensors(np.array(rows))
@@ -141,9 +167,32 @@ def _check_sensors(sensors) -> np.ndarray:
     return s
 
 
+#: rtrace's ambient parameters as this module bounds them: name -> (low, high) inclusive
+#: (integers up to C's INT_MAX, as rtrace reads them).
+RTRACE_PARAMETER_RANGES = {"ab": (0, 16), "ad": (1, 2**31 - 1), "as_": (0, 2**31 - 1),
+                           "aa": (0.0, 1.0), "ar": (0, 2**31 - 1), "lw": (0.0, 1.0)}
+
+
+def check_rtrace_parameters(ab: int = 5, ad: int = 2048, as_: int = 512, aa: float = 0.1,
+                            ar: int = 256, lw: float = 1e-4) -> dict:
+    """rtrace's ambient parameters checked against :data:`RTRACE_PARAMETER_RANGES`; returns
+    them as a dict, or raises ValueError (TypeError for a non-number) naming the parameter,
+    its value and its range. :func:`room_daylight_factor` calls it before any work; a
+    command line can call it before reading any file."""
+    from skydome._validate import check_int, check_number
+
+    out = {}
+    for name, v in (("ab", ab), ("ad", ad), ("as_", as_), ("aa", aa), ("ar", ar), ("lw", lw)):
+        lo, hi = RTRACE_PARAMETER_RANGES[name]
+        out[name] = (check_int(name, v, lo, hi) if isinstance(lo, int)
+                     else check_number(name, v, lo, hi))
+    return out
+
+
 def room_daylight_factor(scene, sensors, *, ground_reflectance: float = 0.2, ab: int = 5,
                          ad: int = 2048, as_: int = 512, aa: float = 0.1, ar: int = 256,
-                         lw: float = 1e-4, sky: str | None = None) -> np.ndarray:
+                         lw: float = 1e-4, sky: str | None = None,
+                         allow_commands: bool = False) -> np.ndarray:
     """Daylight factor [%] of sensor points in a Radiance scene under the CIE overcast sky.
 
     Parameters
@@ -162,30 +211,34 @@ def room_daylight_factor(scene, sensors, *, ground_reflectance: float = 0.2, ab:
         Radiance text of another sky to use instead of skydome's (e.g. ``gensky -c``'s
         output followed by its skyfunc glows); its horizontal illuminance must be
         DF_SKY_ILLUMINANCE_LX. For comparisons.
+    allow_commands : bool
+        Let the scene files (and ``sky``) hold command lines (``!command``), which Radiance's
+        oconv runs as shell commands when it reads them (default False: such a file is
+        refused before any work, naming the file and the line; see
+        :func:`~skydome.daylighting.scene.check_scene_files`).
 
     Returns
     -------
     numpy.ndarray (n,)
         100 E / E_h with E = 179 (0.265 R + 0.670 G + 0.065 B) of ``rtrace -I``.
     """
-    from skydome._validate import check_int, check_number
-    from skydome.daylighting.scene import write_radiance_sky
+    from skydome._validate import check_number
+    from skydome.daylighting.scene import (check_scene_files, find_scene_command,
+                                           write_radiance_sky)
 
-    files = [scene] if isinstance(scene, (str, Path)) else list(scene)
-    if not files:
-        raise ValueError("scene: give at least one Radiance scene file")
-    files = [Path(f).resolve() for f in files]
-    for f in files:
-        if not f.is_file():
-            raise ValueError(f"scene = {str(f)!r}: no such file")
-    s = read_sensors(sensors) if isinstance(sensors, (str, Path)) else _check_sensors(sensors)
+    rt = check_rtrace_parameters(ab=ab, ad=ad, as_=as_, aa=aa, ar=ar, lw=lw)
+    ab, ad, as_, aa, ar, lw = (rt[k] for k in ("ab", "ad", "as_", "aa", "ar", "lw"))
     rho = check_number("ground_reflectance", ground_reflectance, 0.0, 1.0)
-    ab = check_int("ab", ab, 0, 16)
-    ad = check_int("ad", ad, 1, None)
-    as_ = check_int("as_", as_, 0, None)
-    aa = check_number("aa", aa, 0.0, 1.0)
-    ar = check_int("ar", ar, 0, None)
-    lw = check_number("lw", lw, 0.0, 1.0)
+    files = check_scene_files(scene, allow_commands=allow_commands)
+    if sky is not None:
+        if not isinstance(sky, str):
+            raise TypeError(f"sky must be Radiance scene text (str), got {type(sky).__name__}")
+        hit = None if allow_commands else find_scene_command(sky)
+        if hit is not None:
+            raise ValueError(f"sky: line {hit[0]} is a command line ({hit[1]!r}), which "
+                             "Radiance runs as a shell command; refused unless "
+                             "allow_commands=True")
+    s = read_sensors(sensors) if isinstance(sensors, (str, Path)) else _check_sensors(sensors)
     oconv, env = radiance_tool("oconv")
     rtrace, _ = radiance_tool("rtrace")
     e_h = DF_SKY_ILLUMINANCE_LX

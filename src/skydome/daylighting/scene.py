@@ -15,8 +15,15 @@ luminance: the export is achromatic). The sun's light is the direct normal illum
 (``direct_normal_illuminance()``) spread over a
 0.533 deg disc, as gendaylit and gendaymtx -D do.
 
+Scene files given to Radiance (``room_daylight_factor``'s ``scene``) may hold command lines:
+a line whose first character (after blanks) is ``!`` makes oconv run the rest of the line
+as a shell command and read its output as scene text (Radiance's own feature, e.g.
+``!xform -t 1 0 0 chair.rad``). A scene file from elsewhere can so run any program with the
+user's rights. :func:`check_scene_files` refuses such lines unless the caller passes
+``allow_commands=True``.
+
 Reference: G. Ward, Radiance 5.4 reference manual: ``brightdata``, data file format,
-``glow``, ``source``, ``light``.
+``glow``, ``source``, ``light``; scene description format ("!command" inline commands).
 """
 
 from __future__ import annotations
@@ -26,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_radiance_sky", "sun_direct_illuminance"]
+__all__ = ["write_radiance_sky", "sun_direct_illuminance", "check_scene_files",
+           "find_scene_command"]
 
 from skydome.constants import RADIANCE_SUN_ANGLE_DEG as SUN_ANGLE_DEG
 from skydome.constants import RADIANCE_WHITE_EFFICACY as WHITE_EFFICACY
@@ -38,6 +46,82 @@ sd_a = 180 / PI * atan2(Dx, Dy);
 sd_azi = if(-sd_a, sd_a + 360, sd_a);
 sd_sky(v) = if(Dz, if(v, v, 0), 0);
 """
+
+
+_BLANK = b" \t\r\f\v"
+
+
+def find_scene_command(data) -> tuple[int, str] | None:
+    """(line number, line) of the first command line (``!`` first after blanks) in Radiance
+    scene text ``data`` (bytes or str, or a binary file object read in 1 MiB pieces), or
+    None. Lines of any length are scanned without holding them whole."""
+    import re
+
+    if isinstance(data, str):
+        data = data.encode("utf-8", "surrogateescape")
+    if isinstance(data, (bytes, bytearray)):
+        import io
+
+        data = io.BytesIO(bytes(data))
+    pat = re.compile(rb"\n[ \t\r\f\v]*!")
+    line0 = 1          # line number at the start of the piece
+    at_start = True    # only blanks seen since the last line break (or the file's start)
+    while True:
+        piece = data.read(1 << 20)
+        if not piece:
+            return None
+        hit = None
+        if at_start:
+            s = piece.lstrip(_BLANK)
+            if s[:1] == b"!":
+                hit = len(piece) - len(s) - 1  # treat as a match ending at the "!"
+        if hit is None:
+            m = pat.search(piece)
+            if m is not None:
+                hit = m.start()
+                line0 += piece.count(b"\n", 0, m.start()) + 1
+                return line0, _line_text(piece, m.end() - 1)
+        else:
+            return line0, _line_text(piece, hit + 1)
+        nl = piece.rfind(b"\n")
+        if nl >= 0:
+            at_start = not piece[nl + 1:].strip(_BLANK)
+        else:
+            at_start = at_start and not piece.strip(_BLANK)
+        line0 += piece.count(b"\n")
+
+
+def _line_text(piece: bytes, k: int) -> str:
+    end = piece.find(b"\n", k)
+    text = piece[k:end if end >= 0 else len(piece)][:80]
+    return text.decode("utf-8", "replace").strip()
+
+
+def check_scene_files(files, *, allow_commands: bool = False) -> list[Path]:
+    """The scene files as resolved paths, each checked to exist; unless ``allow_commands``,
+    a file holding a command line (``!command``, which Radiance runs as a shell command when
+    it reads the scene) is refused with a ValueError naming the file, the line and the
+    command. ``files``: a path or a sequence of them."""
+    if not isinstance(allow_commands, bool):
+        raise TypeError(f"allow_commands must be True or False, got {allow_commands!r}")
+    items = [files] if isinstance(files, (str, Path)) else list(files)
+    if not items:
+        raise ValueError("scene: give at least one Radiance scene file")
+    out = []
+    for f in items:
+        p = Path(f).resolve()
+        if not p.is_file():
+            raise ValueError(f"scene = {str(f)!r}: no such file")
+        if not allow_commands:
+            with p.open("rb") as fh:
+                hit = find_scene_command(fh)
+            if hit is not None:
+                raise ValueError(
+                    f"scene = {str(f)!r}: line {hit[0]} is a command line ({hit[1]!r}), "
+                    "which Radiance runs as a shell command when it reads the scene; "
+                    "refused unless allow_commands=True (--allow-commands)")
+        out.append(p)
+    return out
 
 
 def sun_direct_illuminance(model) -> float:

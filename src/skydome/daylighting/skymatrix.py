@@ -372,7 +372,35 @@ def perez_sky_matrix_from_weather(weather, sun_position: str = "spa", **kwargs) 
     if "dew_point_c" not in kw and weather.dew_point_c is not None:
         td = np.where(np.isfinite(weather.dew_point_c), weather.dew_point_c, 11.0)
         kw["dew_point_c"] = td
+    _note_beyond_clear_sky(weather, sd)
     return perez_sky_matrix(weather.dni, weather.dhi, sd, weather.day_of_year, **kw)
+
+
+class ClearSkyNote(UserWarning):
+    """One-line note: hours whose direct beam is beyond the clear-sky limit (gendaylit's
+    rule), kept as gendaymtx keeps them."""
+
+
+def _note_beyond_clear_sky(weather, sun_directions) -> np.ndarray:
+    """Flag the hours (sun up) whose DNI/DHI are beyond the clear-sky limit by gendaylit's
+    rule (:func:`~skydome.models.analytic.perez1993.clear_sky_limit_exceeded`) with one
+    :class:`ClearSkyNote` counting them; the matrix keeps them as gendaymtx does (it has no
+    such check). Returns the mask."""
+    from skydome.models.analytic.perez1993 import clear_sky_limit_exceeded
+
+    zen = np.degrees(np.arccos(np.clip(np.asarray(sun_directions)[:, 2], -1.0, 1.0)))
+    bad = (zen < 90.0) & clear_sky_limit_exceeded(weather.dni, weather.dhi, zen,
+                                                   weather.day_of_year)
+    n = int(np.sum(bad))
+    if n:
+        import warnings
+
+        k = int(np.argmax(bad))
+        warnings.warn(f"weather = {weather.path!r}: {n} hour(s) beyond the clear-sky limit "
+                      f"(gendaylit's rule; first: record {k + 1}, {weather.time[k]}, DNI "
+                      f"{weather.dni[k]:g} W/m^2, DHI {weather.dhi[k]:g} W/m^2), kept as "
+                      "gendaymtx keeps them", ClearSkyNote, stacklevel=3)
+    return bad
 
 
 def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str = "float",
@@ -541,6 +569,35 @@ def weather_aod(weather, aod_from) -> np.ndarray:
     return np.full(n, v)
 
 
+class SunRangeNote(UserWarning):
+    """One-line note: lit hours whose sun lies outside the model's range were left 0."""
+
+
+def _hours_outside_sun_range(cls, params: dict, elevation_deg, lit) -> np.ndarray:
+    """Lit hours whose sun elevation lies outside the range the model declares
+    (``sun_elevation_range_deg``, for models that refuse a sun outside it; dobashi1995's
+    ``min_sun_elevation_deg`` lowers its bound). They get a zero row, as the night hours do,
+    and one :class:`SunRangeNote` counts them. Models declared black outside their range
+    (perez1993, the CIE skies) or covering every elevation keep their own handling."""
+    el = np.asarray(elevation_deg, dtype=np.float64)
+    if getattr(cls, "sun_outside_range", "raise") != "raise":
+        return np.zeros(el.shape, dtype=bool)
+    lo, hi = cls.sun_elevation_range_deg
+    if "min_sun_elevation_deg" in params:
+        lo = float(params["min_sun_elevation_deg"])
+    elif "min_sun_elevation_deg" in {p.name for p in getattr(cls, "parameters", ())}:
+        lo = next(p.default for p in cls.parameters if p.name == "min_sun_elevation_deg")
+    outside = lit & ((el < lo) | (el > hi))
+    n = int(np.sum(outside))
+    if n:
+        import warnings
+
+        warnings.warn(f"model {cls.name!r} covers sun elevations [{lo:g}, {hi:g}] deg: {n} lit "
+                      f"hour(s) with the sun outside it (lowest {el[outside].min():.2f} deg) "
+                      "are left 0, as the night hours", SunRangeNote, stacklevel=3)
+    return outside
+
+
 def weather_model_sky_matrix(weather, model: str = "precomputed", *, aod_from=None,
                              aod_step: float = 0.02, params=None, patches="tregenza",
                              order: int = DEFAULT_ORDER, components: str = "spectral:16",
@@ -550,8 +607,14 @@ def weather_model_sky_matrix(weather, model: str = "precomputed", *, aod_from=No
     physically based spectral sky with each hour's aerosol optical depth).
 
     Each lit hour (DNI + DHI > 1e-4 W m^-2, gendaymtx's rule; other hours are 0) gets the
-    model with the sun of the hour's midpoint; the weather's irradiances only select the lit
-    hours (a physically based model computes its own clear sky). With ``aod_from`` the model's
+    model with the sun of the hour's midpoint. A lit hour whose sun lies outside the sun
+    elevations the model declares (``sun_elevation_range_deg`` of a model that refuses a sun
+    outside it: preetham1999, hosek_wilkie2012, cie2003's skies, ... e.g. the twilight hours
+    of a sun just below the horizon) gets a zero row too, as a night hour, and one
+    :class:`SunRangeNote` warning counts them; models with their own handling (black outside
+    the range, or a twilight extension) get those hours as they define them. The weather's
+    irradiances only select the lit hours (a physically based model computes its own clear
+    sky). With ``aod_from`` the model's
     atmosphere is ``Atmosphere.earth(aerosol_optical_depth=AOD)`` per hour, the AOD rounded
     to the nearest multiple of ``aod_step`` so that hours share one set of tables (each
     distinct AOD costs one table build, ~35 s on a 2-core EPYC with the default settings; the
@@ -609,6 +672,7 @@ def weather_model_sky_matrix(weather, model: str = "precomputed", *, aod_from=No
     el = np.degrees(np.arcsin(np.clip(sd_dirs[:, 2], -1.0, 1.0)))
     az = np.degrees(np.arctan2(sd_dirs[:, 0], sd_dirs[:, 1])) % 360.0
     lit = (weather.dni + weather.dhi) > 1e-4
+    lit = lit & ~_hours_outside_sun_range(cls, params, el, lit)
     base: dict = {}  # AOD -> model built once (tables), moved to each hour's sun
 
     def make(h):

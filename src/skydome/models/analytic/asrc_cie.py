@@ -196,6 +196,14 @@ class ASRCCIE(_CIEBase):
             if dni is None or dhi is None:
                 raise ValueError("asrc_cie: dni and dhi must be given together")
             zen = self.sun.zenith_deg
+            from skydome.models.analytic.perez1993 import clear_sky_limit_exceeded
+
+            if self.sun.elevation_deg > 0.0 and bool(clear_sky_limit_exceeded(dni, dhi, zen)):
+                raise ValueError(
+                    f"asrc_cie: dni = {dni:g} W/m^2 with dhi = {dhi:g} W/m^2 at sun elevation "
+                    f"{self.sun.elevation_deg:g} deg is beyond the clear-sky limit (direct "
+                    "normal irradiance <= 1367 W/m^2 and direct normal illuminance <= "
+                    "127500 lx: gendaylit's rule, see perez1993.clear_sky_limit_exceeded)")
             eps = sky_clearness(dni, dhi, zen)               # [PISMS90] eq. for epsilon
             dlt = sky_brightness(dhi, zen, self.sun.distance_au)  # [PISMS90] Delta
         elif have_perez:

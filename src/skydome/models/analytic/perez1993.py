@@ -55,6 +55,9 @@ __all__ = [
     "PerezSkyParameters",
     "perez1993_sky_parameters",
     "perez1993_coefficients_many",
+    "clear_sky_limit_exceeded",
+    "MAX_DIRECT_NORMAL_IRRADIANCE",
+    "MAX_DIRECT_NORMAL_ILLUMINANCE",
 ]
 
 # Extraterrestrial normal irradiance at 1 au used by [PISMS90] and by Radiance's gendaylit
@@ -74,6 +77,12 @@ DELTA_MAX = 0.6
 # Horizon guard of Radiance's perezlum.cal: cos(zeta) is not taken below 0.01 in the gradation
 # term (the last 0.57 deg above the horizon).
 COS_ZETA_MIN = 0.01
+# The clear-sky limits gendaylit (Radiance 5.4, version 2.x) holds a direct beam to: its
+# check_irradiances refuses a direct normal irradiance above its solar constant of 1367 W m^-2
+# and its check_illuminances a direct normal illuminance above 127.5 klx (its
+# solar_constant_l); both answer with an all-zero "error sky". See clear_sky_limit_exceeded.
+MAX_DIRECT_NORMAL_IRRADIANCE = SOLAR_CONSTANT_WRC
+MAX_DIRECT_NORMAL_ILLUMINANCE = SOLAR_ILLUMINANCE_CONSTANT
 # Default dew point of gendaylit [deg C]: W = exp(0.07 Td - 0.075) = 2 cm.
 DEFAULT_DEW_POINT_C = 10.97353115
 
@@ -229,6 +238,70 @@ def perez1990_luminous_efficacy(epsilon, delta, sun_zenith_deg, precipitable_wat
                             global_horizontal=k_glob)
 
 
+def clear_sky_limit_exceeded(dni, dhi, sun_zenith_deg, day_of_year=172,
+                             dew_point_c=DEFAULT_DEW_POINT_C, dni_illuminance=None):
+    """Where a direct beam is brighter than a clear sky allows, by gendaylit's rule.
+
+    Radiance's gendaylit (version 2.x, ``-W`` input; ``gendaylit.c``: check_irradiances,
+    check_parametrization, direct_n_effi_PEREZ, check_illuminances) refuses an hour, printing
+    its all-zero "error sky", when
+
+    1. the direct normal irradiance I exceeds its solar constant, I > 1367 W m^-2; or
+    2. the direct normal illuminance it derives, I K_b, exceeds its illuminance solar
+       constant, I K_b > 127 500 lx, with K_b the direct luminous efficacy of [PISMS90]
+       eq. 8 (Table 4, floored at 0) for epsilon and Delta from eqs. 1-2, computed as
+       gendaylit does: the sun's altitude capped at 87 deg (Z >= 3 deg), Kasten's 1966 air
+       mass [K66], 1367 W m^-2 times Spencer's eccentricity correction [S71], epsilon
+       clamped to [1, 12.009] (an epsilon of infinity, Dh = 0, becomes 12.009) and Delta to
+       [0.01, 0.6], W = exp(0.07 Td - 0.075) [cm] (gendaylit's default Td gives 2 cm).
+
+    Rule 2 is what refuses a clear beam at a low sun: at 20 deg elevation 1358 W m^-2 with
+    Dh = 20 W m^-2 gives K_b = 95.9 lm/W and 130.2 klx (refused), with Dh = 100 W m^-2
+    K_b = 90.9 lm/W and 123.5 klx (accepted; day 1). Negative irradiances count as 0 (gendaylit
+    sets them to 0 with a warning). With ``dni_illuminance`` given (input ``-L``) rule 2 is
+    applied to it directly. (gendaylit's other error skies, zero irradiance with the sun up
+    and a positive Perez b, are not weather that cannot be; :class:`Perez1993` handles b > 0
+    through ``invalid``.)
+
+    Parameters
+    ----------
+    dni, dhi : array_like
+        Direct normal and diffuse horizontal irradiance [W m^-2].
+    sun_zenith_deg : array_like
+        True solar zenith angle [deg].
+    day_of_year : array_like
+        1..366 (the eccentricity correction of I0 in Delta).
+    dew_point_c : array_like
+        Surface dew point [deg C].
+    dni_illuminance : array_like, optional
+        Direct normal illuminance [lx] when it was given instead of derived.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True where the hour is beyond the clear-sky limit (broadcast shape).
+    """
+    dni, dhi, z, doy, td = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (
+        dni, dhi, sun_zenith_deg, day_of_year, dew_point_c)))
+    dni = np.where(dni > 0.0, dni, 0.0)  # gendaylit: "direct irradiance < 0. Using 0.0"
+    dhi = np.where(dhi > 0.0, dhi, 0.0)
+    over = dni > MAX_DIRECT_NORMAL_IRRADIANCE  # rule 1 (check_irradiances)
+    zc = np.clip(np.nan_to_num(z, nan=90.0), 3.0, 90.0)  # altitude <= 87 deg; air mass Z <= 90
+    m = air_mass(zc, "kasten1966")  # [K66], gendaylit's air_mass()
+    i0 = SOLAR_CONSTANT_PEREZ * eccentricity_correction(doy)  # [S71]
+    delta = np.clip(dhi * m / i0, DELTA_MIN, DELTA_MAX)  # [PISMS90] eq. 2, clamped
+    with np.errstate(invalid="ignore"):
+        eps = sky_clearness(dni, dhi, zc)  # [PISMS90] eq. 1
+    eps = np.where(np.isnan(eps) | (eps < 1.0), 1.0,
+                   np.where(eps > EPSILON_MAX, EPSILON_MAX - 0.001, eps))
+    if dni_illuminance is None:
+        w = precipitable_water_from_dew_point(td)  # [PISMS90] eq. 3
+        e_dir = dni * perez1990_luminous_efficacy(eps, delta, zc, w).direct  # eq. 8
+    else:
+        e_dir = np.broadcast_to(np.asarray(dni_illuminance, dtype=np.float64), dni.shape)
+    return over | (e_dir > MAX_DIRECT_NORMAL_ILLUMINANCE)  # rule 2 (check_illuminances)
+
+
 # -- the luminance distribution ---------------------------------------------------------------
 def perez1993_coefficients(sun_zenith_rad: float, epsilon: float, delta: float,
                            delta_floor: bool = True) -> tuple[float, float, float, float, float]:
@@ -353,7 +426,9 @@ class Perez1993(SkyModel):
         quadrature (:func:`skydome.illuminance.sky_quadrature`), or gendaylit's sum over the 145 Tregenza patch
         centres, sum lv cos(theta) 2 pi / 145 (see docs: up to a few per cent different).
     invalid : {"raise", "black"}
-        For inputs where the fitted coefficients give no meaningful sky (b > 0, i.e. a
+        For weather that cannot be (a direct beam beyond the clear-sky limit, by gendaylit's
+        rule: :func:`clear_sky_limit_exceeded`) and for inputs where the fitted
+        coefficients give no meaningful sky (b > 0, i.e. a
         luminance that grows without bound towards the horizon, which gendaylit answers with
         an all-zero "error sky"; or a distribution that is negative over the whole sky):
         ``raise`` a ValueError naming epsilon, Delta, Z and b, or return a ``black`` sky
@@ -478,6 +553,29 @@ class Perez1993(SkyModel):
                 eps, dl = limits(float(sky_clearness(dni, dhi, z_deg)), dhi * m / i0)
         self.sky_clearness, self.sky_brightness = eps, dl
         self.diffuse_irradiance, self.direct_irradiance = float(dhi), float(dni)
+        # gendaylit's clear-sky limit (clear_sky_limit_exceeded) on weather: with -L it checks
+        # only the given direct illuminance, with -W the irradiance and the derived
+        # illuminance. (gendaylit -P applies it to the irradiances implied by epsilon and
+        # Delta too; here (epsilon, Delta) describe a sky, not weather, and are not checked.)
+        by_lux = self.input_mode == "dni_illuminance/dhi_illuminance"
+        beyond = self.input_mode != "epsilon/delta" and bool(clear_sky_limit_exceeded(
+            0.0 if by_lux else dni, dhi, self.sun.zenith_deg, self.day_of_year,
+            self.dew_point_c, self.dni_illuminance if by_lux else None))
+        if beyond:
+            self.valid = False
+            if self.invalid == "raise":
+                given = (f"dni_illuminance = {self.dni_illuminance:g} lx" if by_lux else
+                         f"dni = {dni:g} W/m^2 with dhi = {dhi:g} W/m^2")
+                raise ValueError(
+                    f"perez1993: {given} at sun elevation {self.sun.elevation_deg:g} deg is "
+                    "beyond the clear-sky limit (direct normal irradiance <= "
+                    f"{MAX_DIRECT_NORMAL_IRRADIANCE:g} W/m^2 and direct normal illuminance, "
+                    "by the Perez et al. 1990 efficacy, <= "
+                    f"{MAX_DIRECT_NORMAL_ILLUMINANCE:g} lx: gendaylit's rule); pass "
+                    "invalid='black' for gendaylit's zero sky")
+            self.diffuse_illuminance = self.direct_illuminance = 0.0
+            self._black = True
+            return
         z = math.radians(z_deg)
         self.coefficients = perez1993_coefficients(z, eps, dl)
         lv_zenith = float(perez1993_relative_luminance(1.0, math.cos(z), self.coefficients))

@@ -637,10 +637,19 @@ def trace(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, p
     ``cos_alpha`` cosine of the sun's angular radius; ``table`` the light-path column table;
     ``max_order`` < 0 for no limit.
     """
-    n = dirs.shape[0]
+    trace_rows(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, polarised,
+               max_order, mean, err, 0, dirs.shape[0])
+
+
+@njit(parallel=True, cache=True)
+def trace_rows(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, polarised,
+               max_order, mean, err, start, stop):
+    """:func:`trace` for the directions ``start`` .. ``stop`` - 1 only (the others untouched).
+    Each (direction, wavelength) keeps the random stream of its index in ``dirs``, so
+    tracing the rows in blocks gives the same numbers as tracing them at once."""
     nl = e_sun.shape[0]
-    for idx in prange(n * nl):
-        i = idx // nl
+    for idx in prange((stop - start) * nl):
+        i = start + idx // nl
         l = idx % nl
         _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed,
                    polarised, max_order, mean, err)

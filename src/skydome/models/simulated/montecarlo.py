@@ -59,6 +59,19 @@ def stokes_frame(directions) -> tuple[np.ndarray, np.ndarray]:
     return a, b
 
 
+#: Paths per progress block (direction x wavelength x sample): runs shorter than this go in
+#: one block; longer ones in up to PROGRESS_BLOCKS blocks of whole directions.
+PROGRESS_PATHS_PER_BLOCK = 20_000_000
+PROGRESS_BLOCKS = 200
+
+
+def _progress_blocks(n: int, nl: int, samples: int) -> np.ndarray:
+    """Direction indices where the progress blocks start, and ``n`` at the end."""
+    work = n * nl * samples
+    k = int(min(n, PROGRESS_BLOCKS, max(1, work // PROGRESS_PATHS_PER_BLOCK)))
+    return np.unique(np.linspace(0, n, k + 1).round().astype(np.int64))
+
+
 @register
 class MonteCarlo(SkyModel):
     """Monte Carlo sky: every order of scattering, with standard errors, optionally polarised.
@@ -144,12 +157,23 @@ class MonteCarlo(SkyModel):
         mean = np.zeros((n, nl, 4))
         err = np.zeros((n, nl, 4))
         medium = medium_from_properties(props)
-        K.trace(np.ascontiguousarray(d), np.ascontiguousarray(zen_ref), medium.R + self.observer_altitude_m,
+        args = (np.ascontiguousarray(d), np.ascontiguousarray(zen_ref),
+                medium.R + self.observer_altitude_m,
                 np.ascontiguousarray(self.sun.direction, dtype=np.float64),
                 float(np.cos(np.radians(self.sun.angular_radius_deg))), medium,
                 np.ascontiguousarray(e_sun, dtype=np.float64), table.table, int(self.samples),
-                int(self.seed), self.polarised, -1 if self.max_order is None else int(self.max_order),
-                mean, err)
+                int(self.seed), self.polarised,
+                -1 if self.max_order is None else int(self.max_order), mean, err)
+        # Long runs in blocks of directions, reporting progress (skydome._progress) after
+        # each; every (direction, wavelength) keeps its own random stream, so the numbers do
+        # not depend on the blocks.
+        from skydome._progress import report
+
+        blocks = _progress_blocks(n, nl, int(self.samples))
+        total = n * nl * int(self.samples)
+        for a, b in zip(blocks[:-1], blocks[1:]):
+            K.trace_rows(*args, int(a), int(b))
+            report("montecarlo paths", b * nl * int(self.samples), total)
         mean[..., 0] = np.maximum(mean[..., 0], 0.0)
         self._last = (key, (mean, err))
         return mean, err
