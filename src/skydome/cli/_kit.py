@@ -257,24 +257,56 @@ _SUN_TYPES = {"sun_elevation": Optional[float], "sun_azimuth": Optional[float],
 SUN_BY_ANGLES_OR_PLACE = tuple(SUN_OPTIONS)
 
 
-def sun_options(*names: str):
-    """Give a command declared with ``**sun`` the sun options ``names`` (default all of
-    :data:`SUN_OPTIONS`: --sun-elevation, --sun-azimuth, --lat, --lon, --time, --sun-method),
-    each declared by :func:`sun_option`; typer reads them from the signature, and the command
-    gets them in ``sun`` (a dict), for :func:`_sun_from`."""
-    names = names or SUN_BY_ANGLES_OR_PLACE
+def _add_options(command, options: dict):
+    """Give a command declared with ``**kwargs`` the options ``{name: (annotation, typer
+    option)}`` after its own (typer reads the parameters from the signature and the
+    annotations; the command gets them in its ``**kwargs``)."""
+    kw = inspect.Parameter.KEYWORD_ONLY
+    sig = inspect.signature(command)
+    params = [p for p in sig.parameters.values() if p.kind != inspect.Parameter.VAR_KEYWORD]
+    params += [inspect.Parameter(n, kw, default=marker, annotation=ann)
+               for n, (ann, marker) in options.items()]
+    command.__signature__ = sig.replace(parameters=params)
+    command.__annotations__ = {**command.__annotations__,
+                               **{n: ann for n, (ann, _) in options.items()}}
+    return command
+
+
+def sun_options(*names: str, **defaults):
+    """Give a command declared with ``**sun`` the sun options ``names`` and those given
+    ``defaults`` (without either, all of :data:`SUN_OPTIONS`: --sun-elevation, --sun-azimuth,
+    --lat, --lon, --time, --sun-method), each declared by :func:`sun_option` with the
+    command's default (else None: the sun by angles or by place); the command gets them in
+    ``sun`` (a dict), for :func:`_sun_from`."""
+    names = names + tuple(defaults) or SUN_BY_ANGLES_OR_PLACE
+    defaults = {"sun_method": "spa", **defaults}
 
     def add(command):
-        kw = inspect.Parameter.KEYWORD_ONLY
-        sig = inspect.signature(command)
-        params = [p for p in sig.parameters.values() if p.kind != inspect.Parameter.VAR_KEYWORD]
-        params += [inspect.Parameter(n, kw, annotation=_SUN_TYPES[n],
-                                     default=sun_option(n, "spa" if n == "sun_method" else None))
-                   for n in names]
-        command.__signature__ = sig.replace(parameters=params)
-        command.__annotations__ = {**command.__annotations__, **{n: _SUN_TYPES[n] for n in names}}
-        return command
+        return _add_options(command, {n: (_SUN_TYPES[n], sun_option(n, defaults.get(n)))
+                                      for n in names})
     return add
+
+
+def dask_options(what: str):
+    """Give a command declared with ``**dask`` the options --scheduler and --workers: its
+    pieces of work (``what``) as Dask tasks on a cluster or on local processes; the command
+    gets them in ``dask`` (a dict), for :func:`_dask_choice`."""
+    def add(command):
+        return _add_options(command, {
+            "scheduler": (Optional[str], typer.Option(
+                None, help=f"Render {what} as tasks on this Dask cluster (tcp://HOST:8786).")),
+            "workers": (int, typer.Option(
+                0, help=f"Render {what} on a local Dask cluster of N processes (0: in "
+                        "process)."))})
+    return add
+
+
+def _dask_choice(dask: dict) -> tuple:
+    """(scheduler, workers, whether Dask runs the work) of :func:`dask_options`, checked."""
+    scheduler, workers = dask.get("scheduler"), dask.get("workers", 0)
+    if workers < 0:
+        raise ValueError(f"workers = {workers} is out of range [0, inf)")
+    return scheduler, workers, scheduler is not None or workers > 0
 
 
 def _check_sun_option(name: str, value) -> float:

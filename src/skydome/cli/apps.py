@@ -11,13 +11,15 @@ import typer
 from skydome.cli._kit import (EXTRA, PROJECTIONS, UserError, _build_model, _check_azimuth,
                               _check_clock, _check_date, _check_figure_path, _check_memory,
                               _check_shared, _check_sun_option, _check_utc_offset,
-                              _folder_model, _make_sun, _model_spec, _Progress, _run,
-                              _split_specs, sun_option)
+                              _dask_choice, _folder_model, _model_spec, _Progress, _run,
+                              _split_specs, _sun_from, dask_options, sun_option,
+                              sun_options)
 
 commands = typer.Typer()
 
 
 @commands.command("compare", context_settings=EXTRA)
+@dask_options("the grid's cells")
 def compare_cmd(
     ctx: typer.Context,
     models: str = typer.Option(..., help="Comma-separated model specs, e.g. single_scattering,kaneda1991,preetham1999:3."),
@@ -27,8 +29,7 @@ def compare_cmd(
     size: int = typer.Option(128, help="Fisheye size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder (created if missing): grid.png, error_*.png, table.md, table.csv."),
-    scheduler: Optional[str] = typer.Option(None, help="Render the grid's cells as tasks on this Dask cluster (tcp://HOST:8786)."),
-    workers: int = typer.Option(0, help="Render the cells on a local Dask cluster of N processes (0: in process)."),
+    **dask,
 ):
     """Render several models for several sun elevations and measure each against a reference.
 
@@ -62,9 +63,7 @@ def compare_cmd(
         check_int("size", size, 16, 4096)
         check_int("wavelengths", wavelengths, 3, 401)
         _check_memory("size", size, size * size, max(wavelengths if c.native == "spectral" else 3 for c in classes))
-        if workers < 0:
-            raise ValueError(f"workers = {workers} is out of range [0, inf)")
-        distributed = scheduler is not None or workers > 0
+        scheduler, workers, distributed = _dask_choice(dask)
         progress = _Progress("comparing models")
         try:
             if distributed:  # cells as Dask tasks, resumable from OUT.chunks/
@@ -88,6 +87,7 @@ def compare_cmd(
 
 
 @commands.command("timelapse", context_settings=EXTRA)
+@dask_options("the frames")
 def timelapse_cmd(
     ctx: typer.Context,
     lat: float = sun_option("lat", ...),
@@ -103,8 +103,7 @@ def timelapse_cmd(
     size: int = typer.Option(256, help="Frame size in pixels, 16..4096."),
     wavelengths: int = typer.Option(16, help="Number of wavelengths 380-780 nm, 3..401."),
     out: str = typer.Option(..., help="Output folder: frame_HHMM.png, contact_sheet.png, colours.png, colours.csv."),
-    scheduler: Optional[str] = typer.Option(None, help="Render the frames as tasks on this Dask cluster (tcp://HOST:8786)."),
-    workers: int = typer.Option(0, help="Render the frames on a local Dask cluster of N processes (0: in process)."),
+    **dask,
 ):
     """The colour of the sky through a day: frames, a contact sheet and a colour-against-time plot.
 
@@ -130,9 +129,7 @@ def timelapse_cmd(
         el = np.atleast_1d(solar_position(lat, lon, times)[0])
         _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3,
                       held_images=max(int(np.sum(el >= min_elevation)) - 1, 0))
-        if workers < 0:
-            raise ValueError(f"workers = {workers} is out of range [0, inf)")
-        distributed = scheduler is not None or workers > 0
+        scheduler, workers, distributed = _dask_choice(dask)
         progress = _Progress("timelapse")
         try:
             if distributed:  # frames as Dask tasks, resumable from OUT.chunks/
@@ -158,9 +155,8 @@ def timelapse_cmd(
 
 
 @commands.command("polarisation")
+@sun_options(sun_elevation=20.0, sun_azimuth=180.0)
 def polarisation_cmd(
-    sun_elevation: float = sun_option("sun_elevation", 20.0),
-    sun_azimuth: float = sun_option("sun_azimuth", 180.0),
     method: str = typer.Option("montecarlo", help="montecarlo (multiple scattering, aerosols) or rayleigh_single (analytic)."),
     size: int = typer.Option(48, help="Fisheye size in pixels, 4..1024."),
     samples: int = typer.Option(2000, help="Monte Carlo paths per pixel, 2..10^8."),
@@ -169,6 +165,7 @@ def polarisation_cmd(
     turbidity: float = typer.Option(2.5, help="Turbidity of the atmosphere, 1..32."),
     out: str = typer.Option(..., help="Output figure (.png, .pdf or .svg): degree and angle of polarisation maps."),
     csv: Optional[str] = typer.Option(None, help="Also write the numbers per pixel to this .csv file."),
+    **sun,
 ):
     """Maps of the degree and angle of polarisation of the sky (fisheye, north up, east left)."""
     def go():
@@ -190,7 +187,7 @@ def polarisation_cmd(
         check_int("seed", seed, 0, 2 ** 63 - 1)
         check_number("wavelength", wavelength, 300.0, 1000.0, "nm")
         check_number("turbidity", turbidity, 1.0, 32.0)
-        s = _make_sun(sun_elevation, sun_azimuth, None, None, None, "spa")
+        s = _sun_from(sun)
         from skydome.apps.polarisation import run_polarisation
 
         dop, angle = run_polarisation(out, s, method=method, csv=csv, size=size, samples=samples, seed=seed,
@@ -242,12 +239,11 @@ def twilight_cmd(
 
 
 @commands.command("airlight")
+@sun_options(sun_elevation=20.0, sun_azimuth=120.0)
 def airlight_cmd(
     image: Optional[str] = typer.Option(None, help="Input image: .png (sRGB) or .exr/.npy (linear), white-balanced to the sun."),
     depth: Optional[str] = typer.Option(None, help="Depth map [m]: .exr (Z, Y or R channel) or .npy; inf = sky."),
     synthetic: bool = typer.Option(False, "--synthetic", help="Use the generated synthetic mountain scene instead of --image/--depth."),
-    sun_elevation: float = sun_option("sun_elevation", 20.0),
-    sun_azimuth: float = sun_option("sun_azimuth", 120.0),
     method: str = typer.Option("precomputed", help="precomputed, hillaire2020, preetham1999, hoffman_preetham2002 or dobashi2002."),
     turbidity: float = typer.Option(2.5, help="Turbidity of the air, 2..10 for the Preetham methods, 1..32 otherwise."),
     fov: float = typer.Option(60.0, help="Horizontal field of view of the (pinhole) camera [deg]."),
@@ -255,6 +251,7 @@ def airlight_cmd(
     white_balance: str = typer.Option("fixed", help="fixed: true colour relative to a white surface under the unattenuated sun (clear and hazy air on one scale); sun: output in the input's units (white = white card facing the sun)."),
     fill_sky: bool = typer.Option(False, "--fill-sky", help="Replace the sky pixels (depth inf) by the model's sky along their rays (not for dobashi2002)."),
     out: str = typer.Option(..., help="Output .png (sRGB; before/after sheet with --synthetic), .exr or .npy (linear)."),
+    **sun,
 ):
     """Aerial perspective / airlight: extinction and in-scattered light over an image with a depth map."""
     def go():
@@ -262,9 +259,9 @@ def airlight_cmd(
         from skydome.apps.airlight import airlight_cli
 
         check_output_file(out, (".png", ".exr", ".npy"))
-        sun = _make_sun(sun_elevation, sun_azimuth, None, None, None, "spa")
+        position = _sun_from(sun)
         _check_azimuth("view_azimuth", view_azimuth)
-        airlight_cli(image, depth, out, sun, method=method, turbidity=turbidity, fov_deg=fov,
+        airlight_cli(image, depth, out, position, method=method, turbidity=turbidity, fov_deg=fov,
                      view_azimuth_deg=view_azimuth, synthetic=synthetic, white_balance=white_balance,
                      fill_sky=fill_sky)
         typer.echo(f"wrote {out} ({method}, turbidity {turbidity:g})")
