@@ -60,7 +60,8 @@ def test_command_line_surface_matches_the_snapshot():
         assert got[key] == want[key], key
 
 
-@pytest.mark.parametrize("key", sorted(json.loads(SNAPSHOT.read_text())) if SNAPSHOT.exists() else [])
+@pytest.mark.parametrize("key", sorted(json.loads(SNAPSHOT.read_text()))
+                         if SNAPSHOT.exists() else [])
 def test_every_help_lists_its_commands_and_options(key):
     from skydome.cli import app
 
