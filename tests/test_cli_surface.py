@@ -78,3 +78,34 @@ def test_every_help_lists_its_commands_and_options(key):
 
 if __name__ == "__main__":  # rewrite the snapshot (only when an option legitimately changes)
     SNAPSHOT.write_text(json.dumps(current_surface(), indent=1, sort_keys=True) + "\n")
+
+
+def test_every_sun_option_states_the_one_declared_range():
+    """The sun options are declared once: wherever a command has --sun-elevation,
+    --sun-azimuth, --lat or --lon, its help states the declared range (aureole's narrower
+    lower end of the elevation, 1 deg, excepted), and the ranges are those that
+    skydome.sun.sun_from_options checks."""
+    import typer.main
+
+    from skydome.cli import app
+
+    ranges = {"sun_elevation": "..90", "sun_azimuth": "-360..360", "lat": "-90..90",
+              "lon": "-180..180"}
+    seen = set()
+
+    def walk(cmd, path):
+        if hasattr(cmd, "commands"):
+            for name, sub in cmd.commands.items():
+                walk(sub, path + (name,))
+            return
+        for p in cmd.params:
+            if p.name in ranges or (p.name == "method" and path == ("sun",)):
+                seen.add((path, p.name))
+                text = p.help or ""
+                if p.name in ranges:
+                    assert ranges[p.name] in text, (path, p.name, text)
+                    if p.name == "sun_elevation" and path != ("aureole",):
+                        assert "-90..90" in text, (path, text)
+    walk(typer.main.get_command(app), ())
+    commands = {path for path, _ in seen}
+    assert len(commands) >= 12, sorted(commands)
