@@ -109,3 +109,24 @@ def test_every_sun_option_states_the_one_declared_range():
     walk(typer.main.get_command(app), ())
     commands = {path for path, _ in seen}
     assert len(commands) >= 12, sorted(commands)
+
+
+def test_the_declared_sun_ranges_are_those_the_library_checks():
+    """The command line's declaration of the sun options and skydome.sun.sun_from_options
+    (which every command's sun goes through) accept and refuse the same values: each range's
+    ends pass, a step beyond either end is refused naming the option."""
+    from skydome.cli._kit import SUN_OPTIONS
+    from skydome.sun import sun_from_options
+
+    place = {"lat": 48.2, "lon": 16.4, "time": "2026-06-21T12:00+02:00"}
+    for name, (_, _, rng, _) in SUN_OPTIONS.items():
+        if rng is None:
+            continue
+        for value, ok in ((rng[0], True), (rng[1], True), (rng[0] - 1e-6, False),
+                          (rng[1] + 1e-6, False)):
+            kw = dict(place, **{name: value}) if name in place else {name: value}
+            if ok:
+                sun_from_options(**kw)
+            else:
+                with pytest.raises(ValueError, match=name):
+                    sun_from_options(**kw)

@@ -229,7 +229,7 @@ _PLACE_NOTE = {"lat": " (with --lon and --time)", "time": " (with --lat and --lo
 
 
 def sun_option(name: str, default: Any = None, *, spelling: Optional[str] = None,
-               low: Optional[float] = None, many: bool = False, note: str = ""):
+               low: Optional[float] = None, many: bool = False):
     """The typer option of the sun option ``name`` (a key of :data:`SUN_OPTIONS`) with the
     command's ``default`` (``...``: required; None: the sun by angles defaults to 30 deg high
     in the south, or by place); ``low`` narrows the range's lower end for a command whose
@@ -246,7 +246,6 @@ def sun_option(name: str, default: Any = None, *, spelling: Optional[str] = None
         text += f" (default {_SUN_DEFAULTS[name]:g})"
     elif default is None:
         text += _PLACE_NOTE.get(name, "")
-    text += note
     return typer.Option(default, *([spelling] if spelling else []), help=text + ".")
 
 
