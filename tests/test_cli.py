@@ -113,3 +113,24 @@ def test_import_is_light():
             "if m in sys.modules]; print(','.join(heavy))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == ""
+
+
+def test_model_parameters_have_one_parser(tmp_path):
+    """`export radiance` takes a model's parameters as every command does (--sky-type 1) or
+    as --param sky_type=1: both through the one parser, the same files; an unknown or
+    malformed parameter is refused as one line before anything is written."""
+    common = ["export", "radiance", "--model", "cie2003", "--sun-elevation", "40"]
+    r1 = runner.invoke(app, common + ["--sky-type", "1", "--out", str(tmp_path / "a.rad")])
+    r2 = runner.invoke(app, common + ["--param", "sky_type=1", "--out", str(tmp_path / "b.rad")])
+    assert r1.exit_code == 0 and r2.exit_code == 0, r1.output + r2.output
+    assert (tmp_path / "a.dat").read_bytes() == (tmp_path / "b.dat").read_bytes()
+    r3 = runner.invoke(app, common + ["--sky-type", "12", "--out", str(tmp_path / "c.rad")])
+    assert r3.exit_code == 0 and (tmp_path / "c.dat").read_bytes() != (tmp_path / "a.dat").read_bytes()
+    before = sorted(p.name for p in tmp_path.iterdir())
+    for extra, words in ((["--param", "nope=1"], "has no option --nope"),
+                         (["--nope", "1"], "has no option --nope"),
+                         (["--param", "sky_type"], "NAME=VALUE"),
+                         (["--sky-type", "x"], "--sky-type = 'x'")):
+        r = runner.invoke(app, common + extra + ["--out", str(tmp_path / "d.rad")])
+        assert r.exit_code == 2 and words in r.output, (extra, r.output)
+        assert sorted(p.name for p in tmp_path.iterdir()) == before

@@ -138,7 +138,7 @@ def test_skymatrix_entry_point_turns_off_numpy_huge_pages(monkeypatch):
     import os
 
     import skydome.__main__ as entry
-    from skydome.daylighting import skymatrix_cli
+    from skydome.cli import skymatrix_fast as skymatrix_cli
 
     import gc
 

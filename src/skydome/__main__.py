@@ -1,7 +1,7 @@
 """``skydome`` / ``python -m skydome``: the command line.
 
 A plain perez1993 ``skymatrix`` command line is run without the CLI framework
-(:func:`skydome.daylighting.skymatrix_cli.fast_skymatrix`: no typer, and with ``--backend
+(:func:`skydome.cli.skymatrix_fast.fast_skymatrix`: no typer, and with ``--backend
 numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run); every other
 command line, and any that the
 fast path does not take, goes to the typer application :mod:`skydome.cli`.
@@ -23,7 +23,7 @@ def main() -> None:  # console-script entry point
         # slow: filling a new 161 MB array cost 0.37-0.44 s of system time with them,
         # 0.06-0.09 s with 4 KiB pages. A value set by the user is kept.
         os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
-        from skydome.daylighting.skymatrix_cli import fast_skymatrix, parse_fast_options
+        from skydome.cli.skymatrix_fast import fast_skymatrix, parse_fast_options
 
         opts = parse_fast_options(argv[1:])  # no numpy imported yet
         if opts is not None and opts["model"] == "perez1993":

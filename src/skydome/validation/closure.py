@@ -20,7 +20,8 @@ import numpy as np
 
 from skydome._validate import check_choice, check_number
 
-__all__ = ["BAND_NM", "PYRANOMETER_CLOCK_OFFSET_MIN", "ClosureResult", "closure_wavelengths", "broadband_ghi", "closure"]
+__all__ = ["BAND_NM", "PYRANOMETER_CLOCK_OFFSET_MIN", "ClosureResult", "closure_wavelengths", "broadband_ghi", "closure",
+           "closure_table"]
 
 #: the pyranometer's band [nm] (a thermopile pyranometer's 285-2800 nm, from 300 nm where
 #: the gas table starts: below it the ground irradiance is under 0.01 % of the total)
@@ -168,3 +169,13 @@ def closure(captures, model: str = "precomputed", *, precipitable_water_cm: floa
         out.append(ClosureResult(c.label, model, float(sun.elevation_deg), float(c.ghi_w_m2),
                                  direct + diffuse, direct, diffuse))
     return out
+
+
+def closure_table(results) -> str:
+    """The :func:`closure` results as a Markdown table, a capture a row."""
+    lines = ["| capture | sun elevation [deg] | measured [W m^-2] | model [W m^-2] | direct | "
+             "diffuse | error |", "|---|---|---|---|---|---|---|"]
+    lines += [f"| {r.capture} | {r.sun_elevation_deg:.1f} | {r.measured_w_m2:.1f} | "
+              f"{r.model_w_m2:.1f} | {r.direct_w_m2:.1f} | {r.diffuse_w_m2:.1f} | "
+              f"{100 * r.error:+.1f} % |" for r in results]
+    return "\n".join(lines)

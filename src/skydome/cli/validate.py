@@ -12,13 +12,10 @@ from typing import Optional
 
 import typer
 
+from skydome.cli._kit import _fail
+
 validate_app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                            help="Validate the models against measured skies.")
-
-
-def _fail(message: str) -> None:
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code=2)
 
 
 def _captures(captures):
@@ -73,18 +70,11 @@ def measured(
     if out is None:
         typer.echo(table)
         return
-    import os
-    import tempfile
+    from skydome._io import atomic_write
 
-    p = Path(out)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(table)
-        os.replace(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    def write(tmp):
+        Path(tmp).write_text(table, encoding="utf-8")
+    atomic_write(out, write)
     typer.echo(f"wrote {out}")
 
 
@@ -106,8 +96,4 @@ def closure_cmd(
         _fail(f"water = {water:g} is out of range [0, 10] cm")
     labs = _captures(captures)
     res = closure.closure(load_captures(labs), model, precipitable_water_cm=water, fast=fast)
-    lines = ["| capture | sun elevation [deg] | measured [W m^-2] | model [W m^-2] | direct | diffuse | error |",
-             "|---|---|---|---|---|---|---|"]
-    lines += [f"| {r.capture} | {r.sun_elevation_deg:.1f} | {r.measured_w_m2:.1f} | {r.model_w_m2:.1f} | "
-              f"{r.direct_w_m2:.1f} | {r.diffuse_w_m2:.1f} | {100 * r.error:+.1f} % |" for r in res]
-    typer.echo("\n".join(lines))
+    typer.echo(closure.closure_table(res))

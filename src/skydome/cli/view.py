@@ -6,9 +6,6 @@ import sys
 
 import typer
 
-__all__ = ["view"]
-
-
 def view(port: int = typer.Option(0, help="port on 127.0.0.1 (0: any free port)"),
          host: str = typer.Option("127.0.0.1", help="loopback address to bind: 127.0.0.1, ::1 or localhost"),
          no_browser: bool = typer.Option(False, "--no-browser", help="do not open a browser"),

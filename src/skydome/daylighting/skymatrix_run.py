@@ -1,22 +1,15 @@
-"""``skydome skymatrix`` for perez1993, without the CLI framework (typer, pydantic, rich).
+"""The ``skymatrix`` work once its options are parsed, as plain functions: the perez1993
+matrix with its files (:func:`run_perez_skymatrix`) and any other model's matrix as a Zarr
+array (:func:`write_model_sky_matrix`).
 
-:func:`run_perez_skymatrix` is the command's work once its options are parsed; the typer
-command (:func:`skydome.daylighting.cli.skymatrix_cmd`) calls it, and so does
-:func:`fast_skymatrix`, which ``skydome`` (:mod:`skydome.__main__`) tries first for a
-``skymatrix`` command line: it parses the plain options itself (``--name value``,
-``--name=value``, ``--overwrite``) so that a run imports neither typer (with pydantic, 0.2-0.3
-s of CPU on a 2-core EPYC), nor numba with ``--backend numpy`` or ``auto`` and a fixed order
-(0.4-0.5 s): a whole gendaymtx-like run (``--order 0 --sun-position radiance --backend
-numpy``) is then numpy's start-up plus the work (gendaymtx's CPU time / 5.3 at MF:4 by
-the best rounds, / 4.9 by the medians, docs/performance.md). Anything
-else (help, an unknown or repeated-list option, another model, Dask, a value it refuses)
-goes to the typer command, which parses it and reports an error as one line with exit code 2
-as every command does: the fast path reports nothing itself, and leaves nothing on disk.
+Both validate everything before any work and raise ValueError naming the option, its value
+and what is valid (or call the ``fail`` given); they import no command-line framework, so
+that the command line's fast path (``skydome.cli.skymatrix_fast``) runs a perez1993 matrix
+without typer.
 """
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 #: The command's options and their defaults (the typer command declares the same).
@@ -26,14 +19,21 @@ SKYMATRIX_DEFAULTS = {
     "sun_position": "spa", "fmt": "float", "albedo": "0.2", "overwrite": False,
     "scheduler": None, "workers": 0, "chunk_hours": 730, "backend": "numba",
 }
-#: Long option -> parameter, for the options :func:`fast_skymatrix` parses (string values).
-_FAST_OPTIONS = {"--weather": "weather", "--out": "out", "--patches": "patches",
-                 "--model": "model", "--components": "components", "--sun": "sun",
-                 "--order": "order", "--sun-position": "sun_position", "--format": "fmt",
-                 "--albedo": "albedo", "--backend": "backend"}
 
 
-def order_option(order, model, fail):
+def _refuse(message: str) -> None:
+    raise ValueError(message)
+
+
+def _call(func, *args, **kwargs):
+    return func(*args, **kwargs)
+
+
+def _quiet(text, err=False) -> None:
+    pass
+
+
+def order_option(order, model, fail=_refuse):
     """``--order``: "adaptive" (perez1993's default) or an integer in [0, 16] (the other
     models' default 4); a bad value goes to ``fail``."""
     perez = model == "perez1993"
@@ -49,12 +49,13 @@ def order_option(order, model, fail):
 
 def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, order,
                         sun_position, fmt, albedo, overwrite, scheduler, workers, chunk_hours,
-                        model, fail, guard, echo, backend="numba"):
+                        model, fail=_refuse, guard=_call, echo=_quiet, backend="numba"):
     """The perez1993 ``skymatrix`` command with parsed options (``ps`` the PatchSet, ``order``
     from :func:`order_option`): validates everything, then computes and writes the matrix
     (and with ``--sun separate`` the sun matrix and the suns' scene). ``fail(message)``
-    reports bad input and does not return; ``guard(func, *args)`` calls func turning bad
-    input into ``fail``; ``echo(text, err=False)`` prints."""
+    reports bad input and does not return (default: raise ValueError); ``guard(func, *args)``
+    calls func turning bad input into ``fail`` (default: a plain call); ``echo(text,
+    err=False)`` reports (default: nothing)."""
     import numpy as np
 
     from skydome.constants import SUN_ANGULAR_RADIUS_DEG
@@ -191,65 +192,58 @@ def _sun_scene(m, hours_minute, alt_ok) -> str:
     return "".join(out)
 
 
-class _Refused(Exception):
-    """The fast path does not take this command line (the typer command will)."""
 
+def write_model_sky_matrix(weather, out, ps, model, components, *, sun=None, aod_from=None,
+                           params=None, order=4, sun_position="spa", overwrite=False,
+                           scheduler=None, workers=0, chunk_hours=730) -> str:
+    """``skymatrix --model NAME`` for any model but perez1993: a Zarr array (hours, patches,
+    components) written one chunk of hours at a time into a temporary folder beside ``out``,
+    renamed when complete. ``params`` are the model's keyword parameters. Every option is
+    checked first (ValueError naming it); returns the line that says what was written."""
+    import os
+    import shutil
 
-def _refuse(message=""):
-    raise _Refused(message)
+    from skydome.daylighting.skymatrix import parse_components, weather_model_sky_matrix
+    from skydome.daylighting.weather import read_weather
+    from skydome.models import get_model_class
 
-
-def _try(func, *args, **kwargs):
+    get_model_class(model)
+    parse_components(components)
+    if sun not in (None, "none"):
+        raise ValueError(f"sun = {sun!r}: model {model!r} matrices hold the sky only (give "
+                         "--sun none or leave it out)")
+    if scheduler is not None or workers > 0:
+        raise ValueError(f"--scheduler/--workers are available for perez1993 matrices only, "
+                         f"not {model!r}")
+    if sun_position not in ("spa", "radiance"):
+        raise ValueError(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
+    if chunk_hours < 1:
+        raise ValueError(f"chunk-hours = {chunk_hours} must be >= 1")
+    out_p = Path(out)
+    if out_p.suffix.lower() != ".zarr":
+        raise ValueError(f"out = {out!r}: model {model!r} matrices are written as Zarr "
+                         "(OUT.zarr)")
+    if out_p.exists() and not overwrite:
+        raise ValueError(f"out = {out!r} exists (use --overwrite)")
+    if not out_p.parent.is_dir():
+        raise ValueError(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
+    w = read_weather(weather, sun_position=sun_position)
+    tmp = out_p.parent / f".{out_p.name}.part"
+    shutil.rmtree(tmp, ignore_errors=True)
     try:
-        return func(*args, **kwargs)
-    except Exception as exc:  # bad input or a failed write: the typer command reports it
-        raise _Refused(str(exc)) from exc
-
-
-def _echo(text, err=False):
-    print(text, file=sys.stderr if err else sys.stdout)
-
-
-def parse_fast_options(argv):
-    """The options of a plain ``skymatrix`` command line (``--name value``, ``--name=value``,
-    ``--overwrite``; the last of a repeated option wins, as in typer), or None for anything
-    else: help, other options, positional arguments, a missing value."""
-    opts = dict(SKYMATRIX_DEFAULTS)
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a == "--overwrite":
-            opts["overwrite"] = True
-            i += 1
-            continue
-        name, eq, value = a.partition("=")
-        if name not in _FAST_OPTIONS:
-            return None
-        if not eq:
-            if i + 1 >= len(argv) or argv[i + 1].startswith("-"):
-                return None  # a missing value (or one typer would read otherwise)
-            value = argv[i + 1]
-            i += 1
-        opts[_FAST_OPTIONS[name]] = value
-        i += 1
-    if opts["weather"] is None or opts["out"] is None:
-        return None
-    return opts
-
-
-def fast_skymatrix(argv) -> bool:
-    """Run a plain perez1993 ``skymatrix`` command line in this process without typer;
-    True if it ran to completion, False if the typer command should take it (nothing has
-    been printed and no output is left on disk then)."""
-    opts = parse_fast_options(argv)
-    if opts is None or opts["model"] != "perez1993":
-        return False
-    from skydome.daylighting.patches import patches as make_patches
-
-    try:
-        ps = _try(make_patches, opts.pop("patches"))
-        opts["order"] = order_option(opts["order"], opts["model"], _refuse)
-        run_perez_skymatrix(ps=ps, fail=_refuse, guard=_try, echo=_echo, **opts)
-    except _Refused:
-        return False
-    return True
+        arr = weather_model_sky_matrix(w, model, aod_from=aod_from, params=dict(params or {}),
+                                       patches=ps, order=order, components=components,
+                                       sun_position=sun_position, zarr_path=tmp,
+                                       chunk_hours=chunk_hours)
+        arr.attrs.update({"model": model, "components": components, "patches": ps.name,
+                          "order": order, "aod_from": str(aod_from), "weather":
+                          Path(weather).name, "axes": ["hour", "patch", "component"],
+                          "units": "cd/m^2" if components == "luminance" else
+                          "W m^-2 sr^-1 nm^-1"})
+        if out_p.exists():
+            shutil.rmtree(out_p)
+        os.replace(tmp, out_p)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return f"wrote {out}: {len(w)} hours x {len(ps)} patches x {arr.shape[2]} components"

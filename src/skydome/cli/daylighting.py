@@ -1,7 +1,9 @@
-"""Daylighting commands of the ``skydome`` CLI: ``weather info`` and ``skymatrix``.
+"""The daylighting commands: ``weather info``, ``skymatrix``, ``illuminance`` and
+``daylight-factor``.
 
-``register(app)`` adds them to the main typer app. Heavy modules (pvlib, numba kernels) are
-imported inside the commands only.
+Heavy modules (pvlib, numba kernels) are imported inside the commands only; the perez1993
+``skymatrix`` work is :func:`skydome.daylighting.skymatrix_run.run_perez_skymatrix`, which
+the fast path :mod:`skydome.cli.skymatrix_fast` runs without typer.
 """
 
 from __future__ import annotations
@@ -11,23 +13,11 @@ from typing import Optional
 
 import typer
 
-from skydome.daylighting.skymatrix_cli import SKYMATRIX_DEFAULTS as D
+from skydome.cli._kit import _fail, _param_options, _parse_model_params, _run
+from skydome.daylighting.skymatrix_run import SKYMATRIX_DEFAULTS as D
 
+commands = typer.Typer()
 weather_app = typer.Typer(no_args_is_help=True, help="Hourly weather files (EPW, TMY3).")
-
-
-def _fail(message: str) -> None:
-    """One line on stderr, exit code 2 (the main CLI's convention)."""
-    from skydome.cli import _fail as fail
-
-    fail(message)
-
-
-def _guard(func, *args, **kwargs):
-    """Call ``func``; bad input becomes one line on stderr and exit code 2."""
-    from skydome.cli import _run
-
-    return _run(func, *args, **kwargs)
 
 
 @weather_app.command("info")
@@ -35,7 +25,7 @@ def weather_info(path: str = typer.Argument(..., help="EPW or TMY3 file")):
     """Site, period and what the weather file holds."""
     from skydome.daylighting.weather import read_weather
 
-    w = _guard(read_weather, path)
+    w = _run(read_weather, path)
     s = w.summary()
     typer.echo(f"site: {s['site']}  lat {s['latitude_deg']:.3f} deg N, lon "
                f"{s['longitude_deg']:.3f} deg E, UTC{s['utc_offset_h']:+g} h, "
@@ -48,6 +38,7 @@ def weather_info(path: str = typer.Argument(..., help="EPW or TMY3 file")):
                f"DHI {s['annual_dhi_kwh_m2']:.1f} kWh/m^2")
 
 
+@commands.command("skymatrix")
 def skymatrix_cmd(
     weather: str = typer.Option(..., "--weather", help="EPW, TMY3 or Radiance .wea file"),
     out: str = typer.Option(..., "--out", help="output .mtx (Radiance matrix) or .npy"),
@@ -88,75 +79,32 @@ def skymatrix_cmd(
     With --scheduler or --workers the hours are computed as chunks on Dask, kept in
     OUT.chunks/ until the matrix is written: an interrupted run, rerun, reuses them."""
     from skydome.daylighting.patches import patches as make_patches
-    from skydome.daylighting.skymatrix_cli import order_option, run_perez_skymatrix
+    from skydome.daylighting.skymatrix_run import (order_option, run_perez_skymatrix,
+                                                   write_model_sky_matrix)
 
     # -- validate everything before any work -------------------------------------------------
-    ps = _guard(make_patches, patches)
+    ps = _run(make_patches, patches)
     order = order_option(order, model, _fail)
     if model != "perez1993":
-        return _model_matrix(weather, out, ps, model, components or "spectral:16", sun,
-                             aod_from, param, order, sun_position, overwrite, scheduler,
-                             workers, chunk_hours)
+        from skydome.models import get_model_class
+
+        cls = _run(get_model_class, model)
+        params = _run(lambda: _parse_model_params(cls, _param_options(param)))
+        line = _run(write_model_sky_matrix, weather, out, ps, model, components or "spectral:16",
+                    sun=sun, aod_from=aod_from, params=params, order=order,
+                    sun_position=sun_position, overwrite=overwrite, scheduler=scheduler,
+                    workers=workers, chunk_hours=chunk_hours)
+        typer.echo(line)
+        return
     run_perez_skymatrix(weather=weather, out=out, ps=ps, components=components, sun=sun,
                         aod_from=aod_from, param=param, order=order,
                         sun_position=sun_position, fmt=fmt, albedo=albedo,
                         overwrite=overwrite, scheduler=scheduler, workers=workers,
-                        chunk_hours=chunk_hours, model=model, fail=_fail, guard=_guard,
+                        chunk_hours=chunk_hours, model=model, fail=_fail, guard=_run,
                         echo=typer.echo, backend=backend)
 
 
-def _model_matrix(weather, out, ps, model, components, sun, aod_from, param, order,
-                  sun_position, overwrite, scheduler, workers, chunk_hours):
-    """``skymatrix --model NAME`` for any model but perez1993: a Zarr array (hours, patches,
-    components) written one chunk of hours at a time into a temporary folder beside OUT,
-    renamed when complete."""
-    import os
-    import shutil
-
-    from skydome.daylighting.skymatrix import parse_components, weather_model_sky_matrix
-    from skydome.daylighting.weather import read_weather
-    from skydome.models import get_model_class
-
-    _guard(get_model_class, model)
-    _guard(parse_components, components)
-    if sun not in (None, "none"):
-        _fail(f"sun = {sun!r}: model {model!r} matrices hold the sky only (give --sun none "
-              "or leave it out)")
-    if scheduler is not None or workers > 0:
-        _fail(f"--scheduler/--workers are available for perez1993 matrices only, not {model!r}")
-    if sun_position not in ("spa", "radiance"):
-        _fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
-    if chunk_hours < 1:
-        _fail(f"chunk-hours = {chunk_hours} must be >= 1")
-    params = _params(param)
-    out_p = Path(out)
-    if out_p.suffix.lower() != ".zarr":
-        _fail(f"out = {out!r}: model {model!r} matrices are written as Zarr (OUT.zarr)")
-    if out_p.exists() and not overwrite:
-        _fail(f"out = {out!r} exists (use --overwrite)")
-    if not out_p.parent.is_dir():
-        _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
-    w = _guard(read_weather, weather, sun_position=sun_position)
-    tmp = out_p.parent / f".{out_p.name}.part"
-    shutil.rmtree(tmp, ignore_errors=True)
-    try:
-        arr = _guard(weather_model_sky_matrix, w, model, aod_from=aod_from, params=params,
-                     patches=ps, order=order, components=components,
-                     sun_position=sun_position, zarr_path=tmp, chunk_hours=chunk_hours)
-        arr.attrs.update({"model": model, "components": components, "patches": ps.name,
-                          "order": order, "aod_from": str(aod_from), "weather":
-                          Path(weather).name, "axes": ["hour", "patch", "component"],
-                          "units": "cd/m^2" if components == "luminance" else
-                          "W m^-2 sr^-1 nm^-1"})
-        if out_p.exists():
-            shutil.rmtree(out_p)
-        os.replace(tmp, out_p)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    typer.echo(f"wrote {out}: {len(w)} hours x {len(ps)} patches x {arr.shape[2]} components")
-
-
+@commands.command("illuminance")
 def illuminance_cmd(
     weather: str = typer.Option(..., "--weather", help="EPW or TMY3 file"),
     plane: list[str] = typer.Option(..., "--plane",
@@ -171,7 +119,7 @@ def illuminance_cmd(
     from skydome.daylighting.series import parse_plane, plane_series, write_series_csv
     from skydome.daylighting.weather import read_weather
 
-    planes = [_guard(parse_plane, p) for p in plane]
+    planes = [_run(parse_plane, p) for p in plane]
     if model != "perez1993":
         _fail(f"model = {model!r} is not available for illuminance series (choices: perez1993)")
     if not 0.0 <= albedo <= 1.0:
@@ -183,12 +131,13 @@ def illuminance_cmd(
         _fail(f"out = {out!r} exists (use --overwrite)")
     if not out_p.parent.is_dir():
         _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
-    w = _guard(read_weather, weather)
-    res = _guard(plane_series, w, planes, ground_reflectance=albedo, sun_position=sun_position)
-    _guard(write_series_csv, out_p, res, overwrite=overwrite)
+    w = _run(read_weather, weather)
+    res = _run(plane_series, w, planes, ground_reflectance=albedo, sun_position=sun_position)
+    _run(write_series_csv, out_p, res, overwrite=overwrite)
     typer.echo(f"wrote {out}: {len(w)} hours x {len(planes)} planes")
 
 
+@commands.command("daylight-factor")
 def daylight_factor_cmd(
     plane: list[str] = typer.Option([], "--plane", help="unobstructed plane: horizontal | "
                                     "vertical:AZ | tilted:TILT:AZ (repeat)"),
@@ -223,8 +172,8 @@ def daylight_factor_cmd(
         if not out_p.parent.is_dir():
             _fail(f"out = {out!r}: folder {str(out_p.parent)!r} does not exist")
     if plane:
-        planes = [_guard(parse_plane, p) for p in plane]
-        df = [_guard(plane_daylight_factor, p.tilt_deg, p.azimuth_deg,
+        planes = [_run(parse_plane, p) for p in plane]
+        df = [_run(plane_daylight_factor, p.tilt_deg, p.azimuth_deg,
                      ground_reflectance=ground_reflectance) for p in planes]
         rows = [f"{p.name},{p.tilt_deg:g},{p.azimuth_deg:g},{v:.4f}" for p, v in zip(planes, df)]
         text = "plane,tilt_deg,azimuth_deg,daylight_factor_percent\n" + "\n".join(rows) + "\n"
@@ -232,7 +181,7 @@ def daylight_factor_cmd(
         for f in scene:
             if not Path(f).is_file():
                 _fail(f"scene = {f!r}: no such file")
-        pts = _guard(read_sensors, sensors)
+        pts = _run(read_sensors, sensors)
         try:
             df = room_daylight_factor(scene, pts, ground_reflectance=ground_reflectance,
                                       ab=ab, ad=ad)
@@ -245,75 +194,5 @@ def daylight_factor_cmd(
     else:
         from skydome.daylighting.radiance_io import atomic_write_bytes
 
-        _guard(atomic_write_bytes, out_p, text.encode())
+        _run(atomic_write_bytes, out_p, text.encode())
         typer.echo(f"wrote {out}")
-
-
-def _params(items) -> dict:
-    """--param NAME=VALUE items as a dict (numbers converted)."""
-    params = {}
-    for item in items:
-        if "=" not in item:
-            _fail(f"param = {item!r} must be NAME=VALUE")
-        k, _, v = item.partition("=")
-        params[k.strip()] = _value(v.strip())
-    return params
-
-
-def _value(text: str):
-    for conv in (int, float):
-        try:
-            return conv(text)
-        except ValueError:
-            pass
-    return text
-
-
-def export_radiance_cmd(
-    out: str = typer.Option(..., "--out", help="output .rad (with .dat and .cal beside it)"),
-    model: str = typer.Option("perez1993", "--model", help="any skydome model"),
-    dni: Optional[float] = typer.Option(None, "--dni", help="direct normal irradiance [W/m^2]"),
-    dhi: Optional[float] = typer.Option(None, "--dhi",
-                                        help="diffuse horizontal irradiance [W/m^2]"),
-    sun_elevation: Optional[float] = typer.Option(None, "--sun-elevation", help="[deg]"),
-    sun_azimuth: Optional[float] = typer.Option(None, "--sun-azimuth",
-                                                help="[deg from north towards east]"),
-    lat: Optional[float] = typer.Option(None, "--lat", help="latitude [deg N]"),
-    lon: Optional[float] = typer.Option(None, "--lon", help="longitude [deg E]"),
-    time: Optional[str] = typer.Option(None, "--time", help="ISO time with UTC offset"),
-    param: list[str] = typer.Option([], "--param", help="model parameter NAME=VALUE (repeat)"),
-    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
-):
-    """A Radiance sky for one time: the model's sky as a brightdata pattern, its sun as a
-    light source."""
-    import skydome as sd
-    from skydome.daylighting.scene import write_radiance_sky
-
-    params = _params(param)
-    if dni is not None:
-        params["dni"] = dni
-    if dhi is not None:
-        params["dhi"] = dhi
-    by_place = any(v is not None for v in (lat, lon, time))
-    if by_place:
-        if None in (lat, lon, time) or sun_elevation is not None or sun_azimuth is not None:
-            _fail("give --lat, --lon and --time together, or --sun-elevation/--sun-azimuth")
-        sun = _guard(sd.Sun.from_location, lat, lon, time)
-    else:
-        sun = _guard(sd.Sun, elevation_deg=30.0 if sun_elevation is None else sun_elevation,
-                     azimuth_deg=180.0 if sun_azimuth is None else sun_azimuth)
-    m = _guard(sd.model, model, sun=sun, **params)
-    files = _guard(write_radiance_sky, m, out, overwrite=overwrite)
-    typer.echo(f"wrote {', '.join(str(f) for f in files)}")
-
-
-def register(app: typer.Typer) -> None:
-    """Add the daylighting commands to ``app``."""
-    app.add_typer(weather_app, name="weather")
-    app.command("skymatrix")(skymatrix_cmd)
-    app.command("illuminance")(illuminance_cmd)
-    app.command("daylight-factor")(daylight_factor_cmd)
-    # `skydome export radiance` joins the export group of skydome.export.cli
-    from skydome.export.cli import export_app
-
-    export_app.command("radiance")(export_radiance_cmd)

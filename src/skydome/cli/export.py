@@ -1,4 +1,5 @@
-"""``skydome export``: environment maps and sun lights for renderers and engines.
+"""``skydome export``: environment maps, sun lights, LUT bakes and Radiance skies for
+renderers and engines.
 
 Every command validates all of its input before any work; a bad value prints one line on
 stderr and exits with code 2, leaving nothing on disk.
@@ -11,59 +12,14 @@ from typing import Optional
 
 import typer
 
+from skydome.cli._kit import (EXTRA, UserError, _param_options, _parse_model_params, _Progress,
+                              _run, _sky, _sun_from, sun_options)
+
 export_app = typer.Typer(no_args_is_help=True, rich_markup_mode=None,
                          help="Environment maps and sun lights for Blender, Mitsuba, pbrt, "
                               "Unreal, Unity, three.js and Radiance.")
 
-_EXTRA = {"allow_extra_args": True, "ignore_unknown_options": True}
-# options shared by the commands (typer reads these markers as the parameters' defaults)
 _MODEL = typer.Option("precomputed", help="Registered model name (see `skydome models`).")
-_SUN_EL = typer.Option(None, help="Sun elevation [deg], -90..90 (default 30).")
-_SUN_AZ = typer.Option(None, help="Sun azimuth from north towards east [deg] (default 180).")
-_LAT = typer.Option(None, help="Latitude [deg] (with --lon and --time).")
-_LON = typer.Option(None, help="Longitude [deg], east positive.")
-_TIME = typer.Option(None, help="ISO 8601 time with UTC offset.")
-_SUN_METHOD = typer.Option("spa", help="Solar position algorithm: spa or preetham1999.")
-# the sun options of every command, in the order of skydome.cli._make_sun's arguments
-_SUN_OPTIONS = {"sun_elevation": (Optional[float], _SUN_EL),
-                "sun_azimuth": (Optional[float], _SUN_AZ),
-                "lat": (Optional[float], _LAT), "lon": (Optional[float], _LON),
-                "time": (Optional[str], _TIME), "sun_method": (str, _SUN_METHOD)}
-
-
-def _sun_options(command):
-    """Give a command (declared with ``**sun``) the sun options shared by every command:
-    --sun-elevation, --sun-azimuth, --lat, --lon, --time, --sun-method (typer reads the
-    parameters from the signature and the annotations)."""
-    import inspect
-
-    kw = inspect.Parameter.KEYWORD_ONLY
-    sig = inspect.signature(command)
-    params = [p for p in sig.parameters.values() if p.kind != inspect.Parameter.VAR_KEYWORD]
-    params += [inspect.Parameter(name, kw, default=marker, annotation=ann)
-               for name, (ann, marker) in _SUN_OPTIONS.items()]
-    command.__signature__ = sig.replace(parameters=params)
-    command.__annotations__ = {**command.__annotations__,
-                               **{n: ann for n, (ann, _) in _SUN_OPTIONS.items()}}
-    return command
-
-
-def _sky(model, extra, sun: dict, check=None, progress=None):
-    """The model and sun options of every command, validated before any work: the model
-    class and its ``--name value`` parameters, then ``check()`` (the command's own
-    options), then the sun; returns the constructed sky (its set-up's progress shown on
-    ``progress`` when given)."""
-    from skydome.cli import _build_model, _make_sun, _parse_model_params
-    from skydome.models import get_model_class
-
-    cls = get_model_class(model)
-    params = _parse_model_params(cls, extra)
-    if check is not None:
-        check()
-    position = _make_sun(*(sun.get(n) for n in _SUN_OPTIONS))
-    if progress is None:
-        return cls(sun=position, **params)
-    return _build_model(cls, progress, sun=position, **params)
 
 
 def _sun_path(out: str):
@@ -73,8 +29,8 @@ def _sun_path(out: str):
     return p.with_name(p.stem + ".sun.json")
 
 
-@export_app.command("envmap", context_settings=_EXTRA)
-@_sun_options
+@export_app.command("envmap", context_settings=EXTRA)
+@sun_options()
 def envmap(
     ctx: typer.Context,
     model: str = _MODEL,
@@ -92,8 +48,6 @@ def envmap(
     **sun,
 ):
     """Render a sky into an environment map in a renderer's convention (+ OUT.sun.json)."""
-    from skydome.cli import _run
-
     _run(_envmap, ctx.args, model, out, convention, layout, size, half, sun_in_map, ground,
          ground_albedo, sh, mips, sun, wavelengths)
 
@@ -103,7 +57,6 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
     import json
 
     from skydome._validate import check_int, check_number
-    from skydome.cli import _Progress
     from skydome.export.envmap import check_envmap_options, check_map_path, render_envmap
     from skydome.export.sun import sun_light, write_sun_json
     from skydome.spectra import wavelength_grid
@@ -180,8 +133,8 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
                f"{dt:.1f} s)")
 
 
-@export_app.command("sun", context_settings=_EXTRA)
-@_sun_options
+@export_app.command("sun", context_settings=EXTRA)
+@sun_options()
 def sun_cmd(
     ctx: typer.Context,
     model: str = _MODEL,
@@ -190,15 +143,12 @@ def sun_cmd(
     **sun,
 ):
     """The sun as a light: direction, angular radius, spectral and RGB irradiance, lx."""
-    from skydome.cli import _run
-
     _run(_sun, ctx.args, model, out, convention, sun)
 
 
 def _sun(extra, model, out, convention, sun):
     from pathlib import Path
 
-    from skydome.cli import UserError
     from skydome.export.conventions import get_convention
     from skydome.export.sun import sun_light, write_sun_json
 
@@ -220,8 +170,8 @@ def _sun(extra, model, out, convention, sun):
     typer.echo(f"wrote {out} ({light['illuminance_lx']:.0f} lx, {conv.name} axes)")
 
 
-@export_app.command("luts", context_settings=_EXTRA)
-@_sun_options
+@export_app.command("luts", context_settings=EXTRA)
+@sun_options()
 def luts_cmd(
     ctx: typer.Context,
     model: str = _MODEL,
@@ -232,14 +182,11 @@ def luts_cmd(
 ):
     """Bake the model's tables for a real-time renderer: precomputed in Bruneton's layout,
     hillaire2020 in Hillaire's (+ luts.json: axes, mappings, units, XYZ conversion)."""
-    from skydome.cli import _run
-
     _run(_luts, ctx.args, model, out, format, half, sun)
 
 
 def _luts(extra, model, out, formats, half, sun):
     from skydome._io import check_output_folder
-    from skydome.cli import _Progress
     from skydome.export.luts import LUT_MODELS, check_luts_options, write_luts
 
     checked = {}
@@ -263,3 +210,40 @@ def _luts(extra, model, out, formats, half, sun):
     typer.echo(f"wrote {len(written)} files into {out} ({model}, "
                f"{_time.perf_counter() - t0:.1f} s)")
 
+
+
+@export_app.command("radiance", context_settings=EXTRA)
+@sun_options("sun_elevation", "sun_azimuth", "lat", "lon", "time")
+def export_radiance_cmd(
+    ctx: typer.Context,
+    out: str = typer.Option(..., "--out", help="output .rad (with .dat and .cal beside it)"),
+    model: str = typer.Option("perez1993", "--model", help="any skydome model"),
+    dni: Optional[float] = typer.Option(None, "--dni", help="direct normal irradiance [W/m^2]"),
+    dhi: Optional[float] = typer.Option(None, "--dhi",
+                                        help="diffuse horizontal irradiance [W/m^2]"),
+    param: list[str] = typer.Option([], "--param", help="model parameter NAME=VALUE (repeat); "
+                                    "the same as --NAME VALUE"),
+    overwrite: bool = typer.Option(False, "--overwrite", help="replace existing outputs"),
+    **sun,
+):
+    """A Radiance sky for one time: the model's sky as a brightdata pattern, its sun as a
+    light source.
+
+    Model parameters are given as extra options, e.g. --turbidity 3 (or --param turbidity=3).
+    """
+    _run(_radiance, ctx.args, out, model, dni, dhi, param, overwrite, sun)
+
+
+def _radiance(extra, out, model, dni, dhi, param, overwrite, sun):
+    from skydome.daylighting.scene import write_radiance_sky
+    from skydome.models import get_model_class
+
+    cls = get_model_class(model)
+    params = _parse_model_params(cls, _param_options(param) + list(extra))
+    if dni is not None:
+        params["dni"] = dni
+    if dhi is not None:
+        params["dhi"] = dhi
+    m = cls(sun=_sun_from(sun), **params)
+    files = write_radiance_sky(m, out, overwrite=overwrite)
+    typer.echo(f"wrote {', '.join(str(f) for f in files)}")
