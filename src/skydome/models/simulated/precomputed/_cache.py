@@ -296,19 +296,6 @@ class _NotFinite(Exception):
     pass
 
 
-def _save(file, a: np.ndarray) -> None:
-    """``np.save`` of C-contiguous ``a`` through Python's file writes, which raise OSError
-    with its errno (ENOSPC on a full disk); ``np.save`` to a file name writes with
-    ``ndarray.tofile``, whose short write is an OSError without one."""
-    with open(file, "wb") as f:
-        np.lib.format.write_array_header_1_0(
-            f, {"descr": np.lib.format.dtype_to_descr(a.dtype), "fortran_order": False,
-                "shape": a.shape})
-        data = memoryview(a.reshape(-1)).cast("B")
-        for i in range(0, len(data), 1 << 20):
-            f.write(data[i:i + (1 << 20)])
-
-
 def store(k: str, tables) -> str | None:
     """Write ``tables`` under key ``k`` (a folder of ``.npy`` files and ``meta.json``,
     written under a temporary name and renamed; the stored table of orders 2..N only where
@@ -320,7 +307,7 @@ def store(k: str, tables) -> str | None:
     arrays = tables.arrays()
     if sum(a.nbytes for a in arrays.values()) > limit:
         return None
-    from skydome._io import atomic_folder
+    from skydome._io import atomic_folder, write_npy
 
     folder = cache_dir()
     path = _path(k)
@@ -338,7 +325,7 @@ def store(k: str, tables) -> str | None:
                 crc, finite = _check(a)
                 if not finite:    # never cache a table that is not finite
                     raise _NotFinite(name)
-                _save(os.path.join(tmp, name + ".npy"), a)
+                write_npy(os.path.join(tmp, name + ".npy"), a)
                 names.append(name)
                 sums[name] = _record(a, crc)
             with open(os.path.join(tmp, _META), "w") as f:
