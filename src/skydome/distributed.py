@@ -26,6 +26,7 @@ interruption (Ctrl-C) keeps a new folder, whose chunks a rerun reuses.
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
 import re
 import shutil
@@ -215,8 +216,11 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
             if scheduler is not None:
                 own = client = _connect(scheduler, connect_timeout_s)   # before any write
             else:
+                # the workers' own logging off: a failed chunk (a full disk) reaches the
+                # caller as the chunk's exception, not as a log record on stderr as well
                 cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1,
-                                       processes=True, dashboard_address=None)
+                                       processes=True, dashboard_address=None,
+                                       silence_logs=logging.CRITICAL)
                 own = client = Client(cluster)
         futures, failed = [], False
         try:
