@@ -523,3 +523,30 @@ def test_full_cache_folder_says_so_once(tmp_path, monkeypatch, capfd):
         assert not a.from_cache and not b.from_cache
         assert np.array_equal(a.radiance(AP[0], [550.0]), fresh)
         assert os.listdir(disk) == []
+
+
+@pytest.mark.parametrize("damage", ["flipped", "nan"])
+def test_damaged_saved_table_file_is_refused(damage, tmp_path):
+    """A file written by PrecomputedSky.save with flipped bytes (the zip member's CRC-32
+    no longer matches) or with NaN in a table: load refuses it, naming the file."""
+    import zipfile
+
+    m = tiny(cache=False)
+    path = tmp_path / "t.npz"
+    m.save(path)
+    if damage == "flipped":
+        with zipfile.ZipFile(path) as z:
+            info = z.getinfo("single_scattering.npy")
+        data = bytearray(path.read_bytes())
+        start = info.header_offset + 30 + len(info.filename) + len(info.extra) + 200
+        data[start:start + 64] = bytes(255 - b for b in data[start:start + 64])
+        path.write_bytes(bytes(data))
+    else:
+        with np.load(path) as z:
+            arrays = {k: z[k] for k in z.files}
+        arrays["irradiance"] = arrays["irradiance"].copy()
+        arrays["irradiance"].reshape(-1)[0] = np.nan
+        np.savez(path, **arrays)
+    with pytest.raises(ValueError, match="damaged") as info:
+        P.PrecomputedSky.load(path)
+    assert str(path) in str(info.value)
