@@ -165,3 +165,17 @@ def test_map_and_sun_file_one_unit_on_a_nearly_full_disk(tmp_path):
         import json
 
         assert json.loads((d / "m.sun.json").read_text()) == json.loads(json.dumps(light))
+
+
+@pytest.mark.xfail(strict=True, reason="the skymatrix command must write the assembled matrix "
+                   "through its guard and remove OUT.chunks/ when that write fails")
+def test_full_disk_after_the_chunks_one_line_no_chunk_folder(tmp_path, two_days):
+    """Room for the Dask chunks (about 84 pages) but not for the matrix assembled from them
+    as well (about 82 more): one line, exit 2, neither the matrix nor OUT.chunks/ left."""
+    pytest.importorskip("distributed")
+    with small_disk(tmp_path / "disk", "400k") as d:
+        res = _cli(["skymatrix", "--weather", two_days, "--patches", "reinhart:2",
+                    "--workers", "2", "--chunk-hours", "24", "--out", Path(d) / "a.mtx"])
+        assert "chunks: 2 computed" in res.stderr, res.stderr[-2000:]   # the chunks fitted
+        _one_line_exit_2(res, Path(d) / "a.mtx")
+        assert os.listdir(d) == []
