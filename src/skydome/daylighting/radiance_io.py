@@ -141,10 +141,11 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
 
     The file is a temporary one beside ``path`` (header, then a body of zeros written
     sequentially), renamed to ``path`` when the block ends without an exception and the data
-    is finite; otherwise (also on SIGTERM) it is removed, nothing is left. Writing through the map costs no
-    copy and no second pass. ``check_finite=False`` skips the final reading of the whole map
-    for nan or inf (0.012-0.024 s for an annual MF:4 float matrix, 242 MB, on a 2-core EPYC):
-    for a filler that has checked every value it wrote and raises otherwise.
+    is finite; otherwise (also on SIGTERM) it is removed, nothing is left. Writing through
+    the map costs no copy and no second pass. ``check_finite=False`` skips the final reading
+    of the whole map for nan or inf (0.012-0.024 s for an annual MF:4 float matrix, 242 MB,
+    on a 2-core EPYC): for a filler that has checked every value it wrote and raises
+    otherwise.
 
     The body is written as zeros first, in 1 MiB blocks, rather than left sparse: a sky
     matrix kernel fills the map in runs of hours scattered over every patch row, and on a
