@@ -191,3 +191,133 @@ def test_checks_refuse_before_work(tmp_path):
         with atomic_folder(f):
             pass
     assert f.read_text() == "x"
+
+
+# -- several files as one unit, errors naming the target, registered temporaries -----------
+def test_atomic_files_all_or_none(tmp_path):
+    from skydome._io import atomic_files
+
+    a, b = tmp_path / "m.exr", tmp_path / "m.sun.json"
+    with pytest.raises(OSError):
+        with atomic_files([a, b]) as (ta, tb):
+            assert ta.endswith(".exr") and tb.endswith(".json")   # suffixes kept
+            Path(ta).write_text("map")
+            _enospc()                       # the second file finds the disk full
+    assert list(tmp_path.iterdir()) == []
+    with atomic_files([a, b]) as (ta, tb):
+        Path(ta).write_text("map")
+        Path(tb).write_text("sun")
+    assert a.read_text() == "map" and b.read_text() == "sun"
+    assert _leftovers(tmp_path) == []
+
+
+def test_atomic_files_failed_rename_removes_the_first(tmp_path):
+    """Should the second rename fail (its target became a folder meanwhile), the first file
+    renamed is removed again: never a map without its sun file."""
+    from skydome._io import atomic_files
+
+    a, b = tmp_path / "m.exr", tmp_path / "m.sun.json"
+    with pytest.raises(OSError):
+        with atomic_files([a, b]) as (ta, tb):
+            Path(ta).write_text("map")
+            Path(tb).write_text("sun")
+            b.mkdir()
+            (b / "x").write_text("blocks the rename")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.sun.json"]   # the blocker only
+    assert not a.exists()
+
+
+def test_errors_name_the_target_not_the_temporary(tmp_path):
+    target = tmp_path / "a.txt"
+    with pytest.raises(OSError) as info:
+        atomic_write(target, lambda tmp: _enospc())
+    assert info.value.filename == str(target)
+    with pytest.raises(OSError) as info:
+        with atomic_folder(tmp_path / "out") as tmp:
+            with open(tmp / "b.bin", "wb"):
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp / "b.bin"))
+    assert info.value.filename == str(tmp_path / "out" / "b.bin")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_write_exr_turns_openexr_errors_into_oserror(tmp_path, monkeypatch):
+    """OpenEXR reports a full disk as RuntimeError("... No space left on device"); write_exr
+    raises OSError ENOSPC naming the file instead (and EIO for its other failures)."""
+    OpenEXR = pytest.importorskip("OpenEXR")
+    import numpy as np
+
+    from skydome._io import write_exr
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    ch = {"Y": np.zeros((4, 4), np.float32)}
+    write_exr(tmp_path / "ok.exr", header, ch)
+    assert (tmp_path / "ok.exr").stat().st_size > 0
+
+    class Full:
+        def __init__(self, *a):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *a):
+            return False
+
+        def write(self, path):
+            raise RuntimeError(f'Failed to write pixel data to image file "{path}". '
+                               "No space left on device.")
+
+    monkeypatch.setattr(OpenEXR, "File", Full)
+    with pytest.raises(OSError) as info:
+        write_exr(tmp_path / ".tmp.exr", header, ch, target=tmp_path / "a.exr")
+    assert info.value.errno == errno.ENOSPC and info.value.filename == str(tmp_path / "a.exr")
+    Full.write = lambda self, path: (_ for _ in ()).throw(RuntimeError("bad channel"))
+    with pytest.raises(OSError) as info:
+        write_exr(tmp_path / "b.exr", header, ch)
+    assert info.value.errno == errno.EIO and "bad channel" in info.value.strerror
+
+
+def test_write_npy_round_trip_and_enospc(tmp_path):
+    import numpy as np
+
+    from skydome._io import write_npy
+
+    a = np.arange(24, dtype=np.float32).reshape(2, 3, 4)
+    write_npy(tmp_path / "a.npy", a)
+    b = np.load(tmp_path / "a.npy")
+    assert b.dtype == a.dtype and np.array_equal(b, a)
+    from _tmpfs import small_disk
+
+    with small_disk(tmp_path / "disk", "16k") as d:
+        with pytest.raises(OSError) as info:
+            write_npy(Path(d) / "big.npy", np.zeros(100_000))
+        assert info.value.errno == errno.ENOSPC
+
+
+_TEMPORARY_CHILD = textwrap.dedent("""
+    import os, sys, time
+    from skydome._io import temporary
+    folder = os.path.join(sys.argv[1], ".made-by-a-writer.part")
+    os.mkdir(folder)
+    open(os.path.join(folder, "chunk"), "w").write("x")
+    with temporary(folder, is_dir=True):
+        print("ready", flush=True)
+        time.sleep(60)
+""")
+
+
+def test_registered_temporary_removed_on_sigterm(tmp_path):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1] / "src")
+    proc = subprocess.Popen([sys.executable, "-c", _TEMPORARY_CHILD, str(tmp_path)],
+                            stdout=subprocess.PIPE, env=env, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "ready"
+        assert _leftovers(tmp_path) == [".made-by-a-writer.part"]
+        proc.send_signal(signal.SIGTERM)
+        rc = proc.wait(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert rc == -signal.SIGTERM
+    assert list(tmp_path.iterdir()) == []

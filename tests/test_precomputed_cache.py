@@ -221,13 +221,17 @@ def test_stored_table_joins_the_entry_and_a_hit_reads_it(monkeypatch):
     path = entry()
     assert not os.path.exists(os.path.join(path, STORED))
     size0 = _cache._size(path)
+    meta0 = os.path.getsize(os.path.join(path, "meta.json"))
     assert not first._t.has_multiple_scattering
     ref_ap = first.aerial_perspective(*AP)          # builds the table, adds it to the entry
     assert first._t.has_multiple_scattering
     table = np.array(first._t.multiple_scattering)
     on_disk = np.load(os.path.join(path, STORED))
     assert on_disk.dtype == np.float32 and np.array_equal(on_disk, table)
-    assert _cache._size(path) == size0 + os.path.getsize(os.path.join(path, STORED))
+    # the entry grows by the table's file and its checksum record in meta.json
+    grown = os.path.getsize(os.path.join(path, "meta.json")) - meta0
+    assert 0 < grown < 200
+    assert _cache._size(path) == size0 + os.path.getsize(os.path.join(path, STORED)) + grown
     assert [n for n in os.listdir(path) if n.startswith(".")] == []   # no temporary left
     # a later model (as a later process): a hit for both parts, nothing recomputed
     no_kernel(monkeypatch)
@@ -353,3 +357,196 @@ def test_size_limit_and_clear_count_the_stored_table(monkeypatch):
     assert size_b > table_bytes
     assert P.clear_cache() == size_b and files() == []
     del a
+
+
+# -- the content checked on load: checksums and finiteness -----------------------------------
+def _flip(path, start_fraction=0.5, n=4096):
+    """Invert ``n`` bytes (or all after the header, if fewer) from the middle of ``path``'s
+    data."""
+    data = bytearray(open(path, "rb").read())
+    header = len(data) - np.load(path, mmap_mode="r").nbytes
+    n = min(n, len(data) - header)
+    a = max(header, min(len(data) - n, header + int(start_fraction * (len(data) - header))))
+    data[a:a + n] = bytes(255 - b for b in data[a:a + n])
+    open(path, "wb").write(bytes(data))
+
+
+def _served(m):
+    """What a model serves from its tables: the sky's radiance and the table of orders
+    2..N (built from the scattering density; it gives the aerial perspective)."""
+    try:
+        return m.radiance(AP[0], [550.0]), np.array(m._t.multiple_scattering)
+    except ValueError as exc:              # the model's own NaN guard
+        return str(exc), None
+
+
+def _damaged_without_the_check(monkeypatch):
+    """What the damaged entry would serve if nothing checked it (the control)."""
+    with monkeypatch.context() as mp:
+        mp.setattr(_cache, "_verify", lambda *a: None)
+        m = tiny(cache=True)
+        assert m.from_cache
+        m._t.set_multiple_scattering_sink(lambda shape, slabs: None)   # build in memory
+        return _served(m)
+
+
+def _differs(a, b):
+    return isinstance(a[0], str) or not (np.array_equal(a[0], b[0])
+                                         and np.array_equal(a[1], b[1]))
+
+
+@pytest.mark.parametrize("array", ["scattering_density", "single_scattering", "irradiance"])
+def test_flipped_bytes_are_found_and_the_entry_rebuilt(array, monkeypatch, capfd):
+    """4096 inverted bytes inside an array file (the fault of issue 30): without the check
+    the entry serves another sky; with it the entry is rebuilt, the sky equals a fresh build
+    and one line on stderr names the entry."""
+    fresh = _served(tiny(cache=False))
+    tiny()
+    path = entry()
+    file = os.path.join(path, array + ".npy")
+    before = np.load(file)
+    _flip(file)
+    assert not np.array_equal(np.load(file), before, equal_nan=True)    # really damaged
+    capfd.readouterr()
+    again = tiny()
+    assert not again.from_cache
+    note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
+    assert len(note) == 1 and path in note[0] and "damaged" in note[0], note
+    assert "checksum" in note[0] and array in note[0]
+    assert not _differs(_served(again), fresh)
+    assert tiny().from_cache                                  # rebuilt entry: a clean hit
+    assert capfd.readouterr().err == ""
+    if array == "single_scattering":   # the control: unchecked, it serves another sky
+        # (in these tiny tables the density's middle bytes and the irradiance table do
+        # not reach the two directions served here; their damage is checked on the file)
+        _flip(os.path.join(entry(), array + ".npy"))
+        assert _differs(_damaged_without_the_check(monkeypatch), fresh)
+
+
+@pytest.mark.parametrize("checksum", ["stale", "updated"])
+def test_nan_in_an_entry_is_found_and_the_entry_rebuilt(checksum, capfd):
+    """NaN written into an array file: with its checksum left as it was (caught by the
+    checksum) and with the checksum recomputed for the new bytes (zlib.crc32 over the
+    array's bytes, the format's definition: caught by the finiteness check). Either way the
+    entry is rebuilt and serves the fresh sky."""
+    import json
+    import zlib
+
+    fresh = tiny(cache=False).radiance(AP[0], [550.0])
+    tiny()
+    path = entry()
+    file = os.path.join(path, "single_scattering.npy")
+    a = np.load(file)
+    a.reshape(-1)[::3] = np.nan
+    np.save(file, a)
+    if checksum == "updated":
+        meta = json.load(open(os.path.join(path, "meta.json")))
+        meta["checksums"]["single_scattering"]["crc32"] = zlib.crc32(a.tobytes())
+        json.dump(meta, open(os.path.join(path, "meta.json"), "w"))
+    capfd.readouterr()
+    again = tiny()
+    assert not again.from_cache
+    note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
+    assert len(note) == 1 and path in note[0], note
+    assert ("NaN" in note[0]) == (checksum == "updated")
+    assert np.array_equal(again.radiance(AP[0], [550.0]), fresh)
+    assert tiny().from_cache
+
+
+def test_entry_without_checksums_is_rebuilt(capfd):
+    import json
+
+    tiny()
+    meta_file = os.path.join(entry(), "meta.json")
+    meta = json.load(open(meta_file))
+    del meta["checksums"]
+    json.dump(meta, open(meta_file, "w"))
+    assert not tiny().from_cache
+    assert "no checksums" in capfd.readouterr().err
+    assert tiny().from_cache
+
+
+@pytest.mark.parametrize("damage", ["flipped", "nan"])
+def test_damaged_stored_table_is_removed_and_built_again(damage, capfd):
+    ref = tiny()
+    ref.aerial_perspective(*AP)
+    table = np.array(ref._t.multiple_scattering)
+    file = os.path.join(entry(), STORED)
+    if damage == "flipped":
+        _flip(file)
+    else:
+        a = np.load(file)
+        a[0, 0] = np.nan
+        np.save(file, a)
+    capfd.readouterr()
+    again = tiny()
+    assert again.from_cache                                   # the rest still a hit
+    note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
+    assert len(note) == 1 and entry() in note[0] and STORED in note[0], note
+    assert not again._t.has_multiple_scattering and not os.path.exists(file)
+    assert np.array_equal(again._t.multiple_scattering, table)     # built again
+    assert np.array_equal(np.load(file), table)                    # and stored again
+    assert tiny()._t.has_multiple_scattering
+    assert capfd.readouterr().err == ""
+
+
+def test_tables_that_are_not_finite_are_not_stored(monkeypatch):
+    real = _precompute.precompute
+
+    def poisoned(*a, **k):
+        t = real(*a, **k)
+        t.irradiance = np.full_like(t.irradiance, np.nan)
+        return t
+
+    monkeypatch.setattr(_precompute, "precompute", poisoned)
+    tiny()
+    assert files() == []
+
+
+def test_full_cache_folder_says_so_once(tmp_path, monkeypatch, capfd):
+    """A cache folder on a full disk (a 64 KiB tmpfs; the tiny entry needs about 280 KB):
+    the model works from memory, one line on stderr says the cache could not be written
+    (once per process, not per model), and no temporary is left in the folder."""
+    from _tmpfs import small_disk
+
+    with small_disk(tmp_path / "disk", "64k") as disk:
+        monkeypatch.setenv("SKYDOME_CACHE_DIR", str(disk))
+        monkeypatch.setattr(_cache, "_WRITE_FAILED_SAID", False)
+        fresh = tiny(cache=False).radiance(AP[0], [550.0])
+        capfd.readouterr()
+        a = tiny()
+        b = tiny(orders=3)
+        err = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
+        assert len(err) == 1, err
+        assert str(disk) in err[0] and "could not be written" in err[0]
+        assert "no space left on device" in err[0].lower()
+        assert not a.from_cache and not b.from_cache
+        assert np.array_equal(a.radiance(AP[0], [550.0]), fresh)
+        assert os.listdir(disk) == []
+
+
+@pytest.mark.parametrize("damage", ["flipped", "nan"])
+def test_damaged_saved_table_file_is_refused(damage, tmp_path):
+    """A file written by PrecomputedSky.save with flipped bytes (the zip member's CRC-32
+    no longer matches) or with NaN in a table: load refuses it, naming the file."""
+    import zipfile
+
+    m = tiny(cache=False)
+    path = tmp_path / "t.npz"
+    m.save(path)
+    if damage == "flipped":
+        with zipfile.ZipFile(path) as z:
+            info = z.getinfo("single_scattering.npy")
+        data = bytearray(path.read_bytes())
+        start = info.header_offset + 30 + len(info.filename) + len(info.extra) + 200
+        data[start:start + 64] = bytes(255 - b for b in data[start:start + 64])
+        path.write_bytes(bytes(data))
+    else:
+        with np.load(path) as z:
+            arrays = {k: z[k] for k in z.files}
+        arrays["irradiance"] = arrays["irradiance"].copy()
+        arrays["irradiance"].reshape(-1)[0] = np.nan
+        np.savez(path, **arrays)
+    with pytest.raises(ValueError, match="damaged") as info:
+        P.PrecomputedSky.load(path)
+    assert str(path) in str(info.value)

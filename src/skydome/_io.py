@@ -15,12 +15,23 @@ a partial one.
   handlers between bytecodes, so a SIGTERM that arrives inside a long compiled kernel takes
   effect when the kernel returns.
 
-Only the standard library is imported here.
+* **Other writers.** A writer that makes its own temporary (a memory-mapped matrix, a Zarr
+  folder written chunk by chunk) registers it with :func:`temporary` for the same SIGTERM
+  clean-up.
+* **Errors.** A failed write raises :class:`OSError` with its errno (ENOSPC on a full disk)
+  and the name of the file it was writing: :func:`write_exr` turns OpenEXR's RuntimeError
+  into one, and :func:`write_npy` replaces ``np.save`` to a file name, whose short write on
+  a full disk is an OSError without an errno. A command line reports such an error as one
+  line (``could not write 'FILE': No space left on device``) and exit code 2.
+
+Only the standard library is imported here (numpy and OpenEXR inside the writers that need
+them).
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import shutil
 import signal
@@ -30,8 +41,8 @@ import threading
 from pathlib import Path
 from typing import Callable, Iterator
 
-__all__ = ["atomic_file", "atomic_write", "atomic_folder", "check_output_file", "check_output_folder",
-           "current_umask"]
+__all__ = ["atomic_file", "atomic_write", "atomic_folder", "atomic_files", "check_output_file",
+           "check_output_folder", "current_umask", "temporary", "write_exr", "write_npy"]
 
 # live temporaries: path -> True for a folder, False for a file
 _LIVE: dict[str, bool] = {}
@@ -105,6 +116,62 @@ def _unregister(path: str) -> None:
         _LIVE.pop(path, None)
 
 
+@contextlib.contextmanager
+def temporary(path, is_dir: bool = False) -> Iterator[str]:
+    """Register ``path`` (a temporary file, or folder with ``is_dir``, that the caller made)
+    for the block: a SIGTERM in the block removes it before the process ends. The caller
+    still removes it on an exception and renames it on success; the registration ends with
+    the block."""
+    path = os.fspath(path)
+    _register(path, is_dir)
+    try:
+        yield path
+    finally:
+        _unregister(path)
+
+
+def write_exr(path, header: dict, channels: dict, target=None) -> None:
+    """Write an OpenEXR file (``OpenEXR.File(header, channels).write(path)``), raising
+    OSError naming ``target`` (default ``path``) where OpenEXR fails: errno ENOSPC for a full
+    disk (OpenEXR raises RuntimeError "... No space left on device"), EIO otherwise."""
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(header, channels) as f:
+            f.write(os.fspath(path))
+    except RuntimeError as exc:
+        text = " ".join(str(exc).split())
+        for code in (errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EROFS):
+            if os.strerror(code).lower() in text.lower():
+                raise OSError(code, os.strerror(code), os.fspath(target or path)) from None
+        raise OSError(errno.EIO, f"OpenEXR could not write the file ({text})",
+                      os.fspath(target or path)) from None
+
+
+def write_npy(path, array) -> None:
+    """``np.save(path, array)`` through Python's file writes, in 1 MiB pieces: a full disk
+    raises OSError ENOSPC naming the file (``np.save`` to a name writes with
+    ``ndarray.tofile``, whose short write is an OSError without an errno or a file name)."""
+    import numpy as np
+
+    a = np.ascontiguousarray(array)
+    with open(path, "wb") as f:
+        np.lib.format.write_array_header_1_0(
+            f, {"descr": np.lib.format.dtype_to_descr(a.dtype), "fortran_order": False,
+                "shape": a.shape})
+        data = memoryview(a.reshape(-1)).cast("B")
+        for i in range(0, len(data), 1 << 20):
+            f.write(data[i:i + (1 << 20)])
+
+
+def _named(exc: OSError, tmp, path) -> OSError:
+    """``exc`` naming the target ``path`` where it named the temporary ``tmp`` or nothing
+    (a write error names what the user asked for, not a hidden temporary)."""
+    if exc.errno is None or exc.filename not in (None, os.fspath(tmp)):
+        return exc
+    return OSError(exc.errno, exc.strerror or os.strerror(exc.errno), os.fspath(path))
+
+
 def _parent(path: Path) -> Path:
     return path.parent if str(path.parent) else Path(".")
 
@@ -131,6 +198,9 @@ def atomic_file(path, suffix: str | None = None) -> Iterator[str]:
             mode = 0o666 & ~current_umask()
         os.chmod(tmp, mode)
         os.replace(tmp, path)
+    except OSError as exc:
+        _remove(tmp, False)
+        raise _named(exc, tmp, path) from exc
     except BaseException:
         _remove(tmp, False)
         raise
@@ -186,6 +256,47 @@ def check_output_file(path, suffixes=None, name: str = "out") -> Path:
 
 
 @contextlib.contextmanager
+def atomic_files(paths, suffixes=None) -> Iterator[list[str]]:
+    """Several files as one unit, all or none: yield a temporary file beside each of
+    ``paths`` (keeping its suffix, or the one in ``suffixes``); on a clean exit rename every
+    one into place. On any exception, ``KeyboardInterrupt`` or SIGTERM while they are written
+    every temporary is removed and no target is touched; should a rename fail (after all
+    were written) the targets already renamed are removed too, so that no file is left
+    without the others."""
+    paths = [Path(p) for p in paths]
+    sufs = [p.suffix for p in paths] if suffixes is None else list(suffixes)
+    tmps: list[str] = []
+    done: list[Path] = []
+    try:
+        for p, suf in zip(paths, sufs):
+            fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp" + suf,
+                                       dir=_parent(p))
+            os.close(fd)
+            _register(tmp, False)
+            tmps.append(tmp)
+        yield list(tmps)
+        for p, tmp in zip(paths, tmps):
+            try:
+                mode = stat.S_IMODE(os.stat(p).st_mode)
+            except FileNotFoundError:
+                mode = 0o666 & ~current_umask()
+            os.chmod(tmp, mode)
+        for p, tmp in zip(paths, tmps):
+            os.replace(tmp, p)
+            done.append(p)
+    except BaseException:
+        for tmp in tmps:
+            _remove(tmp, False)
+        if len(done) < len(paths):
+            for p in done:
+                _remove(str(p), False)
+        raise
+    finally:
+        for tmp in tmps:
+            _unregister(tmp)
+
+
+@contextlib.contextmanager
 def atomic_folder(path) -> Iterator[Path]:
     """Yield a temporary folder beside ``path``; on a clean exit its files become ``path``.
 
@@ -205,6 +316,12 @@ def atomic_folder(path) -> Iterator[Path]:
         else:
             for f in sorted(os.listdir(tmp)):
                 os.replace(os.path.join(tmp, f), path / f)
+    except OSError as exc:   # name the file in the target folder, not in the temporary one
+        name = os.fspath(exc.filename) if isinstance(exc.filename, (str, Path)) else None
+        if exc.errno is not None and (name is None or name.startswith(tmp)):
+            where = str(path) if name is None else str(path) + name[len(tmp):]
+            raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno), where) from exc
+        raise
     finally:
         _remove(tmp, True)
         _unregister(tmp)

@@ -12,12 +12,24 @@ client only collects hashes.
 The embedded default needs no set-up: a ``LocalCluster`` on this machine (processes, one
 thread each). ``scheduler="tcp://HOST:8786"`` runs the same job on an existing cluster (the
 folder must then be on storage every worker sees).
+
+Errors, before any work: a scheduler address that is not ``tcp://HOST:PORT`` or
+``HOST:PORT`` (PORT 1-65535; ``tls://``, ``ws://``, ``wss://`` and ``inproc://`` addresses
+as Dask writes them are taken too) is refused with a ValueError naming ``scheduler``, and a
+scheduler that does not answer within ``connect_timeout_s`` (default
+:data:`CONNECT_TIMEOUT_S`) raises :class:`SchedulerError` (a ValueError) naming it, before
+the chunk folder is made. A run that fails leaves the folder as it found it: one it created
+is removed (with the chunks it wrote), an existing one keeps its verified chunks; only an
+interruption (Ctrl-C) keeps a new folder, whose chunks a rerun reuses.
 """
 
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
+import re
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +38,56 @@ from typing import Callable, Sequence
 import numpy as np
 
 __all__ = ["Chunk", "JobReport", "run_chunks", "sky_matrix_chunks", "assemble_chunks",
-           "distributed_sky_matrix", "split_sun"]
+           "distributed_sky_matrix", "split_sun", "check_scheduler", "SchedulerError",
+           "CONNECT_TIMEOUT_S"]
+
+#: Seconds to wait for a scheduler given by address to answer (``connect_timeout_s``).
+CONNECT_TIMEOUT_S = 10.0
+
+_HOST = r"(?:[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?(?:\.[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}" \
+        r"[A-Za-z0-9])?)*|\[[0-9A-Fa-f:.]+\])"
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss)://)?(" + _HOST + r"):([0-9]{1,5})$")
+_VALID = "tcp://HOST:PORT or HOST:PORT with PORT in 1-65535"
+
+
+class SchedulerError(ValueError):
+    """The Dask scheduler given by address did not answer."""
+
+
+def check_scheduler(scheduler, name: str = "scheduler") -> str | None:
+    """``scheduler`` as given (None: a local cluster) if it is a Dask scheduler address:
+    ``tcp://HOST:PORT`` or ``HOST:PORT`` (PORT 1-65535; also ``tls://``, ``ws://``,
+    ``wss://`` and ``inproc://`` addresses); else ValueError naming ``name``, the value and
+    the valid form. Checks the syntax only (no connection)."""
+    if scheduler is None:
+        return None
+    if not isinstance(scheduler, str):
+        raise TypeError(f"{name} must be a string ({_VALID}), got {scheduler!r}")
+    text = scheduler.strip()
+    if text.startswith("inproc://") and len(text) > len("inproc://"):
+        return text
+    m = _ADDRESS.match(text)
+    if m is None:
+        raise ValueError(f"{name} = {scheduler!r} is not a Dask scheduler address: give "
+                         f"{_VALID}")
+    port = int(m.group(3))
+    if not 1 <= port <= 65535:
+        raise ValueError(f"{name} = {scheduler!r}: port {port} is out of range [1, 65535] "
+                         f"(give {_VALID})")
+    return text
+
+
+def _connect(scheduler: str, timeout_s: float):
+    """A Client of the scheduler at ``scheduler``, or SchedulerError after ``timeout_s``."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout=timeout_s)
+    except (OSError, TimeoutError) as exc:
+        raise SchedulerError(
+            f"scheduler = {scheduler!r}: no Dask scheduler answered within {timeout_s:g} s "
+            f"({' '.join(str(exc).split()) or type(exc).__name__}); check the address, or "
+            "leave the scheduler option out to run on this machine") from None
 
 
 @dataclass(frozen=True)
@@ -82,6 +143,13 @@ def _compute_and_store(folder: str, key: str, func, args) -> tuple[str, str]:
             with os.fdopen(fd, "wb") as f:
                 f.write(payload)
             os.replace(tmp, folder_p / name)
+        except OSError as exc:      # a full disk: ENOSPC naming the chunk, not its temporary
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            if exc.errno is None or exc.filename not in (None, tmp):
+                raise
+            raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno),
+                          str(folder_p / name)) from None
         except BaseException:
             if os.path.exists(tmp):
                 os.unlink(tmp)
@@ -90,7 +158,8 @@ def _compute_and_store(folder: str, key: str, func, args) -> tuple[str, str]:
 
 
 def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
-               n_workers: int = 2, client=None, progress: bool = False) -> JobReport:
+               n_workers: int = 2, client=None, progress: bool = False,
+               connect_timeout_s: float = CONNECT_TIMEOUT_S) -> JobReport:
     """Compute the chunks that ``folder`` does not already hold (verified by hash).
 
     Parameters
@@ -101,12 +170,24 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
         Where the chunks are written (created if missing).
     scheduler : str, optional
         Address of a running dask.distributed scheduler ("tcp://HOST:8786"); default: a local
-        cluster of ``n_workers`` processes with one thread each, closed at the end.
+        cluster of ``n_workers`` processes with one thread each, closed at the end. Checked
+        before any work (:func:`check_scheduler`).
     client : distributed.Client, optional
         Use this client (its cluster) instead.
     progress : bool
         Show a progress bar (dask.distributed's).
+    connect_timeout_s : float
+        Seconds to wait for ``scheduler`` to answer (0 < t <= 3600), then
+        :class:`SchedulerError`; nothing is written then.
+
+    A run that fails (an exception) removes ``folder`` if it made it; Ctrl-C keeps it (a
+    rerun reuses its chunks).
     """
+    from skydome._validate import check_number
+
+    scheduler = check_scheduler(scheduler)
+    connect_timeout_s = check_number("connect_timeout_s", connect_timeout_s, 0.0, 3600.0,
+                                     "s", low_open=True)
     keys = [c.key for c in chunks]
     if len(set(keys)) != len(keys):
         raise ValueError("chunk keys must be unique")
@@ -114,7 +195,7 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
         if not k or "/" in k or k.startswith("."):
             raise ValueError(f"chunk key {k!r} is not a plain file-name stem")
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    created = not folder.exists()
     verified, repaired, todo, hashes = [], [], [], {}
     for c in chunks:
         h = _verified(folder, c.key)
@@ -125,18 +206,25 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
             if (folder / f"{c.key}.npy").exists():
                 repaired.append(c.key)
             todo.append(c)
-    if todo:
+    if not todo:
+        folder.mkdir(parents=True, exist_ok=True)
+    else:
         from distributed import Client, LocalCluster, as_completed
 
         own = None
         if client is None:
             if scheduler is not None:
-                own = client = Client(scheduler)
+                own = client = _connect(scheduler, connect_timeout_s)   # before any write
             else:
+                # the workers' own logging off: a failed chunk (a full disk) reaches the
+                # caller as the chunk's exception, not as a log record on stderr as well
                 cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1,
-                                       processes=True, dashboard_address=None)
+                                       processes=True, dashboard_address=None,
+                                       silence_logs=logging.CRITICAL)
                 own = client = Client(cluster)
+        futures, failed = [], False
         try:
+            folder.mkdir(parents=True, exist_ok=True)
             futures = [client.submit(_compute_and_store, str(folder), c.key, c.func, c.args,
                                      key=f"skydome-{folder.name}-{c.key}", pure=False)
                        for c in todo]
@@ -147,12 +235,19 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
             for fut in as_completed(futures):
                 k, h = fut.result()
                 hashes[k] = h
+        except Exception:
+            failed = True
+            for fut in futures:
+                fut.cancel()
+            raise
         finally:
             if own is not None:
                 cl = own.cluster
                 own.close()
                 if cl is not None and scheduler is None:
                     cl.close()
+            if failed and created:   # leave the folder as it was found: not there
+                shutil.rmtree(folder, ignore_errors=True)
     computed = [c.key for c in todo]
     return JobReport(computed, verified, repaired, hashes)
 
@@ -214,12 +309,15 @@ def assemble_chunks(folder, keys) -> np.ndarray:
 
 def distributed_sky_matrix(weather, folder, *, chunk_hours: int = 730,
                            scheduler: str | None = None, n_workers: int = 2, client=None,
-                           progress: bool = False, **kwargs):
+                           progress: bool = False,
+                           connect_timeout_s: float = CONNECT_TIMEOUT_S, **kwargs):
     """Annual sky matrix computed in chunks on Dask; returns (matrix (hours, patches, comp),
     JobReport). Rerunning with the same ``folder`` reuses the verified chunks. With
     ``sun="separate"`` the matrix holds the sun matrix as one more row (hours, patches + 1,
-    comp): :func:`split_sun` separates them."""
+    comp): :func:`split_sun` separates them. ``scheduler`` is checked before any work and
+    ``connect_timeout_s`` bounds the wait for it (:func:`run_chunks`)."""
+    check_scheduler(scheduler)
     chunks = sky_matrix_chunks(weather, chunk_hours=chunk_hours, **kwargs)
     rep = run_chunks(chunks, folder, scheduler=scheduler, n_workers=n_workers, client=client,
-                     progress=progress)
+                     progress=progress, connect_timeout_s=connect_timeout_s)
     return assemble_chunks(folder, [c.key for c in chunks]), rep

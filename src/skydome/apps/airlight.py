@@ -75,7 +75,9 @@ def _write(path, img):
 
             h = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
             chans = {"RGB": np.ascontiguousarray(img.astype(np.float32))}
-            OpenEXR.File(h, chans).write(tmp)
+            from skydome._io import write_exr
+
+            write_exr(tmp, h, chans)
 
 
 def _display_gain(x) -> float:

@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from skydome._io import _named, temporary
+
 __all__ = ["write_matrix", "read_matrix", "matrix_file", "atomic_write_bytes",
            "atomic_write_stream", "FORMATS"]
 
@@ -139,10 +141,11 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
 
     The file is a temporary one beside ``path`` (header, then a body of zeros written
     sequentially), renamed to ``path`` when the block ends without an exception and the data
-    is finite; otherwise it is removed, nothing is left. Writing through the map costs no
-    copy and no second pass. ``check_finite=False`` skips the final reading of the whole map
-    for nan or inf (0.012-0.024 s for an annual MF:4 float matrix, 242 MB, on a 2-core EPYC):
-    for a filler that has checked every value it wrote and raises otherwise.
+    is finite; otherwise (also on SIGTERM) it is removed, nothing is left. Writing through
+    the map costs no copy and no second pass. ``check_finite=False`` skips the final reading
+    of the whole map for nan or inf (0.012-0.024 s for an annual MF:4 float matrix, 242 MB,
+    on a 2-core EPYC): for a filler that has checked every value it wrote and raises
+    otherwise.
 
     The body is written as zeros first, in 1 MiB blocks, rather than left sparse: a sky
     matrix kernel fills the map in runs of hours scattered over every patch row, and on a
@@ -166,22 +169,28 @@ def matrix_file(path, nrows: int, ncols: int, ncomp: int, fmt: str = "float", in
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     mm = None
     try:
-        with os.fdopen(fd, "wb", buffering=0) as f:
-            f.write(head)
-            zeros = bytes(min(size, 1 << 20))
-            for a in range(0, size, len(zeros) or 1):  # the body's pages, in file order
-                f.write(zeros[:min(len(zeros), size - a)])
-        mm = np.memmap(tmp, dtype=dtype, mode="r+", offset=len(head),
-                       shape=(nrows, ncols, ncomp))
-        yield mm.view(np.ndarray)
-        block = max(1, (1 << 22) // max(1, ncols * ncomp))
-        for r0 in range(0, nrows if check_finite else 0, block):
-            if not np.all(np.isfinite(mm[r0:r0 + block])):
-                raise ValueError("matrix holds nan or inf values")
-        del mm  # no msync: the page cache is coherent, as for a written file
-        mm = None
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
+        with temporary(tmp):     # a SIGTERM meanwhile removes the temporary
+            with os.fdopen(fd, "wb", buffering=0) as f:
+                f.write(head)
+                zeros = bytes(min(size, 1 << 20))
+                for a in range(0, size, len(zeros) or 1):  # the body's pages, in file order
+                    f.write(zeros[:min(len(zeros), size - a)])
+            mm = np.memmap(tmp, dtype=dtype, mode="r+", offset=len(head),
+                           shape=(nrows, ncols, ncomp))
+            yield mm.view(np.ndarray)
+            block = max(1, (1 << 22) // max(1, ncols * ncomp))
+            for r0 in range(0, nrows if check_finite else 0, block):
+                if not np.all(np.isfinite(mm[r0:r0 + block])):
+                    raise ValueError("matrix holds nan or inf values")
+            del mm  # no msync: the page cache is coherent, as for a written file
+            mm = None
+            os.chmod(tmp, 0o666 & ~_umask())
+            os.replace(tmp, path)
+    except OSError as exc:
+        del mm
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise _named(exc, tmp, path) from exc
     except BaseException:
         del mm
         if os.path.exists(tmp):
@@ -199,17 +208,24 @@ WRITE_SLICE = 1 << 20
 def atomic_write_stream(path, chunks) -> None:
     """Write the byte chunks of an iterable to ``path`` through a temporary file and a
     rename (each chunk in ``write`` calls of at most :data:`WRITE_SLICE` bytes, no copy);
-    nothing is left behind if it fails."""
+    nothing is left behind if it fails (an exception, Ctrl-C, or SIGTERM: the temporary is
+    registered with :func:`skydome._io.temporary`). A failed write raises OSError naming
+    ``path`` (ENOSPC on a full disk)."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     try:
-        with os.fdopen(fd, "wb") as f:
-            for c in chunks:
-                c = memoryview(c).cast("B")
-                for a in range(0, len(c), WRITE_SLICE):
-                    f.write(c[a:a + WRITE_SLICE])
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
+        with temporary(tmp):     # a SIGTERM meanwhile removes the temporary
+            with os.fdopen(fd, "wb") as f:
+                for c in chunks:
+                    c = memoryview(c).cast("B")
+                    for a in range(0, len(c), WRITE_SLICE):
+                        f.write(c[a:a + WRITE_SLICE])
+            os.chmod(tmp, 0o666 & ~_umask())
+            os.replace(tmp, path)
+    except OSError as exc:       # a full disk: ENOSPC naming the file asked for
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise _named(exc, tmp, path) from exc
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

@@ -466,7 +466,9 @@ def model_sky_matrix(make_model, n_hours: int, *, patches="tregenza",
         Write a Zarr array (hours, patches, components) instead of returning the matrix,
         one chunk of ``chunk_hours`` hours at a time: memory holds one chunk, never the whole
         matrix (MF:6 spectral over a year is 8760 x 5186 x 41 x 8 bytes = 15 GB). The ground
-        patch 0 is left 0 (the models' ground is not modelled here).
+        patch 0 is left 0 (the models' ground is not modelled here). The folder must not
+        exist; it is removed again on any exception, Ctrl-C or SIGTERM before the call
+        returns (a full disk: OSError ENOSPC), so nothing partial is left.
 
     Returns
     -------
@@ -491,17 +493,42 @@ def model_sky_matrix(make_model, n_hours: int, *, patches="tregenza",
     starts = offsets[:-1]
     dom = np.add.reduceat(weights, starts)
     shape = (n_hours, len(ps), ncomp)
-    store = None
-    if zarr_path is not None:
-        import zarr
-        from pathlib import Path
+    if zarr_path is None:
+        return _fill_matrix(None, make_model, n_hours, chunk_hours, ps, ncomp, wl, nodes,
+                            weights, starts, dom)
+    import os
+    import shutil
+    from pathlib import Path
 
-        zp = Path(zarr_path)
-        if zp.exists():
-            raise ValueError(f"out = {str(zp)!r} exists")
-        store = zarr.open_array(str(zp), mode="w-", shape=shape,
-                                chunks=(min(chunk_hours, n_hours), len(ps), ncomp),
-                                dtype="f8", fill_value=0.0)
+    import zarr
+
+    from skydome._io import temporary
+
+    zp = Path(zarr_path)
+    if zp.exists():
+        raise ValueError(f"out = {str(zp)!r} exists")
+    # the folder is this call's until it returns: removed on an exception, Ctrl-C or SIGTERM
+    with temporary(zp, is_dir=True):
+        try:
+            store = zarr.open_array(str(zp), mode="w-", shape=shape,
+                                    chunks=(min(chunk_hours, n_hours), len(ps), ncomp),
+                                    dtype="f8", fill_value=0.0)
+            return _fill_matrix(store, make_model, n_hours, chunk_hours, ps, ncomp, wl,
+                                nodes, weights, starts, dom)
+        except OSError as exc:
+            shutil.rmtree(zp, ignore_errors=True)
+            if exc.errno is None or exc.filename is not None:
+                raise
+            raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(zp)) from exc
+        except BaseException:
+            shutil.rmtree(zp, ignore_errors=True)
+            raise
+
+
+def _fill_matrix(store, make_model, n_hours, chunk_hours, ps, ncomp, wl, nodes, weights,
+                 starts, dom):
+    """The loop of :func:`model_sky_matrix`: into the Zarr array ``store``, or a new array."""
+    shape = (n_hours, len(ps), ncomp)
     out = None if store is not None else np.zeros(shape)
     for a in range(0, n_hours, chunk_hours):
         b = min(n_hours, a + chunk_hours)

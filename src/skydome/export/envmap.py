@@ -313,10 +313,15 @@ class EnvironmentMap:
         return out
 
     # -- writing ----------------------------------------------------------------------------
-    def write(self, path, half: bool = False) -> list[Path]:
+    def write(self, path, half: bool = False, also=()) -> list[Path]:
         """Write the map (.exr float32 or ``half``, or .hdr) atomically; ``layout="faces"``
-        writes six files ``<stem>_px``, ``_nx``, ``_py``, ``_ny``, ``_pz``, ``_nz``. Returns
-        the paths written."""
+        writes six files ``<stem>_px``, ``_nx``, ``_py``, ``_ny``, ``_pz``, ``_nz``.
+        ``also``: (path, write) pairs of files that belong with the map, e.g. its sun light
+        (``(sun_path, skydome.export.sun.sun_json_writer(light))``); ``write(tmp)`` writes
+        one to a temporary file. The map's files and these are one unit
+        (:func:`skydome._io.atomic_files`): every one is written to a temporary first, then
+        all are renamed; on a failure (a full disk) none is left. Returns the paths
+        written."""
         p = check_map_path(path, half)
         if self.layout == "faces":
             names = {"+X": "px", "-X": "nx", "+Y": "py", "-Y": "ny", "+Z": "pz", "-Z": "nz"}
@@ -327,21 +332,25 @@ class EnvironmentMap:
             raise ValueError(f"the map's largest value {max(float(np.max(im)) for _, im in targets):.4g} "
                              f"exceeds the half-float range ({HALF_MAX:g}): the sun in the map "
                              "needs float32 (drop half) or export the sun as a light")
-        from skydome._io import atomic_write as _atomic_write
+        import os
 
-        written = []
-        try:
-            for target, im in targets:
-                if target.suffix.lower() == ".exr":
-                    _atomic_write(target, lambda tmp, im=im: self._write_exr(tmp, im, half))
-                else:
-                    _atomic_write(target, lambda tmp, im=im: self._write_hdr(tmp, im))
-                written.append(target)
-        except BaseException:
-            for w in written:                         # nothing partial: all faces or none
-                w.unlink(missing_ok=True)
-            raise
-        return written
+        from skydome._io import atomic_files
+
+        writers = [(target, (lambda tmp, im=im: self._write_exr(tmp, im, half))
+                    if target.suffix.lower() == ".exr" else
+                    (lambda tmp, im=im: self._write_hdr(tmp, im))) for target, im in targets]
+        writers += [(Path(q), w) for q, w in also]
+        # all faces and the files that go with the map, or none
+        with atomic_files([q for q, _ in writers]) as tmps:
+            for (q, write), tmp in zip(writers, tmps):
+                try:
+                    write(tmp)
+                except OSError as exc:   # name the file asked for, not its temporary
+                    if exc.errno is None or exc.filename not in (None, tmp):
+                        raise
+                    raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno),
+                                  str(q)) from exc
+        return [q for q, _ in writers]
 
     def _header(self) -> dict[str, str]:
         import json
@@ -366,8 +375,9 @@ class EnvironmentMap:
         header.update(self._header())
         header["units"] = self.units.description
         ch = {c: np.ascontiguousarray(im[..., i].astype(dtype)) for i, c in enumerate("RGB")}
-        with OpenEXR.File(header, ch) as f:
-            f.write(tmp)
+        from skydome._io import write_exr
+
+        write_exr(tmp, header, ch)       # a full disk: OSError ENOSPC (OpenEXR: RuntimeError)
 
     def _write_hdr(self, tmp: str, im: np.ndarray) -> None:
         from skydome.imaging.image import rgbe_encode

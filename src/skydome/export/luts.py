@@ -341,6 +341,8 @@ def _exr_2d(arr: np.ndarray) -> np.ndarray:
 def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str) -> None:
     import OpenEXR
 
+    from skydome._io import write_exr
+
     img = _exr_2d(arr)
     dtype = np.float16 if half else np.float32
     names = "RGBA" if img.shape[-1] == 4 else None
@@ -351,8 +353,7 @@ def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str) -> None:
               for i in range(img.shape[-1])}
     else:
         ch = {c: np.ascontiguousarray(img[..., i].astype(dtype)) for i, c in enumerate(names)}
-    with OpenEXR.File(header, ch) as f:
-        f.write(tmp)
+    write_exr(tmp, header, ch)     # a full disk: OSError ENOSPC, not OpenEXR's RuntimeError
 
 
 def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
@@ -389,8 +390,9 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
         for k, (n, f) in enumerate(names):
             arr = np.ascontiguousarray(tex[n], dtype="<f4")
             target = tmp / f"{n}.{f}"
-            if f == "bin":
-                arr.tofile(target)
+            if f == "bin":     # Python's writes: a full disk raises OSError ENOSPC
+                with open(target, "wb") as fh:
+                    fh.write(memoryview(arr.reshape(-1)).cast("B"))
             elif f == "npy":
                 target.write_bytes(_npy_bytes(arr))
             else:

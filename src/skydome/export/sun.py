@@ -121,11 +121,20 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None,
     }
 
 
+def sun_json_writer(light: dict):
+    """``write(tmp)``: writes ``light`` as JSON to the file ``tmp`` (for a map's ``also``
+    files, :meth:`skydome.export.envmap.EnvMap.write`)."""
+    def write(tmp) -> None:
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(light, f, indent=2)
+    return write
+
+
 def write_sun_json(light: dict, path) -> Path:
     """Write ``light`` as JSON atomically (.json only); returns the path."""
     from skydome._io import atomic_file, check_output_file
 
     p = check_output_file(path, (".json",), name="sun light file")
-    with atomic_file(p) as tmp, open(tmp, "w", encoding="utf-8") as f:
-        json.dump(light, f, indent=2)
+    with atomic_file(p) as tmp:
+        sun_json_writer(light)(tmp)
     return p

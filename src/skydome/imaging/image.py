@@ -352,8 +352,9 @@ class SkyImage:
             header[f"skydome:{key}" if key not in ("units",) else key] = value
         channels = {"R": np.ascontiguousarray(rgb[..., 0]), "G": np.ascontiguousarray(rgb[..., 1]),
                     "B": np.ascontiguousarray(rgb[..., 2]), "Y": np.ascontiguousarray(Y)}
-        with OpenEXR.File(header, channels) as f:
-            f.write(tmp)
+        from skydome._io import write_exr
+
+        write_exr(tmp, header, channels)  # a full disk: OSError ENOSPC (OpenEXR: RuntimeError)
 
     def _write_hdr(self, tmp: str) -> None:
         H, W = self.shape

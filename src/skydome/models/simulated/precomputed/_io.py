@@ -41,16 +41,30 @@ def save(model, path) -> None:
 
 
 def load(cls, path, sun=None):
-    """Read tables written by :func:`save` into a new ``cls`` (see ``PrecomputedSky.load``)."""
+    """Read tables written by :func:`save` into a new ``cls`` (see ``PrecomputedSky.load``).
+
+    The file's content is checked as it is read: every member of the ``.npz`` (a zip file)
+    against its CRC-32 (by :mod:`zipfile`), and every table for finite values. A damaged
+    file raises ValueError naming it (flipped bytes, a truncated file, NaN in a table)."""
+    import zipfile
+
     from skydome.models.simulated.precomputed._tables import Tables
     from skydome.sun import Sun
 
-    with np.load(os.fspath(path), allow_pickle=False) as z:
-        m = json.loads(str(z["meta"]))
-        if m.get("format") != FORMAT:
-            raise ValueError(f"{path} is not a skydome precomputed-table file of this version "
-                             f"(format {m.get('format')!r}, expected {FORMAT!r})")
-        tables = Tables.from_arrays({k: z[k] for k in z.files if k != "meta"})
+    try:
+        with np.load(os.fspath(path), allow_pickle=False) as z:
+            m = json.loads(str(z["meta"]))
+            if m.get("format") != FORMAT:
+                raise ValueError(f"{path} is not a skydome precomputed-table file of this "
+                                 f"version (format {m.get('format')!r}, expected {FORMAT!r})")
+            arrays = {k: z[k] for k in z.files if k != "meta"}
+    except (zipfile.BadZipFile, KeyError, EOFError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path} is damaged or not a skydome precomputed-table file "
+                         f"({' '.join(str(exc).split())})") from None
+    for k, a in arrays.items():
+        if np.issubdtype(a.dtype, np.floating) and not np.all(np.isfinite(a)):
+            raise ValueError(f"{path} is damaged: table {k!r} holds NaN or infinite values")
+    tables = Tables.from_arrays(arrays)
     obj = cls.__new__(cls)
     for p in cls.parameters:
         if p.name in m:

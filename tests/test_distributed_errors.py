@@ -1,0 +1,114 @@
+"""Dask errors before any work: the scheduler address checked for its form (issue 30: `foo`,
+`http://...` and port 99999 waited 13-44 s before failing), a bounded wait for a scheduler
+that does not answer with a message naming the option, and no chunk folder left behind.
+Loopback only: tcp://127.0.0.1:1, where nothing listens."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from skydome.distributed import (Chunk, SchedulerError, check_scheduler,
+                                 distributed_sky_matrix, run_chunks)
+
+pytest.importorskip("distributed")
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:8786", "127.0.0.1:8786",
+                                     "tcp://scheduler.example.org:1", "localhost:65535",
+                                     "tls://10.0.0.2:8786", "tcp://[::1]:8786",
+                                     "inproc://192.0.2.2/22822/1"])
+def test_valid_addresses_pass(address):
+    assert check_scheduler(address) == address
+
+
+@pytest.mark.parametrize("address, why", [
+    ("foo", "not a Dask scheduler address"),
+    ("http://127.0.0.1:8786", "not a Dask scheduler address"),
+    ("tcp://127.0.0.1", "not a Dask scheduler address"),
+    ("tcp://127.0.0.1:99999", "port 99999 is out of range [1, 65535]"),
+    ("127.0.0.1:0", "port 0 is out of range [1, 65535]"),
+    ("tcp://bad host:8786", "not a Dask scheduler address"),
+    ("", "not a Dask scheduler address"),
+])
+def test_bad_addresses_refused_with_option_value_and_form(address, why):
+    with pytest.raises(ValueError) as info:
+        check_scheduler(address)
+    msg = str(info.value)
+    assert msg.startswith(f"scheduler = {address!r}") and why in msg
+    assert "tcp://HOST:PORT or HOST:PORT" in msg and "\n" not in msg
+
+
+def _chunk(x):
+    return np.full(3, float(x))
+
+
+def test_bad_address_refused_before_any_work(tmp_path, monkeypatch):
+    """The address is refused before the chunks are made (sky_matrix_chunks, which computes
+    the sun positions) and before the folder is created."""
+    import skydome.distributed as D
+
+    monkeypatch.setattr(D, "sky_matrix_chunks", lambda *a, **k: pytest.fail("work began"))
+    t0 = time.perf_counter()
+    for bad in ("foo", "http://127.0.0.1:8786", "tcp://127.0.0.1:99999"):
+        with pytest.raises(ValueError, match="scheduler"):
+            distributed_sky_matrix(None, tmp_path / "out.chunks", scheduler=bad)
+    assert time.perf_counter() - t0 < 1.0
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unanswered_scheduler_bounded_wait_and_no_folder(tmp_path):
+    """tcp://127.0.0.1:1: nothing listens there. The wait ends after the connect timeout
+    (2 s here; issue 30: 44 s) with a SchedulerError naming the option and the address,
+    and the chunk folder is not created."""
+    folder = tmp_path / "out.mtx.chunks"
+    t0 = time.perf_counter()
+    with pytest.raises(SchedulerError) as info:
+        run_chunks([Chunk("a", _chunk, (1,))], folder, scheduler="tcp://127.0.0.1:1",
+                   connect_timeout_s=2.0)
+    took = time.perf_counter() - t0
+    msg = str(info.value)
+    assert msg.startswith("scheduler = 'tcp://127.0.0.1:1'") and "within 2 s" in msg
+    assert "\n" not in msg
+    assert isinstance(info.value, ValueError)
+    assert took < 15.0, took        # the timeout and the client's own shutdown
+    assert not folder.exists()
+
+
+@pytest.mark.parametrize("value", [0, -1, float("nan"), 1e9])
+def test_bad_connect_timeout_refused(tmp_path, value):
+    with pytest.raises(ValueError, match="connect_timeout_s"):
+        run_chunks([Chunk("a", _chunk, (1,))], tmp_path / "c", scheduler="tcp://127.0.0.1:1",
+                   connect_timeout_s=value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def _fails(x):
+    raise RuntimeError(f"chunk {x} failed")
+
+
+def test_failed_run_removes_the_folder_it_made_but_keeps_an_existing_one(tmp_path):
+    """A chunk that raises: the run's new folder is removed; a folder that existed before
+    (a resumed run) is kept with its verified chunks."""
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                           dashboard_address=None)
+    client = Client(cluster)
+    try:
+        new = tmp_path / "new.chunks"
+        with pytest.raises(RuntimeError, match="failed"):
+            run_chunks([Chunk("a", _chunk, (1,)), Chunk("b", _fails, (2,))], new,
+                       client=client)
+        assert not new.exists()
+        old = tmp_path / "old.chunks"
+        run_chunks([Chunk("a", _chunk, (1,))], old, client=client)
+        with pytest.raises(RuntimeError, match="failed"):
+            run_chunks([Chunk("a", _chunk, (1,)), Chunk("b", _fails, (2,))], old,
+                       client=client)
+        assert sorted(p.name for p in old.iterdir()) == ["a.npy", "a.npy.sha256"]
+    finally:
+        client.close()
+        cluster.close()
