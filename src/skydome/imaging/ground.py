@@ -11,8 +11,9 @@ by Gauss-Legendre quadrature in cos(theta) (32 nodes) times the midpoint rule in
 
 ``ground="model"`` (the default of :func:`skydome.imaging.render`): models that trace
 ground-hit rays themselves (the physically based ones: their radiance below the horizon
-is the ground seen through the air in front of it) keep their values. Two of them light
-their ground with the transmitted sun only (:data:`SUN_ONLY_GROUND`: measured, the nadir
+is the ground seen through the air in front of it; ``own_ground`` on the model's class,
+:mod:`skydome.models`) keep their values. Two of them light their ground with the
+transmitted sun only (``own_ground = "sun"``: measured, the nadir
 of a ground-level observer at sun 40 deg is rho E_sun sin(el) / pi to 1e-6, while
 ``precomputed``, ``nishita1996`` and ``montecarlo`` give rho E_h / pi within 2 %); for a
 ground-level observer of those, the skylight term rho E_sky / pi is added. For the other
@@ -28,12 +29,26 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DEFAULT_ALBEDO", "check_ground", "horizontal_irradiance", "apply_ground"]
+__all__ = ["DEFAULT_ALBEDO", "check_ground", "horizontal_irradiance", "apply_ground",
+           "sun_only_ground"]
 
 #: Ground albedo for models without one (Radiance gensky's default ground reflectance).
 DEFAULT_ALBEDO = 0.2
-#: Models whose own ground is lit by the transmitted sun only (no skylight on the ground).
-SUN_ONLY_GROUND = ("single_scattering", "hillaire2020")
+
+
+def sun_only_ground() -> tuple[str, ...]:
+    """The registered models whose own ground is lit by the transmitted sun only (no
+    skylight on the ground): those declaring ``own_ground = "sun"``."""
+    from skydome.models import available
+
+    return tuple(n for n, cls in available().items() if cls.own_ground == "sun")
+
+
+def __getattr__(name):
+    # SUN_ONLY_GROUND, read from the models' capabilities when asked for
+    if name == "SUN_ONLY_GROUND":
+        return sun_only_ground()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def check_ground(ground):
@@ -103,7 +118,7 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
         data[below] = 0.0
         return "black"
     if ground == "model" and np.any(data[below] > 0.0):
-        if (getattr(sky, "name", "") in SUN_ONLY_GROUND
+        if (getattr(sky, "own_ground", None) == "sun"
                 and float(getattr(sky, "observer_altitude_m", 0.0) or 0.0) == 0.0):
             rho = _albedo(sky, wl, ground)
             data[below] += np.maximum(conv(np.asarray(rho) * horizontal_irradiance(
