@@ -320,9 +320,12 @@ def __getattr__(name):
 def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The bake of ``sky`` in its model's layout (``lut_layout``): Bruneton's
     (``"bruneton"``, e.g. ``precomputed``) or Hillaire's (``"hillaire"``, e.g.
-    ``hillaire2020``); ValueError for other models."""
+    ``hillaire2020``; any object with the precomputed model's ``export_textures``
+    is baked in Bruneton's); ValueError for other models."""
     name = getattr(sky, "name", type(sky).__name__)
     layout = getattr(sky, "lut_layout", None)
+    if layout is None and hasattr(sky, "export_textures"):
+        layout = "bruneton"         # an object that exports the precomputed model's tables
     if layout == "hillaire":
         return bake_hillaire2020(sky, wavelengths_nm)
     if layout == "bruneton":
