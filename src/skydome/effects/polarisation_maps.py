@@ -189,9 +189,9 @@ class PolarisationMap(NamedTuple):
     """A map of polarisation on a grid of viewing directions (a fisheye, say: north up,
     east left, looking up).
 
-    dirs (H, W, 3); mask (H, W) True where computed (the sky disc of a fisheye); stokes, stderr (H, W, 4) at one
-    wavelength; dop (H, W) in [0, 1] and aop (H, W) [deg] in (-90, 90] (NaN off the disc);
-    plus the method, sun and wavelength [nm]."""
+    dirs (H, W, 3); mask (H, W) True where computed (the sky disc of a fisheye); stokes,
+    stderr (H, W, 4) at one wavelength; dop (H, W) in [0, 1] and aop (H, W) [deg] in
+    (-90, 90] (NaN where not computed); plus the method, sun and wavelength [nm]."""
     dirs: np.ndarray
     mask: np.ndarray
     stokes: np.ndarray
