@@ -14,6 +14,7 @@ import numpy as np
 
 from skydome.effects.polarisation_maps import find_neutral_points, meridian_profile, polarisation_maps
 from skydome.imaging.plots import plot_polarisation_maps
+from skydome.imaging.projections import Fisheye
 from skydome.sun import Sun
 
 FIG = Path(__file__).resolve().parent.parent / "docs" / "figures"
@@ -51,10 +52,11 @@ def figures(size=48, samples=3000):
     FIG.mkdir(parents=True, exist_ok=True)
     for el in (5.0, 20.0, 40.0):
         sun = Sun(el, 180.0)
-        plot_polarisation_maps(polarisation_maps("rayleigh_single", sun, size=size, turbidity=2.5),
+        grid = Fisheye(size).directions()
+        plot_polarisation_maps(polarisation_maps("rayleigh_single", sun, *grid, turbidity=2.5),
                                FIG / f"polarisation_single_{int(el)}.png")
         t = time.perf_counter()
-        pm = polarisation_maps("montecarlo", sun, size=size, samples=samples, seed=1, turbidity=2.5)
+        pm = polarisation_maps("montecarlo", sun, *grid, samples=samples, seed=1, turbidity=2.5)
         print(f"montecarlo map {size}x{size}, {samples} paths/pixel, sun {el:g} deg: "
               f"{time.perf_counter() - t:.1f} s; max DoP {np.nanmax(pm.dop):.3f}")
         plot_polarisation_maps(pm, FIG / f"polarisation_montecarlo_{int(el)}.png")

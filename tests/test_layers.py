@@ -50,8 +50,6 @@ FACADE = "skydome"
 # entry when its item is merged (the tests fail on an entry that no longer matches, so that
 # none outlives its break). (importer, imported)
 KNOWN_UPWARD = {
-    # item 4: polarisation_maps takes directions; the sun's pixel becomes a projection method
-    ("skydome.effects.polarisation_maps", "skydome.imaging.projections"),
     # item 5: the Perez sky-matrix chunking moves from distributed.py into daylighting/
     ("skydome.distributed", "skydome.daylighting.skymatrix"),
 }

@@ -19,6 +19,7 @@ from skydome.effects.polarisation import (angle_of_polarisation, degree_of_polar
 from skydome.effects.polarisation_maps import (e_vectors, find_neutral_points, meridian_profile,
                                                polarisation_maps, sky_stokes)
 from skydome.imaging.plots import plot_polarisation_maps
+from skydome.imaging.projections import Fisheye
 from skydome.models.simulated.montecarlo import stokes_frame
 from skydome.sun import Sun
 from skydome.transport.geometry import direction_from_angles
@@ -174,13 +175,14 @@ def test_maps_orientation_and_figure(tmp_path):
     single-scattering band of maximum polarisation (90 deg from the sun) runs north-south
     through the zenith; the sun's side (left) is weakly polarised."""
     sun = Sun(2.0, 90.0)
-    m = polarisation_maps("rayleigh_single", sun, size=16, intensity="unit")
+    m = polarisation_maps("rayleigh_single", sun, *Fisheye(16).directions(), intensity="unit")
     assert m.dop.shape == (16, 16) and np.all(np.isnan(m.dop[~m.mask]))
     assert np.all((m.dop[m.mask] >= 0) & (m.dop[m.mask] <= 1))
     centre_col = m.dop[:, 7:9][m.mask[:, 7:9]]
     assert centre_col.min() > 0.85                       # 90 deg from the sun everywhere
     assert np.nanmean(m.dop[7:9, 0:3]) < 0.2             # east (left) edge: near the sun
-    mc = polarisation_maps("montecarlo", Sun(20.0, 180.0), size=8, samples=20, seed=1)
+    mc = polarisation_maps("montecarlo", Sun(20.0, 180.0), *Fisheye(8).directions(), samples=20,
+                           seed=1)
     assert np.all(np.isfinite(mc.stokes)) and np.all(mc.stokes[..., 0][mc.mask] >= 0)
     out = tmp_path / "pol.png"
     plot_polarisation_maps(mc, out)

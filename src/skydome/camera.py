@@ -111,6 +111,15 @@ class Projection:
     def _jacobian(self, row, col) -> np.ndarray:
         raise NotImplementedError
 
+    def sun_pixel(self, sun) -> tuple[float, float] | None:
+        """Continuous pixel coordinates (row, col) of the centre of ``sun`` (a
+        :class:`skydome.Sun`); None when the sun is below the horizon (elevation < 0), NaN
+        when it is above the horizon but outside the image."""
+        if sun.elevation_deg < 0:
+            return None
+        r, c = self.pixel_from_direction(np.asarray(sun.direction, dtype=np.float64))
+        return float(r), float(c)
+
     def describe(self) -> dict[str, Any]:
         """Name, size and orientation convention of the projection."""
         return {"projection": self.name, "width": self.width, "height": self.height,

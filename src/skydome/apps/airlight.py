@@ -10,7 +10,7 @@ import numpy as np
 
 from skydome._io import atomic_file, check_output_file
 from skydome._validate import check_choice
-from skydome.effects.airlight import METHODS, WHITE_BALANCES, apply_airlight
+from skydome.effects.airlight import WHITE_BALANCES, apply_airlight, methods
 
 __all__ = ["airlight_cli", "demo_effects"]
 
@@ -102,7 +102,7 @@ def airlight_cli(image, depth, out, sun, *, method, turbidity, fov_deg, view_azi
                  width: int = 320, height: int = 180):
     """The ``skydome airlight`` command: validates, applies, writes (atomically)."""
     o = check_output_file(out, (".png", ".exr", ".npy"))
-    check_choice("method", method, METHODS)
+    check_choice("method", method, methods())
     check_choice("white_balance", white_balance, WHITE_BALANCES)
     if synthetic:
         from skydome.effects.dobashi2002 import Camera, synthetic_mountains

@@ -157,7 +157,8 @@ def _effects(out_dir: Path) -> list[Path]:
     from skydome.effects.polarisation_maps import polarisation_maps
     from skydome.imaging.plots import plot_polarisation_maps
 
-    pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0), size=64)
+    pm = polarisation_maps("rayleigh_single", sd.Sun(elevation_deg=20.0, azimuth_deg=180.0),
+                           *sd.Fisheye(64).directions())
     plot_polarisation_maps(pm, eff / "polarisation_rayleigh.png")
     written.append(eff / "polarisation_rayleigh.png")
     tiles.append((written[-1], "polarisation of the sky (single Rayleigh scattering)"))

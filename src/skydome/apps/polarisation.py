@@ -17,11 +17,15 @@ def run_polarisation(out, sun, *, method: str = "montecarlo", csv=None, size: in
     [deg]. If the CSV cannot be written, a figure this call created is removed again."""
     import os
 
+    from skydome._validate import check_int
     from skydome.effects.polarisation_maps import polarisation_maps
     from skydome.imaging.plots import plot_polarisation_maps
+    from skydome.imaging.projections import Fisheye
 
+    size = check_int("size", size, 4, 4096)
     kw = dict(samples=samples, seed=seed) if method == "montecarlo" else {}
-    pmap = polarisation_maps(method, sun, size=size, wavelength_nm=wavelength_nm, turbidity=turbidity, **kw)
+    pmap = polarisation_maps(method, sun, *Fisheye(size).directions(), wavelength_nm=wavelength_nm,
+                             turbidity=turbidity, **kw)
     existed = os.path.exists(out)
     plot_polarisation_maps(pmap, out)
     if csv is not None:

@@ -8,10 +8,14 @@ airlight) and grey-white in haze (aerosol airlight, almost independent of wavele
 :func:`apply_airlight` applies it with a choice of method, each model's own
 ``aerial_perspective`` along every pixel's ray:
 
-* ``precomputed`` (Bruneton 2017 tables, multiple scattering), ``hillaire2020``,
-  ``preetham1999`` (its section 5), ``hoffman_preetham2002`` (F_ex, L_in);
+* every registered model that declares ``airlight = True`` (:mod:`skydome.models`,
+  capabilities; with the keywords of its ``airlight_options``): ``precomputed`` (Bruneton
+  2017 tables, multiple scattering), ``hillaire2020``, ``preetham1999`` (its section 5),
+  ``hoffman_preetham2002`` (F_ex, L_in);
 * ``dobashi2002`` (the table-based formulation, with light shafts in
   :mod:`skydome.effects.dobashi2002`).
+
+:func:`methods` lists them (``METHODS`` is the same tuple, read when asked for).
 
 Image convention: input linear sRGB white-balanced to the direct sunlight at the camera
 ((1, 1, 1) = a white Lambertian surface facing the sun, as :mod:`skydome.effects.dobashi2002`
@@ -33,9 +37,27 @@ import numpy as np
 
 from skydome._validate import check_choice, check_number
 
-__all__ = ["METHODS", "WHITE_BALANCES", "apply_airlight"]
+__all__ = ["METHODS", "WHITE_BALANCES", "apply_airlight", "methods"]
 
-METHODS = ("precomputed", "hillaire2020", "preetham1999", "hoffman_preetham2002", "dobashi2002")
+#: The methods that are not a sky model's aerial perspective.
+EFFECT_METHODS = ("dobashi2002",)
+
+
+def methods() -> tuple[str, ...]:
+    """The methods of :func:`apply_airlight`: the models that declare ``airlight = True``
+    (``precomputed`` first, the default, then by name) and :data:`EFFECT_METHODS`."""
+    from skydome.models import available
+
+    names = sorted((n for n, cls in available().items() if cls.airlight),
+                   key=lambda n: (n != "precomputed", n))
+    return tuple(names) + EFFECT_METHODS
+
+
+def __getattr__(name):
+    # METHODS, read from the models' capabilities when asked for
+    if name == "METHODS":
+        return methods()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _white_rgb(spectrum, wl):
@@ -62,7 +84,9 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
     depth_m : array_like (H, W)
         Distance along each pixel's ray [m]; inf, nan or <= 0: sky (left unchanged).
     sun : skydome.Sun
-    method : {"precomputed", "hillaire2020", "preetham1999", "hoffman_preetham2002", "dobashi2002"}
+    method : str
+        One of :func:`methods` ("precomputed", "hillaire2020", "hoffman_preetham2002",
+        "preetham1999", "dobashi2002").
     turbidity : float
         Turbidity of the air (2..10 for the Preetham methods).
     fov_deg, view_azimuth_deg, view_elevation_deg : float
@@ -94,9 +118,10 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
     """
     import skydome as sd
     from skydome.effects.dobashi2002 import Camera, apply_aerial_perspective
+    from skydome.models import get_model_class
     from skydome.spectra import solar_irradiance, spectrum_to_xyz, wavelength_grid, xyz_to_linear_srgb
 
-    check_choice("method", method, METHODS)
+    check_choice("method", method, methods())
     check_choice("white_balance", white_balance, WHITE_BALANCES)
     if white_balance == "sun" and sun.elevation_deg <= 0.0:
         raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range (0, 90] deg "
@@ -113,25 +138,25 @@ def apply_airlight(image, depth_m, sun, *, method: str = "precomputed", turbidit
     if method == "dobashi2002":
         if fill_sky:
             raise ValueError("fill_sky = True is not available for method 'dobashi2002' "
-                             "(choose one of precomputed, hillaire2020, preetham1999, hoffman_preetham2002)")
+                             f"(choose one of {', '.join(methods()[:-len(EFFECT_METHODS)])})")
         atm = sd.Atmosphere.earth(turbidity=turbidity)
         out = apply_aerial_perspective(img, depth, cam, sun, atmosphere=atm, return_parts=return_parts)
         return out
-    if sun.elevation_deg < 0 and method in ("preetham1999", "hoffman_preetham2002"):
-        raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range [0, 90] deg "
-                         f"for method {method!r}")
+    cls = get_model_class(method)
+    if not cls.sun_in_range(sun.elevation_deg):
+        lo, hi = cls.sun_elevation_range_deg
+        raise ValueError(f"sun elevation_deg = {sun.elevation_deg:g} deg is out of range "
+                         f"[{lo:g}, {hi:g}] deg for method {method!r}")
     wl = wavelength_grid(380.0, 780.0, n=n_wavelengths)
-    sky = sd.model(method, sun=sun, turbidity=turbidity, **(model_params or {}))
+    sky = cls(sun=sun, turbidity=turbidity, **(model_params or {}))
     h, w = depth.shape
     dirs = cam.ray_directions(w, h)
     obj = np.isfinite(depth) & (depth > 0)
     T = np.ones(depth.shape + (wl.size,))
     Lin = np.zeros(depth.shape + (wl.size,))
     if obj.any():
-        # hillaire2020: march each ray; its froxel volume (4 km slices) halves the
-        # extinction over the first kilometres and clamps distances beyond ~30 km
-        kw = {"use_volume": False} if method == "hillaire2020" else {}
-        t, l_in = sky.aerial_perspective(dirs[obj], depth[obj], wl, **kw)
+        # the model's own keywords (hillaire2020: march each ray, not its froxel volume)
+        t, l_in = sky.aerial_perspective(dirs[obj], depth[obj], wl, **cls.airlight_options)
         T[obj], Lin[obj] = t, l_in
     # the object: image (1, 1, 1) = a white Lambertian surface facing the transmitted sun,
     # radiance E_trans / pi; the result is divided by the luminance of a white surface under

@@ -21,7 +21,8 @@ this frame in the same way; at the zenith they pick opposite reference axes (nor
 south), which leaves Q and U unchanged (a rotation by 180 deg). ``test_polarisation_maps``
 checks both.
 
-:func:`polarisation_maps` samples a fisheye (north up, east left, looking up),
+:func:`polarisation_maps` samples a grid of directions (a fisheye's pixels, say: north
+up, east left, looking up),
 :func:`skydome.imaging.plots.plot_polarisation_maps` draws the degree (perceptual colour map, 0..1) and angle
 (cyclic colour map, with E-vector segments) of polarisation, and :func:`meridian_profile`
 with :func:`find_neutral_points` locate the Arago, Babinet and Brewster neutral points
@@ -34,7 +35,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skydome._validate import as_directions, as_wavelengths, check_choice, check_int, check_number
+from skydome._validate import as_directions, as_wavelengths, check_choice, check_number
 from skydome.effects.polarisation import (angle_of_polarisation, degree_of_polarisation,
                                           neutral_points_from_sign, neutral_points_on_meridian,
                                           rayleigh_single_scattering_stokes)
@@ -185,11 +186,12 @@ def e_vectors(directions, stokes) -> np.ndarray:
 # ---------------------------------------------------------------------------------------
 
 class PolarisationMap(NamedTuple):
-    """A fisheye map of polarisation (north up, east left, looking up).
+    """A map of polarisation on a grid of viewing directions (a fisheye, say: north up,
+    east left, looking up).
 
-    dirs (H, W, 3); mask (H, W) True on the sky disc; stokes, stderr (H, W, 4) at one
-    wavelength; dop (H, W) in [0, 1] and aop (H, W) [deg] in (-90, 90] (NaN off the disc);
-    plus the method, sun and wavelength [nm]."""
+    dirs (H, W, 3); mask (H, W) True where computed (the sky disc of a fisheye); stokes,
+    stderr (H, W, 4) at one wavelength; dop (H, W) in [0, 1] and aop (H, W) [deg] in
+    (-90, 90] (NaN where not computed); plus the method, sun and wavelength [nm]."""
     dirs: np.ndarray
     mask: np.ndarray
     stokes: np.ndarray
@@ -201,31 +203,32 @@ class PolarisationMap(NamedTuple):
     wavelength_nm: float
 
 
-def polarisation_maps(method: str, sun, size: int = 48, wavelength_nm: float = 550.0,
+def polarisation_maps(method: str, sun, directions, mask=None, wavelength_nm: float = 550.0,
                       **kw) -> PolarisationMap:
-    """Degree and angle of polarisation on a ``size`` x ``size`` fisheye (north up, east
-    left, zenith at the centre, horizon on the inscribed circle) at one wavelength [nm].
-    ``kw`` go to :func:`sky_stokes`."""
-    from skydome.imaging.projections import Fisheye
-
-    size = check_int("size", size, 4, 4096)
+    """Degree and angle of polarisation at one wavelength [nm] on a grid of viewing
+    directions (H, W, 3) (unit vectors, East-North-Up), e.g. the pixels of a projection:
+    ``polarisation_maps(method, sun, *skydome.Fisheye(48).directions())`` gives the
+    fisheye map (north up, east left, zenith at the centre, horizon on the inscribed
+    circle). ``mask`` (H, W) marks the directions to compute (default: every finite one);
+    the others hold 0 (Stokes) and NaN (degree, angle). ``kw`` go to :func:`sky_stokes`."""
+    d = np.asarray(directions, dtype=np.float64)
+    if d.ndim != 3 or d.shape[-1] != 3:
+        raise ValueError(f"directions has shape {d.shape}; expected (height, width, 3)")
+    if mask is None:
+        mask = np.all(np.isfinite(d), axis=-1)
+    mask = np.asarray(mask)
+    if mask.shape != d.shape[:2] or mask.dtype != bool:
+        raise ValueError(f"mask has shape {mask.shape} and dtype {mask.dtype}; expected "
+                         f"booleans of shape {d.shape[:2]} (the directions')")
     wl = float(check_number("wavelength_nm", wavelength_nm, 200.0, 4000.0, "nm"))
-    dirs, mask = Fisheye(size).directions()
-    st = np.zeros((size, size, 4))
-    er = np.zeros((size, size, 4))
-    r = sky_stokes(method, sun, dirs[mask], [wl], **kw)
+    st = np.zeros(d.shape[:2] + (4,))
+    er = np.zeros(d.shape[:2] + (4,))
+    r = sky_stokes(method, sun, d[mask], [wl], **kw)
     st[mask] = r.stokes[:, 0, :]
     er[mask] = r.stderr[:, 0, :]
     dop = np.where(mask, degree_of_polarisation(st), np.nan)
     aop = np.where(mask, angle_of_polarisation(st), np.nan)
-    return PolarisationMap(dirs, mask, st, er, dop, aop, method, sun, wl)
-
-
-def _sun_pixel(proj, sun):
-    if sun.elevation_deg < 0:
-        return None
-    r, c = proj.pixel_from_direction(sun.direction)
-    return float(r), float(c)
+    return PolarisationMap(d, mask, st, er, dop, aop, method, sun, wl)
 
 
 class MeridianProfile(NamedTuple):

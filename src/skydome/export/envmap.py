@@ -13,13 +13,16 @@ the ``photometric`` units; a convention may name its tool's own units instead
 (luminance = 683 lm/W x 106.7503 nm x Y(RGB)), in which its spectral emitters and
 ``sunsky`` meet the map; ``units=`` chooses either for any convention.
 
-The sky comes from :func:`skydome.imaging.render` through a :class:`MapProjection` (the
-convention's pixel layout as a skydome projection), without the sun; the sun is either
-left out (exported as a light) or added energy-true into the pixel that holds its centre
-(``sun="map"``). Below the horizon the map holds, by default, a Lambertian ground of the
-model's albedo lit by the map's own upper hemisphere and the sun
-(``L = albedo E_h / pi``); ``ground="black"`` leaves zero, ``ground="model"`` keeps what the
-model returns there.
+The sky and the ground come from :func:`skydome.imaging.render` through a
+:class:`MapProjection` (the convention's pixel layout as a skydome projection), without
+the sun; the sun is the render's own sun light (``SkyImage.sun_light``), either left out
+(exported as a light, ``EnvironmentMap.sun_light``) or added energy-true into the pixel
+that holds its centre (``sun="map"``). Below the horizon the map holds, by default, the
+render's Lambertian ground (:mod:`skydome.imaging.ground`: ``L = albedo E_h / pi`` with
+E_h the model's sky and sun on a horizontal plane, and the model's albedo,
+:func:`skydome.imaging.ground.model_albedo`, or the one given); ``ground="black"`` leaves
+zero, ``ground="model"`` keeps what the render's ``ground="model"`` gives there (the
+model's own ground, else that Lambertian one).
 
 References
 ----------
@@ -268,6 +271,11 @@ class EnvironmentMap:
     metadata : dict
     units : Units
         The scale of the RGB values (default: the convention's own).
+    sun_light : dict or None
+        The map's sun as a light in the convention (:func:`skydome.export.sun.sun_light_from`
+        of the render's own sun light, at the map's wavelengths): the light that lit its
+        Lambertian ground and that ``sun="map"`` put into it; None without a sun above the
+        horizon.
     """
 
     images: dict
@@ -279,6 +287,7 @@ class EnvironmentMap:
 
     def __post_init__(self):
         self.units = resolve_units(self.convention, self.units)
+    sun_light: dict | None = None
 
     def directions(self) -> tuple[np.ndarray, np.ndarray]:
         """ENU directions (n, 3) and solid angles (n,) of every pixel of every image."""
@@ -438,14 +447,12 @@ def _parse_size(layout: str, size) -> tuple[int, int]:
     return vals[0], vals[1]
 
 
-def _sun_irradiance_rgb(sky) -> tuple[np.ndarray, Any]:
-    """RGB irradiance [W m^-2] (module scale) of the visible solar disc, or zeros."""
-    from skydome.export.sun import sun_light
-
-    light = sun_light(sky, "skydome")
+def _sun_rgb(light: dict | None) -> np.ndarray:
+    """RGB irradiance [W m^-2] (module scale) of a sun light of :mod:`skydome.export.sun`,
+    or zeros without one."""
     if light is None:
-        return np.zeros(3), None
-    return np.array(light["rgb_irradiance_W_m2"]), light
+        return np.zeros(3)
+    return np.array(light["rgb_irradiance_W_m2"])
 
 
 def check_envmap_options(convention, layout, size, sun="separate", ground="lambertian",
@@ -490,11 +497,16 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
         ``separate`` (not in the map; see :func:`skydome.export.sun.sun_light`) or ``map``
         (its irradiance added into the pixel holding its centre, energy-true).
     ground : str
-        ``lambertian`` (albedo x E_h / pi below the horizon), ``black`` or ``model``.
+        ``lambertian`` (albedo x E_h / pi below the horizon, for every model), ``black``
+        or ``model`` (the render's ``ground="model"``).
     ground_albedo : float, optional
-        In [0, 1]; default the model's ``albedo`` / ``ground_albedo`` if it has one, else 0.2.
+        In [0, 1]; default the model's albedo
+        (:func:`skydome.imaging.ground.model_albedo`: its ``albedo`` parameter, else its
+        atmosphere's ground albedo, else 0.2).
     wavelengths_nm : array_like, optional
-        For spectral models (default: skydome.render()'s 16 samples 380-780 nm).
+        For spectral models, the sky's and the sun's (default
+        :func:`skydome.spectra.default_wavelengths`, 41 samples 380-780 nm, those of
+        :func:`skydome.export.sun.sun_light`).
     progress : callable, optional
         ``progress(done, total)`` over all pixels.
     units : str, optional
@@ -502,15 +514,23 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
         ``photometric`` (W m^-2 sr^-1, 683 lm/W) or ``mitsuba`` (Mitsuba 3's own); default
         the convention's (``mitsuba`` for the mitsuba convention, else photometric).
     """
-    from skydome.imaging import render
-
-    conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground, units)
-    if ground_albedo is None:
-        ground_albedo = next((float(getattr(sky, a)) for a in ("albedo", "ground_albedo")
-                              if isinstance(getattr(sky, a, None), (int, float))), 0.2)
     from skydome._validate import check_number
+    from skydome.export.sun import sun_light_from
+    from skydome.imaging import render
+    from skydome.imaging.ground import horizontal_irradiance, model_albedo
+    from skydome.spectra import default_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
 
-    ground_albedo = check_number("ground_albedo", ground_albedo, 0.0, 1.0)
+    conv, layout, (W, H) = check_envmap_options(convention, layout, size, sun, ground,
+                                                  units)
+    if ground_albedo is not None:
+        ground_albedo = check_number("ground_albedo", ground_albedo, 0.0, 1.0)
+    wl = default_wavelengths() if wavelengths_nm is None else wavelengths_nm
+    # the ground as imaging.render makes it (skydome.imaging.ground: one Lambertian ground,
+    # one albedo rule): the model's albedo, a given one, black, or the model's own ground
+    if ground == "lambertian":
+        render_ground = "lambertian" if ground_albedo is None else ground_albedo
+    else:
+        render_ground = ground
 
     if layout in _CUBE_LAYOUTS:
         projections = {f: CubeFaceProjection(conv, f, W) for f in FACES}
@@ -520,30 +540,36 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
     done = [0]
 
     images = {}
+    sun_light = None
     for name, proj in projections.items():
         base = done[0]
 
         def prog(k, _n, base=base):
             if progress is not None:
                 progress(base + k, total)
-        img = render(sky, proj, wavelengths_nm, draw_sun=False, progress=prog, output="xyz")
+        img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
+                     ground=render_ground)
         rgb = np.where(img.mask[..., None], img.linear_srgb(), 0.0) / K_M
         images[name] = np.maximum(rgb, 0.0)            # out-of-gamut negatives clipped
         done[0] += proj.width * proj.height
+        sun_light = img.sun_light                      # the same for every image
 
-    env = EnvironmentMap(images, projections, conv, layout, units=units)
-    E_sun, light = _sun_irradiance_rgb(sky)
-    d_all, w_all = env.directions()
-    up = d_all[:, 2] > 0.0
-    E_h = (env.pixels()[up] * (d_all[up, 2] * w_all[up])[:, None]).sum(axis=0)
-    if light is not None:
-        E_h = E_h + E_sun * max(np.sin(np.radians(sky.sun.elevation_deg)), 0.0)
-    if ground != "model":
-        L_ground = ground_albedo * E_h / np.pi if ground == "lambertian" else np.zeros(3)
-        for name, proj in projections.items():
-            d, mask = proj.directions()
-            below = mask & (d[..., 2] < 0.0)
-            images[name][below] = L_ground
+    # the image's own sun light, in the convention (None: no sun above the horizon)
+    light = None if sun_light is None else sun_light_from(sun_light, sky.sun, conv,
+                                                                  units)
+    env = EnvironmentMap(images, projections, conv, layout, units=units,
+                         sun_light=light)
+    E_sun = _sun_rgb(light)
+    # the irradiance on a horizontal plane that lights the Lambertian ground (its sky and
+    # sun), in the map's RGB
+    spectral = getattr(sky, "native", "spectral") == "spectral"
+    wl_h = np.asarray(wl, dtype=np.float64) if spectral else None
+    E_h_xyz = horizontal_irradiance(sky, wl_h)
+    if spectral:
+        E_h_xyz = spectrum_to_xyz(E_h_xyz, wl_h)
+    E_h = xyz_to_linear_srgb(E_h_xyz) / K_M
+    if ground_albedo is None:
+        ground_albedo = model_albedo(sky)
     if sun == "map" and light is not None:
         s = np.asarray(sky.sun.direction)
         best = None

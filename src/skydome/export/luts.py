@@ -61,7 +61,7 @@ import numpy as np
 
 __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "bake",
            "write_luts", "write_precomputed_luts", "check_luts_options", "LUT_FORMAT",
-           "HILLAIRE_FORMAT", "LUT_MODELS", "LUT_FILE_FORMATS"]
+           "HILLAIRE_FORMAT", "LUT_MODELS", "LUT_LAYOUTS", "LUT_FILE_FORMATS", "lut_models"]
 
 #: version 2: the mu_s axis is the model's zenith-angle mapping (table format
 #: skydome.precomputed/2), no longer [Bru17]'s; version 3: the mu axis too is the model's
@@ -69,8 +69,9 @@ __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "ba
 LUT_FORMAT = "skydome.luts.bruneton-xyz/3"
 #: the hillaire2020 bake (Hillaire's layout, XYZ)
 HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/1"
-#: models that have a bake
-LUT_MODELS = ("precomputed", "hillaire2020")
+#: the bakes by layout: a model declares its layout as ``lut_layout`` (skydome.models,
+#: capabilities), so that :func:`lut_models` lists it and :func:`bake` bakes it
+LUT_LAYOUTS = ("bruneton", "hillaire")
 #: file formats of :func:`write_luts`
 LUT_FILE_FORMATS = ("exr", "npy", "bin")
 #: the model's table format whose axes this bake describes
@@ -300,15 +301,39 @@ def bake_hillaire2020(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], 
     return tex, desc
 
 
+def lut_models() -> tuple[str, ...]:
+    """The registered models that have a bake: those declaring a ``lut_layout``
+    (``precomputed`` first, the default, then by name). ``LUT_MODELS`` is the same tuple,
+    read when asked for."""
+    from skydome.models import available
+
+    return tuple(sorted((n for n, cls in available().items() if cls.lut_layout is not None),
+                        key=lambda n: (n != "precomputed", n)))
+
+
+def __getattr__(name):
+    if name == "LUT_MODELS":
+        return lut_models()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """The bake of ``sky`` in its model's layout: Bruneton's for ``precomputed``, Hillaire's
-    for ``hillaire2020``; ValueError for other models."""
+    """The bake of ``sky`` in its model's layout (``lut_layout``): Bruneton's
+    (``"bruneton"``, e.g. ``precomputed``) or Hillaire's (``"hillaire"``, e.g.
+    ``hillaire2020``; any object with the precomputed model's ``export_textures``
+    is baked in Bruneton's); ValueError for other models."""
     name = getattr(sky, "name", type(sky).__name__)
-    if name == "hillaire2020":
+    layout = getattr(sky, "lut_layout", None)
+    if layout is None and hasattr(sky, "export_textures"):
+        layout = "bruneton"         # an object that exports the precomputed model's tables
+    if layout == "hillaire":
         return bake_hillaire2020(sky, wavelengths_nm)
-    if name == "precomputed" or hasattr(sky, "export_textures"):
+    if layout == "bruneton":
         return bake_precomputed(sky)
-    raise ValueError(f"model = {name!r} has no LUT bake; valid: {', '.join(LUT_MODELS)}")
+    if layout is not None:
+        raise ValueError(f"model {name!r}: lut_layout = {layout!r} is not one of "
+                         f"{', '.join(LUT_LAYOUTS)}")
+    raise ValueError(f"model = {name!r} has no LUT bake; valid: {', '.join(lut_models())}")
 
 
 def _npy_bytes(arr: np.ndarray) -> bytes:

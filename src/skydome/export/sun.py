@@ -37,37 +37,51 @@ import numpy as np
 
 from skydome.export.conventions import get_convention, get_units, resolve_units
 
-__all__ = ["sun_light", "write_sun_json"]
+__all__ = ["sun_light", "sun_light_from", "write_sun_json"]
 
 _K_M = 683.0
 
 
 def sun_light(sky, convention: str = "skydome", wavelengths_nm=None,
               units: str | None = None) -> dict | None:
-    """The sun of ``sky`` as a light (see the module docstring); None if the model has no
-    sun with a radiance, or the sun is wholly below the horizon.
+    """The sun of ``sky`` as a light (see the module docstring) at ``wavelengths_nm``
+    (default :func:`skydome.spectra.default_wavelengths`); None if the model has no sun
+    with a radiance, or the sun is wholly below the horizon.
 
     ``units``: the scale of the map the light goes with (a name of
     :data:`skydome.export.conventions.UNITS`), default the convention's own; it sets
     ``rgb_irradiance_map_units`` and, for the mitsuba convention, the Mitsuba target.
     """
     from skydome.imaging.sun_disc import sun_light as render_sun_light
-    from skydome.spectra import default_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
+    from skydome.spectra import default_wavelengths
 
-    conv = get_convention(convention)
-    map_units = resolve_units(conv, units)               # ValueError naming units
-    # Mitsuba's target is in Mitsuba's units, unless a mitsuba map is written in others
-    mi_units = map_units if conv.name == "mitsuba" else get_units("mitsuba")
-    sun = getattr(sky, "sun", None)
+    resolve_units(get_convention(convention), units)      # ValueError naming units, first
     wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
     # the render layer's sun light: the limb-darkened disc's spectral normal irradiance,
     # times the part of its flux above the horizon (per wavelength)
     base = render_sun_light(sky, wl)
     if base is None or getattr(sky, "native", "spectral") == "luminance":
         return None
-    E = np.asarray(base.irradiance, dtype=np.float64)                 # W m^-2 nm^-1
+    return sun_light_from(base, sky.sun, convention, units)
+
+
+def sun_light_from(base, sun, convention: str = "skydome", units: str | None = None) -> dict:
+    """The light of :func:`sun_light` made from a render's sun light ``base`` (a
+    :class:`skydome.imaging.sun_disc.SunLight`: ``SkyImage.sun_light``) and the
+    :class:`skydome.Sun` it comes from. A spectral ``base`` gives every field; an XYZ one
+    (a luminance-only model's sun, D65 chromaticity) leaves the wavelengths and the
+    spectral irradiance None. ``units`` as in :func:`sun_light`."""
+    from skydome.spectra import spectrum_to_xyz, xyz_to_linear_srgb
+
+    conv = get_convention(convention)
+    map_units = resolve_units(conv, units)               # ValueError naming units
+    # Mitsuba's target is in Mitsuba's units, unless a mitsuba map is written in others
+    mi_units = map_units if conv.name == "mitsuba" else get_units("mitsuba")
+    E = np.asarray(base.irradiance, dtype=np.float64)     # W m^-2 nm^-1, or XYZ [lx]
     frac = base.visible_fraction
-    xyz = spectrum_to_xyz(E, wl)                                        # Y = illuminance [lx]
+    spectral = base.wavelengths_nm is not None
+    wl = np.asarray(base.wavelengths_nm, dtype=np.float64) if spectral else None
+    xyz = spectrum_to_xyz(E, wl) if spectral else E                     # Y = illuminance [lx]
     rgb = np.maximum(xyz_to_linear_srgb(xyz), 0.0) / _K_M               # W m^-2, map scale
     lux = float(xyz[1])
     d_enu = np.asarray(sun.direction, dtype=np.float64)
@@ -82,7 +96,7 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None,
                "irradiance_rgb": [float(c) * mi_units.scale for c in rgb],
                "note": "Mitsuba axes: +X east, +Y up, +Z south (convention mitsuba); "
                        f"irradiance in {mi_units.name} units"}
-    if mi_units.name == "mitsuba":
+    if mi_units.name == "mitsuba" and spectral:
         # Mitsuba's units are spectral radiometry: the physical spectral irradiance is its
         # own value (Y = integral E y-bar dl / 106.7503 in its films); the dictionary is
         # Mitsuba's as it stands (a 'spectrum' takes exactly 'type' and 'value')
@@ -97,8 +111,8 @@ def sun_light(sky, convention: str = "skydome", wavelengths_nm=None,
         "elevation_deg": float(sun.elevation_deg), "azimuth_deg": float(sun.azimuth_deg),
         "angular_radius_deg": float(sun.angular_radius_deg),
         "visible_fraction": float(frac),
-        "wavelengths_nm": [float(w) for w in wl],
-        "spectral_irradiance_W_m2_nm": [float(e) for e in E],
+        "wavelengths_nm": [float(w) for w in wl] if spectral else None,
+        "spectral_irradiance_W_m2_nm": [float(e) for e in E] if spectral else None,
         "rgb_irradiance_W_m2": [float(c) for c in rgb],
         "rgb_colour_space": "linear Rec. 709 / sRGB primaries, D65; 683 lm/W",
         "map_units": map_units.name,

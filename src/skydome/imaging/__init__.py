@@ -50,11 +50,12 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     limb_darkening : bool
         Give the disc the sun's centre-to-limb darkening (Neckel 2005; default) or, if
         False, a uniform radiance. Either way its flux is the model's.
-    ground : {"model", "black"} or float
+    ground : {"model", "black", "lambertian"} or float
         What the pixels below the horizon show (:mod:`skydome.imaging.ground`): "model"
         (default) the model's own ground where it traces ground-hit rays, else a
         Lambertian ground of the model's albedo (0.2 without one) lit by its sky and sun;
-        "black"; or an albedo in [0, 1] for a Lambertian ground on every model.
+        "black"; "lambertian", that Lambertian ground on every model; or an albedo in
+        [0, 1] for a Lambertian ground of that albedo on every model.
     output : {"native", "xyz"}
         "native" (default): a spectral image for spectral models, XYZ for the others.
         "xyz": an XYZ image for every model, by the fused path: each chunk of the model's

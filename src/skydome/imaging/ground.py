@@ -11,39 +11,62 @@ by Gauss-Legendre quadrature in cos(theta) (32 nodes) times the midpoint rule in
 
 ``ground="model"`` (the default of :func:`skydome.imaging.render`): models that trace
 ground-hit rays themselves (the physically based ones: their radiance below the horizon
-is the ground seen through the air in front of it) keep their values. Two of them light
-their ground with the transmitted sun only (:data:`SUN_ONLY_GROUND`: measured, the nadir
+is the ground seen through the air in front of it; ``own_ground`` on the model's class,
+:mod:`skydome.models`) keep their values. Two of them light their ground with the
+transmitted sun only (``own_ground = "sun"``: measured, the nadir
 of a ground-level observer at sun 40 deg is rho E_sun sin(el) / pi to 1e-6, while
 ``precomputed``, ``nishita1996`` and ``montecarlo`` give rho E_h / pi within 2 %); for a
 ground-level observer of those, the skylight term rho E_sky / pi is added. For the other
 models (the analytic ones give nothing below the horizon) the ground is the Lambertian
 one above. ``ground="black"``: nothing below the horizon.
+``ground="lambertian"``: the Lambertian ground of the model's albedo for every model.
 ``ground=<albedo in [0, 1]>``: the Lambertian ground of that albedo for every model.
 
-The albedo of ``"model"`` is the model's ``atmosphere.ground_albedo`` where it has one,
-else 0.2, the default ground reflectance of Radiance's ``gensky`` (``-g 0.2``).
+The model's albedo (:func:`model_albedo`, the one rule of skydome's renders and
+environment maps): the model's own ground albedo parameter ``albedo`` where it has one
+that is set (``hosek_wilkie2012``, ``nishita1993``), else its ``atmosphere.ground_albedo``
+(spectral where the atmosphere's is), else 0.2, the default ground reflectance of
+Radiance's ``gensky`` (``-g 0.2``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DEFAULT_ALBEDO", "check_ground", "horizontal_irradiance", "apply_ground"]
+__all__ = ["DEFAULT_ALBEDO", "GROUNDS", "check_ground", "horizontal_irradiance", "apply_ground",
+           "model_albedo", "sun_only_ground"]
 
 #: Ground albedo for models without one (Radiance gensky's default ground reflectance).
 DEFAULT_ALBEDO = 0.2
-#: Models whose own ground is lit by the transmitted sun only (no skylight on the ground).
-SUN_ONLY_GROUND = ("single_scattering", "hillaire2020")
+#: The named values of ``ground`` (besides an albedo in [0, 1]).
+GROUNDS = ("model", "black", "lambertian")
+
+
+def sun_only_ground() -> tuple[str, ...]:
+    """The registered models whose own ground is lit by the transmitted sun only (no
+    skylight on the ground): those declaring ``own_ground = "sun"``."""
+    from skydome.models import available
+
+    return tuple(n for n, cls in available().items() if cls.own_ground == "sun")
+
+
+def __getattr__(name):
+    # SUN_ONLY_GROUND, read from the models' capabilities when asked for
+    if name == "SUN_ONLY_GROUND":
+        return sun_only_ground()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def check_ground(ground):
-    """Validate ``ground``: "model", "black" or an albedo in [0, 1]."""
+    """Validate ``ground``: "model", "black", "lambertian" or an albedo in [0, 1]."""
     if isinstance(ground, str):
-        if ground not in ("model", "black"):
-            raise ValueError(f"ground = {ground!r} must be 'model', 'black' or an albedo in [0, 1]")
+        if ground not in GROUNDS:
+            raise ValueError(f"ground = {ground!r} must be 'model', 'black', 'lambertian' or "
+                             "an albedo in [0, 1]")
         return ground
     if isinstance(ground, bool) or not isinstance(ground, (int, float, np.floating, np.integer)):
-        raise TypeError(f"ground must be 'model', 'black' or an albedo in [0, 1], got {ground!r}")
+        raise TypeError(f"ground must be 'model', 'black', 'lambertian' or an albedo in [0, 1], "
+                        f"got {ground!r}")
     g = float(ground)
     if not 0.0 <= g <= 1.0:
         raise ValueError(f"ground = {g} is out of range [0, 1] (an albedo)")
@@ -78,15 +101,25 @@ def horizontal_irradiance(sky, wavelengths_nm=None, n_mu: int = 32, n_phi: int =
     return E
 
 
-def _albedo(sky, wl, ground) -> np.ndarray | float:
-    if ground != "model":
-        return float(ground)
+def model_albedo(sky, wavelengths_nm=None) -> np.ndarray | float:
+    """The albedo of the model's ground (module docstring): per wavelength at
+    ``wavelengths_nm`` (an array, or a float where it is grey), or the value at 555 nm
+    when ``wavelengths_nm`` is None (XYZ images)."""
+    own = getattr(sky, "albedo", None)
+    if isinstance(own, (int, float, np.floating, np.integer)) and not isinstance(own, bool):
+        return float(own)
     a = getattr(getattr(sky, "atmosphere", None), "ground_albedo", None)
     if a is None:
         return DEFAULT_ALBEDO
-    w = np.asarray(wl if wl is not None else (555.0,), dtype=np.float64)
+    w = np.asarray(wavelengths_nm if wavelengths_nm is not None else (555.0,), dtype=np.float64)
     v = np.asarray(a(w) if callable(a) else a, dtype=np.float64)
-    return v if wl is not None else float(np.ravel(v)[0])
+    return v if wavelengths_nm is not None else float(np.ravel(v)[0])
+
+
+def _albedo(sky, wl, ground) -> np.ndarray | float:
+    if ground not in ("model", "lambertian"):
+        return float(ground)
+    return model_albedo(sky, wl)
 
 
 def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, ground,
@@ -103,7 +136,7 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
         data[below] = 0.0
         return "black"
     if ground == "model" and np.any(data[below] > 0.0):
-        if (getattr(sky, "name", "") in SUN_ONLY_GROUND
+        if (getattr(sky, "own_ground", None) == "sun"
                 and float(getattr(sky, "observer_altitude_m", 0.0) or 0.0) == 0.0):
             rho = _albedo(sky, wl, ground)
             data[below] += np.maximum(conv(np.asarray(rho) * horizontal_irradiance(

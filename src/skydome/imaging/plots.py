@@ -254,8 +254,9 @@ def plot_polarisation_maps(pmap, path, title: str | None = None,
     """Figure with the degree (viridis, colour bar 0..1) and the angle (cyclic 'twilight',
     colour bar -90..90 deg) of polarisation of ``pmap``; the degree panel carries E-vector
     segments on a ``segments`` x ``segments`` grid, of length proportional to the degree.
-    North up, east left; the sun is marked. Written atomically (.png, .pdf or .svg)."""
-    from skydome.effects.polarisation_maps import _sun_pixel, e_vectors
+    ``pmap`` holds the directions of a square fisheye (``Fisheye(n).directions()``): north
+    up, east left; the sun is marked. Written atomically (.png, .pdf or .svg)."""
+    from skydome.effects.polarisation_maps import e_vectors
     from skydome.imaging.projections import Fisheye
 
     plt = _pyplot()
@@ -295,7 +296,7 @@ def plot_polarisation_maps(pmap, path, title: str | None = None,
                 yc, xc = r + 0.5, c + 0.5
                 ax.plot([xc - half * dc / L, xc + half * dc / L], [yc - half * dr / L, yc + half * dr / L],
                         color=col_, lw=lw, solid_capstyle="round")
-    sp = _sun_pixel(proj, pmap.sun)
+    sp = proj.sun_pixel(pmap.sun)
     for ax in axes:
         ax.add_patch(plt.Circle((n / 2, n / 2), n / 2, fill=False, color="0.4", lw=0.8))
         if sp is not None:

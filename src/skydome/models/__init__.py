@@ -47,6 +47,33 @@ Models that have it implement one signature, ``aerial_perspective(directions, di
 wavelengths_nm, ...) -> (transmittance, in-scattered radiance)``, both of shape
 (..., n_wavelengths); model-specific options follow as keywords.
 
+Capabilities
+------------
+What the rest of skydome may do with a model is declared on its class, never listed by
+name elsewhere; the consumers read these attributes through the registry
+(:func:`available`), so a new model that declares them appears in each of them by itself:
+
+* ``viewer_shader`` (None): the WebGL shader that draws the model in the viewer
+  (``viewer/static/shaders/<viewer_shader>.glsl``, its uniforms set by ``sky.js`` and
+  computed by the builder of that name in :mod:`skydome.viewer.scene`); None: the viewer
+  does not offer the model. ``viewer_parameters`` (()): the model parameters its page
+  exposes.
+* ``lut_layout`` (None): the texture layout of the model's LUT bake for real-time
+  renderers (:mod:`skydome.export.luts`: ``"bruneton"`` or ``"hillaire"``); None: no bake.
+* ``airlight`` (False): :mod:`skydome.effects.airlight` may use the model's
+  ``aerial_perspective`` (the model must have one and take ``turbidity``);
+  ``airlight_options`` ({}): the keywords it passes to ``aerial_perspective`` there.
+* ``own_ground`` (None): what the model returns below the horizon: None, nothing (renders
+  put a Lambertian ground of the model's albedo there, :mod:`skydome.imaging.ground`);
+  ``"sun_and_sky"``, its own ground-hit rays, the ground lit by its sun and sky; ``"sun"``,
+  its own ground lit by the transmitted sun only (renders add the skylight's share for an
+  observer on the ground); ``"own"``, its own ground lit by rules of its own (neither
+  of those), which renders keep as they are.
+
+:func:`register` refuses a class whose capabilities are incoherent (a viewer parameter the
+model does not declare, airlight without ``aerial_perspective`` or ``turbidity``, an
+unknown ``own_ground``).
+
 Models register themselves with :func:`register`; the registry discovers every module in
 ``skydome.models.analytic`` and ``skydome.models.simulated`` on first use, so adding a
 model needs no edit here. Model modules must not import numba at module level.
@@ -58,13 +85,15 @@ import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from types import MappingProxyType
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
 from skydome._validate import as_directions, check_choice, check_int, check_number, check_real
 
 __all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
+           "check_capabilities", "unregister", "OWN_GROUND",
            "resolve_atmosphere", "ATMOSPHERE", "TURBIDITY", "OBSERVER_ALTITUDE_M",
            "ATMOSPHERE_PARAMETERS"]
 
@@ -182,6 +211,21 @@ class SkyModel:
     #: its sky is black, luminance 0 everywhere). A model that supports every elevation by
     #: a documented extension (twilight) declares the full range [-90, 90].
     sun_outside_range: ClassVar[str] = "raise"
+
+    # -- capabilities (module docstring): safe defaults, each model sets its own ---------
+    #: The viewer's shader for the model (None: not in the viewer).
+    viewer_shader: ClassVar[str | None] = None
+    #: The model parameters the viewer's page exposes.
+    viewer_parameters: ClassVar[tuple[str, ...]] = ()
+    #: The layout of the model's LUT bake, "bruneton" or "hillaire" (None: no bake).
+    lut_layout: ClassVar[str | None] = None
+    #: Whether skydome.effects.airlight may use the model's ``aerial_perspective``.
+    airlight: ClassVar[bool] = False
+    #: Keywords skydome.effects.airlight passes to ``aerial_perspective``.
+    airlight_options: ClassVar[Mapping[str, Any]] = MappingProxyType({})
+    #: What the model returns below the horizon: None (nothing), "sun_and_sky", "sun" or
+    #: "own" (its own ground, lit by its sun and sky, by its sun only, or by its own rules).
+    own_ground: ClassVar[str | None] = None
 
     # -- the common constructor --------------------------------------------------------
     def __init__(self, sun=None, **params):
@@ -401,14 +445,61 @@ _DISCOVERED = False
 _PACKAGES = ("skydome.models.analytic", "skydome.models.simulated")
 
 
+#: The values of ``SkyModel.own_ground``.
+OWN_GROUND = (None, "sun_and_sky", "sun", "own")
+
+
+def check_capabilities(cls: type[SkyModel]) -> None:
+    """ValueError (naming the model, the attribute and its value) unless the capability
+    attributes of ``cls`` are coherent with its declarations (module docstring)."""
+    names = {p.name for p in cls.parameters}
+    shader = cls.viewer_shader
+    if shader is not None and not (isinstance(shader, str) and shader.isidentifier()):
+        raise ValueError(f"model {cls.name!r}: viewer_shader = {shader!r} is not None or a "
+                         "shader name (an identifier)")
+    extra = [k for k in cls.viewer_parameters if k not in names]
+    if extra or isinstance(cls.viewer_parameters, str):
+        raise ValueError(f"model {cls.name!r}: viewer_parameters = {cls.viewer_parameters!r} "
+                         f"names parameters it does not declare ({', '.join(extra)}); valid: "
+                         f"{', '.join(sorted(names)) or 'none'}")
+    if shader is None and cls.viewer_parameters:
+        raise ValueError(f"model {cls.name!r}: viewer_parameters = {cls.viewer_parameters!r} "
+                         "without a viewer_shader")
+    if cls.lut_layout is not None and not isinstance(cls.lut_layout, str):
+        raise ValueError(f"model {cls.name!r}: lut_layout = {cls.lut_layout!r} is not None "
+                         "or a layout name")
+    if not isinstance(cls.airlight, bool):
+        raise ValueError(f"model {cls.name!r}: airlight = {cls.airlight!r} is not True or False")
+    if cls.airlight and not (callable(getattr(cls, "aerial_perspective", None))
+                             and "turbidity" in names):
+        raise ValueError(f"model {cls.name!r}: airlight = True needs an aerial_perspective "
+                         "method and a turbidity parameter")
+    if cls.airlight_options and not cls.airlight:
+        raise ValueError(f"model {cls.name!r}: airlight_options = {dict(cls.airlight_options)!r} "
+                         "without airlight = True")
+    if cls.own_ground not in OWN_GROUND:
+        raise ValueError(f"model {cls.name!r}: own_ground = {cls.own_ground!r} is not one of "
+                         f"{', '.join(map(repr, OWN_GROUND))}")
+
+
 def register(cls: type[SkyModel]) -> type[SkyModel]:
-    """Class decorator adding a model to the registry under ``cls.name``."""
+    """Class decorator adding a model to the registry under ``cls.name``; its capabilities
+    are checked first (:func:`check_capabilities`)."""
     if not cls.name:
         raise ValueError(f"{cls.__name__} has no name")
+    check_capabilities(cls)
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise ValueError(f"model name {cls.name!r} registered twice")
     _REGISTRY[cls.name] = cls
     return cls
+
+
+def unregister(name: str) -> None:
+    """Remove the model registered under ``name`` (a model made for a test, say);
+    KeyError if there is none."""
+    if name not in _REGISTRY:
+        raise KeyError(f"model = {name!r} is not registered")
+    del _REGISTRY[name]
 
 
 def _discover() -> None:

@@ -33,17 +33,34 @@ from typing import Any, Mapping
 
 import numpy as np
 
-__all__ = ["VIEWER_MODELS", "SUN_KEYS", "parse_request", "shader_scene", "build_model"]
+__all__ = ["VIEWER_MODELS", "SUN_KEYS", "parse_request", "shader_scene", "build_model",
+           "viewer_models", "VIEWS"]
 
-#: Models the viewer renders with a shader, and the model parameters it exposes.
-VIEWER_MODELS: dict[str, tuple[str, ...]] = {
-    "preetham1999": ("turbidity",),
-    "hoffman_preetham2002": ("turbidity", "g", "sky_distance_m", "phase"),
-    "oneil2005": ("kr", "km", "g", "scale_depth", "outer_ratio", "samples"),
-    "hillaire2020": ("turbidity", "observer_altitude_m"),
-    "precomputed": ("turbidity", "observer_altitude_m"),
-    "dobashi2002": ("turbidity", "shafts", "n_planes"),
-}
+
+def viewer_models() -> dict[str, tuple[str, ...]]:
+    """Models the viewer renders with a shader, and the model parameters it exposes: every
+    registered model that declares a ``viewer_shader`` (with its ``viewer_parameters``;
+    skydome.models, capabilities), by the year in its name (names without one last), then
+    the viewer's own scenes (:data:`VIEWS`). ``VIEWER_MODELS`` is the same dict, read when
+    asked for."""
+    import re
+
+    from skydome.models import available
+
+    def year(name):
+        m = re.search(r"(\d{4})$", name)
+        return (int(m.group(1)) if m else 10_000, name)
+
+    found = {n: cls for n, cls in available().items() if cls.viewer_shader is not None}
+    out = {n: tuple(found[n].viewer_parameters) for n in sorted(found, key=year)}
+    out.update({n: tuple(v.viewer_parameters) for n, v in VIEWS.items()})
+    return out
+
+
+def __getattr__(name):
+    if name == "VIEWER_MODELS":
+        return viewer_models()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 #: Table sizes of the viewer's precomputed model: smaller than the model's defaults so that
 #: a turbidity change bakes in about 10 s on two cores (the sun and the observer altitude
@@ -76,6 +93,8 @@ class Dobashi2002View:
     behind the terrain is not rendered."""
 
     name = "dobashi2002"
+    viewer_shader = "dobashi2002"
+    viewer_parameters = ("turbidity", "shafts", "n_planes")
     reference = "Dobashi, Yamamoto & Nishita 2002"
     summary = ("light shafts and aerial perspective over a synthetic mountain scene: sampling "
                "planes, 2D look-up tables, shadow volume from a heightmap")
@@ -106,10 +125,15 @@ class Dobashi2002View:
                 "sun_azimuth_deg": self.sun.azimuth_deg}
 
 
+#: The viewer's own scenes that are not sky models, by name (the page lists them after
+#: the models; each class declares ``viewer_shader`` and ``viewer_parameters``).
+VIEWS = {Dobashi2002View.name: Dobashi2002View}
+
+
 def viewer_class(name: str):
     """The class whose ``parameters`` the page shows for model ``name``."""
-    if name == "dobashi2002":
-        return Dobashi2002View
+    if name in VIEWS:
+        return VIEWS[name]
     from skydome.models import get_model_class
 
     return get_model_class(name)
@@ -129,13 +153,14 @@ def parse_request(query: Mapping[str, str]) -> tuple[str, dict[str, Any], dict[s
     Unknown keys raise ValueError naming the valid ones.
     """
     model = query.get("model")
+    models = viewer_models()
     if model is None:
-        raise ValueError(f"model is missing; valid: {', '.join(VIEWER_MODELS)}")
-    if model not in VIEWER_MODELS:
-        raise ValueError(f"model = {model!r} is not one of {', '.join(VIEWER_MODELS)}")
+        raise ValueError(f"model is missing; valid: {', '.join(models)}")
+    if model not in models:
+        raise ValueError(f"model = {model!r} is not one of {', '.join(models)}")
     cls = viewer_class(model)
-    params_of = cls._parameters() if model == "dobashi2002" else cls.parameters
-    pars = {p.name: p for p in params_of if p.name in VIEWER_MODELS[model]}
+    params_of = cls._parameters() if model in VIEWS else cls.parameters
+    pars = {p.name: p for p in params_of if p.name in models[model]}
     sun: dict[str, Any] = {}
     params: dict[str, Any] = {}
     for key, text in query.items():
@@ -164,11 +189,12 @@ def build_model(model: str, sun_kw: Mapping[str, Any], params: Mapping[str, Any]
     from skydome.sun import sun_from_options
 
     sun = sun_from_options(**sun_kw)
-    if model == "precomputed":
+    if model in VIEWS:
+        return VIEWS[model](sun, **params)
+    shader = viewer_class(model).viewer_shader
+    if shader == "precomputed":
         return _precomputed_model(sun, dict(params))
-    if model == "dobashi2002":
-        return Dobashi2002View(sun, **params)
-    if model == "oneil2005" and params.get("samples", 2) > ONEIL_MAX_SAMPLES:
+    if shader == "oneil2005" and params.get("samples", 2) > ONEIL_MAX_SAMPLES:
         raise ValueError(f"samples = {params['samples']} is out of range [1, "
                          f"{ONEIL_MAX_SAMPLES}] in the viewer")
     return skydome.model(model, sun=sun, **params)
@@ -459,6 +485,7 @@ def _dobashi(view) -> dict[str, Any]:
     return out
 
 
+#: The numbers of each shader (``viewer_shader``), by shader.
 _BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil,
              "hillaire2020": _hillaire, "precomputed": _precomputed, "dobashi2002": _dobashi}
 
@@ -470,8 +497,10 @@ def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:
     """
     model, sun_kw, params = parse_request(query)
     sky = build_model(model, sun_kw, params)
-    out = {"model": model, "sun": _sun_block(sky), "describe": _jsonable(sky.describe())}
-    out.update(_BUILDERS[model](sky))
+    shader = viewer_class(model).viewer_shader
+    out = {"model": model, "shader": shader, "sun": _sun_block(sky),
+           "describe": _jsonable(sky.describe())}
+    out.update(_BUILDERS[shader](sky))
     return out
 
 

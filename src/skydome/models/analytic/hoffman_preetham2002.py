@@ -198,6 +198,9 @@ class HoffmanPreetham2002(SkyModel):
     reference = ("N. Hoffman, A. J. Preetham, 'Rendering Outdoor Light Scattering in Real "
                  "Time', Game Developers Conference 2002 (ATI white paper)")
     native = "spectral"
+    viewer_shader = "hoffman_preetham2002"
+    viewer_parameters = ("turbidity", "g", "sky_distance_m", "phase")
+    airlight = True                       # F_ex, L_in
     summary = "Homogeneous single-scattering sky and aerial perspective for shaders"
     parameters = (
         Parameter("turbidity", "", 2.5, _p99.TURBIDITY_RANGE[0], _p99.TURBIDITY_RANGE[1],

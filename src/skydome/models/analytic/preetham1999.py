@@ -521,6 +521,9 @@ class Preetham1999(SkyModel):
     reference = ("A. J. Preetham, P. Shirley, B. Smits, 'A Practical Analytic Model for "
                  "Daylight', Proc. SIGGRAPH 99, pp. 91-100 (1999)")
     native = "xyz"
+    viewer_shader = "preetham1999"
+    viewer_parameters = ("turbidity",)
+    airlight = True                       # its section 5 (F_ex, L_in)
     summary = "Perez-form fit of sky luminance and chromaticity vs turbidity, with spectral sun"
     parameters = (
         Parameter("turbidity", "", 2.5, TURBIDITY_RANGE[0], TURBIDITY_RANGE[1],

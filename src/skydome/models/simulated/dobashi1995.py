@@ -89,6 +89,7 @@ class Dobashi1995(SkyModel):
     reference = ("Dobashi, Nishita, Kaneda & Yamashita 1995, A fast display method of sky colour "
                  "using basis functions, Pacific Graphics '95")
     native = "spectral"
+    own_ground = "sun_and_sky"            # its default base's; an instance takes its base's
     summary = "Any model's sky as cosine series per elevation ring, interpolated in sun altitude."
     parameters = (
         Parameter("base", "", "nishita1996", doc="registered name of the model represented",
@@ -140,6 +141,9 @@ class Dobashi1995(SkyModel):
         self.sun = sun
         self.base = base
         self.base_params = base_params
+        # below the horizon it represents its base's ground (capabilities, skydome.models)
+        self.own_ground = cls.own_ground
+        self.observer_altitude_m = float(base_params.get("observer_altitude_m") or 0.0)
         self.max_error = p["max_error"]
         self.sun_altitudes = p["sun_altitudes"]
         self.rings = p["rings"]

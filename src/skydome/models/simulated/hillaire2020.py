@@ -21,6 +21,8 @@ at each wavelength of the grid. See docs/sections/hillaire2020.md for the deviat
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_choice
@@ -137,6 +139,14 @@ class Hillaire2020(SkyModel):
     reference = ("Hillaire, A Scalable and Production Ready Sky and Atmosphere Rendering "
                  "Technique, Computer Graphics Forum 39(4) (EGSR 2020), eqs. 1-11")
     native = "spectral"
+    viewer_shader = "hillaire2020"
+    viewer_parameters = ("turbidity", "observer_altitude_m")
+    lut_layout = "hillaire"
+    airlight = True
+    # march each ray: the froxel volume (4 km slices) halves the extinction over the first
+    # kilometres and clamps distances beyond ~30 km
+    airlight_options = MappingProxyType({"use_volume": False})
+    own_ground = "sun"                    # measured: rho E_sun sin(el) / pi at the nadir
     summary = "LUT-based sky with Hillaire's fast multiple-scattering approximation."
     parameters = (
         *ATMOSPHERE_PARAMETERS,

@@ -161,6 +161,7 @@ class Kaneda1991(SkyModel):
                  "outdoor scenery under various atmospheric conditions. The Visual Computer 7, "
                  "247-258; survey section 7.2")
     native = "spectral"
+    own_ground = "own"                    # measured against rho E_h / pi: docs/models.md
     summary = "Spherical earth, exponential air and aerosols, single scattering, fog layer."
     parameters = (
         ATMOSPHERE,

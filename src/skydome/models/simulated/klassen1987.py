@@ -138,6 +138,7 @@ class Klassen1987(SkyModel):
     reference = ("Klassen, R.V. 1987. Modeling the effect of the atmosphere on light. ACM TOG "
                  "6(3), 215-237; survey section 7.1")
     native = "spectral"
+    own_ground = "own"                    # measured against rho E_h / pi: docs/models.md
     summary = "Flat earth, haze layer under haze-free air, closed-form single scattering, fog."
     parameters = (
         Parameter("turbidity", "", 2.5, 1.0, 32.0, "Preetham turbidity of the haze layer"),

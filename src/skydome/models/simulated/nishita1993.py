@@ -174,6 +174,7 @@ class Nishita1993(SkyModel):
     reference = ("Nishita, Sirai, Tadamura & Nakamae, Display of the Earth Taking into Account "
                  "Atmospheric Scattering, SIGGRAPH 93, 175-182 (eqs. 1-3, sec. 4-5)")
     native = "spectral"
+    own_ground = "own"                    # measured against rho E_h / pi: docs/models.md
     summary = ("The earth seen from space or the air: single scattering, sea colour and glint, "
                "land map, shadow.")
     parameters = (

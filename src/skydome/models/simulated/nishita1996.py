@@ -109,6 +109,7 @@ class Nishita1996(SkyModel):
     reference = ("Nishita, Dobashi, Kaneda & Yamashita 1996, Display method of the sky color "
                  "taking into account multiple scattering, Pacific Graphics '96")
     native = "spectral"
+    own_ground = "sun_and_sky"            # measured: rho E_h / pi at the nadir within 2 %
     summary = "Multiple scattering by sky-sphere sample directions; cylindrical sun tables."
     parameters = (
         *ATMOSPHERE_PARAMETERS,

@@ -200,6 +200,8 @@ class ONeil2005(SkyModel):
     reference = ("O'Neil, S. 2005. Accurate Atmospheric Scattering. GPU Gems 2, ch. 16; "
                  "Kment, Rauter & Zotti, sec. 7.8")
     native = "spectral"
+    viewer_shader = "oneil2005"
+    viewer_parameters = ("kr", "km", "g", "scale_depth", "outer_ratio", "samples")
     summary = "O'Neil's real-time single scattering: fitted optical-depth polynomial, 2 samples."
     parameters = (
         Parameter("atmosphere", "", None, doc="derive kr, km, g, scale_depth, outer_ratio from it",

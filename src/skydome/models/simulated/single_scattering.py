@@ -46,6 +46,7 @@ class SingleScattering(SkyModel):
     reference = ("Kment, Rauter & Zotti, Modelling of Daylight for Computer Graphics, eqs. 12, "
                  "15-16; Nishita et al. 1993, SIGGRAPH, eqs. 1-3 (numerical integration)")
     native = "spectral"
+    own_ground = "sun"                    # measured: rho E_sun sin(el) / pi at the nadir
     summary = ("Brute-force single scattering in a spherical atmosphere: first order only, so "
                "too dark away from the sun and at the horizon (use precomputed for the sky).")
     parameters = (

@@ -23,7 +23,8 @@ async function source(name) {
   return sources.get(name);
 }
 
-// uniforms of each model, from the server's scene JSON (skydome.viewer.scene)
+// uniforms of each shader (the scene's "shader", a model's viewer_shader), from the server's
+// scene JSON (skydome.viewer.scene)
 const SETTERS = {
   preetham1999(gl, u, s) {
     gl.uniform1fv(u("u_coef"), s.coef.flat());
@@ -386,10 +387,10 @@ export class SkyRenderer {
   async renderXYZ(views, camera, w, h) {
     const gl = this.gl, t = this._ensureTarget(w, h);
     const progs = [];
-    for (const v of views) progs.push(await this.program(v.scene.model, v.scene.wavelengths_nm?.length ?? 1));
+    for (const v of views) progs.push(await this.program(v.scene.shader, v.scene.wavelengths_nm?.length ?? 1));
     gl.bindVertexArray(this.vao);
     for (let k = 0; k < views.length; ++k) {
-      const v = views[k], pre = PREPASSES[v.scene.model];
+      const v = views[k], pre = PREPASSES[v.scene.shader];
       if (pre) await pre(this, v.scene);
       gl.bindFramebuffer(gl.FRAMEBUFFER, t.fb);
       gl.viewport(0, 0, w, h);
@@ -404,10 +405,10 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_up"), camera.up);
       gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
-      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002"].includes(v.scene.model) ? 1 : 0);
+      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002"].includes(v.scene.shader) ? 1 : 0);
       gl.uniform1i(u("u_output"), v.output || 0);
       gl.uniform1f(u("u_ap_distance"), v.distance || 0);
-      SETTERS[v.scene.model](gl, u, v.scene);
+      SETTERS[v.scene.shader](gl, u, v.scene);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }
     gl.disable(gl.SCISSOR_TEST);

@@ -138,6 +138,11 @@ class PrecomputedSky(SkyModel):
     reference = ("Bruneton, Precomputed Atmospheric Scattering: a New Implementation (2017); "
                  "Bruneton & Neyret, Precomputed Atmospheric Scattering, EGSR 2008, eqs. 1-9")
     native = "spectral"
+    viewer_shader = "precomputed"
+    viewer_parameters = ("turbidity", "observer_altitude_m")
+    lut_layout = "bruneton"
+    airlight = True
+    own_ground = "sun_and_sky"            # [Bru17] GetSunAndSkyIrradiance
     summary = "Bruneton-style precomputed multiple scattering tables (spectral, any atmosphere)."
     parameters = (
         *ATMOSPHERE_PARAMETERS,
