@@ -78,9 +78,15 @@ def skymatrix_cmd(
 
     With --scheduler or --workers the hours are computed as chunks on Dask, kept in
     OUT.chunks/ until the matrix is written: an interrupted run, rerun, reuses them."""
+    from skydome.cli._notes import notes_as_lines
     from skydome.daylighting.patches import patches as make_patches
+    from skydome.daylighting.skymatrix import ClearSkyNote, SunRangeNote
     from skydome.daylighting.skymatrix_run import (order_option, run_perez_skymatrix,
                                                    write_model_sky_matrix)
+
+    # the library's notes (lit hours outside a model's sun range, hours beyond the clear-sky
+    # limit) as one line each on stderr
+    notes = notes_as_lines(SunRangeNote, ClearSkyNote, emit=lambda t: typer.echo(t, err=True))
 
     # -- validate everything before any work -------------------------------------------------
     ps = _run(make_patches, patches)
@@ -90,18 +96,20 @@ def skymatrix_cmd(
 
         cls = _run(get_model_class, model)
         params = _run(lambda: _parse_model_params(cls, _param_options(param)))
-        line = _run(write_model_sky_matrix, weather, out, ps, model, components or "spectral:16",
-                    sun=sun, aod_from=aod_from, params=params, order=order,
-                    sun_position=sun_position, overwrite=overwrite, scheduler=scheduler,
-                    workers=workers, chunk_hours=chunk_hours)
+        with notes:
+            line = _run(write_model_sky_matrix, weather, out, ps, model,
+                        components or "spectral:16", sun=sun, aod_from=aod_from, params=params,
+                        order=order, sun_position=sun_position, overwrite=overwrite,
+                        scheduler=scheduler, workers=workers, chunk_hours=chunk_hours)
         typer.echo(line)
         return
-    run_perez_skymatrix(weather=weather, out=out, ps=ps, components=components, sun=sun,
-                        aod_from=aod_from, param=param, order=order,
-                        sun_position=sun_position, fmt=fmt, albedo=albedo,
-                        overwrite=overwrite, scheduler=scheduler, workers=workers,
-                        chunk_hours=chunk_hours, model=model, fail=_fail, guard=_run,
-                        echo=typer.echo, backend=backend)
+    with notes:
+        run_perez_skymatrix(weather=weather, out=out, ps=ps, components=components, sun=sun,
+                            aod_from=aod_from, param=param, order=order,
+                            sun_position=sun_position, fmt=fmt, albedo=albedo,
+                            overwrite=overwrite, scheduler=scheduler, workers=workers,
+                            chunk_hours=chunk_hours, model=model, fail=_fail, guard=_run,
+                            echo=typer.echo, backend=backend)
 
 
 @commands.command("illuminance")
