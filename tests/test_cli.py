@@ -134,3 +134,43 @@ def test_model_parameters_have_one_parser(tmp_path):
         r = runner.invoke(app, common + extra + ["--out", str(tmp_path / "d.rad")])
         assert r.exit_code == 2 and words in r.output, (extra, r.output)
         assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_view_verbose_logs_requests_and_its_help_says_so():
+    """`skydome view --verbose` (make_server(verbose=True)): each request one line on stderr;
+    its help names the requests and the clients that hung up or timed out."""
+    import os
+    import re
+    import signal
+    import urllib.request
+
+    res = _run("view", "--help")
+    assert res.exit_code == 0
+    text = " ".join(re.sub(r"[│╭╮╰╯─]", " ", res.output).split())
+    assert ("log every request, and one line per client that hung up or timed out, on stderr"
+            in text), text
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    p = subprocess.Popen([sys.executable, "-m", "skydome.cli", "view", "--port", "0",
+                          "--no-browser", "--verbose"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        url = p.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:"), url
+        with urllib.request.urlopen(url, timeout=30) as r:
+            assert r.status == 200
+        p.send_signal(signal.SIGINT)
+        assert p.wait(timeout=20) == 0
+        err = p.stderr.read()
+        assert re.search(r'"GET / HTTP/1\.[01]" 200', err), err
+        assert "Traceback" not in err
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+
+
+def test_view_bad_port_one_line():
+    res = _run("view", "--port", "70000", "--no-browser", "--verbose")
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert lines[0].startswith("error: ") and "port" in lines[0] and "70000" in lines[0]

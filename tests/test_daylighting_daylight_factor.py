@@ -113,3 +113,83 @@ def test_cli_planes(tmp_path):
                  ["--scene", "x.rad"], ["--plane", "horizontal", "--out", str(out)]):
         r = CliRunner().invoke(app, ["daylight-factor", *args])
         assert r.exit_code == 2, (args, r.output)
+
+
+# -- the command line: rtrace's parameters and the scene files checked before any work ------
+# a scene file whose one line is a command: Radiance's oconv runs it and reads its output, a
+# black (reflectance 0) ceiling 200 x 200 m at 1 m above a sensor at the origin
+_CEILING_COMMAND = ("!echo void plastic black 0 0 5 0 0 0 0 0 "
+                    "black polygon ceiling 0 0 12 -100 -100 1 100 -100 1 100 100 1 -100 100 1\n")
+
+
+def _cli(args):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    return CliRunner().invoke(app, ["daylight-factor", *args])
+
+
+def _one_line_error(res, *fragments):
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
+    assert "Traceback" not in res.output
+    for f in fragments:
+        assert f in lines[0], (f, lines[0])
+
+
+def test_cli_bad_rtrace_parameters_and_scene_commands_refused_before_any_work(tmp_path):
+    (tmp_path / "empty.rad").write_text("# nothing\n")
+    (tmp_path / "cmd.rad").write_text(_CEILING_COMMAND)
+    (tmp_path / "s.pts").write_text("0 0 0 0 0 1\n")
+    scene = ["--scene", str(tmp_path / "empty.rad"), "--sensors", str(tmp_path / "s.pts")]
+    out = ["--out", str(tmp_path / "df.csv")]
+    before = sorted(p.name for p in tmp_path.iterdir())
+    cases = [
+        (["--plane", "horizontal", "--ab", "17", *out], ("--ab", "17", "[0, 16]")),
+        ([*scene, "--ab", "17", *out], ("--ab", "17", "[0, 16]")),
+        ([*scene, "--ab", "-1", *out], ("--ab", "-1", "[0, 16]")),
+        ([*scene, "--ad", "0", *out], ("--ad", "0", "[1, ")),
+        (["--scene", str(tmp_path / "cmd.rad"), "--sensors", str(tmp_path / "s.pts"), *out],
+         ("--scene", "cmd.rad", "line 1 is a command line", "--allow-commands")),
+        (["--scene", str(tmp_path / "none.rad"), "--sensors", str(tmp_path / "s.pts"), *out],
+         ("--scene", "none.rad", "no such file")),
+    ]
+    for args, fragments in cases:
+        _one_line_error(_cli(args), *fragments)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_cli_allow_commands_runs_the_scene_command(tmp_path):
+    """With --allow-commands oconv runs the scene's command: its black ceiling hides the sky
+    from an upward sensor (DF near 0, against 100 % by definition without it)."""
+    (tmp_path / "empty.rad").write_text("# nothing\n")
+    (tmp_path / "cmd.rad").write_text(_CEILING_COMMAND)
+    (tmp_path / "s.pts").write_text("0 0 0 0 0 1\n")
+    rt = ["--sensors", str(tmp_path / "s.pts"), "--ab", "1", "--ad", "1024"]
+    open_sky = _cli(["--scene", str(tmp_path / "empty.rad"), *rt])
+    assert open_sky.exit_code == 0, open_sky.output
+    assert float(open_sky.stdout.splitlines()[1].split(",")[1]) == pytest.approx(100.0, rel=0.03)
+    out = tmp_path / "df.csv"
+    covered = _cli(["--scene", str(tmp_path / "cmd.rad"), *rt, "--allow-commands",
+                    "--out", str(out)])
+    assert covered.exit_code == 0, covered.output
+    rows = out.read_text().splitlines()
+    assert rows[0] == "sensor,daylight_factor_percent"
+    assert 0.0 <= float(rows[1].split(",")[1]) < 1.0
+
+
+def test_cli_value_error_of_the_room_run_is_one_line(tmp_path, monkeypatch):
+    import skydome.daylighting.daylight_factor as dfm
+
+    def refuse(*args, **kwargs):
+        raise ValueError("sensors = 'x': refused\nsecond line")
+
+    monkeypatch.setattr(dfm, "room_daylight_factor", refuse)
+    (tmp_path / "empty.rad").write_text("# nothing\n")
+    (tmp_path / "s.pts").write_text("0 0 0 0 0 1\n")
+    res = _cli(["--scene", str(tmp_path / "empty.rad"), "--sensors", str(tmp_path / "s.pts"),
+                "--out", str(tmp_path / "df.csv")])
+    _one_line_error(res, "--sensors = 'x': refused")
+    assert not (tmp_path / "df.csv").exists()

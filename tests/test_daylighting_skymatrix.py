@@ -213,3 +213,85 @@ def test_out_must_be_a_c_contiguous_file_order_array(days):
                 np.zeros((n, 146, 3))):  # (hours, patches): not Radiance's order
         with pytest.raises(ValueError, match="out must be"):
             perez_sky_matrix(days.dni, days.dhi, sd, days.day_of_year, out=bad)
+
+
+# -- the command line: the library's notes as one line each on stderr -----------------------
+@pytest.fixture(scope="module")
+def note_weather(tmp_path_factory):
+    """Two .wea files of the sample's first day with a lit hour of the sun below the
+    horizon (twilight: outside preetham1999's sun range), one of them with a winter noon
+    beyond the clear-sky limit (DNI 1366, DHI 5 W/m^2: gendaylit's rule 2)."""
+    import dataclasses
+
+    w = read_weather(sample_weather_path())
+    el = 90.0 - w.sun_zenith_deg
+    lit = (w.dni + w.dhi) > 1e-4
+    k = int(np.argmax(lit & (el < 0.0)))
+    day = w.select(slice(k // 24 * 24, k // 24 * 24 + 24))
+    folder = tmp_path_factory.mktemp("notes")
+    write_wea(day, folder / "twilight.wea")
+    noon = int(np.argmin(day.sun_zenith_deg))
+    dni, dhi = day.dni.copy(), day.dhi.copy()
+    dni[noon], dhi[noon] = 1366.0, 5.0
+    write_wea(dataclasses.replace(day, dni=dni, dhi=dhi), folder / "clear.wea")
+    return folder
+
+
+def _stderr_lines(text):
+    return [ln for ln in text.splitlines() if ln.strip()]
+
+
+def _one_note(lines, fragment):
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("note: ") and fragment in lines[0], lines
+    assert "Warning" not in lines[0] and "warn(" not in lines[0]
+
+
+def test_cli_notes_one_line_each(note_weather, tmp_path):
+    """The model path's SunRangeNote and the Perez path's ClearSkyNote (typer command and
+    the fast path of `skydome skymatrix`) as one line `note: ...`, not Python's warning."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    runner = CliRunner()
+    res = runner.invoke(app, ["skymatrix", "--weather", str(note_weather / "twilight.wea"),
+                              "--out", str(tmp_path / "p.zarr"), "--model", "preetham1999",
+                              "--components", "luminance", "--order", "1"])
+    assert res.exit_code == 0, res.output
+    _one_note(_stderr_lines(res.stderr),
+              "model 'preetham1999' covers sun elevations [0, 90] deg: 2 lit hour(s)")
+    assert (tmp_path / "p.zarr").is_dir()
+
+    res = runner.invoke(app, ["skymatrix", "--weather", str(note_weather / "clear.wea"),
+                              "--out", str(tmp_path / "t.mtx"), "--order", "0"])
+    assert res.exit_code == 0, res.output
+    _one_note(_stderr_lines(res.stderr), "1 hour(s) beyond the clear-sky limit")
+    assert (tmp_path / "t.mtx").is_file()
+
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    proc = subprocess.run([sys.executable, "-m", "skydome", "skymatrix", "--weather",
+                           str(note_weather / "clear.wea"), "--out", str(tmp_path / "f.mtx"),
+                           "--order", "0", "--backend", "numpy"],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    _one_note(_stderr_lines(proc.stderr), "1 hour(s) beyond the clear-sky limit")
+    assert (tmp_path / "f.mtx").stat().st_size == (tmp_path / "t.mtx").stat().st_size
+
+
+def test_cli_bad_input_before_any_note(note_weather, tmp_path):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    res = CliRunner().invoke(app, ["skymatrix", "--weather", str(note_weather / "clear.wea"),
+                                   "--out", str(tmp_path / "t.mtx"), "--albedo", "2"])
+    lines = _stderr_lines(res.stderr)
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert lines[0].startswith("error: ") and "albedo" in lines[0] and "'2'" in lines[0]
+    assert list(tmp_path.iterdir()) == []

@@ -72,3 +72,68 @@ def test_export_sun(tmp_path):
                                atol=1e-12)
     np.testing.assert_allclose(light["targets"]["mitsuba"]["direction"],
                                -np.array(light["direction_to_sun"]), atol=1e-12)
+
+
+# Mitsuba 3's normalisation of y-bar, include/mitsuba/core/spectrum.h:
+# MI_CIE_Y_NORMALIZATION = 1 / 106.7502593994140625
+MITSUBA_CIE_Y_NORMALIZATION = 1.0 / 106.7502593994140625
+
+
+def test_export_units_mitsuba_scales_map_sun_and_sh(tmp_path):
+    """--units mitsuba: the map, its sun light and its SH in Mitsuba's units, the photometric
+    values times Mitsuba's MI_CIE_Y_NORMALIZATION; the SH says which units it holds."""
+    from skydome.imaging.image import read_exr
+
+    common = [*HW, "--sun-elevation", "35", "--sun-azimuth", "150", "--convention", "blender",
+              "--size", "32x16", "--sh"]
+    res = runner.invoke(app, ["export", "envmap", *common, "--out", str(tmp_path / "p.exr")])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, ["export", "envmap", *common, "--units", "mitsuba",
+                              "--out", str(tmp_path / "m.exr")])
+    assert res.exit_code == 0, res.output
+    p, m = read_exr(tmp_path / "p.exr"), read_exr(tmp_path / "m.exr")
+    for c in "RGB":
+        np.testing.assert_allclose(m[c], p[c] * MITSUBA_CIE_Y_NORMALIZATION, rtol=1e-6)
+    sh_p = json.loads((tmp_path / "p.sh.json").read_text())
+    sh_m = json.loads((tmp_path / "m.sh.json").read_text())
+    assert sh_p["units"] == "photometric" and "[W m^-2]" in sh_p["irradiance"]
+    assert sh_m["units"] == "mitsuba" and "mitsuba" in sh_m["irradiance"]
+    assert "W m^-2]" not in sh_m["irradiance"]
+    np.testing.assert_allclose(np.array(sh_m["coefficients_rgb"]),
+                               np.array(sh_p["coefficients_rgb"]) * MITSUBA_CIE_Y_NORMALIZATION,
+                               rtol=1e-5, atol=1e-12)
+    sun_p = json.loads((tmp_path / "p.sun.json").read_text())
+    sun_m = json.loads((tmp_path / "m.sun.json").read_text())
+    assert sun_p["map_units"] == "photometric" and sun_m["map_units"] == "mitsuba"
+    np.testing.assert_allclose(sun_m["rgb_irradiance_map_units"],
+                               np.array(sun_p["rgb_irradiance_W_m2"]) * MITSUBA_CIE_Y_NORMALIZATION,
+                               rtol=1e-12)
+
+
+def test_export_sun_units(tmp_path):
+    sun = [*HW, "--sun-elevation", "40", "--sun-azimuth", "200"]
+    res = runner.invoke(app, ["export", "sun", *sun, "--convention", "mitsuba", "--units",
+                              "photometric", "--out", str(tmp_path / "p.json")])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, ["export", "sun", *sun, "--convention", "mitsuba",
+                              "--out", str(tmp_path / "m.json")])
+    assert res.exit_code == 0, res.output
+    p = json.loads((tmp_path / "p.json").read_text())
+    m = json.loads((tmp_path / "m.json").read_text())
+    assert p["map_units"] == "photometric" and m["map_units"] == "mitsuba"  # mitsuba's own
+    np.testing.assert_allclose(p["rgb_irradiance_map_units"], p["rgb_irradiance_W_m2"])
+    np.testing.assert_allclose(m["rgb_irradiance_map_units"],
+                               np.array(m["rgb_irradiance_W_m2"]) * MITSUBA_CIE_Y_NORMALIZATION,
+                               rtol=1e-12)
+
+
+def test_export_bad_units_one_line_nothing_written(tmp_path):
+    for command, out in (("envmap", "x.exr"), ("sun", "x.json")):
+        for units in ("Mitsuba", "radiometric", ""):
+            res = runner.invoke(app, ["export", command, *HW, "--units", units,
+                                      "--out", str(tmp_path / out)])
+            lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+            assert res.exit_code == 2 and len(lines) == 1, (command, units, res.output)
+            assert lines[0].startswith(f"error: --units = {units!r} is not one of "
+                                       "photometric, mitsuba"), lines[0]
+    assert list(tmp_path.iterdir()) == []

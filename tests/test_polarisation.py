@@ -50,3 +50,46 @@ def test_neutral_point_finder():
     dop += np.where(np.abs(e - 160) < 1, -0.5, 0.0).clip(-dop, None)
     found = neutral_points_on_meridian(e, np.maximum(dop, 0), sun_elevation_deg=10.0)
     assert found["babinet"] == pytest.approx(25.0)
+
+
+def test_cli_montecarlo_shows_the_progress_of_its_paths(tmp_path, monkeypatch):
+    """`skydome polarisation --method montecarlo` runs under the command line's progress
+    reporter: the kernel's blocks arrive as the stage "montecarlo paths", up to all paths."""
+    from typer.testing import CliRunner
+
+    import skydome.cli.apps as cli_apps
+    from skydome.cli import app
+    from skydome.cli._kit import _Progress
+    from skydome.models.simulated import montecarlo as mc
+
+    calls = []
+
+    class Recorder(_Progress):
+        def __call__(self, *args):
+            calls.append(args)
+            super().__call__(*args)
+
+    monkeypatch.setattr(cli_apps, "_Progress", Recorder)
+    monkeypatch.setattr(mc, "PROGRESS_PATHS_PER_BLOCK", 200)   # several blocks in a short run
+    out = tmp_path / "pol.png"
+    res = CliRunner().invoke(app, ["polarisation", "--method", "montecarlo", "--size", "6",
+                                   "--samples", "20", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert out.is_file()
+    paths = [c for c in calls if c[0] == "montecarlo paths"]
+    assert len(paths) >= 2
+    done = [c[1] for c in paths]
+    assert done == sorted(done) and done[-1] == paths[-1][2] and paths[-1][2] % 20 == 0
+
+
+def test_cli_montecarlo_bad_input_one_line_nothing_written(tmp_path):
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    res = CliRunner().invoke(app, ["polarisation", "--method", "montecarlo", "--samples", "1",
+                                   "--out", str(tmp_path / "pol.png")])
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert lines[0].startswith("error: --samples = 1") and "[2, 100000000]" in lines[0]
+    assert list(tmp_path.iterdir()) == []

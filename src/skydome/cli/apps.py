@@ -188,10 +188,18 @@ def polarisation_cmd(
         check_number("wavelength", wavelength, 300.0, 1000.0, "nm")
         check_number("turbidity", turbidity, 1.0, 32.0)
         s = _sun_from(sun)
+        from skydome._progress import reporting
         from skydome.apps.polarisation import run_polarisation
 
-        dop, angle = run_polarisation(out, s, method=method, csv=csv, size=size, samples=samples, seed=seed,
-                                      wavelength_nm=wavelength, turbidity=turbidity)
+        # the Monte Carlo kernel reports its paths (stage "montecarlo paths") in blocks
+        progress = _Progress(f"polarisation ({method})")
+        try:
+            with reporting(progress):
+                dop, angle = run_polarisation(out, s, method=method, csv=csv, size=size,
+                                              samples=samples, seed=seed,
+                                              wavelength_nm=wavelength, turbidity=turbidity)
+        finally:
+            progress.close()
         typer.echo(f"maximum degree of polarisation {dop:.3f} at {angle:.1f} deg from the sun; wrote {out}"
                    + (f" and {csv}" if csv else ""))
     _run(go)

@@ -78,9 +78,15 @@ def skymatrix_cmd(
 
     With --scheduler or --workers the hours are computed as chunks on Dask, kept in
     OUT.chunks/ until the matrix is written: an interrupted run, rerun, reuses them."""
+    from skydome.cli._notes import notes_as_lines
     from skydome.daylighting.patches import patches as make_patches
+    from skydome.daylighting.skymatrix import ClearSkyNote, SunRangeNote
     from skydome.daylighting.skymatrix_run import (order_option, run_perez_skymatrix,
                                                    write_model_sky_matrix)
+
+    # the library's notes (lit hours outside a model's sun range, hours beyond the clear-sky
+    # limit) as one line each on stderr
+    notes = notes_as_lines(SunRangeNote, ClearSkyNote, emit=lambda t: typer.echo(t, err=True))
 
     # -- validate everything before any work -------------------------------------------------
     ps = _run(make_patches, patches)
@@ -90,18 +96,20 @@ def skymatrix_cmd(
 
         cls = _run(get_model_class, model)
         params = _run(lambda: _parse_model_params(cls, _param_options(param)))
-        line = _run(write_model_sky_matrix, weather, out, ps, model, components or "spectral:16",
-                    sun=sun, aod_from=aod_from, params=params, order=order,
-                    sun_position=sun_position, overwrite=overwrite, scheduler=scheduler,
-                    workers=workers, chunk_hours=chunk_hours)
+        with notes:
+            line = _run(write_model_sky_matrix, weather, out, ps, model,
+                        components or "spectral:16", sun=sun, aod_from=aod_from, params=params,
+                        order=order, sun_position=sun_position, overwrite=overwrite,
+                        scheduler=scheduler, workers=workers, chunk_hours=chunk_hours)
         typer.echo(line)
         return
-    run_perez_skymatrix(weather=weather, out=out, ps=ps, components=components, sun=sun,
-                        aod_from=aod_from, param=param, order=order,
-                        sun_position=sun_position, fmt=fmt, albedo=albedo,
-                        overwrite=overwrite, scheduler=scheduler, workers=workers,
-                        chunk_hours=chunk_hours, model=model, fail=_fail, guard=_run,
-                        echo=typer.echo, backend=backend)
+    with notes:
+        run_perez_skymatrix(weather=weather, out=out, ps=ps, components=components, sun=sun,
+                            aod_from=aod_from, param=param, order=order,
+                            sun_position=sun_position, fmt=fmt, albedo=albedo,
+                            overwrite=overwrite, scheduler=scheduler, workers=workers,
+                            chunk_hours=chunk_hours, model=model, fail=_fail, guard=_run,
+                            echo=typer.echo, backend=backend)
 
 
 @commands.command("illuminance")
@@ -146,15 +154,20 @@ def daylight_factor_cmd(
                                           help="points file, one 'x y z dx dy dz' a line"),
     ground_reflectance: float = typer.Option(0.2, "--ground-reflectance",
                                              help="ground reflectance in [0, 1]"),
-    ab: int = typer.Option(5, "--ab", help="rtrace ambient bounces"),
-    ad: int = typer.Option(2048, "--ad", help="rtrace ambient divisions"),
+    ab: int = typer.Option(5, "--ab", help="rtrace ambient bounces, 0..16"),
+    ad: int = typer.Option(2048, "--ad", help="rtrace ambient divisions, >= 1"),
+    allow_commands: bool = typer.Option(
+        False, "--allow-commands", help="let the scene files hold command lines ('!command', "
+        "which Radiance runs as shell commands); refused by default"),
     out: Optional[str] = typer.Option(None, "--out", help="output .csv (default: stdout)"),
     overwrite: bool = typer.Option(False, "--overwrite", help="replace an existing output"),
 ):
     """Daylight factor [%] under the CIE overcast sky: of unobstructed planes (--plane), or of
     sensor points in a Radiance scene by rtrace (--scene, --sensors)."""
-    from skydome.daylighting.daylight_factor import (plane_daylight_factor, read_sensors,
+    from skydome.daylighting.daylight_factor import (check_rtrace_parameters,
+                                                     plane_daylight_factor, read_sensors,
                                                      room_daylight_factor)
+    from skydome.daylighting.scene import check_scene_files
     from skydome.daylighting.series import parse_plane
 
     if bool(plane) == bool(scene or sensors):
@@ -163,8 +176,7 @@ def daylight_factor_cmd(
         _fail("--scene and --sensors go together")
     if not 0.0 <= ground_reflectance <= 1.0:
         _fail(f"ground-reflectance = {ground_reflectance:g} is out of range [0, 1]")
-    if ab < 0 or ad < 1:
-        _fail(f"ab = {ab} must be >= 0 and ad = {ad} >= 1")
+    _run(check_rtrace_parameters, ab=ab, ad=ad)
     out_p = Path(out) if out else None
     if out_p is not None:
         if out_p.exists() and not overwrite:
@@ -178,15 +190,14 @@ def daylight_factor_cmd(
         rows = [f"{p.name},{p.tilt_deg:g},{p.azimuth_deg:g},{v:.4f}" for p, v in zip(planes, df)]
         text = "plane,tilt_deg,azimuth_deg,daylight_factor_percent\n" + "\n".join(rows) + "\n"
     else:
-        for f in scene:
-            if not Path(f).is_file():
-                _fail(f"scene = {f!r}: no such file")
+        # the files exist and hold no command line (unless allowed), before any work
+        _run(check_scene_files, scene, allow_commands=allow_commands)
         pts = _run(read_sensors, sensors)
         try:
             df = room_daylight_factor(scene, pts, ground_reflectance=ground_reflectance,
-                                      ab=ab, ad=ad)
-        except RuntimeError as exc:
-            _fail(str(exc).splitlines()[0])
+                                      ab=ab, ad=ad, allow_commands=allow_commands)
+        except (RuntimeError, ValueError, TypeError) as exc:   # Radiance failed, bad input
+            _fail((str(exc).splitlines() or [type(exc).__name__])[0])
         rows = [" ".join(f"{v:g}" for v in p) + f",{v:.4f}" for p, v in zip(pts, df)]
         text = "sensor,daylight_factor_percent\n" + "\n".join(rows) + "\n"
     if out_p is None:

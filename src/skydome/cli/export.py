@@ -45,15 +45,18 @@ def envmap(
     sh: bool = typer.Option(False, "--sh", help="Also write OUT.sh.json: order-2 irradiance SH (9 RGB coefficients)."),
     mips: int = typer.Option(0, "--mips", help="Also write N-1 GGX-prefiltered levels OUT_mip1.. (roughness k/(N-1)) + OUT.mips.json; latlong and cube layouts; 0 = none."),
     wavelengths: int = typer.Option(16, help="Wavelengths 380-780 nm for spectral models, 3..401."),
+    units: Optional[str] = typer.Option(
+        None, help="Scale of the RGB values: photometric (683 lm/W) or mitsuba (Mitsuba 3's); "
+                   "default the convention's own (mitsuba for mitsuba, else photometric)."),
     **sun,
 ):
     """Render a sky into an environment map in a renderer's convention (+ OUT.sun.json)."""
     _run(_envmap, ctx.args, model, out, convention, layout, size, half, sun_in_map, ground,
-         ground_albedo, sh, mips, sun, wavelengths)
+         ground_albedo, sh, mips, sun, wavelengths, units)
 
 
 def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, ground, ground_albedo,
-            sh, mips, sun, wavelengths):
+            sh, mips, sun, wavelengths, units=None):
     import json
 
     from skydome._validate import check_int, check_number
@@ -67,7 +70,7 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
 
     def check():
         checked["conv"], checked["layout"], (_, height) = check_envmap_options(
-            convention, layout, size, sun_mode, ground)
+            convention, layout, size, sun_mode, ground, units=units)
         if mips:
             from skydome.export.prefilter import check_mip_levels
 
@@ -93,7 +96,7 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
         env = render_envmap(sky, conv, size, layout, sun=sun_mode, ground=ground,
                             ground_albedo=ground_albedo,
                             wavelengths_nm=wavelength_grid(380.0, 780.0, n=wavelengths),
-                            progress=progress)
+                            progress=progress, units=units)
     finally:
         progress.close()
     written = env.write(p, half=half)
@@ -107,7 +110,7 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
                 w.unlink(missing_ok=True)
             raise
     if not sun_in_map:
-        light = sun_light(sky, conv)
+        light = sun_light(sky, conv, units=env.units.name)
         if light is not None:
             written.append(write_sun_json(light, _sun_path(out)))
     if sh:
@@ -115,7 +118,10 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
         doc = {"convention": conv.name, "order": 2, "basis": "real SH Y00, Y1-1, Y10, Y11, "
                "Y2-2, Y2-1, Y20, Y21, Y22 in the convention's x, y, z (Ramamoorthi & "
                "Hanrahan 2001 eq. 3)", "coefficients_rgb": coef.tolist(),
-               "irradiance": "E(n) = sum A_l L_lm Y_lm(n), A = (pi, 2 pi / 3, pi / 4) [W m^-2]",
+               "irradiance": "E(n) = sum A_l L_lm Y_lm(n), A = (pi, 2 pi / 3, pi / 4): RGB "
+               "irradiance " + ("[W m^-2] " if env.units.name == "photometric" else "")
+               + f"in the map's units ({env.units.name}: its pixels' radiance units x sr)",
+               "units": env.units.name,
                "includes_sun": bool(sun_in_map)}
         from pathlib import Path
 
@@ -140,21 +146,26 @@ def sun_cmd(
     model: str = _MODEL,
     out: str = typer.Option(..., help="Output .json file."),
     convention: str = typer.Option("skydome", help="Axes of the direction: a convention name."),
+    units: Optional[str] = typer.Option(
+        None, help="Scale of the map the RGB irradiance goes with: photometric (683 lm/W) or "
+                   "mitsuba (Mitsuba 3's); default the convention's own (mitsuba for mitsuba, "
+                   "else photometric)."),
     **sun,
 ):
     """The sun as a light: direction, angular radius, spectral and RGB irradiance, lx."""
-    _run(_sun, ctx.args, model, out, convention, sun)
+    _run(_sun, ctx.args, model, out, convention, sun, units)
 
 
-def _sun(extra, model, out, convention, sun):
+def _sun(extra, model, out, convention, sun, units=None):
     from pathlib import Path
 
-    from skydome.export.conventions import get_convention
+    from skydome.export.conventions import get_convention, resolve_units
     from skydome.export.sun import sun_light, write_sun_json
 
     p = Path(out)
 
     def check():
+        resolve_units(convention, units)                 # a convention and units it knows
         if p.suffix.lower() != ".json":
             raise UserError(f"out = {out!r} must end in .json")
         if not (p.parent if str(p.parent) else Path(".")).is_dir():
@@ -162,7 +173,7 @@ def _sun(extra, model, out, convention, sun):
 
     conv = get_convention(convention)
     sky = _sky(model, extra, sun, check)
-    light = sun_light(sky, conv)
+    light = sun_light(sky, conv, units=units)
     if light is None:
         raise UserError(f"model {model!r} has no sun above the horizon to export "
                         f"(sun elevation {sky.sun.elevation_deg:.2f} deg)")

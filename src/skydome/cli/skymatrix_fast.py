@@ -82,12 +82,18 @@ def fast_skymatrix(argv) -> bool:
     opts = parse_fast_options(argv)
     if opts is None or opts["model"] != "perez1993":
         return False
+    from skydome.cli._notes import notes_as_lines
     from skydome.daylighting.patches import patches as make_patches
+    from skydome.daylighting.skymatrix import ClearSkyNote
 
+    notes: list[str] = []   # shown once the run has succeeded (else the typer command runs)
     try:
         ps = _try(make_patches, opts.pop("patches"))
         opts["order"] = order_option(opts["order"], opts["model"], _refuse)
-        run_perez_skymatrix(ps=ps, fail=_refuse, guard=_try, echo=_echo, **opts)
+        with notes_as_lines(ClearSkyNote, emit=notes.append):
+            run_perez_skymatrix(ps=ps, fail=_refuse, guard=_try, echo=_echo, **opts)
     except _Refused:
         return False
+    for note in notes:
+        _echo(note, err=True)
     return True

@@ -9,7 +9,9 @@ import typer
 def view(port: int = typer.Option(0, help="port on 127.0.0.1 (0: any free port)"),
          host: str = typer.Option("127.0.0.1", help="loopback address to bind: 127.0.0.1, ::1 or localhost"),
          no_browser: bool = typer.Option(False, "--no-browser", help="do not open a browser"),
-         verbose: bool = typer.Option(False, "--verbose", help="log every request on stderr")):
+         verbose: bool = typer.Option(False, "--verbose",
+                                      help="log every request, and one line per client that "
+                                           "hung up or timed out, on stderr")):
     """Render the sky live in the browser (WebGL2): prints the page's URL and serves it
     until Ctrl-C."""
     from skydome.viewer.server import make_server, serve
