@@ -270,7 +270,9 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     idx = (np.asarray(t.scattering_index) if t.scattering_index is not None
            else np.arange(sca.shape[0]))
     e_sun = solar_irradiance(wl)
-    omega = 2.0 * np.pi * (1.0 - np.cos(t.sun_angular_radius_rad))
+    # the disc's solid angle is the sky's sun's (PrecomputedSky.sun_radiance divides by it);
+    # the tables' own angular radius sets the penumbra (visible fraction, ground cosine)
+    omega = float(sky.sun.solid_angle_sr)
     xyz_sun = K.sum(axis=0)
     channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ", "transmittance": "XYZ",
                 "irradiance": "XYZ", "optical_depth": names,
@@ -318,11 +320,15 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
                           "GetIrradianceTextureUvFromRMuS); rows r, columns mu_s",
         },
         "sun": {"angular_radius_rad": t.sun_angular_radius_rad, "solid_angle_sr": omega,
+                "disc_angular_radius_deg": float(sky.sun.angular_radius_deg),
                 "solar_irradiance_xyz": xyz_sun.tolist(),
                 "radiance_top_of_atmosphere_xyz": (xyz_sun / omega).tolist(),
                 "solar_irradiance_w_m2_nm": e_sun.tolist(),
                 "note": "XYZ illuminance [lx] and disc radiance [cd m^-2] above the "
-                        "atmosphere at 1 au; the sun's disc seen through the air is "
+                        "atmosphere at 1 au; angular_radius_rad: the tables' (the penumbra "
+                        "of the visible fraction and of the ground's cosine), "
+                        "solid_angle_sr: the disc's (of disc_angular_radius_deg); the "
+                        "sun's disc seen through the air is "
                         "radiance_top_of_atmosphere_xyz x transmittance(r, mu_s) x the "
                         "fraction of the disc above the horizon"},
         "rayleigh": {"constituents": [int(idx[k]) for k in ray],
