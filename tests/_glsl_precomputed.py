@@ -184,22 +184,22 @@ def transmittance_to_top(trans, atm, r, mu):
     return np.where(hits_ground(r, mu, atm["bottomRadius"])[..., None], 0.0, v)
 
 
-def transmittance_along(trans, atm, r, mu, d, ground):
-    R, Rt = atm["bottomRadius"], atm["topRadius"]
-    size = textureSize(trans)
-    rd = radius_along(r, mu, d, R, Rt)
-    mud = np.clip((r * mu + d) / rd, -1.0, 1.0)
-    g = ground[..., None]
-    num = np.where(g, texture2d(trans, transmittance_uv(rd, -mud, R, Rt, size)),
-                   texture2d(trans, transmittance_uv(r, mu, R, Rt, size)))[..., :3]
-    den = np.where(g, texture2d(trans, transmittance_uv(r, -mu, R, Rt, size)),
-                   texture2d(trans, transmittance_uv(rd, mud, R, Rt, size)))[..., :3]
-    return np.minimum(num / np.maximum(den, 1e-30), 1.0)
-
-
 def columns(od, atm, r, mu):
     return texture2d(od, transmittance_uv(r, mu, atm["bottomRadius"], atm["topRadius"],
                                           textureSize(od)))
+
+
+def transmittance_along(od, atm, r, mu, d, ground):
+    rd = radius_along(r, mu, d, atm["bottomRadius"], atm["topRadius"])
+    mud = np.clip((r * mu + d) / rd, -1.0, 1.0)
+    g = ground[..., None]
+    c = np.where(g, columns(od, atm, rd, -mud) - columns(od, atm, r, -mu),
+                 columns(od, atm, r, mu) - columns(od, atm, rd, mud))
+    c = np.maximum(c, 0.0)
+    t = 0.0
+    for j in range(atm["nWavelengths"]):
+        t = t + atm["xyzWeights"][j] * np.exp(-c @ atm["extinction"][j])[..., None]
+    return np.minimum(t / atm["solarIrradiance"], 1.0)
 
 
 # -- the sun --------------------------------------------------------------------------------
@@ -227,16 +227,17 @@ def sun_radiance_xyz(trans, atm, r, mu_s):
 
 
 # -- sky radiance ---------------------------------------------------------------------------
-def scattered_radiance(scat, mie, atm, r, mu, mu_s, nu, ground):
+def scattered_radiance(scat, mie, mult, atm, r, mu, mu_s, nu, ground):
     uvwz = scattering_uvwz(r, mu, mu_s, nu, ground, atm, textureSize(scat))
     n_nu = float(atm["nuSize"])
     s = lookup_4d(scat, uvwz, n_nu)
     m = lookup_4d(mie, uvwz, n_nu)
     return (s * rayleigh_phase(atm["rayleighGamma"], nu)[..., None]
-            + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None])
+            + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None]
+            + lookup_4d(mult, uvwz, n_nu))
 
 
-def sky_radiance(scat, mie, trans, atm, camera, view, sun):
+def sky_radiance(scat, mie, mult, trans, atm, camera, view, sun):
     """skydomeSkyRadiance for a camera inside the atmosphere (camera (3,), view (n, 3))."""
     r = np.linalg.norm(camera)
     assert r <= atm["topRadius"]
@@ -246,7 +247,7 @@ def sky_radiance(scat, mie, trans, atm, camera, view, sun):
     nu = np.clip(view @ sun, -1.0, 1.0)
     ground = hits_ground(r, mu, atm["bottomRadius"])
     t = transmittance_to_top(trans, atm, r, mu)
-    return scattered_radiance(scat, mie, atm, r, mu, mu_s, nu, ground), t
+    return scattered_radiance(scat, mie, mult, atm, r, mu, mu_s, nu, ground), t
 
 
 # -- ground ---------------------------------------------------------------------------------
@@ -297,17 +298,17 @@ def ground_radiance(od, irr_spec, atm, camera, view, sun):
     return np.where(hit[..., None], xyz, 0.0)
 
 
-def radiance(scat, mie, trans, od, irr_spec, atm, camera, view, sun):
+def radiance(scat, mie, mult, trans, od, irr_spec, atm, camera, view, sun):
     """skydomeRadiance: sky and ground, 0 at night."""
     r = np.linalg.norm(camera)
     if np.dot(camera, sun) / r < atm["muSMin"]:
         return np.zeros(view.shape[:-1] + (3,))
-    sky, _ = sky_radiance(scat, mie, trans, atm, camera, view, sun)
+    sky, _ = sky_radiance(scat, mie, mult, trans, atm, camera, view, sun)
     return np.maximum(sky + ground_radiance(od, irr_spec, atm, camera, view, sun), 0.0)
 
 
 # -- aerial perspective ---------------------------------------------------------------------
-def sky_radiance_to_point(scat, mie, trans, atm, camera, view, dist, sun):
+def sky_radiance_to_point(scat, mie, mult, od, atm, camera, view, dist, sun):
     """skydomeSkyRadianceToPoint for points camera + dist * view (camera inside the
     atmosphere)."""
     R, Rt = atm["bottomRadius"], atm["topRadius"]
@@ -320,12 +321,13 @@ def sky_radiance_to_point(scat, mie, trans, atm, camera, view, dist, sun):
     ground = hits_ground(r, mu, R)
     d_end = np.where(ground, distance_to_ground(r, mu, R), distance_to_top(r, mu, Rt))
     d = np.clip(dist, 0.0, d_end)
-    t = transmittance_along(trans, atm, np.full_like(mu, r), mu, d, ground)
+    t = transmittance_along(od, atm, np.full_like(mu, r), mu, d, ground)
     size = textureSize(scat)
     n_nu = float(atm["nuSize"])
     uvwz0 = scattering_uvwz(r, mu, mu_s, nu, ground, atm, size)
     s = lookup_4d(scat, uvwz0, n_nu)
     m = lookup_4d(mie, uvwz0, n_nu)
+    n = lookup_4d(mult, uvwz0, n_nu)
     rp = radius_along(r, mu, d, R, Rt)
     mup = np.clip((r * mu + d) / rp, -1.0, 1.0)
     mu_sp = np.clip((r * mu_s + d * nu) / rp, -1.0, 1.0)
@@ -333,5 +335,7 @@ def sky_radiance_to_point(scat, mie, trans, atm, camera, view, dist, sun):
     inner = (d < d_end)[..., None]
     s = s - np.where(inner, t * lookup_4d(scat, uvwz1, n_nu), 0.0)
     m = m - np.where(inner, t * lookup_4d(mie, uvwz1, n_nu), 0.0)
+    n = n - np.where(inner, t * lookup_4d(mult, uvwz1, n_nu), 0.0)
     return np.maximum(s * rayleigh_phase(atm["rayleighGamma"], nu)[..., None]
-                      + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None], 0.0), t
+                      + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None] + n,
+                      0.0), t

@@ -60,15 +60,15 @@ from typing import Any
 import numpy as np
 
 __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "bake",
-           "write_luts", "write_precomputed_luts", "atmosphere_from_luts", "rayleigh_phase",
+           "write_luts", "write_precomputed_luts", "atmosphere_from_luts",
            "check_luts_options", "LUT_FORMAT", "HILLAIRE_FORMAT", "LUT_MODELS",
            "LUT_FILE_FORMATS"]
 
 #: version 2: the mu_s axis is the model's zenith-angle mapping (table format
 #: skydome.precomputed/2), no longer [Bru17]'s; version 3: the mu axis too is the model's
 #: (angle from the local horizon, table format skydome.precomputed/3); version 4: the
-#: reference's texture set (scattering with Rayleigh + orders 2..N / P_R, a separate
-#: single-Mie texture, transmittance, optical depths, irradiance) and the constants
+#: reference's texture set (Rayleigh and single Mie scattering, orders 2..N apart,
+#: transmittance, optical depths, irradiance) and the atmosphere's constants
 LUT_FORMAT = "skydome.luts.bruneton-xyz/4"
 #: the hillaire2020 bake (Hillaire's layout, XYZ); version 2: the atmosphere's parameters,
 #: the sun's disc and EXR channels named X, Y, Z (A)
@@ -164,30 +164,6 @@ def _phase_groups(t) -> tuple[list[int], list[int], tuple[int, float]]:
     return ray, mie, ((codes[mie[0]], params[mie[0]]) if mie else (3, 0.0))
 
 
-def rayleigh_phase(gamma: float, nu):
-    """Rayleigh phase function with depolarisation [sr^-1]: 3 / (16 pi) ((1 + 3 gamma) +
-    (1 - gamma) nu^2) / (1 + 2 gamma) (Hansen & Travis 1974 eq. 2.15; gamma = rho / (2 - rho))
-    -- the model's (skydome.transport._phase.rayleigh_phase), vectorised."""
-    nu = np.asarray(nu, dtype=np.float64)
-    return 3.0 / (16.0 * np.pi) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * nu * nu) \
-        / (1.0 + 2.0 * gamma)
-
-
-def _node_nu(t, n_r, n_mu, n_ms, n_nu) -> np.ndarray:
-    """(n_r, n_mu, n_mu_s, n_nu): the nu of every node of the 4-D table, clamped to the range
-    that (mu, mu_s) allow (:func:`._mapping.cell_nu`, the value the table holds there)."""
-    from skydome.models.simulated.precomputed import _mapping
-
-    R, Rt = t.planet_radius_m, t.top_radius_m
-    mu = np.array([[_mapping.cell_mu(j, n_mu, _mapping.cell_r(i, n_r, R, Rt), R, Rt)[0]
-                    for j in range(n_mu)] for i in range(n_r)])
-    mus = _mapping.mu_s_nodes(n_ms, t.mu_s_min)
-    nu = -1.0 + 2.0 * np.arange(n_nu) / (n_nu - 1.0)
-    m, s = mu[:, :, None, None], mus[None, None, :, None]
-    half = np.sqrt(np.maximum((1.0 - m * m) * (1.0 - s * s), 0.0))
-    return np.clip(nu[None, None, None, :], m * s - half, m * s + half)
-
-
 def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
     """(r, mu, mu_s, nu, l) float32 @ K (l, 3) -> (r, mu, mu_s, nu, 3) float64, an r slab at
     a time (the 4-D tables are large)."""
@@ -204,16 +180,20 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
 
     Textures (float32, C order, RGBA; 2-D (height, width, 4), 3-D (depth, height, width, 4)):
 
-    * ``scattering`` (n_r, n_mu, n_nu n_mu_s, 4): [Bru17]'s scattering texture without
-      combined textures: XYZ of Rayleigh single scattering (without its phase function) plus
-      orders 2..N divided by the Rayleigh phase function at the node's nu (the reference's
-      ComputeMultipleScatteringTexture), so that radiance = scattering P_R(nu) + single_mie
-      P_M(nu); A = 0.
+    * ``scattering`` (n_r, n_mu, n_nu n_mu_s, 4): [Bru17]'s scattering texture, XYZ of
+      Rayleigh single scattering without its phase function; A = 0.
     * ``single_mie_scattering``: the same shape, XYZ of single Mie scattering without its
-      phase function (the reference's separate single-Mie texture, not the red channel in A:
-      that extrapolation, [BN08] eq. 9 / GetExtrapolatedSingleMieScattering, assumes the
-      Mie-to-Rayleigh ratio is the same in every channel up to the ratio of the scattering
-      coefficients, which the XYZ channels of a spectral table do not satisfy); A = 0.
+      phase function: the reference's separate single-Mie texture, not its red channel in
+      the scattering texture's A, whose extrapolation to the other channels ([BN08] eq. 9,
+      GetExtrapolatedSingleMieScattering) assumes the Mie-to-Rayleigh ratio is the same in
+      every channel up to the ratio of the scattering coefficients, which the XYZ channels
+      of a spectral table do not satisfy; A = 0.
+    * ``multiple_scattering``: the same shape, XYZ of orders 2..N (full radiance, no phase
+      function to apply). The reference adds orders 2..N divided by the Rayleigh phase
+      function at the node's nu into the scattering texture; with 16 nu nodes that costs up
+      to 2.3 % of the sky's luminance (the quotient interpolates worse in nu than either
+      factor), so the bake keeps them apart (the look-up then equals the model's own look-up
+      of the same table to float32).
     * ``transmittance`` (n_tr_r, n_tr_mu, 4): to the top of the atmosphere, per XYZ channel
       weighted by the sun's spectrum (sum_j K_jc T_j / sum_j K_jc; exact for the sun's disc,
       the usual three-channel approximation for anything else); A = 0.
@@ -235,7 +215,7 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
 
     t = _precomputed_tables(sky)
     ray, mie, (mie_code, mie_g) = _phase_groups(t)
-    gamma = float(t.phase_param[ray[0]])
+    gamma = float(t.phase_param[ray[0]])        # P_R's, the description's "rayleigh"
     wl = np.asarray(t.table_wavelengths_nm, dtype=np.float64)
     nl = wl.size
     K = xyz_weights_for_table(wl)
@@ -246,7 +226,7 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     if len(t.beta_e) > 4:
         raise ValueError(f"constituents = {len(t.beta_e)}: the optical_depth texture holds at "
                          "most 4 (after folding the absorbers)")
-    scat = _xyz_4d(ms, K) / rayleigh_phase(gamma, _node_nu(t, n_r, n_mu, n_ms, n_nu))[..., None]
+    scat = np.zeros(ms.shape[:-1] + (3,))
     for k in ray:
         scat += _xyz_4d(ss[k], K)
     mie_xyz = np.zeros_like(scat)
@@ -260,6 +240,7 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     tex = {
         "scattering": _bruneton_3d(scat),
         "single_mie_scattering": _bruneton_3d(mie_xyz),
+        "multiple_scattering": _bruneton_3d(_xyz_4d(ms, K)),
         "transmittance": _rgba(trans @ Kn),
         "optical_depth": od,
         "irradiance": _rgba(irr @ K),
@@ -274,7 +255,8 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     # the tables' own angular radius sets the penumbra (visible fraction, ground cosine)
     omega = float(sky.sun.solid_angle_sr)
     xyz_sun = K.sum(axis=0)
-    channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ", "transmittance": "XYZ",
+    channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ",
+                "multiple_scattering": "XYZ", "transmittance": "XYZ",
                 "irradiance": "XYZ", "optical_depth": names,
                 "irradiance_spectral": None}
     desc = {

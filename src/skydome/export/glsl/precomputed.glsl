@@ -2,8 +2,9 @@
 // in GLSL ES 3.00 / GLSL 3.30: the sky, the sun's disc, the ground and aerial perspective.
 //
 // The bake holds E. Bruneton's (2017) textures in CIE XYZ (luts.json describes them):
-//   scattering            sampler3D  XYZ of Rayleigh single scattering + orders 2..N / P_R(nu)
+//   scattering            sampler3D  XYZ of Rayleigh single scattering (no phase function)
 //   single_mie_scattering sampler3D  XYZ of single Mie scattering (no phase function)
+//   multiple_scattering   sampler3D  XYZ of orders 2..N (radiance)
 //   transmittance         sampler2D  XYZ-weighted transmittance to the top of the atmosphere
 //   optical_depth         sampler2D  column of each constituent to the top (RGBA = 4 of them)
 //   irradiance            sampler2D  XYZ of the sky's irradiance on a horizontal surface
@@ -182,32 +183,35 @@ vec3 skydomeTransmittanceToTop(sampler2D transmittance, SkydomeAtmosphere atm, f
                                                          atm.topRadius, size)).rgb;
 }
 
-// XYZ-weighted transmittance from (r, mu) over a distance d ([Bru17] GetTransmittance): the
-// ratio of two transmittances to the top; a ground ray's both rays reversed
-vec3 skydomeTransmittanceAlong(sampler2D transmittance, SkydomeAtmosphere atm, float r,
-                               float mu, float d, bool ground) {
-    float R = atm.bottomRadius;
-    float Rt = atm.topRadius;
-    vec2 size = vec2(textureSize(transmittance, 0));
-    float rd = skydomePcRadiusAlong(r, mu, d, R, Rt);
-    float mud = clamp((r * mu + d) / rd, -1.0, 1.0);
-    vec3 num;
-    vec3 den;
-    if (ground) {
-        num = texture(transmittance, skydomeTransmittanceUv(rd, -mud, R, Rt, size)).rgb;
-        den = texture(transmittance, skydomeTransmittanceUv(r, -mu, R, Rt, size)).rgb;
-    } else {
-        num = texture(transmittance, skydomeTransmittanceUv(r, mu, R, Rt, size)).rgb;
-        den = texture(transmittance, skydomeTransmittanceUv(rd, mud, R, Rt, size)).rgb;
-    }
-    return min(num / max(den, vec3(1e-30)), vec3(1.0));
-}
-
 // columns of the constituents from (r, mu) to the top [m at reference density]
 vec4 skydomeColumns(sampler2D opticalDepth, SkydomeAtmosphere atm, float r, float mu) {
     vec2 size = vec2(textureSize(opticalDepth, 0));
     return texture(opticalDepth, skydomeTransmittanceUv(r, mu, atm.bottomRadius,
                                                         atm.topRadius, size));
+}
+
+// transmittance from (r, mu) over a distance d, per XYZ channel weighted by the sun's
+// spectrum (sum_j K_j T_j / sum_j K_j): T_j = exp(-beta_e,j . (columns of the segment))
+// ([BN08] eq. 1-2), the columns the difference of two columns to the top ([Bru17]
+// GetTransmittance; a ground ray's both rays reversed). Differences of columns stay
+// accurate near the horizon, where a ratio of two interpolated transmittances does not.
+vec3 skydomeTransmittanceAlong(sampler2D opticalDepth, SkydomeAtmosphere atm, float r,
+                               float mu, float d, bool ground) {
+    float rd = skydomePcRadiusAlong(r, mu, d, atm.bottomRadius, atm.topRadius);
+    float mud = clamp((r * mu + d) / rd, -1.0, 1.0);
+    vec4 c;
+    if (ground) {
+        c = skydomeColumns(opticalDepth, atm, rd, -mud) - skydomeColumns(opticalDepth, atm, r, -mu);
+    } else {
+        c = skydomeColumns(opticalDepth, atm, r, mu) - skydomeColumns(opticalDepth, atm, rd, mud);
+    }
+    c = max(c, vec4(0.0));
+    vec3 t = vec3(0.0);
+    for (int j = 0; j < SKYDOME_PC_MAX_WAVELENGTHS; ++j) {
+        if (j >= atm.nWavelengths) break;
+        t += atm.xyzWeights[j] * exp(-dot(atm.extinction[j], c));
+    }
+    return min(t / atm.solarIrradiance, vec3(1.0));
 }
 
 // -- the sun ----------------------------------------------------------------------------------
@@ -243,27 +247,29 @@ vec3 skydomeSunRadianceXYZ(sampler2D transmittance, SkydomeAtmosphere atm, float
 }
 
 // -- sky radiance ([Bru17] GetSkyRadiance) ----------------------------------------------------
-// in-scattered radiance at radius r towards (mu, mu_s, nu) [cd m^-2]: Rayleigh + orders
-// 2..N times P_R, single Mie times P_M ([BN08] eq. 7-9: single scattering without phase)
+// in-scattered radiance at radius r towards (mu, mu_s, nu) [cd m^-2]: single Rayleigh
+// times P_R, single Mie times P_M ([BN08] eq. 7-9: single scattering stored without its
+// phase function) and orders 2..N
 vec3 skydomeScatteredRadiance(sampler3D scattering, sampler3D singleMie,
-                              SkydomeAtmosphere atm, float r, float mu, float muS, float nu,
-                              bool ground) {
+                              sampler3D multiple, SkydomeAtmosphere atm, float r, float mu,
+                              float muS, float nu, bool ground) {
     vec4 uvwz = skydomeScatteringUvwz(r, mu, muS, nu, ground, atm,
                                       vec3(textureSize(scattering, 0)));
     float nNu = float(atm.nuSize);
     vec3 s = skydomeLookup4D(scattering, uvwz, nNu);
     vec3 m = skydomeLookup4D(singleMie, uvwz, nNu);
     return s * skydomeRayleighPhase(atm.rayleighGamma, nu)
-        + m * skydomeMiePhase(atm.miePhaseCode, atm.mieG, nu);
+        + m * skydomeMiePhase(atm.miePhaseCode, atm.mieG, nu)
+        + skydomeLookup4D(multiple, uvwz, nNu);
 }
 
 // the sky's radiance from the camera (position from the planet's centre) along viewRay,
 // XYZ [cd m^-2], without the sun's disc and the ground; transmittance to the top (0 for a
 // ray that meets the ground). A camera above the atmosphere is moved to where the ray
 // enters it ([Bru17] GetSkyRadiance).
-vec3 skydomeSkyRadiance(sampler3D scattering, sampler3D singleMie, sampler2D transmittance,
-                        SkydomeAtmosphere atm, vec3 camera, vec3 viewRay, vec3 sunDir,
-                        out vec3 transmittanceToTop) {
+vec3 skydomeSkyRadiance(sampler3D scattering, sampler3D singleMie, sampler3D multiple,
+                        sampler2D transmittance, SkydomeAtmosphere atm, vec3 camera,
+                        vec3 viewRay, vec3 sunDir, out vec3 transmittanceToTop) {
     float r = length(camera);
     float rmu = dot(camera, viewRay);
     float Rt = atm.topRadius;
@@ -283,7 +289,8 @@ vec3 skydomeSkyRadiance(sampler3D scattering, sampler3D singleMie, sampler2D tra
     float nu = clamp(dot(viewRay, sunDir), -1.0, 1.0);
     bool ground = skydomePcHitsGround(r, mu, atm.bottomRadius);
     transmittanceToTop = skydomeTransmittanceToTop(transmittance, atm, r, mu);
-    return skydomeScatteredRadiance(scattering, singleMie, atm, r, mu, muS, nu, ground);
+    return skydomeScatteredRadiance(scattering, singleMie, multiple, atm, r, mu, muS, nu,
+                                    ground);
 }
 
 // -- ground ([Bru17] GetSunAndSkyIrradiance; [BN08] eq. 1-2) ------------------------------------
@@ -350,26 +357,29 @@ vec3 skydomeGroundRadiance(sampler2D opticalDepth, sampler2DArray irradianceSpec
 
 // everything the camera sees along viewRay but the sun's disc: the sky and, for a ray that
 // meets it, the ground behind the air; 0 with the sun below mu_s_min (night)
-vec3 skydomeRadiance(sampler3D scattering, sampler3D singleMie, sampler2D transmittance,
-                     sampler2D opticalDepth, sampler2DArray irradianceSpectral,
-                     SkydomeAtmosphere atm, vec3 camera, vec3 viewRay, vec3 sunDir) {
+vec3 skydomeRadiance(sampler3D scattering, sampler3D singleMie, sampler3D multiple,
+                     sampler2D transmittance, sampler2D opticalDepth,
+                     sampler2DArray irradianceSpectral, SkydomeAtmosphere atm, vec3 camera,
+                     vec3 viewRay, vec3 sunDir) {
     float r = length(camera);
     if (dot(camera, sunDir) / r < atm.muSMin) return vec3(0.0);
     vec3 t;
-    vec3 sky = skydomeSkyRadiance(scattering, singleMie, transmittance, atm, camera, viewRay,
-                                  sunDir, t);
+    vec3 sky = skydomeSkyRadiance(scattering, singleMie, multiple, transmittance, atm, camera,
+                                  viewRay, sunDir, t);
     return max(sky + skydomeGroundRadiance(opticalDepth, irradianceSpectral, atm, camera,
                                            viewRay, sunDir), vec3(0.0));
 }
 
 // -- aerial perspective ([Bru17] GetSkyRadianceToPoint) ---------------------------------------
 // in-scattered radiance between the camera and point, XYZ [cd m^-2], S(camera) - T S(point)
-// ([BN08] eq. 7-9 over the segment), each phase term apart; transmittance (XYZ-weighted) in
-// transmittanceOut. An object of radiance L0 appears as transmittanceOut * L0 + the result.
+// ([BN08] eq. 7-9 over the segment), each phase term apart; transmittance (XYZ-weighted,
+// skydomeTransmittanceAlong) in transmittanceOut: T S(point) in XYZ is the three-channel
+// approximation of the spectral product. An object of radiance L0 appears as transmittanceOut * L0 + the result.
 // The distance is clamped to the end of the ray (ground or top of the atmosphere).
 vec3 skydomeSkyRadianceToPoint(sampler3D scattering, sampler3D singleMie,
-                               sampler2D transmittance, SkydomeAtmosphere atm, vec3 camera,
-                               vec3 point, vec3 sunDir, out vec3 transmittanceOut) {
+                               sampler3D multiple, sampler2D opticalDepth,
+                               SkydomeAtmosphere atm, vec3 camera, vec3 point, vec3 sunDir,
+                               out vec3 transmittanceOut) {
     float R = atm.bottomRadius;
     float Rt = atm.topRadius;
     vec3 viewRay = normalize(point - camera);
@@ -395,12 +405,13 @@ vec3 skydomeSkyRadianceToPoint(sampler3D scattering, sampler3D singleMie,
     float dEnd = ground ? skydomePcDistanceToGround(r, mu, R)
                         : skydomePcDistanceToTop(r, mu, Rt);
     d = clamp(d, 0.0, dEnd);
-    transmittanceOut = skydomeTransmittanceAlong(transmittance, atm, r, mu, d, ground);
+    transmittanceOut = skydomeTransmittanceAlong(opticalDepth, atm, r, mu, d, ground);
     vec3 size = vec3(textureSize(scattering, 0));
     float nNu = float(atm.nuSize);
     vec4 uvwz0 = skydomeScatteringUvwz(r, mu, muS, nu, ground, atm, size);
     vec3 s = skydomeLookup4D(scattering, uvwz0, nNu);
     vec3 m = skydomeLookup4D(singleMie, uvwz0, nNu);
+    vec3 n = skydomeLookup4D(multiple, uvwz0, nNu);
     if (d < dEnd) {
         float rp = skydomePcRadiusAlong(r, mu, d, R, Rt);
         float mup = clamp((r * mu + d) / rp, -1.0, 1.0);
@@ -408,7 +419,8 @@ vec3 skydomeSkyRadianceToPoint(sampler3D scattering, sampler3D singleMie,
         vec4 uvwz1 = skydomeScatteringUvwz(rp, mup, muSp, nu, ground, atm, size);
         s -= transmittanceOut * skydomeLookup4D(scattering, uvwz1, nNu);
         m -= transmittanceOut * skydomeLookup4D(singleMie, uvwz1, nNu);
+        n -= transmittanceOut * skydomeLookup4D(multiple, uvwz1, nNu);
     }
     return max(s * skydomeRayleighPhase(atm.rayleighGamma, nu)
-               + m * skydomeMiePhase(atm.miePhaseCode, atm.mieG, nu), vec3(0.0));
+               + m * skydomeMiePhase(atm.miePhaseCode, atm.mieG, nu) + n, vec3(0.0));
 }
