@@ -24,7 +24,7 @@ def atmosphere_from_desc(desc: dict) -> dict:
             "solarIrradiance": np.asarray(desc["sun"]["solar_irradiance_xyz"]),
             "rayleighGamma": desc["rayleigh"]["gamma"], "miePhaseCode": desc["mie"]["phase_code"],
             "mieG": desc["mie"]["g"], "nuSize": desc["sizes"]["nu"],
-            "nWavelengths": desc["sizes"]["wavelengths"],
+            "nWavelengths": desc["n_wavelengths"],
             "extinction": np.pad(np.asarray(desc["extinction_per_m"]).T,
                                  ((0, 0), (0, 4 - len(desc["extinction_per_m"])))),
             "xyzWeights": np.asarray(desc["xyz_weights"]),

@@ -315,9 +315,10 @@ def test_description_holds_the_constants(baked):
     t = sky._t
     assert desc["bottom_radius_m"] == t.planet_radius_m and desc["top_radius_m"] == t.top_radius_m
     assert desc["mu_s_min"] == t.mu_s_min
-    assert desc["sizes"] == {"r": 32, "mu": 128, "mu_s": 48, "nu": 16, "transmittance_r": 64,
-                             "transmittance_mu": 256, "irradiance_r": 16,
-                             "irradiance_mu_s": 64, "wavelengths": 20}
+    assert desc["sizes"] == {"r": 32, "mu": 128, "mu_s": 48, "nu": 16}
+    assert desc["transmittance_size"] == {"r": 64, "mu": 256}
+    assert desc["irradiance_size"] == {"r": 16, "mu_s": 64}
+    assert desc["n_wavelengths"] == 20
     assert desc["sun"]["solar_irradiance_xyz"][1] == pytest.approx(133_334.0, rel=0.01)
     assert desc["mie"]["g"] == 0.76 and desc["mie"]["phase"] == "Cornette-Shanks"
     assert desc["rayleigh"]["gamma"] == pytest.approx(float(t.phase_param[0]))

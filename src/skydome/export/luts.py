@@ -173,7 +173,7 @@ def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
     return out
 
 
-def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """(textures, description) of a :class:`PrecomputedSky`: [Bru17]'s textures in CIE XYZ,
     everything an engine needs to draw the sky, the sun, the ground and aerial perspective
     (``export/glsl/precomputed.glsl``).
@@ -204,6 +204,12 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
       surface (orders 1..N), Y in lx for a sun at 1 au; A = 0.
     * ``irradiance_spectral`` (ceil(nl / 4), n_irr_r, n_irr_mu_s, 4): the same per unit
       solar irradiance on the table wavelengths, layer k channel c = wavelength 4 k + c.
+
+    ``ground``: also the per-constituent layout that the viewer's shader reads
+    (``skydome.viewer``): ``single_scattering_<k>`` (XYZ of constituent k's single
+    scattering without its phase function, the scattering textures' shape) and
+    ``transmittance_spectral`` ((ceil(nl / 4), n_tr_r, n_tr_mu, 4), four table wavelengths
+    per texel).
 
     XYZ values (Y in cd m^-2 or lx) are for a sun at 1 au: multiply by
     ``Sun.irradiance_scale``. The description holds the parametrisation (mappings, sizes,
@@ -246,6 +252,10 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         "irradiance": _rgba(irr @ K),
         "irradiance_spectral": _spectral_layers(irr.astype(np.float32)),
     }
+    if ground:
+        for k in range(ss.shape[0]):
+            tex[f"single_scattering_{k}"] = _bruneton_3d(_xyz_4d(ss[k], K))
+        tex["transmittance_spectral"] = _spectral_layers(trans.astype(np.float32))
     names = _constituent_names(sky, cols.shape[0])
     sca = np.asarray(t.scattering_coefficient, dtype=np.float64)   # (k, l)
     idx = (np.asarray(t.scattering_index) if t.scattering_index is not None
@@ -258,7 +268,8 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ",
                 "multiple_scattering": "XYZ", "transmittance": "XYZ",
                 "irradiance": "XYZ", "optical_depth": names,
-                "irradiance_spectral": None}
+                "irradiance_spectral": None, "transmittance_spectral": None}
+    channels.update({f"single_scattering_{k}": "XYZ" for k in range(ss.shape[0])})
     desc = {
         "format": LUT_FORMAT, "model": "precomputed",
         "reference": "E. Bruneton, Precomputed Atmospheric Scattering: a New Implementation "
@@ -270,10 +281,10 @@ def bake_precomputed(sky) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
                  "reference density (times extinction_per_m gives the optical depth)",
         "bottom_radius_m": t.planet_radius_m, "top_radius_m": t.top_radius_m,
         "planet_radius_m": t.planet_radius_m, "mu_s_min": t.mu_s_min,
-        "sizes": {"r": n_r, "mu": n_mu, "mu_s": n_ms, "nu": n_nu,
-                  "transmittance_r": int(cols.shape[1]), "transmittance_mu": int(cols.shape[2]),
-                  "irradiance_r": int(irr.shape[0]), "irradiance_mu_s": int(irr.shape[1]),
-                  "wavelengths": nl},
+        "sizes": {"r": n_r, "mu": n_mu, "mu_s": n_ms, "nu": n_nu},
+        "transmittance_size": {"r": int(cols.shape[1]), "mu": int(cols.shape[2])},
+        "irradiance_size": {"r": int(irr.shape[0]), "mu_s": int(irr.shape[1])},
+        "n_wavelengths": nl,
         "layout": "scattering textures float32 (n_r, n_mu, n_nu * n_mu_s, 4): x = i_nu * "
                   "n_mu_s + i_mu_s, y = i_mu, z = i_r ([Bru17] GetScattering's 4-D -> 3-D "
                   "packing); RGBA = X, Y, Z, 0",

@@ -49,7 +49,7 @@ struct SkydomeAtmosphere {
     int miePhaseCode;           // "mie"."phase_code": 1 Henyey-Greenstein, 2 Cornette-Shanks,
     float mieG;                 // 3 isotropic; "mie"."g"
     int nuSize;                 // "sizes"."nu" (the 4-D table's nu nodes)
-    int nWavelengths;           // "sizes"."wavelengths" (<= SKYDOME_PC_MAX_WAVELENGTHS)
+    int nWavelengths;           // "n_wavelengths" (<= SKYDOME_PC_MAX_WAVELENGTHS)
     // per table wavelength j: beta_e of the constituents ("extinction_per_m"[c][j] in
     // channel c), the XYZ weight K_j ("xyz_weights"[j]) and the ground albedo
     vec4 extinction[SKYDOME_PC_MAX_WAVELENGTHS];
