@@ -25,8 +25,8 @@ def atmosphere_from_desc(desc: dict) -> dict:
             "rayleighGamma": desc["rayleigh"]["gamma"], "miePhaseCode": desc["mie"]["phase_code"],
             "mieG": desc["mie"]["g"], "nuSize": desc["sizes"]["nu"],
             "nWavelengths": desc["n_wavelengths"],
-            "extinction": np.pad(np.asarray(desc["extinction_per_m"]).T,
-                                 ((0, 0), (0, 4 - len(desc["extinction_per_m"])))),
+            "extinction": np.pad(np.asarray(desc["extinction_per_km"]).T,
+                                 ((0, 0), (0, 4 - len(desc["extinction_per_km"])))),
             "xyzWeights": np.asarray(desc["xyz_weights"]),
             "groundAlbedo": np.asarray(desc["ground_albedo"])}
 

@@ -198,8 +198,9 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
       weighted by the sun's spectrum (sum_j K_jc T_j / sum_j K_jc; exact for the sun's disc,
       the usual three-channel approximation for anything else); A = 0.
     * ``optical_depth`` (n_tr_r, n_tr_mu, 4): the column of each constituent (up to four, in
-      the channels) from (r, mu) to the top [m at reference density]; the spectral
-      transmittance is exp(-sum_c beta_e[c, j] column_c), the model's own.
+      the channels) from (r, mu) to the top [km at reference density]; the spectral
+      transmittance is exp(-sum_c beta_e[c, j] column_c), the model's own (beta_e in
+      km^-1: ``extinction_per_km``; km so that half floats hold the columns).
     * ``irradiance`` (n_irr_r, n_irr_mu_s, 4): XYZ of the sky's irradiance on a horizontal
       surface (orders 1..N), Y in lx for a sun at 1 au; A = 0.
     * ``irradiance_spectral`` (ceil(nl / 4), n_irr_r, n_irr_mu_s, 4): the same per unit
@@ -241,7 +242,7 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
     cols = np.asarray(t.columns, dtype=np.float64)             # (c, r, mu)
     trans = np.exp(-np.einsum("cij,cl->ijl", cols, t.beta_e))  # (r, mu, l)
     od = np.zeros(cols.shape[1:] + (4,), dtype=np.float32)
-    od[..., :cols.shape[0]] = cols.transpose(1, 2, 0)
+    od[..., :cols.shape[0]] = cols.transpose(1, 2, 0) * 1e-3      # km: half floats hold it
     irr = np.asarray(t.irradiance, dtype=np.float64)           # (r, mu_s, l)
     tex = {
         "scattering": _bruneton_3d(scat),
@@ -277,8 +278,9 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
         "units": "XYZ textures: CIE 1931 XYZ, Y in cd m^-2 (radiance) or lx (irradiance) for "
                  "a sun at 1 au (multiply by Sun.irradiance_scale); scattering and "
                  "single_mie_scattering without their phase functions [sr^-1]; "
-                 "irradiance_spectral per unit solar irradiance; optical_depth in m at "
-                 "reference density (times extinction_per_m gives the optical depth)",
+                 "irradiance_spectral per unit solar irradiance; optical_depth: columns in "
+                 "km at reference density (times extinction_per_km gives the optical "
+                 "depth)",
         "bottom_radius_m": t.planet_radius_m, "top_radius_m": t.top_radius_m,
         "planet_radius_m": t.planet_radius_m, "mu_s_min": t.mu_s_min,
         "sizes": {"r": n_r, "mu": n_mu, "mu_s": n_ms, "nu": n_nu},
@@ -334,7 +336,7 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
                 "phase": {1: "Henyey-Greenstein", 2: "Cornette-Shanks",
                           3: "isotropic"}[int(mie_code)]},
         "constituents": names,
-        "extinction_per_m": np.asarray(t.beta_e, dtype=np.float64).tolist(),
+        "extinction_per_km": (np.asarray(t.beta_e, dtype=np.float64) * 1e3).tolist(),
         "ground_albedo": np.asarray(t.ground_albedo, dtype=np.float64).tolist(),
         "table_wavelengths_nm": wl.tolist(),
         "xyz_weights": K.tolist(),
@@ -701,15 +703,24 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
     formats = check_luts_options(formats, half)
     folder = check_output_folder(folder)
     tex, desc = bake(sky, wavelengths_nm)
+    chans = {n: (desc["textures"].get(n) or {}).get("channels") for n in tex}
+    exr_scale = {n: 1.0 for n in tex}
     if half:
-        big = max(float(np.max(tex[n])) for n in tex
-                  if (desc["textures"].get(n) or {}).get("channels"))
         from skydome.export.envmap import HALF_MAX
 
-        if big > HALF_MAX:
-            raise ValueError(f"half = True: the largest texel {big:.4g} exceeds the half-float "
-                             f"range ({HALF_MAX:g}); write float32")
-    chans = {n: (desc["textures"].get(n) or {}).get("channels") for n in tex}
+        for n in tex:
+            if chans[n]:
+                big = float(np.max(tex[n]))
+                # radiance beyond 10^4 cd m^-2 in kcd m^-2: half floats keep 11 bits of
+                # it (the precomputed sky through half floats: 0.03 % RMS, 0.2 % max at
+                # sun 60 to -10 deg)
+                exr_scale[n] = 1e-3 if big > 1e4 else 1.0
+                if big * exr_scale[n] > HALF_MAX:
+                    raise ValueError(f"half = True: the largest texel of {n}, {big:.4g}, "
+                                     f"exceeds the half-float range ({HALF_MAX:g}) even "
+                                     "scaled by 1e-3; write float32")
+                if exr_scale[n] != 1.0:
+                    desc["textures"][n]["exr_scale"] = exr_scale[n]
     desc["files"] = {n: [f"{n}.{f}" for f in formats if f != "exr" or chans[n]]
                      for n in tex}
     if "exr" in formats:
@@ -719,7 +730,10 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
                                    "something; an unused A is not written",
                        "3-D textures": "slices stacked top to bottom: image row = "
                                        "slice * height + row",
-                       "spectral textures": "not in EXR (.npy / .bin only)"}
+                       "spectral textures": "not in EXR (.npy / .bin only)",
+                       "scale": "EXR value = texture value x textures.<name>.exr_scale "
+                                "(1 where absent; 1e-3, i.e. kcd m^-2, for half-float "
+                                "textures beyond 10^4)"}
     names = [(n, f) for n in tex for f in formats if f != "exr" or chans[n]]
     total = len(names) + 1
     written = []
@@ -732,7 +746,8 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
             elif f == "npy":
                 target.write_bytes(_npy_bytes(arr))
             else:
-                _write_exr(str(target), arr, half, n, chans[n])
+                _write_exr(str(target), arr * np.float32(exr_scale[n]) if exr_scale[n] != 1.0
+                           else arr, half, n, chans[n])
             written.append(folder / target.name)
             if progress is not None:
                 progress(k + 1, total)

@@ -6,7 +6,7 @@
 //   single_mie_scattering sampler3D  XYZ of single Mie scattering (no phase function)
 //   multiple_scattering   sampler3D  XYZ of orders 2..N (radiance)
 //   transmittance         sampler2D  XYZ-weighted transmittance to the top of the atmosphere
-//   optical_depth         sampler2D  column of each constituent to the top (RGBA = 4 of them)
+//   optical_depth         sampler2D  column of each constituent to the top [km] (RGBA = 4)
 //   irradiance            sampler2D  XYZ of the sky's irradiance on a horizontal surface
 //   irradiance_spectral   sampler2DArray  the same per table wavelength (4 per layer)
 // Sampler state: LINEAR filtering, CLAMP_TO_EDGE, no mip maps. Node i of an axis of n nodes
@@ -50,8 +50,8 @@ struct SkydomeAtmosphere {
     float mieG;                 // 3 isotropic; "mie"."g"
     int nuSize;                 // "sizes"."nu" (the 4-D table's nu nodes)
     int nWavelengths;           // "n_wavelengths" (<= SKYDOME_PC_MAX_WAVELENGTHS)
-    // per table wavelength j: beta_e of the constituents ("extinction_per_m"[c][j] in
-    // channel c), the XYZ weight K_j ("xyz_weights"[j]) and the ground albedo
+    // per table wavelength j: beta_e of the constituents [km^-1] ("extinction_per_km"[c][j]
+    // in channel c), the XYZ weight K_j ("xyz_weights"[j]) and the ground albedo
     vec4 extinction[SKYDOME_PC_MAX_WAVELENGTHS];
     vec3 xyzWeights[SKYDOME_PC_MAX_WAVELENGTHS];
     float groundAlbedo[SKYDOME_PC_MAX_WAVELENGTHS];
@@ -183,7 +183,7 @@ vec3 skydomeTransmittanceToTop(sampler2D transmittance, SkydomeAtmosphere atm, f
                                                          atm.topRadius, size)).rgb;
 }
 
-// columns of the constituents from (r, mu) to the top [m at reference density]
+// columns of the constituents from (r, mu) to the top [km at reference density]
 vec4 skydomeColumns(sampler2D opticalDepth, SkydomeAtmosphere atm, float r, float mu) {
     vec2 size = vec2(textureSize(opticalDepth, 0));
     return texture(opticalDepth, skydomeTransmittanceUv(r, mu, atm.bottomRadius,
