@@ -711,10 +711,10 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
         for n in tex:
             if chans[n]:
                 big = float(np.max(tex[n]))
-                # radiance beyond 10^4 cd m^-2 in kcd m^-2: half floats keep 11 bits of
-                # it (the precomputed sky through half floats: 0.03 % RMS, 0.2 % max at
-                # sun 60 to -10 deg)
-                exr_scale[n] = 1e-3 if big > 1e4 else 1.0
+                # a texture beyond the half-float range in kcd m^-2 (half floats keep 11
+                # bits: the precomputed sky through them within 0.034 % at sun 60 to -4
+                # deg, 0.2 % at -10 deg)
+                exr_scale[n] = 1e-3 if big > HALF_MAX else 1.0
                 if big * exr_scale[n] > HALF_MAX:
                     raise ValueError(f"half = True: the largest texel of {n}, {big:.4g}, "
                                      f"exceeds the half-float range ({HALF_MAX:g}) even "
@@ -732,8 +732,8 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
                                        "slice * height + row",
                        "spectral textures": "not in EXR (.npy / .bin only)",
                        "scale": "EXR value = texture value x textures.<name>.exr_scale "
-                                "(1 where absent; 1e-3, i.e. kcd m^-2, for half-float "
-                                "textures beyond 10^4)"}
+                                "(1 where absent; 1e-3, i.e. kcd m^-2, for a half-float "
+                                "texture beyond the half-float range, 65504)"}
     names = [(n, f) for n in tex for f in formats if f != "exr" or chans[n]]
     total = len(names) + 1
     written = []
