@@ -171,7 +171,8 @@ def scattering_uvwz(r, mu, mu_s, nu, ground, atm, size):
 def lookup_4d(tex, uvwz, n_nu):
     i = np.minimum(np.floor(uvwz[..., 0]), n_nu - 2.0)
     f = (uvwz[..., 0] - i)[..., None]
-    a = texture3d(tex, np.stack([(i + uvwz[..., 1]) / n_nu, uvwz[..., 2], uvwz[..., 3]], -1))[..., :3]
+    a = texture3d(tex, np.stack([(i + uvwz[..., 1]) / n_nu, uvwz[..., 2], uvwz[..., 3]],
+                                -1))[..., :3]
     b = texture3d(tex, np.stack([(i + 1.0 + uvwz[..., 1]) / n_nu, uvwz[..., 2], uvwz[..., 3]],
                                 -1))[..., :3]
     return a * (1.0 - f) + b * f

@@ -69,7 +69,8 @@ void main() {
 
 
 @pytest.mark.skipif(not Path("/usr/bin/glslangValidator").exists(),
-                    reason="glslangValidator (Debian glslang-tools, installed by scripts/_setup) missing")
+                    reason="glslangValidator (Debian glslang-tools, installed by "
+                           "scripts/_setup) missing")
 @pytest.mark.parametrize("version", ["#version 300 es\nprecision highp float;\n"
                                      "precision highp sampler3D;\n"
                                      "precision highp sampler2DArray;\n", "#version 330 core\n"])
@@ -341,7 +342,8 @@ def test_description_holds_the_constants(baked):
 
 def test_half_float_exr(baked, tmp_path):
     """`write_luts(..., ("exr",), half=True)`: the textures beyond the half-float range
-    (65504 cd m^-2) are written in kcd m^-2 (exr_scale 1e-3 in luts.json), channels X, Y, Z; the sky rendered
+    (65504 cd m^-2) are written in kcd m^-2 (exr_scale 1e-3 in luts.json), channels X, Y,
+    Z; the sky rendered
     from the half-float values is within 0.1 % of the float32 one (measured 0.034 % max at
     sun 20 deg; 0.2 % at -10 deg)."""
     import OpenEXR

@@ -10,8 +10,8 @@ node), y = mu, z = r (``GetScatteringTextureUvwzFromRMuMuSNu`` and the 4-D -> 3-
 of ``GetScattering``). He precomputes spectrally and stores RGB, converting with
 "luminance from radiance" coefficients, which is exact because everything after the
 table look-up is linear. :func:`bake_precomputed` does the same for skydome's tables
-(read through the model's public :meth:`PrecomputedSky.export_textures`): each table
-wavelength j gets the XYZ weight
+(the model's :class:`~skydome.models.simulated.precomputed.Tables`): each table wavelength
+j gets the XYZ weight
 
     K_j = sum_l 683 w_l E_sun(l) W_lj
 
@@ -19,34 +19,34 @@ with W the model's interpolation from the table grid to the output grid (linear 
 wavelength, end values held), E_sun the ASTM G173 solar spectrum and w_l the CIE 1931
 integration weights of the output grid (skydome's default 41 wavelengths), the map that
 ``PrecomputedSky.xyz`` applies. Multiply the baked values by the sun's 1/d^2 factor
-(``Sun.irradiance_scale``) at render time.
+(``Sun.irradiance_scale``) at render time. The textures (scattering, single Mie, orders
+2..N, transmittance, optical depths, irradiance) and the atmosphere's constants are
+described in :func:`bake_precomputed`; ``export/glsl/precomputed.glsl`` renders the sky,
+the sun, the ground and aerial perspective from them.
 
-Textures (float32, C order, RGBA with A = 0, i.e. (z, y, x, 4)):
-
-* ``multiple_scattering``: XYZ of orders 2..N, shape (n_r, n_mu, n_nu * n_mu_s, 4);
-* ``single_scattering_<k>``: XYZ of single scattering of constituent k without its phase
-  function, same shape; multiply by the constituent's phase function P_k(nu) [sr^-1].
-
-The axis mappings are those of the model's ``textures.json`` (copied into the
-description, with its ``table_format``): r and nu are [Bru17]'s; mu is the model's own
-mapping of the angle from the local horizon (``precomputed._mapping.mu_unit``, table format
-3): on each half of the axis (ground rays, sky rays) x = asinh(e / 2 deg) / asinh(e_max /
-2 deg), e the angle from the horizon of radius r; mu_s is the model's own zenith-angle
-mapping (``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s
-distance-to-the-top mapping:
+The axis mappings: r and nu are [Bru17]'s; mu is the model's own mapping of the angle
+from the local horizon (``precomputed._mapping.mu_unit``, table format 3): on each half
+of the axis (ground rays, sky rays) x = asinh(e / 2 deg) / asinh(e_max / 2 deg), e the
+angle from the horizon of radius r; mu_s is the model's own zenith-angle mapping
+(``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s distance-to-the-top
+mapping:
 
     x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)),
     u(theta) = asinh((theta - 92 deg) / 6 deg),
 
 theta_s = acos(mu_s), theta_max = acos(mu_s_min), 0 at mu_s_min (clamped below), 1 at
 the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet radius.
-Bake format 3 (``LUT_FORMAT``) is the one with these mu and mu_s axes; format 2 had
-[Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes.
+Bake format 4 (``LUT_FORMAT``) has the reference's texture set and the constants; format
+3 had these axes and per-constituent single scattering only, format 2 [Bru17]'s mu axis,
+format 1 [Bru17]'s mu and mu_s axes.
 
 References
 ----------
 [Bru17] E. Bruneton, Precomputed Atmospheric Scattering: a New Implementation (2017),
     atmosphere/functions.glsl and model.cc (luminance_from_radiance).
+[BN08] E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008.
+[Hil20] S. Hillaire, A Scalable and Production Ready Sky and Atmosphere Rendering
+    Technique, CGF 39(4), EGSR 2020.
 """
 
 from __future__ import annotations

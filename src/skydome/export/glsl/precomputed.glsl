@@ -374,8 +374,9 @@ vec3 skydomeRadiance(sampler3D scattering, sampler3D singleMie, sampler3D multip
 // in-scattered radiance between the camera and point, XYZ [cd m^-2], S(camera) - T S(point)
 // ([BN08] eq. 7-9 over the segment), each phase term apart; transmittance (XYZ-weighted,
 // skydomeTransmittanceAlong) in transmittanceOut: T S(point) in XYZ is the three-channel
-// approximation of the spectral product. An object of radiance L0 appears as transmittanceOut * L0 + the result.
-// The distance is clamped to the end of the ray (ground or top of the atmosphere).
+// approximation of the spectral product. An object of radiance L0 appears as
+// transmittanceOut * L0 + the result. The distance is clamped to the end of the ray (ground
+// or top of the atmosphere).
 vec3 skydomeSkyRadianceToPoint(sampler3D scattering, sampler3D singleMie,
                                sampler3D multiple, sampler2D opticalDepth,
                                SkydomeAtmosphere atm, vec3 camera, vec3 point, vec3 sunDir,
