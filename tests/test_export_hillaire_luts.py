@@ -265,16 +265,24 @@ def test_write_luts_folder_and_cli(tmp_path):
                               "exr,npy,bin", "--half", "--out", str(out), *small])
     assert res.exit_code == 0, res.output
     desc = json.loads((out / "luts.json").read_text())
-    assert desc["format"] == "skydome.luts.hillaire-xyz/1"
+    assert desc["format"] == "skydome.luts.hillaire-xyz/2"
     assert desc["exr"]["dtype"] == "float16"
     sv = np.load(out / "sky_view.npy")
     assert sv.shape == (8, 16, 4)
     np.testing.assert_array_equal(np.fromfile(out / "sky_view.bin", "<f4").reshape(sv.shape), sv)
     ch = read_exr(out / "sky_view.exr")
-    assert ch["R"].dtype == np.float16
-    np.testing.assert_allclose(ch["G"].astype(float), sv[..., 1], rtol=1e-3)
+    assert ch["X"].dtype == np.float16
+    np.testing.assert_allclose(ch["Y"].astype(float), sv[..., 1], rtol=1e-3)
     ap = read_exr(out / "aerial_perspective.exr")
-    assert ap["R"].shape == (4 * 4, 4)                     # slices stacked top to bottom
+    assert ap["X"].shape == (4 * 4, 4)                     # slices stacked top to bottom
+    # the channels are named for what they hold (CIE XYZ; A = transmittance in the volume),
+    # as the OpenEXR reader lists them in the header
+    import OpenEXR
+
+    for name, want in (("sky_view", {"X", "Y", "Z"}), ("transmittance", {"X", "Y", "Z"}),
+                       ("aerial_perspective", {"X", "Y", "Z", "A"})):
+        with OpenEXR.File(str(out / f"{name}.exr")) as f:
+            assert {c.name for c in f.header()["channels"]} == want, name
     assert not (out / "sky_view_spectral.exr").exists()      # spectral only as npy / bin
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
     for args, msg in ((["--model", "preetham1999"], "has no LUT bake"),
@@ -313,3 +321,52 @@ void main() {
     src.write_text(version + GLSL.read_text() + main)
     res = subprocess.run(["/usr/bin/glslangValidator", str(src)], capture_output=True, text=True)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_bake_holds_the_atmosphere_that_rebuilds_the_model(baked):
+    """luts.json's atmosphere (coefficients, density profiles, phase functions, radii,
+    ground albedo) and model parameters alone rebuild the model: a hillaire2020 sky built
+    from the JSON (after a JSON round trip) gives the original's radiance within 1e-6, for
+    the baked sun and another one (an engine rebuilding its per-frame tables)."""
+    import skydome
+    from skydome.export.luts import atmosphere_from_luts
+
+    sky, _, desc = baked
+    desc = json.loads(json.dumps(desc))
+    atm = atmosphere_from_luts(desc)
+    params = {k: v for k, v in desc["model_parameters"].items()}
+    wl = np.asarray(desc["output_wavelengths_nm"])
+    d = _dirs(200, 7)
+    for sun in (sky.sun, skydome.Sun(elevation_deg=3.0, azimuth_deg=250.0)):
+        orig = skydome.model("hillaire2020", sun=sun, atmosphere=sky.atmosphere,
+                             **params).radiance(d, wl)
+        again = skydome.model("hillaire2020", sun=sun, atmosphere=atm, **params).radiance(d, wl)
+        assert orig.max() > 0.0
+        np.testing.assert_allclose(again, orig, rtol=1e-6, atol=1e-9 * orig.max())
+    names = [c["name"] for c in desc["atmosphere"]["constituents"]]
+    assert names[:2] == ["rayleigh", "aerosol"]
+    assert desc["atmosphere"]["constituents"][1]["g"] == sky.atmosphere.constituent("aerosol").g
+    with pytest.raises(ValueError, match="atmosphere"):
+        atmosphere_from_luts({"format": "skydome.luts.hillaire-xyz/1"})
+
+
+def test_bake_holds_the_sun_disc(baked):
+    """sun_disc: above the atmosphere the disc's luminance is the luminous solar constant
+    over the disc's solid angle (133 334 lx, Darula, Kittler & Gueymard 2005, within 1 %:
+    their spectrum differs from ASTM G173's); through the air it is that radiance times the
+    transmittance texture at (observer, sun), per XYZ channel, and equals the model's
+    sun_radiance reduced to XYZ."""
+    from skydome.spectra import spectrum_to_xyz
+
+    sky, tex, desc = baked
+    disc = desc["sun_disc"]
+    assert disc["angular_radius_deg"] == sky.sun.angular_radius_deg
+    top = np.asarray(disc["radiance_top_of_atmosphere_xyz"])
+    assert top[1] * disc["solid_angle_sr"] == pytest.approx(133_334.0, rel=0.01)
+    wl = np.asarray(desc["output_wavelengths_nm"])
+    cpu = spectrum_to_xyz(sky.sun_radiance(wl), wl) / sky.sun.irradiance_scale
+    np.testing.assert_allclose(disc["radiance_xyz"], cpu, rtol=1e-9)
+    R, Rt, r0 = desc["planet_radius_m"], desc["top_radius_m"], desc["observer_radius_m"]
+    t = _glsl_transmittance_to_top(tex["transmittance"].astype(float), np.array([r0]),
+                                   np.array([sky.sun.direction[2]]), R, Rt)[0, :3]
+    np.testing.assert_allclose(top * t, cpu, rtol=1e-5)

@@ -63,15 +63,20 @@ def test_write_precomputed_luts(small_sky, tmp_path):
     assert desc["table_format"] == "skydome.precomputed/3"
     assert "asinh((theta - 92 deg)/6 deg)" in desc["mappings"]["mu_s"]
     assert "asinh(e/w)/asinh(e_max/w), w = 2 deg" in desc["mappings"]["mu"]
-    assert set(desc["textures"]) == {"multiple_scattering", "single_scattering_0",
-                                     "single_scattering_1"}
+    # [Bru17]'s texture set: Rayleigh and single Mie apart, orders 2..N, transmittance,
+    # the constituents' columns (optical depths), the sky's irradiance (XYZ and spectral)
+    assert set(desc["textures"]) == {"scattering", "single_mie_scattering",
+                                     "multiple_scattering", "transmittance", "optical_depth",
+                                     "irradiance", "irradiance_spectral"}
     for name, t in desc["textures"].items():
         raw = np.fromfile(out / t["file"], dtype="<f4").reshape(t["shape"])
         npy = np.load(out / f"{name}.npy")
         assert np.array_equal(raw, npy)
-        assert np.all(np.isfinite(raw)) and np.all(raw >= 0.0) and np.all(raw[..., 3] == 0.0)
+        assert np.all(np.isfinite(raw)) and np.all(raw >= 0.0)
+        if t["channels"] == ["X", "Y", "Z"]:
+            assert np.all(raw[..., 3] == 0.0)
     assert not [p for p in out.iterdir() if p.name.startswith(".")]     # no temporary left
-    assert len(written) == 7
+    assert len(written) == 2 * 7 + 1
 
 
 def test_bake_refuses_other_table_format(tmp_path):
@@ -110,12 +115,24 @@ def test_cli_export_luts_precomputed(tmp_path):
                                   "exr,npy", "--out", str(out), *small])
         assert res.exit_code == 0, res.output
     desc = json.loads((out / "luts.json").read_text())
-    assert desc["format"] == "skydome.luts.bruneton-xyz/3"
+    assert desc["format"] == "skydome.luts.bruneton-xyz/4"
     ms = np.load(out / "multiple_scattering.npy")
     assert ms.shape == (4, 8, 2 * 4, 4)
     ch = read_exr(out / "multiple_scattering.exr")
-    assert ch["R"].dtype == np.float32 and ch["R"].shape == (4 * 8, 8)
-    np.testing.assert_array_equal(ch["G"], ms[..., 1].reshape(32, 8))
+    assert ch["X"].dtype == np.float32 and ch["X"].shape == (4 * 8, 8)
+    np.testing.assert_array_equal(ch["Y"], ms[..., 1].reshape(32, 8))
+    # the EXR channels are named for what they hold (CIE XYZ; the columns by constituent),
+    # as the OpenEXR reader lists them in the header; spectral layers only in .npy / .bin
+    import OpenEXR
+
+    for name in ("scattering", "single_mie_scattering", "multiple_scattering",
+                 "transmittance", "irradiance"):
+        with OpenEXR.File(str(out / f"{name}.exr")) as f:
+            assert [c.name for c in f.header()["channels"]] == ["X", "Y", "Z"], name
+    with OpenEXR.File(str(out / "optical_depth.exr")) as f:
+        assert ({c.name for c in f.header()["channels"]}
+                == set(desc["textures"]["optical_depth"]["channels"]) >= {"rayleigh", "aerosol"})
+    assert not (out / "irradiance_spectral.exr").exists()
     assert not list(out.glob("*.bin"))
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
     res = runner.invoke(app, ["export", "luts", "--model", "precomputed", "--format", "tiff",

@@ -10,8 +10,8 @@ node), y = mu, z = r (``GetScatteringTextureUvwzFromRMuMuSNu`` and the 4-D -> 3-
 of ``GetScattering``). He precomputes spectrally and stores RGB, converting with
 "luminance from radiance" coefficients, which is exact because everything after the
 table look-up is linear. :func:`bake_precomputed` does the same for skydome's tables
-(read through the model's public :meth:`PrecomputedSky.export_textures`): each table
-wavelength j gets the XYZ weight
+(the model's :class:`~skydome.models.simulated.precomputed.Tables`): each table wavelength
+j gets the XYZ weight
 
     K_j = sum_l 683 w_l E_sun(l) W_lj
 
@@ -19,34 +19,34 @@ with W the model's interpolation from the table grid to the output grid (linear 
 wavelength, end values held), E_sun the ASTM G173 solar spectrum and w_l the CIE 1931
 integration weights of the output grid (skydome's default 41 wavelengths), the map that
 ``PrecomputedSky.xyz`` applies. Multiply the baked values by the sun's 1/d^2 factor
-(``Sun.irradiance_scale``) at render time.
+(``Sun.irradiance_scale``) at render time. The textures (scattering, single Mie, orders
+2..N, transmittance, optical depths, irradiance) and the atmosphere's constants are
+described in :func:`bake_precomputed`; ``export/glsl/precomputed.glsl`` renders the sky,
+the sun, the ground and aerial perspective from them.
 
-Textures (float32, C order, RGBA with A = 0, i.e. (z, y, x, 4)):
-
-* ``multiple_scattering``: XYZ of orders 2..N, shape (n_r, n_mu, n_nu * n_mu_s, 4);
-* ``single_scattering_<k>``: XYZ of single scattering of constituent k without its phase
-  function, same shape; multiply by the constituent's phase function P_k(nu) [sr^-1].
-
-The axis mappings are those of the model's ``textures.json`` (copied into the
-description, with its ``table_format``): r and nu are [Bru17]'s; mu is the model's own
-mapping of the angle from the local horizon (``precomputed._mapping.mu_unit``, table format
-3): on each half of the axis (ground rays, sky rays) x = asinh(e / 2 deg) / asinh(e_max /
-2 deg), e the angle from the horizon of radius r; mu_s is the model's own zenith-angle
-mapping (``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s
-distance-to-the-top mapping:
+The axis mappings: r and nu are [Bru17]'s; mu is the model's own mapping of the angle
+from the local horizon (``precomputed._mapping.mu_unit``, table format 3): on each half
+of the axis (ground rays, sky rays) x = asinh(e / 2 deg) / asinh(e_max / 2 deg), e the
+angle from the horizon of radius r; mu_s is the model's own zenith-angle mapping
+(``precomputed._mapping.mu_s_unit``; table format 2), not [Bru17]'s distance-to-the-top
+mapping:
 
     x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)),
     u(theta) = asinh((theta - 92 deg) / 6 deg),
 
 theta_s = acos(mu_s), theta_max = acos(mu_s_min), 0 at mu_s_min (clamped below), 1 at
 the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet radius.
-Bake format 3 (``LUT_FORMAT``) is the one with these mu and mu_s axes; format 2 had
-[Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes.
+Bake format 4 (``LUT_FORMAT``) has the reference's texture set and the constants; format
+3 had these axes and per-constituent single scattering only, format 2 [Bru17]'s mu axis,
+format 1 [Bru17]'s mu and mu_s axes.
 
 References
 ----------
 [Bru17] E. Bruneton, Precomputed Atmospheric Scattering: a New Implementation (2017),
     atmosphere/functions.glsl and model.cc (luminance_from_radiance).
+[BN08] E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008.
+[Hil20] S. Hillaire, A Scalable and Production Ready Sky and Atmosphere Rendering
+    Technique, CGF 39(4), EGSR 2020.
 """
 
 from __future__ import annotations
@@ -60,15 +60,19 @@ from typing import Any
 import numpy as np
 
 __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "bake",
-           "write_luts", "write_precomputed_luts", "check_luts_options", "LUT_FORMAT",
-           "HILLAIRE_FORMAT", "LUT_MODELS", "LUT_LAYOUTS", "LUT_FILE_FORMATS", "lut_models"]
+           "write_luts", "write_precomputed_luts", "atmosphere_from_luts",
+           "check_luts_options", "LUT_FORMAT", "HILLAIRE_FORMAT", "LUT_MODELS", "LUT_LAYOUTS",
+           "LUT_FILE_FORMATS", "lut_models"]
 
 #: version 2: the mu_s axis is the model's zenith-angle mapping (table format
 #: skydome.precomputed/2), no longer [Bru17]'s; version 3: the mu axis too is the model's
-#: (angle from the local horizon, table format skydome.precomputed/3)
-LUT_FORMAT = "skydome.luts.bruneton-xyz/3"
-#: the hillaire2020 bake (Hillaire's layout, XYZ)
-HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/1"
+#: (angle from the local horizon, table format skydome.precomputed/3); version 4: the
+#: reference's texture set (Rayleigh and single Mie scattering, orders 2..N apart,
+#: transmittance, optical depths, irradiance) and the atmosphere's constants
+LUT_FORMAT = "skydome.luts.bruneton-xyz/4"
+#: the hillaire2020 bake (Hillaire's layout, XYZ); version 2: the atmosphere's parameters,
+#: the sun's disc and EXR channels named X, Y, Z (A)
+HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/2"
 #: the bakes by layout: a model declares its layout as ``lut_layout`` (skydome.models,
 #: capabilities), so that :func:`lut_models` lists it and :func:`bake` bakes it
 LUT_LAYOUTS = ("bruneton", "hillaire")
@@ -113,60 +117,266 @@ def _spectral_layers(tab: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(out.reshape(a, b, n4, 4).transpose(2, 0, 1, 3))
 
 
-def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """(textures, description) of a :class:`PrecomputedSky` in Bruneton's layout, XYZ.
+def _precomputed_tables(sky):
+    """The model's tables (:class:`skydome.models.simulated.precomputed.Tables`) of a
+    :class:`PrecomputedSky`, after the table format check."""
+    from skydome.models.simulated.precomputed import _io
+    from skydome.models.simulated.precomputed._tables import Tables
 
-    ``ground``: also the tables of [Bru17]'s ground radiance (GetSunAndSkyIrradiance and
-    GetTransmittance of GetSkyRadianceToPoint), which is a product of spectra and so is
-    kept on the table wavelengths: ``transmittance_spectral`` (to the top, (r, mu) in the
-    transmittance mapping) and ``irradiance_spectral`` (the sky irradiance E(r, mu_s)),
-    both (ceil(nl / 4), n_r, n_mu, 4) with four wavelengths per texel; the description gets
-    the ground albedo on the table wavelengths and their XYZ weights K_j (above)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        sky.export_textures(tmp)
-        with open(os.path.join(tmp, "textures.json")) as f:
-            src = json.load(f)
-        arrays = {name: np.load(os.path.join(tmp, t["file"]))
-                  for name, t in src["textures"].items()}
-    if src.get("format") != TABLE_FORMAT:
-        raise ValueError(f"textures.json format = {src.get('format')!r} is not supported; "
-                         f"valid: {TABLE_FORMAT!r} (the mu and mu_s mappings this bake describes)")
-    if 4 in src["phase_code"]:
+    t = getattr(sky, "_t", None)
+    if not isinstance(t, Tables):
+        # not a PrecomputedSky: its own export says which table format it has
+        with tempfile.TemporaryDirectory() as tmp:
+            sky.export_textures(tmp)
+            with open(os.path.join(tmp, "textures.json")) as f:
+                fmt = json.load(f).get("format")
+        if fmt != TABLE_FORMAT:
+            raise ValueError(f"textures.json format = {fmt!r} is not supported; valid: "
+                             f"{TABLE_FORMAT!r} (the mu and mu_s mappings this bake describes)")
+        raise ValueError("the precomputed LUT bake needs a PrecomputedSky (its tables)")
+    if _io.FORMAT != TABLE_FORMAT:       # pragma: no cover - a guard for the next format
+        raise ValueError(f"table format = {_io.FORMAT!r} is not supported; valid: "
+                         f"{TABLE_FORMAT!r}")
+    if np.any(t.phase_code == 4):
         raise ValueError("the sky has a tabulated phase function (phase code 4): the LUT bake "
                          "stores XYZ single scattering for an analytic phase only; give the "
                          "constituents an analytic phase (henyey_greenstein, cornette_shanks)")
-    K = xyz_weights_for_table(src["wavelengths_nm"])
-    ss = arrays["single_scattering"].astype(np.float64)       # (k, r, mu, mu_s, nu, l)
-    ms = arrays["multiple_scattering"].astype(np.float64)     # (r, mu, mu_s, nu, l)
-    tex = {"multiple_scattering": _bruneton_3d(ms @ K)}
-    for k in range(ss.shape[0]):
-        tex[f"single_scattering_{k}"] = _bruneton_3d(ss[k] @ K)
+    return t
+
+
+def _phase_groups(t) -> tuple[list[int], list[int], tuple[int, float]]:
+    """(Rayleigh constituents, Mie constituents, (Mie phase code, parameter)): [Bru17]'s two
+    phase functions. The scattering constituents with the Rayleigh phase (code 0) must share
+    one depolarisation, the others one analytic phase function; ValueError otherwise."""
+    codes = [int(c) for c in t.phase_code]
+    params = [float(p) for p in t.phase_param]
+    ray = [k for k, c in enumerate(codes) if c == 0]
+    mie = [k for k, c in enumerate(codes) if c != 0]
+    if not ray:
+        raise ValueError("phase codes = %s: the Bruneton bake needs a constituent with the "
+                         "Rayleigh phase function (code 0)" % codes)
+    if len({params[k] for k in ray}) > 1:
+        raise ValueError(f"Rayleigh phase parameters = {[params[k] for k in ray]}: the "
+                         "Bruneton bake holds one Rayleigh phase function (one depolarisation)")
+    if len({(codes[k], params[k]) for k in mie}) > 1:
+        raise ValueError(f"phase codes = {codes}, parameters = {params}: the Bruneton bake "
+                         "holds one Mie phase function; these constituents have "
+                         f"{len({(codes[k], params[k]) for k in mie})} different ones")
+    return ray, mie, ((codes[mie[0]], params[mie[0]]) if mie else (3, 0.0))
+
+
+def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """(r, mu, mu_s, nu, l) float32 @ K (l, 3) -> (r, mu, mu_s, nu, 3) float64, an r slab at
+    a time (the 4-D tables are large)."""
+    out = np.empty(tab.shape[:-1] + (3,))
+    for i in range(tab.shape[0]):
+        out[i] = tab[i].astype(np.float64) @ K
+    return out
+
+
+def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """(textures, description) of a :class:`PrecomputedSky`: [Bru17]'s textures in CIE XYZ,
+    everything an engine needs to draw the sky, the sun, the ground and aerial perspective
+    (``export/glsl/precomputed.glsl``).
+
+    Textures (float32, C order, RGBA; 2-D (height, width, 4), 3-D (depth, height, width, 4)):
+
+    * ``scattering`` (n_r, n_mu, n_nu n_mu_s, 4): [Bru17]'s scattering texture, XYZ of
+      Rayleigh single scattering without its phase function; A = 0.
+    * ``single_mie_scattering``: the same shape, XYZ of single Mie scattering without its
+      phase function: the reference's separate single-Mie texture, not its red channel in
+      the scattering texture's A, whose extrapolation to the other channels ([BN08] eq. 9,
+      GetExtrapolatedSingleMieScattering) assumes the Mie-to-Rayleigh ratio is the same in
+      every channel up to the ratio of the scattering coefficients, which the XYZ channels
+      of a spectral table do not satisfy (default model: that ratio in Y over X varies by
+      6.4 % RMS about its median, in Z by 37 %); A = 0.
+    * ``multiple_scattering``: the same shape, XYZ of orders 2..N (full radiance, no phase
+      function to apply). The reference adds orders 2..N divided by the Rayleigh phase
+      function at the node's nu into the scattering texture; with 16 nu nodes that costs up
+      to 2.3 % of the sky's luminance (the quotient interpolates worse in nu than either
+      factor), so the bake keeps them apart (the look-up then equals the model's own look-up
+      of the same table to float32).
+    * ``transmittance`` (n_tr_r, n_tr_mu, 4): to the top of the atmosphere, per XYZ channel
+      weighted by the sun's spectrum (sum_j K_jc T_j / sum_j K_jc; exact for the sun's disc,
+      the usual three-channel approximation for anything else); A = 0.
+    * ``optical_depth`` (n_tr_r, n_tr_mu, 4): the column of each constituent (up to four, in
+      the channels) from (r, mu) to the top [km at reference density]; the spectral
+      transmittance is exp(-sum_c beta_e[c, j] column_c), the model's own (beta_e in
+      km^-1: ``extinction_per_km``; km so that half floats hold the columns).
+    * ``irradiance`` (n_irr_r, n_irr_mu_s, 4): XYZ of the sky's irradiance on a horizontal
+      surface (orders 1..N), Y in lx for a sun at 1 au; A = 0.
+    * ``irradiance_spectral`` (ceil(nl / 4), n_irr_r, n_irr_mu_s, 4): the same per unit
+      solar irradiance on the table wavelengths, layer k channel c = wavelength 4 k + c.
+
+    ``ground``: also the per-constituent layout that the viewer's shader reads
+    (``skydome.viewer``): ``single_scattering_<k>`` (XYZ of constituent k's single
+    scattering without its phase function, the scattering textures' shape) and
+    ``transmittance_spectral`` ((ceil(nl / 4), n_tr_r, n_tr_mu, 4), four table wavelengths
+    per texel).
+
+    XYZ values (Y in cd m^-2 or lx) are for a sun at 1 au: multiply by
+    ``Sun.irradiance_scale``. The description holds the parametrisation (mappings, sizes,
+    texel convention) and the atmosphere's constants (radii, mu_s_min, the sun, the
+    Rayleigh and Mie coefficients and phase functions, each constituent's extinction, the
+    ground albedo, the luminance conversion K).
+    """
+    from skydome.spectra import solar_irradiance
+
+    t = _precomputed_tables(sky)
+    ray, mie, (mie_code, mie_g) = _phase_groups(t)
+    gamma = float(t.phase_param[ray[0]])        # P_R's, the description's "rayleigh"
+    wl = np.asarray(t.table_wavelengths_nm, dtype=np.float64)
+    nl = wl.size
+    K = xyz_weights_for_table(wl)
+    Kn = K / K.sum(axis=0)
+    ss = t.single_scattering                                   # (k, r, mu, mu_s, nu, l)
+    ms = t.multiple_scattering                                 # built on first read
     n_r, n_mu, n_ms, n_nu = ms.shape[:4]
-    desc = {
-        "format": LUT_FORMAT, "units": "CIE 1931 XYZ with Y in cd m^-2 for a sun at 1 au "
-        "(multiply by Sun.irradiance_scale); single scattering without its phase function",
-        "planet_radius_m": src["planet_radius_m"], "top_radius_m": src["top_radius_m"],
-        "mu_s_min": src["mu_s_min"], "sizes": {"r": n_r, "mu": n_mu, "mu_s": n_ms, "nu": n_nu},
-        "layout": "float32 (r, mu, nu * mu_s, 4): x = i_nu * n_mu_s + i_mu_s, y = i_mu, "
-                  "z = i_r; RGBA = X, Y, Z, 0",
-        "phase_code": src["phase_code"], "phase_param": src["phase_param"],
-        "phase_codes": src["phase_codes"], "table_format": src["format"],
-        "mappings": src["mappings"],
-        "table_wavelengths_nm": src["wavelengths_nm"],
-        "xyz_weights": K.tolist(),
+    if len(t.beta_e) > 4:
+        raise ValueError(f"constituents = {len(t.beta_e)}: the optical_depth texture holds at "
+                         "most 4 (after folding the absorbers)")
+    scat = np.zeros(ms.shape[:-1] + (3,))
+    for k in ray:
+        scat += _xyz_4d(ss[k], K)
+    mie_xyz = np.zeros_like(scat)
+    for k in mie:
+        mie_xyz += _xyz_4d(ss[k], K)
+    cols = np.asarray(t.columns, dtype=np.float64)             # (c, r, mu)
+    trans = np.exp(-np.einsum("cij,cl->ijl", cols, t.beta_e))  # (r, mu, l)
+    od = np.zeros(cols.shape[1:] + (4,), dtype=np.float32)
+    od[..., :cols.shape[0]] = cols.transpose(1, 2, 0) * 1e-3      # km: half floats hold it
+    irr = np.asarray(t.irradiance, dtype=np.float64)           # (r, mu_s, l)
+    tex = {
+        "scattering": _bruneton_3d(scat),
+        "single_mie_scattering": _bruneton_3d(mie_xyz),
+        "multiple_scattering": _bruneton_3d(_xyz_4d(ms, K)),
+        "transmittance": _rgba(trans @ Kn),
+        "optical_depth": od,
+        "irradiance": _rgba(irr @ K),
+        "irradiance_spectral": _spectral_layers(irr.astype(np.float32)),
     }
     if ground:
-        tex["transmittance_spectral"] = _spectral_layers(arrays["transmittance"].astype(np.float32))
-        tex["irradiance_spectral"] = _spectral_layers(arrays["irradiance"].astype(np.float32))
-        props = sky.atmosphere.optical_properties(np.asarray(src["wavelengths_nm"]))
-        desc["ground_albedo"] = np.asarray(props.ground_albedo, dtype=np.float64).tolist()
-        desc["ground_layout"] = ("*_spectral: float32 (ceil(nl / 4), n_r, n_mu or n_mu_s, 4), "
-                                 "layer k channel c = table wavelength 4 k + c; transmittance: "
-                                 "x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min); "
-                                 "irradiance: x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2")
-    desc["textures"] = {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
+        for k in range(ss.shape[0]):
+            tex[f"single_scattering_{k}"] = _bruneton_3d(_xyz_4d(ss[k], K))
+        tex["transmittance_spectral"] = _spectral_layers(trans.astype(np.float32))
+    names = _constituent_names(sky, cols.shape[0])
+    sca = np.asarray(t.scattering_coefficient, dtype=np.float64)   # (k, l)
+    idx = (np.asarray(t.scattering_index) if t.scattering_index is not None
+           else np.arange(sca.shape[0]))
+    e_sun = solar_irradiance(wl)
+    # the disc's solid angle is the sky's sun's (PrecomputedSky.sun_radiance divides by it);
+    # the tables' own angular radius sets the penumbra (visible fraction, ground cosine)
+    omega = float(sky.sun.solid_angle_sr)
+    xyz_sun = K.sum(axis=0)
+    channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ",
+                "multiple_scattering": "XYZ", "transmittance": "XYZ",
+                "irradiance": "XYZ", "optical_depth": names,
+                "irradiance_spectral": None, "transmittance_spectral": None}
+    channels.update({f"single_scattering_{k}": "XYZ" for k in range(ss.shape[0])})
+    desc = {
+        "format": LUT_FORMAT, "model": "precomputed",
+        "reference": "E. Bruneton, Precomputed Atmospheric Scattering: a New Implementation "
+                     "(2017), atmosphere/functions.glsl",
+        "units": "XYZ textures: CIE 1931 XYZ, Y in cd m^-2 (radiance) or lx (irradiance) for "
+                 "a sun at 1 au (multiply by Sun.irradiance_scale); scattering and "
+                 "single_mie_scattering without their phase functions [sr^-1]; "
+                 "irradiance_spectral per unit solar irradiance; optical_depth: columns in "
+                 "km at reference density (times extinction_per_km gives the optical "
+                 "depth)",
+        "bottom_radius_m": t.planet_radius_m, "top_radius_m": t.top_radius_m,
+        "planet_radius_m": t.planet_radius_m, "mu_s_min": t.mu_s_min,
+        "sizes": {"r": n_r, "mu": n_mu, "mu_s": n_ms, "nu": n_nu},
+        "transmittance_size": {"r": int(cols.shape[1]), "mu": int(cols.shape[2])},
+        "irradiance_size": {"r": int(irr.shape[0]), "mu_s": int(irr.shape[1])},
+        "n_wavelengths": nl,
+        "layout": "scattering textures float32 (n_r, n_mu, n_nu * n_mu_s, 4): x = i_nu * "
+                  "n_mu_s + i_mu_s, y = i_mu, z = i_r ([Bru17] GetScattering's 4-D -> 3-D "
+                  "packing); RGBA = X, Y, Z, 0",
+        "table_format": TABLE_FORMAT,
+        "texel_convention": "node i of n at unit coordinate x = i / (n - 1); a GPU texture "
+                            "coordinate is u = (x (n - 1) + 0.5) / n (texel centres); LINEAR "
+                            "filtering, CLAMP_TO_EDGE",
+        "mappings": {
+            "r": "x = rho / H, rho = sqrt(r^2 - R^2), H = sqrt(Rt^2 - R^2) ([Bru17])",
+            "mu": "x = asinh(e/w)/asinh(e_max/w), w = 2 deg, e the angle of the ray from the "
+                  "local horizon, whose dip below the horizontal is atan(rho/R): e = asin(mu) "
+                  "+ dip, e_max = 90 deg + dip for rays that do not hit the ground, e = -dip - "
+                  "asin(mu), e_max = 90 deg - dip for rays that do; first half: rays hitting "
+                  "the ground, node k = x (n/2-1) (node 0 = horizon .. n/2-1 = nadir); second "
+                  "half: node n/2 + (1 - x)(n/2-1) (node n/2 = zenith .. n-1 = horizon); a "
+                  "look-up stays in the half of its ray",
+            "mu_s": "x = (u(theta_max) - u(theta_s))/(u(theta_max) - u(0)), u(theta) = "
+                    "asinh((theta - 92 deg)/6 deg), theta_s = acos(mu_s), theta_max = "
+                    "acos(mu_s_min) (0 at mu_s_min, 1 at the zenith); node i at x = i/(n-1)",
+            "nu": "x = (nu + 1)/2, node i at x = i/(n-1); the 4-D look-up interpolates "
+                  "between two nu blocks by hand and filters (mu_s, mu, r) in hardware",
+            "transmittance": "x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), d the "
+                             "distance to the top along mu, d_min = Rt - r, d_max = rho + H "
+                             "([Bru17] GetTransmittanceTextureUvFromRMu); rows r, columns mu",
+            "irradiance": "x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2 ([Bru17] "
+                          "GetIrradianceTextureUvFromRMuS); rows r, columns mu_s",
+        },
+        "sun": {"angular_radius_rad": t.sun_angular_radius_rad, "solid_angle_sr": omega,
+                "disc_angular_radius_deg": float(sky.sun.angular_radius_deg),
+                "solar_irradiance_xyz": xyz_sun.tolist(),
+                "radiance_top_of_atmosphere_xyz": (xyz_sun / omega).tolist(),
+                "solar_irradiance_w_m2_nm": e_sun.tolist(),
+                "note": "XYZ illuminance [lx] and disc radiance [cd m^-2] above the "
+                        "atmosphere at 1 au; angular_radius_rad: the tables' (the penumbra "
+                        "of the visible fraction and of the ground's cosine), "
+                        "solid_angle_sr: the disc's (of disc_angular_radius_deg); the "
+                        "sun's disc seen through the air is "
+                        "radiance_top_of_atmosphere_xyz x transmittance(r, mu_s) x the "
+                        "fraction of the disc above the horizon"},
+        "rayleigh": {"constituents": [int(idx[k]) for k in ray],
+                     "scattering_per_m": sca[ray].sum(axis=0).tolist(),
+                     "phase": "3 / (16 pi) ((1 + 3 gamma) + (1 - gamma) nu^2) / (1 + 2 gamma)",
+                     "gamma": gamma},
+        "mie": {"constituents": [int(idx[k]) for k in mie],
+                "scattering_per_m": (sca[mie].sum(axis=0) if mie else np.zeros(nl)).tolist(),
+                "phase_code": int(mie_code), "g": float(mie_g),
+                "phase": {1: "Henyey-Greenstein", 2: "Cornette-Shanks",
+                          3: "isotropic"}[int(mie_code)]},
+        "constituents": names,
+        "extinction_per_km": (np.asarray(t.beta_e, dtype=np.float64) * 1e3).tolist(),
+        "ground_albedo": np.asarray(t.ground_albedo, dtype=np.float64).tolist(),
+        "table_wavelengths_nm": wl.tolist(),
+        "xyz_weights": K.tolist(),
+        "xyz_weights_transmittance": Kn.tolist(),
+        "luminance_conversion": "XYZ = sum_j K_j S_j for a quantity per unit solar irradiance "
+                                "S_j on the table wavelengths: K_j = sum_l 683 w_l E_sun(l) "
+                                "W_lj (xyz_weights; W the model's linear interpolation to 41 "
+                                "wavelengths 380-780 nm, w_l the CIE 1931 weights); linear "
+                                "sRGB = M XYZ",
+        "xyz_to_linear_srgb": [[3.2404542, -1.5371385, -0.4985314],
+                               [-0.9692660, 1.8760108, 0.0415560],
+                               [0.0556434, -0.2040259, 1.0572252]],
+        "phase_code": [int(x) for x in t.phase_code],
+        "phase_param": [float(x) for x in t.phase_param],
+        "glsl": "export/glsl/precomputed.glsl",
+    }
+    desc["textures"] = {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32",
+                            "channels": (list(channels[n]) if channels[n] is not None
+                                         else None)}
                         for n, a in tex.items()}
     return tex, desc
+
+
+def _constituent_names(sky, n: int) -> list[str]:
+    """Names of the model's constituents after folding the absorbers (``column<c>`` where the
+    atmosphere is not known, e.g. a model read from a file)."""
+    atm = getattr(sky, "atmosphere", None)
+    if atm is not None:
+        try:
+            from skydome.atmosphere import fold_absorbers
+
+            keep = fold_absorbers(atm.optical_properties(np.array([550.0])))[1]
+            names = [atm.constituents[int(i)].name for i in keep]
+            if len(names) == n:
+                return names
+        except Exception:       # noqa: BLE001 - names are a label, the columns do not need them
+            pass
+    return [f"column{c}" for c in range(n)]
 
 
 def _solar_xyz_weights(grid_nm, wavelengths_nm=None, to_request=None) -> np.ndarray:
@@ -295,7 +505,12 @@ def bake_hillaire2020(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], 
                                   "fades to 0 at d = 0 ([Hil20] sec. 5.4)",
         },
         "glsl": "export/glsl/hillaire2020.glsl (the lookups of this bake)",
-        "textures": {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32"}
+        "atmosphere": _hillaire_atmosphere(sky, tb),
+        "model_parameters": {p.name: getattr(sky, p.name) for p in sky.parameters
+                             if p.name not in ("atmosphere", "turbidity")},
+        "sun_disc": _sun_disc(sky, grid, wl, Ks),
+        "textures": {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32",
+                         "channels": _HILLAIRE_CHANNELS.get(n)}
                      for n, a in tex.items()},
     }
     return tex, desc
@@ -315,6 +530,123 @@ def __getattr__(name):
     if name == "LUT_MODELS":
         return lut_models()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+#: EXR channel names of the hillaire2020 bake's XYZ textures (the spectral ones: none)
+_HILLAIRE_CHANNELS = {"transmittance": "XYZ", "multiple_scattering": "XYZ", "sky_view": "XYZ",
+                      "aerial_perspective": "XYZA", "aerial_transmittance": "XYZ"}
+
+
+def _hillaire_atmosphere(sky, tb) -> dict[str, Any]:
+    """The medium the hillaire2020 tables were built from, on their wavelength grid: what an
+    engine needs to rebuild the per-frame tables (sky view, aerial perspective) for another
+    sun or observer ([Hil20] secs. 5.3-5.4 read the coefficients, the density profiles, the
+    phase functions, the radii, the ground albedo and the sun); :func:`atmosphere_from_luts`
+    turns it back into an :class:`~skydome.atmosphere.Atmosphere`."""
+    from skydome.atmosphere import PHASE_CODES, fold_absorbers
+    from skydome.atmosphere.profiles import PROFILE_CODES
+    from skydome.spectra import solar_irradiance
+
+    p = tb.props                                      # optical_properties(grid, fold=True)
+    atm = sky.atmosphere
+    keep = fold_absorbers(atm.optical_properties(tb.grid))[1]
+    names = [atm.constituents[int(i)].name for i in keep]
+    if len(names) != p.profile_code.size:           # pragma: no cover - fold is deterministic
+        names = [f"constituent{c}" for c in range(p.profile_code.size)]
+    if p.phase_table is not None:
+        raise ValueError("the sky has a tabulated phase function: the hillaire2020 bake "
+                         "describes analytic phase functions only")
+    profile_names = {v: k for k, v in PROFILE_CODES.items()}
+    phase_names = {v: k for k, v in PHASE_CODES.items()}
+    profile_params = {"exponential": ("scale_height_m", None), "tent": ("center_m",
+                      "half_width_m"), "uniform": ("thickness_m", None),
+                      "gaussian": ("center_m", "width_m")}
+    cons = []
+    for c, name in enumerate(names):
+        kind = profile_names[int(p.profile_code[c])]
+        a, b = profile_params[kind]
+        prof = {"type": kind, a: float(p.profile_p0[c])}
+        if b is not None:
+            prof[b] = float(p.profile_p1[c])
+        phase = phase_names[int(p.phase_code[c])]
+        param = float(p.phase_param[c])
+        entry = {"name": name, "profile": prof, "phase": phase,
+                 "scattering_per_m": p.scattering[c].tolist(),
+                 "absorption_per_m": (p.extinction[c] - p.scattering[c]).tolist()}
+        if phase == "rayleigh":
+            entry["depolarisation"] = 2.0 * param / (1.0 + param)    # rho of gamma
+        elif phase in ("henyey_greenstein", "cornette_shanks"):
+            entry["g"] = param
+        cons.append(entry)
+    return {
+        "note": "coefficients at reference density on wavelengths_nm (the tables' grid), "
+                "absorbers that share a density profile folded into one constituent; "
+                "density profiles relative to the reference density as in "
+                "skydome.atmosphere.profiles (exponential exp(-h / H); tent max(0, 1 - "
+                "|h - c| / w); uniform 1 below the thickness; gaussian exp(-((h - c) / "
+                "w)^2 / 2)); phase functions as in skydome.transport._phase",
+        "planet_radius_m": float(p.planet_radius_m), "top_radius_m": float(p.top_radius_m),
+        "wavelengths_nm": np.asarray(tb.grid, dtype=np.float64).tolist(),
+        "ground_albedo": np.asarray(p.ground_albedo, dtype=np.float64).tolist(),
+        "solar_irradiance_w_m2_nm": solar_irradiance(tb.grid).tolist(),
+        "constituents": cons,
+    }
+
+
+def _sun_disc(sky, grid, wl, Ks) -> dict[str, Any]:
+    """The sun's disc for an engine: its angular radius, its radiance above the atmosphere
+    (XYZ, cd m^-2, at 1 au) and the baked sun's radiance through the atmosphere."""
+    from skydome.spectra import spectrum_to_xyz
+
+    s = sky.sun
+    top = Ks.sum(axis=0) / s.solid_angle_sr
+    seen = spectrum_to_xyz(sky.sun_radiance(wl), wl) / s.irradiance_scale
+    return {"angular_radius_deg": float(s.angular_radius_deg),
+            "solid_angle_sr": float(s.solid_angle_sr),
+            "radiance_top_of_atmosphere_xyz": [float(x) for x in top],
+            "radiance_xyz": [float(x) for x in seen],
+            "note": "uniform disc (the model draws no limb darkening); radiance_xyz is the "
+                    "baked sun's, through the air: for another sun multiply "
+                    "radiance_top_of_atmosphere_xyz by the transmittance texture at "
+                    "(observer radius, mu_s) (exact per XYZ channel); XYZ at 1 au, multiply "
+                    "by Sun.irradiance_scale"}
+
+
+def atmosphere_from_luts(desc: dict[str, Any]):
+    """The :class:`~skydome.atmosphere.Atmosphere` described by a hillaire2020 bake's
+    ``luts.json`` (``desc["atmosphere"]``): each coefficient a table on the bake's wavelength
+    grid (exact there, linear between), the density profiles and phase functions as
+    given. ValueError where the description lacks it."""
+    from skydome.atmosphere import Atmosphere, Constituent
+    from skydome.atmosphere import profiles as P
+
+    a = desc.get("atmosphere") if isinstance(desc, dict) else None
+    if not isinstance(a, dict) or "constituents" not in a:
+        raise ValueError("desc has no 'atmosphere' with 'constituents' (a hillaire2020 "
+                         f"bake of format {HILLAIRE_FORMAT!r} has them)")
+    wl = np.asarray(a["wavelengths_nm"], dtype=np.float64)
+    make = {"exponential": lambda q: P.ExponentialProfile(q["scale_height_m"]),
+            "tent": lambda q: P.TentProfile(q["center_m"], q["half_width_m"]),
+            "uniform": lambda q: P.UniformProfile(q["thickness_m"]),
+            "gaussian": lambda q: P.GaussianLayerProfile(q["center_m"], q["width_m"])}
+
+    def coefficient(values):
+        v = np.asarray(values, dtype=np.float64)
+        return float(v[0]) if wl.size == 1 else (wl, v)
+
+    cons = []
+    for c in a["constituents"]:
+        kw = {"phase": c["phase"]}
+        if "g" in c:
+            kw["g"] = c["g"]
+        if "depolarisation" in c:
+            kw["depolarisation"] = c["depolarisation"]
+        cons.append(Constituent(c["name"], scattering=coefficient(c["scattering_per_m"]),
+                                absorption=coefficient(c["absorption_per_m"]),
+                                profile=make[c["profile"]["type"]](c["profile"]), **kw))
+    return Atmosphere(tuple(cons), planet_radius_m=a["planet_radius_m"],
+                      top_altitude_m=a["top_radius_m"] - a["planet_radius_m"],
+                      ground_albedo=coefficient(a["ground_albedo"]), name="from-luts")
 
 
 def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -363,21 +695,25 @@ def _exr_2d(arr: np.ndarray) -> np.ndarray:
     return arr if arr.ndim == 3 else arr.reshape(-1, arr.shape[-2], arr.shape[-1])
 
 
-def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str) -> None:
+def _exr_channels(names) -> list[str]:
+    """EXR channel names of a texture's channels: "XYZ" -> X, Y, Z; "XYZA" -> X, Y, Z, A; a
+    list -> its names (one per channel)."""
+    return list(names)
+
+
+def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str, channels) -> None:
+    """One EXR image of ``arr`` with the channels named ``channels`` (the first
+    len(channels) components of each texel; the unused A of an XYZ texture is left out)."""
     import OpenEXR
 
     from skydome._io import write_exr
 
     img = _exr_2d(arr)
     dtype = np.float16 if half else np.float32
-    names = "RGBA" if img.shape[-1] == 4 else None
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "skydome:texture": desc_name}
-    if names is None:
-        ch = {f"C{i:03d}": np.ascontiguousarray(img[..., i].astype(dtype))
-              for i in range(img.shape[-1])}
-    else:
-        ch = {c: np.ascontiguousarray(img[..., i].astype(dtype)) for i, c in enumerate(names)}
+    ch = {c: np.ascontiguousarray(img[..., i].astype(dtype))
+          for i, c in enumerate(_exr_channels(channels))}
     write_exr(tmp, header, ch)     # a full disk: OSError ENOSPC, not OpenEXR's RuntimeError
 
 
@@ -394,21 +730,38 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
     formats = check_luts_options(formats, half)
     folder = check_output_folder(folder)
     tex, desc = bake(sky, wavelengths_nm)
+    chans = {n: (desc["textures"].get(n) or {}).get("channels") for n in tex}
+    exr_scale = {n: 1.0 for n in tex}
     if half:
-        big = max(float(np.max(a)) for n, a in tex.items() if a.shape[-1] == 4)
         from skydome.export.envmap import HALF_MAX
 
-        if big > HALF_MAX:
-            raise ValueError(f"half = True: the largest texel {big:.4g} exceeds the half-float "
-                             f"range ({HALF_MAX:g}); write float32")
-    desc["files"] = {n: [f"{n}.{f}" for f in formats if f != "exr" or a.shape[-1] == 4]
-                     for n, a in tex.items()}
+        for n in tex:
+            if chans[n]:
+                big = float(np.max(tex[n]))
+                # a texture beyond the half-float range in kcd m^-2 (half floats keep 11
+                # bits: the precomputed sky through them within 0.034 % at sun 60 to -4
+                # deg, 0.2 % at -10 deg)
+                exr_scale[n] = 1e-3 if big > HALF_MAX else 1.0
+                if big * exr_scale[n] > HALF_MAX:
+                    raise ValueError(f"half = True: the largest texel of {n}, {big:.4g}, "
+                                     f"exceeds the half-float range ({HALF_MAX:g}) even "
+                                     "scaled by 1e-3; write float32")
+                if exr_scale[n] != 1.0:
+                    desc["textures"][n]["exr_scale"] = exr_scale[n]
+    desc["files"] = {n: [f"{n}.{f}" for f in formats if f != "exr" or chans[n]]
+                     for n in tex}
     if "exr" in formats:
-        desc["exr"] = {"dtype": "float16" if half else "float32", "channels": "RGBA",
+        desc["exr"] = {"dtype": "float16" if half else "float32",
+                       "channels": "named for what they hold (textures.<name>.channels): X, "
+                                   "Y, Z for CIE XYZ, A where the alpha channel holds "
+                                   "something; an unused A is not written",
                        "3-D textures": "slices stacked top to bottom: image row = "
                                        "slice * height + row",
-                       "spectral textures": "not in EXR (.npy / .bin only)"}
-    names = [(n, f) for n, a in tex.items() for f in formats if f != "exr" or a.shape[-1] == 4]
+                       "spectral textures": "not in EXR (.npy / .bin only)",
+                       "scale": "EXR value = texture value x textures.<name>.exr_scale "
+                                "(1 where absent; 1e-3, i.e. kcd m^-2, for a half-float "
+                                "texture beyond the half-float range, 65504)"}
+    names = [(n, f) for n in tex for f in formats if f != "exr" or chans[n]]
     total = len(names) + 1
     written = []
     with atomic_folder(folder) as tmp:
@@ -421,7 +774,8 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
             elif f == "npy":
                 target.write_bytes(_npy_bytes(arr))
             else:
-                _write_exr(str(target), arr, half, n)
+                _write_exr(str(target), arr * np.float32(exr_scale[n]) if exr_scale[n] != 1.0
+                           else arr, half, n, chans[n])
             written.append(folder / target.name)
             if progress is not None:
                 progress(k + 1, total)

@@ -1,0 +1,342 @@
+"""A numpy transcription of src/skydome/export/glsl/precomputed.glsl, function by function
+and line by line (vectorised over rays, float64), with GLSL ``texture()`` emulated: LINEAR
+filtering, CLAMP_TO_EDGE, texel centres at (i + 0.5) / n (OpenGL 4.6 section 8.14.2).
+
+Textures are numpy arrays as the bake writes them: 2-D (height, width, 4), 3-D and 2-D
+arrays (depth or layers, height, width, 4); ``atm`` is a dict with the fields of the GLSL
+struct SkydomeAtmosphere (:func:`atmosphere_from_desc`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+PI = 3.14159265358979
+MU_WIDTH = 0.0349065850398866
+MU_S_CENTRE = 1.6057029118347832
+MU_S_WIDTH = 0.10471975511965977
+
+
+def atmosphere_from_desc(desc: dict) -> dict:
+    """The GLSL struct's fields filled from luts.json, as the shader's host code would."""
+    return {"bottomRadius": desc["bottom_radius_m"], "topRadius": desc["top_radius_m"],
+            "muSMin": desc["mu_s_min"], "sunAngularRadius": desc["sun"]["angular_radius_rad"],
+            "sunSolidAngle": desc["sun"]["solid_angle_sr"],
+            "solarIrradiance": np.asarray(desc["sun"]["solar_irradiance_xyz"]),
+            "rayleighGamma": desc["rayleigh"]["gamma"], "miePhaseCode": desc["mie"]["phase_code"],
+            "mieG": desc["mie"]["g"], "nuSize": desc["sizes"]["nu"],
+            "nWavelengths": desc["n_wavelengths"],
+            "extinction": np.pad(np.asarray(desc["extinction_per_km"]).T,
+                                 ((0, 0), (0, 4 - len(desc["extinction_per_km"])))),
+            "xyzWeights": np.asarray(desc["xyz_weights"]),
+            "groundAlbedo": np.asarray(desc["ground_albedo"])}
+
+
+# -- texture() ------------------------------------------------------------------------------
+def _axis(u, n):
+    x = np.asarray(u, dtype=np.float64) * n - 0.5
+    i0 = np.floor(x)
+    f = x - i0
+    i0 = i0.astype(int)
+    return np.clip(i0, 0, n - 1), np.clip(i0 + 1, 0, n - 1), f[..., None]
+
+
+def texture2d(tex, uv):
+    h, w = tex.shape[:2]
+    x0, x1, fx = _axis(uv[..., 0], w)
+    y0, y1, fy = _axis(uv[..., 1], h)
+    return ((1 - fy) * ((1 - fx) * tex[y0, x0] + fx * tex[y0, x1])
+            + fy * ((1 - fx) * tex[y1, x0] + fx * tex[y1, x1]))
+
+
+def texture3d(tex, uvw):
+    d, h, w = tex.shape[:3]
+    x0, x1, fx = _axis(uvw[..., 0], w)
+    y0, y1, fy = _axis(uvw[..., 1], h)
+    z0, z1, fz = _axis(uvw[..., 2], d)
+    out = 0.0
+    for zi, wz in ((z0, 1 - fz), (z1, fz)):
+        for yi, wy in ((y0, 1 - fy), (y1, fy)):
+            for xi, wx in ((x0, 1 - fx), (x1, fx)):
+                out = out + wz * wy * wx * tex[zi, yi, xi]
+    return out
+
+
+def texture2darray(tex, uv, layer):
+    """sampler2DArray: bilinear in (u, v), the layer rounded to the nearest integer."""
+    k = int(np.clip(np.floor(layer + 0.5), 0, tex.shape[0] - 1))
+    return texture2d(tex[k], uv)
+
+
+def textureSize(tex):
+    """(width, height[, depth]) as GLSL's textureSize."""
+    return np.array(tex.shape[:-1][::-1], dtype=np.float64)
+
+
+# -- geometry -------------------------------------------------------------------------------
+def rho_(r, R):
+    return np.sqrt(np.maximum((r - R) * (r + R), 0.0))
+
+
+def hits_ground(r, mu, R):
+    return (mu < 0.0) & ((r * mu) * (r * mu) - (r - R) * (r + R) >= 0.0)
+
+
+def distance_to_top(r, mu, Rt):
+    return np.maximum(-r * mu + np.sqrt(np.maximum((r * mu) * (r * mu) + (Rt - r) * (Rt + r),
+                                                   0.0)), 0.0)
+
+
+def distance_to_ground(r, mu, R):
+    return np.maximum(-r * mu - np.sqrt(np.maximum((r * mu) * (r * mu) - (r - R) * (r + R),
+                                                   0.0)), 0.0)
+
+
+def radius_along(r, mu, d, R, Rt):
+    return np.clip(np.sqrt(np.maximum(d * d + 2.0 * r * mu * d + r * r, 0.0)), R, Rt)
+
+
+def unit_to_texel(x, n):
+    return (np.clip(x, 0.0, 1.0) * (n - 1.0) + 0.5) / n
+
+
+# -- phase functions ------------------------------------------------------------------------
+def rayleigh_phase(gamma, nu):
+    return 3.0 / (16.0 * PI) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * nu * nu) / (1.0 + 2.0 * gamma)
+
+
+def mie_phase(code, g, nu):
+    den = 1.0 + g * g - 2.0 * g * nu
+    hg = (1.0 - g * g) / (den * np.sqrt(den)) / (4.0 * PI)
+    if code == 1:
+        return hg
+    if code == 2:
+        return 3.0 / (2.0 * (2.0 + g * g)) * (1.0 + nu * nu) * hg
+    return np.full_like(nu, 1.0 / (4.0 * PI))
+
+
+# -- texture coordinates --------------------------------------------------------------------
+def transmittance_uv(r, mu, R, Rt, size):
+    H = np.sqrt((Rt - R) * (Rt + R))
+    rho = rho_(r, R)
+    d = distance_to_top(r, mu, Rt)
+    d_min = Rt - r
+    d_max = rho + H
+    with np.errstate(invalid="ignore", divide="ignore"):
+        x_mu = np.where(d_max <= d_min, 0.0, np.clip((d - d_min) / (d_max - d_min), 0.0, 1.0))
+    return np.stack(np.broadcast_arrays(unit_to_texel(x_mu, size[0]),
+                                        unit_to_texel(rho / H, size[1])), -1)
+
+
+def irradiance_uv(r, mu_s, R, Rt, size):
+    return np.stack(np.broadcast_arrays(unit_to_texel(0.5 * (mu_s + 1.0), size[0]),
+                                        unit_to_texel((r - R) / (Rt - R), size[1])), -1)
+
+
+def mu_s_unit(mu_s, mu_s_min):
+    th_max = np.arccos(np.clip(mu_s_min, -1.0, 1.0))
+    th = np.minimum(np.arccos(np.clip(mu_s, -1.0, 1.0)), th_max)
+    top = np.arcsinh((th_max - MU_S_CENTRE) / MU_S_WIDTH)
+    zen = np.arcsinh((0.0 - MU_S_CENTRE) / MU_S_WIDTH)
+    u = np.arcsinh((th - MU_S_CENTRE) / MU_S_WIDTH)
+    return np.clip((top - u) / (top - zen), 0.0, 1.0)
+
+
+def mu_unit(r, mu, ground, R):
+    dip = np.arctan2(rho_(r, R), R)
+    a = np.arcsin(np.clip(mu, -1.0, 1.0))
+    e = np.where(ground, -dip - a, a + dip)
+    e_max = np.where(ground, 0.5 * PI - dip, 0.5 * PI + dip)
+    top = np.arcsinh(np.maximum(e_max, 0.0) / MU_WIDTH)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        x = np.clip(np.arcsinh(np.maximum(e, 0.0) / MU_WIDTH) / top, 0.0, 1.0)
+    return np.where(top <= 0.0, 0.0, x)
+
+
+def scattering_uvwz(r, mu, mu_s, nu, ground, atm, size):
+    R, Rt = atm["bottomRadius"], atm["topRadius"]
+    n_nu = float(atm["nuSize"])
+    n_mu_s = size[0] / n_nu
+    n_mu = size[1]
+    half = np.floor(0.5 * n_mu)
+    H = np.sqrt((Rt - R) * (Rt + R))
+    w = unit_to_texel(rho_(r, R) / H, size[2])
+    x_mu = mu_unit(r, mu, ground, R)
+    f_mu = np.where(ground, x_mu * (half - 1.0), half + (1.0 - x_mu) * (half - 1.0))
+    v = (f_mu + 0.5) / n_mu
+    u = unit_to_texel(mu_s_unit(mu_s, atm["muSMin"]), n_mu_s)
+    f_nu = np.clip(0.5 * (nu + 1.0), 0.0, 1.0) * (n_nu - 1.0)
+    return np.stack(np.broadcast_arrays(f_nu, u, v, w), -1)
+
+
+def lookup_4d(tex, uvwz, n_nu):
+    i = np.minimum(np.floor(uvwz[..., 0]), n_nu - 2.0)
+    f = (uvwz[..., 0] - i)[..., None]
+    a = texture3d(tex, np.stack([(i + uvwz[..., 1]) / n_nu, uvwz[..., 2], uvwz[..., 3]],
+                                -1))[..., :3]
+    b = texture3d(tex, np.stack([(i + 1.0 + uvwz[..., 1]) / n_nu, uvwz[..., 2], uvwz[..., 3]],
+                                -1))[..., :3]
+    return a * (1.0 - f) + b * f
+
+
+# -- transmittance --------------------------------------------------------------------------
+def transmittance_to_top(trans, atm, r, mu):
+    v = texture2d(trans, transmittance_uv(r, mu, atm["bottomRadius"], atm["topRadius"],
+                                          textureSize(trans)))[..., :3]
+    return np.where(hits_ground(r, mu, atm["bottomRadius"])[..., None], 0.0, v)
+
+
+def columns(od, atm, r, mu):
+    return texture2d(od, transmittance_uv(r, mu, atm["bottomRadius"], atm["topRadius"],
+                                          textureSize(od)))
+
+
+def transmittance_along(od, atm, r, mu, d, ground):
+    rd = radius_along(r, mu, d, atm["bottomRadius"], atm["topRadius"])
+    mud = np.clip((r * mu + d) / rd, -1.0, 1.0)
+    g = ground[..., None]
+    c = np.where(g, columns(od, atm, rd, -mud) - columns(od, atm, r, -mu),
+                 columns(od, atm, r, mu) - columns(od, atm, rd, mud))
+    c = np.maximum(c, 0.0)
+    t = 0.0
+    for j in range(atm["nWavelengths"]):
+        t = t + atm["xyzWeights"][j] * np.exp(-c @ atm["extinction"][j])[..., None]
+    return np.minimum(t / atm["solarIrradiance"], 1.0)
+
+
+# -- the sun --------------------------------------------------------------------------------
+def sun_visible_fraction(r, mu_s, atm):
+    sin_h = atm["bottomRadius"] / r
+    cos_h = -np.sqrt(np.maximum(1.0 - sin_h * sin_h, 0.0))
+    e = sin_h * atm["sunAngularRadius"]
+    x = np.clip((mu_s - cos_h + e) / (2.0 * e), 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def sun_radiance(od, atm, r, mu_s):
+    col = columns(od, atm, np.asarray(r, float), np.asarray(mu_s, float))
+    xyz = 0.0
+    for j in range(atm["nWavelengths"]):
+        xyz = xyz + atm["xyzWeights"][j] * np.exp(-np.dot(col, atm["extinction"][j]))[..., None]
+    return xyz * sun_visible_fraction(r, mu_s, atm)[..., None] / atm["sunSolidAngle"]
+
+
+def sun_radiance_xyz(trans, atm, r, mu_s):
+    t = texture2d(trans, transmittance_uv(r, mu_s, atm["bottomRadius"], atm["topRadius"],
+                                          textureSize(trans)))[..., :3]
+    return (atm["solarIrradiance"] / atm["sunSolidAngle"] * t
+            * sun_visible_fraction(r, mu_s, atm)[..., None])
+
+
+# -- sky radiance ---------------------------------------------------------------------------
+def scattered_radiance(scat, mie, mult, atm, r, mu, mu_s, nu, ground):
+    uvwz = scattering_uvwz(r, mu, mu_s, nu, ground, atm, textureSize(scat))
+    n_nu = float(atm["nuSize"])
+    s = lookup_4d(scat, uvwz, n_nu)
+    m = lookup_4d(mie, uvwz, n_nu)
+    return (s * rayleigh_phase(atm["rayleighGamma"], nu)[..., None]
+            + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None]
+            + lookup_4d(mult, uvwz, n_nu))
+
+
+def sky_radiance(scat, mie, mult, trans, atm, camera, view, sun):
+    """skydomeSkyRadiance for a camera inside the atmosphere (camera (3,), view (n, 3))."""
+    r = np.linalg.norm(camera)
+    assert r <= atm["topRadius"]
+    rmu = view @ camera
+    mu = np.clip(rmu / r, -1.0, 1.0)
+    mu_s = np.clip(np.dot(camera, sun) / r, -1.0, 1.0) * np.ones_like(mu)
+    nu = np.clip(view @ sun, -1.0, 1.0)
+    ground = hits_ground(r, mu, atm["bottomRadius"])
+    t = transmittance_to_top(trans, atm, r, mu)
+    return scattered_radiance(scat, mie, mult, atm, r, mu, mu_s, nu, ground), t
+
+
+# -- ground ---------------------------------------------------------------------------------
+def sun_and_sky_irradiance(trans, irr, atm, point, normal, sun):
+    r = np.linalg.norm(point)
+    mu_s = np.clip(np.dot(point, sun) / r, -1.0, 1.0)
+    sky = (texture2d(irr, irradiance_uv(r, mu_s, atm["bottomRadius"], atm["topRadius"],
+                                        textureSize(irr)))[..., :3]
+           * (1.0 + np.dot(normal, point) / r) * 0.5)
+    t = texture2d(trans, transmittance_uv(r, mu_s, atm["bottomRadius"], atm["topRadius"],
+                                          textureSize(trans)))[..., :3]
+    return (atm["solarIrradiance"] * t * sun_visible_fraction(r, mu_s, atm)
+            * max(np.dot(normal, sun), 0.0)), sky
+
+
+def ground_radiance(od, irr_spec, atm, camera, view, sun):
+    R, Rt = atm["bottomRadius"], atm["topRadius"]
+    r = np.linalg.norm(camera)
+    mu = np.clip(view @ camera / r, -1.0, 1.0)
+    mu_s = np.clip(np.dot(camera, sun) / r, -1.0, 1.0)
+    nu = np.clip(view @ sun, -1.0, 1.0)
+    hit = hits_ground(r, mu, R)
+    dg = distance_to_ground(r, mu, R)
+    mu_g = np.clip((r * mu_s + dg * nu) / R, -1.0, 1.0)
+    alpha = atm["sunAngularRadius"]
+    f = np.where(mu_g < -alpha, 0.0,
+                 np.where(mu_g > alpha, mu_g, (mu_g + alpha) * (mu_g + alpha) / (4.0 * alpha)))
+    c_sun = columns(od, atm, np.full_like(mu, R), mu_g)
+    rd = radius_along(r, mu, dg, R, Rt)
+    mud = np.clip((r * mu + dg) / rd, -1.0, 1.0)
+    c_view = np.maximum(columns(od, atm, rd, -mud) - columns(od, atm, np.full_like(mu, r), -mu),
+                        0.0)
+    isize = textureSize(irr_spec)
+    uv = irradiance_uv(R, mu_g, R, Rt, isize[:2])
+    xyz = np.zeros(mu.shape + (3,))
+    for k in range(8):
+        if 4 * k >= atm["nWavelengths"]:
+            break
+        e = texture2darray(irr_spec, uv, float(k))
+        for c in range(4):
+            j = 4 * k + c
+            if j >= atm["nWavelengths"]:
+                break
+            t_sun = np.exp(-c_sun @ atm["extinction"][j])
+            t_view = np.exp(-c_view @ atm["extinction"][j])
+            xyz += atm["xyzWeights"][j] * (t_view * atm["groundAlbedo"][j] / PI
+                                           * (f * t_sun + e[..., c]))[..., None]
+    return np.where(hit[..., None], xyz, 0.0)
+
+
+def radiance(scat, mie, mult, trans, od, irr_spec, atm, camera, view, sun):
+    """skydomeRadiance: sky and ground, 0 at night."""
+    r = np.linalg.norm(camera)
+    if np.dot(camera, sun) / r < atm["muSMin"]:
+        return np.zeros(view.shape[:-1] + (3,))
+    sky, _ = sky_radiance(scat, mie, mult, trans, atm, camera, view, sun)
+    return np.maximum(sky + ground_radiance(od, irr_spec, atm, camera, view, sun), 0.0)
+
+
+# -- aerial perspective ---------------------------------------------------------------------
+def sky_radiance_to_point(scat, mie, mult, od, atm, camera, view, dist, sun):
+    """skydomeSkyRadianceToPoint for points camera + dist * view (camera inside the
+    atmosphere)."""
+    R, Rt = atm["bottomRadius"], atm["topRadius"]
+    r = np.linalg.norm(camera)
+    assert r <= Rt
+    rmu = view @ camera
+    mu = np.clip(rmu / r, -1.0, 1.0)
+    mu_s = np.clip(np.dot(camera, sun) / r, -1.0, 1.0) * np.ones_like(mu)
+    nu = np.clip(view @ sun, -1.0, 1.0)
+    ground = hits_ground(r, mu, R)
+    d_end = np.where(ground, distance_to_ground(r, mu, R), distance_to_top(r, mu, Rt))
+    d = np.clip(dist, 0.0, d_end)
+    t = transmittance_along(od, atm, np.full_like(mu, r), mu, d, ground)
+    size = textureSize(scat)
+    n_nu = float(atm["nuSize"])
+    uvwz0 = scattering_uvwz(r, mu, mu_s, nu, ground, atm, size)
+    s = lookup_4d(scat, uvwz0, n_nu)
+    m = lookup_4d(mie, uvwz0, n_nu)
+    n = lookup_4d(mult, uvwz0, n_nu)
+    rp = radius_along(r, mu, d, R, Rt)
+    mup = np.clip((r * mu + d) / rp, -1.0, 1.0)
+    mu_sp = np.clip((r * mu_s + d * nu) / rp, -1.0, 1.0)
+    uvwz1 = scattering_uvwz(rp, mup, mu_sp, nu, ground, atm, size)
+    inner = (d < d_end)[..., None]
+    s = s - np.where(inner, t * lookup_4d(scat, uvwz1, n_nu), 0.0)
+    m = m - np.where(inner, t * lookup_4d(mie, uvwz1, n_nu), 0.0)
+    n = n - np.where(inner, t * lookup_4d(mult, uvwz1, n_nu), 0.0)
+    return np.maximum(s * rayleigh_phase(atm["rayleighGamma"], nu)[..., None]
+                      + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None] + n,
+                      0.0), t
