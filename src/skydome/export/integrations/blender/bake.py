@@ -112,7 +112,8 @@ def _check_job(job: dict) -> dict:
         raise ValueError(f"out must be a path ending in .exr, got {j.get('out')!r}")
     angles = j.get("sun_elevation_deg") is not None or j.get("sun_azimuth_deg") is not None
     place = any(j.get(k) is not None for k in ("latitude_deg", "longitude_deg", "times"))
-    if angles == place:
+    if angles == place or (angles and (j.get("sun_elevation_deg") is None
+                                       or j.get("sun_azimuth_deg") is None)):
         raise ValueError("give the sun either as sun_elevation_deg and sun_azimuth_deg or as "
                          "latitude_deg, longitude_deg and times")
     if angles:
