@@ -42,6 +42,19 @@ def _white():
     return mat
 
 
+def _fcurves(action):
+    """An action's F-curves: ``action.fcurves`` before Blender 5, the channelbags of its
+    layered slots from 5.0."""
+    if hasattr(action, "fcurves") and not hasattr(action, "layers"):
+        return list(action.fcurves)
+    out = []
+    for layer in action.layers:
+        for strip in layer.strips:
+            for bag in strip.channelbags:
+                out.extend(bag.fcurves)
+    return out
+
+
 def _clear_meshes(scene):
     import bpy
 
@@ -82,6 +95,19 @@ def main():
               "sun_angle": sun.data.angle,
               "exposure": scene.view_settings.exposure,
               "view_transform": scene.view_settings.view_transform}
+    if props.use_sequence:
+        # a day sequence: no render; the image sequence and the keyframes
+        act = sun.animation_data.action
+        result["sequence"] = {
+            "image_source": tex.image.source, "frame_duration": tex.image_user.frame_duration,
+            "frame_start": tex.image_user.frame_start, "scene_frames": [scene.frame_start,
+                                                                        scene.frame_end],
+            "rotation_keys": [[list(k.co) for k in fc.keyframe_points]
+                              for fc in _fcurves(act) if fc.data_path == "rotation_euler"],
+            "exposure_keys": [list(k.co) for fc in _fcurves(scene.animation_data.action)
+                              if fc.data_path.endswith("exposure") for k in fc.keyframe_points]}
+        print("RESULT " + json.dumps(result))
+        return
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.max_bounces = 0                  # direct light only

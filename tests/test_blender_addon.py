@@ -122,7 +122,7 @@ def test_bake_day_sequence(tmp_path):
         assert Path(f["sun_json"]).is_file()
 
 
-def _run_addon(python, how, sky, expected, tmp_path):
+def _run_check(python, how, settings, tmp_path):
     zip_path = pack_addon(tmp_path / "skydome_sky.zip")
     user = tmp_path / "blender_user"
     user.mkdir()
@@ -130,11 +130,15 @@ def _run_addon(python, how, sky, expected, tmp_path):
                PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
     script = Path(__file__).with_name("_blender_addon_check.py")
     proc = subprocess.run([str(python), str(script), str(zip_path), how, sys.executable,
-                           str(tmp_path), json.dumps(SETTINGS)],
+                           str(tmp_path), json.dumps(settings)],
                           capture_output=True, text=True, timeout=600, env=env)
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
     assert proc.returncode == 0 and lines, (proc.stdout[-2000:], proc.stderr[-2000:])
-    r = json.loads(lines[-1][len("RESULT "):])
+    return json.loads(lines[-1][len("RESULT "):])
+
+
+def _run_addon(python, how, sky, expected, tmp_path):
+    r = _run_check(python, how, SETTINGS, tmp_path)
     light = sun_light(sky, "blender")["targets"]["blender"]
     # what the add-on created: the World, the lamp from sun.json, the exposure
     assert r["world"] == "skydome sky" and r["background_strength"] == 1.0
@@ -182,3 +186,31 @@ def test_addon_in_blender_5(sky, expected, tmp_path):
                     "(bpy 5.0.1, about 900 MB)")
     r = _run_addon(BPY5, "extension", sky, expected, tmp_path)
     assert r["module"] == "bl_ext.user_default.skydome_sky" and r["blender"].startswith("5.")
+
+
+def test_addon_day_sequence_in_blender_4(tmp_path):
+    """Three times at one place: the World's image is a 3-image sequence from the scene's
+    first frame, and the lamp's rotation and the exposure are keyframed on frames 1-3 with
+    the sun of Sun.from_location at each time."""
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("bpy (Blender as a Python module) is not installed")
+    times = ["2024-06-21T08:00:00+02:00", "2024-06-21T10:00:00+02:00",
+             "2024-06-21T12:00:00+02:00"]
+    settings = {"model": "hosek_wilkie2012", "sun_mode": "PLACE_TIME", "latitude": 48.0,
+                "longitude": 11.0, "time": times[0], "time_end": times[-1],
+                "step_minutes": 120, "use_sequence": True, "size": "1024"}
+    r = _run_check(sys.executable, "legacy", settings, tmp_path)
+    seq = r["sequence"]
+    assert seq["image_source"] == "SEQUENCE" and seq["frame_duration"] == 3
+    assert seq["frame_start"] == 1 and seq["scene_frames"] == [1, 3]
+    assert Path(r["map"]).name == "sky0001.exr"
+    keys = np.array(seq["rotation_keys"])                  # (3 axes, 3 keys, (frame, value))
+    assert keys.shape == (3, 3, 2)
+    np.testing.assert_allclose(keys[:, :, 0], [[1, 2, 3]] * 3)
+    for i, t in enumerate(times):
+        s = sd.Sun.from_location(48.0, 11.0, t)
+        x, z = keys[0, i, 1], keys[2, i, 1]
+        d = [np.sin(x) * np.sin(z), -np.sin(x) * np.cos(z), np.cos(x)]   # Rz Rx (0, 0, 1)
+        np.testing.assert_allclose(d, s.direction, atol=1e-6)
+        assert keys[1, i, 1] == 0.0
+    assert len(seq["exposure_keys"]) == 3
