@@ -98,6 +98,12 @@ def test_exposure_ev():
     ({"latitude_deg": 48, "longitude_deg": 11, "times": ["noon"]}, "time"),
     ({"sun_elevation_deg": 35, "sun_azimuth_deg": 0, "model": "nope"}, "nope"),
     ({"sun_elevation_deg": 35, "sun_azimuth_deg": 0, "colour": 1}, "colour"),
+    ({"sun_elevation_deg": 35, "sun_azimuth_deg": 0, "atmosphere": "blender"}, "atmosphere"),
+    ({"sun_elevation_deg": 35, "sun_azimuth_deg": 0, "aerosol_optical_depth": 0.1},
+     "aerosol_optical_depth"),
+    ({"sun_elevation_deg": 35, "sun_azimuth_deg": 0, "out": "/nonexistent/sky.exr"},
+     "does not exist"),
+    ({"sun_elevation_deg": 35, "sun_azimuth_deg": 0, "out": "sky.png"}, "exr"),
 ])
 def test_bake_rejects_bad_jobs_before_work(tmp_path, job, match):
     job = {"out": str(tmp_path / "sky.exr"), **job}

@@ -19,7 +19,8 @@ A job (a JSON object):
   (:meth:`skydome.atmosphere.Atmosphere.blender`, Blender 5's own sky). Analytic models
   take ``turbidity`` and ``albedo`` where they have them;
 * ``width`` x ``height`` of the lat-long map (default 2048 x 1024), ``half`` (16-bit
-  EXR, default true), ``out`` = the map's path (``.exr``); a sequence writes
+  EXR, default true), ``out`` = the map's path (``.exr``, in an existing folder); a
+  sequence writes
   ``STEM0001.exr``, ``STEM0002.exr``, ... (Blender's image-sequence numbering);
 * ``exposure_compensation_ev`` added to the exposure (default 0).
 
@@ -108,8 +109,17 @@ def _check_job(job: dict) -> dict:
     j["half"] = bool(j.get("half", True))
     j["exposure_compensation_ev"] = check_number(
         "exposure_compensation_ev", j.get("exposure_compensation_ev", 0.0), -20.0, 20.0, "EV")
-    if not j.get("out") or Path(str(j["out"])).suffix.lower() != ".exr":
-        raise ValueError(f"out must be a path ending in .exr, got {j.get('out')!r}")
+    from skydome._io import check_output_file
+
+    check_output_file(str(j.get("out") or ""), (".exr",), name="out")  # its folder must exist
+    names = {p.name for p in get_model_class(j["model"]).parameters}
+    if "atmosphere" not in names:
+        if atm == "blender":
+            raise ValueError(f"atmosphere 'blender' needs a model that takes an atmosphere "
+                             f"(e.g. precomputed), not {j['model']!r}")
+        if j.get("aerosol_optical_depth") is not None:
+            raise ValueError(f"model {j['model']!r} takes no aerosol_optical_depth; give "
+                             "turbidity")
     angles = j.get("sun_elevation_deg") is not None or j.get("sun_azimuth_deg") is not None
     place = any(j.get(k) is not None for k in ("latitude_deg", "longitude_deg", "times"))
     if angles == place or (angles and (j.get("sun_elevation_deg") is None
@@ -154,12 +164,6 @@ def _sky(job: dict, sun):
             params["atmosphere"] = Atmosphere.earth(turbidity=job.get("turbidity") or 2.5,
                                                     ground_albedo=job["albedo"])
     else:
-        if job["atmosphere"] == "blender":
-            raise ValueError(f"atmosphere 'blender' needs a model that takes an atmosphere "
-                             f"(e.g. precomputed), not {job['model']!r}")
-        if job.get("aerosol_optical_depth") is not None:
-            raise ValueError(f"model {job['model']!r} takes no aerosol_optical_depth; give "
-                             "turbidity")
         if "turbidity" in names and job.get("turbidity") is not None:
             params["turbidity"] = job["turbidity"]
         if "albedo" in names:
@@ -213,7 +217,6 @@ def bake(job: dict) -> dict:
     else:
         suns = [sd.Sun.from_location(j["latitude_deg"], j["longitude_deg"], t)
                 for t in j["times"]]
-    out.parent.mkdir(parents=True, exist_ok=True)
     if len(suns) == 1:
         paths = [out]
     else:
