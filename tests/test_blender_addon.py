@@ -1,6 +1,6 @@
 """The Blender add-on (skydome.export.integrations.blender): packed by pack_addon(),
-installed into a fresh Blender (an empty BLENDER_USER_RESOURCES) as a legacy add-on in
-the shared environment's bpy (4.2 LTS) and as an extension in bpy 5.0 (.venv-bpy5, made by
+installed into a fresh Blender (an empty BLENDER_USER_RESOURCES) as a legacy add-on and as
+an extension, in the shared environment's bpy (4.2 LTS) and in bpy 5.0 (.venv-bpy5, made by
 scripts/_setup test), enabled, its operator run; Cycles (CPU) then renders a white
 Lambertian plane and a post's shadow. The plane's radiance x pi must equal skydome's own
 horizontal irradiance (a finer map in skydome's convention integrated with exact pixel
@@ -177,21 +177,27 @@ def _run_addon(python, how, sky, expected, tmp_path):
     return r
 
 
-def test_addon_in_blender_4(sky, expected, tmp_path):
-    """The shared environment's bpy (4.2 LTS): the zip installed as a legacy add-on."""
+MODULES = {"legacy": "skydome_sky", "extension": "bl_ext.user_default.skydome_sky"}
+
+
+@pytest.mark.parametrize("how", ["legacy", "extension"])
+def test_addon_in_blender_4(how, sky, expected, tmp_path):
+    """The shared environment's bpy (4.2 LTS): the zip installed as a legacy add-on and as
+    an extension."""
     if importlib.util.find_spec("bpy") is None:
         pytest.skip("bpy (Blender as a Python module) is not installed")
-    r = _run_addon(sys.executable, "legacy", sky, expected, tmp_path)
-    assert r["module"] == "skydome_sky" and r["blender"].startswith("4.")
+    r = _run_addon(sys.executable, how, sky, expected, tmp_path)
+    assert r["module"] == MODULES[how] and r["blender"].startswith("4.")
 
 
-def test_addon_in_blender_5(sky, expected, tmp_path):
-    """bpy 5.0 in .venv-bpy5: the same zip installed as an extension."""
+@pytest.mark.parametrize("how", ["legacy", "extension"])
+def test_addon_in_blender_5(how, sky, expected, tmp_path):
+    """bpy 5.0 in .venv-bpy5: the same zip, both ways."""
     if not BPY5.is_file():
         pytest.skip(f"{BPY5.relative_to(ROOT)} missing: `scripts/_setup test` makes it "
                     "(bpy 5.0.1, about 900 MB)")
-    r = _run_addon(BPY5, "extension", sky, expected, tmp_path)
-    assert r["module"] == "bl_ext.user_default.skydome_sky" and r["blender"].startswith("5.")
+    r = _run_addon(BPY5, how, sky, expected, tmp_path)
+    assert r["module"] == MODULES[how] and r["blender"].startswith("5.")
 
 
 @pytest.mark.parametrize("blender", ["4", "5"])
