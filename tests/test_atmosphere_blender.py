@@ -70,7 +70,7 @@ def test_nishita_constants():
     # rayleigh_coeff[0], [1], [10], [20] and ozone_coeff[0], [11], [20] (380, 400, 580, 780 nm)
     np.testing.assert_allclose(ray.scattering([380.0, 400.0, 580.0, 780.0]),
                                [5.424820087636473e-5, 4.418549866505454e-5,
-                                9.99557429990163e-6, 3.05591531679811e-6], rtol=1e-4)
+                                9.99557429990163e-6, 3.05591531679811e-6], rtol=1e-6)
     np.testing.assert_allclose(oz.absorption([380.0, 600.0, 780.0]),
                                [3.25126849861e-9, 2.73551299461512e-6, 1.6828623364192e-7],
                                rtol=1e-12)

@@ -28,8 +28,8 @@ end segments extended). Blender's background aerosol term (2e6 / 1.3681e20 = 1.5
 the sea-level density) is left out.
 
 ``NISHITA`` (Blender 2.90-4.x; intern/sky/source/sky_nishita.cpp, Apache-2.0):
-radii 6360 / 6420 km; Rayleigh 5.4248e-5 (lambda / 380 nm)^-4 m^-1 (its rayleigh_coeff
-table at 380, 400, ..., 780 nm follows that law), 8 km; aerosol scattering 2e-5 m^-1
+radii 6360 / 6420 km; Rayleigh 5.424820087636473e-5 (lambda / 380 nm)^-4 m^-1 (its
+rayleigh_coeff table at 380, 400, ..., 780 nm follows that law), 8 km; aerosol scattering 2e-5 m^-1
 (mie_coeff), extinction 1.11 x that, 1.2 km (mie_scale), g = 0.76 (its phase_mie is
 Cornette-Shanks'); ozone on the 10-25-40 km tent with the ozone_coeff peak coefficients at
 380, 400, ..., 780 nm;
@@ -131,7 +131,7 @@ def blender_atmosphere(sky_type: str = "multiple_scattering", air_density: float
     if kind == "nishita":
         wl_tab = np.linspace(380.0, 780.0, 21)
         return Atmosphere(
-            (Constituent("rayleigh", scattering=lambda wl: air * 5.4248e-5
+            (Constituent("rayleigh", scattering=lambda wl: air * 5.424820087636473e-5
                          * (np.asarray(wl, dtype=np.float64) / 380.0) ** -4.0,
                          profile=ExponentialProfile(8000.0), phase="rayleigh"),
              Constituent("aerosol", scattering=aer * 2e-5, absorption=aer * 0.11 * 2e-5,
