@@ -55,6 +55,10 @@ def _fcurves(action):
     return out
 
 
+def tex_of(scene):
+    return [n for n in scene.world.node_tree.nodes if n.type == "TEX_ENVIRONMENT"][0]
+
+
 def _clear_meshes(scene):
     import bpy
 
@@ -106,6 +110,16 @@ def main():
                               for fc in _fcurves(act) if fc.data_path == "rotation_euler"],
             "exposure_keys": [list(k.co) for fc in _fcurves(scene.animation_data.action)
                               if fc.data_path.endswith("exposure") for k in fc.keyframe_points]}
+        # then a single bake: the sequence's keys must go
+        props.use_sequence = False
+        props.sun_mode = "ANGLES"
+        assert bpy.ops.skydome.bake_sky() == {"FINISHED"}
+        left = [fc.data_path for idb in (sun, sun.data, scene)
+                if idb.animation_data and idb.animation_data.action
+                for fc in _fcurves(idb.animation_data.action)]
+        result["after_single_bake"] = {
+            "fcurves": left, "image_source": tex_of(scene).image.source,
+            "rotation_deg": [float(x) * 180.0 / 3.141592653589793 for x in sun.rotation_euler]}
         print("RESULT " + json.dumps(result))
         return
     scene.render.engine = "CYCLES"

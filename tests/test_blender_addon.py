@@ -214,7 +214,8 @@ def test_addon_day_sequence(blender, tmp_path):
              "2024-06-21T12:00:00+02:00"]
     settings = {"model": "hosek_wilkie2012", "sun_mode": "PLACE_TIME", "latitude": 48.0,
                 "longitude": 11.0, "time": times[0], "time_end": times[-1],
-                "step_minutes": 120, "use_sequence": True, "size": "1024"}
+                "step_minutes": 120, "use_sequence": True, "size": "1024",
+                "sun_elevation": 35.0, "sun_azimuth": 150.0}
     r = _run_check(python, how, settings, tmp_path)
     assert r["blender"].startswith(blender + ".")
     seq = r["sequence"]
@@ -231,3 +232,7 @@ def test_addon_day_sequence(blender, tmp_path):
         np.testing.assert_allclose(d, s.direction, atol=1e-6)
         assert keys[1, i, 1] == 0.0
     assert len(seq["exposure_keys"]) == 3
+    # a single bake afterwards removes the sequence's keys and image sequence
+    after = r["after_single_bake"]
+    assert after["fcurves"] == [] and after["image_source"] == "FILE"
+    np.testing.assert_allclose(after["rotation_deg"], [55.0, 0.0, 30.0], atol=1e-5)

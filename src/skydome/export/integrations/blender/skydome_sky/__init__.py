@@ -230,11 +230,36 @@ def _apply_frame(scene, obj, frame, key=None):
         scene.view_settings.keyframe_insert("exposure", frame=key)
 
 
+def _fcurve_lists(id_data):
+    """The F-curve collections of an ID's action: ``action.fcurves`` before Blender 4.4,
+    the channelbags of its layered strips from 4.4 (the only form in 5.0)."""
+    ad = getattr(id_data, "animation_data", None)
+    act = ad.action if ad else None
+    if act is None:
+        return []
+    if hasattr(act, "layers"):
+        return [bag.fcurves for layer in act.layers for strip in layer.strips
+                for bag in getattr(strip, "channelbags", [])]
+    return [act.fcurves]
+
+
+def _drop_keys(id_data, paths):
+    """Remove the F-curves of ``paths`` (RNA paths) from an ID's action, other
+    animation kept."""
+    for fcurves in _fcurve_lists(id_data):
+        for fc in [fc for fc in fcurves if fc.data_path in paths]:
+            fcurves.remove(fc)
+
+
 def apply_result(scene, result, view_transform="AgX"):
-    """Create or update the World, the sun lamp and the exposure from a bake result."""
+    """Create or update the World, the sun lamp and the exposure from a bake result
+    (keys of an earlier day sequence removed first)."""
     frames = result["frames"]
     _world(scene, frames)
     obj = _sun(scene)
+    _drop_keys(obj, {"rotation_euler"})
+    _drop_keys(obj.data, {"energy", "color"})
+    _drop_keys(scene, {"view_settings.exposure"})
     if view_transform != "KEEP":
         scene.view_settings.view_transform = view_transform
     if len(frames) == 1:
