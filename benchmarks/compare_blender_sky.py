@@ -49,31 +49,14 @@ CASES = (("HOSEK_WILKIE", "hosek_wilkie2012", {"turbidity": 3.0, "albedo": 0.3})
 NISHITA = {"altitude": 0.0, "air_density": 1.0, "dust_density": 1.0, "ozone_density": 1.0,
            "sun_disc": False, "sun_elevation": float(np.radians(SUN[0])),
            "sun_rotation": float(np.radians(SUN[1]))}
-# the peak ozone absorption coefficients [m^-1] of Blender's sky_nishita.cpp (OZONE_COEFF),
-# at 380, 400, ..., 780 nm (Blender 4.2, Apache-2.0)
-_OZONE_COEFF = (3.25126849861e-09, 5.85395365047e-09, 1.977191155085e-08, 7.309568762914e-08,
-                2.0084561514287e-07, 4.0383958096161e-07, 6.3551335912363e-07,
-                9.670704118097e-07, 1.5479740042441e-06, 2.09038647223331e-06,
-                2.46128056164565e-06, 2.73551299461512e-06, 2.15125863128643e-06,
-                1.59051840791988e-06, 1.12356197979857e-06, 7.3527551487574e-07,
-                4.6450130357806e-07, 3.3096079921048e-07, 2.2512612292678e-07,
-                1.487912926649e-07, 1.6828623364192e-07)
 
 
 def blender_nishita_atmosphere():
-    """skydome's Atmosphere with the constants of Blender's NISHITA sky (module notes)."""
-    from skydome.atmosphere import Atmosphere, Constituent, ExponentialProfile, TentProfile
+    """skydome's Atmosphere with the constants of Blender's NISHITA sky (module notes):
+    :meth:`skydome.Atmosphere.blender` with ``sky_type="nishita"``."""
+    from skydome.atmosphere import Atmosphere
 
-    wl_tab = np.linspace(380.0, 780.0, 21)
-    return Atmosphere(
-        (Constituent("rayleigh", scattering=lambda wl: 5.42482e-5 * (np.asarray(wl) / 380.0) ** -4.0,
-                     profile=ExponentialProfile(8000.0), phase="rayleigh"),
-         Constituent("aerosol", scattering=2e-5, absorption=0.11 * 2e-5,
-                     profile=ExponentialProfile(1200.0), phase="cornette_shanks", g=0.76),
-         Constituent("ozone", scattering=0.0,
-                     absorption=lambda wl: np.interp(wl, wl_tab, _OZONE_COEFF),
-                     profile=TentProfile(25e3, 15e3), phase="isotropic")),
-        planet_radius_m=6360e3, top_altitude_m=60e3, ground_albedo=0.1, name="blender_nishita")
+    return Atmosphere.blender("nishita")
 
 
 def _blender(job: dict) -> None:

@@ -538,6 +538,18 @@ class Atmosphere:
             planet_radius_m=EARTH_RADIUS, top_altitude_m=60e3, ground_albedo=0.1, name="bruneton2017")
 
     @classmethod
+    def blender(cls, sky_type: str = "multiple_scattering", *, air_density: float = 1.0,
+                aerosol_density: float = 1.0, ozone_density: float = 1.0) -> "Atmosphere":
+        """Blender's own atmosphere: ``"multiple_scattering"`` (Blender 5's default Sky
+        Texture, intern/sky/source/sky_multiple_scattering.cpp) or ``"nishita"`` (Blender
+        2.90-4.x, sky_nishita.cpp), with the node's air, aerosol (dust) and ozone density
+        factors in [0, 10]. Constants, sources and the two profiles replaced by ones of
+        equal column: :mod:`skydome.atmosphere.blender`."""
+        from skydome.atmosphere.blender import blender_atmosphere
+
+        return blender_atmosphere(sky_type, air_density, aerosol_density, ozone_density)
+
+    @classmethod
     def volcanic_ash(cls, optical_depth_550: float = 1.0, *, median_radius_um: float = 0.45,
                      geometric_std: float = 1.15, refractive_index: Any = 1.5 - 0.001j,
                      layer_altitude_m: float = 20e3, layer_width_m: float = 3e3,

@@ -1,0 +1,1 @@
+"""Integrations of skydome's exports into other programs (the Blender add-on)."""
