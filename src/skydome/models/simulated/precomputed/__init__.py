@@ -212,7 +212,8 @@ class PrecomputedSky(SkyModel):
         """(tables, from_cache): from the on-disk cache when it holds this atmosphere and
         these settings, else precomputed (and stored there)."""
         from skydome.models.simulated.precomputed import _cache
-        from skydome.models.simulated.precomputed._precompute import precompute
+        from skydome.models.simulated.precomputed._precompute import (
+            attach_stored_table_builder, precompute)
 
         # tabulated phase functions are evaluated on the table wavelengths here, once
         props = atm.optical_properties(wl, fold=True)   # absorbers folded (exact)
@@ -227,6 +228,7 @@ class PrecomputedSky(SkyModel):
             _cache.store(k, tables)
         if not tables.has_multiple_scattering:
             # the stored table, built on first use, is written into the entry then
+            attach_stored_table_builder(tables)
             tables.set_multiple_scattering_sink(
                 lambda shape, slabs: _cache.add_stored_table(k, shape, slabs))
         return tables, hit

@@ -51,6 +51,10 @@ def load(cls, path, sun=None):
             raise ValueError(f"{path} is not a skydome precomputed-table file of this version "
                              f"(format {m.get('format')!r}, expected {FORMAT!r})")
         tables = Tables.from_arrays({k: z[k] for k in z.files if k != "meta"})
+    if not tables.has_multiple_scattering:
+        from skydome.models.simulated.precomputed._precompute import attach_stored_table_builder
+
+        attach_stored_table_builder(tables)
     obj = cls.__new__(cls)
     for p in cls.parameters:
         if p.name in m:

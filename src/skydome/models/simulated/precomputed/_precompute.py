@@ -6,7 +6,8 @@ Each step is one function here calling its numba kernel (modules ``_single``, ``
 them). No order's radiance is tabulated: the incident radiance and ground irradiance of
 orders >= 3 are ray integrals of the previous order's scattering density, and the stored
 multiple-scattering table is one integral of the summed density, built on its first read
-(:func:`stored_table_of`), not here: the sky's ``radiance()`` does not read it. Working memory: float32
+(:func:`stored_table_of`, given to the tables by :func:`attach_stored_table_builder`), not
+here: the sky's ``radiance()`` does not read it. Working memory: float32
 throughout, the orders computed one batch of wavelengths at a time (only the batch's last
 order's density kept), the geometric remainder added in place.
 """
@@ -325,13 +326,25 @@ def _precompute_tables(props, wl, p):
         dens = dict(scattering_density=J_sum, profile_code=np.asarray(codes),
                     profile_p0=np.asarray(p0s, dtype=np.float64),
                     profile_p1=np.asarray(p1s, dtype=np.float64), scattering_index=sc_idx)
-    return Tables(table_wavelengths_nm=np.asarray(wl, dtype=np.float64), columns=col,
-                  beta_e=beta_e, single_scattering=ss, multiple_scattering=ms, irradiance=E,
-                  phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
-                  scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
-                  mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
-                  precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab,
-                  stored_table_samples=n_q_ms, stored_table=p.get("stored_table", "full"), **dens)
+    tables = Tables(table_wavelengths_nm=np.asarray(wl, dtype=np.float64), columns=col,
+                    beta_e=beta_e, single_scattering=ss, multiple_scattering=ms, irradiance=E,
+                    phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
+                    scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
+                    mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
+                    precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab,
+                    stored_table_samples=n_q_ms, stored_table=p.get("stored_table", "full"),
+                    **dens)
+    attach_stored_table_builder(tables)
+    return tables
+
+
+def attach_stored_table_builder(tables):
+    """Give ``tables`` (:class:`._tables.Tables`) the builder of its stored table of orders
+    2..N (:func:`stored_table_of`, :func:`stored_table_slabs`, looked up when called);
+    returns ``tables``."""
+    tables.set_multiple_scattering_builder(lambda t: stored_table_of(t),
+                                           lambda t: stored_table_slabs(t))
+    return tables
 
 
 def stored_table_of(t, r_range=None):
