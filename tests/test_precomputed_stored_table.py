@@ -40,9 +40,8 @@ def eager_table(m):
     else:
         nodes, n_nu = None, PC.MS_NU_SIZE
     return PC.stored_multiple_scattering(
-        t.scattering_density, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
-        t.columns, t.beta_e, t.planet_radius_m, t.top_radius_m, t.mu_s_min, n_q, shape,
-        nodes=nodes, n_nu=n_nu)
+        t.scattering_density, PC.tables_medium(t), t.scattering_index, t.columns, t.mu_s_min,
+        n_q, shape, nodes=nodes, n_nu=n_nu)
 
 
 @pytest.mark.parametrize("stored", ["full", "subset"])

@@ -35,12 +35,13 @@ from skydome.transport._medium import (EXPONENTIAL, GAUSSIAN, TENT, UNIFORM,  # 
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4PI,  # noqa: F401
                                      ISOTROPIC, RAYLEIGH, phase_fill, phase_value)
 from skydome.transport._quadrature import (column_quadrature, geometric_node,  # noqa: F401
-                                          geometric_step, medium_columns, simpson)
+                                          geometric_step, medium_columns, piece_nodes,
+                                          simpson)
 from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
 from skydome.transport._tables import cell as table_cell
 from skydome.transport._tables import lookup_columns, lookup_columns_cell
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
-from skydome.transport._vexp import exp_neg_many, expm1_many
+from skydome.transport._vexp import exp_neg_many
 from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
 
 
@@ -271,22 +272,14 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
         a = w_brk[q]
         b = w_brk[q + 1]
         dense_at_b = b <= tmin      # before the lowest point the density grows with t
-        length = b - a
-        if length <= 0.0:
+        if b - a <= 0.0:
             continue
-        dv = geometric_step(length, n_view, ts)
-        # the nodes of the piece in increasing t, with the radii at them and at the
-        # midpoints before them (Simpson's rule for the view column), then the densities
-        # of every constituent at all of them at once (exp_neg_many: one vectorised pass)
-        # (geometric_node: u = ts expm1((k + 1/2) dv), w = (u + ts) dv, by expm1_many)
-        for kk in range(n_view):
-            k = n_view - 1 - kk if dense_at_b else kk
-            w_node_t[kk] = (k + 0.5) * dv
-        expm1_many(w_node_t, n_view, w_node_w, w_xbits, w_xbits_f)
-        for kk in range(n_view):
-            u = ts * w_node_w[kk]
-            w_node_w[kk] = (u + ts) * dv
-            w_node_t[kk] = b - u if dense_at_b else a + u
+        # the nodes of the piece in increasing t (piece_nodes, its expm1 in one vectorised
+        # pass), with the radii at them and at the midpoints before them (Simpson's rule
+        # for the view column), then the densities of every constituent at all of them at
+        # once (exp_neg_many: one vectorised pass)
+        piece_nodes(a, b, dense_at_b, n_view, ts, True, w_node_t, w_node_w, 0, True, w_xbits,
+                    w_xbits_f)
         for kk in range(n_view):
             t = w_node_t[kk]
             tp = w_node_t[kk - 1] if kk > 0 else t_prev
