@@ -165,17 +165,18 @@ def column_quadrature(code, p0, p1, r, mu, R, Rt, n, ts, ground=True):
     if t1 <= t0:
         return 0.0
     tmin = lowest_point(r, mu, t0, t1)
+    tq = np.empty(n)
+    wq = np.empty(n)
+    no_bits = np.empty(0, dtype=np.int64)     # the scalar form's unused scratch
     total = 0.0
     for piece in range(2):
         a, b, dense_at_b = piece_bounds(piece, t0, tmin, t1)
-        length = b - a
-        if length <= 0.0:
+        if b - a <= 0.0:
             continue
-        dv = geometric_step(length, n, ts)
+        piece_nodes(a, b, dense_at_b, n, ts, False, tq, wq, 0, False, no_bits,
+                    no_bits.view(np.float64))
         for k in range(n):
-            u, w = geometric_node(k, dv, ts)
-            t = b - u if dense_at_b else a + u
-            total += w * profile_density(code, p0, p1, radius_along(r, mu, t) - R)
+            total += wq[k] * profile_density(code, p0, p1, radius_along(r, mu, tq[k]) - R)
     return total
 
 

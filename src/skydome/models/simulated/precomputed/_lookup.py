@@ -13,7 +13,8 @@ from numba import njit
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
-from skydome.transport._kernels import exp_neg_array, profile_density_many
+from skydome.transport._kernels import profile_density_many
+from skydome.transport._vexp import exp_neg_many
 from skydome.transport._phase import phase_fill_coded
 from skydome.transport._tables import lookup_columns as columns_at
 
@@ -131,7 +132,7 @@ def ray_weights(col, m, sc_idx, r, mu, ground, nq, w, s):
     The whole ray at once: its columns node by node ([Bru17] GetTransmittance, for rays to
     the ground both ends reversed, as in :func:`columns_segment`), then the optical depths
     of every node and wavelength in one vectorised exp pass
-    (:func:`skydome.transport._kernels.exp_neg_array`, relative error < 1e-8; numba's
+    (:func:`skydome.transport._vexp.exp_neg_many`, to a few units in the last place; numba's
     math.exp is a scalar libm call) and the densities of every node per constituent in one
     more (:func:`skydome.transport._kernels.profile_density_many`): 18 % of the orders'
     ray integrals against one node at a time. Scratch ``s``: the
@@ -166,8 +167,8 @@ def ray_weights(col, m, sc_idx, r, mu, ground, nq, w, s):
     for q in range(nq):
         for l in range(nl):
             xs[q * nl + l] = -_optical_depth(beta_e, cs[q], l)
-    exp_neg_array(xs[:nq * nl], es, ib)
     fb = ib.view(np.float64)
+    exp_neg_many(xs, nq * nl, es, ib, fb)
     for kk in range(sc_idx.shape[0]):
         c = sc_idx[kk]
         profile_density_many(codes[c], p0s[c], p1s[c], rts, R, nq, dk[kk], ib, fb)
