@@ -41,7 +41,8 @@ def _check_same_as_serial(days, chunks, got):
 def test_worker_killed_mid_run_result_complete_and_identical(days, tmp_path):
     from distributed import Client, LocalCluster
 
-    from skydome.distributed import assemble_chunks, run_chunks, sky_matrix_chunks
+    from skydome.daylighting.skymatrix_chunks import sky_matrix_chunks
+    from skydome.distributed import assemble_chunks, run_chunks
 
     chunks = sky_matrix_chunks(days, chunk_hours=6, **KW)
     assert len(chunks) == 16
@@ -78,7 +79,8 @@ def test_worker_killed_mid_run_result_complete_and_identical(days, tmp_path):
 def test_interrupted_run_resumes_without_recomputing(days, tmp_path):
     from distributed import Client, LocalCluster
 
-    from skydome.distributed import assemble_chunks, run_chunks, sky_matrix_chunks
+    from skydome.daylighting.skymatrix_chunks import sky_matrix_chunks
+    from skydome.distributed import assemble_chunks, run_chunks
 
     chunks = sky_matrix_chunks(days, chunk_hours=24, **KW)
     keys = [c.key for c in chunks]
@@ -154,7 +156,7 @@ def test_chunk_bit_identical_with_read_only_arguments(days):
     """Workers get their arguments as read-only arrays (dask's zero-copy deserialisation);
     a chunk computed from them equals the serial chunk bit for bit (numba would otherwise
     run a second specialisation of the kernels, 1 ulp apart)."""
-    from skydome.distributed import sky_matrix_chunks
+    from skydome.daylighting.skymatrix_chunks import sky_matrix_chunks
 
     chunks = sky_matrix_chunks(days, chunk_hours=24, **KW)[:2]
 

@@ -10,8 +10,8 @@ import time
 import numpy as np
 import pytest
 
-from skydome.distributed import (Chunk, SchedulerError, check_scheduler,
-                                 distributed_sky_matrix, run_chunks)
+from skydome.daylighting.skymatrix_chunks import distributed_sky_matrix
+from skydome.distributed import Chunk, SchedulerError, check_scheduler, run_chunks
 
 pytest.importorskip("distributed")
 
@@ -48,7 +48,7 @@ def _chunk(x):
 def test_bad_address_refused_before_any_work(tmp_path, monkeypatch):
     """The address is refused before the chunks are made (sky_matrix_chunks, which computes
     the sun positions) and before the folder is created."""
-    import skydome.distributed as D
+    import skydome.daylighting.skymatrix_chunks as D
 
     monkeypatch.setattr(D, "sky_matrix_chunks", lambda *a, **k: pytest.fail("work began"))
     t0 = time.perf_counter()

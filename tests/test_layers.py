@@ -46,18 +46,12 @@ LAYERS = (
 # importers are read through those names (see _graph), so it has no layer of its own.
 FACADE = "skydome"
 
-# Known breaks, each removed by an item of issue 26 that is being done in parallel; delete an
-# entry when its item is merged (the tests fail on an entry that no longer matches, so that
-# none outlives its break). (importer, imported)
-KNOWN_UPWARD = {
-    # item 5: the Perez sky-matrix chunking moves from distributed.py into daylighting/
-    ("skydome.distributed", "skydome.daylighting.skymatrix"),
-}
+# Known breaks, each to be removed by a later change; delete an entry when its break is
+# mended (the tests fail on an entry that no longer matches, so that none outlives its
+# break). (importer, imported)
+KNOWN_UPWARD: set[tuple[str, str]] = set()
 # Edges cut before the search for cycles. (importer, imported)
 KNOWN_CYCLE_EDGES = {
-    # item 5: the stored-table builder is injected into Tables like its sink
-    ("skydome.models.simulated.precomputed._tables",
-     "skydome.models.simulated.precomputed._precompute"),
     # not named by issue 26, found by this test: the package atmosphere imports gases and mie
     # inside its functions, and they import its Constituent, TabulatedPhase, Atmosphere back
     ("skydome.atmosphere", "skydome.atmosphere.gases"),

@@ -19,7 +19,8 @@ from hypothesis import strategies as st
 import skydome as sd
 from skydome.atmosphere import Atmosphere
 from skydome.spectra import solar_irradiance
-from skydome.models.simulated.precomputed._geometry import gauss_rule
+from skydome.transport._medium import medium_from_properties
+from skydome.transport._quadrature import gauss_legendre_unit as gauss_rule
 from skydome.transport.geometry import direction_from_angles
 
 SMALL = dict(scattering_r_size=12, scattering_mu_size=48, scattering_mu_s_size=12,
@@ -475,15 +476,15 @@ def test_irradiance_rays_share_geometry_exactly():
     props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(np.array(WL3), fold=True)
     R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
     p = dict(transmittance_r_size=16, transmittance_mu_size=64)
-    col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1, R, Rt, p)
+    m = medium_from_properties(props)
+    col = PC.transmittance_columns(m, p)
     sc = np.array([0, 1], dtype=np.int64)
     rng = np.random.default_rng(3)
     J = rng.uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
     rule = gauss_rule(5)
     mu_s_min = float(np.cos(np.radians(108.0)))
     th, ph, dom = PC._hemisphere(3)
-    beta_e = np.ascontiguousarray(props.extinction)
-    args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e, R, Rt)
+    args = (m, sc, col)
     out = np.empty((3, 5, 3))
     _irradiance.indirect_irradiance_rays(J, *args, mu_s_min, *rule, 500.0, th, ph, dom, out, 3)
     # the ground's row alone (as the precomputation's orders ask for it): the same values
@@ -502,9 +503,9 @@ def test_irradiance_rays_share_geometry_exactly():
                     nu = np.clip(np.sqrt(1 - mu_s ** 2) * np.sin(th[a]) * np.cos(ph[b])
                                  + mu_s * np.cos(th[a]), -1, 1)
                     one = np.zeros(3)
-                    sc_ = _multiple.ray_scratch(5, col.shape[0], 2, 3)
-                    _multiple.ray_integral(J, *args, frame, r,
-                                           np.cos(th[a]), mu_s, nu, False, *rule, 500.0, *sc_, one)
+                    sc_ = _multiple.ray_scratch(5, col.shape[0], 2, 3, np.empty((10, 2, 3)))
+                    _multiple.ray_integral(J, *args, frame, r, np.cos(th[a]), mu_s, nu, False,
+                                           *rule, 500.0, sc_, one)
                     ref[ir, im] += 2 * np.cos(th[a]) * dom[a] * one
     # equal to rounding: 1e-15 relative in general, up to 2.5e-6 with the sun at the zenith
     # or the nadir (the azimuth about the sun is singular there), and at the top (r = Rt)
@@ -525,19 +526,19 @@ def test_incident_radiance_rays_against_one_ray_integral_per_ray():
     props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(np.array(WL3), fold=True)
     R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
     p = dict(transmittance_r_size=16, transmittance_mu_size=64)
-    col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1, R, Rt, p)
+    m = medium_from_properties(props)._replace(albedo=np.zeros(3))      # a black ground
+    col = PC.transmittance_columns(m, p)
     sc = np.array([0, 1], dtype=np.int64)
     J = np.random.default_rng(5).uniform(0.5, 1.5, (2, 9, 5, 6, 7, 3)).astype(np.float32)
     rule = gauss_rule(5)
     mu_s_min = float(np.cos(np.radians(108.0)))
     n_r, n_ms, n_th = 3, 4, 4
     th_in = (np.arange(n_th) + 0.5) * np.pi / n_th
-    beta_e = np.ascontiguousarray(props.extinction)
-    args = (props.profile_code, props.profile_p0, props.profile_p1, sc, col, beta_e)
+    args = (m, sc, col)
     out = np.empty((n_th * n_th, n_r, n_ms, 3), dtype=np.float32)
     dE = np.zeros((4, 8, 3))
-    _density.incident_radiance_rays(J, dE, *args, np.zeros(3), R, Rt, mu_s_min, *rule, 500.0,
-                                    n_r, n_ms, th_in, th_in, out)
+    _density.incident_radiance_rays(J, dE, *args, mu_s_min, *rule, 500.0, n_r, n_ms, th_in,
+                                    th_in, out)
     frame = mu_s_frame(mu_s_min)
     ref = np.empty(out.shape)
     n_ground = 0
@@ -550,9 +551,9 @@ def test_incident_radiance_rays_against_one_ray_integral_per_ray():
                                                                  sin_s, R)
                     n_ground += ground
                     one = np.zeros(3)
-                    _multiple.ray_integral(J, *args, R, Rt, frame, r, ct, mu_s, nu, ground,
-                                           *rule, 500.0,
-                                           *_multiple.ray_scratch(5, col.shape[0], 2, 3), one)
+                    sc_ = _multiple.ray_scratch(5, col.shape[0], 2, 3, np.empty((10, 2, 3)))
+                    _multiple.ray_integral(J, *args, frame, r, ct, mu_s, nu, ground,
+                                           *rule, 500.0, sc_, one)
                     ref[a * n_th + b, ir, ims] = one
     assert 0 < n_ground < ref.size // 3
     np.testing.assert_allclose(out, ref, rtol=2e-6, atol=1e-6 * ref.max())
@@ -630,8 +631,8 @@ def test_stored_multiple_scattering_against_the_full_grid_integration(default_55
     shape = t.multiple_scattering.shape
     full = t.multiple_scattering          # the default: integrated at every node
     sub = PC.stored_multiple_scattering(
-        t.scattering_density, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
-        t.columns, t.beta_e, t.planet_radius_m, t.top_radius_m, t.mu_s_min, n_q, shape)
+        t.scattering_density, PC.tables_medium(t), t.scattering_index, t.columns, t.mu_s_min,
+        n_q, shape)
     assert m.stored_table == "full"
     rel = np.abs(sub - full) / np.maximum(full, 1e-3 * full.max())
     assert rel.mean() < 0.01, rel.mean()
@@ -688,20 +689,21 @@ def test_precompute_runs_without_numpy_hugepage_advice_and_restores_it(monkeypat
 
 
 def test_gauss_rule_in_v_integrates_length_and_density_profiles():
-    """``_geometry.ray_nodes_rule`` with ``gauss_rule`` against closed forms: the length of
+    """``transport._quadrature.ray_nodes_rule`` with ``gauss_legendre_unit`` against closed
+    forms: the length of
     a ray (a constant integrand) and the column of an exponential profile of scale height
     H along a vertical ray, H (1 - exp(-L / H)), for the Rayleigh (8 km) and aerosol (1.2 km)
     scale heights. The midpoint rule of ``ray_nodes`` in v = ln(1 + u / ts) is short on the
     length by about V^2 / (24 n^2), V = ln(1 + L / ts) (the Jacobian e^v is convex): the
     reason the precomputation's ray integrals use the Gauss rule."""
-    from skydome.models.simulated.precomputed import _geometry as G
+    from skydome.transport import _quadrature as G
 
     R = 6.36e6
     ts = 500.0
     for L in (2e4, 1e5, 1.2e6):
         t = np.empty(40)
         w = np.empty(40)
-        rx, rw = G.gauss_rule(7)
+        rx, rw = G.gauss_legendre_unit(7)
         n = G.ray_nodes_rule(R, 1.0, L, rx, rw, ts, t, w)     # upward: one piece
         assert n == 7
         assert abs(w[:n].sum() / L - 1.0) < 1e-7        # e^v to degree 13

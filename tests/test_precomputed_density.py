@@ -156,10 +156,11 @@ def test_source_functional_equals_the_source_total_of_the_products(n_in, n_out, 
     _precompute.density_products(q, L, w, beta_s, None, J, 0)
     props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(
         np.linspace(400.0, 700.0, nl), fold=True)
-    R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
+    from skydome.transport._medium import medium_from_properties
+
     sc = np.array([0, 1], dtype=np.int64)
-    args = (props.profile_code, props.profile_p0, props.profile_p1, sc)
-    ref = _precompute.source_total(J, q, *args, R, Rt)
-    got = _precompute._SourceFunctional(q, *args, beta_s, R, Rt, n_r, n_ms)(L)
+    args = (medium_from_properties(props), sc)
+    ref = _precompute.source_total(J, q, *args)
+    got = _precompute._SourceFunctional(q, *args, beta_s, n_r, n_ms)(L)
     assert np.all(ref > 0)
     np.testing.assert_allclose(got, ref, rtol=1e-5)

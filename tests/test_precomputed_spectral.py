@@ -19,8 +19,9 @@ SMALL = dict(scattering_r_size=8, scattering_mu_size=32, scattering_mu_s_size=16
 def _props_and_columns(wl):
     props = Atmosphere.earth().optical_properties(wl, fold=True)
     p = sd.models.simulated.precomputed.PrecomputedSky._validate_params({})
-    col = PC.transmittance_columns(props.profile_code, props.profile_p0, props.profile_p1,
-                                   props.planet_radius_m, props.top_radius_m, p)
+    from skydome.transport._medium import medium_from_properties
+
+    col = PC.transmittance_columns(medium_from_properties(props), p)
     return props, col[:, 0, 0]
 
 

@@ -40,9 +40,8 @@ def eager_table(m):
     else:
         nodes, n_nu = None, PC.MS_NU_SIZE
     return PC.stored_multiple_scattering(
-        t.scattering_density, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
-        t.columns, t.beta_e, t.planet_radius_m, t.top_radius_m, t.mu_s_min, n_q, shape,
-        nodes=nodes, n_nu=n_nu)
+        t.scattering_density, PC.tables_medium(t), t.scattering_index, t.columns, t.mu_s_min,
+        n_q, shape, nodes=nodes, n_nu=n_nu)
 
 
 @pytest.mark.parametrize("stored", ["full", "subset"])
@@ -129,3 +128,42 @@ def test_orders_one_has_a_zero_table_without_density():
     m = small(orders=1)
     assert not m._t.has_density and m._t.has_multiple_scattering
     assert not np.any(m._t.multiple_scattering)
+
+
+def test_tables_without_a_builder_say_so_and_build_once_given_one():
+    """The Tables record imports no kernel: tables made from arrays alone (no stored table,
+    no builder) refuse to build the stored table with a ValueError naming the way out, and
+    build the eager table once the precomputation's builder is attached."""
+    from skydome.models.simulated.precomputed._tables import Tables
+
+    m = small()
+    bare = Tables.from_arrays({k: v for k, v in m._t.arrays().items()
+                               if k != "multiple_scattering"})
+    assert not bare.has_multiple_scattering
+    with pytest.raises(ValueError, match="set_multiple_scattering_builder"):
+        bare.build_multiple_scattering()
+    assert PC.attach_stored_table_builder(bare) is bare
+    assert np.array_equal(bare.multiple_scattering, eager_table(m))
+
+
+def test_the_medium_of_the_tables_is_the_atmosphere_s():
+    """``tables_medium`` (the kernels' Medium rebuilt from the tables, for the stored table
+    and the observer's slice) holds the planet, the density profiles, the extinction and
+    the ground albedo of the atmosphere's own optical properties on the table wavelengths
+    (``transport._medium.medium_from_properties``), and its scattering rows at
+    ``scattering_index``."""
+    from skydome.transport._medium import medium_from_properties
+
+    m = small()
+    t = m._t
+    got = PC.tables_medium(t)
+    ref = medium_from_properties(m.atmosphere.optical_properties(t.table_wavelengths_nm,
+                                                                 fold=True))
+    assert (got.R, got.Rt) == (ref.R, ref.Rt)
+    for name in ("profile_code", "profile_p0", "profile_p1", "extinction", "albedo"):
+        assert np.array_equal(getattr(got, name), getattr(ref, name)), name
+    sc = t.scattering_index
+    assert np.array_equal(got.scattering[sc], ref.scattering[sc])
+    assert np.array_equal(got.phase_code[sc], ref.phase_code[sc])
+    others = np.setdiff1d(np.arange(ref.scattering.shape[0]), sc)
+    assert not np.any(got.scattering[others]) and not np.any(ref.scattering[others])

@@ -117,7 +117,7 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
     if distributed:
         import shutil
 
-        from skydome.distributed import distributed_sky_matrix
+        from skydome.daylighting.skymatrix_chunks import distributed_sky_matrix
 
         chunk_dir = Path(f"{out_p}.chunks")
         sky, rep = guard(distributed_sky_matrix, w, chunk_dir, chunk_hours=chunk_hours,
@@ -132,7 +132,7 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
         m = _M()
         m.sky = sky
         if mode == "separate":
-            from skydome.distributed import split_sun
+            from skydome.daylighting.skymatrix_chunks import split_sun
 
             m.sky, m.sun = split_sun(sky)
             m.sun_directions = (w.spa_sun_directions() if sun_position == "spa" else

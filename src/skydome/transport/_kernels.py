@@ -35,36 +35,14 @@ from skydome.transport._medium import (EXPONENTIAL, GAUSSIAN, TENT, UNIFORM,  # 
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, INV_4PI,  # noqa: F401
                                      ISOTROPIC, RAYLEIGH, phase_fill, phase_value)
 from skydome.transport._quadrature import (column_quadrature, geometric_node,  # noqa: F401
-                                          geometric_step, medium_columns, simpson)
+                                          geometric_step, medium_columns, piece_nodes,
+                                          simpson)
 from skydome.transport._tables import lookup_column as table_lookup  # noqa: F401
 from skydome.transport._tables import cell as table_cell
 from skydome.transport._tables import lookup_columns, lookup_columns_cell
 from skydome.transport._tables import r_mu_from_transmittance_unit as table_rmu
-from skydome.transport._vexp import exp_neg_many, expm1_many
+from skydome.transport._vexp import exp_neg_many
 from skydome.transport._tables import transmittance_unit_from_r_mu as table_coords  # noqa: F401
-
-
-@njit(cache=True, fastmath=True)
-def exp_neg_array(x, out, ibuf):
-    """out[l] = exp(x[l]) for x[l] <= 0 (x below -700 is clamped), relative error < 1e-8.
-
-    Written so that LLVM vectorises it (numba's math.exp is a scalar libm call): 2^y with
-    y = x log2(e) split into k = floor(y) and f = y - k; 2^f = exp(f ln 2) by its Taylor
-    series to degree 10 on [0, ln 2); 2^k assembled from the IEEE-754 exponent bits.
-    About twice the throughput of math.exp in the spectral loops.
-    """
-    n = x.shape[0]
-    fbuf = ibuf.view(np.float64)
-    for l in range(n):
-        y = max(x[l], -700.0) * 1.4426950408889634
-        k = math.floor(y)
-        t = (y - k) * 0.6931471805599453
-        out[l] = 1.0 + t * (1.0 + t * (0.5 + t * (1.0 / 6.0 + t * (1.0 / 24.0 + t * (
-            1.0 / 120.0 + t * (1.0 / 720.0 + t * (1.0 / 5040.0 + t * (1.0 / 40320.0 + t * (
-                1.0 / 362880.0 + t / 3628800.0)))))))))
-        ibuf[l] = (np.int64(k) + 1023) << 52
-    for l in range(n):
-        out[l] *= fbuf[l]
 
 
 @njit(cache=True, inline="always")
@@ -159,7 +137,6 @@ class _SingleWork(NamedTuple):
     rho_mid: np.ndarray    # (nc,) ... at the midpoint
     rho: np.ndarray        # (nc,) ... at the node
     ebuf: np.ndarray       # (nl,) exp(tau)
-    ibuf: np.ndarray       # (nl,) int64 scratch of exp_neg_array
     scat: np.ndarray       # (nc,) 1 where the constituent scatters
     brk: np.ndarray        # (6,) break points
     phs: np.ndarray        # (nl,) phase function per wavelength
@@ -170,7 +147,7 @@ class _SingleWork(NamedTuple):
     node_mus: np.ndarray   # (n_view,) cosine of the sun's zenith angle at the nodes
     node_xr: np.ndarray    # (n_view,) their column-table coordinates (x_r, x_mu)
     node_xmu: np.ndarray
-    xbits: np.ndarray      # (max(2 n_view, nl),) int64 scratch of exp_neg_many
+    xbits: np.ndarray      # (max(2 n_view, nl),) int64 scratch of the vectorised exps
     xbits_f: np.ndarray    # its float64 view
 
 
@@ -209,7 +186,7 @@ def _ray_block(i0, i1, dirs, r0, sun, m, e_sun, table, n_view, ts, light_exact, 
     xbits = np.zeros(max(2 * n_view, nl), dtype=np.int64)
     w = _SingleWork(np.zeros((nc, nl)), np.zeros(nl), np.zeros(nc), np.zeros(nc),
                     np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nl),
-                    np.zeros(nl, dtype=np.int64), np.zeros(nc), np.zeros(6), np.zeros(nl),
+                    np.zeros(nc), np.zeros(6), np.zeros(nl),
                     np.zeros(n_view), np.zeros(n_view), np.zeros(2 * n_view),
                     np.zeros((nc, 2 * n_view)), np.zeros(n_view), np.zeros(n_view),
                     np.zeros(n_view), xbits, xbits.view(np.float64))
@@ -231,7 +208,6 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
     w_brk = w.brk
     w_dcol = w.dcol
     w_ebuf = w.ebuf
-    w_ibuf = w.ibuf
     w_rho = w.rho
     w_rho_mid = w.rho_mid
     w_rho_prev = w.rho_prev
@@ -271,22 +247,14 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
         a = w_brk[q]
         b = w_brk[q + 1]
         dense_at_b = b <= tmin      # before the lowest point the density grows with t
-        length = b - a
-        if length <= 0.0:
+        if b - a <= 0.0:
             continue
-        dv = geometric_step(length, n_view, ts)
-        # the nodes of the piece in increasing t, with the radii at them and at the
-        # midpoints before them (Simpson's rule for the view column), then the densities
-        # of every constituent at all of them at once (exp_neg_many: one vectorised pass)
-        # (geometric_node: u = ts expm1((k + 1/2) dv), w = (u + ts) dv, by expm1_many)
-        for kk in range(n_view):
-            k = n_view - 1 - kk if dense_at_b else kk
-            w_node_t[kk] = (k + 0.5) * dv
-        expm1_many(w_node_t, n_view, w_node_w, w_xbits, w_xbits_f)
-        for kk in range(n_view):
-            u = ts * w_node_w[kk]
-            w_node_w[kk] = (u + ts) * dv
-            w_node_t[kk] = b - u if dense_at_b else a + u
+        # the nodes of the piece in increasing t (piece_nodes, its expm1 in one vectorised
+        # pass), with the radii at them and at the midpoints before them (Simpson's rule
+        # for the view column), then the densities of every constituent at all of them at
+        # once (exp_neg_many: one vectorised pass)
+        piece_nodes(a, b, dense_at_b, n_view, ts, True, w_node_t, w_node_w, 0, True, w_xbits,
+                    w_xbits_f)
         for kk in range(n_view):
             t = w_node_t[kk]
             tp = w_node_t[kk - 1] if kk > 0 else t_prev
@@ -327,7 +295,7 @@ def _view_ray_integral(r0, mu, nu, sun, m, table, n_view, ts, light_exact, n_lig
                 col = w_dcol[c] + w_scol[c]
                 for l in range(nl):
                     w_tau[l] -= beta_e[c, l] * col
-            exp_neg_array(w_tau, w_ebuf, w_ibuf)
+            exp_neg_many(w_tau, nl, w_ebuf, w_xbits, w_xbits_f)
             for c in range(nc):
                 wr = wt * w_rho[c] * w_scat[c]
                 if wr > 0.0:

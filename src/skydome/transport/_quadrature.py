@@ -9,7 +9,16 @@ are spaced geometrically away from the dense end: node k of n has
 ``dv = ln(1 + L / ts) / n`` (the Jacobian du/dv = u + ts). The rule is second order in dv:
 a constant density over a path of length L has the relative error
 (ln(1 + L/ts) / n)^2 / 24. This resolves the 1.2 km aerosol scale height looking up and
-the 100 km-scale horizon path with the same few nodes.
+the 100 km-scale horizon path with the same few nodes. :func:`piece_nodes` lays out the
+nodes of one piece for every kernel that walks a ray (:func:`ray_nodes` the two pieces of
+a ray split at its lowest point).
+
+The better rule for smooth integrands (:func:`ray_nodes_rule`, :func:`piece_nodes_rule`):
+Gauss-Legendre in the same v per piece, node k at v = V x_k, V = ln(1 + L / ts), with
+(x_k, w_k) the Gauss-Legendre rule on [0, 1] (:func:`gauss_legendre_unit`). The midpoint
+rule in v integrates even a constant short, by V^2 / (24 n^2) per piece relatively (the
+Jacobian e^v is convex: 1.5 % for a 200 km ray with 10 nodes); Gauss-Legendre integrates
+the Jacobian times a smooth integrand to order 2n.
 
 Over the sphere: the product midpoint rule in (cos theta, phi), n_mu x n_phi cells of
 equal solid angle 4 pi / (n_mu n_phi).
@@ -19,10 +28,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from skydome.transport._geometry import lowest_point, radius_along, ray_segment, safe_sqrt
 from skydome.transport._medium import profile_density
+from skydome.transport._vexp import expm1_many
 
 
 @njit(cache=True)
@@ -46,6 +57,93 @@ def geometric_edge(k, dv, ts):
     return ts * math.expm1(k * dv)
 
 
+@njit(cache=True, inline="always")
+def piece_nodes(a, b, dense_at_b, n, ts, ascending, t_out, w_out, m, vector, xbits, xbits_f):
+    """The n nodes of the geometric midpoint rule on the piece [a, b] of a ray (dense at b
+    where ``dense_at_b``, else at a): distances into t_out[m:m + n] [m], weights into
+    w_out[m:m + n] [m] (node k at u_k = ts expm1((k + 1/2) dv) from the dense end, weight
+    (u_k + ts) dv, dv = :func:`geometric_step`); in increasing distance where
+    ``ascending``, else from the dense end. Returns m + n.
+
+    ``vector``: the n expm1 in one vectorised pass (:func:`skydome.transport._vexp.
+    expm1_many`, scratch xbits (int64) and its float64 view xbits_f, at least n long; m
+    must be 0), else one :func:`geometric_node` per node. Inlined, so that each kernel
+    keeps its own floating-point flags."""
+    dv = geometric_step(b - a, n, ts)
+    flip = ascending and dense_at_b
+    if vector:
+        for kk in range(n):
+            k = n - 1 - kk if flip else kk
+            t_out[kk] = (k + 0.5) * dv
+        expm1_many(t_out, n, w_out, xbits, xbits_f)
+        for kk in range(n):
+            u = ts * w_out[kk]
+            w_out[kk] = (u + ts) * dv
+            t_out[kk] = b - u if dense_at_b else a + u
+        return n
+    for kk in range(n):
+        k = n - 1 - kk if flip else kk
+        u, w = geometric_node(k, dv, ts)
+        t_out[m + kk] = b - u if dense_at_b else a + u
+        w_out[m + kk] = w
+    return m + n
+
+
+@njit(cache=True, inline="always")
+def piece_nodes_rule(a, b, dense_at_b, rx, rw, ts, t_out, w_out, m):
+    """:func:`piece_nodes` with the rule (rx, rw) on [0, 1] (:func:`gauss_legendre_unit`)
+    in place of the midpoint rule: v = ln(1 + u / ts) runs over [0, V = ln(1 + (b - a) /
+    ts)], node k at v = V rx[k], u = ts expm1(v) from the dense end, weight
+    (u + ts) V rw[k] (du = (u + ts) dv); in the order of rx from the dense end. Returns
+    m + rx.size."""
+    V = math.log1p((b - a) / ts)
+    for k in range(rx.shape[0]):
+        u = ts * math.expm1(V * rx[k])
+        t_out[m] = b - u if dense_at_b else a + u
+        w_out[m] = (u + ts) * V * rw[k]
+        m += 1
+    return m
+
+
+def gauss_legendre_unit(n):
+    """(x, w): the n-point Gauss-Legendre rule on [0, 1] (nodes ascending, weights summing
+    to 1; numpy's ``leggauss`` mapped from [-1, 1]), for :func:`ray_nodes_rule`."""
+    x, w = np.polynomial.legendre.leggauss(int(n))
+    return np.ascontiguousarray(0.5 * (x + 1.0)), np.ascontiguousarray(0.5 * w)
+
+
+@njit(cache=True)
+def ray_nodes(r, mu, d, n, ts, t_out, w_out):
+    """The geometric midpoint rule on the ray [0, d] from radius r, zenith cosine mu, split
+    at its lowest point: n nodes per piece (:func:`piece_nodes`, each piece from its dense
+    end), distances t_out and weights w_out [m]; returns the node count."""
+    t_low = lowest_point(r, mu, 0.0, d)
+    no_bits = np.empty(0, dtype=np.int64)     # the scalar form's unused scratch
+    m = 0
+    for piece in range(2):
+        a, b, dense_at_b = piece_bounds(piece, 0.0, t_low, d)
+        if b - a <= 0.0:
+            continue
+        m = piece_nodes(a, b, dense_at_b, n, ts, False, t_out, w_out, m, False, no_bits,
+                        no_bits.view(np.float64))
+    return m
+
+
+@njit(cache=True)
+def ray_nodes_rule(r, mu, d, rx, rw, ts, t_out, w_out):
+    """:func:`ray_nodes` with the rule (rx, rw) on [0, 1] per piece
+    (:func:`piece_nodes_rule`; module docstring); returns the node count (at most
+    2 rx.size)."""
+    t_low = lowest_point(r, mu, 0.0, d)
+    m = 0
+    for piece in range(2):
+        a, b, dense_at_b = piece_bounds(piece, 0.0, t_low, d)
+        if b - a <= 0.0:
+            continue
+        m = piece_nodes_rule(a, b, dense_at_b, rx, rw, ts, t_out, w_out, m)
+    return m
+
+
 @njit(cache=True)
 def piece_bounds(piece, t0, tmin, t1):
     """(a, b, dense_at_b) of piece 0 (from the start t0 to the lowest point tmin, densest at
@@ -67,17 +165,18 @@ def column_quadrature(code, p0, p1, r, mu, R, Rt, n, ts, ground=True):
     if t1 <= t0:
         return 0.0
     tmin = lowest_point(r, mu, t0, t1)
+    tq = np.empty(n)
+    wq = np.empty(n)
+    no_bits = np.empty(0, dtype=np.int64)     # the scalar form's unused scratch
     total = 0.0
     for piece in range(2):
         a, b, dense_at_b = piece_bounds(piece, t0, tmin, t1)
-        length = b - a
-        if length <= 0.0:
+        if b - a <= 0.0:
             continue
-        dv = geometric_step(length, n, ts)
+        piece_nodes(a, b, dense_at_b, n, ts, False, tq, wq, 0, False, no_bits,
+                    no_bits.view(np.float64))
         for k in range(n):
-            u, w = geometric_node(k, dv, ts)
-            t = b - u if dense_at_b else a + u
-            total += w * profile_density(code, p0, p1, radius_along(r, mu, t) - R)
+            total += wq[k] * profile_density(code, p0, p1, radius_along(r, mu, tq[k]) - R)
     return total
 
 

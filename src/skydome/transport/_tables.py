@@ -1,7 +1,9 @@
 """Table mappings and look-ups of the numerical core (numba, scalar).
 
-Bruneton's (2017) parametrisations (precomputed_atmospheric_scattering,
-atmosphere/functions.glsl, [Bru17]) as inverse pairs, without the texel-centre offset: a
+Bruneton's (2017) transmittance and irradiance parametrisations
+(precomputed_atmospheric_scattering, atmosphere/functions.glsl, [Bru17]) as inverse pairs
+(the precomputed model's scattering mappings are its own, models/simulated/precomputed/
+_mapping.py), without the texel-centre offset: a
 table axis of n nodes holds node i at the unit coordinate x = i / (n - 1). H =
 sqrt(Rt^2 - R^2) is the distance to the top along the horizon from the ground and rho =
 sqrt(r^2 - R^2) the distance to the horizon from radius r.
@@ -9,15 +11,6 @@ sqrt(r^2 - R^2) the distance to the horizon from radius r.
 * transmittance (r, mu) <-> (x_r, x_mu): x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min)
   with d the distance to the top, d_min = Rt - r, d_max = rho + H
   (GetTransmittanceTextureUvFromRMu / GetRMuFromTransmittanceTextureUv);
-* scattering r: x_r = rho / H;
-* scattering mu, per half of the axis: rays that hit the ground use the distance to the
-  ground, x = (d - d_min) / (d_max - d_min), d_min = r - R, d_max = rho (x = 0 nadir,
-  1 horizon); the others the distance to the top as for the transmittance (x = 0 zenith,
-  1 horizon);
-* scattering mu_s: x = max(1 - a / A, 0) / (1 + a), a = (d - d_min) / (d_max - d_min), d the
-  distance to the top from the ground towards the sun, d_min = Rt - R, d_max = H, A the
-  value of a at mu_s_min;
-* scattering nu: x = (nu + 1) / 2;
 * irradiance (r, mu_s): x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2.
 
 Interpolation cells: :func:`cell` turns a unit coordinate into a node and a fraction;
@@ -32,7 +25,7 @@ import math
 
 from numba import njit
 
-from skydome.transport._geometry import clamp_cosine, distance_to_sphere_far, distance_to_top, safe_sqrt
+from skydome.transport._geometry import clamp_cosine, distance_to_sphere_far, safe_sqrt
 
 
 # -- transmittance (r, mu) -------------------------------------------------------------------------
@@ -62,107 +55,6 @@ def r_mu_from_transmittance_unit(x_r, x_mu, R, Rt):
     if d == 0.0:
         return r, 1.0
     return r, clamp_cosine((H * H - rho * rho - d * d) / (2.0 * r * d))
-
-
-# -- scattering (r, mu, mu_s, nu) ------------------------------------------------------------------
-@njit(cache=True)
-def r_unit_from_r(r, R, Rt):
-    """x_r = rho / H of radius r [m] ([Bru17] GetScatteringTextureUvwzFromRMuMuSNu)."""
-    return safe_sqrt(r * r - R * R) / math.sqrt(Rt * Rt - R * R)
-
-
-@njit(cache=True)
-def r_from_r_unit(x, R, Rt):
-    """Inverse of :func:`r_unit_from_r`: r = sqrt((x H)^2 + R^2) [m]."""
-    rho = math.sqrt(Rt * Rt - R * R) * x
-    return math.sqrt(rho * rho + R * R)
-
-
-@njit(cache=True)
-def mu_unit_from_r_mu(r, mu, ground, R, Rt):
-    """Unit coordinate within its half of the scattering mu axis ([Bru17]): for a ray that
-    hits the ground (``ground``) x = 0 at the nadir, 1 at the horizon; otherwise x = 0 at
-    the zenith, 1 at the horizon."""
-    H = math.sqrt(Rt * Rt - R * R)
-    rho = safe_sqrt(r * r - R * R)
-    rmu = r * mu
-    disc = rmu * rmu - r * r + R * R
-    if ground:
-        d = -rmu - safe_sqrt(disc)
-        d_min = r - R
-        d_max = rho
-        x = 0.0 if d_max <= d_min else (d - d_min) / (d_max - d_min)
-    else:
-        d = -rmu + safe_sqrt(disc + H * H)
-        d_min = Rt - r
-        d_max = rho + H
-        x = (d - d_min) / (d_max - d_min)
-    return min(max(x, 0.0), 1.0)
-
-
-@njit(cache=True)
-def mu_from_r_mu_unit(r, x, ground, R, Rt):
-    """Inverse of :func:`mu_unit_from_r_mu` at radius r: the cosine mu."""
-    H = math.sqrt(Rt * Rt - R * R)
-    rho = safe_sqrt(r * r - R * R)
-    if ground:
-        d = (r - R) + x * (rho - (r - R))
-        if d <= 0.0:
-            return -1.0
-        return clamp_cosine(-(rho * rho + d * d) / (2.0 * r * d))
-    d_min = Rt - r
-    d = d_min + x * (rho + H - d_min)
-    if d <= 0.0:
-        return 1.0
-    return clamp_cosine((H * H - rho * rho - d * d) / (2.0 * r * d))
-
-
-@njit(cache=True)
-def _mu_s_scale(R, Rt, mu_s_min):
-    """(H, d_min, d_max, A) of the mu_s mapping: d_min = Rt - R, d_max = H, A the unit
-    distance a at mu_s_min."""
-    H = math.sqrt(Rt * Rt - R * R)
-    d_min = Rt - R
-    return H, d_min, H, (distance_to_top(R, mu_s_min, Rt) - d_min) / (H - d_min)
-
-
-@njit(cache=True)
-def mu_s_unit_from_mu_s(mu_s, R, Rt, mu_s_min):
-    """[Bru17] mu_s mapping to [0, 1] (0 at mu_s_min, 1 at the zenith)."""
-    H, d_min, d_max, A = _mu_s_scale(R, Rt, mu_s_min)
-    a = (distance_to_top(R, mu_s, Rt) - d_min) / (d_max - d_min)
-    return max(1.0 - a / A, 0.0) / (1.0 + a)
-
-
-@njit(cache=True)
-def mu_s_from_mu_s_unit(x, R, Rt, mu_s_min):
-    """Inverse of :func:`mu_s_unit_from_mu_s`."""
-    H, d_min, d_max, A = _mu_s_scale(R, Rt, mu_s_min)
-    a = (A - x * A) / (1.0 + x * A)
-    d = d_min + min(a, A) * (d_max - d_min)
-    if d == 0.0:
-        return 1.0
-    return clamp_cosine((H * H - d * d) / (2.0 * R * d))
-
-
-@njit(cache=True)
-def nu_unit_from_nu(nu):
-    """x = (nu + 1) / 2 ([Bru17])."""
-    return 0.5 * (nu + 1.0)
-
-
-@njit(cache=True)
-def nu_from_nu_unit(x):
-    """Inverse of :func:`nu_unit_from_nu`: nu = 2 x - 1."""
-    return 2.0 * x - 1.0
-
-
-@njit(cache=True)
-def clamp_nu(nu, mu, mu_s):
-    """nu clamped to the range allowed by the zenith cosines mu and mu_s:
-    mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)) ([Bru17] GetRMuMuSNuFromScatteringTextureFragCoord)."""
-    s = safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s))
-    return min(max(nu, mu * mu_s - s), mu * mu_s + s)
 
 
 # -- irradiance (r, mu_s) ---------------------------------------------------------------------------

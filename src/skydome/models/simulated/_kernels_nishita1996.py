@@ -25,7 +25,7 @@ from numba import njit, prange
 from skydome.transport._geometry import ray_segment_xyz, safe_sqrt
 from skydome.transport._medium import profile_density
 from skydome.transport._phase import TABULATED, phase_fill, phase_of
-from skydome.transport._quadrature import geometric_node, geometric_step, simpson
+from skydome.transport._quadrature import piece_bounds, piece_nodes, simpson
 
 
 @njit(cache=True)
@@ -218,7 +218,6 @@ def ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end):
         return 0, False
     a_ = t0
     b_ = t0
-    dv = 0.0
     cnt = 0
     b = px * dx + py * dy + pz * dz
     tmin = min(max(-b, t0), t1)
@@ -229,27 +228,23 @@ def ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end):
     xr = math.sqrt(px * px + py * py + pz * pz + 2 * b * t0 + t0 * t0)
     for c in range(nc):
         rho_prev[c] = profile_density(codes[c], p0s[c], p1s[c], xr - R)
+    tq = np.empty(n)
+    wq = np.empty(n)
+    no_bits = np.empty(0, dtype=np.int64)      # piece_nodes's scalar form: no scratch
     for piece in range(3):
         if piece < 2:
-            if piece == 0:
-                a_, b_ = t0, tmin
-            else:
-                a_, b_ = tmin, t1
-            length = b_ - a_
-            if length <= 0.0:
+            a_, b_, dense_at_b = piece_bounds(piece, t0, tmin, t1)
+            if b_ - a_ <= 0.0:
                 continue
-            dv = geometric_step(length, n, ts)
-            cnt = n
+            cnt = piece_nodes(a_, b_, dense_at_b, n, ts, True, tq, wq, 0, False, no_bits,
+                              no_bits.view(np.float64))
         else:
+            tq[0] = t1
+            wq[0] = 0.0
             cnt = 1
         for kk in range(cnt):
-            if piece < 2:
-                k = n - 1 - kk if piece == 0 else kk
-                u, w = geometric_node(k, dv, ts)
-                t = b_ - u if piece == 0 else a_ + u
-            else:
-                t = t1
-                w = 0.0
+            t = tq[kk]
+            w = wq[kk]
             qx = px + t * dx
             qy = py + t * dy
             qz = pz + t * dz

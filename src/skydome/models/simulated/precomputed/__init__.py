@@ -25,7 +25,7 @@ import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths, check_number
 from skydome.models import ATMOSPHERE_PARAMETERS, Parameter, SkyModel, register
-from skydome.models.simulated.precomputed._precompute import QUADRATURE_SCALE_M
+from skydome.models.simulated.precomputed._precompute import QUADRATURE_SCALE_M, tables_medium
 from skydome.models.simulated.precomputed._tables import Tables
 
 __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
@@ -217,7 +217,8 @@ class PrecomputedSky(SkyModel):
         """(tables, from_cache): from the on-disk cache when it holds this atmosphere and
         these settings, else precomputed (and stored there)."""
         from skydome.models.simulated.precomputed import _cache
-        from skydome.models.simulated.precomputed._precompute import precompute
+        from skydome.models.simulated.precomputed._precompute import (
+            attach_stored_table_builder, precompute)
 
         # tabulated phase functions are evaluated on the table wavelengths here, once
         props = atm.optical_properties(wl, fold=True)   # absorbers folded (exact)
@@ -232,6 +233,7 @@ class PrecomputedSky(SkyModel):
             _cache.store(k, tables)
         if not tables.has_multiple_scattering:
             # the stored table, built on first use, is written into the entry then
+            attach_stored_table_builder(tables)
             tables.set_multiple_scattering_sink(
                 lambda shape, slabs: _cache.add_stored_table(k, shape, slabs))
         return tables, hit
@@ -316,11 +318,11 @@ class PrecomputedSky(SkyModel):
             ground = np.arange(n_g + n_s) < n_g
             cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
             out = np.empty((n_g + n_s, _SLICE_PHI, ss.shape[-1]))
-            _multiple.multiple_scattering_slice(t.scattering_density, t.profile_code, t.profile_p0,
-                                         t.profile_p1, t.scattering_index, t.columns,
-                                         t.beta_e, R, Rt, self._mu_s_min, self._r0, mu_s,
-                                         int(self.integration_samples), QUADRATURE_SCALE_M,
-                                         np.cos(th), ground, cphi, out)
+            _multiple.multiple_scattering_slice(t.scattering_density, tables_medium(t),
+                                                t.scattering_index, t.columns, self._mu_s_min,
+                                                self._r0, mu_s, int(self.integration_samples),
+                                                QUADRATURE_SCALE_M, np.cos(th), ground, cphi,
+                                                out)
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out

@@ -158,23 +158,30 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, R, Rt, mu_s_min,
-                           rx, rw, ts, n_r, n_ms, th_in, ph_in, out):
+def incident_radiance_rays(J, dE, m, sc_idx, col, mu_s_min, rx, rw, ts, n_r, n_ms, th_in, ph_in,
+                           out):
     """Radiance of the previous order arriving at each (r, mu_s) node of the scattering
     density from the incident directions, as :func:`incident_radiance` for orders >= 3 but
     integrated along each incident ray from the previous order's scattering density ``J``
     ([BN08] eq. 8, :func:`._multiple.ray_integral`: the quadrature and exact density
     profiles of :func:`._multiple.multiple_scattering_table`) instead of interpolated from
     a 4-D table of that order, plus the light the ground reflects once more (irradiance
-    table ``dE`` of the order before); the quadrature rule (rx, rw) in v per piece of each
-    ray (:func:`._geometry.ray_nodes_rule`). out[i, r, mu_s, l] (float32), directions as in
-    :func:`incident_radiance`. One work item per (theta, r, mu_s), theta outermost (no
-    per-ray allocation); the sums in float32."""
+    table ``dE`` of the order before), in the medium m
+    (:class:`skydome.transport._medium.Medium`: its extinction and ground albedo on J's
+    wavelengths, its scattering constituents sc_idx, its column table ``col``); the
+    quadrature rule (rx, rw) in v per piece of each
+    ray (:func:`skydome.transport._quadrature.ray_nodes_rule`). out[i, r, mu_s, l]
+    (float32), directions as in :func:`incident_radiance`. One work item per (theta, r, mu_s),
+    theta outermost (no per-ray allocation); the sums in float32."""
     n_th = th_in.shape[0]
     n_ph = ph_in.shape[0]
     nl = out.shape[3]
     nc = col.shape[0]
     nsc = J.shape[0]
+    R = m.R
+    Rt = m.Rt
+    beta_e = m.extinction
+    albedo = m.albedo
     frame = mu_s_frame(mu_s_min)
     n_nodes = n_r * n_ms
     # work items ordered by the angle from the sun first: every ray of one theta reads
@@ -189,10 +196,10 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
         a = 2 * (k % h) + k // h if k < 2 * h else k
         ir = (idx % n_nodes) // n_ms
         ims = idx % n_ms
-        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, _ = ray_scratch(rx.size, nc, nsc, nl)
         # float32 weights and sums (the precision of J and of the output; 20-40 positive
         # terms per value): the wavelength loops of density_acc vectorise 8-wide
-        tw = np.empty((2 * rx.size, nsc, nl), dtype=np.float32)
+        w = ray_scratch(rx.size, nc, nsc, nl,
+                        np.empty((2 * rx.size, nsc, nl), dtype=np.float32))
         acc = np.empty(nl, dtype=np.float32)
         tg = np.empty(nl)
         eg = np.empty(nl)
@@ -200,11 +207,10 @@ def incident_radiance_rays(J, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo, 
         for b in range(n_ph):
             nu, ct, ground = incident_direction(th_in[a], ph_in[b], r, mu_s, sin_s, R)
             acc[:] = 0.0
-            ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, ct, mu_s,
-                         nu, ground, rx, rw, ts, tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw, acc)
+            ray_integral(J, m, sc_idx, col, frame, r, ct, mu_s, nu, ground, rx, rw, ts, w, acc)
             if ground:
                 ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
-                                     nu, w1, w2, cs[0], tg, eg, acc)
+                                     nu, w.w1, w.w2, w.cs[0], tg, eg, acc)
             o = out[a * n_ph + b, ir, ims]
             for l in range(nl):
                 o[l] = acc[l]

@@ -65,6 +65,10 @@ def load(cls, path, sun=None):
         if np.issubdtype(a.dtype, np.floating) and not np.all(np.isfinite(a)):
             raise ValueError(f"{path} is damaged: table {k!r} holds NaN or infinite values")
     tables = Tables.from_arrays(arrays)
+    if not tables.has_multiple_scattering:
+        from skydome.models.simulated.precomputed._precompute import attach_stored_table_builder
+
+        attach_stored_table_builder(tables)
     obj = cls.__new__(cls)
     for p in cls.parameters:
         if p.name in m:

@@ -10,13 +10,13 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_top,
-                                                             ray_nodes_rule)
+from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_to_top
 from skydome.models.simulated.precomputed._lookup import (columns_at, ray_weights,
                                                            sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
                                                             density_phi_index, mu_s_frame, r_index)
 from skydome.models.simulated.precomputed._multiple import density_acc, ray_scratch
+from skydome.transport._quadrature import ray_nodes_rule
 
 
 
@@ -64,13 +64,15 @@ def indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th, ph, d_omega, out):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, rx, rw,
-                             ts, th, ph, d_omega, out, n_r_table):
+def indirect_irradiance_rays(J, m, sc_idx, col, mu_s_min, rx, rw, ts, th, ph, d_omega, out,
+                             n_r_table):
     """:func:`indirect_irradiance` for an order >= 2 whose radiance is not tabulated: the
     radiance of each hemisphere direction integrated along its ray from that order's
     scattering density ``J`` ([BN08] eq. 8 and 9, :func:`._multiple.ray_integral`, the
     integrand of the multiple-scattering table on the nodes of the rule (rx, rw) in v per
-    piece of each ray, :func:`._geometry.ray_nodes_rule`), on the irradiance table's nodes.
+    piece of each ray, :func:`skydome.transport._quadrature.ray_nodes_rule`), on the
+    irradiance table's nodes, in the medium m (:class:`skydome.transport._medium.Medium`,
+    its scattering constituents sc_idx, its column table ``col``).
 
     A hemisphere direction's ray, its quadrature nodes, their radii, local zenith cosines
     and transmittance-weighted density weights depend on (r, theta) alone, not on the sun
@@ -85,18 +87,22 @@ def indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_
     n_ph = ph.shape[0]
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    R = m.R
+    Rt = m.Rt
     frame = mu_s_frame(mu_s_min)
     part = np.zeros((n_r * n_th, n_m, nl))
     for idx in prange(n_r * n_th):
         ir = idx // n_th
         a = idx % n_th
-        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tws = ray_scratch(rx.size, nc, nsc, nl)
+        w = ray_scratch(rx.size, nc, nsc, nl, np.empty((2 * rx.size, nsc, nl)))
+        tq = w.tq
+        rts = w.rts
+        tws = w.tw
         r = R + (Rt - R) * ir / (n_r_table - 1.0)
         ct = math.cos(th[a])
         st = math.sin(th[a])
-        nq = ray_nodes_rule(r, ct, distance_to_top(r, ct, Rt), rx, rw, ts, tq, wq)
-        ray_weights(col, r, ct, False, nq, tq, wq, 2.0 * ct * d_omega[a], R, Rt, codes, p0s,
-                    p1s, sc_idx, beta_e, w1, w2, rts, cs, xs, es, ib, dk, tws)
+        nq = ray_nodes_rule(r, ct, distance_to_top(r, ct, Rt), rx, rw, ts, tq, w.wq)
+        ray_weights(col, m, sc_idx, r, ct, False, nq, 2.0 * ct * d_omega[a], w)
         mts = np.empty(nq)
         jrs = np.empty(nq, dtype=np.int64)
         jas = np.empty(nq)

@@ -13,7 +13,8 @@ from numba import njit
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
-from skydome.transport._kernels import exp_neg_array, profile_density_many
+from skydome.transport._kernels import profile_density_many
+from skydome.transport._vexp import exp_neg_many
 from skydome.transport._phase import phase_fill_coded
 from skydome.transport._tables import lookup_columns as columns_at
 
@@ -116,26 +117,43 @@ def irradiance_lookup_acc(E, r, mu_s, R, Rt, w, out):
 
 
 @njit(cache=True, fastmath=True)
-def ray_weights(col, r, mu, ground, nq, tq, wq, w, R, Rt, codes, p0s, p1s, sc_idx, beta_e, w1, w2,
-                rts, cs, xs, es, ib, dk, tw):
+def ray_weights(col, m, sc_idx, r, mu, ground, nq, w, s):
     """The weights of the scattering density J_k at the ``nq`` quadrature nodes (distances
-    ``tq``, weights ``wq``) of one ray from radius r, zenith cosine mu (``ground``: the ray
-    ends on the ground): tw[q, k, l] = w wq[q] T(r, mu; tq[q])[l] rho_k(r_q), the
+    s.tq, weights s.wq) of one ray from radius r, zenith cosine mu (``ground``: the ray
+    ends on the ground) in the medium m (:class:`skydome.transport._medium.Medium`, its
+    column table ``col``, its scattering constituents sc_idx):
+    s.tw[q, k, l] = w wq[q] T(r, mu; tq[q])[l] rho_k(r_q), the
     transmittance from the ray's start to the node times scattering constituent k's density
     there (the weights of every ray integral: :func:`._multiple.ray_integral`,
     :func:`._multiple.multiple_scattering_table`, :func:`._multiple.multiple_scattering_slice`,
-    :func:`._irradiance.indirect_irradiance_rays`), in the precision of ``tw``; rts[q] the
-    radius of node q.
+    :func:`._irradiance.indirect_irradiance_rays`), in the precision of ``tw``; s.rts[q]
+    the radius of node q.
 
     The whole ray at once: its columns node by node ([Bru17] GetTransmittance, for rays to
     the ground both ends reversed, as in :func:`columns_segment`), then the optical depths
     of every node and wavelength in one vectorised exp pass
-    (:func:`skydome.transport._kernels.exp_neg_array`, relative error < 1e-8; numba's
+    (:func:`skydome.transport._vexp.exp_neg_many`, to a few units in the last place; numba's
     math.exp is a scalar libm call) and the densities of every node per constituent in one
     more (:func:`skydome.transport._kernels.profile_density_many`): 18 % of the orders'
-    ray integrals against one node at a time. Scratch (:func:`._multiple.ray_scratch`):
-    w1, w2 per column constituent; rts, cs [q, c]; xs, es of nq x nl; ib (int64) of at
-    least nq x nl and nq; dk [k, q]."""
+    ray integrals against one node at a time. Scratch ``s``: the
+    :class:`._multiple.RayWork` of :func:`._multiple.ray_scratch`."""
+    tq = s.tq
+    wq = s.wq
+    w1 = s.w1
+    w2 = s.w2
+    rts = s.rts
+    cs = s.cs
+    xs = s.xs
+    es = s.es
+    ib = s.ib
+    dk = s.dk
+    tw = s.tw
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
     nl = tw.shape[2]
     nc = col.shape[0]
     columns_at(col, r, -mu if ground else mu, R, Rt, w2)
@@ -149,8 +167,8 @@ def ray_weights(col, r, mu, ground, nq, tq, wq, w, R, Rt, codes, p0s, p1s, sc_id
     for q in range(nq):
         for l in range(nl):
             xs[q * nl + l] = -_optical_depth(beta_e, cs[q], l)
-    exp_neg_array(xs[:nq * nl], es, ib)
     fb = ib.view(np.float64)
+    exp_neg_many(xs, nq * nl, es, ib, fb)
     for kk in range(sc_idx.shape[0]):
         c = sc_idx[kk]
         profile_density_many(codes[c], p0s[c], p1s[c], rts, R, nq, dk[kk], ib, fb)

@@ -7,14 +7,15 @@ the rest by :func:`table_from_coarse`), and on the observer's own sky map.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
-                                                             distance_to_top, ray_nodes,
-                                                             ray_nodes_rule)
+                                                             distance_to_top)
 from skydome.models.simulated.precomputed._lookup import ray_weights
+from skydome.transport._quadrature import ray_nodes, ray_nodes_rule
 from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
                                                             density_mu_s_index,
                                                             density_phi_index, mu_s_frame,
@@ -56,31 +57,53 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
 
 
 
+class RayWork(NamedTuple):
+    """Scratch arrays of one work item's ray integrals (at most m = 2 n_q quadrature nodes,
+    :func:`ray_scratch`)."""
+
+    tq: np.ndarray     # (m,) distances of the nodes [m]
+    wq: np.ndarray     # (m,) their weights [m]
+    w1: np.ndarray     # (nc,) columns at a node (:func:`._lookup.ray_weights`)
+    w2: np.ndarray     # (nc,) columns at the ray's start
+    rts: np.ndarray    # (m,) radii of the nodes [m]
+    cs: np.ndarray     # (m, nc) columns from the start to each node
+    xs: np.ndarray     # (m nl,) -optical depths
+    es: np.ndarray     # (m nl,) transmittances
+    ib: np.ndarray     # (m max(nl, 1),) int64 scratch of the vectorised exp
+    dk: np.ndarray     # (nsc, m) densities of the scattering constituents at the nodes
+    tw: np.ndarray     # (m, nsc, nl) the weights of J (:func:`._lookup.ray_weights`)
+
+
 @njit(cache=True)
-def ray_scratch(n_q, nc, nsc, nl):
-    """Scratch arrays of one work item's ray integrals (at most 2 n_q quadrature nodes):
-    (tq, wq) the nodes, (w1, w2) per column constituent and (rts, cs, xs, es, ib, dk) of
-    :func:`._lookup.ray_weights`, and tw [q, k, l] (float64) its weights."""
+def ray_scratch(n_q, nc, nsc, nl, tw):
+    """The :class:`RayWork` of one work item's ray integrals (at most 2 n_q quadrature
+    nodes, nc constituents, nsc scattering ones, nl wavelengths), with ``tw`` the array
+    of J's weights, (2 n_q, nsc, nl) in the precision of the sums."""
     m = 2 * n_q
-    return (np.empty(m), np.empty(m), np.empty(nc), np.empty(nc), np.empty(m),
-            np.empty((m, nc)), np.empty(m * nl), np.empty(m * nl),
-            np.empty(m * max(nl, 1), dtype=np.int64), np.empty((nsc, m)), np.empty((m, nsc, nl)))
+    return RayWork(np.empty(m), np.empty(m), np.empty(nc), np.empty(nc), np.empty(m),
+                   np.empty((m, nc)), np.empty(m * nl), np.empty(m * nl),
+                   np.empty(m * max(nl, 1), dtype=np.int64), np.empty((nsc, m)), tw)
 
 
 @njit(cache=True, fastmath=True)
-def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, mu_s, nu, ground,
-                 rx, rw, ts, tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw, acc):
+def ray_integral(J, m, sc_idx, col, frame, r, mu, mu_s, nu, ground, rx, rw, ts, w, acc):
     """acc[l] += int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt along one
     ray ([BN08] eq. 8) from radius r in the direction of zenith cosine mu and sun cosine nu,
     the sun at zenith cosine mu_s, to the ground (``ground``) or the top: the integrand of
     :func:`multiple_scattering_table` (exact density profiles, J interpolated in the sun's
     frame) on the nodes of the rule (rx, rw) in v = ln(1 + u / ts) per piece of the ray
-    (:func:`._geometry.ray_nodes_rule`), for a single ray, without per-ray allocations
-    (``tq`` .. ``dk``: :func:`ray_scratch` of rx.size nodes per piece; ``tw`` [q, k, l] in
-    the precision of ``acc``)."""
+    (:func:`skydome.transport._quadrature.ray_nodes_rule`), for a single ray, in the
+    medium m (:class:`skydome.transport._medium.Medium`; its scattering constituents
+    sc_idx, its column table ``col``), without per-ray allocations (``w``: the
+    :func:`ray_scratch` of rx.size nodes per piece, its ``tw`` in the precision of
+    ``acc``)."""
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    R = m.R
+    Rt = m.Rt
+    tq = w.tq
+    tw = w.tw
     d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
-    nq = ray_nodes_rule(r, mu, d, rx, rw, ts, tq, wq)
+    nq = ray_nodes_rule(r, mu, d, rx, rw, ts, tq, w.wq)
     jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
     # an angle from the sun on a theta node of J to rounding (the incident directions of
     # the orders >= 3: (2i + 1) pi / (2 n_in) is node (2i + 1) n_out / n_in of J's
@@ -91,8 +114,8 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
     elif jb > 1.0 - THETA_SNAP:
         jt, jb = jt + 1, 0.0
     # the transmittance-weighted densities of every node of the ray, then J's gathers
-    ray_weights(col, r, mu, ground, nq, tq, wq, 1.0, R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                w1, w2, rts, cs, xs, es, ib, dk, tw)
+    ray_weights(col, m, sc_idx, r, mu, ground, nq, 1.0, w)
+    rts = w.rts
     for q in range(nq):
         t = tq[q]
         rt = rts[q]
@@ -105,17 +128,16 @@ def ray_integral(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, frame, r, mu, m
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, n_q,
-                              ts, mu_nodes, n_mu_full, mu_s_nodes_sel, n_ms_full, r_first,
-                              n_r_full, out):
+def multiple_scattering_table(J, m, sc_idx, col, mu_s_min, n_q, ts, mu_nodes, n_mu_full,
+                              mu_s_nodes_sel, n_ms_full, r_first, n_r_full, out):
     """One scattering order, full radiance ([Bru17] ComputeMultipleScattering, [BN08] eq. 8):
     out[r, mu, mu_s, nu, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt.
 
     J_k is the scattering density of scattering constituent k (constituent sc_idx[k] of the
-    profile arrays) per unit number density, which is smooth in r; its density profile
-    rho_k is applied exactly at each quadrature node (the r nodes of the table do not
-    resolve the 1.2 km aerosol layer: interpolating rho_k J_k between them overestimated
-    the aerosol's multiple scattering by up to 20 %).
+    medium m, :class:`skydome.transport._medium.Medium`) per unit number density, which is
+    smooth in r; its density profile rho_k is applied exactly at each quadrature node (the r
+    nodes of the table do not resolve the 1.2 km aerosol layer: interpolating rho_k J_k between
+    them overestimated the aerosol's multiple scattering by up to 20 %).
 
     J (float32) is tabulated on [k, theta, phi, r, mu_s, l] in the sun's frame (theta the
     angle between the view ray and the sun, acos nu, uniform in [0, pi]; phi the azimuth of
@@ -139,14 +161,18 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     n_r, n_mu, n_ms, n_nu, nl = out.shape
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    R = m.R
+    Rt = m.Rt
     nk = n_ms * n_nu
     frame = mu_s_frame(mu_s_min)
     mus = np.empty(n_ms)
     for k in range(n_ms):
         mus[k] = mu_s_from_unit(mu_s_nodes_sel[k] / (n_ms_full - 1.0), mu_s_min)
     for idx in prange(n_r * n_mu):
-        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, _ = ray_scratch(n_q, nc, nsc, nl)
-        tw = np.empty((2 * n_q, nsc, nl), dtype=np.float32)
+        w = ray_scratch(n_q, nc, nsc, nl, np.empty((2 * n_q, nsc, nl), dtype=np.float32))
+        tq = w.tq
+        tw = w.tw
+        rts = w.rts
         acc = np.zeros((nk, nl), dtype=np.float32)
         nus = np.empty(nk)
         jts = np.empty(nk, dtype=np.int64)
@@ -159,7 +185,7 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
         for k in range(nk):
             nus[k] = cell_nu(k % n_nu, n_nu, mu, mus[k // n_nu])
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
-        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
+        nq = ray_nodes(r, mu, d, n_q, ts, tq, w.wq)
         for k in range(nk):
             # the angle from the sun (acos nu) is the same at every node of the ray
             jts[k], jbs[k] = _split(math.acos(nus[k]) / math.pi * (n_tj - 1), n_tj)
@@ -173,8 +199,7 @@ def multiple_scattering_table(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
             if k % n_nu == 0 or nus[k] != nus[k - 1]:
                 ks[n_u] = k
                 n_u += 1
-        ray_weights(col, r, mu, ground, nq, tq, wq, 1.0, R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                    w1, w2, rts, cs, xs, es, ib, dk, tw)
+        ray_weights(col, m, sc_idx, r, mu, ground, nq, 1.0, w)
         for q in range(nq):
             t = tq[q]
             rt = rts[q]
@@ -266,8 +291,8 @@ def table_from_coarse(coarse, mu_nodes, mu_cell, mu_frac, mu_s_nodes_sel, ms_cel
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, r, mu_s,
-                              n_q, ts, mu_nodes, ground_nodes, cphi_nodes, out):
+def multiple_scattering_slice(J, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts, mu_nodes,
+                              ground_nodes, cphi_nodes, out):
     """Orders 2..N seen by an observer at radius r with the sun at mu_s, on a sky map of view
     directions: view zenith cosines ``mu_nodes`` (with ``ground_nodes``: does the ray end on
     the ground) x azimuths from the sun's with cosines ``cphi_nodes``:
@@ -283,17 +308,21 @@ def multiple_scattering_slice(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu
     n_mu, n_nu, nl = out.shape
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    R = m.R
+    Rt = m.Rt
     frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
-        tq, wq, w1, w2, rts, cs, xs, es, ib, dk, tw = ray_scratch(n_q, nc, nsc, nl)
+        w = ray_scratch(n_q, nc, nsc, nl, np.empty((2 * n_q, nsc, nl)))
+        tq = w.tq
+        tw = w.tw
+        rts = w.rts
         acc = np.zeros((n_nu, nl))
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]
         s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
-        nq = ray_nodes(r, mu, d, n_q, ts, tq, wq)
-        ray_weights(col, r, mu, ground, nq, tq, wq, 1.0, R, Rt, codes, p0s, p1s, sc_idx, beta_e,
-                    w1, w2, rts, cs, xs, es, ib, dk, tw)
+        nq = ray_nodes(r, mu, d, n_q, ts, tq, w.wq)
+        ray_weights(col, m, sc_idx, r, mu, ground, nq, 1.0, w)
         for q in range(nq):
             t = tq[q]
             rt = rts[q]

@@ -6,7 +6,8 @@ Each step is one function here calling its numba kernel (modules ``_single``, ``
 them). No order's radiance is tabulated: the incident radiance and ground irradiance of
 orders >= 3 are ray integrals of the previous order's scattering density, and the stored
 multiple-scattering table is one integral of the summed density, built on its first read
-(:func:`stored_table_of`), not here: the sky's ``radiance()`` does not read it. Working memory: float32
+(:func:`stored_table_of`, given to the tables by :func:`attach_stored_table_builder`), not
+here: the sky's ``radiance()`` does not read it. Working memory: float32
 throughout, the orders computed one batch of wavelengths at a time (only the batch's last
 order's density kept), the geometric remainder added in place.
 """
@@ -32,28 +33,66 @@ TABULATED = 4       # skydome.transport._phase.TABULATED (not imported: it loads
 SUN_ANGULAR_RADIUS_RAD = float(np.radians(0.2666))
 
 
-def transmittance_columns(codes, p0s, p1s, R, Rt, p):
+def on_wavelengths(m, sel):
+    """The medium m (:class:`skydome.transport._medium.Medium`) on its table wavelengths
+    ``sel`` (a slice or indices): every per-wavelength array cut to them, contiguous (a
+    batch of the orders' wavelengths)."""
+    c = np.ascontiguousarray
+    return m._replace(scattering=c(m.scattering[:, sel]), extinction=c(m.extinction[:, sel]),
+                      phase_table=c(m.phase_table[..., sel]), phase_cdf=c(m.phase_cdf[..., sel]),
+                      albedo=c(m.albedo[sel]))
+
+
+def tables_medium(t):
+    """The :class:`skydome.transport._medium.Medium` of the tables ``t``
+    (:class:`._tables.Tables` with a scattering density): the planet, the density profiles
+    and the extinction as the precomputation had them; the scattering coefficients and
+    phase functions of the scattering constituents (``scattering_index``) in their rows,
+    zeros in the others."""
+    from skydome.transport._medium import Medium, phase_cdf_table
+
+    c = np.ascontiguousarray
+    sc = np.asarray(t.scattering_index, dtype=np.int64)
+    nc = int(np.asarray(t.profile_code).size)
+    nl = int(np.asarray(t.table_wavelengths_nm).size)
+    scat = np.zeros((nc, nl))
+    scat[sc] = t.scattering_coefficient
+    code = np.zeros(nc, dtype=np.int64)
+    code[sc] = t.phase_code
+    param = np.zeros(nc)
+    param[sc] = t.phase_param
+    tab = t.kernel_phase_table
+    table = np.zeros((nc,) + tab.shape[1:])
+    table[sc] = tab
+    return Medium(float(t.planet_radius_m), float(t.top_radius_m),
+                  c(t.profile_code, dtype=np.int64), c(t.profile_p0, dtype=np.float64),
+                  c(t.profile_p1, dtype=np.float64), scat, c(t.beta_e, dtype=np.float64), code,
+                  param, table, c(phase_cdf_table(table)), c(t.ground_albedo, dtype=np.float64))
+
+
+def transmittance_columns(m, p):
     """Step 1: column densities to the top on Bruneton's (r, mu) mapping ([Bru17]
     ComputeTransmittanceToTopAtmosphereBoundary, kept per constituent so that any
-    wavelength's transmittance is exp(-sum_c beta_c col_c))."""
+    wavelength's transmittance is exp(-sum_c beta_c col_c)), for the density profiles of
+    the medium m (:class:`skydome.transport._medium.Medium`)."""
     from skydome.transport import _kernels as K
 
-    return K.build_column_table(codes, p0s, p1s, R, Rt, p["transmittance_r_size"],
-                                p["transmittance_mu_size"], 128, QUADRATURE_SCALE_M)
+    return K.build_column_table(m.profile_code, m.profile_p0, m.profile_p1, m.R, m.Rt,
+                                p["transmittance_r_size"], p["transmittance_mu_size"], 128,
+                                QUADRATURE_SCALE_M)
 
 
-def single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p):
-    """Step 2: single scattering per scattering constituent, no phase ([Bru17]
-    ComputeSingleScattering)."""
+def single_scattering(col, m, sc_idx, beta_s, mu_s_min, alpha, p):
+    """Step 2: single scattering per scattering constituent (sc_idx of the medium m, their
+    scattering coefficients beta_s), no phase ([Bru17] ComputeSingleScattering)."""
     from skydome.models.simulated.precomputed import _single
 
-    nl = beta_e.shape[1]
-    trans = np.exp(-np.einsum("cij,cl->ijl", col, beta_e)).astype(np.float32)
+    nl = m.extinction.shape[1]
+    trans = np.exp(-np.einsum("cij,cl->ijl", col, m.extinction)).astype(np.float32)
     ss = np.empty((sc_idx.size, p["scattering_r_size"], p["scattering_mu_size"],
                    p["scattering_mu_s_size"], p["scattering_nu_size"], nl), dtype=np.float32)
-    _single.single_scattering_table(col, trans, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt,
-                                    mu_s_min, alpha, p["integration_samples"],
-                                    QUADRATURE_SCALE_M, ss)
+    _single.single_scattering_table(col, trans, m, sc_idx, beta_s, mu_s_min, alpha,
+                                    p["integration_samples"], QUADRATURE_SCALE_M, ss)
     return ss
 
 
@@ -194,6 +233,7 @@ def precompute(props, wl, p):
 def _precompute_tables(props, wl, p):
     """:func:`precompute`."""
     from skydome.models.simulated.precomputed._tables import Tables
+    from skydome.transport._medium import medium_from_properties
 
     t_start = time.perf_counter()
     R = float(props.planet_radius_m)
@@ -201,7 +241,8 @@ def _precompute_tables(props, wl, p):
     mu_s_min = float(np.cos(np.radians(p["max_sun_zenith_deg"])))
     alpha = SUN_ANGULAR_RADIUS_RAD
     codes, p0s, p1s = props.profile_code, props.profile_p0, props.profile_p1
-    beta_e = np.ascontiguousarray(props.extinction)
+    m = medium_from_properties(props)     # the kernels' atmosphere
+    beta_e = m.extinction
     sc_idx = np.nonzero(np.any(props.scattering > 0.0, axis=1))[0].astype(np.int64)
     if sc_idx.size == 0:
         sc_idx = np.array([0], dtype=np.int64)
@@ -220,16 +261,16 @@ def _precompute_tables(props, wl, p):
     n_q_ms = max(4, (p["integration_samples"] + 1) // 2)   # J is smooth along the ray
     # the ray integrals of J in the precomputation (the orders >= 3's incident radiance, the
     # ground irradiance of orders >= 2): Gauss-Legendre in v per piece of each ray
-    # (_geometry.ray_nodes_rule), RAY_RULE_DIVISOR times fewer nodes than
+    # (transport._quadrature.ray_nodes_rule), RAY_RULE_DIVISOR times fewer nodes than
     # integration_samples (7 at the default): closer to the converged integral than 20
     # midpoint nodes (docs/models.md, "precomputed")
-    from skydome.models.simulated.precomputed._geometry import gauss_rule
+    from skydome.transport._quadrature import gauss_legendre_unit
 
-    rule = gauss_rule(max(4, -(-p["integration_samples"] // RAY_RULE_DIVISOR)))
+    rule = gauss_legendre_unit(max(4, -(-p["integration_samples"] // RAY_RULE_DIVISOR)))
 
     # 1. transmittance; 2. single scattering
-    col = transmittance_columns(codes, p0s, p1s, R, Rt, p)
-    ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min, alpha, p)
+    col = transmittance_columns(m, p)
+    ss = single_scattering(col, m, sc_idx, beta_s, mu_s_min, alpha, p)
     # the orders of each wavelength are independent of the other wavelengths': order 2 one
     # batch of wavelengths at a time (its working arrays are on the full grids), then the
     # orders >= 3 on their coarser grids, all wavelengths at once where they fit (the ray
@@ -274,10 +315,9 @@ def _precompute_tables(props, wl, p):
         tot2 = np.zeros(nl)
         for b, l0 in enumerate(range(0, nl, nb)):
             sl = slice(l0, min(nl, l0 + nb))
-            tot2[sl] = second_order_batch(ss[..., sl], col, codes, p0s, p1s, sc_idx, beta_e[:, sl],
-                                          beta_s[:, sl], pc, pp, pt[..., sl], albedo[sl], R, Rt,
-                                          mu_s_min, alpha, q2, l0, n_ms_j, J_sum[..., sl],
-                                          dE1[..., sl])
+            tot2[sl] = second_order_batch(ss[..., sl], col, on_wavelengths(m, sl), sc_idx,
+                                          beta_s[:, sl], pc, pp, pt[..., sl], mu_s_min, alpha,
+                                          q2, l0, n_ms_j, J_sum[..., sl], dE1[..., sl])
             report("precomputing tables: scattering orders", 2 + b, n_steps)
         E += dE1
         # the default grids: the orders >= 3 summed in J_sum itself (higher_orders_summed),
@@ -292,29 +332,25 @@ def _precompute_tables(props, wl, p):
             # wavelengths) and computed again after them (the same kernel: the same bits)
             ss = None
         if summed:
-            higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
-                                 beta_s, albedo, R, Rt, mu_s_min, q3, rule, p,
-                                 (1 + n_batch, 1 + n_batch + p["orders"] - 2))
+            higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q3, rule,
+                                 p, (1 + n_batch, 1 + n_batch + p["orders"] - 2))
         elif nl_hi == nl:
             for b, l0 in enumerate(range(0, nl, nb_hi)):
                 sl = slice(l0, min(nl, l0 + nb_hi))
-                higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, codes, p0s, p1s,
-                              sc_idx, beta_e[:, sl], beta_s[:, sl], albedo[sl], R, Rt, mu_s_min,
-                              q2, q3, hi, rule, p,
+                higher_orders(J_sum[..., sl], dE1[..., sl], tot2[sl], col, on_wavelengths(m, sl),
+                              sc_idx, beta_s[:, sl], mu_s_min, q2, q3, hi, rule, p,
                               (1 + n_batch + b * (p["orders"] - 2), n_steps), l0)
         elif p["orders"] >= 3:
-            higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes,
-                                 p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2,
-                                 q3, hi, rule, p, (1 + n_batch, n_steps))
+            higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, m,
+                                 sc_idx, beta_s, mu_s_min, q2, q3, hi, rule, p,
+                                 (1 + n_batch, n_steps))
         # 3c. the ground irradiance of orders 2..N (+ remainder) at every r node: one ray
         # integral of the summed density (the irradiance is linear in J, as the stored
         # table's radiance is); the orders' own ground reflections needed the ground's row
         # of each order's irradiance only
-        E += irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                   mu_s_min, rule, E.shape)
+        E += irradiance_of_density(J_sum, m, sc_idx, col, mu_s_min, rule, E.shape)
     if ss is None:
-        ss = single_scattering(col, codes, p0s, p1s, beta_s, beta_e, sc_idx, R, Rt, mu_s_min,
-                               alpha, p)
+        ss = single_scattering(col, m, sc_idx, beta_s, mu_s_min, alpha, p)
     # 4. the stored orders 2..N (+ remainder) are not integrated here: the sky's radiance()
     # integrates them at the observer from J_sum; the stored table is built from J_sum on
     # its first read (Tables.build_multiple_scattering -> stored_table_of), with the
@@ -325,13 +361,25 @@ def _precompute_tables(props, wl, p):
         dens = dict(scattering_density=J_sum, profile_code=np.asarray(codes),
                     profile_p0=np.asarray(p0s, dtype=np.float64),
                     profile_p1=np.asarray(p1s, dtype=np.float64), scattering_index=sc_idx)
-    return Tables(table_wavelengths_nm=np.asarray(wl, dtype=np.float64), columns=col,
-                  beta_e=beta_e, single_scattering=ss, multiple_scattering=ms, irradiance=E,
-                  phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
-                  scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
-                  mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
-                  precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab,
-                  stored_table_samples=n_q_ms, stored_table=p.get("stored_table", "full"), **dens)
+    tables = Tables(table_wavelengths_nm=np.asarray(wl, dtype=np.float64), columns=col,
+                    beta_e=beta_e, single_scattering=ss, multiple_scattering=ms, irradiance=E,
+                    phase_code=np.asarray(pc, dtype=np.int64), phase_param=pp, ground_albedo=albedo,
+                    scattering_coefficient=beta_s, planet_radius_m=R, top_radius_m=Rt,
+                    mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
+                    precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab,
+                    stored_table_samples=n_q_ms, stored_table=p.get("stored_table", "full"),
+                    **dens)
+    attach_stored_table_builder(tables)
+    return tables
+
+
+def attach_stored_table_builder(tables):
+    """Give ``tables`` (:class:`._tables.Tables`) the builder of its stored table of orders
+    2..N (:func:`stored_table_of`, :func:`stored_table_slabs`, looked up when called);
+    returns ``tables``."""
+    tables.set_multiple_scattering_builder(lambda t: stored_table_of(t),
+                                           lambda t: stored_table_slabs(t))
+    return tables
 
 
 def stored_table_of(t, r_range=None):
@@ -351,8 +399,7 @@ def stored_table_of(t, r_range=None):
     n_mu_t, n_ms_t, n_nu_t = shape[1:4]
     full = t.stored_table == "full"
     return stored_multiple_scattering(
-        t.scattering_density, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
-        t.columns, t.beta_e, t.planet_radius_m, t.top_radius_m, t.mu_s_min,
+        t.scattering_density, tables_medium(t), t.scattering_index, t.columns, t.mu_s_min,
         int(t.stored_table_samples), shape,
         nodes=(np.arange(n_mu_t), np.arange(n_ms_t)) if full else None,
         n_nu=n_nu_t if full else MS_NU_SIZE, r_range=r_range)
@@ -419,14 +466,14 @@ def node_brackets(nodes, n):
     return cell.astype(np.int64), frac
 
 
-def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min,
-                               n_q, shape, nodes=None, n_nu=MS_NU_SIZE, r_range=None):
-    """Step 4: the stored table of orders 2..N, shape ``shape`` (r, mu, mu_s, nu, l),
-    integrated from the summed density at the nodes of :func:`stored_table_nodes` (or
-    ``nodes`` = (mu nodes, mu_s nodes)) on ``n_nu`` nu nodes, and interpolated onto the
-    rest in the logarithm (docs/models.md, "precomputed": multiple scattering falls off
-    about exponentially with the sun's depression and towards the horizon). ``r_range`` =
-    (first, end), every node only: the rows first .. end-1 of the table."""
+def stored_multiple_scattering(J_sum, m, sc_idx, col, mu_s_min, n_q, shape, nodes=None,
+                               n_nu=MS_NU_SIZE, r_range=None):
+    """Step 4: the stored table of orders 2..N, shape ``shape`` (r, mu, mu_s, nu, l), in the
+    medium m (:func:`tables_medium`), integrated from the summed density at the nodes of
+    :func:`stored_table_nodes` (or ``nodes`` = (mu nodes, mu_s nodes)) on ``n_nu`` nu nodes, and
+    interpolated onto the rest in the logarithm (docs/models.md, "precomputed": multiple
+    scattering falls off about exponentially with the sun's depression and towards the horizon).
+    ``r_range`` = (first, end), every node only: the rows first .. end-1 of the table."""
     from skydome.models.simulated.precomputed import _multiple
 
     n_r, n_mu, n_ms, n_nu_f, nl = shape
@@ -439,9 +486,8 @@ def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, R
                          "the whole table where it is integrated on a subset of its nodes")
     out = np.empty((r1 - r0,) + tuple(shape[1:]), dtype=np.float32)
     c = out if full else np.empty((n_r, mu_n.size, ms_n.size, n_nu, nl), dtype=np.float32)
-    _multiple.multiple_scattering_table(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                        mu_s_min, n_q, QUADRATURE_SCALE_M, mu_n, n_mu, ms_n,
-                                        n_ms, r0, n_r, c)
+    _multiple.multiple_scattering_table(J_sum, m, sc_idx, col, mu_s_min, n_q, QUADRATURE_SCALE_M,
+                                        mu_n, n_mu, ms_n, n_ms, r0, n_r, c)
     if full:
         return out
     # log of the computed values (>= 0; a floor of 1e-30 of each wavelength's largest)
@@ -449,7 +495,7 @@ def stored_multiple_scattering(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, R
     np.log(np.maximum(c, floor), out=c)
     mc, mf = node_brackets(mu_n, n_mu)
     sc, sf = node_brackets(ms_n, n_ms)
-    _multiple.table_from_coarse(c, mu_n, mc, mf, ms_n, sc, sf, R, Rt, mu_s_min, out)
+    _multiple.table_from_coarse(c, mu_n, mc, mf, ms_n, sc, sf, m.R, m.Rt, mu_s_min, out)
     return np.exp(out, out=out)
 
 
@@ -530,14 +576,14 @@ def _column_weights(beta_s, n_r, n_ms, nl):
             for k in range(beta_s.shape[0])]
 
 
-def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp, pt, albedo, R,
-                       Rt, mu_s_min, alpha, q2, l0, n_ms_j, J_out, dE_out):
-    """Steps 3a-3c of order 2 for one batch of wavelengths (every array given on the batch's
-    wavelengths; ``l0`` the index of its first table wavelength): the incident radiance
-    from the single-scattering table ([Bru17] ComputeScatteringDensity) and the direct
-    sun's ground reflection, J of order 2 into ``J_out`` (on the full grids of ``q2``), the
-    ground irradiance of order 1 into ``dE_out``; returns order 2's source strength per
-    wavelength (:func:`source_total`)."""
+def second_order_batch(ss, col, m, sc_idx, beta_s, pc, pp, pt, mu_s_min, alpha, q2, l0, n_ms_j,
+                       J_out, dE_out):
+    """Steps 3a-3c of order 2 for one batch of wavelengths (every array and the medium m
+    given on the batch's wavelengths, :func:`on_wavelengths`; ``l0`` the index of its
+    first table wavelength): the incident radiance from the single-scattering table
+    ([Bru17] ComputeScatteringDensity) and the direct sun's ground reflection, J of order 2
+    into ``J_out`` (on the full grids of ``q2``), the ground irradiance of order 1 into
+    ``dE_out``; returns order 2's source strength per wavelength (:func:`source_total`)."""
     from skydome.models.simulated.precomputed import _density, _irradiance
 
     nl = ss.shape[-1]
@@ -550,13 +596,12 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
     w_col = _column_weights(beta_s, n_r, n_ms_j, nl)
     # 3a. single scattering arriving at each node + ground reflection of the sun
     L_in = np.empty((q2.n_in, n_r, n_ms_j, nl), dtype=np.float32)
-    _density.incident_radiance(ss, pc, pp, pt, col, np.ascontiguousarray(beta_e),
-                               np.ascontiguousarray(albedo), R, Rt, mu_s_min, alpha, n_r, n_ms_j,
-                               q2.th_in, q2.ph_in, L_in)
+    _density.incident_radiance(ss, pc, pp, pt, col, m.extinction, m.albedo, m.R, m.Rt, mu_s_min,
+                               alpha, n_r, n_ms_j, q2.th_in, q2.ph_in, L_in)
     # 3c. ground irradiance of order 1 ([BN08] eq. 9), from the same source
     dE = np.empty(dE_out.shape)
-    _irradiance.indirect_irradiance(ss, pc, pp, np.ascontiguousarray(pt), R, Rt, mu_s_min, th_i,
-                                    ph_i, dom_i, dE)
+    _irradiance.indirect_irradiance(ss, pc, pp, np.ascontiguousarray(pt), m.R, m.Rt, mu_s_min,
+                                    th_i, ph_i, dom_i, dE)
     dE_out[...] = dE
     # 3b. scattering density J ([BN08] eq. 7) on the outgoing grid, straight into J_out
     # where it is one block of memory (a batch of all the wavelengths)
@@ -566,22 +611,20 @@ def second_order_batch(ss, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, pc, pp,
     del L_in
     if J is not J_out:
         J_out[...] = J
-    return source_total(J, q2, codes, p0s, p1s, sc_idx, R, Rt)
+    return source_total(J, q2, m, sc_idx)
 
 
-def irradiance_of_density(J, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt, mu_s_min, rule, shape,
-                          rows=None):
+def irradiance_of_density(J, m, sc_idx, col, mu_s_min, rule, shape, rows=None):
     """The ground irradiance (table of ``shape`` (r, mu_s, l); its first ``rows`` r rows
     only, all by default) of the radiance whose scattering density is ``J``: a ray integral
     along each direction of the hemisphere (:func:`._irradiance.indirect_irradiance_rays`,
-    [BN08] eq. 8 and 9, on IRRADIANCE_HIGH_ORDER_SAMPLES x 4 of them)."""
+    [BN08] eq. 8 and 9, on IRRADIANCE_HIGH_ORDER_SAMPLES x 4 of them) in the medium m."""
     from skydome.models.simulated.precomputed import _irradiance
 
     th_h, ph_h, dom_h = _hemisphere(IRRADIANCE_HIGH_ORDER_SAMPLES)
     out = np.empty((shape[0] if rows is None else rows,) + tuple(shape[1:]))
-    _irradiance.indirect_irradiance_rays(J, codes, p0s, p1s, sc_idx, col,
-                                         np.ascontiguousarray(beta_e), R, Rt, mu_s_min, *rule,
-                                         QUADRATURE_SCALE_M, th_h, ph_h, dom_h, out, shape[0])
+    _irradiance.indirect_irradiance_rays(J, m, sc_idx, col, mu_s_min, *rule, QUADRATURE_SCALE_M,
+                                         th_h, ph_h, dom_h, out, shape[0])
     return out
 
 
@@ -592,8 +635,8 @@ def _ground_row(E0):
     return np.ascontiguousarray(np.broadcast_to(E0, (2,) + E0.shape))
 
 
-def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo,
-                         R, Rt, mu_s_min, q, rule, p, progress=(0, None)):
+def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, rule, p,
+                         progress=(0, None)):
     """Steps 3a-3b for orders 3..N at every wavelength, and the geometric remainder, with
     no table of one order's density: ``J_sum`` (on the outgoing grid of ``q``, float32)
     holds order 2's density on entry and orders 2..N (+ remainder) on return; ``dE1`` the
@@ -622,22 +665,18 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
     from skydome.models.simulated.precomputed import _density
 
     w_col = _column_weights(beta_s, n_r, n_ms, nl)
-    beta_e = np.ascontiguousarray(beta_e)
-    albedo = np.ascontiguousarray(albedo)
     X = np.empty((q.n_in, n_r, n_ms, nl), dtype=np.float32)
     X_prev = np.zeros_like(X)
     ground = _ground_row(dE1[0])                # G_1 at the ground
-    strength = _SourceFunctional(q, codes, p0s, p1s, sc_idx, beta_s, R, Rt, n_r, n_ms)
+    strength = _SourceFunctional(q, m, sc_idx, beta_s, n_r, n_ms)
     tot, tot_prev = tot2, None
     for order in range(3, p["orders"] + 1):
         # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
         # ground's reflection of orders 1..o-2
-        _density.incident_radiance_rays(J_sum, ground, codes, p0s, p1s, sc_idx, col, beta_e,
-                                        albedo, R, Rt, mu_s_min, *rule, ts, n_r, n_ms,
-                                        q.th_in, q.ph_in, X)
+        _density.incident_radiance_rays(J_sum, ground, m, sc_idx, col, mu_s_min, *rule, ts, n_r,
+                                        n_ms, q.th_in, q.ph_in, X)
         # 3c. the ground irradiance of orders 2..o-1 at the ground's row: G_(o-1)
-        G = irradiance_of_density(J_sum, codes, p0s, p1s, sc_idx, col, beta_e, R, Rt,
-                                  mu_s_min, rule, dE1.shape, rows=1)
+        G = irradiance_of_density(J_sum, m, sc_idx, col, mu_s_min, rule, dE1.shape, rows=1)
         ground = _ground_row(dE1[0] + G[0])
         # order o's incident radiance X_o - X_(o-1), into X_prev's array; X becomes X_prev
         np.subtract(X, X_prev, out=X_prev)
@@ -656,10 +695,10 @@ def higher_orders_summed(J_sum, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e,
                progress[1] or p["orders"])
 
 
-def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, albedo, R, Rt,
-                  mu_s_min, q2, q3, hi, rule, p, progress=(0, None), l0=0, sink=None,
-                  work=None):
-    """Steps 3a-3c for orders 3..N of one batch of wavelengths, and the geometric remainder:
+def higher_orders(J2, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q2, q3, hi, rule, p,
+                  progress=(0, None), l0=0, sink=None, work=None):
+    """Steps 3a-3c for orders 3..N of one batch of wavelengths (the medium m on them,
+    :func:`on_wavelengths`), and the geometric remainder:
     ``J2`` the summed density (on the full grids of ``q2``), holding only order 2's on entry
     (the source of order 3), ``dE1`` the ground irradiance of order 1, ``tot2`` order 2's
     source strength. Each order's ground irradiance is computed at the ground's row only
@@ -689,8 +728,6 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     ts = QUADRATURE_SCALE_M
     rhs = np.empty((10, n_r * n_ms * nl), dtype=np.float32)
     w_col = _column_weights(beta_s, n_r, n_ms, nl)
-    beta_e = np.ascontiguousarray(beta_e)
-    albedo = np.ascontiguousarray(albedo)
     shape = (nsc, q3.th_out.size, q3.ph_out.size, n_r, n_ms, nl)
     L_in = np.empty((q3.n_in, n_r, n_ms, nl), dtype=np.float32)
     J = np.empty(shape, dtype=np.float32) if work is None else work
@@ -708,17 +745,16 @@ def higher_orders(J2, dE1, tot2, col, codes, p0s, p1s, sc_idx, beta_e, beta_s, a
     for order in range(3, p["orders"] + 1):
         # 3a. radiance of order-1 arriving at each node, integrated along the incident rays
         # from J of order-1, + ground reflection of the irradiance of order-2
-        _density.incident_radiance_rays(src, dE, codes, p0s, p1s, sc_idx, col, beta_e, albedo,
-                                        R, Rt, mu_s_min, *rule, ts, n_r, n_ms, q3.th_in,
-                                        q3.ph_in, L_in)
+        _density.incident_radiance_rays(src, dE, m, sc_idx, col, mu_s_min, *rule, ts, n_r, n_ms,
+                                        q3.th_in, q3.ph_in, L_in)
         # 3c. ground irradiance of order-1 ([BN08] eq. 9) at the ground, from the same source
-        dE = _ground_row(irradiance_of_density(src, codes, p0s, p1s, sc_idx, col, beta_e, R,
-                                               Rt, mu_s_min, rule, dE1.shape, rows=1)[0])
+        dE = _ground_row(irradiance_of_density(src, m, sc_idx, col, mu_s_min, rule, dE1.shape,
+                                               rows=1)[0])
         # 3b. J of this order ([BN08] eq. 7); J of order-1 is no longer needed
         density_products(q3, L_in, w_col, beta_s, rhs, J, l0)
         sink(J)
         src = J
-        tot_prev, tot = tot, source_total(J, q3, codes, p0s, p1s, sc_idx, R, Rt)
+        tot_prev, tot = tot, source_total(J, q3, m, sc_idx)
         report("precomputing tables: scattering orders", progress[0] + order - 2,
                progress[1] or p["orders"])
     if p["remaining_orders"] == "geometric" and p["orders"] >= 3:
@@ -740,9 +776,8 @@ SPREAD_CUBIC = True
 SPREAD_BAND = True
 
 
-def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, codes, p0s,
-                         p1s, sc_idx, beta_e, beta_s, albedo, R, Rt, mu_s_min, q2, q3, hi, rule,
-                         p, progress=(0, None)):
+def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col, m, sc_idx,
+                         beta_s, mu_s_min, q2, q3, hi, rule, p, progress=(0, None)):
     """:func:`higher_orders` at the table wavelengths ``l_hi`` only (in the ``batches`` of
     :func:`subset_batches`), spread onto every table wavelength ``wl`` (:mod:`._spectral`):
     ``J_sum`` holds order 2 at every wavelength on entry and orders 2..N (+ remainder) on
@@ -785,9 +820,9 @@ def higher_orders_subset(J_sum, dE1, tot2, l_hi, l_nodes, band, wl, batches, col
                 return
             _add_order(Jo.reshape(-1, ls.size), ls, node_of, jf, rho)
 
-        higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, codes, p0s, p1s, sc_idx,
-                      beta_e[:, ls], beta_s[:, ls], albedo[ls], R, Rt, mu_s_min, q2, q3, hi, rule,
-                      p, (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
+        higher_orders(J_b, dE1_hi[..., cs], tot2[ls], col, on_wavelengths(m, ls), sc_idx,
+                      beta_s[:, ls], mu_s_min, q2, q3, hi, rule, p,
+                      (progress[0] + b * (p["orders"] - 2), progress[1]), ls, sink=sink,
                       work=J_b if same else None)
         del J_b, sink
         for i in range(nb if H_b is not None else 0):
@@ -1084,16 +1119,18 @@ def _blocks_in_threads(worker, starts):
                 f.result()
 
 
-def source_total(J, q, codes, p0s, p1s, sc_idx, R, Rt):
+def source_total(J, q, m, sc_idx):
     """Per wavelength, sum over J's nodes of sum_k rho_k(r) J_k sin(theta): the scattering
     density of one order times each constituent's number density, over the sphere of
     outgoing directions (theta uniform: sin theta the solid angle per node), the (r, mu_s)
     nodes counted alike; the ratio of two orders' totals is the geometric remainder's
     ratio (comparable across grids of different sizes: divided by the node count of
-    the outgoing grid and of the (r, mu_s) grid)."""
+    the outgoing grid and of the (r, mu_s) grid). The density profiles are those of the
+    medium m's constituents sc_idx."""
     from skydome.models.simulated.precomputed._mapping import cell_r
     from skydome.transport._kernels import profile_density
 
+    codes, p0s, p1s, R, Rt = m.profile_code, m.profile_p0, m.profile_p1, m.R, m.Rt
     nsc, n_t, n_p, n_r, n_ms = J.shape[:5]
     nl = J.shape[-1]
     w_t = np.sin(q.th_out) / (n_t * n_p * n_r * n_ms)
@@ -1120,10 +1157,11 @@ class _SourceFunctional:
     sum_phi cos(n phi) of each mode n (a tabulated phase function: one u per table
     wavelength)."""
 
-    def __init__(self, q, codes, p0s, p1s, sc_idx, beta_s, R, Rt, n_r, n_ms):
+    def __init__(self, q, m, sc_idx, beta_s, n_r, n_ms):
         from skydome.models.simulated.precomputed._mapping import cell_r
         from skydome.transport._kernels import profile_density
 
+        codes, p0s, p1s, R, Rt = m.profile_code, m.profile_p0, m.profile_p1, m.R, m.Rt
         n_t, n_p = q.th_out.size, q.ph_out.size
         w_t = np.sin(q.th_out) / (n_t * n_p * n_r * n_ms)
         self.u = []

@@ -16,7 +16,7 @@ from skydome.models.simulated.precomputed._lookup import (columns_at, columns_se
                                                            irradiance_lookup_acc, sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import _split, mu_frame, mu_index_framed
 from skydome.models.simulated.precomputed._multiple import slice_index
-from skydome.transport._kernels import exp_neg_array
+from skydome.transport._vexp import exp_neg_many
 from skydome.transport._phase import phase_fill_coded
 
 INV_PI = 1.0 / math.pi
@@ -38,7 +38,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
     Lambertian ground lit by the sun and the sky ([Bru17] GetSunAndSkyIrradiance) times the
     transmittance to the ground: both exponentials (sun to the ground point, observer to the
     ground point) are taken at once for all wavelengths by the vectorised
-    :func:`skydome.transport._kernels.exp_neg_array` (relative error < 1e-8)."""
+    :func:`skydome.transport._vexp.exp_neg_many` (the core's one vectorised exp)."""
     n = dirs.shape[0]
     nsc = ss_slice.shape[0]
     n_mu = ss_slice.shape[1]
@@ -115,7 +115,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
                     for c in range(nc):
                         s += beta_e[c, l] * cs[c]
                     xb[nl + l] = -s
-                exp_neg_array(xb, eb, ibuf)
+                exp_neg_many(xb, 2 * nl, eb, ibuf, ibuf.view(np.float64))
                 for l in range(nl):
                     eg[l] = f * eb[l]
                 irradiance_lookup_acc(E, R, mu_g, R, Rt, 1.0, eg)

@@ -20,14 +20,15 @@ from skydome.transport._kernels import profile_density
 
 # -- precomputation ---------------------------------------------------------------------------------
 @njit(parallel=True, cache=True, fastmath=True)
-def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_idx, R, Rt,
-                            mu_s_min, alpha, n_q, ts, out):
+def single_scattering_table(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n_q, ts, out):
     """Single scattering per scattering constituent, without its phase function ([Bru17]
     ComputeSingleScattering, [BN08] eq. 4 without P):
 
     out[k, r, mu, mu_s, nu, l] = beta_s,k(l) int_0^d rho_k(r_t) T(r, mu, t) T_sun(r_t, mu_s_t) dt
 
-    per unit solar irradiance, for every node of the 4-D table. T along the view ray from
+    per unit solar irradiance, for every node of the 4-D table, in the medium m
+    (:class:`skydome.transport._medium.Medium`; beta_s,k = beta_s_sc[k], its scattering
+    constituents sc_idx, its column table ``col``). T along the view ray from
     the column table (exact exponent), T_sun interpolated in the (float32) transmittance
     table trans[r, mu, l] (as [Bru17] does).
 
@@ -39,6 +40,12 @@ def single_scattering_table(col, trans, codes, p0s, p1s, beta_s_sc, beta_e, sc_i
     that :func:`._mapping.cell_nu` clamps onto its neighbour's nu (about 12 % of them at
     the default sizes) is the same ray and sun geometry: copied, not integrated again."""
     nsc, n_r, n_mu, n_ms, n_nu, nl = out.shape
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
     nc = codes.shape[0]
     n_rT, n_muT = trans.shape[0], trans.shape[1]
     H = math.sqrt(Rt * Rt - R * R)

@@ -9,7 +9,8 @@ density's outgoing directions in the sun's frame) and ``wavelength`` (the table
 wavelengths, innermost).
 
 The stored 4-D table of orders 2..N (``multiple_scattering``) is built on first use from
-the summed scattering density and the column table (:meth:`Tables.build_multiple_scattering`):
+the summed scattering density and the column table by the builder the precomputation gives
+the record (:meth:`Tables.build_multiple_scattering`; the record imports no kernel):
 the sky's ``radiance()`` integrates orders 2..N at the observer and never reads it; aerial
 perspective, the texture/LUT export and the viewer do.
 """
@@ -98,24 +99,35 @@ class Tables:
         return self.__dict__.get("_" + _LAZY) is not None
 
     def build_multiple_scattering(self) -> np.ndarray:
-        """The stored table of orders 2..N: built now if it is not yet (the same integral
-        of the summed density as the precomputation's step 4, :func:`._precompute.
-        stored_table_of`). Where :meth:`set_multiple_scattering_sink` gave a sink (the
-        on-disk cache), the table is built slab by slab of r nodes straight into it and
-        the array it returns is kept; without one, or where it returns None (it could not
-        write), the table is built in memory."""
+        """The stored table of orders 2..N: built now if it is not yet, by the builder that
+        :meth:`set_multiple_scattering_builder` gave (the precomputation's step 4,
+        :func:`._precompute.attach_stored_table_builder`). Where
+        :meth:`set_multiple_scattering_sink` gave a sink (the on-disk cache), the table is
+        built slab by slab of r nodes straight into it and the array it returns is kept;
+        without one, or where it returns None (it could not write), the table is built in
+        memory. ValueError where the table is not built and no builder was given."""
         ms = self.__dict__.get("_" + _LAZY)
         if ms is not None:
             return ms
-        from skydome.models.simulated.precomputed import _precompute
-
+        builder = self.__dict__.get("_builder")
+        if builder is None:
+            raise ValueError("the stored table of orders 2..N (multiple_scattering) is not "
+                             "built and these tables have no builder: give one with "
+                             "set_multiple_scattering_builder")
+        whole, slabs = builder
         sink = self.__dict__.get("_sink")
         if sink is not None:
-            ms = sink(self.single_scattering.shape[1:], _precompute.stored_table_slabs(self))
+            ms = sink(self.single_scattering.shape[1:], slabs(self))
         if ms is None:
-            ms = _precompute.stored_table_of(self)
+            ms = whole(self)
         self.multiple_scattering = ms
         return ms
+
+    def set_multiple_scattering_builder(self, whole, slabs) -> None:
+        """How the stored table is built on first use: ``whole(tables) -> array`` (float32,
+        the single-scattering table's shape without its first axis) and
+        ``slabs(tables) -> iterator`` of its consecutive r slabs (for a sink)."""
+        self.__dict__["_builder"] = (whole, slabs)
 
     def set_multiple_scattering_sink(self, sink) -> None:
         """``sink(shape, slabs) -> array or None``: called when the stored table is built,
