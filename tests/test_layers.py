@@ -56,6 +56,9 @@ KNOWN_CYCLE_EDGES = {
     # inside its functions, and they import its Constituent, TabulatedPhase, Atmosphere back
     ("skydome.atmosphere", "skydome.atmosphere.gases"),
     ("skydome.atmosphere", "skydome.atmosphere.mie"),
+    # the same pattern: Atmosphere.blender() reads atmosphere/blender.py's constants, which
+    # build an Atmosphere
+    ("skydome.atmosphere", "skydome.atmosphere.blender"),
 }
 
 
