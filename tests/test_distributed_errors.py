@@ -112,3 +112,70 @@ def test_failed_run_removes_the_folder_it_made_but_keeps_an_existing_one(tmp_pat
     finally:
         client.close()
         cluster.close()
+
+
+# -- the command line: --scheduler and --connect-timeout checked before any work ------------
+def _cli(args, timeout=300):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1] / "src")
+    return subprocess.run([sys.executable, "-m", "skydome", *map(str, args)], env=env,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def _error_line(res) -> str:
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert res.returncode == 2, (res.returncode, res.stderr[-2000:])
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr[-2000:]
+    return lines[0]
+
+
+_COMMANDS = {
+    # the weather file does not exist: the scheduler's check must come before it is read
+    "skymatrix": ["skymatrix", "--weather", "{d}/missing.epw", "--out", "{d}/a.mtx"],
+    "timelapse": ["timelapse", "--lat", "48", "--lon", "11", "--date", "2026-06-21",
+                  "--model", "cie2003", "--out", "{d}/tl"],
+    "compare": ["compare", "--models", "cie2003", "--reference", "cie2003", "--out",
+                "{d}/cmp"],
+}
+
+
+@pytest.mark.parametrize("command", list(_COMMANDS))
+@pytest.mark.parametrize("option, value, why", [
+    ("--scheduler", "foo", "--scheduler = 'foo' is not a Dask scheduler address"),
+    ("--scheduler", "tcp://127.0.0.1:99999", "port 99999 is out of range [1, 65535]"),
+    ("--connect-timeout", "0", "--connect-timeout = 0"),
+    ("--connect-timeout", "7200", "--connect-timeout = 7200"),
+])
+def test_cli_scheduler_and_timeout_refused_before_any_work(tmp_path, command, option,
+                                                           value, why):
+    args = [a.format(d=tmp_path) for a in _COMMANDS[command]] + [option, value]
+    if option == "--connect-timeout":
+        args += ["--scheduler", "tcp://127.0.0.1:1"]
+    line = _error_line(_cli(args))
+    assert why in line, line
+    if option == "--connect-timeout":
+        assert "3600" in line, line          # the valid range is named
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["skymatrix", "timelapse"])
+def test_cli_unanswered_scheduler_one_line_after_the_connect_timeout(tmp_path, command):
+    """--connect-timeout reaches the library's wait (the message says 1 s, not the default
+    10 s); neither an output nor a chunk folder is left."""
+    from skydome.daylighting.weather import sample_weather_path
+
+    args = [a.format(d=tmp_path) for a in _COMMANDS[command]]
+    if command == "skymatrix":
+        args[args.index("--weather") + 1] = str(sample_weather_path())
+    t0 = time.perf_counter()
+    line = _error_line(_cli([*args, "--scheduler", "tcp://127.0.0.1:1",
+                             "--connect-timeout", "1"]))
+    assert line.startswith("error: --scheduler = 'tcp://127.0.0.1:1': no Dask scheduler "
+                           "answered within 1 s"), line
+    assert time.perf_counter() - t0 < 120.0
+    assert list(tmp_path.iterdir()) == []       # no output, no OUT.chunks/

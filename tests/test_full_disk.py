@@ -43,8 +43,12 @@ def _cli(args, timeout=600):
                           capture_output=True, text=True, timeout=timeout)
 
 
-def _one_line_exit_2(res, target):
-    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+def _one_line_exit_2(res, target, report=None):
+    """Exit 2 and one line on stderr naming ``target`` and the full disk; a line starting
+    with ``report`` (the command's report of the work done before the write) is not an
+    error line and is left out."""
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()
+             and not (report and ln.startswith(report))]
     assert res.returncode == 2, (res.returncode, res.stderr[-3000:])
     assert len(lines) == 1, res.stderr[-3000:]
     assert lines[0].startswith("error: could not write") and \
@@ -74,34 +78,30 @@ CASES = {
                         "--model", "oneil2005", "--components", "luminance", "--order", "0",
                         "--chunk-hours", "6", "--out", "{d}/a.zarr"], "a.zarr"),
 }
-# command lines whose write is not yet inside the command's one-line error handling: the
-# library raises OSError ENOSPC naming the file, the skymatrix command calls write_matrix
-# outside its guard (to be wired where the command-line modules move into skydome/cli/)
-NEEDS_CLI_WIRING = {"skymatrix ascii", "skymatrix npy"}
+# command lines whose matrix is written by write_matrix (through the command's guard); the
+# library half of these cases is checked on its own below
+MATRIX_WRITER_CASES = ("skymatrix ascii", "skymatrix npy")
 
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_full_disk_one_line_exit_2_nothing_left(case, tmp_path, two_days):
-    if case in NEEDS_CLI_WIRING:
-        pytest.xfail("the skymatrix command must call write_matrix through its guard")
     if case == "skymatrix workers 2":
         pytest.importorskip("distributed")
     args, target = CASES[case]
     with small_disk(tmp_path / "disk", "16k") as d:
         res = _cli([a.format(d=d, w=two_days) for a in args])
-        # the Zarr command writes into a temporary folder it names .OUT.part, which the
-        # library's error names (the command could name OUT instead)
-        line = _one_line_exit_2(res, Path(d) / (".a.zarr.part" if target == "a.zarr"
-                                                else target))
+        # the Zarr command writes into a temporary folder .OUT.part; its error names OUT
+        line = _one_line_exit_2(res, Path(d) / target)
+        assert ".part" not in line, line
         if case == "skymatrix workers 2":       # the chunk folder is not left either
             assert ".chunks" in line
         assert os.listdir(d) == []
 
 
-@pytest.mark.parametrize("case", sorted(NEEDS_CLI_WIRING))
+@pytest.mark.parametrize("case", MATRIX_WRITER_CASES)
 def test_full_disk_matrix_writer_raises_enospc_naming_the_file(case, tmp_path, two_days):
-    """The library half of the xfail cases above: write_matrix raises OSError ENOSPC naming
-    the output (not its temporary), and leaves nothing."""
+    """The library half of the matrix-writer cases above: write_matrix raises OSError ENOSPC
+    naming the output (not its temporary), and leaves nothing."""
     import errno
 
     from skydome.daylighting.radiance_io import write_matrix
@@ -167,8 +167,28 @@ def test_map_and_sun_file_one_unit_on_a_nearly_full_disk(tmp_path):
         assert json.loads((d / "m.sun.json").read_text()) == json.loads(json.dumps(light))
 
 
-@pytest.mark.xfail(strict=True, reason="the skymatrix command must write the assembled matrix "
-                   "through its guard and remove OUT.chunks/ when that write fails")
+def test_export_envmap_map_and_sun_file_one_unit_on_a_nearly_full_disk(tmp_path):
+    """``skydome export envmap`` on a disk with room for the map but not for its .sun.json:
+    exit 2, one line naming the sun file, and neither file left (the map and its sun light
+    are written as one unit). The map's size is measured by the same command on a normal
+    folder first."""
+    args = ["export", "envmap", "--model", "hosek_wilkie2012", "--size", "64x32",
+            "--sun-elevation", "30", "--sun-azimuth", "120"]
+    probe = tmp_path / "probe"
+    probe.mkdir()
+    res = _cli([*args, "--out", probe / "m.exr"])
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert sorted(os.listdir(probe)) == ["m.exr", "m.sun.json"]
+    need = -(-(probe / "m.exr").stat().st_size // 4096) * 4096     # the map's pages
+    with small_disk(tmp_path / "disk", "256k") as d:
+        d = Path(d)
+        _fill_to(d, need)
+        assert _free_bytes(d) >= (probe / "m.exr").stat().st_size     # the map alone fits
+        res = _cli([*args, "--out", d / "m.exr"])
+        _one_line_exit_2(res, d / "m.sun.json")
+        assert sorted(os.listdir(d)) == ["filler"]
+
+
 def test_full_disk_after_the_chunks_one_line_no_chunk_folder(tmp_path, two_days):
     """Room for the Dask chunks (about 84 pages) but not for the matrix assembled from them
     as well (about 82 more): one line, exit 2, neither the matrix nor OUT.chunks/ left."""
@@ -177,5 +197,5 @@ def test_full_disk_after_the_chunks_one_line_no_chunk_folder(tmp_path, two_days)
         res = _cli(["skymatrix", "--weather", two_days, "--patches", "reinhart:2",
                     "--workers", "2", "--chunk-hours", "24", "--out", Path(d) / "a.mtx"])
         assert "chunks: 2 computed" in res.stderr, res.stderr[-2000:]   # the chunks fitted
-        _one_line_exit_2(res, Path(d) / "a.mtx")
+        _one_line_exit_2(res, Path(d) / "a.mtx", report="chunks: 2 computed, 0 reused")
         assert os.listdir(d) == []

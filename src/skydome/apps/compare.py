@@ -108,14 +108,15 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
                    size: int = 128, wavelengths: int = 16,
                    build: Callable | None = None, progress: Callable | None = None,
                    scheduler: str | None = None, workers: int = 0,
-                   client=None) -> list[ComparisonRow]:
+                   connect_timeout_s: float = 10.0, client=None) -> list[ComparisonRow]:
     """Render and compare; write the report into ``out_dir`` (created if missing).
 
     With ``scheduler`` (a dask.distributed address), ``workers`` > 0 (a local cluster) or
     ``client``, every (model, sun elevation) cell is a chunk of
     :func:`skydome.distributed.run_chunks`, kept in ``OUT.chunks/`` until the report is
     written (a rerun renders only the missing cells); ``build`` must then be picklable
-    (:func:`spec_builder`).
+    (:func:`spec_builder`); ``connect_timeout_s`` bounds the wait for ``scheduler``
+    (:func:`skydome.distributed.run_chunks`).
 
     Parameters
     ----------
@@ -174,7 +175,8 @@ def run_comparison(specs: Sequence[str], sun_elevations: Sequence[float], out_di
         run_chunks([Chunk(key, _render_cell, (build, spec, e, sun_azimuth_deg, size,
                                               wavelengths))
                     for (spec, e), key in cells.items()], chunk_dir, scheduler=scheduler,
-                   n_workers=max(workers, 1), client=client, progress=progress is not None)
+                   n_workers=max(workers, 1), client=client, progress=progress is not None,
+                   connect_timeout_s=connect_timeout_s)
     for e in elevs:
         sun = Sun(elevation_deg=e, azimuth_deg=sun_azimuth_deg)
         for spec in specs:

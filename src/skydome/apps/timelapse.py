@@ -125,7 +125,8 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
                   min_elevation_deg: float = -6.0, size: int = 256, wavelengths: int = 16,
                   projection: str = "fisheye", progress: Callable | None = None,
                   scheduler: str | None = None, workers: int = 0,
-                  client=None, sheet_cols: int = 8) -> list[TimelapseFrame]:
+                  connect_timeout_s: float = 10.0, client=None,
+                  sheet_cols: int = 8) -> list[TimelapseFrame]:
     """Render ``build(sun)`` at each time with the sun above ``min_elevation_deg``.
 
     Everything is written into a temporary folder beside ``out_dir`` and moved in at the
@@ -135,7 +136,8 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
     that many processes) or ``client``, every frame is a chunk of
     :func:`skydome.distributed.run_chunks`, kept in ``OUT.chunks/`` until the folder is
     written: a rerun after an interruption renders only the missing frames. ``build`` must
-    then be picklable (:func:`model_builder`).
+    then be picklable (:func:`model_builder`); ``connect_timeout_s`` bounds the wait for
+    ``scheduler`` (:func:`skydome.distributed.run_chunks`).
 
     ``contact_sheet.png`` has ``sheet_cols`` frames a row, each in a box of
     min(128, ``size``) pixels.
@@ -171,7 +173,8 @@ def run_timelapse(build: Callable, lat_deg: float, lon_deg: float, times, out_di
                         (build, float(el[i]), float(az[i]), projection, size, wl.size))
                   for i in todo]
         run_chunks(chunks, chunk_dir, scheduler=scheduler, n_workers=max(workers, 1),
-                   client=client, progress=progress is not None)
+                   client=client, progress=progress is not None,
+                   connect_timeout_s=connect_timeout_s)
     with atomic_folder(out_dir) as tmp:
         for n, i in enumerate(todo):
             t = times[i]

@@ -286,26 +286,57 @@ def sun_options(*names: str, **defaults):
     return add
 
 
+#: --connect-timeout's default [s]: skydome.distributed.CONNECT_TIMEOUT_S (not imported here:
+#: the kit imports the light modules only)
+CONNECT_TIMEOUT_DEFAULT = 10.0
+
+
+def connect_timeout_option():
+    """--connect-timeout, declared once beside --scheduler (:func:`dask_options` and the
+    ``skymatrix`` command): ``connect_timeout_s`` of :func:`skydome.distributed.run_chunks`,
+    checked by :func:`_check_dask` (0 < t <= 3600 s)."""
+    return typer.Option(CONNECT_TIMEOUT_DEFAULT, "--connect-timeout",
+                        help="Seconds to wait for --scheduler to answer, 0 < t <= 3600.")
+
+
 def dask_options(what: str):
-    """Give a command declared with ``**dask`` the options --scheduler and --workers: its
-    pieces of work (``what``) as Dask tasks on a cluster or on local processes; the command
-    gets them in ``dask`` (a dict), for :func:`_dask_choice`."""
+    """Give a command declared with ``**dask`` the options --scheduler, --connect-timeout
+    and --workers: its pieces of work (``what``) as Dask tasks on a cluster or on local
+    processes; the command gets them in ``dask`` (a dict), for :func:`_dask_choice`."""
     def add(command):
         return _add_options(command, {
             "scheduler": (Optional[str], typer.Option(
                 None, help=f"Render {what} as tasks on this Dask cluster (tcp://HOST:8786).")),
+            "connect_timeout": (float, connect_timeout_option()),
             "workers": (int, typer.Option(
                 0, help=f"Render {what} on a local Dask cluster of N processes (0: in "
                         "process)."))})
     return add
 
 
+def _check_dask(scheduler, connect_timeout) -> tuple:
+    """(scheduler, connect_timeout) checked before any work: the scheduler's address
+    (:func:`skydome.distributed.check_scheduler`, syntax only) and the timeout in (0, 3600] s
+    (the range ``connect_timeout_s`` of :func:`skydome.distributed.run_chunks` takes)."""
+    from skydome._validate import check_number
+
+    if scheduler is not None:
+        from skydome.distributed import check_scheduler
+
+        scheduler = check_scheduler(scheduler)
+    return scheduler, check_number("connect_timeout", connect_timeout, 0.0, 3600.0, "s",
+                                   low_open=True)
+
+
 def _dask_choice(dask: dict) -> tuple:
-    """(scheduler, workers, whether Dask runs the work) of :func:`dask_options`, checked."""
+    """(scheduler, workers, whether Dask runs the work, connect timeout [s]) of
+    :func:`dask_options`, checked."""
     scheduler, workers = dask.get("scheduler"), dask.get("workers", 0)
     if workers < 0:
         raise ValueError(f"workers = {workers} is out of range [0, inf)")
-    return scheduler, workers, scheduler is not None or workers > 0
+    scheduler, timeout = _check_dask(scheduler, dask.get("connect_timeout",
+                                                         CONNECT_TIMEOUT_DEFAULT))
+    return scheduler, workers, scheduler is not None or workers > 0, timeout
 
 
 def _check_sun_option(name: str, value) -> float:

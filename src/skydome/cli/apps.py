@@ -63,7 +63,7 @@ def compare_cmd(
         check_int("size", size, 16, 4096)
         check_int("wavelengths", wavelengths, 3, 401)
         _check_memory("size", size, size * size, max(wavelengths if c.native == "spectral" else 3 for c in classes))
-        scheduler, workers, distributed = _dask_choice(dask)
+        scheduler, workers, distributed, timeout = _dask_choice(dask)
         progress = _Progress("comparing models")
         try:
             if distributed:  # cells as Dask tasks, resumable from OUT.chunks/
@@ -76,7 +76,8 @@ def compare_cmd(
             rows = run_comparison(specs, elevs, out, reference=reference, sun_azimuth_deg=sun_azimuth,
                                   size=size, wavelengths=wavelengths, build=build,
                                   progress=None if distributed else progress,
-                                  scheduler=scheduler, workers=workers)
+                                  scheduler=scheduler, workers=workers,
+                                  connect_timeout_s=timeout)
         finally:
             progress.close()
         from skydome.apps.compare import table_markdown
@@ -129,7 +130,7 @@ def timelapse_cmd(
         el = np.atleast_1d(solar_position(lat, lon, times)[0])
         _check_memory("size", size, size * size, wavelengths if cls.native == "spectral" else 3,
                       held_images=max(int(np.sum(el >= min_elevation)) - 1, 0))
-        scheduler, workers, distributed = _dask_choice(dask)
+        scheduler, workers, distributed, timeout = _dask_choice(dask)
         progress = _Progress("timelapse")
         try:
             if distributed:  # frames as Dask tasks, resumable from OUT.chunks/
@@ -142,7 +143,8 @@ def timelapse_cmd(
             frames = run_timelapse(build, lat, lon, times, out,
                                    min_elevation_deg=min_elevation, size=size, wavelengths=wavelengths,
                                    projection=projection, progress=None if distributed else progress,
-                                   scheduler=scheduler, workers=workers)
+                                   scheduler=scheduler, workers=workers,
+                                   connect_timeout_s=timeout)
         finally:
             progress.close()
         done = [f for f in frames if f.image_path is not None]

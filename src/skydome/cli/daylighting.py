@@ -13,7 +13,8 @@ from typing import Optional
 
 import typer
 
-from skydome.cli._kit import _fail, _param_options, _parse_model_params, _run
+from skydome.cli._kit import (_check_dask, _fail, _param_options, _parse_model_params, _run,
+                              connect_timeout_option)
 from skydome.daylighting.skymatrix_run import SKYMATRIX_DEFAULTS as D
 
 commands = typer.Typer()
@@ -67,6 +68,7 @@ def skymatrix_cmd(
                                    help="replace existing outputs"),
     scheduler: Optional[str] = typer.Option(D["scheduler"], "--scheduler",
                                             help="run on a Dask cluster (tcp://HOST:8786)"),
+    connect_timeout: float = connect_timeout_option(),
     workers: int = typer.Option(D["workers"], "--workers",
                                 help="run on a local Dask cluster of N processes (0: in process)"),
     chunk_hours: int = typer.Option(D["chunk_hours"], "--chunk-hours", help="hours per Dask chunk"),
@@ -89,6 +91,7 @@ def skymatrix_cmd(
     notes = notes_as_lines(SunRangeNote, ClearSkyNote, emit=lambda t: typer.echo(t, err=True))
 
     # -- validate everything before any work -------------------------------------------------
+    scheduler, connect_timeout = _run(_check_dask, scheduler, connect_timeout)
     ps = _run(make_patches, patches)
     order = order_option(order, model, _fail)
     if model != "perez1993":
@@ -109,7 +112,8 @@ def skymatrix_cmd(
                             sun_position=sun_position, fmt=fmt, albedo=albedo,
                             overwrite=overwrite, scheduler=scheduler, workers=workers,
                             chunk_hours=chunk_hours, model=model, fail=_fail, guard=_run,
-                            echo=typer.echo, backend=backend)
+                            echo=typer.echo, backend=backend,
+                            connect_timeout=connect_timeout)
 
 
 @commands.command("illuminance")

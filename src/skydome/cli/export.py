@@ -61,7 +61,7 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
 
     from skydome._validate import check_int, check_number
     from skydome.export.envmap import check_envmap_options, check_map_path, render_envmap
-    from skydome.export.sun import sun_light, write_sun_json
+    from skydome.export.sun import sun_json_writer, sun_light
     from skydome.spectra import wavelength_grid
 
     # 1. validate everything before any work
@@ -99,7 +99,10 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
                             progress=progress, units=units)
     finally:
         progress.close()
-    written = env.write(p, half=half)
+    # the map and its sun light file are one unit: both or neither (a full disk)
+    light = None if sun_in_map else sun_light(sky, conv, units=env.units.name)
+    also = [] if light is None else [(_sun_path(out), sun_json_writer(light))]
+    written = env.write(p, half=half, also=also)
     if mips:
         from skydome.export.prefilter import prefiltered_mips, write_mips
 
@@ -109,10 +112,6 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
             for w in written:
                 w.unlink(missing_ok=True)
             raise
-    if not sun_in_map:
-        light = sun_light(sky, conv, units=env.units.name)
-        if light is not None:
-            written.append(write_sun_json(light, _sun_path(out)))
     if sh:
         coef = env.irradiance_sh()
         doc = {"convention": conv.name, "order": 2, "basis": "real SH Y00, Y1-1, Y10, Y11, "

@@ -18,6 +18,7 @@ SKYMATRIX_DEFAULTS = {
     "components": None, "sun": None, "aod_from": None, "param": [], "order": None,
     "sun_position": "spa", "fmt": "float", "albedo": "0.2", "overwrite": False,
     "scheduler": None, "workers": 0, "chunk_hours": 730, "backend": "numba",
+    "connect_timeout": 10.0,
 }
 
 
@@ -49,13 +50,20 @@ def order_option(order, model, fail=_refuse):
 
 def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, order,
                         sun_position, fmt, albedo, overwrite, scheduler, workers, chunk_hours,
-                        model, fail=_refuse, guard=_call, echo=_quiet, backend="numba"):
+                        model, fail=_refuse, guard=_call, echo=_quiet, backend="numba",
+                        connect_timeout=10.0):
     """The perez1993 ``skymatrix`` command with parsed options (``ps`` the PatchSet, ``order``
     from :func:`order_option`): validates everything, then computes and writes the matrix
     (and with ``--sun separate`` the sun matrix and the suns' scene). ``fail(message)``
     reports bad input and does not return (default: raise ValueError); ``guard(func, *args)``
-    calls func turning bad input into ``fail`` (default: a plain call); ``echo(text,
-    err=False)`` reports (default: nothing)."""
+    calls func turning bad input and failed writes (a full disk) into ``fail`` (default: a
+    plain call); ``echo(text, err=False)`` reports (default: nothing). ``connect_timeout``
+    [s] bounds the wait for ``scheduler`` (``connect_timeout_s`` of
+    :func:`skydome.distributed.distributed_sky_matrix`). A failed write leaves none of the
+    outputs, nor ``OUT.chunks/`` if this run made it (an interrupted run keeps it: a rerun
+    reuses its chunks)."""
+    import shutil
+
     import numpy as np
 
     from skydome.constants import SUN_ANGULAR_RADIUS_DEG
@@ -81,6 +89,14 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
         fail("backend = 'numpy' takes a fixed --order (0..16), not the adaptive rule")
     if workers < 0 or chunk_hours < 1:
         fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
+    from skydome._validate import check_number
+
+    if scheduler is not None:
+        from skydome.distributed import check_scheduler
+
+        scheduler = guard(check_scheduler, scheduler)
+    connect_timeout = guard(check_number, "connect_timeout", connect_timeout, 0.0, 3600.0, "s",
+                            low_open=True)
     distributed = scheduler is not None or workers > 0
     rho = None
     if albedo != "weather":
@@ -114,14 +130,15 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
         rho_v = rho
     dtype = np.float32 if fmt == "float" else np.float64
     chunk_dir = None
+    made_chunk_dir = False
     if distributed:
-        import shutil
-
         from skydome.daylighting.skymatrix_chunks import distributed_sky_matrix
 
         chunk_dir = Path(f"{out_p}.chunks")
+        made_chunk_dir = not chunk_dir.exists()
         sky, rep = guard(distributed_sky_matrix, w, chunk_dir, chunk_hours=chunk_hours,
                          scheduler=scheduler, n_workers=max(workers, 1), progress=True,
+                         connect_timeout_s=connect_timeout,
                          sun_position=sun_position, ground_reflectance=rho_v, patches=ps.name,
                          order=order, sun=sun, components=components, dtype=dtype)
         echo(f"chunks: {len(rep.computed)} computed, {len(rep.verified)} reused", err=True)
@@ -153,21 +170,25 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
             if not distributed:
                 m = guard(perez_sky_matrix_from_weather, w, dtype=dtype, backend=backend,
                           **kw)
-            write_matrix(out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
-                         transpose=out_p.suffix.lower() != ".npy")
+            guard(write_matrix, out_p, m.sky, fmt=fmt, info=info, overwrite=overwrite,
+                  transpose=out_p.suffix.lower() != ".npy")
         written.append(out_p)
         if mode == "separate":
-            write_matrix(targets[1], m.sun[None, :, :], fmt=fmt,
-                         info=info + [f"sun matrix: radiance of the {SUN_ANGLE_DEG} deg solar disc"],
-                         overwrite=overwrite)
+            guard(write_matrix, targets[1], m.sun[None, :, :], fmt=fmt,
+                  info=info + [f"sun matrix: radiance of the {SUN_ANGLE_DEG} deg solar disc"],
+                  overwrite=overwrite)
             written.append(targets[1])
             minute = 24 * 60 * (w.day_of_year - 1) + (w.hour * 60.0 + 0.5).astype(int)
             up = m.sun_directions[:, 2] > -np.sin(np.radians(SUN_ANGULAR_RADIUS_DEG))
-            atomic_write_bytes(targets[2], _sun_scene(m, minute, up).encode())
+            guard(atomic_write_bytes, targets[2], _sun_scene(m, minute, up).encode())
             written.append(targets[2])
-    except BaseException:
+    except BaseException as exc:
         for t in written:
             t.unlink(missing_ok=True)
+        # a failed write (through guard: the command's exit, or the error itself) removes
+        # the chunks this run made; Ctrl-C keeps them for a rerun
+        if made_chunk_dir and not isinstance(exc, KeyboardInterrupt):
+            shutil.rmtree(chunk_dir, ignore_errors=True)
         raise
     if chunk_dir is not None:
         shutil.rmtree(chunk_dir, ignore_errors=True)
@@ -199,10 +220,13 @@ def write_model_sky_matrix(weather, out, ps, model, components, *, sun=None, aod
     """``skymatrix --model NAME`` for any model but perez1993: a Zarr array (hours, patches,
     components) written one chunk of hours at a time into a temporary folder beside ``out``,
     renamed when complete. ``params`` are the model's keyword parameters. Every option is
-    checked first (ValueError naming it); returns the line that says what was written."""
+    checked first (ValueError naming it); returns the line that says what was written. A
+    failed write (a full disk) raises OSError naming ``out`` and leaves nothing; so does
+    SIGTERM (the temporary is registered with :func:`skydome._io.temporary`)."""
     import os
     import shutil
 
+    from skydome._io import temporary
     from skydome.daylighting.skymatrix import parse_components, weather_model_sky_matrix
     from skydome.daylighting.weather import read_weather
     from skydome.models import get_model_class
@@ -231,18 +255,29 @@ def write_model_sky_matrix(weather, out, ps, model, components, *, sun=None, aod
     tmp = out_p.parent / f".{out_p.name}.part"
     shutil.rmtree(tmp, ignore_errors=True)
     try:
+        # the library registers tmp for the SIGTERM clean-up while it writes the chunks
+        # (skydome._io.temporary; a registration ends with its block, so this call's own
+        # starts when that one has ended) ...
         arr = weather_model_sky_matrix(w, model, aod_from=aod_from, params=dict(params or {}),
                                        patches=ps, order=order, components=components,
                                        sun_position=sun_position, zarr_path=tmp,
                                        chunk_hours=chunk_hours)
-        arr.attrs.update({"model": model, "components": components, "patches": ps.name,
-                          "order": order, "aod_from": str(aod_from), "weather":
-                          Path(weather).name, "axes": ["hour", "patch", "component"],
-                          "units": "cd/m^2" if components == "luminance" else
-                          "W m^-2 sr^-1 nm^-1"})
-        if out_p.exists():
-            shutil.rmtree(out_p)
-        os.replace(tmp, out_p)
+        # ... and this call until the rename
+        with temporary(tmp, is_dir=True):
+            arr.attrs.update({"model": model, "components": components, "patches": ps.name,
+                              "order": order, "aod_from": str(aod_from), "weather":
+                              Path(weather).name, "axes": ["hour", "patch", "component"],
+                              "units": "cd/m^2" if components == "luminance" else
+                              "W m^-2 sr^-1 nm^-1"})
+            if out_p.exists():
+                shutil.rmtree(out_p)
+            os.replace(tmp, out_p)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if exc.errno is None:
+            raise
+        # the error names the user's OUT, not the temporary .OUT.part (or a file in it)
+        raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(out_p)) from exc
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
