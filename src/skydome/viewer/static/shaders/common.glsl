@@ -98,12 +98,13 @@ vec3 with_sun_disc(vec3 sky, vec3 d, vec2 px, vec2 size) {
     float ps = max(angle_between(d, view_direction(px + vec2(1.0, 0.0), size)),
                    angle_between(d, view_direction(px + vec2(0.0, 1.0), size)));
     if (!(th < a + 1.5 * ps)) return sky;
-    int n = int(clamp(ceil(8.0 * ps / a), 2.0, 32.0));
+    // parts of at most 1/16 of the disc's radius: >= ~800 inside a disc smaller than the pixel
+    int n = int(clamp(ceil(16.0 * ps / a), 2.0, 64.0));
     float cover = 0.0;
     vec3 acc = vec3(0.0);
-    for (int i = 0; i < 32; ++i) {
+    for (int i = 0; i < 64; ++i) {
         if (i >= n) break;
-        for (int j = 0; j < 32; ++j) {
+        for (int j = 0; j < 64; ++j) {
             if (j >= n) break;
             vec2 q = px + (vec2(float(i), float(j)) + 0.5) / float(n) - 0.5;
             vec3 e = view_direction(q, size);
