@@ -97,7 +97,8 @@ def main(names) -> None:
             data = base64.b64decode(url.split(",", 1)[1])
             out = ROOT / "docs" / "images" / f"{name}.png"
             atomic_write(out, lambda path, d=data: Path(path).write_bytes(d), suffix=".png")
-            print(out.relative_to(ROOT), page.evaluate("() => document.getElementById('ev100').value"), "EV100")
+            ev = page.evaluate("() => document.getElementById('ev100').value")
+            print(out.relative_to(ROOT), ev, "EV100")
             page.close()
         b.close()
     srv.shutdown()

@@ -111,7 +111,8 @@ def _canvas_pixels(page) -> np.ndarray:
     from PIL import Image
 
     url = page.evaluate("() => document.getElementById('sky').toDataURL('image/png')")
-    return np.asarray(Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).convert("RGBA"))
+    png = base64.b64decode(url.split(",", 1)[1])
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGBA"))
 
 
 def _screen(page, path) -> np.ndarray:
@@ -146,11 +147,13 @@ def test_layout_fits(page, tmp_path):
         "() => [...document.querySelectorAll('#controls input, #controls select, "
         "#controls button, #controls output, #controls legend')].map((e) => { "
         "const r = e.getBoundingClientRect(); "
-        "return [e.id || e.dataset.param || e.name || e.tagName, r.left, r.top, r.right, r.bottom]; })")
+        "return [e.id || e.dataset.param || e.name || e.tagName, "
+        "r.left, r.top, r.right, r.bottom]; })")
     assert len(boxes) >= 30
     for name, left, top, right, bottom in boxes:
         assert right > left and bottom > top, name
-        assert 0 <= left and right <= w and 0 <= top and bottom <= h, (name, left, top, right, bottom)
+        box = (name, left, top, right, bottom)
+        assert 0 <= left and right <= w and 0 <= top and bottom <= h, box
         # not hidden by the panel's own scrolling either
         assert panel[0] - 0.5 <= left and right <= panel[2] + 0.5, (name, panel)
         assert panel[1] - 0.5 <= top and bottom <= panel[3] + 0.5, (name, panel)
@@ -190,7 +193,8 @@ def test_refused_value_over_a_cleared_picture(page, tmp_path):
     err = _error(page)
     assert "turbidity" in err and "99" in err, err
     e, cv = _rect(page, "#error"), _rect(page, "#sky")
-    assert page.evaluate("() => getComputedStyle(document.getElementById('error')).display") != "none"
+    shown = "() => getComputedStyle(document.getElementById('error')).display"
+    assert page.evaluate(shown) != "none"
     # the message stands over the picture, wholly inside the canvas's box
     assert cv[0] <= e[0] < e[2] <= cv[2] and cv[1] <= e[1] < e[3] <= cv[3], (e, cv)
     assert e[2] - e[0] > 50 and e[3] - e[1] > 15, e
@@ -309,12 +313,15 @@ def test_sun_disc_in_the_page(page, model, tmp_path):
     off = np.asarray(page.evaluate("(p) => window.skydomeViewer.sample(p)", pts))
     shot_off = _screen(page, shot_dir / f"viewer_{w}x{h}_{model}_nosun.png")
     _set(page, "#sun-disc", True)
-    omega = _pixel_solid_angles(cols.ravel().astype(float), rows.ravel().astype(float), cw, ch, t, asp)
+    omega = _pixel_solid_angles(cols.ravel().astype(float), rows.ravel().astype(float),
+                                cw, ch, t, asp)
     flux = ((on - off) * omega[:, None]).sum(axis=0)           # XYZ of the drawn disc [lx]
     r_sun = np.radians(sky.sun.angular_radius_deg)
     want = _disc_reference_xyz(sky) * 2.0 * np.pi * (1.0 - np.cos(r_sun))
-    print(f"page disc {model} {w}x{h}: flux Y / L_sun Omega_sun - 1 = {flux[1] / want[1] - 1:+.4f}, "
-          f"X/Y {flux[0] / flux[1] / (want[0] / want[1]) - 1:+.4f}, Z/Y {flux[2] / flux[1] / (want[2] / want[1]) - 1:+.4f}")
+    xr = flux[0] / flux[1] / (want[0] / want[1]) - 1
+    zr = flux[2] / flux[1] / (want[2] / want[1]) - 1
+    print(f"page disc {model} {w}x{h}: flux Y / L_sun Omega_sun - 1 = "
+          f"{flux[1] / want[1] - 1:+.4f}, X/Y {xr:+.4f}, Z/Y {zr:+.4f}")
     assert flux[1] == pytest.approx(want[1], rel=0.02), (model, flux, want)
     assert flux[0] / flux[1] == pytest.approx(want[0] / want[1], rel=0.02), (model, flux, want)
     assert flux[2] / flux[1] == pytest.approx(want[2] / want[1], rel=0.02), (model, flux, want)
@@ -346,8 +353,9 @@ def test_sun_disc_in_the_page(page, model, tmp_path):
 
 
 def _gpu(page, model, values, w, h, projection, crop, disc):
-    flat = page.evaluate("([m, v, w, h, p, c, d]) => window.skydomeViewer.renderFloat(m, v, w, h, p, "
-                         "{ crop: c, disc: d })", [model, values, w, h, projection, crop, disc])
+    flat = page.evaluate("([m, v, w, h, p, c, d]) => "
+                         "window.skydomeViewer.renderFloat(m, v, w, h, p, { crop: c, disc: d })",
+                         [model, values, w, h, projection, crop, disc])
     return np.asarray(flat, dtype=np.float64).reshape(crop[3], crop[2], 3)
 
 
@@ -390,7 +398,8 @@ def test_sun_disc_against_the_cpu_disc(page, model, projection):
     peak = cpu[..., 1].max()
     err = np.abs(gpu_sun[..., 1] - cpu[..., 1]).max() / peak
     print(f"disc {model} {projection}: flux X, Y, Z GPU/CPU - 1 = "
-          f"{', '.join(f'{v:+.4f}' for v in f_gpu / f_cpu - 1)}; largest pixel error {err:.4f} of the peak")
+          f"{', '.join(f'{v:+.4f}' for v in f_gpu / f_cpu - 1)}; "
+          f"largest pixel error {err:.4f} of the peak")
     assert f_gpu == pytest.approx(f_cpu, rel=0.01), (model, projection, f_gpu, f_cpu)
     assert err <= 0.05, (model, projection, err)
     assert not _no_console_errors(messages), messages
