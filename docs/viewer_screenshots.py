@@ -4,7 +4,8 @@
 
 Each view is set through the page's own controls, drawn at the canvas's 960 x 540 and
 saved from the canvas (photographic mode, the default hue-preserving display, auto exposure
-unless an EV100 is given).
+unless an EV100 is given, the sun's disc on). ``viewer_page_1280x720`` is the whole page
+in a 1280 x 720 window as it opens (the default model, precomputed).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from _viewer import CHROMIUM, CHROMIUM_ARGS, wait_ready  # noqa: E402
+from _viewer import CHROMIUM, CHROMIUM_ARGS, wait_ready, warm_precomputed  # noqa: E402
 
 # name: controls (element id -> value), in the order they are set
 VIEWS = {
@@ -72,11 +73,21 @@ def main(names) -> None:
     from skydome._io import atomic_write
     from skydome.viewer.server import make_server
 
+    warm_precomputed()                  # the page opens on precomputed: its first draw bakes
     srv = make_server()
     threading.Thread(target=srv.serve_forever, daemon=True).start()
     with sync_playwright() as p:
         b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        for name in names or VIEWS:
+        if not names or "viewer_page_1280x720" in names:
+            page = b.new_page(viewport={"width": 1280, "height": 720})
+            page.goto(srv.url)
+            wait_ready(page, 120)
+            out = ROOT / "docs" / "images" / "viewer_page_1280x720.png"
+            data = page.screenshot()
+            atomic_write(out, lambda path, d=data: Path(path).write_bytes(d), suffix=".png")
+            print(out.relative_to(ROOT))
+            page.close()
+        for name in [n for n in names if n in VIEWS] or (VIEWS if not names else []):
             page = b.new_page(viewport={"width": 1500, "height": 900})
             page.goto(srv.url)
             wait_ready(page)
@@ -86,7 +97,8 @@ def main(names) -> None:
             data = base64.b64decode(url.split(",", 1)[1])
             out = ROOT / "docs" / "images" / f"{name}.png"
             atomic_write(out, lambda path, d=data: Path(path).write_bytes(d), suffix=".png")
-            print(out.relative_to(ROOT), page.evaluate("() => document.getElementById('ev100').value"), "EV100")
+            ev = page.evaluate("() => document.getElementById('ev100').value")
+            print(out.relative_to(ROOT), ev, "EV100")
             page.close()
         b.close()
     srv.shutdown()

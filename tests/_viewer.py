@@ -76,6 +76,7 @@ def browser_page(viewer_url):
         messages = []
         page.on("console", lambda m: messages.append((m.type, m.text)))
         page.on("pageerror", lambda e: messages.append(("pageerror", str(e))))
+        warm_precomputed()          # the page opens on precomputed: its first draw bakes
         page.goto(viewer_url)
         wait_ready(page)
         yield page, messages

@@ -66,6 +66,11 @@ def page(browser_page):  # noqa: F811
     _set(page, "#model-b", "")
     _set(page, "#projection", "1")            # equirect hemisphere: zenith row 0, horizon last
     _set(page, "#sun-az", "180")
+    # the sky alone: these checks are about the sky's colours (the sun's disc has its own
+    # tests in test_viewer_layout.py)
+    page.evaluate("() => { const e = document.getElementById('sun-disc'); e.checked = false; "
+                  "e.dispatchEvent(new Event('change')); }")
+    _wait_idle(page)
     return page, messages
 
 

@@ -501,7 +501,35 @@ def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:
     out = {"model": model, "shader": shader, "sun": _sun_block(sky),
            "describe": _jsonable(sky.describe())}
     out.update(_BUILDERS[shader](sky))
+    out["sun_disc"] = _sun_disc(sky)
     return out
+
+
+def _sun_disc(sky) -> dict[str, Any] | None:
+    """The sun's disc as ``skydome.imaging.render`` draws it into an XYZ image: the model's
+    mean disc radiance (``sun_disc_radiance`` on the default grid, reduced to XYZ with the
+    render's CIE weights; Y in cd/m^2), the angular radius [rad] and [Nec05]'s
+    limb-darkening polynomial I(mu) / I_mean at the X, Y and Z channels' wavelengths
+    (``XYZ_CHANNEL_WAVELENGTHS_NM``; coefficients of mu^0..mu^5 per channel, divided by the
+    disc mean so that the disc averages to 1). None for a scene without a sun (dobashi2002)
+    or where the render draws none (sun below minus its angular radius)."""
+    from skydome.imaging import sun_disc as sd
+    from skydome.spectra import default_wavelengths
+
+    sun = getattr(sky, "sun", None)
+    if sun is None or not callable(getattr(sky, "sun_radiance", None)):
+        return None
+    if not sun.elevation_deg > -sun.angular_radius_deg:
+        return None
+    wl = default_wavelengths()
+    L = sd.sun_disc_radiance(sky, wl)
+    if L is None:
+        return None
+    xyz = np.asarray(L, dtype=np.float64) @ _xyz_weights(wl)
+    ch = np.asarray(sd.XYZ_CHANNEL_WAVELENGTHS_NM)
+    A = sd._neckel_coefficients(ch) / sd.limb_darkening_mean(ch)[:, None]     # (3, 6)
+    return {"xyz": [float(v) for v in xyz], "alpha": float(np.radians(sun.angular_radius_deg)),
+            "limb": A.T.ravel().tolist()}                                     # (6, 3): mu^k rows
 
 
 def _jsonable(obj):

@@ -8,9 +8,57 @@ const RAMP = [[0, 0, 0], [0.1, 0.1, 0.8], [0, 0.7, 0.9], [0.1, 0.8, 0.2], [0.95,
               [0.9, 0.15, 0.1], [1, 1, 1]];
 
 const $ = (id) => document.getElementById(id);
-let renderer = null, models = {}, lastScenes = [], frameTimes = [], chromaGain = 1;
+let renderer = null, models = {}, lastScenes = [], chromaGain = 1;
+// the sky pass's times of the model (or pair) on screen, reset when it changes
+let frameTimes = [], frameKey = "";
+// the model the page opens on: skydome's default model
+const DEFAULT_MODEL = "precomputed";
 
-function showError(msg) { $("error").textContent = msg || ""; }
+// A refused value: its message over the picture, and no picture under it (the canvas is
+// cleared and dimmed while the error stands).
+function showError(msg) {
+  $("error").textContent = msg || "";
+  if (msg) { renderer?.clearCanvas(); $("sky").classList.add("stale"); }
+}
+
+// The baking state: shown over a cleared canvas when the server takes longer than a
+// moment to answer (a precomputed turbidity bakes tables for seconds); the controls stay
+// usable, and the newest values are drawn when the answer comes.
+let busyTimer = null, busyTick = null;
+function startBusy(text) {
+  stopBusy();
+  busyTimer = setTimeout(() => {
+    const t0 = performance.now();
+    renderer?.clearCanvas();
+    $("sky").classList.add("stale");
+    $("busy").hidden = false;
+    const tick = () => {
+      $("busy-text").textContent = `${text} ${((performance.now() - t0) / 1000).toFixed(0)} s`;
+    };
+    tick();
+    busyTick = setInterval(tick, 500);
+  }, 300);
+}
+function stopBusy() {
+  clearTimeout(busyTimer);
+  clearInterval(busyTick);
+  busyTimer = busyTick = null;
+  $("busy").hidden = true;
+}
+
+// the precomputed turbidities this page has had drawn (the server keeps the last two)
+const bakedTurbidity = new Set();
+const defaultOf = (model, name) => models[model].parameters.find((p) => p.name === name)?.default;
+function busyText(a, b, own) {
+  for (const m of [a, b]) {
+    if (m === "precomputed") {
+      const T = m === a ? own.turbidity : defaultOf(m, "turbidity");
+      if (!bakedTurbidity.has(String(T)))
+        return `baking the precomputed model's tables for turbidity ${T} (about 10 s)...`;
+    }
+  }
+  return `computing the scene (${[a, b].filter(Boolean).join(", ")})...`;
+}
 
 async function getJSON(url) {
   const r = await apiFetch(url);
@@ -98,12 +146,22 @@ async function draw() {
     try {
       const a = $("model").value, b = $("model-b").value;
       const own = modelValues(), sun = sunValues();
-      const scenes = [await fetchScene(a, { ...sun, ...own })];
-      if (b) scenes.push(await fetchScene(b, { ...sun, ...(b === a ? own : {}) }));
+      startBusy(busyText(a, b, own));
+      let scenes;
+      try {
+        scenes = [await fetchScene(a, { ...sun, ...own })];
+        if (b) scenes.push(await fetchScene(b, { ...sun, ...(b === a ? own : {}) }));
+      } finally {
+        stopBusy();
+      }
+      if (a === "precomputed") bakedTurbidity.add(String(own.turbidity));
+      if (b === "precomputed") bakedTurbidity.add(String(b === a ? own.turbidity : defaultOf(b, "turbidity")));
+      if (pending) continue;            // newer values came in meanwhile: draw those
       lastScenes = scenes;
       const c = $("sky"), w = c.width, h = c.height, half = Math.floor(w / 2);
-      const views = scenes.length === 1 ? [{ scene: scenes[0], x0: 0, w }]
-        : [{ scene: scenes[0], x0: 0, w: half }, { scene: scenes[1], x0: half, w: w - half }];
+      const disc = $("sun-disc").checked;
+      const views = scenes.length === 1 ? [{ scene: scenes[0], x0: 0, w, disc }]
+        : [{ scene: scenes[0], x0: 0, w: half, disc }, { scene: scenes[1], x0: half, w: w - half, disc }];
       const t0 = performance.now();
       await renderer.renderXYZ(views, camera(), w, h);
       renderer.sync();
@@ -113,10 +171,14 @@ async function draw() {
       chromaGain = la === null ? 1 : huntChromaGain(la);
       $("gain-v").textContent = $("hunt").checked ? chromaGain.toFixed(2) : "off";
       await renderer.show(display());
+      $("sky").classList.remove("stale");
+      const key = `${scenes.map((s) => s.model).join(" | ")} ${w}x${h}`;
+      if (key !== frameKey) { frameTimes = []; frameKey = key; }
       frameTimes.push(ms1);
       if (frameTimes.length > 20) frameTimes.shift();
       const ms = frameTimes.reduce((s, v) => s + v, 0) / frameTimes.length;
-      $("readout").textContent = `${ms.toFixed(1)} ms/frame sky pass (${w}x${h}, synced)`;
+      $("readout").textContent = `${scenes.map((s) => s.model).join(" | ")}: ${ms.toFixed(1)} ms/frame `
+        + `sky pass (${w}x${h}, synced, mean of ${frameTimes.length})`;
       $("label-a").textContent = scenes.length > 1 ? scenes[0].model : "";
       $("label-b").textContent = scenes.length > 1 ? scenes[1].model : "";
       drawScale();
@@ -200,7 +262,9 @@ function saveView() {
   const proj = cam.projection === "camera" ? "fisheye" : cam.projection;
   const size = proj === "fisheye" ? String(Math.min(cam.width, cam.height)) : `${cam.width}x${cam.height}`;
   if (scenes[0].wavelengths_nm) cli.push("--wavelengths", String(scenes[0].wavelengths_nm.length));
-  cli.push("--projection", proj, "--size", size, "--no-sun", "--out", "view.exr");
+  cli.push("--projection", proj, "--size", size);
+  if (!$("sun-disc").checked) cli.push("--no-sun");
+  cli.push("--out", "view.exr");
   if (scenes[0].model === "dobashi2002") {
     // the effect over the same synthetic scene on the CPU (`skydome airlight`; without shafts)
     cli.length = 0;
@@ -262,14 +326,23 @@ function wireDrag() {
 // opts.camera: [view azimuth, elevation, field of view] of a camera view (projection 0);
 // opts.output: dobashi2002's quantity (0 the scene, 1 in-scattered light, 2 transmittance
 // as the XYZ of a white surface facing the sun, 3 the surface's distance [m] in X);
+// opts.crop: [col0, row0, cols, rows] of the frame to return (default all);
 // hillaire2020's aerial perspective to opts.distance [m] (1 in-scattered light, 2 the
-// XYZ of sunlight through the transmittance).
+// XYZ of sunlight through the transmittance); opts.disc: with the sun's disc (off by
+// default: the model's sky alone, as the CPU model's xyz()).
 async function renderFloat(model, values, w, h, projection = 1, opts = {}) {
   const scene = await fetchScene(model, values), [az, el, fov] = opts.camera || [180, 15, 90];
-  await renderer.renderXYZ([{ scene, x0: 0, w, output: opts.output || 0, distance: opts.distance || 0 }],
+  await renderer.renderXYZ([{ scene, x0: 0, w, output: opts.output || 0, distance: opts.distance || 0,
+                             disc: !!opts.disc }],
                           cameraAxes(az, el, fov, projection), w, h);
-  const a = renderer.readXYZ(), out = new Array(w * h * 3);
-  for (let i = 0, j = 0; i < a.length; i += 4, j += 3) { out[j] = a[i]; out[j + 1] = a[i + 1]; out[j + 2] = a[i + 2]; }
+  const a = renderer.readXYZ();
+  // opts.crop [col0, row0, cols, rows]: only that rectangle (row 0 at the top)
+  const [c0, r0, cw, ch] = opts.crop || [0, 0, w, h], out = new Array(cw * ch * 3);
+  for (let r = 0, j = 0; r < ch; ++r)
+    for (let c = 0; c < cw; ++c, j += 3) {
+      const i = 4 * ((r0 + r) * w + c0 + c);
+      out[j] = a[i]; out[j + 1] = a[i + 1]; out[j + 2] = a[i + 2];
+    }
   return out;
 }
 
@@ -321,7 +394,7 @@ async function main() {
     return;
   }
   for (const name of Object.keys(models)) {
-    $("model").append(new Option(name, name));
+    $("model").append(new Option(name, name, name === DEFAULT_MODEL, name === DEFAULT_MODEL));
     $("model-b").append(new Option(name, name));
   }
   paramControls($("model").value);
@@ -329,8 +402,11 @@ async function main() {
   for (const id of ["model-b", "sun-el", "sun-az", "lat", "lon", "time", "projection", "view-az",
                     "view-el", "fov", "mode", "transform", "hunt", "ev100", "fc-lo", "fc-hi"])
     $(id).addEventListener("input", schedule);
+  // a slider's value shows at once, also while the server is still busy with a bake
+  for (const id of ["sun-el", "sun-az", "view-az", "view-el", "fov"]) $(id).addEventListener("input", updateOutputs);
   for (const el of document.querySelectorAll("input[name=sunmode]")) el.addEventListener("change", schedule);
   $("auto-exp").addEventListener("change", schedule);
+  $("sun-disc").addEventListener("change", schedule);
   $("save").addEventListener("click", saveView);
   wireDrag();
   pending = true;

@@ -382,7 +382,8 @@ export class SkyRenderer {
     return (this.aux[name] = { tex, fb, w, h });
   }
 
-  // Draw the views into the float target. views: [{scene, x0, w}] side by side (split view);
+  // Draw the views into the float target. views: [{scene, x0, w, disc}] side by side (split
+  // view; disc: draw the sun's disc);
   // camera: {projection, fwd, right, up, tanHalfFov}.
   async renderXYZ(views, camera, w, h) {
     const gl = this.gl, t = this._ensureTarget(w, h);
@@ -409,6 +410,15 @@ export class SkyRenderer {
       gl.uniform1i(u("u_output"), v.output || 0);
       gl.uniform1f(u("u_ap_distance"), v.distance || 0);
       SETTERS[v.scene.shader](gl, u, v.scene);
+      // the sun's disc (common.glsl: with_sun_disc): views that ask for it (v.disc), for
+      // the sky itself (output 0), where the model has a sun above minus its radius
+      const disc = v.disc && !v.output ? v.scene.sun_disc : null;
+      gl.uniform1i(u("u_disc_on"), disc ? 1 : 0);
+      if (disc) {
+        gl.uniform3fv(u("u_disc_L"), disc.xyz);
+        gl.uniform1f(u("u_disc_alpha"), disc.alpha);
+        gl.uniform3fv(u("u_limb"), disc.limb);
+      }
       gl.drawArrays(gl.TRIANGLES, 0, 3);
     }
     gl.disable(gl.SCISSOR_TEST);
@@ -464,6 +474,15 @@ export class SkyRenderer {
     gl.deleteFramebuffer(fb);
     gl.deleteTexture(tex);
     return Array.from({ length: n }, (_, i) => [px[4 * i], px[4 * i + 1], px[4 * i + 2]]);
+  }
+
+  // Clear the canvas (no picture: while an error stands or tables bake).
+  clearCanvas() {
+    const gl = this.gl;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.viewport(0, 0, this.canvas.width, this.canvas.height);
+    gl.clearColor(0, 0, 0, 1);
+    gl.clear(gl.COLOR_BUFFER_BIT);
   }
 
   // Block until the GPU has finished (a one-pixel read), for frame timing.
