@@ -1,1 +1,1 @@
-"""Integrations of skydome's exports into other programs (the Blender add-on)."""
+"""Integrations of skydome's exports into other programs (the Blender add-on, three.js)."""
