@@ -137,3 +137,38 @@ def test_export_bad_units_one_line_nothing_written(tmp_path):
             assert lines[0].startswith(f"error: --units = {units!r} is not one of "
                                        "photometric, mitsuba"), lines[0]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_export_blender_addon_and_threejs_write_the_package_sources(tmp_path):
+    """`export blender-addon` packs the add-on folder's files under its module name (what
+    Blender's installer reads; the bpy tests install such a zip); `export threejs` copies the
+    module, the example page and the one source of the shader byte for byte."""
+    import zipfile
+
+    from skydome.export.integrations.blender import ADDON_MODULE, addon_dir
+    from skydome.export.integrations.threejs import FILES
+
+    z = tmp_path / "addon.zip"
+    res = runner.invoke(app, ["export", "blender-addon", "--out", str(z)])
+    assert res.exit_code == 0, res.output
+    with zipfile.ZipFile(z) as f:
+        names = f.namelist()
+        assert f"{ADDON_MODULE}/__init__.py" in names
+        for n in names:
+            assert f.read(n) == (addon_dir() / n.split("/", 1)[1]).read_bytes()
+    folder = tmp_path / "tj"
+    res = runner.invoke(app, ["export", "threejs", "--out", str(folder)])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in folder.iterdir()) == sorted(FILES)
+    for name, src in FILES.items():
+        assert (folder / name).read_bytes() == src.read_bytes()
+
+
+def test_export_blender_addon_and_threejs_refuse_bad_outputs(tmp_path):
+    for args in (["export", "blender-addon", "--out", str(tmp_path / "addon.txt")],
+                 ["export", "blender-addon", "--out", str(tmp_path / "no" / "a.zip")],
+                 ["export", "threejs", "--out", str(tmp_path / "no" / "such" / "dir")]):
+        res = runner.invoke(app, args)
+        assert res.exit_code == 2, (args, res.output)
+        assert res.output.count("\n") == 1 and res.output.startswith("error: "), res.output
+    assert list(tmp_path.iterdir()) == []

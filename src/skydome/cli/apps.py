@@ -254,7 +254,9 @@ def airlight_cmd(
     image: Optional[str] = typer.Option(None, help="Input image: .png (sRGB) or .exr/.npy (linear), white-balanced to the sun."),
     depth: Optional[str] = typer.Option(None, help="Depth map [m]: .exr (Z, Y or R channel) or .npy; inf = sky."),
     synthetic: bool = typer.Option(False, "--synthetic", help="Use the generated synthetic mountain scene instead of --image/--depth."),
-    method: str = typer.Option("precomputed", help="precomputed, hillaire2020, preetham1999, hoffman_preetham2002 or dobashi2002."),
+    method: str = typer.Option("precomputed", help="A model with aerial perspective (its "
+                               "airlight capability; skydome.effects.airlight.methods() "
+                               "lists them) or dobashi2002."),
     turbidity: float = typer.Option(2.5, help="Turbidity of the air, 2..10 for the Preetham methods, 1..32 otherwise."),
     fov: float = typer.Option(60.0, help="Horizontal field of view of the (pinhole) camera [deg]."),
     view_azimuth: float = typer.Option(0.0, help="Azimuth the camera looks towards [deg], -360..360 (horizontal view)."),

@@ -257,3 +257,30 @@ def _radiance(extra, out, model, dni, dhi, param, overwrite, sun):
     m = cls(sun=_sun_from(sun), **params)
     files = write_radiance_sky(m, out, overwrite=overwrite)
     typer.echo(f"wrote {', '.join(str(f) for f in files)}")
+
+
+@export_app.command("blender-addon")
+def blender_addon_cmd(
+    out: str = typer.Option(..., help="The add-on's zip file (.zip), for Blender 4.2 LTS to "
+                                      "5.x: Edit > Preferences > Add-ons > Install from Disk."),
+):
+    """Pack skydome's Blender add-on (a World panel that bakes the sky through skydome and
+    makes the World, the sun lamp and the exposure) as an installable zip."""
+    from skydome.export.integrations.blender import pack_addon
+
+    p = _run(pack_addon, out)
+    typer.echo(f"wrote {p}")
+
+
+@export_app.command("threejs")
+def threejs_cmd(
+    out: str = typer.Option(..., help="Output folder (created complete, or its files "
+                                      "replaced): the ES module, its example page and the "
+                                      "shader."),
+):
+    """Write the three.js module that draws the precomputed sky from an `export luts
+    --model precomputed --format bin` folder, with an example page (docs/rendering.md)."""
+    from skydome.export.integrations.threejs import write_threejs
+
+    written = _run(write_threejs, out)
+    typer.echo(f"wrote {len(written)} files into {out}")
