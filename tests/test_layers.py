@@ -51,15 +51,7 @@ FACADE = "skydome"
 # break). (importer, imported)
 KNOWN_UPWARD: set[tuple[str, str]] = set()
 # Edges cut before the search for cycles. (importer, imported)
-KNOWN_CYCLE_EDGES = {
-    # not named by issue 26, found by this test: the package atmosphere imports gases and mie
-    # inside its functions, and they import its Constituent, TabulatedPhase, Atmosphere back
-    ("skydome.atmosphere", "skydome.atmosphere.gases"),
-    ("skydome.atmosphere", "skydome.atmosphere.mie"),
-    # the same pattern: Atmosphere.blender() reads atmosphere/blender.py's constants, which
-    # build an Atmosphere
-    ("skydome.atmosphere", "skydome.atmosphere.blender"),
-}
+KNOWN_CYCLE_EDGES: set[tuple[str, str]] = set()
 
 
 def _modules(package: str) -> list[str]:

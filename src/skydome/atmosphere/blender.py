@@ -116,14 +116,18 @@ def ozone_layer_moments_km() -> tuple[float, float, float]:
     return mean, sd, column
 
 
-def blender_atmosphere(sky_type: str = "multiple_scattering", air_density: float = 1.0,
-                       aerosol_density: float = 1.0, ozone_density: float = 1.0):
-    """Blender's atmosphere (module docstring) as a skydome Atmosphere."""
+def blender_atmosphere(atmosphere_cls, sky_type: str = "multiple_scattering",
+                       air_density: float = 1.0, aerosol_density: float = 1.0,
+                       ozone_density: float = 1.0):
+    """Blender's atmosphere (module docstring) as a skydome Atmosphere, of the class
+    ``atmosphere_cls`` (:meth:`skydome.atmosphere.Atmosphere.blender` passes its own: this
+    module does not import the package that calls it)."""
     from skydome._validate import check_choice, check_number
-    from skydome.atmosphere import Atmosphere, Constituent
+    from skydome.atmosphere._constituent import Constituent
     from skydome.atmosphere.profiles import (ExponentialProfile, GaussianLayerProfile,
                                              TentProfile)
 
+    Atmosphere = atmosphere_cls
     kind = check_choice("sky_type", str(sky_type).lower(), ("multiple_scattering", "nishita"))
     air = check_number("air_density", air_density, 0.0, 10.0)
     aer = check_number("aerosol_density", aerosol_density, 0.0, 10.0)

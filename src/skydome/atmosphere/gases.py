@@ -84,7 +84,7 @@ def water_vapour(precipitable_water_cm: float = PRECIPITABLE_WATER_CM, top_altit
     """An absorbing water-vapour constituent holding ``precipitable_water_cm`` [cm] in
     [0, 10] on an exponential profile of ``scale_height_m``; its band optical depths matched
     at ``reference_airmass`` (module docstring)."""
-    from skydome.atmosphere import Constituent
+    from skydome.atmosphere._constituent import Constituent
 
     w = check_number("precipitable_water_cm", precipitable_water_cm, 0.0, 10.0, "cm")
     m = _check_airmass(reference_airmass)
@@ -102,7 +102,7 @@ def mixed_gases(top_altitude_m: float = 100e3, *, scale_height_m: float = H_RAYL
                 reference_airmass: float = REFERENCE_AIRMASS):
     """The uniformly mixed gases (O2 with its A and B bands, CO2) of a sea-level column,
     with the air density (exponential profile of ``scale_height_m``, the Rayleigh one)."""
-    from skydome.atmosphere import Constituent
+    from skydome.atmosphere._constituent import Constituent
 
     m = _check_airmass(reference_airmass)
     profile = ExponentialProfile(scale_height_m)

@@ -63,7 +63,7 @@ from typing import Any, Callable, NamedTuple
 import numpy as np
 
 from skydome._validate import as_wavelengths, check_int, check_number
-from skydome.atmosphere import Constituent
+from skydome.atmosphere._constituent import Constituent
 from skydome.atmosphere.profiles import DensityProfile
 
 __all__ = ["mie_series", "lognormal_nodes", "MieOptics", "MieAerosol", "MieConstituent",
@@ -354,7 +354,7 @@ class MieConstituent(Constituent):
 def mie_phase_table(aerosol: "MieAerosol"):
     """The aerosol's Lorenz-Mie phase function as a :class:`~skydome.atmosphere.TabulatedPhase`
     (computed per wavelength grid, normalised by construction, [BH83] eq. 3.16)."""
-    from skydome.atmosphere import TabulatedPhase
+    from skydome.atmosphere._constituent import TabulatedPhase
 
     return TabulatedPhase.from_function(aerosol.phase_table, f"Lorenz-Mie {aerosol!r}",
                                         normalise=False)
@@ -414,15 +414,17 @@ def mie_constituent(aerosol: MieAerosol, profile: DensityProfile, *,
 
 
 # ---------------------------------------------------------------------------------------------
-def layered_mie_atmosphere(kind: str, *, optical_depth_550: float, median_radius_um: float,
+def layered_mie_atmosphere(atmosphere_cls, kind: str, *, optical_depth_550: float, median_radius_um: float,
                            geometric_std: float, refractive_index: Any, layer_altitude_m: float,
                            layer_width_m: float, background_turbidity: float,
                            n_radii: int = 41, **earth_kwargs):
     """Atmosphere.earth(turbidity=background_turbidity, ...) plus an elevated Gaussian
     layer of Mie particles (the body of :meth:`Atmosphere.volcanic_ash` and
-    :meth:`Atmosphere.forest_fire_smoke`)."""
-    from skydome.atmosphere import Atmosphere
+    :meth:`Atmosphere.forest_fire_smoke`, which pass their class as ``atmosphere_cls``: this
+    module builds constituents and does not import the package that calls it)."""
     from skydome.atmosphere.profiles import GaussianLayerProfile
+
+    Atmosphere = atmosphere_cls
 
     z = check_number("layer_altitude_m", layer_altitude_m, 0.0, 80e3, "m")
     w = check_number("layer_width_m", layer_width_m, 10.0, 20e3, "m")
