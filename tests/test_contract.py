@@ -70,7 +70,13 @@ COMPANIONS: dict[tuple[str, str], dict] = {
 EAGER = {"precomputed"}
 
 #: Declared ranges known to differ from the enforced ones, with the reason.
-KNOWN: dict = {}   # (model, parameter, side) -> why a declared bound is not the enforced one
+_CLEAR_SKY = ("the declared bound is the range of the value alone; the beam is refused "
+              "there by gendaylit's clear-sky limit (direct normal irradiance <= 1367 W/m^2, "
+              "illuminance <= 127.5 klx; perez1993.clear_sky_limit_exceeded), a joint rule "
+              "that invalid='black' turns into gendaylit's zero sky")
+KNOWN: dict = {   # (model, parameter, side) -> why a declared bound is not the enforced one
+    (name, param, "high"): _CLEAR_SKY for name, param in (
+        ("perez1993", "dni"), ("perez1993", "dni_illuminance"), ("asrc_cie", "dni"))}
 
 
 def _kwargs(name, **extra):
