@@ -45,6 +45,7 @@ import numpy as np
 
 from skydome.export.conventions import Convention, Units, get_convention, resolve_units
 from skydome.imaging.projections import Projection
+from skydome.imaging import _one_blas_thread
 
 __all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envmap",
            "FACES", "LAYOUTS", "cube_face_direction", "cube_face_from_direction",
@@ -501,20 +502,25 @@ def check_envmap_options(convention, layout, size, sun="separate", ground="lambe
     return conv, layout, _parse_size(layout, size)
 
 
-def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray) -> np.ndarray:
+def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray, block: int = 262144) -> np.ndarray:
     """The map's linear sRGB / 683 (H, W, 3) of an XYZ image, out-of-gamut negatives
-    clipped, 0 where masked: one matrix product over the pixels, in place after it."""
+    clipped, 0 where masked; computed in place in ``xyz`` (returned), in blocks of pixels:
+    no full-size temporaries (on a 4096 x 2048 map each costs more in fresh pages than
+    the arithmetic)."""
     from skydome.spectra import xyz_to_linear_srgb
 
-    H, W = xyz.shape[:2]
-    rgb = xyz_to_linear_srgb(xyz.reshape(-1, 3)).reshape(H, W, 3)
     if not mask.all():
-        rgb[~mask] = 0.0
-    rgb /= K_M
-    np.maximum(rgb, 0.0, out=rgb)                      # out-of-gamut negatives clipped
-    return rgb
+        xyz[~mask] = 0.0
+    flat = xyz.reshape(-1, 3)
+    for start in range(0, flat.shape[0], block):
+        b = flat[start:start + block]
+        b[...] = xyz_to_linear_srgb(b)
+        b /= K_M
+        np.maximum(b, 0.0, out=b)                      # out-of-gamut negatives clipped
+    return xyz
 
 
+@_one_blas_thread
 def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
                   layout: str | None = None, sun: str = "separate", ground: str = "lambertian",
                   ground_albedo: float | None = None, wavelengths_nm=None,
@@ -591,7 +597,7 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
                 progress(base + (size if k >= n else k * size // max(n, 1)), total)
         img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
                      ground=render_ground)
-        images[name] = _xyz_to_map_rgb(img.data, img.mask)
+        images[name] = _xyz_to_map_rgb(img.data, img.mask)   # (the image's own array)
         done[0] += proj.width * proj.height
         sun_light = img.sun_light                      # the same for every image
 

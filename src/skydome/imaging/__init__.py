@@ -21,6 +21,24 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
            "Projection"]
 
 
+def _one_blas_thread(fn):
+    """Run ``fn`` with BLAS limited to one thread. The render path's products are skinny
+    (a chunk of pixels times an (n x 3) matrix): OpenBLAS's thread pool, spin-waiting
+    against numba's between the kernels, made them cost 0.3-3.3 s of CPU for the 8 M
+    pixels of a 4096 x 2048 map against 0.04-0.1 s on one thread (2-core EPYC,
+    docs/performance.md); one thread gives the same values."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapped(*args, **kwargs):
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+    return wrapped
+
+
+@_one_blas_thread
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
            chunk: int = 262144, limb_darkening: bool = True, ground="model",
@@ -128,12 +146,12 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     sampled = mask
     if on_ground and ground != "model":
         sampled = mask & ~(dirs[..., 2] < 0.0)
-    idx = np.flatnonzero(sampled)
-    total = idx.size
-    if total and idx[-1] - idx[0] + 1 == total:
-        # one run of pixels (a lat-long map's sky, cube faces): contiguous chunks, no
-        # gather and scatter through an index array
-        first, idx = int(idx[0]), None
+    flat_s = sampled.reshape(-1)
+    total = int(np.count_nonzero(flat_s))
+    first = int(np.argmax(flat_s)) if total else 0
+    # one run of pixels (a lat-long map's sky, cube faces): contiguous chunks, no gather
+    # and scatter through an index array
+    idx = None if bool(flat_s[first:first + total].all()) else np.flatnonzero(flat_s)
     data = np.zeros((H, W, n_ch), dtype=np.float64)
     flat_data = data.reshape(-1, n_ch)
     for start in range(0, total, chunk):
