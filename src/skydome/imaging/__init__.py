@@ -22,19 +22,36 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
 
 
 def _one_blas_thread(fn):
-    """Run ``fn`` with BLAS limited to one thread. The render path's products are skinny
-    (a chunk of pixels times an (n x 3) matrix): OpenBLAS's thread pool, spin-waiting
-    against numba's between the kernels, made them cost 0.3-3.3 s of CPU for the 8 M
-    pixels of a 4096 x 2048 map against 0.04-0.1 s on one thread (2-core EPYC,
-    docs/performance.md); one thread gives the same values."""
+    """Run ``fn`` with BLAS limited to one thread and numpy's new arrays on small pages.
+
+    The render path's products are skinny (a chunk of pixels times an (n x 3) matrix):
+    OpenBLAS's thread pool, spin-waiting against numba's between the kernels, made them
+    cost 0.3-3.3 s of CPU for the 8 M pixels of a 4096 x 2048 map against 0.04-0.1 s on
+    one thread; one thread gives the same values. numpy advises transparent huge pages for
+    large arrays, and on the 2-core EPYC virtual machine of docs/performance.md the first
+    touch of a 2 MiB page is slow: a fresh process's first 4096 x 2048 map of
+    preetham1999 took 4.7 s (3.2 s CPU) with them, 1.7 s (1.1 s) without. The previous
+    advice is restored on return (the command line sets NUMPY_MADVISE_HUGEPAGE=0)."""
     import functools
 
     @functools.wraps(fn)
     def wrapped(*args, **kwargs):
         from threadpoolctl import threadpool_limits
 
-        with threadpool_limits(limits=1, user_api="blas"):
-            return fn(*args, **kwargs)
+        try:
+            from numpy._core.multiarray import _set_madvise_hugepage
+        except ImportError:                                    # numpy < 2
+            try:
+                from numpy.core.multiarray import _set_madvise_hugepage
+            except ImportError:
+                _set_madvise_hugepage = None
+        prev = None if _set_madvise_hugepage is None else _set_madvise_hugepage(False)
+        try:
+            with threadpool_limits(limits=1, user_api="blas"):
+                return fn(*args, **kwargs)
+        finally:
+            if prev is not None:
+                _set_madvise_hugepage(prev)
     return wrapped
 
 
