@@ -16,13 +16,15 @@ import sys
 
 def main() -> None:  # console-script entry point
     argv = sys.argv[1:]
+    # Before numpy is imported: no transparent huge pages for its large arrays (a matrix
+    # held whole for a .npy or ascii output, the Perez work arrays, an environment map's
+    # directions and pixels). On the 2-core EPYC virtual machine of docs/performance.md the
+    # first touch of a 2 MiB page is slow: filling a new 161 MB array cost 0.37-0.44 s of
+    # system time with them, 0.06-0.09 s with 4 KiB pages; a 4096 x 2048 environment map
+    # of preetham1999 took 4.7 s (3.2 s CPU) in a fresh process with them, 1.7 s (1.1 s)
+    # without. A value set by the user is kept.
+    os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
     if argv[:1] == ["skymatrix"]:
-        # Before numpy is imported: no transparent huge pages for its large arrays (a
-        # matrix held whole for a .npy or ascii output, the Perez work arrays). On the 2-core
-        # EPYC virtual machine of docs/performance.md the first touch of a 2 MiB page is
-        # slow: filling a new 161 MB array cost 0.37-0.44 s of system time with them,
-        # 0.06-0.09 s with 4 KiB pages. A value set by the user is kept.
-        os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
         from skydome.cli.skymatrix_fast import fast_skymatrix, parse_fast_options
 
         opts = parse_fast_options(argv[1:])  # no numpy imported yet

@@ -589,12 +589,12 @@ def xyz_to_linear_srgb(xyz) -> np.ndarray:
     numpy.ndarray
         Shape (..., 3), linear R, G, B (may be negative out of gamut or above 1).
     """
-    return _as_triples(xyz, "xyz") @ _M_XYZ_TO_SRGB.T
+    return np.dot(_as_triples(xyz, "xyz"), _M_XYZ_TO_SRGB.T)   # = @, several times faster
 
 
 def linear_srgb_to_xyz(rgb) -> np.ndarray:
     """XYZ from linear sRGB (inverse of :func:`xyz_to_linear_srgb`); shape (..., 3)."""
-    return _as_triples(rgb, "rgb") @ _M_SRGB_TO_XYZ.T
+    return np.dot(_as_triples(rgb, "rgb"), _M_SRGB_TO_XYZ.T)
 
 
 def xyz_to_acescg(xyz) -> np.ndarray:
@@ -614,12 +614,12 @@ def xyz_to_acescg(xyz) -> np.ndarray:
     numpy.ndarray
         Shape (..., 3), linear ACEScg R, G, B on the scale of the input.
     """
-    return _as_triples(xyz, "xyz") @ _M_XYZ_D65_TO_ACESCG.T
+    return np.dot(_as_triples(xyz, "xyz"), _M_XYZ_D65_TO_ACESCG.T)
 
 
 def acescg_to_xyz(rgb) -> np.ndarray:
     """D65-referred XYZ from ACEScg (inverse of :func:`xyz_to_acescg`); shape (..., 3)."""
-    return _as_triples(rgb, "rgb") @ _M_ACESCG_TO_XYZ_D65.T
+    return np.dot(_as_triples(rgb, "rgb"), _M_ACESCG_TO_XYZ_D65.T)
 
 
 def srgb_encode(linear) -> np.ndarray:

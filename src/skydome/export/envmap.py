@@ -45,6 +45,7 @@ import numpy as np
 
 from skydome.export.conventions import Convention, Units, get_convention, resolve_units
 from skydome.imaging.projections import Projection
+from skydome.imaging import _one_blas_thread
 
 __all__ = ["MapProjection", "CubeFaceProjection", "EnvironmentMap", "render_envmap",
            "FACES", "LAYOUTS", "cube_face_direction", "cube_face_from_direction",
@@ -80,11 +81,14 @@ class _Cached:
 
     def directions(self):
         if getattr(self, "_dirs", None) is None:
-            d, m = Projection.directions(self)
+            d, m = self._pixel_directions()
             d.setflags(write=False)
             m.setflags(write=False)
             self._dirs = (d, m)
         return self._dirs
+
+    def _pixel_directions(self):
+        return Projection.directions(self)
 
     def solid_angles(self):
         if getattr(self, "_omega", None) is None:
@@ -122,6 +126,30 @@ class MapProjection(_Cached, Projection):
 
         u, v = self.convention.uv_from_direction(_as_dirs(directions))
         return v * self.height, u * self.width
+
+    def _pixel_directions(self):
+        """The pixel centres' directions; a lat-long map's are separable: every lat-long
+        layout has v = zenith angle / pi, so d(u, v) = sin(pi v) h(u) + cos(pi v) up, with
+        h(u) the horizontal unit vector of column u. Computed as that outer product (one
+        sin and cos per row and per column instead of per pixel), the same values, bit for
+        bit, as direction_from_pixel at every centre (the tool -> ENU matrices are signed
+        permutations: exact)."""
+        if self.layout != "latlong":
+            return Projection.directions(self)
+        v = (np.arange(self.height, dtype=np.float64) + 0.5) / self.height
+        u = (np.arange(self.width, dtype=np.float64) + 0.5) / self.width
+        conv = self.convention
+        up = conv.direction_from_uv(0.0, 0.0)
+        if not np.array_equal(up, (0.0, 0.0, 1.0)):
+            return Projection.directions(self)
+        h = conv.direction_from_uv(u, np.full_like(u, 0.5))   # sin(pi / 2) = 1 exactly
+        h[:, 2] = 0.0                                         # cos(pi / 2) is 6e-17, not 0
+        s, c = np.sin(np.pi * v), np.cos(np.pi * v)
+        d = np.empty((self.height, self.width, 3))
+        np.multiply(s[:, None], h[None, :, 0], out=d[..., 0])
+        np.multiply(s[:, None], h[None, :, 1], out=d[..., 1])
+        d[..., 2] = c[:, None]
+        return d, np.ones((self.height, self.width), dtype=bool)
 
     def _jacobian(self, row, col) -> np.ndarray:
         if self.layout == "latlong":
@@ -474,6 +502,25 @@ def check_envmap_options(convention, layout, size, sun="separate", ground="lambe
     return conv, layout, _parse_size(layout, size)
 
 
+def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray, block: int = 262144) -> np.ndarray:
+    """The map's linear sRGB / 683 (H, W, 3) of an XYZ image, out-of-gamut negatives
+    clipped, 0 where masked; computed in place in ``xyz`` (returned), in blocks of pixels:
+    no full-size temporaries (on a 4096 x 2048 map each costs more in fresh pages than
+    the arithmetic)."""
+    from skydome.spectra import xyz_to_linear_srgb
+
+    if not mask.all():
+        xyz[~mask] = 0.0
+    flat = xyz.reshape(-1, 3)
+    for start in range(0, flat.shape[0], block):
+        b = flat[start:start + block]
+        b[...] = xyz_to_linear_srgb(b)
+        b /= K_M
+        np.maximum(b, 0.0, out=b)                      # out-of-gamut negatives clipped
+    return xyz
+
+
+@_one_blas_thread
 def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
                   layout: str | None = None, sun: str = "separate", ground: str = "lambertian",
                   ground_albedo: float | None = None, wavelengths_nm=None,
@@ -544,13 +591,13 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
     for name, proj in projections.items():
         base = done[0]
 
-        def prog(k, _n, base=base):
+        def prog(k, n, base=base, size=proj.width * proj.height):
+            # render reports the pixels it samples (not those the ground replaces)
             if progress is not None:
-                progress(base + k, total)
+                progress(base + (size if k >= n else k * size // max(n, 1)), total)
         img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
                      ground=render_ground)
-        rgb = np.where(img.mask[..., None], img.linear_srgb(), 0.0) / K_M
-        images[name] = np.maximum(rgb, 0.0)            # out-of-gamut negatives clipped
+        images[name] = _xyz_to_map_rgb(img.data, img.mask)   # (the image's own array)
         done[0] += proj.width * proj.height
         sun_light = img.sun_light                      # the same for every image
 

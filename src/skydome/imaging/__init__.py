@@ -21,6 +21,41 @@ __all__ = ["render", "Equirect", "Fisheye", "AngularMap", "make_projection", "Sk
            "Projection"]
 
 
+def _one_blas_thread(fn):
+    """Run ``fn`` with BLAS limited to one thread and numpy's new arrays on small pages.
+
+    The render path's products are skinny (a chunk of pixels times an (n x 3) matrix):
+    OpenBLAS's thread pool, spin-waiting against numba's between the kernels, made them
+    cost 0.3-3.3 s of CPU for the 8 M pixels of a 4096 x 2048 map against 0.04-0.1 s on
+    one thread; one thread gives the same values. numpy advises transparent huge pages for
+    large arrays, and on the 2-core EPYC virtual machine of docs/performance.md the first
+    touch of a 2 MiB page is slow: a fresh process's first 4096 x 2048 map of
+    preetham1999 took 4.7 s (3.2 s CPU) with them, 1.7 s (1.1 s) without. The previous
+    advice is restored on return (the command line sets NUMPY_MADVISE_HUGEPAGE=0)."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapped(*args, **kwargs):
+        from threadpoolctl import threadpool_limits
+
+        try:
+            from numpy._core.multiarray import _set_madvise_hugepage
+        except ImportError:                                    # numpy < 2
+            try:
+                from numpy.core.multiarray import _set_madvise_hugepage
+            except ImportError:
+                _set_madvise_hugepage = None
+        prev = None if _set_madvise_hugepage is None else _set_madvise_hugepage(False)
+        try:
+            with threadpool_limits(limits=1, user_api="blas"):
+                return fn(*args, **kwargs)
+        finally:
+            if prev is not None:
+                _set_madvise_hugepage(prev)
+    return wrapped
+
+
+@_one_blas_thread
 def render(sky, projection: Projection, wavelengths_nm=None, *,
            progress: Callable[[int, int], None] | None = None, draw_sun: bool = True,
            chunk: int = 262144, limb_darkening: bool = True, ground="model",
@@ -121,13 +156,24 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     if fused:
         sample, to_xyz = _fused_sampler(sky, wl)
         n_ch = 3
-    idx = np.flatnonzero(mask)
     flat_dirs = dirs.reshape(-1, 3)
-    total = idx.size
+    on_ground = not np.any(np.asarray(getattr(projection, "position", (0.0, 0.0, 0.0))) != 0.0)
+    # the pixels the model is sampled at: all the mask's, but those below the horizon where
+    # the ground replaces them (black or Lambertian: apply_ground overwrites every one)
+    sampled = mask
+    if on_ground and ground != "model":
+        sampled = mask & ~(dirs[..., 2] < 0.0)
+    flat_s = sampled.reshape(-1)
+    total = int(np.count_nonzero(flat_s))
+    first = int(np.argmax(flat_s)) if total else 0
+    # one run of pixels (a lat-long map's sky, cube faces): contiguous chunks, no gather
+    # and scatter through an index array
+    idx = None if bool(flat_s[first:first + total].all()) else np.flatnonzero(flat_s)
     data = np.zeros((H, W, n_ch), dtype=np.float64)
     flat_data = data.reshape(-1, n_ch)
     for start in range(0, total, chunk):
-        rows = idx[start:start + chunk]
+        rows = (slice(first + start, first + min(start + chunk, total)) if idx is None
+                else idx[start:start + chunk])
         d = flat_dirs[rows]
         if fused:
             v = np.asarray(sample(d), dtype=np.float64) @ to_xyz
@@ -144,7 +190,7 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     if fused:
         spectral = False
     ground_info = None
-    if not np.any(np.asarray(getattr(projection, "position", (0.0, 0.0, 0.0))) != 0.0):
+    if on_ground:
         # an observer on the ground (a camera away from the origin sees no "horizon")
         ground_info = apply_ground(sky, data, dirs, mask, wl, ground,
                                    to_xyz=_xyz_weights(wl) if fused else None)
@@ -214,7 +260,9 @@ def _fused_sampler(sky, wl):
     Models with a wavelength table (``radiance_table`` per unit solar irradiance on the
     table wavelengths and the linear ``_to_wavelengths`` resampling) are sampled on their
     table and the resampling folded into M: it is linear, so its matrix is its image of the
-    identity. Other spectral models are sampled at ``wl``."""
+    identity. Models with ``_spectral_basis(wl)`` -> (sample, B), radiance = sample(d) @ B,
+    are sampled on their basis and B folded into M. Other spectral models are sampled at
+    ``wl``."""
     M = _xyz_weights(wl)
     table = getattr(sky, "radiance_table", None)
     resample = getattr(sky, "_to_wavelengths", None)
@@ -223,4 +271,12 @@ def _fused_sampler(sky, wl):
         R = np.asarray(resample(np.eye(int(n_t)), wl), dtype=np.float64)  # (n_table, n_wl)
         if R.shape == (int(n_t), wl.size) and np.all(R >= 0.0):
             return table, R @ M
+    # models whose spectrum is a fixed linear map of a few basis values per direction
+    # (hosek_wilkie2012: 11 bands interpolated in wavelength): the map folded into M
+    basis = getattr(sky, "_spectral_basis", None)
+    if callable(basis):
+        sample, B = basis(wl)
+        B = np.asarray(B, dtype=np.float64)                  # (n_basis, n_wl)
+        if B.ndim == 2 and B.shape[1] == wl.size:
+            return sample, B @ M
     return (lambda d: sky.radiance(d, wl)), M

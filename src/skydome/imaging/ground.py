@@ -133,7 +133,7 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
     if not np.any(below):
         return None
     if ground == "black":
-        data[below] = 0.0
+        np.copyto(data, 0.0, where=below[..., None])    # (no gather through a boolean index)
         return "black"
     if ground == "model" and np.any(data[below] > 0.0):
         if (getattr(sky, "own_ground", None) == "sun"
@@ -145,6 +145,6 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
         return "the model's own ground-hit rays"
     rho = _albedo(sky, wl, ground)
     L = conv(np.asarray(rho) * horizontal_irradiance(sky, wl) / np.pi)
-    data[below] = np.maximum(L, 0.0)
+    np.copyto(data, np.maximum(L, 0.0), where=below[..., None])
     return (f"Lambertian, albedo {np.round(np.ravel(rho), 4).tolist()}, lit by the model's "
             "sky and sun (observer on the ground)")

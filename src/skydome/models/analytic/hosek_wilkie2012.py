@@ -274,6 +274,13 @@ class HosekWilkie2012(SkyModel):
         w = as_wavelengths(wavelengths_nm, *ACCEPTED_RANGE)
         return self._eval(directions, "spectral") @ _band_weights(w).T
 
+    def _spectral_basis(self, wavelengths_nm):
+        """(sample, B): ``radiance(d, wavelengths_nm) == sample(d) @ B`` with ``sample(d)``
+        the (n, 11) band radiances and B the (11, n_wl) interpolation weights, so that a
+        renderer can fold B into its spectrum -> XYZ weights (skydome.imaging.render)."""
+        w = as_wavelengths(wavelengths_nm, *ACCEPTED_RANGE)
+        return (lambda d: self._eval(d, "spectral")), _band_weights(w).T
+
     def xyz(self, directions) -> np.ndarray:
         """CIE 1931 XYZ of the sky from the authors' XYZ dataset, Y in cd m^-2, (..., 3)."""
         return K_M * self._eval(directions, "xyz")

@@ -1,0 +1,128 @@
+"""Environment map and shortest-render path: wall and CPU time per stage, warm caches.
+
+In process, for a 4096x2048 lat-long half-float map of ``hosek_wilkie2012``,
+``preetham1999`` and ``precomputed`` (sun at 30 deg, azimuth 135 deg, the CLI's 16
+wavelengths, Lambertian ground, the sun as a separate light) it prints the stages of
+:func:`skydome.export.envmap.render_envmap` and the write:
+
+* ``directions``: the map projection's pixel directions (a fresh projection);
+* ``render``: :func:`skydome.imaging.render` (``output="xyz"``, ground included);
+* ``envmap``: the whole :func:`render_envmap` (render, RGB, sun light, metadata);
+* ``write``: ``EnvironmentMap.write(half=True)`` (EXR, half floats);
+
+and the 512 px fisheye render of the precomputed sky (the shortest ``skydome render``).
+Then, in fresh ``python -m skydome`` processes (tables and numba caches warm), the
+commands ``export envmap --size 4096x2048 --half`` for each model and
+``render --sun-elevation 30 --out x.png``, the best of ``--repeat`` runs (wall and the
+child's CPU time). The machine is shared: compare runs made at the same load (printed).
+
+Run: ``PYTHONPATH=src python benchmarks/bench_envmap_path.py [--repeat N] [--no-cli]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+MODELS = ("hosek_wilkie2012", "preetham1999", "precomputed")
+SIZE = "4096x2048"
+
+
+def _clock(fn):
+    w0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - w0, time.process_time() - c0
+
+
+def _row(name, wall, cpu):
+    print(f"  {name:34s} wall {wall:6.2f} s   cpu {cpu:6.2f} s", flush=True)
+
+
+def in_process(folder: str) -> None:
+    import skydome as sd
+    from skydome.export.envmap import MapProjection, render_envmap
+    from skydome.imaging import Fisheye, render
+    from skydome.spectra import wavelength_grid
+
+    wl = wavelength_grid(380.0, 780.0, n=16)
+    sun = sd.Sun(elevation_deg=30.0, azimuth_deg=135.0)
+    W, H = (int(v) for v in SIZE.split("x"))
+    for name in MODELS:
+        print(f"{name}: {SIZE} half EXR, in process", flush=True)
+        sky, w, c = _clock(lambda: sd.model(name, sun=sun))
+        _row("model (warm caches)", w, c)
+        render_envmap(sky, "skydome", "64x32", wavelengths_nm=wl)      # warm the kernels
+        proj, w, c = _clock(lambda: MapProjection("skydome", W, H))
+        _, w, c = _clock(proj.directions)
+        _row("directions", w, c)
+        _, w, c = _clock(lambda: render(sky, proj, wl, draw_sun=False, output="xyz",
+                                        ground="lambertian"))
+        _row("render (xyz, ground)", w, c)
+        env, w1, c1 = _clock(lambda: render_envmap(sky, "skydome", SIZE, wavelengths_nm=wl))
+        _row("render_envmap (total)", w1, c1)
+        path = os.path.join(folder, f"{name}.exr")
+        _, w2, c2 = _clock(lambda: env.write(path, half=True))
+        _row("write (half EXR)", w2, c2)
+        _row("render_envmap + write", w1 + w2, c1 + c2)
+    print("precomputed: 512 px fisheye render, in process", flush=True)
+    sky, w, c = _clock(lambda: sd.model("precomputed", sun=sd.Sun(elevation_deg=30.0,
+                                                                  azimuth_deg=180.0)))
+    _row("model (warm caches)", w, c)
+    img, w1, c1 = _clock(lambda: render(sky, Fisheye(512), wl, output="xyz"))
+    _row("render", w1, c1)
+    _, w2, c2 = _clock(lambda: img.save(os.path.join(folder, "x.png")))
+    _row("save (png)", w2, c2)
+
+
+def _cli(args, repeat: int) -> tuple[float, float]:
+    best = (float("inf"), float("inf"))
+    for _ in range(repeat):
+        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "skydome", *args], check=True,
+                       capture_output=True)
+        wall = time.perf_counter() - t0
+        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+        best = min(best, (wall, cpu))
+    return best
+
+
+def fresh_processes(folder: str, repeat: int) -> None:
+    print(f"fresh processes (python -m skydome, best of {repeat})", flush=True)
+    for name in MODELS:
+        out = os.path.join(folder, f"cli_{name}.exr")
+        w, c = _cli(["export", "envmap", "--model", name, "--size", SIZE, "--half",
+                     "--out", out], repeat)
+        _row(f"export envmap {name}", w, c)
+    w, c = _cli(["render", "--sun-elevation", "30", "--out", os.path.join(folder, "x.png")],
+                repeat)
+    _row("render --sun-elevation 30 (512 px)", w, c)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeat", type=int, default=2, help="fresh-process runs per command")
+    ap.add_argument("--no-cli", action="store_true", help="skip the fresh processes")
+    ap.add_argument("--no-inprocess", action="store_true", help="skip the in-process stages")
+    a = ap.parse_args()
+    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo")
+                if ln.startswith("model name")), platform.processor())
+    print(f"machine: {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}; "
+          f"load average at start {os.getloadavg()[0]:.1f}")
+    with tempfile.TemporaryDirectory() as folder:
+        if not a.no_inprocess:
+            in_process(folder)
+        if not a.no_cli:
+            fresh_processes(folder, a.repeat)
+    print(f"load average at end {os.getloadavg()[0]:.1f}")
+
+
+if __name__ == "__main__":
+    main()
