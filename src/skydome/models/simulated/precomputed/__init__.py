@@ -376,12 +376,49 @@ class PrecomputedSky(SkyModel):
             out[:] = 0.0
             return out
         ss_s, ms_s = self._observer_slices()
+        geom = self._slice_geometry()
+        ss_map = self._twilight_single_scattering()
+        if ss_map is not None:
+            ss_s, geom = ss_map, np.append(geom, 1.0)
         t = self._t
         _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
                            t.phase_code, t.phase_param, t.kernel_phase_table, ms_s, t.columns,
                            t.beta_e, t.ground_albedo, t.irradiance, scale, self._R, self._Rt,
-                           self._alpha, self._slice_geometry(), out)
+                           self._alpha, geom, out)
         return out
+
+    def _twilight_single_scattering(self):
+        """With the sun below the horizon (and the observer's sky map of orders 2..N in use):
+        single scattering on that sky map, integrated for the observer's own r and mu_s with
+        every ray split at the earth's shadow (:func:`._twilight.single_scattering_slice`),
+        instead of the 4-D table interpolated at them; None otherwise (the sun above the
+        horizon: the table, as before)."""
+        from skydome.models.simulated.precomputed import _geometry, _twilight
+
+        mu_s = float(self.sun.direction[2])
+        geom = self._slice_geometry()
+        if mu_s >= 0.0 or geom[0] <= 0.0:
+            return None
+        cache = self.__dict__.setdefault("_twilight_cache", {})
+        key = (self._r0, mu_s)
+        if key not in cache:
+            t = self._t
+            n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
+            th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
+                                 th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
+            ground = np.arange(n_g + n_s) < n_g
+            cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
+            rx, rw = _geometry.gauss_rule(_twilight.TWILIGHT_SS_NODES)
+            out = np.empty((t.scattering_index.size, n_g + n_s, _SLICE_PHI, self.n_wavelengths))
+            _twilight.single_scattering_slice(
+                t.columns, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
+                np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64), t.beta_e,
+                self._R, self._Rt, self._alpha, self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw,
+                np.cos(th), ground, cphi, out)
+            if len(cache) > 8:
+                cache.clear()
+            cache[key] = out
+        return cache[key]
 
     def _transmittance_table(self, r, mu):
         from skydome.models.simulated.precomputed import _lookup
