@@ -393,7 +393,8 @@ class PrecomputedSky(SkyModel):
         every ray split at the earth's shadow (:func:`._twilight.single_scattering_slice`),
         instead of the 4-D table interpolated at them; None otherwise (the sun above the
         horizon: the table, as before)."""
-        from skydome.models.simulated.precomputed import _geometry, _twilight
+        from skydome.models.simulated.precomputed import _twilight
+        from skydome.transport._quadrature import gauss_legendre_unit
 
         mu_s = float(self.sun.direction[2])
         geom = self._slice_geometry()
@@ -408,13 +409,12 @@ class PrecomputedSky(SkyModel):
                                  th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
             ground = np.arange(n_g + n_s) < n_g
             cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
-            rx, rw = _geometry.gauss_rule(_twilight.TWILIGHT_SS_NODES)
+            rx, rw = gauss_legendre_unit(_twilight.TWILIGHT_SS_NODES)
             out = np.empty((t.scattering_index.size, n_g + n_s, _SLICE_PHI, self.n_wavelengths))
             _twilight.single_scattering_slice(
-                t.columns, t.profile_code, t.profile_p0, t.profile_p1, t.scattering_index,
-                np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64), t.beta_e,
-                self._R, self._Rt, self._alpha, self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw,
-                np.cos(th), ground, cphi, out)
+                t.columns, tables_medium(t), t.scattering_index,
+                np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64), self._alpha,
+                self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw, np.cos(th), ground, cphi, out)
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out

@@ -24,7 +24,9 @@ from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_
 from skydome.models.simulated.precomputed._lookup import (columns_at, columns_segment,
                                                            sun_visible_fraction)
 from skydome.transport._geometry import lowest_point
-from skydome.transport._kernels import profile_density, view_break_points
+from skydome.transport._kernels import view_break_points
+from skydome.transport._medium import profile_density
+from skydome.transport._quadrature import piece_nodes_rule
 
 # Gauss-Legendre nodes per piece of a ray (ends, lowest point, shadow crossings) in
 # v = ln(1 + u / ts), dense at the piece's end nearer the lowest point or the shadow
@@ -34,23 +36,32 @@ TWILIGHT_SS_NODES = 24
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def single_scattering_slice(col, codes, p0s, p1s, sc_idx, beta_s, beta_e, R, Rt, alpha, r, mu_s,
-                            ts, rx, rw, mu_nodes, ground_nodes, cphi_nodes, out):
+def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, mu_nodes,
+                            ground_nodes, cphi_nodes, out):
     """out[k, mu, phi, l] = beta_s,k(l) int_0^d rho_k(r_t) T(r, mu, t) T_sun(r_t, mu_s_t)
     v(r_t, mu_s_t) dt ([BN08] eq. 4 without the phase function; v the visible fraction of
-    the sun's disc, :func:`._lookup.sun_visible_fraction`) for an observer at radius r,
+    the sun's disc, :func:`._lookup.sun_visible_fraction`, alpha its angular radius) in the
+    medium m (:class:`skydome.transport._medium.Medium`; its scattering constituents
+    ``sc_idx``, beta_s,k = beta_s[k]) for an observer at radius r,
     the sun at zenith cosine mu_s, on the sky map of view zenith cosines ``mu_nodes``
     (``ground_nodes``: the ray ends on the ground) x azimuths from the sun's with cosines
     ``cphi_nodes``. Both transmittances from the column table ``col`` (exact exponent);
     the ray split at its lowest point and where it crosses the shadow's boundary
     (:func:`skydome.transport._kernels.view_break_points`), the rule (rx, rw) on [0, 1]
-    (:func:`._geometry.gauss_rule`) in v = ln(1 + u / ts) on every piece."""
+    (:func:`skydome.transport._quadrature.gauss_legendre_unit`) in v = ln(1 + u / ts) on
+    every piece (:func:`skydome.transport._quadrature.piece_nodes_rule`)."""
     nsc = out.shape[0]
     n_mu = out.shape[1]
     n_phi = out.shape[2]
     nl = out.shape[3]
     nc = col.shape[0]
     n_x = rx.shape[0]
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
     for imu in prange(n_mu):
         w1 = np.empty(nc)
         w2 = np.empty(nc)
@@ -59,6 +70,8 @@ def single_scattering_slice(col, codes, p0s, p1s, sc_idx, beta_s, beta_e, R, Rt,
         dens = np.empty(nsc)
         acc = np.empty((nsc, nl))
         brk = np.empty(6)
+        tq = np.empty(n_x)
+        tw = np.empty(n_x)
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
@@ -73,12 +86,10 @@ def single_scattering_slice(col, codes, p0s, p1s, sc_idx, beta_s, beta_e, R, Rt,
                 b = brk[q + 1]
                 if b - a <= 0.0:
                     continue
-                dense_at_b = b <= tmin
-                V = math.log1p((b - a) / ts)
+                piece_nodes_rule(a, b, b <= tmin, rx, rw, ts, tq, tw, 0)
                 for k in range(n_x):
-                    u = ts * math.expm1(V * rx[k])
-                    t = b - u if dense_at_b else a + u
-                    wq = (u + ts) * V * rw[k]
+                    t = tq[k]
+                    wq = tw[k]
                     rt = point_along(r, mu, t, R, Rt)
                     mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
                     vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
