@@ -122,3 +122,20 @@ def test_sky_step_where_the_sun_crosses_the_horizon(sky):
     r = down.radiance(d, [550.0])[:, 0] / up.radiance(d, [550.0])[:, 0] - 1.0
     assert np.sqrt(np.mean(r ** 2)) < 0.005, r
     assert np.abs(r).max() < 0.01, r
+
+
+@pytest.mark.parametrize("elevation", [-4.0, -8.0])
+def test_aerial_perspective_beyond_the_top_is_the_twilight_sky(sky, elevation):
+    """As by day (tests/test_precomputed.py, test_aerial_perspective_limits): a path beyond
+    the top of the atmosphere in-scatters the sky itself, here with single scattering at
+    the observer as in radiance() (the 4-D table's single scattering differs from it by up
+    to some 10 % in twilight, docs/models.md); distance 0 in-scatters nothing."""
+    m = sky.with_sun(sd.Sun(elevation_deg=elevation, azimuth_deg=180.0))
+    d = sd.direction_from_angles(np.array([2.0, 10.0, 20.0, 45.0, 89.0]),
+                                 np.array([0.0, 180.0, 90.0, 0.0, 0.0]))
+    wl = [450.0, 550.0, 650.0]
+    _, s_inf = m.aerial_perspective(d, 1e7, wl)
+    np.testing.assert_allclose(s_inf, m.radiance(d, wl), rtol=1e-6)
+    t0, s0 = m.aerial_perspective(d, 0.0, wl)
+    np.testing.assert_allclose(t0, 1.0, atol=1e-6)
+    np.testing.assert_allclose(s0, 0.0, atol=1e-12)

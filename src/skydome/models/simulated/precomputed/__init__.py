@@ -512,9 +512,16 @@ class PrecomputedSky(SkyModel):
             no_ground = np.zeros_like(t.ground_albedo)
             one = np.ones(nl)
             a_sl, a_tab = np.empty_like(ins), np.empty_like(ins)
-            for ms_x, o, geom in ((ms_s, a_sl, self._slice_geometry()),
-                                  (ms_tab, a_tab, self._slice_geometry(table=True))):
-                _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), zero,
+            cases = ((zero, ms_s, a_sl, self._slice_geometry()),
+                     (zero, ms_tab, a_tab, self._slice_geometry(table=True)))
+            ss_map = self._twilight_single_scattering()
+            if ss_map is not None:
+                # the sun below the horizon: single scattering at the observer too (as in
+                # radiance()), in place of the table's
+                cases = ((ss_map, ms_s, a_sl, np.append(self._slice_geometry(), 1.0)),
+                         (ss_s, ms_tab, a_tab, self._slice_geometry(table=True)))
+            for ss_x, ms_x, o, geom in cases:
+                _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_x,
                                    t.phase_code, t.phase_param, t.kernel_phase_table, ms_x,
                                    t.columns, t.beta_e, no_ground, t.irradiance, one, self._R, self._Rt, self._alpha,
                                    geom, o)
