@@ -38,7 +38,8 @@ def sky():
     ref = np.load(CIVIL)
     return sd.model("precomputed", sun=sd.Sun(elevation_deg=-4.0, azimuth_deg=180.0),
                     table_wavelengths_nm=list(ref["wavelengths_nm"]),
-                    atmosphere=Atmosphere.earth(aerosol_optical_depth=0.2))
+                    atmosphere=Atmosphere.earth(aerosol_optical_depth=0.2),
+                    twilight_single_scattering=True)
 
 
 def _errors(sky, path, elevation, table_single_scattering=False):
@@ -50,7 +51,7 @@ def _errors(sky, path, elevation, table_single_scattering=False):
     mc, err = ref[k][:, 0], ref[k + "_err"][:, 0]
     m = sky.with_sun(sd.Sun(elevation_deg=elevation, azimuth_deg=180.0))
     if table_single_scattering:
-        m.__dict__["_twilight_single_scattering"] = lambda: None
+        m.twilight_single_scattering = False
     rel = m.radiance(ref["directions"], ref["wavelengths_nm"])[:, 0] / mc - 1.0
     return rel, err / mc
 
@@ -102,7 +103,7 @@ def test_day_sky_reads_the_table(sky, elevation):
     wl = [450.0, 550.0, 650.0]
     a = m.radiance(d, wl)
     off = sky.with_sun(sd.Sun(elevation_deg=elevation, azimuth_deg=135.0))
-    off.__dict__["_twilight_single_scattering"] = lambda: None
+    off.twilight_single_scattering = False
     assert np.array_equal(a, off.radiance(d, wl))
 
 
@@ -139,3 +140,20 @@ def test_aerial_perspective_beyond_the_top_is_the_twilight_sky(sky, elevation):
     t0, s0 = m.aerial_perspective(d, 0.0, wl)
     np.testing.assert_allclose(t0, 1.0, atol=1e-6)
     np.testing.assert_allclose(s0, 0.0, atol=1e-12)
+
+
+def test_observer_single_scattering_is_opt_in(sky):
+    """The default reads single scattering from the 4-D table in twilight too (as the
+    viewer's shader and the LUT bakes do); ``twilight_single_scattering=True`` turns the
+    observer's integral on. Same tables, so the default's sky differs from the opt-in one."""
+    import copy
+
+    m = sky.with_sun(sd.Sun(elevation_deg=-6.0, azimuth_deg=180.0))
+    default = copy.copy(m)
+    default.twilight_single_scattering = False
+    assert default._twilight_single_scattering() is None
+    d = sd.direction_from_angles([10.0, 30.0], [0.0, 180.0])
+    a, b = default.radiance(d, [550.0]), m.radiance(d, [550.0])
+    assert np.all(np.isfinite(a)) and np.all(a > 0) and not np.allclose(a, b, rtol=1e-3)
+    p = next(q for q in type(sky).parameters if q.name == "twilight_single_scattering")
+    assert p.default is False and p.kind == "bool"

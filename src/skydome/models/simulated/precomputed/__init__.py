@@ -184,6 +184,11 @@ class PrecomputedSky(SkyModel):
                   "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
         Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),
+        Parameter("twilight_single_scattering", "", False,
+                  doc="sun below the horizon: single scattering integrated at the observer, "
+                      "each ray split at the earth's shadow (closer to Monte Carlo), not read "
+                      "from the 4-D table; opt-in until the viewer's shader does the same",
+                  kind="bool"),
     )
 
     def __init__(self, sun, **params):
@@ -388,7 +393,8 @@ class PrecomputedSky(SkyModel):
         return out
 
     def _twilight_single_scattering(self):
-        """With the sun below the horizon (and the observer's sky map of orders 2..N in use):
+        """With ``twilight_single_scattering`` and the sun below the horizon (and the
+        observer's sky map of orders 2..N in use):
         single scattering on that sky map, integrated for the observer's own r and mu_s with
         every ray split at the earth's shadow (:func:`._twilight.single_scattering_slice`),
         instead of the 4-D table interpolated at them; None otherwise (the sun above the
@@ -397,8 +403,10 @@ class PrecomputedSky(SkyModel):
         from skydome.transport._quadrature import gauss_legendre_unit
 
         mu_s = float(self.sun.direction[2])
+        if not getattr(self, "twilight_single_scattering", False) or mu_s >= 0.0:
+            return None
         geom = self._slice_geometry()
-        if mu_s >= 0.0 or geom[0] <= 0.0:
+        if geom[0] <= 0.0:
             return None
         cache = self.__dict__.setdefault("_twilight_cache", {})
         key = (self._r0, mu_s)
