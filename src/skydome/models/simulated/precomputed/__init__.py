@@ -184,6 +184,11 @@ class PrecomputedSky(SkyModel):
                   "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
         Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),
+        Parameter("twilight_single_scattering", "", False,
+                  doc="sun below the horizon: single scattering integrated at the observer, "
+                      "each ray split at the earth's shadow (closer to Monte Carlo), not read "
+                      "from the 4-D table; opt-in until the viewer's shader does the same",
+                  kind="bool"),
     )
 
     def __init__(self, sun, **params):
@@ -376,12 +381,52 @@ class PrecomputedSky(SkyModel):
             out[:] = 0.0
             return out
         ss_s, ms_s = self._observer_slices()
+        geom = self._slice_geometry()
+        ss_map = self._twilight_single_scattering()
+        if ss_map is not None:
+            ss_s, geom = ss_map, np.append(geom, 1.0)
         t = self._t
         _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
                            t.phase_code, t.phase_param, t.kernel_phase_table, ms_s, t.columns,
                            t.beta_e, t.ground_albedo, t.irradiance, scale, self._R, self._Rt,
-                           self._alpha, self._slice_geometry(), out)
+                           self._alpha, geom, out)
         return out
+
+    def _twilight_single_scattering(self):
+        """With ``twilight_single_scattering`` and the sun below the horizon (and the
+        observer's sky map of orders 2..N in use):
+        single scattering on that sky map, integrated for the observer's own r and mu_s with
+        every ray split at the earth's shadow (:func:`._twilight.single_scattering_slice`),
+        instead of the 4-D table interpolated at them; None otherwise (the sun above the
+        horizon: the table, as before)."""
+        from skydome.models.simulated.precomputed import _twilight
+        from skydome.transport._quadrature import gauss_legendre_unit
+
+        mu_s = float(self.sun.direction[2])
+        if not getattr(self, "twilight_single_scattering", False) or mu_s >= 0.0:
+            return None
+        geom = self._slice_geometry()
+        if geom[0] <= 0.0:
+            return None
+        cache = self.__dict__.setdefault("_twilight_cache", {})
+        key = (self._r0, mu_s)
+        if key not in cache:
+            t = self._t
+            n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
+            th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
+                                 th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
+            ground = np.arange(n_g + n_s) < n_g
+            cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
+            rx, rw = gauss_legendre_unit(_twilight.TWILIGHT_SS_NODES)
+            out = np.empty((t.scattering_index.size, n_g + n_s, _SLICE_PHI, self.n_wavelengths))
+            _twilight.single_scattering_slice(
+                t.columns, tables_medium(t), t.scattering_index,
+                np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64), self._alpha,
+                self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw, np.cos(th), ground, cphi, out)
+            if len(cache) > 8:
+                cache.clear()
+            cache[key] = out
+        return cache[key]
 
     def _transmittance_table(self, r, mu):
         from skydome.models.simulated.precomputed import _lookup
@@ -475,9 +520,16 @@ class PrecomputedSky(SkyModel):
             no_ground = np.zeros_like(t.ground_albedo)
             one = np.ones(nl)
             a_sl, a_tab = np.empty_like(ins), np.empty_like(ins)
-            for ms_x, o, geom in ((ms_s, a_sl, self._slice_geometry()),
-                                  (ms_tab, a_tab, self._slice_geometry(table=True))):
-                _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), zero,
+            cases = ((zero, ms_s, a_sl, self._slice_geometry()),
+                     (zero, ms_tab, a_tab, self._slice_geometry(table=True)))
+            ss_map = self._twilight_single_scattering()
+            if ss_map is not None:
+                # the sun below the horizon: single scattering at the observer too (as in
+                # radiance()), in place of the table's
+                cases = ((ss_map, ms_s, a_sl, np.append(self._slice_geometry(), 1.0)),
+                         (ss_s, ms_tab, a_tab, self._slice_geometry(table=True)))
+            for ss_x, ms_x, o, geom in cases:
+                _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_x,
                                    t.phase_code, t.phase_param, t.kernel_phase_table, ms_x,
                                    t.columns, t.beta_e, no_ground, t.irradiance, one, self._R, self._Rt, self._alpha,
                                    geom, o)

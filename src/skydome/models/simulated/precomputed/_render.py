@@ -34,7 +34,9 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
     already interpolated at the observer's r and mu_s (multilinear interpolation is
     separable, so the result equals the full 4-D lookup). With ``geom[0] > 0``, ``ms_slice``
     is instead the observer's sky map (n_ground + n_sky, n_phi, nl) of
-    :func:`multiple_scattering_slice`, indexed by :func:`slice_index`. Ground-hitting rays add the
+    :func:`multiple_scattering_slice`, indexed by :func:`slice_index`; with ``geom[3] > 0`` too,
+    ``ss_slice`` is on that sky map as well (:func:`._twilight.single_scattering_slice`, shape
+    (nsc, n_ground + n_sky, n_phi, nl)). Ground-hitting rays add the
     Lambertian ground lit by the sun and the sky ([Bru17] GetSunAndSkyIrradiance) times the
     transmittance to the ground: both exponentials (sun to the ground point, observer to the
     ground point) are taken at once for all wavelengths by the vectorised
@@ -46,6 +48,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
     n_mu_ms = ms_slice.shape[0]
     n_nu_ms = ms_slice.shape[1]
     sky_map = geom[0] > 0.0
+    ss_map = sky_map and geom.shape[0] > 3 and geom[3] > 0.0
     sh = math.sqrt(sun[0] * sun[0] + sun[1] * sun[1])
     nl = out.shape[1]
     nc = col.shape[0]
@@ -85,6 +88,13 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
             for l in range(nl):
                 acc[l] = ((1.0 - bm) * ((1.0 - f) * ms_slice[jm, jn, l] + f * ms_slice[jm, jn + 1, l])
                           + bm * ((1.0 - f) * ms_slice[jm + 1, jn, l] + f * ms_slice[jm + 1, jn + 1, l]))
+            if ss_map:
+                # single scattering on the observer's sky map too (twilight: _twilight)
+                im, inu = jm, jn
+                w00 = (1.0 - bm) * (1.0 - f)
+                w01 = (1.0 - bm) * f
+                w10 = bm * (1.0 - f)
+                w11 = bm * f
             for k in range(nsc):
                 phase_fill_coded(pc, pp, pt, k, nu, pw)
                 s = ss_slice[k]

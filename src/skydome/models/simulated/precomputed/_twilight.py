@@ -1,0 +1,112 @@
+"""Single scattering at the observer's own r and mu_s for a sun below the horizon: the
+observer's sky map of :func:`._multiple.multiple_scattering_slice`, each ray split where it
+crosses the boundary of the earth's shadow.
+
+In twilight the 4-D single-scattering table is the largest error of the sky: its rays share
+their quadrature nodes between every (mu_s, nu) node, so they cannot be split at each sun
+geometry's shadow boundary, where the integrand jumps; and the sky read from it is
+interpolated in mu_s, while in twilight it falls about e-fold per degree of the sun's
+depression (docs/models.md, "Twilight: single scattering at the observer"). Here every
+ray of the map is integrated for the observer's own sun, piece by piece between its ends,
+its lowest point and its shadow crossings ([BN08] eq. 4 without the phase function, as in
+:func:`._single.single_scattering_table`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
+                                                             distance_to_top, point_along)
+from skydome.models.simulated.precomputed._lookup import (columns_at, columns_segment,
+                                                           sun_visible_fraction)
+from skydome.transport._geometry import lowest_point
+from skydome.transport._kernels import view_break_points
+from skydome.transport._medium import profile_density
+from skydome.transport._quadrature import piece_nodes_rule
+
+# Gauss-Legendre nodes per piece of a ray (ends, lowest point, shadow crossings) in
+# v = ln(1 + u / ts), dense at the piece's end nearer the lowest point or the shadow
+# boundary; convergence measured in docs/models.md ("Twilight: single scattering at the
+# observer")
+TWILIGHT_SS_NODES = 24
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, mu_nodes,
+                            ground_nodes, cphi_nodes, out):
+    """out[k, mu, phi, l] = beta_s,k(l) int_0^d rho_k(r_t) T(r, mu, t) T_sun(r_t, mu_s_t)
+    v(r_t, mu_s_t) dt ([BN08] eq. 4 without the phase function; v the visible fraction of
+    the sun's disc, :func:`._lookup.sun_visible_fraction`, alpha its angular radius) in the
+    medium m (:class:`skydome.transport._medium.Medium`; its scattering constituents
+    ``sc_idx``, beta_s,k = beta_s[k]) for an observer at radius r,
+    the sun at zenith cosine mu_s, on the sky map of view zenith cosines ``mu_nodes``
+    (``ground_nodes``: the ray ends on the ground) x azimuths from the sun's with cosines
+    ``cphi_nodes``. Both transmittances from the column table ``col`` (exact exponent);
+    the ray split at its lowest point and where it crosses the shadow's boundary
+    (:func:`skydome.transport._kernels.view_break_points`), the rule (rx, rw) on [0, 1]
+    (:func:`skydome.transport._quadrature.gauss_legendre_unit`) in v = ln(1 + u / ts) on
+    every piece (:func:`skydome.transport._quadrature.piece_nodes_rule`)."""
+    nsc = out.shape[0]
+    n_mu = out.shape[1]
+    n_phi = out.shape[2]
+    nl = out.shape[3]
+    nc = col.shape[0]
+    n_x = rx.shape[0]
+    R = m.R
+    Rt = m.Rt
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
+    for imu in prange(n_mu):
+        w1 = np.empty(nc)
+        w2 = np.empty(nc)
+        cv = np.empty(nc)
+        csun = np.empty(nc)
+        dens = np.empty(nsc)
+        acc = np.empty((nsc, nl))
+        brk = np.empty(6)
+        tq = np.empty(n_x)
+        tw = np.empty(n_x)
+        mu = mu_nodes[imu]
+        ground = ground_nodes[imu]
+        d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
+        s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        tmin = lowest_point(r, mu, 0.0, d)
+        for iphi in range(n_phi):
+            nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[iphi])
+            acc[:] = 0.0
+            nbrk = view_break_points(r, mu, mu_s, nu, R, 0.0, d, brk)
+            for q in range(nbrk - 1):
+                a = brk[q]
+                b = brk[q + 1]
+                if b - a <= 0.0:
+                    continue
+                piece_nodes_rule(a, b, b <= tmin, rx, rw, ts, tq, tw, 0)
+                for k in range(n_x):
+                    t = tq[k]
+                    wq = tw[k]
+                    rt = point_along(r, mu, t, R, Rt)
+                    mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
+                    vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
+                    if vis <= 0.0:
+                        continue
+                    columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cv)
+                    columns_at(col, rt, mu_s_t, R, Rt, csun)
+                    for kk in range(nsc):
+                        c = sc_idx[kk]
+                        dens[kk] = profile_density(codes[c], p0s[c], p1s[c], rt - R)
+                    for l in range(nl):
+                        tau = 0.0
+                        for c in range(nc):
+                            tau += beta_e[c, l] * (cv[c] + csun[c])
+                        e = wq * vis * math.exp(-tau)
+                        for kk in range(nsc):
+                            acc[kk, l] += dens[kk] * e
+            for kk in range(nsc):
+                for l in range(nl):
+                    out[kk, imu, iphi, l] = beta_s[kk, l] * acc[kk, l]
