@@ -104,12 +104,7 @@ class Hillaire2020(SkyModel):
         Sun position; elevation in [-10, 90] deg (the paper's method is made for the sun
         above about -10 deg; below that the earth's shadow covers most of the
         atmosphere seen and twilight needs more orders than the isotropic transfer gives).
-    atmosphere : skydome.Atmosphere, optional
-        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
-    turbidity : float
-        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude above the ground [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     n_wavelengths : int
         Wavelengths the tables are built at (default 16). A request with at most this
         many wavelengths is computed on its own grid; a denser one on ``n_wavelengths``

@@ -69,19 +69,14 @@ def _fine_grid():
 
 @register
 class Nishita1996(SkyModel):
-    """Sky radiance with multiple scattering by the sky-sphere method of [NDKY96].
+    """Sky radiance with multiple scattering by the sky-sphere method of [NDKY96]. The
+    atmosphere's ground albedo reflects the sun and the sky.
 
     Parameters
     ----------
     sun : skydome.Sun
         Sun position; any elevation (below the horizon only the upper atmosphere is lit).
-    atmosphere : skydome.Atmosphere, optional
-        The medium (default ``Atmosphere.earth(turbidity=turbidity)``); its ground albedo
-        reflects the sun and the sky.
-    turbidity : float
-        Preetham turbidity [1, 32] when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     orders : int
         Scattering orders summed, [1, 10] (default 6: the 6th adds 0.6-0.8 % of the
         luminance averaged over the sky for turbidity 2.5, sun at 5-30 deg; see
