@@ -245,8 +245,9 @@ class Nishita1996(SkyModel):
         nl = wl.size
         out = np.zeros((self.orders, v.shape[0], nl))
         med = st["medium"]
-        K.view_single(v, st["r0"], self._sun, med, st["e_sun"], st["lo"], st["hi"],
-                      self.view_samples, 500.0, out[0])
+        # order 1: the lattice kernel with one node, the observer at (0, 0, r0)
+        K.lattice_single(np.array([[0.0, 0.0, st["r0"]]]), v, self._sun, med, st["e_sun"],
+                         st["lo"], st["hi"], self.view_samples, 500.0, out[:1])
         if self.orders > 1:
             # orders 2..N in one pass: the phase-cell weights and the ray's nodes are shared
             K.view_gather_orders(v, st["r0"], st["fields_all"], st["grounds_all"], st["fine"],
