@@ -246,23 +246,32 @@ def _decode(raw: bytes) -> str:
         return raw.decode("latin-1")
 
 
-def _iter_lines(path: Path, name: str):
-    """(line number, text) of each line, read one at a time with at most MAX_LINE_BYTES per
-    line (a longer one is refused without reading it whole); a UTF-8 byte-order mark at the
-    start of the file is dropped; line ends (LF, CRLF) stripped."""
+def bounded_lines(path: Path, label: str, max_bytes: int, what: str):
+    """(line number, raw bytes) of each line of the file ``path``, read one at a time with at
+    most ``max_bytes`` a line: a longer one is refused without reading it whole (ValueError
+    "``label``: line k is longer than ``max_bytes`` bytes (not ``what``)"); a UTF-8
+    byte-order mark at the start of the file is dropped. Line ends are kept."""
     with path.open("rb") as f:
         k = 0
         while True:
-            raw = f.readline(MAX_LINE_BYTES + 1)
+            raw = f.readline(max_bytes + 1)
             if not raw:
                 return
             k += 1
-            if len(raw) > MAX_LINE_BYTES and not raw.endswith(b"\n"):
-                raise ValueError(f"weather = {name!r}: line {k} is longer than {MAX_LINE_BYTES} "
-                                 "bytes (not a weather record)")
+            if len(raw) > max_bytes and not raw.endswith(b"\n"):
+                raise ValueError(f"{label}: line {k} is longer than {max_bytes} bytes "
+                                 f"(not {what})")
             if k == 1 and raw.startswith(_BOM):
                 raw = raw[len(_BOM):]
-            yield k, _decode(raw).rstrip("\r\n")
+            yield k, raw
+
+
+def _iter_lines(path: Path, name: str):
+    """(line number, text) of each line (:func:`bounded_lines`, at most MAX_LINE_BYTES a
+    line), decoded (:func:`_decode`), line ends (LF, CRLF) stripped."""
+    for k, raw in bounded_lines(path, f"weather = {name!r}", MAX_LINE_BYTES,
+                                "a weather record"):
+        yield k, _decode(raw).rstrip("\r\n")
 
 
 def _first_line(path: Path) -> str:
