@@ -47,7 +47,9 @@ Aerial perspective
 ------------------
 Models that have it implement one signature, ``aerial_perspective(directions, distance_m,
 wavelengths_nm, ...) -> (transmittance, in-scattered radiance)``, both of shape
-(..., n_wavelengths); model-specific options follow as keywords.
+(..., n_wavelengths); model-specific options follow as keywords. A model whose eye is on
+the ground inherits it from :class:`GroundEyeAerialPerspective` and implements only the
+rays (``_aerial_rays``).
 
 Capabilities
 ------------
@@ -97,7 +99,8 @@ from skydome._validate import as_directions, check_choice, check_int, check_numb
 __all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
            "check_capabilities", "unregister", "OWN_GROUND",
            "resolve_atmosphere", "ATMOSPHERE", "TURBIDITY", "OBSERVER_ALTITUDE_M",
-           "ATMOSPHERE_PARAMETERS", "ATMOSPHERE_PARAMETERS_DOC", "fill_parameter_docs"]
+           "ATMOSPHERE_PARAMETERS", "ATMOSPHERE_PARAMETERS_DOC", "fill_parameter_docs",
+           "GroundEyeAerialPerspective"]
 
 
 class ParameterTypeError(TypeError, ValueError):
@@ -412,6 +415,40 @@ class SkyModel:
         if object_radiance is not None:
             L = np.asarray(object_radiance, dtype=np.float64) * t + L
         return t, L
+
+
+class GroundEyeAerialPerspective:
+    """Mixin giving a model whose eye is on the ground the protocol's ``aerial_perspective``
+    from its ``_aerial_rays(directions (k, 3), distances (k,) [m], wavelengths (n,) [nm])
+    -> (transmittance (k, n), in-scattered radiance (k, n))``, which takes a direction below
+    the horizon as the horizontal direction of the same azimuth. Put it before
+    :class:`SkyModel` among the bases."""
+
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
+        """Transmittance and in-scattered radiance between the eye (on the ground) and an
+        object at ``distance_m`` along ``directions`` (by the model's ``_aerial_rays``).
+
+        Parameters
+        ----------
+        directions : array_like (..., 3)
+            Unit vectors from the eye towards the object (z < 0 is taken as the horizontal
+            direction of the same azimuth: the eye is on the flat ground).
+        distance_m : float or array_like (...)
+            Distance to the object [m], >= 0; broadcast with the directions.
+        wavelengths_nm : array_like (n,)
+        object_radiance : array_like (..., n), optional
+            Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
+
+        Returns
+        -------
+        transmittance : (..., n)
+        radiance : (..., n)
+            The in-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance``
+            is given, the radiance reaching the eye, ``L_0 T + L_in``.
+        """
+        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
+        t, L = self._aerial_rays(dd, dist_f, wl)
+        return self._aerial_outputs(t, L, shape, object_radiance)
 
 
 # -- shared by the physically based models ---------------------------------------------------
