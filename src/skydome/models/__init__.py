@@ -376,8 +376,12 @@ class SkyModel:
         return float(lum) * float(self.sun.solid_angle_sr)
 
     def describe(self) -> dict[str, Any]:
-        """The model's name, reference, native quantity and parameter values."""
-        values = {p.name: getattr(self, p.name, None) for p in self.parameters}
+        """The model's name, reference, native quantity and parameter values; a value that
+        describes itself (an Atmosphere) by its own ``describe()``."""
+        values = {}
+        for p in self.parameters:
+            v = getattr(self, p.name, None)
+            values[p.name] = v.describe() if callable(getattr(v, "describe", None)) else v
         return {"model": self.name, "reference": self.reference, "native": self.native,
                 "parameters": values}
 

@@ -334,11 +334,6 @@ class Hillaire2020(SkyModel):
         T = np.clip(self._to_grid(T, tb.grid, wl), 0.0, 1.0)
         return T.reshape(shape + (wl.size,)), L.reshape(shape + (wl.size,))
 
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
-
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
 Hillaire2020Sky = Hillaire2020

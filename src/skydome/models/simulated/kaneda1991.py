@@ -315,11 +315,6 @@ class Kaneda1991(GroundEyeAerialPerspective, SkyModel):
                              s["fog_code"], float(self.fog_height_m), t)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
-
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
 Kaneda1991Sky = Kaneda1991

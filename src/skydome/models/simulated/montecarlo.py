@@ -229,11 +229,6 @@ class MonteCarlo(SkyModel):
         t = ss.transmittance(self.sun.direction)
         return solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr * t
 
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
-
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
 MonteCarloSky = MonteCarlo

@@ -278,11 +278,6 @@ class Nishita1996(SkyModel):
         t = np.exp(-(col[:, None] * pr.extinction).sum(axis=0))
         return st["e_sun"] / self.sun.solid_angle_sr * t
 
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
-
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
 Nishita1996Sky = Nishita1996

@@ -102,11 +102,6 @@ class SingleScattering(SkyModel):
         t = self._integrator(wl).transmittance(self.sun.direction)
         return self._solar(wl) / self.sun.solid_angle_sr * t
 
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
-
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
 SingleScatteringSky = SingleScattering
