@@ -278,3 +278,38 @@ def test_nishita1996_paper_directions_warn():
 def test_dobashi1995_min_sun_below_base_range_fails_up_front():
     with pytest.raises(ValueError, match="min_sun_elevation_deg"):
         sd.model("dobashi1995", sun=SUN, base="preetham1999", min_sun_elevation_deg=-5.0)
+
+
+def test_shared_parameters_described_once_from_their_declarations():
+    """Every model taking ATMOSPHERE_PARAMETERS has their entries in its docstring, written
+    by the registry from the declarations (turbidity's range [1, 32] is Preetham et al.'s
+    fit range, its default 2.5 the declared one), and no placeholder is left."""
+    from skydome.models import ATMOSPHERE_PARAMETERS, ATMOSPHERE_PARAMETERS_DOC
+
+    shared = {p.name for p in ATMOSPHERE_PARAMETERS}
+    users = [c for c in available().values() if shared <= {p.name for p in c.parameters}]
+    assert len(users) >= 5
+    for cls in users:
+        doc = cls.__doc__ or ""
+        assert ATMOSPHERE_PARAMETERS_DOC not in doc, cls.name
+        assert doc.count("atmosphere : ") == 1, cls.name
+        assert "turbidity : float, [1, 32], default 2.5" in doc, cls.name
+        assert "observer_altitude_m : float [m], [0, 99999], default 0" in doc, cls.name
+
+
+def test_atmosphere_parameters_placeholder_needs_the_declarations():
+    from skydome.models import SkyModel, register
+
+    class NoAtmosphere(SkyModel):
+        """A model without an atmosphere.
+
+        Parameters
+        ----------
+        {atmosphere_parameters}
+        """
+
+        name = "no_atmosphere_doc_test"
+        native = "luminance"
+
+    with pytest.raises(ValueError, match="no_atmosphere_doc_test.*atmosphere, turbidity"):
+        register(NoAtmosphere)

@@ -121,36 +121,28 @@ def read_sensors(path) -> np.ndarray:
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"sensors = {str(path)!r}: no such file")
+    from skydome.daylighting.weather import bounded_lines
+
     rows = []
-    with p.open("rb") as f:
-        k = 0
-        while True:
-            raw = f.readline(MAX_SENSOR_LINE_BYTES + 1)
-            if not raw:
-                break
-            k += 1
-            if len(raw) > MAX_SENSOR_LINE_BYTES and not raw.endswith(b"\n"):
-                raise ValueError(f"sensors = {str(path)!r}: line {k} is longer than "
-                                 f"{MAX_SENSOR_LINE_BYTES} bytes (not a points file)")
-            if k == 1 and raw.startswith(b"\xef\xbb\xbf"):
-                raw = raw[3:]
-            try:
-                ln = raw.decode("ascii")
-            except UnicodeDecodeError:
-                ln = None
-            if ln is None or "\x00" in ln:
-                raise ValueError(f"sensors = {str(path)!r}: line {k} is not text (a binary "
-                                 "file?); expected one 'x y z dx dy dz' a line")
-            if not ln.strip() or ln.lstrip().startswith("#"):
-                continue
-            try:
-                v = [float(x) for x in ln.split()]
-            except ValueError:
-                v = []
-            if len(v) != 6 or not np.all(np.isfinite(v)):
-                raise ValueError(f"sensors = {str(path)!r}: line {k} must be 6 numbers "
-                                 "(x y z dx dy dz)")
-            rows.append(v)
+    for k, raw in bounded_lines(p, f"sensors = {str(path)!r}", MAX_SENSOR_LINE_BYTES,
+                                "a points file"):
+        try:
+            ln = raw.decode("ascii")
+        except UnicodeDecodeError:
+            ln = None
+        if ln is None or "\x00" in ln:
+            raise ValueError(f"sensors = {str(path)!r}: line {k} is not text (a binary "
+                             "file?); expected one 'x y z dx dy dz' a line")
+        if not ln.strip() or ln.lstrip().startswith("#"):
+            continue
+        try:
+            v = [float(x) for x in ln.split()]
+        except ValueError:
+            v = []
+        if len(v) != 6 or not np.all(np.isfinite(v)):
+            raise ValueError(f"sensors = {str(path)!r}: line {k} must be 6 numbers "
+                             "(x y z dx dy dz)")
+        rows.append(v)
     if not rows:
         raise ValueError(f"sensors = {str(path)!r} holds no points")
     return _check_sensors(np.array(rows))

@@ -246,23 +246,32 @@ def _decode(raw: bytes) -> str:
         return raw.decode("latin-1")
 
 
-def _iter_lines(path: Path, name: str):
-    """(line number, text) of each line, read one at a time with at most MAX_LINE_BYTES per
-    line (a longer one is refused without reading it whole); a UTF-8 byte-order mark at the
-    start of the file is dropped; line ends (LF, CRLF) stripped."""
+def bounded_lines(path: Path, label: str, max_bytes: int, what: str):
+    """(line number, raw bytes) of each line of the file ``path``, read one at a time with at
+    most ``max_bytes`` a line: a longer one is refused without reading it whole (ValueError
+    "``label``: line k is longer than ``max_bytes`` bytes (not ``what``)"); a UTF-8
+    byte-order mark at the start of the file is dropped. Line ends are kept."""
     with path.open("rb") as f:
         k = 0
         while True:
-            raw = f.readline(MAX_LINE_BYTES + 1)
+            raw = f.readline(max_bytes + 1)
             if not raw:
                 return
             k += 1
-            if len(raw) > MAX_LINE_BYTES and not raw.endswith(b"\n"):
-                raise ValueError(f"weather = {name!r}: line {k} is longer than {MAX_LINE_BYTES} "
-                                 "bytes (not a weather record)")
+            if len(raw) > max_bytes and not raw.endswith(b"\n"):
+                raise ValueError(f"{label}: line {k} is longer than {max_bytes} bytes "
+                                 f"(not {what})")
             if k == 1 and raw.startswith(_BOM):
                 raw = raw[len(_BOM):]
-            yield k, _decode(raw).rstrip("\r\n")
+            yield k, raw
+
+
+def _iter_lines(path: Path, name: str):
+    """(line number, text) of each line (:func:`bounded_lines`, at most MAX_LINE_BYTES a
+    line), decoded (:func:`_decode`), line ends (LF, CRLF) stripped."""
+    for k, raw in bounded_lines(path, f"weather = {name!r}", MAX_LINE_BYTES,
+                                "a weather record"):
+        yield k, _decode(raw).rstrip("\r\n")
 
 
 def _first_line(path: Path) -> str:
@@ -335,6 +344,18 @@ def _header_number(text: str, name: str, line: int, field: str) -> float:
     return v
 
 
+#: Where the site header (line 1) of each format holds latitude, longitude, time zone and
+#: elevation: (field index, the format's name for it) [EPW, TMY3]; the site's name is field 1.
+_EPW_SITE = ((6, "latitude"), (7, "longitude"), (8, "time zone"), (9, "elevation"))
+_TMY3_SITE = ((4, "latitude"), (5, "longitude"), (3, "TZ"), (6, "altitude"))
+
+
+def _header_site(f: list[str], name: str, fields) -> "Site":
+    """The Site of the header fields ``f`` laid out as ``fields`` (``_EPW_SITE``,
+    ``_TMY3_SITE``)."""
+    return Site(f[1].strip(), *(_header_number(f[i], name, 1, label) for i, label in fields))
+
+
 def _split_record(text: str, sep, name: str, rec: int, line: int, need: int) -> list[str]:
     if len(text) > MAX_FIELDS * 64 and text.count(sep or " ") > MAX_FIELDS:
         raise ValueError(f"{_where(name, rec, line)} has more than {MAX_FIELDS} fields")
@@ -371,6 +392,19 @@ _LABELS = {"dni": "DNI", "dhi": "DHI", "ghi": "GHI", "dni_illuminance": "DNI ill
            "precipitable_water_cm": "precipitable water", "aod": "AOD"}
 
 
+def _record_columns(rows, lines, name: str, time_labels, keys):
+    """The records ``rows`` (month, day, hour, then one text field per key of ``keys``) read
+    at line numbers ``lines`` as columns: the line numbers (int array), the month, day and
+    hour as int arrays (``time_labels`` name them in errors) and the quantities by key
+    (:func:`_column` each)."""
+    line_of = np.array(lines, dtype=np.int64)
+    cols = list(zip(*rows))
+    ints = [_column(cols[j], line_of, name, lab, integer=True).astype(np.int64)
+            for j, lab in enumerate(time_labels)]
+    values = {key: _column(cols[3 + j], line_of, name, _LABELS[key]) for j, key in enumerate(keys)}
+    return line_of, ints, values
+
+
 def _parse_epw(p: Path, name: str):
     """Site, (month, day, hour) arrays, quantity arrays and line numbers of an EPW file."""
     site = None
@@ -384,10 +418,7 @@ def _parse_epw(p: Path, name: str):
             if f[0].strip().upper() != "LOCATION" or len(f) < 10:
                 raise ValueError(f"weather = {name!r}: line 1 is not an EPW LOCATION header "
                                  "(LOCATION,city,state,country,source,WMO,lat,lon,TZ,elev)")
-            site = Site(f[1].strip(), _header_number(f[6], name, 1, "latitude"),
-                        _header_number(f[7], name, 1, "longitude"),
-                        _header_number(f[8], name, 1, "time zone"),
-                        _header_number(f[9], name, 1, "elevation"))
+            site = _header_site(f, name, _EPW_SITE)
             continue
         if k <= 8 or not text.strip():
             continue  # the other seven header lines [EPW]
@@ -401,12 +432,8 @@ def _parse_epw(p: Path, name: str):
         raise ValueError(f"weather = {name!r}: empty file")
     if rec == 0:
         raise ValueError(f"weather = {name!r}: truncated, no data records")
-    line_of = np.array(lines, dtype=np.int64)
-    cols = list(zip(*rows))
-    ints = [_column(cols[j], line_of, name, lab, integer=True).astype(np.int64)
-            for j, lab in enumerate(("month", "day", "hour"))]
-    values = {key: _column(cols[3 + j], line_of, name, _LABELS[key])
-              for j, key in enumerate(_EPW_FIELDS)}
+    line_of, ints, values = _record_columns(rows, lines, name, ("month", "day", "hour"),
+                                            _EPW_FIELDS)
     for key, v in values.items():
         if key in _EPW_MISSING:
             v[v >= _EPW_MISSING[key]] = np.nan
@@ -432,10 +459,7 @@ def _parse_tmy3(p: Path, name: str):
             if len(f) < 7:
                 raise ValueError(f"weather = {name!r}: line 1 is not a TMY3 site header "
                                  "(USAF,Name,State,TZ,latitude,longitude,altitude)")
-            site = Site(f[1].strip(), _header_number(f[4], name, 1, "latitude"),
-                        _header_number(f[5], name, 1, "longitude"),
-                        _header_number(f[3], name, 1, "TZ"),
-                        _header_number(f[6], name, 1, "altitude"))
+            site = _header_site(f, name, _TMY3_SITE)
             continue
         if k == 2:
             heads = text.split(",")
@@ -468,11 +492,8 @@ def _parse_tmy3(p: Path, name: str):
         raise ValueError(f"weather = {name!r}: truncated, no TMY3 header")
     if rec == 0:
         raise ValueError(f"weather = {name!r}: truncated, no data records")
-    line_of = np.array(lines, dtype=np.int64)
-    cols = list(zip(*rows))
-    ints = [_column(cols[j], line_of, name, lab, integer=True).astype(np.int64)
-            for j, lab in enumerate(("date (month)", "date (day)", "time (hour)"))]
-    got = {key: _column(cols[3 + j], line_of, name, _LABELS[key]) for j, key in enumerate(keys)}
+    line_of, ints, got = _record_columns(
+        rows, lines, name, ("date (month)", "date (day)", "time (hour)"), keys)
     values = {key: got.get(key) for key in _TMY3_FIELDS}
     return site, *ints, values, line_of
 

@@ -7,7 +7,9 @@ A model is a small class deriving from :class:`SkyModel`. It declares
 * ``native``: ``"spectral"``, ``"xyz"`` or ``"luminance"``, the quantity it computes;
 * ``parameters``: a tuple of :class:`Parameter` (name, unit, default, valid range, meaning);
   shared ones come from here (:data:`ATMOSPHERE`, :data:`TURBIDITY`,
-  :data:`OBSERVER_ALTITUDE_M`, :data:`ATMOSPHERE_PARAMETERS`) so each has one range;
+  :data:`OBSERVER_ALTITUDE_M`, :data:`ATMOSPHERE_PARAMETERS`) so each has one range, and
+  one description: a line ``{atmosphere_parameters}`` in the class docstring becomes their
+  numpydoc entries (:func:`fill_parameter_docs`, run by :func:`register`);
 * ``sun_elevation_range_deg`` and ``sun_outside_range``: the sun elevations where it applies
   and what happens outside them (``"raise"`` or ``"black"``; a model that extends itself to
   every elevation, twilight included, declares [-90, 90]);
@@ -45,7 +47,9 @@ Aerial perspective
 ------------------
 Models that have it implement one signature, ``aerial_perspective(directions, distance_m,
 wavelengths_nm, ...) -> (transmittance, in-scattered radiance)``, both of shape
-(..., n_wavelengths); model-specific options follow as keywords.
+(..., n_wavelengths); model-specific options follow as keywords. A model whose eye is on
+the ground inherits it from :class:`GroundEyeAerialPerspective` and implements only the
+rays (``_aerial_rays``).
 
 Capabilities
 ------------
@@ -95,7 +99,8 @@ from skydome._validate import as_directions, check_choice, check_int, check_numb
 __all__ = ["Parameter", "SkyModel", "register", "model", "available", "get_model_class", "check_sun",
            "check_capabilities", "unregister", "OWN_GROUND",
            "resolve_atmosphere", "ATMOSPHERE", "TURBIDITY", "OBSERVER_ALTITUDE_M",
-           "ATMOSPHERE_PARAMETERS"]
+           "ATMOSPHERE_PARAMETERS", "ATMOSPHERE_PARAMETERS_DOC", "fill_parameter_docs",
+           "GroundEyeAerialPerspective"]
 
 
 class ParameterTypeError(TypeError, ValueError):
@@ -169,6 +174,23 @@ class Parameter:
             hi = "inf" if self.high is None else f"{self.high:g}"
             return f"{'(' if self.low_open else '['}{lo}, {hi}]"
         return ""
+
+    def doc_entry(self, indent: str = "") -> str:
+        """This parameter as a numpydoc entry (two lines, the second indented 4 more):
+        name, kind, unit, range and default, then its meaning."""
+        head = f"{self.name} : {self.kind}"
+        if self.unit:
+            head += f" [{self.unit}]"
+        rng = self.range_text()
+        if self.kind in ("float", "int", "choice") and rng:
+            head += f", {rng}"
+        if self.default is None:
+            head += ", optional"
+        else:
+            head += f", default {self.default:g}" if self.kind in ("float", "int") \
+                else f", default {self.default!r}"
+        doc = self.doc
+        return f"{indent}{head}\n{indent}    {doc}{'' if doc.endswith('.') else '.'}"
 
 
 def _guard_directions(method):
@@ -354,8 +376,12 @@ class SkyModel:
         return float(lum) * float(self.sun.solid_angle_sr)
 
     def describe(self) -> dict[str, Any]:
-        """The model's name, reference, native quantity and parameter values."""
-        values = {p.name: getattr(self, p.name, None) for p in self.parameters}
+        """The model's name, reference, native quantity and parameter values; a value that
+        describes itself (an Atmosphere) by its own ``describe()``."""
+        values = {}
+        for p in self.parameters:
+            v = getattr(self, p.name, None)
+            values[p.name] = v.describe() if callable(getattr(v, "describe", None)) else v
         return {"model": self.name, "reference": self.reference, "native": self.native,
                 "parameters": values}
 
@@ -393,6 +419,40 @@ class SkyModel:
         if object_radiance is not None:
             L = np.asarray(object_radiance, dtype=np.float64) * t + L
         return t, L
+
+
+class GroundEyeAerialPerspective:
+    """Mixin giving a model whose eye is on the ground the protocol's ``aerial_perspective``
+    from its ``_aerial_rays(directions (k, 3), distances (k,) [m], wavelengths (n,) [nm])
+    -> (transmittance (k, n), in-scattered radiance (k, n))``, which takes a direction below
+    the horizon as the horizontal direction of the same azimuth. Put it before
+    :class:`SkyModel` among the bases."""
+
+    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
+        """Transmittance and in-scattered radiance between the eye (on the ground) and an
+        object at ``distance_m`` along ``directions`` (by the model's ``_aerial_rays``).
+
+        Parameters
+        ----------
+        directions : array_like (..., 3)
+            Unit vectors from the eye towards the object (z < 0 is taken as the horizontal
+            direction of the same azimuth: the eye is on the flat ground).
+        distance_m : float or array_like (...)
+            Distance to the object [m], >= 0; broadcast with the directions.
+        wavelengths_nm : array_like (n,)
+        object_radiance : array_like (..., n), optional
+            Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
+
+        Returns
+        -------
+        transmittance : (..., n)
+        radiance : (..., n)
+            The in-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance``
+            is given, the radiance reaching the eye, ``L_0 T + L_in``.
+        """
+        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
+        t, L = self._aerial_rays(dd, dist_f, wl)
+        return self._aerial_outputs(t, L, shape, object_radiance)
 
 
 # -- shared by the physically based models ---------------------------------------------------
@@ -482,12 +542,42 @@ def check_capabilities(cls: type[SkyModel]) -> None:
                          f"{', '.join(map(repr, OWN_GROUND))}")
 
 
+#: The placeholder line of a model's docstring that :func:`register` replaces by the
+#: numpydoc entries of :data:`ATMOSPHERE_PARAMETERS` (their one description).
+ATMOSPHERE_PARAMETERS_DOC = "{atmosphere_parameters}"
+
+
+def fill_parameter_docs(cls: type[SkyModel]) -> None:
+    """Replace each line ``{atmosphere_parameters}`` of the docstring of ``cls`` by the
+    entries of :data:`ATMOSPHERE_PARAMETERS` (:meth:`Parameter.doc_entry`, at that line's
+    indent), so that the shared parameters are described once, by their declarations.
+    ValueError (naming the model) where the class does not declare them all."""
+    doc = cls.__dict__.get("__doc__")
+    if not doc or ATMOSPHERE_PARAMETERS_DOC not in doc:
+        return
+    names = {p.name for p in cls.parameters}
+    missing = [p.name for p in ATMOSPHERE_PARAMETERS if p.name not in names]
+    if missing:
+        raise ValueError(f"model {cls.name!r}: docstring has {ATMOSPHERE_PARAMETERS_DOC} but "
+                         f"the model does not declare {', '.join(missing)}")
+    lines = []
+    for line in doc.split("\n"):
+        if line.strip() == ATMOSPHERE_PARAMETERS_DOC:
+            indent = line[:len(line) - len(line.lstrip())]
+            lines += [p.doc_entry(indent) for p in ATMOSPHERE_PARAMETERS]
+        else:
+            lines.append(line)
+    cls.__doc__ = "\n".join(lines)
+
+
 def register(cls: type[SkyModel]) -> type[SkyModel]:
     """Class decorator adding a model to the registry under ``cls.name``; its capabilities
-    are checked first (:func:`check_capabilities`)."""
+    are checked first (:func:`check_capabilities`) and the shared parameters' entries
+    written into its docstring (:func:`fill_parameter_docs`)."""
     if not cls.name:
         raise ValueError(f"{cls.__name__} has no name")
     check_capabilities(cls)
+    fill_parameter_docs(cls)
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise ValueError(f"model name {cls.name!r} registered twice")
     _REGISTRY[cls.name] = cls

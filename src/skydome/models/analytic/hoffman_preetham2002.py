@@ -131,10 +131,7 @@ def aerial_perspective(view_direction, distance_m, wavelengths_nm, *, sun, turbi
         F_ex [-] and L_in [W m^-2 sr^-1 nm^-1], each shape (..., n).
     """
     d = as_directions(view_direction, "view_direction")
-    s = np.asarray(distance_m, dtype=np.float64)
-    if not np.all(np.isfinite(s)) or np.any(s < 0.0):
-        raise ValueError("distance_m is out of range [0, inf) m (got a negative or "
-                         "non-finite value)")
+    s = _p99.check_distances(distance_m)
     w = as_wavelengths(wavelengths_nm, *_WL_RANGE)
     T = check_number("turbidity", turbidity, *_p99.TURBIDITY_RANGE)
     g = check_number("g", g, -1.0, 1.0, low_open=True, high_open=True)

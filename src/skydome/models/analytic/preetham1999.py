@@ -640,6 +640,16 @@ def _sky_grid(n_theta: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]:
     return d.reshape(-1, 3), dom.reshape(-1)
 
 
+def check_distances(distance_m) -> np.ndarray:
+    """Eye-object distances [m] as a float array; ValueError unless all are finite and
+    >= 0 (the aerial perspective of this model and of Hoffman & Preetham's)."""
+    s = np.asarray(distance_m, dtype=np.float64)
+    if not np.all(np.isfinite(s)) or np.any(s < 0.0):
+        raise ValueError("distance_m is out of range [0, inf) m (got a negative or "
+                         "non-finite value)")
+    return s
+
+
 def aerial_perspective(directions, distance_m, wavelengths_nm, *, sun, turbidity: float,
                        observer_altitude_m: float = 0.0, include_skylight: bool = True,
                        sky=None, n_quadrature: int = 32, sky_samples: int = 16):
@@ -699,10 +709,7 @@ def aerial_perspective(directions, distance_m, wavelengths_nm, *, sun, turbidity
     The sun's radiance seen from each point is that at the eye (the paper's assumption).
     """
     d = as_directions(directions, "directions")
-    s = np.asarray(distance_m, dtype=np.float64)
-    if not np.all(np.isfinite(s)) or np.any(s < 0.0):
-        raise ValueError("distance_m is out of range [0, inf) m (got a negative or "
-                         "non-finite value)")
+    s = check_distances(distance_m)
     w = as_wavelengths(wavelengths_nm, *_TABLE2_RANGE)
     T = _check_turbidity(turbidity)
     h0 = check_number("observer_altitude_m", observer_altitude_m, 0.0, 20000.0, "m")

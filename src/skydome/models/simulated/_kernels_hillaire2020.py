@@ -55,6 +55,15 @@ def fill_phases(m, nu, phs):
         phase_fill(m, c, nu, phs[c])
 
 
+@njit(cache=True, inline="always")
+def march_buffers(m):
+    """The work arrays of one :func:`march` (L, T, F (n_lambda,), rho (nc,)) and the phase
+    functions phs (nc, n_lambda) it reads (to be filled), for the medium m."""
+    nc = m.profile_code.shape[0]
+    nl = m.extinction.shape[1]
+    return np.empty(nl), np.empty(nl), np.empty(nl), np.empty(nc), np.empty((nc, nl))
+
+
 @njit(cache=True, fastmath=True)
 def march(r0, mu, nu, sz, t_stop, m, phs, isotropic, tlut, mslut, use_ms, ground, n_steps, ts,
           L, T, F, rho):
@@ -197,7 +206,6 @@ def build_multiple_scattering(m, tlut, n_h, n_m, sqrt_dirs, n_steps, ts, order_o
     """
     R = m.R
     Rt = m.Rt
-    nc = m.profile_code.shape[0]
     nl = m.extinction.shape[1]
     out = np.empty((n_h, n_m, nl))
     dummy = np.zeros((2, 2, nl))
@@ -210,11 +218,8 @@ def build_multiple_scattering(m, tlut, n_h, n_m, sqrt_dirs, n_steps, ts, order_o
         r0 = R + h
         mu_s = 2.0 * j / (n_m - 1.0) - 1.0
         sun_y = safe_sqrt(1.0 - mu_s * mu_s)
-        L = np.empty(nl)
-        T = np.empty(nl)
-        F = np.empty(nl)
-        rho = np.empty(nc)
-        phs = np.full((nc, nl), INV_4PI)
+        L, T, F, rho, phs = march_buffers(m)
+        phs[:, :] = INV_4PI
         l2 = np.zeros(nl)
         fms = np.zeros(nl)
         for k in range(nd):
@@ -268,7 +273,6 @@ def build_skyview(r0, sz, H, W, m, tlut, mslut, use_ms, n_steps, ts):
     """Sky-view table (H, W, n_lambda) of radiance per unit irradiance seen from r0 with
     the sun at zenith cosine ``sz`` ([Hil20] sec. 5.3). The ground (lit, Lambertian) is
     included in the lower half."""
-    nc = m.profile_code.shape[0]
     nl = m.extinction.shape[1]
     out = np.empty((H, W, nl))
     sx = safe_sqrt(1.0 - sz * sz)
@@ -278,11 +282,7 @@ def build_skyview(r0, sz, H, W, m, tlut, mslut, use_ms, n_steps, ts):
         mu, cphi = skyview_angles(row, col, H, W, m.R, r0)
         st = safe_sqrt(1.0 - mu * mu)
         nu = st * cphi * sx + mu * sz
-        L = np.empty(nl)
-        T = np.empty(nl)
-        F = np.empty(nl)
-        rho = np.empty(nc)
-        phs = np.empty((nc, nl))
+        L, T, F, rho, phs = march_buffers(m)
         fill_phases(m, nu, phs)
         march(r0, mu, nu, sz, -1.0, m, phs, False, tlut, mslut, use_ms, True, n_steps, ts, L, T,
               F, rho)
@@ -343,16 +343,11 @@ def march_directions(dirs, sun, r0, t_stop, m, tlut, mslut, use_ms, ground, n_st
     transmittance, (n, n_lambda) each. ``t_stop[i]`` > 0 ends ray i there (aerial
     perspective); otherwise the ray runs to the top of the atmosphere or the ground."""
     n = dirs.shape[0]
-    nc = m.profile_code.shape[0]
     nl = m.extinction.shape[1]
     block = 64
     nb = (n + block - 1) // block
     for ib in prange(nb):
-        L = np.empty(nl)
-        T = np.empty(nl)
-        F = np.empty(nl)
-        rho = np.empty(nc)
-        phs = np.empty((nc, nl))
+        L, T, F, rho, phs = march_buffers(m)
         for i in range(ib * block, min(n, (ib + 1) * block)):
             mu = dirs[i, 2]
             nu = dirs[i, 0] * sun[0] + dirs[i, 1] * sun[1] + dirs[i, 2] * sun[2]
@@ -387,7 +382,6 @@ def build_aerial_perspective(r0, sz, n_v, n_u, n_s, km_per_slice, m, tlut, mslut
     implementation's squared slice distribution). Each froxel is marched on its own; a
     froxel below the ground ends at the ground (no ground reflection: the object hides
     it)."""
-    nc = m.profile_code.shape[0]
     nl = m.extinction.shape[1]
     out_l = np.empty((n_v, n_u, n_s, nl))
     out_t = np.empty((n_v, n_u, n_s, nl))
@@ -399,11 +393,7 @@ def build_aerial_perspective(r0, sz, n_v, n_u, n_s, km_per_slice, m, tlut, mslut
         dx, dy, dz = ap_direction(row, col, n_v, n_u, sx, sz)
         nu = dx * sx + dz * sz
         depth = km_per_slice * 1000.0 * n_s * ((k + 0.5) / n_s) ** 2
-        L = np.empty(nl)
-        T = np.empty(nl)
-        F = np.empty(nl)
-        rho = np.empty(nc)
-        phs = np.empty((nc, nl))
+        L, T, F, rho, phs = march_buffers(m)
         fill_phases(m, nu, phs)
         march(r0, dz, nu, sz, depth, m, phs, False, tlut, mslut, use_ms, False, n_steps, ts, L,
               T, F, rho)

@@ -194,6 +194,16 @@ def cylinder_lookup(lo, hi, R, Rt, px, py, pz, sx, sy, sz, out):
 
 
 # -- rays -----------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def ray_buffers(n, nc, nl):
+    """Zeroed work arrays of :func:`ray_nodes` for ``n`` nodes per piece, nc constituents
+    and nl wavelengths: pos (2n+1, 3), wts (2n+1,), rho (2n+1, nc), trans (2n+1, nl),
+    t_end (1,)."""
+    k = 2 * n + 1
+    return (np.zeros((k, 3)), np.zeros(k), np.zeros((k, nc)), np.zeros((k, nl)),
+            np.zeros(1))
+
+
 @njit(cache=True)
 def ray_nodes(px, py, pz, dx, dy, dz, m, n, ts, pos, wts, rho, trans, t_end):
     """Quadrature nodes along the ray from p along d through the medium m: positions pos
@@ -385,7 +395,8 @@ def ground_interp(g, fx, fy, out):
 @njit(parallel=True, cache=True)
 def lattice_single(nodes, dirs, sun, m, e_sun, lo, hi, n, ts, out):
     """Order 1 on the lattice: out[p, k, :] = single-scattered light (and sunlit ground)
-    arriving at lattice node p from sky-sphere direction k."""
+    arriving at lattice node p from sky-sphere direction k. With the observer as the one
+    node and the view directions as ``dirs``, order 1 towards the observer."""
     npt = nodes.shape[0]
     K = dirs.shape[0]
     nc = m.profile_code.shape[0]
@@ -393,11 +404,7 @@ def lattice_single(nodes, dirs, sun, m, e_sun, lo, hi, n, ts, out):
     for idx in prange(npt * K):
         p = idx // K
         k = idx % K
-        pos = np.zeros((2 * n + 1, 3))
-        wts = np.zeros(2 * n + 1)
-        rho = np.zeros((2 * n + 1, nc))
-        trans = np.zeros((2 * n + 1, nl))
-        t_end = np.zeros(1)
+        pos, wts, rho, trans, t_end = ray_buffers(n, nc, nl)
         col = np.zeros(nc)
         res = np.zeros(nl)
         phs = np.zeros((nc, nl))
@@ -467,11 +474,7 @@ def lattice_gather(nodes, dirs, Jf, G, m, D, Htop, n, ts, out):
     for idx in prange(npt * K):
         p = idx // K
         k = idx % K
-        pos = np.zeros((2 * n + 1, 3))
-        wts = np.zeros(2 * n + 1)
-        rho = np.zeros((2 * n + 1, nc))
-        trans = np.zeros((2 * n + 1, nl))
-        t_end = np.zeros(1)
+        pos, wts, rho, trans, t_end = ray_buffers(n, nc, nl)
         tmp = np.zeros(nl)
         res = np.zeros(nl)
         gather_along(nodes[p, 0], nodes[p, 1], nodes[p, 2], dirs[k, 0], dirs[k, 1], dirs[k, 2], k,
@@ -481,27 +484,6 @@ def lattice_gather(nodes, dirs, Jf, G, m, D, Htop, n, ts, out):
 
 
 # -- the observer's view rays ---------------------------------------------------------------------
-@njit(parallel=True, cache=True)
-def view_single(vdirs, r0, sun, m, e_sun, lo, hi, n, ts, out):
-    """Order 1 towards the observer at (0, 0, r0) for every view direction."""
-    nv = vdirs.shape[0]
-    nc = m.profile_code.shape[0]
-    nl = e_sun.shape[0]
-    for i in prange(nv):
-        pos = np.zeros((2 * n + 1, 3))
-        wts = np.zeros(2 * n + 1)
-        rho = np.zeros((2 * n + 1, nc))
-        trans = np.zeros((2 * n + 1, nl))
-        t_end = np.zeros(1)
-        col = np.zeros(nc)
-        res = np.zeros(nl)
-        phs = np.zeros((nc, nl))
-        single_along(0.0, 0.0, r0, vdirs[i, 0], vdirs[i, 1], vdirs[i, 2], sun[0], sun[1], sun[2],
-                     m, e_sun, lo, hi, n, ts, res, pos, wts, rho, trans, t_end, col, phs)
-        for l in range(nl):
-            out[i, l] = res[l]
-
-
 @njit(parallel=True, cache=True)
 def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, m, D, Htop, n, ts,
                        out):
@@ -537,11 +519,7 @@ def view_gather_orders(vdirs, r0, I_all, G_all, fine_dirs, fine_dw, fine_owner, 
                     tot += v
                 for j in range(K):
                     W[c, lw, j] /= tot          # normalise: sum_j W = 1 (energy conservation)
-        pos = np.zeros((2 * n + 1, 3))
-        wts = np.zeros(2 * n + 1)
-        rho = np.zeros((2 * n + 1, nc))
-        trans = np.zeros((2 * n + 1, nl))
-        t_end = np.zeros(1)
+        pos, wts, rho, trans, t_end = ray_buffers(n, nc, nl)
         tmp = np.zeros(nl)
         sw = np.zeros((K, nl))
         for o in range(n_o):

@@ -104,12 +104,7 @@ class Hillaire2020(SkyModel):
         Sun position; elevation in [-10, 90] deg (the paper's method is made for the sun
         above about -10 deg; below that the earth's shadow covers most of the
         atmosphere seen and twilight needs more orders than the isotropic transfer gives).
-    atmosphere : skydome.Atmosphere, optional
-        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
-    turbidity : float
-        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude above the ground [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     n_wavelengths : int
         Wavelengths the tables are built at (default 16). A request with at most this
         many wavelengths is computed on its own grid; a denser one on ``n_wavelengths``
@@ -338,11 +333,6 @@ class Hillaire2020(SkyModel):
         L = np.maximum(self._to_request(L, tb.grid, wl) * self._solar(wl), 0.0)
         T = np.clip(self._to_grid(T, tb.grid, wl), 0.0, 1.0)
         return T.reshape(shape + (wl.size,)), L.reshape(shape + (wl.size,))
-
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).

@@ -42,7 +42,8 @@ import math
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import ATMOSPHERE, TURBIDITY, Parameter, SkyModel, register
+from skydome.models import (ATMOSPHERE, TURBIDITY, GroundEyeAerialPerspective, Parameter, SkyModel,
+                            register)
 
 __all__ = ["Kaneda1991", "Kaneda1991Sky", "phase_hazy", "phase_murky"]
 
@@ -125,7 +126,7 @@ def _shell_altitudes(props, top, n_shells, fog):
 
 
 @register
-class Kaneda1991(SkyModel):
+class Kaneda1991(GroundEyeAerialPerspective, SkyModel):
     """Kaneda et al. (1991): single scattering over a spherical earth, with optional fog.
 
     Parameters
@@ -288,6 +289,9 @@ class Kaneda1991(SkyModel):
         L = self._solar(wl) * np.einsum("ncl,cl,ncl->nl", ph, s["beta_s"], acc)
         return trans, np.maximum(L, 0.0)
 
+    #: the rays of ``aerial_perspective`` (air, aerosols, ozone and fog)
+    _aerial_rays = _trace
+
     # -- public API -----------------------------------------------------------------------
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
         """Single-scattered sky radiance (fog included when enabled) [W m^-2 sr^-1 nm^-1],
@@ -310,36 +314,6 @@ class Kaneda1991(SkyModel):
         KK.sun_transmittance(s["medium"], float(self.sun.direction[2]), s["table"], s["nc_a"],
                              s["fog_code"], float(self.fog_height_m), t)
         return self._solar(wl) / self.sun.solid_angle_sr * t
-
-    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
-        """Transmittance and in-scattered radiance between the eye (on the ground) and an
-        object at ``distance_m`` along ``directions`` (air, aerosols, ozone and fog).
-
-        Parameters
-        ----------
-        directions : array_like (..., 3)
-            Unit vectors from the eye towards the object (z < 0 is treated as horizontal).
-        distance_m : float or array_like (...)
-            Distance to the object [m], >= 0; broadcast with the directions.
-        wavelengths_nm : array_like (n,)
-        object_radiance : array_like (..., n), optional
-            Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
-
-        Returns
-        -------
-        transmittance : (..., n)
-        radiance : (..., n)
-            In-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance`` is
-            given, the radiance reaching the eye, ``L_0 T + L_in``.
-        """
-        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
-        t, L = self._trace(dd, dist_f, wl)
-        return self._aerial_outputs(t, L, shape, object_radiance)
-
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).

@@ -49,7 +49,7 @@ import math
 import numpy as np
 
 from skydome._validate import as_directions, as_wavelengths
-from skydome.models import Parameter, SkyModel, register
+from skydome.models import GroundEyeAerialPerspective, Parameter, SkyModel, register
 
 __all__ = ["Klassen1987", "Klassen1987Sky", "refraction_saemundsson_deg", "refraction_bennett_deg",
            "kasten_young_airmass"]
@@ -99,7 +99,7 @@ def _rayleigh_phase(cos_theta):
 
 
 @register
-class Klassen1987(SkyModel):
+class Klassen1987(GroundEyeAerialPerspective, SkyModel):
     """Klassen's (1987) two-layer flat-earth atmosphere: sky, sun and fog colour.
 
     Parameters
@@ -304,35 +304,14 @@ class Klassen1987(SkyModel):
         return (solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr
                 * np.exp(-self.sun_airmass * tau))
 
-    def aerial_perspective(self, directions, distance_m, wavelengths_nm, object_radiance=None):
-        """Transmittance and in-scattered radiance between the eye (on the ground) and an
-        object at ``distance_m`` along ``directions`` (closed form per layer).
-
-        Parameters
-        ----------
-        directions : array_like (..., 3)
-            Unit vectors from the eye towards the object (z < 0 is taken as the horizontal
-            direction of the same azimuth: the eye is on the flat ground).
-        distance_m : float or array_like (...)
-            Distance to the object [m], >= 0; broadcast with the directions.
-        wavelengths_nm : array_like (n,)
-        object_radiance : array_like (..., n), optional
-            Radiance leaving the object towards the eye [W m^-2 sr^-1 nm^-1].
-
-        Returns
-        -------
-        transmittance : (..., n)
-        radiance : (..., n)
-            The in-scattered radiance L_in [W m^-2 sr^-1 nm^-1]; when ``object_radiance``
-            is given, the radiance reaching the eye, ``L_0 T + L_in``.
-        """
+    def _aerial_rays(self, dd, dist, wl):
+        """The rays of ``aerial_perspective`` (closed form per layer); a direction below the
+        horizon is taken as the horizontal direction of the same azimuth."""
         from skydome.models.simulated.kaneda1991 import _horizon_clamp
 
-        dd, dist_f, wl, shape = self._aerial_inputs(directions, distance_m, wavelengths_nm)
         dd = _horizon_clamp(dd)
         nu = np.clip(dd @ self.apparent_sun_direction, -1.0, 1.0)
-        t, L = self._path(dd[:, 2], nu, dist_f, wl)
-        return self._aerial_outputs(t, L, shape, object_radiance)
+        return self._path(dd[:, 2], nu, dist, wl)
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).

@@ -81,12 +81,7 @@ class MonteCarlo(SkyModel):
     sun : skydome.Sun
         Sun position, any elevation in [-90, 90] deg (below the horizon only light that
         reaches the air above the earth's shadow contributes, by any number of scatterings).
-    atmosphere : skydome.Atmosphere, optional
-        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
-    turbidity : float
-        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude above the ground [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     samples : int
         Paths per direction per wavelength (default 256); the standard error falls as
         1/sqrt(samples).
@@ -233,11 +228,6 @@ class MonteCarlo(SkyModel):
 
         t = ss.transmittance(self.sun.direction)
         return solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr * t
-
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).

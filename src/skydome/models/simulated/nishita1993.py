@@ -457,8 +457,3 @@ class Nishita1993(SkyModel):
             fov = 160.0
         return Camera(w, h, fov, position=(0.0, 0.0, self.camera_altitude_m),
                       look_at=(0.0, 0.0, -self._R), up=(0.0, 1.0, 0.0))
-
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out

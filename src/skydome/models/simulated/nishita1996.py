@@ -69,19 +69,14 @@ def _fine_grid():
 
 @register
 class Nishita1996(SkyModel):
-    """Sky radiance with multiple scattering by the sky-sphere method of [NDKY96].
+    """Sky radiance with multiple scattering by the sky-sphere method of [NDKY96]. The
+    atmosphere's ground albedo reflects the sun and the sky.
 
     Parameters
     ----------
     sun : skydome.Sun
         Sun position; any elevation (below the horizon only the upper atmosphere is lit).
-    atmosphere : skydome.Atmosphere, optional
-        The medium (default ``Atmosphere.earth(turbidity=turbidity)``); its ground albedo
-        reflects the sun and the sky.
-    turbidity : float
-        Preetham turbidity [1, 32] when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     orders : int
         Scattering orders summed, [1, 10] (default 6: the 6th adds 0.6-0.8 % of the
         luminance averaged over the sky for turbidity 2.5, sun at 5-30 deg; see
@@ -250,8 +245,9 @@ class Nishita1996(SkyModel):
         nl = wl.size
         out = np.zeros((self.orders, v.shape[0], nl))
         med = st["medium"]
-        K.view_single(v, st["r0"], self._sun, med, st["e_sun"], st["lo"], st["hi"],
-                      self.view_samples, 500.0, out[0])
+        # order 1: the lattice kernel with one node, the observer at (0, 0, r0)
+        K.lattice_single(np.array([[0.0, 0.0, st["r0"]]]), v, self._sun, med, st["e_sun"],
+                         st["lo"], st["hi"], self.view_samples, 500.0, out[:1])
         if self.orders > 1:
             # orders 2..N in one pass: the phase-cell weights and the ray's nodes are shared
             K.view_gather_orders(v, st["r0"], st["fields_all"], st["grounds_all"], st["fine"],
@@ -281,11 +277,6 @@ class Nishita1996(SkyModel):
             return np.zeros(wl.size)
         t = np.exp(-(col[:, None] * pr.extinction).sum(axis=0))
         return st["e_sun"] / self.sun.solid_angle_sr * t
-
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).

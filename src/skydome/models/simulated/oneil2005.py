@@ -329,12 +329,6 @@ class ONeil2005(SkyModel):
         t = 4.0 * np.pi * (self.kr * (wl / 1000.0) ** -4.0 + self.km) * float(self._scale(mu))
         return solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr * np.exp(-t)
 
-    def describe(self):
-        out = super().describe()
-        if self.atmosphere is not None:
-            out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
-
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).
 ONeil2005Sky = ONeil2005

@@ -26,12 +26,7 @@ class SingleScattering(SkyModel):
     sun : skydome.Sun
         Sun position; any elevation in [-90, 90] deg (below the horizon only the upper
         atmosphere is lit, through the earth's shadow boundary).
-    atmosphere : skydome.Atmosphere, optional
-        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
-    turbidity : float
-        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude above the ground [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     view_samples : int, optional
         Quadrature nodes per piece of each view ray (default 16 with the sun above the
         horizon: error <= 0.2 % against the converged result; 64 with the sun below it:
@@ -106,11 +101,6 @@ class SingleScattering(SkyModel):
         wl = as_wavelengths(wavelengths_nm)
         t = self._integrator(wl).transmittance(self.sun.direction)
         return self._solar(wl) / self.sun.solid_angle_sr * t
-
-    def describe(self):
-        out = super().describe()
-        out["parameters"]["atmosphere"] = self.atmosphere.describe()
-        return out
 
 
 #: The earlier name (class names follow the registry names, without a "Sky" suffix).

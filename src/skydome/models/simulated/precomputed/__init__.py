@@ -44,12 +44,7 @@ class PrecomputedSky(SkyModel):
     sun : skydome.Sun
         Sun position. Sun elevations down to ``90 - max_sun_zenith_deg`` (-18 deg by
         default) are in the tables; below that the sky is night: radiance 0.
-    atmosphere : skydome.Atmosphere, optional
-        The medium. Default ``Atmosphere.earth(turbidity=turbidity)``.
-    turbidity : float
-        Preetham turbidity [1, 32] used when no atmosphere is given (default 2.5).
-    observer_altitude_m : float
-        Observer altitude above the ground [m], [0, top of the atmosphere).
+    {atmosphere_parameters}
     n_wavelengths : int
         Number of table wavelengths, evenly spaced over 380-780 nm (default 20).
     table_wavelengths_nm : array_like, optional
