@@ -277,13 +277,7 @@ class Atmosphere:
         distribution; complex refractive index (ash 1.5 - 0.001i); Gaussian layer centre
         and width [m]; turbidity of the ordinary aerosol below; other keywords go to
         :meth:`earth`."""
-        from skydome.atmosphere.mie import layered_mie_atmosphere
-
-        return layered_mie_atmosphere(cls, "volcanic_ash", optical_depth_550=optical_depth_550,
-                                      median_radius_um=median_radius_um, geometric_std=geometric_std,
-                                      refractive_index=refractive_index,
-                                      layer_altitude_m=layer_altitude_m, layer_width_m=layer_width_m,
-                                      background_turbidity=background_turbidity, **earth_kwargs)
+        return cls._mie_layered("volcanic_ash", locals())
 
     @classmethod
     def forest_fire_smoke(cls, optical_depth_550: float = 1.0, *, median_radius_um: float = 0.5,
@@ -293,13 +287,16 @@ class Atmosphere:
         """Earth plus an elevated layer of uniform smoke droplets (Lorenz-Mie): the blue
         sun of 1950 September after the Alberta forest fires (Wilson, MNRAS 111, 1951;
         survey section 5.6). Same parameters as :meth:`volcanic_ash`."""
+        return cls._mie_layered("forest_fire_smoke", locals())
+
+    @classmethod
+    def _mie_layered(cls, kind: str, args: dict) -> "Atmosphere":
+        """The body of :meth:`volcanic_ash` and :meth:`forest_fire_smoke` (``args``: their
+        arguments): :func:`skydome.atmosphere.mie.layered_mie_atmosphere` of this class."""
         from skydome.atmosphere.mie import layered_mie_atmosphere
 
-        return layered_mie_atmosphere(cls, "forest_fire_smoke", optical_depth_550=optical_depth_550,
-                                      median_radius_um=median_radius_um, geometric_std=geometric_std,
-                                      refractive_index=refractive_index,
-                                      layer_altitude_m=layer_altitude_m, layer_width_m=layer_width_m,
-                                      background_turbidity=background_turbidity, **earth_kwargs)
+        kw = {k: v for k, v in args.items() if k not in ("cls", "earth_kwargs")}
+        return layered_mie_atmosphere(cls, kind, **kw, **args["earth_kwargs"])
 
     @classmethod
     def custom(cls, *, rayleigh_scattering, rayleigh_scale_height_m: float = H_RAYLEIGH,

@@ -50,18 +50,10 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
     (:func:`skydome.transport._kernels.view_break_points`), the rule (rx, rw) on [0, 1]
     (:func:`skydome.transport._quadrature.gauss_legendre_unit`) in v = ln(1 + u / ts) on
     every piece (:func:`skydome.transport._quadrature.piece_nodes_rule`)."""
-    nsc = out.shape[0]
-    n_mu = out.shape[1]
-    n_phi = out.shape[2]
-    nl = out.shape[3]
+    nsc, n_mu, n_phi, nl = out.shape
     nc = col.shape[0]
     n_x = rx.shape[0]
-    R = m.R
-    Rt = m.Rt
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
-    beta_e = m.extinction
+    R, Rt = m.R, m.Rt
     for imu in prange(n_mu):
         w1 = np.empty(nc)
         w2 = np.empty(nc)
@@ -99,11 +91,12 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
                     columns_at(col, rt, mu_s_t, R, Rt, csun)
                     for kk in range(nsc):
                         c = sc_idx[kk]
-                        dens[kk] = profile_density(codes[c], p0s[c], p1s[c], rt - R)
+                        dens[kk] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
+                                                   rt - R)
                     for l in range(nl):
                         tau = 0.0
                         for c in range(nc):
-                            tau += beta_e[c, l] * (cv[c] + csun[c])
+                            tau += m.extinction[c, l] * (cv[c] + csun[c])
                         e = wq * vis * math.exp(-tau)
                         for kk in range(nsc):
                             acc[kk, l] += dens[kk] * e
