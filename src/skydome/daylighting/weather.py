@@ -23,6 +23,7 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -679,7 +680,7 @@ def _spa_zenith_azimuth(site: Site, t_mid):
 
     The arguments are those of pvlib's ``get_solarposition(..., altitude=elevation,
     method="nrel_numpy")``, passed to its ``spa.solar_position_numpy`` directly (the same
-    numbers, bit for bit: tests/test_daylighting_io.py), without pandas or the pvlib
+    numbers, bit for bit: tests/test_daylighting_weather.py), without pandas or the pvlib
     package's imports: instants as Unix seconds (UTC nanoseconds / 1e9, as pvlib's
     ``_datetime_to_unixtime``), pressure from the site's elevation by pvlib's ``alt2pres``
     (hPa; it moves only the apparent, refracted position, which is not used), 12 degC,
@@ -753,12 +754,18 @@ def _read_wea(p: Path, year: int, sun_position: str) -> Weather:
             raise ValueError(f"weather = {name!r}: truncated record (record {j}: "
                              f"{len(f) if len(f) <= MAX_FIELDS else 'too many'} of 5 fields, "
                              f"line {k})")
-        try:
-            rows.append([_number(v, name, j, k, lab) for v, lab in zip(f, labels)])
-        except ValueError as exc:
-            raise ValueError(f"{exc} (a record that is not numeric)") from None
-        if any(np.isnan(rows[-1])):
-            raise ValueError(f"{_where(name, j, k)} is not numeric")
+        try:  # the common case: five finite numbers (no per-field messages needed)
+            r = [float(v) for v in f]
+        except ValueError:
+            r = None
+        if r is None or not all(map(math.isfinite, r)):
+            try:
+                r = [_number(v, name, j, k, lab) for v, lab in zip(f, labels)]
+            except ValueError as exc:
+                raise ValueError(f"{exc} (a record that is not numeric)") from None
+            if any(np.isnan(r)):
+                raise ValueError(f"{_where(name, j, k)} is not numeric")
+        rows.append(r)
         line_of.append(k)
     for key in keys[1:]:
         if key not in head:
