@@ -12,7 +12,8 @@ each round (gendaymtx, then each skydome case):
   default backend (numba) and with ``--backend numpy`` (no numba start-up); both through
   ``python -m skydome``, whose typer-free path takes these command lines;
 - the same from the TMY3 file (pvlib.iotools read, pandas and pvlib imported);
-- skydome's defaults from the TMY3 file (adaptive patch means, SPA suns), and the same with
+- skydome's defaults (adaptive patch means, SPA suns) from the same .wea as gendaymtx (the
+  like-for-like case of a default run) and from the TMY3 file, and from the TMY3 file with
   the former default, order 4;
 - in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun; numba
   and numpy backends), the default one (adaptive, SPA suns) and order 4 (SPA suns) filled
@@ -138,6 +139,9 @@ def main(argv=None):
                     sky + ["--weather", str(tmy3), "--patches", spec, "--order", "0",
                            "--sun-position", "radiance", "--out", str(tmp / "s.mtx")],
                     senv, False),
+                "skydome CLI, .wea, defaults (adaptive, SPA)": (
+                    sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--out",
+                           str(tmp / "s.mtx")], senv, False),
                 "skydome CLI, TMY3, defaults (adaptive, SPA)": (
                     sky + ["--weather", str(tmy3), "--patches", spec, "--out",
                            str(tmp / "s.mtx")], senv, False),
