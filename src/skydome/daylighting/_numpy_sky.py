@@ -2,7 +2,8 @@
 
 The same arithmetic as :func:`skydome.daylighting._kernels.fill_perez_sky` with a fixed
 patch rule (one quadrature rule for every patch, e.g. order 0, gendaymtx's one point at each
-patch centre), in the same order of operations per value, but vectorised over blocks of
+patch centre) or a tiered one (the adaptive rule: see :func:`_refine_tiers`), in the same
+order of operations per value, but vectorised over blocks of
 lit hours x nodes with numpy's ufuncs instead of one numba loop per hour. It needs no
 ``import numba`` (0.4-0.5 s of CPU on a 2-core EPYC, the start-up floor of any numba path),
 and numpy's vectorised ``arccos``/``exp`` are faster than the scalar libm calls of the strict
