@@ -12,8 +12,10 @@ each round (gendaymtx, then each skydome case):
   default backend (numba) and with ``--backend numpy`` (no numba start-up); both through
   ``python -m skydome``, whose typer-free path takes these command lines;
 - the same from the TMY3 file (pvlib.iotools read, pandas and pvlib imported);
-- skydome's defaults from the TMY3 file (adaptive patch means, SPA suns), and the same with
-  the former default, order 4;
+- skydome's defaults (adaptive patch means, SPA suns) from the same .wea as gendaymtx (the
+  like-for-like case of a default run) and from the TMY3 file, and from the TMY3 file with
+  the former default, order 4; the defaults' rule from the .wea with ``--backend numpy``
+  (the adaptive rule without numba);
 - in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun; numba
   and numpy backends), the default one (adaptive, SPA suns) and order 4 (SPA suns) filled
   into the file's memory map, the part of a run that is the matrix and its file;
@@ -138,6 +140,12 @@ def main(argv=None):
                     sky + ["--weather", str(tmy3), "--patches", spec, "--order", "0",
                            "--sun-position", "radiance", "--out", str(tmp / "s.mtx")],
                     senv, False),
+                "skydome CLI, .wea, defaults (adaptive, SPA)": (
+                    sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--out",
+                           str(tmp / "s.mtx")], senv, False),
+                "skydome CLI, .wea, defaults (adaptive, SPA), --backend numpy": (
+                    sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--backend",
+                           "numpy", "--out", str(tmp / "s.mtx")], senv, False),
                 "skydome CLI, TMY3, defaults (adaptive, SPA)": (
                     sky + ["--weather", str(tmy3), "--patches", spec, "--out",
                            str(tmp / "s.mtx")], senv, False),
@@ -174,6 +182,8 @@ def main(argv=None):
                          "backend", w, 0, "radiance", "numpy"),
                         ("skydome in process, matrix + file, defaults (adaptive, SPA)", w_spa,
                          "adaptive", "spa", "numba"),
+                        ("skydome in process, matrix + file, defaults (adaptive, SPA), numpy "
+                         "backend", w_spa, "adaptive", "spa", "numpy"),
                         ("skydome in process, matrix + file, order 4, SPA", w_spa, 4, "spa",
                          "numba")):
                     (tmp / "s.mtx").unlink(missing_ok=True)

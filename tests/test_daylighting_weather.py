@@ -166,3 +166,45 @@ def test_bad_wea_records(tmy3, tmp_path, edit, message):
     with pytest.raises(ValueError, match=message):
         read_weather(tmp_path / "b.wea")
     assert len(read_weather(tmp_path / "g.wea")) == 48
+
+
+@pytest.mark.parametrize("utc_offset_h", [-5.0, 5.5, 0.0])
+def test_spa_without_pandas_equals_pvlib_get_solarposition(tmy3, utc_offset_h):
+    # The sun positions are pvlib's NREL SPA called without pandas or the pvlib package's
+    # imports; pvlib's public get_solarposition (method "nrel_numpy", the site's altitude)
+    # is the reference, bit for bit, at the site's offset and at a half-hour one.
+    import dataclasses
+    import datetime
+
+    import pandas as pd
+    from pvlib import solarposition
+
+    from skydome.daylighting.weather import _spa_zenith_azimuth
+
+    site = dataclasses.replace(tmy3.site, utc_offset_h=utc_offset_h)
+    zen, azi = _spa_zenith_azimuth(site, tmy3.time)
+    tz = datetime.timezone(datetime.timedelta(hours=utc_offset_h))
+    ref = solarposition.get_solarposition(pd.DatetimeIndex(tmy3.time).tz_localize(tz),
+                                          site.latitude_deg, site.longitude_deg,
+                                          altitude=site.elevation_m, method="nrel_numpy")
+    assert np.array_equal(zen, ref["zenith"].to_numpy())
+    assert np.array_equal(azi, ref["azimuth"].to_numpy())
+
+
+def test_wea_with_spa_suns_imports_neither_pandas_nor_pvlib(tmy3, tmp_path):
+    # A .wea read with the default (SPA) suns needs numpy alone: pvlib's package import
+    # (SciPy, pandas) is most of a short run's start-up.
+    import os
+    import subprocess
+    import sys
+
+    write_wea(tmy3, tmp_path / "y.wea")
+    code = ("import sys; from skydome.daylighting.weather import read_weather; "
+            f"w = read_weather({str(tmp_path / 'y.wea')!r}); "
+            "assert w.sun_model == 'spa' and len(w) == 8760; "
+            "print(sorted(m for m in ('pandas', 'pvlib', 'scipy') if m in sys.modules))")
+    env = dict(os.environ)
+    env.pop("PVLIB_USE_NUMBA", None)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       check=True)
+    assert r.stdout.strip() == "[]"

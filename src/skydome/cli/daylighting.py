@@ -73,8 +73,8 @@ def skymatrix_cmd(
                                 help="run on a local Dask cluster of N processes (0: in process)"),
     chunk_hours: int = typer.Option(D["chunk_hours"], "--chunk-hours", help="hours per Dask chunk"),
     backend: str = typer.Option(D["backend"], "--backend",
-                                help="numba (default) | numpy (a fixed --order, no numba "
-                                "start-up; equal to rounding) | auto (perez1993)"),
+                                help="numba (default) | numpy (no numba start-up; equal "
+                                "to rounding) | auto (numpy for perez1993)"),
 ):
     """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible.
 

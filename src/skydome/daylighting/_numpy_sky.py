@@ -2,7 +2,8 @@
 
 The same arithmetic as :func:`skydome.daylighting._kernels.fill_perez_sky` with a fixed
 patch rule (one quadrature rule for every patch, e.g. order 0, gendaymtx's one point at each
-patch centre), in the same order of operations per value, but vectorised over blocks of
+patch centre) or a tiered one (the adaptive rule: see :func:`_refine_tiers`), in the same
+order of operations per value, but vectorised over blocks of
 lit hours x nodes with numpy's ufuncs instead of one numba loop per hour. It needs no
 ``import numba`` (0.4-0.5 s of CPU on a 2-core EPYC, the start-up floor of any numba path),
 and numpy's vectorised ``arccos``/``exp`` are faster than the scalar libm calls of the strict
@@ -53,7 +54,7 @@ def _runs(hours):
 
 
 def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_scale,
-                       cz_min):
+                       cz_min, tiers=None):
     """The sky patches' unnormalised means and their per-hour scale, block of lit hours by
     block.
 
@@ -64,10 +65,21 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
     several days' lit hours, in order): ``hours`` (n,) their indices, ``means`` (P, n), patch
     k's mean of lv in row k (the layout of the file's rows), and ``scale`` (n,), e_diff / (the
     horizontal integral) times ``out_scale``; the kernel's ``v`` is means * scale. Both are
-    overwritten by the next block."""
+    overwritten by the next block.
+
+    ``tiers``: None (one rule), or (offsets (T, P + 1), cos_tier (T, P), centres (P, 3)) of
+    a tiered rule (the adaptive one, :func:`skydome.daylighting.patches.tiered_nodes`): the
+    last (far) rule, whose nodes are a contiguous block of ``nodes``, is computed for every
+    patch and hour as above, then the patch-hours nearer the sun are recomputed with their
+    finer rule (see :func:`_refine_tiers`)."""
+    if tiers is not None:
+        t_off, cos_tier, centres = tiers
+        f0, f1 = int(t_off[-1, 0]), int(t_off[-1, -1])
+        all_nodes, all_weights = nodes, weights
+        nodes, weights, offsets = nodes[f0:f1], weights[f0:f1], t_off[-1] - f0
     n_p = offsets.shape[0] - 1
     m = nodes.shape[0]
-    one = m == n_p  # one node per patch (order 0): the mean is lv itself
+    one = m == n_p and tiers is None  # one node per patch (order 0): the mean is lv itself
     z = np.ascontiguousarray(nodes[:, 2])
     # the nodes come in runs of equal altitude: one gradation term per run
     first = np.flatnonzero(np.concatenate([[True], z[1:] != z[:-1]]))
@@ -107,12 +119,69 @@ def perez_patch_values(nodes, weights, offsets, s_dist, coef, lit, e_diff, out_s
             horiz = z @ lv
             means = np.add.reduceat(lv, starts, axis=0)
             means /= wsum
+        if tiers is not None:
+            _refine_tiers(means, horiz, lv, z, offsets, all_nodes, all_weights, t_off,
+                          cos_tier, centres, s_t[:, i0:i1], coef_t[:, i0:i1], cz_min)
         flat = horiz <= 1e-6         # gendaymtx: a zero sky is made uniform, normalised by pi
         if flat.any():
             means[:, flat] = 1.0
             horiz[flat] = np.pi
         scale = e_lit[i0:i1] / horiz * out_scale  # the sky's horizontal illuminance is Dh
         yield lit_h[i0:i1], means, scale
+
+
+def _ragged(first, counts):
+    """Indices first[i] + 0 .. counts[i] - 1, concatenated, and the start of each run."""
+    starts = np.cumsum(counts) - counts
+    return np.repeat(first - starts, counts) + np.arange(int(counts.sum())), starts
+
+
+def _refine_tiers(means, horiz, lv_far, z_far, off_far, nodes, weights, t_off, cos_tier,
+                  centres, s_t, coef_t, cz_min):
+    """The finer rules of a tiered rule, in place, for one block of hours: ``means`` (P, n)
+    and ``horiz`` (n,) hold the far rule's patch means and horizontal integrals, ``lv_far``
+    (M_far, n) its node values times their weights, ``z_far`` and ``off_far`` its nodes'
+    cos(zeta) and the patches' offsets into them. Patch k at hour j takes rule t, the first t
+    < T - 1 with cos(angle between its centre and the sun) > cos_tier[t, k] (the kernel's
+    choice, from the same dot products cx sx + cy sy + cz sz in the kernel's order): its
+    mean is recomputed with rule t's nodes, and the hour's integral takes rule t's share of
+    the patch in place of the far rule's. The few such patch-hours (those within about 10
+    deg of the sun) are gathered node by node."""
+    n_t = t_off.shape[0]
+    sx, sy, sz = s_t
+    d = centres[:, 0:1] * sx
+    d += centres[:, 1:2] * sy
+    d += centres[:, 2:3] * sz
+    tier = np.full(d.shape, n_t - 1, dtype=np.int64)
+    for t in range(n_t - 2, -1, -1):  # the first (finest) rule that applies wins
+        tier[d > cos_tier[t][:, None]] = t
+    a, b, c, dd, e = coef_t
+    for t in range(n_t - 1):
+        kk, jj = np.nonzero(tier == t)
+        if not kk.size:
+            continue
+        idx, st = _ragged(t_off[t, kk], t_off[t, kk + 1] - t_off[t, kk])
+        jr = np.repeat(jj, t_off[t, kk + 1] - t_off[t, kk])
+        nd = nodes[idx]
+        nz = nd[:, 2]
+        cg = nd[:, 0] * sx[jr]
+        cg += nd[:, 1] * sy[jr]
+        cg += nz * sz[jr]
+        np.clip(cg, -1.0, 1.0, out=cg)
+        lv = np.exp(dd[jr] * np.arccos(cg))
+        lv *= c[jr]
+        lv += 1.0                    # [PSM93] eq. 1: 1 + c exp(d gamma) + e cos^2(gamma)
+        lv += e[jr] * (cg * cg)
+        lv *= 1.0 + a[jr] * np.exp(b[jr] / np.maximum(nz, cz_min))
+        np.maximum(lv, 0.0, out=lv)  # a negative lv is clipped to 0 (per node)
+        w = weights[idx]
+        lv *= w
+        means[kk, jj] = np.add.reduceat(lv, st) / np.add.reduceat(w, st)
+        lv *= nz
+        fidx, fst = _ragged(off_far[kk], off_far[kk + 1] - off_far[kk])
+        fj = np.repeat(jj, off_far[kk + 1] - off_far[kk])
+        far = np.add.reduceat(lv_far[fidx, fj] * z_far[fidx], fst)
+        np.add.at(horiz, jj, np.add.reduceat(lv, st) - far)
 
 
 def _candidates(s, c_t, n_c):
@@ -190,7 +259,8 @@ def nearest_patches(centres, s_true, hours, nsuns):
 
 
 def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_min, centres,
-                   dom, s_true, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa):
+                   dom, s_true, e_dir, rho, tint, grey, out_scale, nsuns, fixed_sa,
+                   tiers=None):
     """Fill the sky matrix ``out`` (P + 1, H, C), zero-filled, in Radiance's file order (row
     0 the ground): the patch values of :func:`perez_patch_values` times the tint, the ground
     and the sun, with the kernel's per-hour inputs (see
@@ -230,7 +300,7 @@ def fill_perez_sky(out, lit, nodes, weights, offsets, s_dist, coef, e_diff, cz_m
     rows = out.reshape(out.shape[0], -1)[1:]  # the sky patches' rows, a view (C-contiguous)
     ar = np.arange(_BLOCK)
     for hrs, means, scale in perez_patch_values(nodes, weights, offsets, s_dist, coef, lit,
-                                                e_diff, out_scale, cz_min):
+                                                e_diff, out_scale, cz_min, tiers):
         if not means.max() * scale.max() * t_max <= limit:  # False for a nan
             raise ValueError("matrix holds nan or inf values")
         # value (k, h, c) = means[k, h] x (scale[h] tint[c]), written run of consecutive

@@ -85,8 +85,6 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
         fail(f"sun-position = {sun_position!r} is unknown (choices: spa, radiance)")
     if backend not in ("numba", "numpy", "auto"):
         fail(f"backend = {backend!r} is unknown (choices: numba, numpy, auto)")
-    if backend == "numpy" and order == "adaptive":
-        fail("backend = 'numpy' takes a fixed --order (0..16), not the adaptive rule")
     if workers < 0 or chunk_hours < 1:
         fail(f"workers = {workers} must be >= 0 and chunk-hours = {chunk_hours} >= 1")
     from skydome._validate import check_number
@@ -118,7 +116,7 @@ def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, o
             fail(f"out = {str(t)!r}: folder {str(t.parent)!r} does not exist")
     from skydome.daylighting.weather import read_weather
 
-    if not distributed and (backend == "numba" or order == "adaptive"):  # only the Perez kernels run: no BLAS probe
+    if not distributed and backend == "numba":  # only the Perez kernels run: no BLAS probe
         from skydome.daylighting.skymatrix import start_numba_without_blas
 
         start_numba_without_blas()

@@ -23,6 +23,7 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -667,8 +668,60 @@ def _calendar(t_mid):
     return month, day, hour, doy
 
 
+def _pvlib_spa():
+    """pvlib's ``spa`` module (its numpy NREL SPA [RA04]) without importing the ``pvlib``
+    package: ``pvlib/__init__`` imports every subpackage (SciPy's integrate and optimize,
+    pandas; 0.8-1.1 s of CPU on a 2-core EPYC), while ``spa.py`` needs numpy alone. None
+    when pvlib's SPA would be numba-compiled (PVLIB_USE_NUMBA set; pvlib then reloads it for
+    its numpy path, which :func:`_spa_zenith_azimuth` takes through pvlib instead)."""
+    import os
+    import sys
+
+    if os.getenv("PVLIB_USE_NUMBA", "0") != "0":
+        return None
+    mod = sys.modules.get("pvlib.spa")
+    if mod is not None:
+        return None if mod.USE_NUMBA else mod
+    import importlib.util
+
+    spec = importlib.util.find_spec("pvlib")  # finds the package; runs nothing of it
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    path = Path(next(iter(spec.submodule_search_locations))) / "spa.py"
+    sub = importlib.util.spec_from_file_location("pvlib.spa", path)
+    if sub is None or sub.loader is None:
+        return None
+    mod = importlib.util.module_from_spec(sub)
+    sub.loader.exec_module(mod)  # not put in sys.modules: a later ``import pvlib`` is whole
+    return None if mod.USE_NUMBA else mod
+
+
 def _spa_zenith_azimuth(site: Site, t_mid):
-    """True zenith and azimuth [deg] by pvlib's NREL SPA [RA04] at local-standard instants."""
+    """True zenith and azimuth [deg] by pvlib's NREL SPA [RA04] at local-standard instants.
+
+    The arguments are those of pvlib's ``get_solarposition(..., altitude=elevation,
+    method="nrel_numpy")``, passed to its ``spa.solar_position_numpy`` directly (the same
+    numbers, bit for bit: tests/test_daylighting_weather.py), without pandas or the pvlib
+    package's imports: instants as Unix seconds (UTC nanoseconds / 1e9, as pvlib's
+    ``_datetime_to_unixtime``), pressure from the site's elevation by pvlib's ``alt2pres``
+    (hPa; it moves only the apparent, refracted position, which is not used), 12 degC,
+    delta T 67 s, refraction 0.5667 deg (pvlib's defaults)."""
+    spa = _pvlib_spa()
+    if spa is None:
+        return _spa_zenith_azimuth_pvlib(site, t_mid)
+    t = np.asarray(t_mid, dtype="datetime64[ns]")
+    offset_us = round(site.utc_offset_h * 3_600_000_000)  # datetime.timedelta(hours=...)
+    ns = t.astype(np.int64) - offset_us * 1000
+    unixtime = ns / np.int64(1_000_000_000)
+    alt = float(site.elevation_m)
+    pressure = 100 * ((44331.514 - alt) / 11880.516) ** (1 / 0.1902632)  # pvlib alt2pres
+    res = spa.solar_position_numpy(unixtime, site.latitude_deg, site.longitude_deg, alt,
+                                   pressure / 100, 12.0, 67.0, 0.5667, 4)
+    return (np.asarray(res[1], dtype=np.float64), np.asarray(res[4], dtype=np.float64))
+
+
+def _spa_zenith_azimuth_pvlib(site: Site, t_mid):
+    """:func:`_spa_zenith_azimuth` through pvlib's ``get_solarposition`` (with pandas)."""
     import datetime
 
     import pandas as pd
@@ -722,12 +775,18 @@ def _read_wea(p: Path, year: int, sun_position: str) -> Weather:
             raise ValueError(f"weather = {name!r}: truncated record (record {j}: "
                              f"{len(f) if len(f) <= MAX_FIELDS else 'too many'} of 5 fields, "
                              f"line {k})")
-        try:
-            rows.append([_number(v, name, j, k, lab) for v, lab in zip(f, labels)])
-        except ValueError as exc:
-            raise ValueError(f"{exc} (a record that is not numeric)") from None
-        if any(np.isnan(rows[-1])):
-            raise ValueError(f"{_where(name, j, k)} is not numeric")
+        try:  # the common case: five finite numbers (no per-field messages needed)
+            r = [float(v) for v in f]
+        except ValueError:
+            r = None
+        if r is None or not all(map(math.isfinite, r)):
+            try:
+                r = [_number(v, name, j, k, lab) for v, lab in zip(f, labels)]
+            except ValueError as exc:
+                raise ValueError(f"{exc} (a record that is not numeric)") from None
+            if any(np.isnan(r)):
+                raise ValueError(f"{_where(name, j, k)} is not numeric")
+        rows.append(r)
         line_of.append(k)
     for key in keys[1:]:
         if key not in head:
