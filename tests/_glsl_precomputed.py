@@ -31,7 +31,7 @@ def atmosphere_from_desc(desc: dict) -> dict:
             "groundAlbedo": np.asarray(desc["ground_albedo"])}
 
 
-# -- texture() ------------------------------------------------------------------------------
+# -- GLSL texture() with LINEAR filtering and CLAMP_TO_EDGE (GL 4.6 section 8.14.2) --------
 def _axis(u, n):
     x = np.asarray(u, dtype=np.float64) * n - 0.5
     i0 = np.floor(x)
@@ -41,6 +41,7 @@ def _axis(u, n):
 
 
 def texture2d(tex, uv):
+    """tex (height, width, c); uv (..., 2) = (u along width, v along height)."""
     h, w = tex.shape[:2]
     x0, x1, fx = _axis(uv[..., 0], w)
     y0, y1, fy = _axis(uv[..., 1], h)
@@ -49,6 +50,7 @@ def texture2d(tex, uv):
 
 
 def texture3d(tex, uvw):
+    """tex (depth, height, width, c); uvw (..., 3)."""
     d, h, w = tex.shape[:3]
     x0, x1, fx = _axis(uvw[..., 0], w)
     y0, y1, fy = _axis(uvw[..., 1], h)

@@ -18,38 +18,9 @@ import pytest
 GLSL = Path(__file__).parents[1] / "src/skydome/export/glsl/hillaire2020.glsl"
 
 
-# -- GLSL texture() with LINEAR filtering and CLAMP_TO_EDGE (GL 4.6 section 8.14.2) --------
-def _axis(u, n):
-    x = np.asarray(u, dtype=np.float64) * n - 0.5
-    i0 = np.floor(x)
-    f = x - i0
-    i0 = i0.astype(int)
-    return np.clip(i0, 0, n - 1), np.clip(i0 + 1, 0, n - 1), f
-
-
-def texture2d(tex, uv):
-    """tex (height, width, c); uv (..., 2) = (u along width, v along height)."""
-    h, w = tex.shape[:2]
-    x0, x1, fx = _axis(uv[..., 0], w)
-    y0, y1, fy = _axis(uv[..., 1], h)
-    fx, fy = fx[..., None], fy[..., None]
-    return ((1 - fy) * ((1 - fx) * tex[y0, x0] + fx * tex[y0, x1])
-            + fy * ((1 - fx) * tex[y1, x0] + fx * tex[y1, x1]))
-
-
-def texture3d(tex, uvw):
-    """tex (depth, height, width, c); uvw (..., 3)."""
-    d, h, w = tex.shape[:3]
-    x0, x1, fx = _axis(uvw[..., 0], w)
-    y0, y1, fy = _axis(uvw[..., 1], h)
-    z0, z1, fz = _axis(uvw[..., 2], d)
-    fx, fy, fz = fx[..., None], fy[..., None], fz[..., None]
-    out = 0.0
-    for zi, wz in ((z0, 1 - fz), (z1, fz)):
-        for yi, wy in ((y0, 1 - fy), (y1, fy)):
-            for xi, wx in ((x0, 1 - fx), (x1, fx)):
-                out = out + wz * wy * wx * tex[zi, yi, xi]
-    return out
+# GLSL texture() with LINEAR filtering and CLAMP_TO_EDGE (GL 4.6 section 8.14.2): the one
+# transcription of tests/_glsl_precomputed.py
+from _glsl_precomputed import texture2d, texture3d  # noqa: E402
 
 
 # -- numpy transcription of hillaire2020.glsl ------------------------------------------
