@@ -38,61 +38,23 @@ BPY5 = ROOT / ".venv-bpy5" / "bin" / "python"
 Y709 = np.array([0.2126, 0.7152, 0.0722])
 
 
+def _sky_texture(nt, item: dict, job: dict):
+    """Blender 5's MULTIPLE_SCATTERING sky: unit densities, sea level, no sun disc."""
+    tex = nt.nodes.new("ShaderNodeTexSky")
+    tex.sky_type = "MULTIPLE_SCATTERING"
+    tex.sun_disc = False
+    tex.altitude = 0.0
+    tex.air_density = tex.aerosol_density = tex.ozone_density = 1.0
+    tex.sun_elevation = np.radians(item["elevation"])
+    tex.sun_rotation = np.radians(item["azimuth"])
+    return tex
+
+
 def _blender(job: dict) -> None:
     """In the bpy 5 subprocess: render each world of ``job`` and save .npy files."""
-    import bpy
-    import OpenEXR
+    from _blender_panorama import render_panoramas
 
-    for item in job["worlds"]:
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        sc = bpy.context.scene
-        sc.render.engine = "CYCLES"
-        sc.cycles.device = "CPU"
-        sc.cycles.samples = 16
-        sc.cycles.use_denoising = False
-        sc.view_settings.view_transform = "Standard"
-        sc.render.image_settings.file_format = "OPEN_EXR"
-        sc.render.image_settings.color_depth = "32"
-        world = bpy.data.worlds.new("w")
-        sc.world = world
-        nt = world.node_tree
-        nt.nodes.clear()
-        if item["kind"] == "map":
-            tex = nt.nodes.new("ShaderNodeTexEnvironment")
-            tex.image = bpy.data.images.load(item["map"])
-            tex.image.colorspace_settings.name = "Linear Rec.709"
-        else:
-            tex = nt.nodes.new("ShaderNodeTexSky")
-            tex.sky_type = "MULTIPLE_SCATTERING"
-            tex.sun_disc = False
-            tex.altitude = 0.0
-            tex.air_density = tex.aerosol_density = tex.ozone_density = 1.0
-            tex.sun_elevation = np.radians(item["elevation"])
-            tex.sun_rotation = np.radians(item["azimuth"])
-        bg = nt.nodes.new("ShaderNodeBackground")
-        out = nt.nodes.new("ShaderNodeOutputWorld")
-        nt.links.new(tex.outputs["Color"], bg.inputs["Color"])
-        nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
-        cam = bpy.data.cameras.new("c")
-        cam.type = "PANO"
-        if hasattr(cam, "panorama_type"):
-            cam.panorama_type = "EQUIRECTANGULAR"
-        else:                                        # older Cycles: the type on cam.cycles
-            cam.cycles.panorama_type = "EQUIRECTANGULAR"
-        obj = bpy.data.objects.new("c", cam)
-        sc.collection.objects.link(obj)
-        sc.camera = obj
-        # looking along +X with +Z up: the layout of Blender's Environment Texture
-        obj.rotation_euler = (np.pi / 2, 0.0, -np.pi / 2)
-        sc.render.resolution_x, sc.render.resolution_y = W, H
-        sc.render.resolution_percentage = 100
-        path = str(Path(job["dir"]) / f"{item['name']}.exr")
-        sc.render.filepath = path
-        bpy.ops.render.render(write_still=True)
-        with OpenEXR.File(path, separate_channels=True) as f:
-            ch = f.channels()
-            img = np.stack([np.array(ch[c].pixels) for c in "RGB"], axis=-1)
-        np.save(Path(job["dir"]) / f"{item['name']}.npy", img)
+    render_panoramas(job, _sky_texture, W, H)
 
 
 def _metrics(img: np.ndarray) -> dict:

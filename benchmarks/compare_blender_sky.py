@@ -59,60 +59,23 @@ def blender_nishita_atmosphere():
     return Atmosphere.blender("nishita")
 
 
+def _sky_texture(nt, item: dict, job: dict):
+    """Blender's sky texture of ``item`` (turbidity 3, ground albedo 0.3, skydome's sun)."""
+    tex = nt.nodes.new("ShaderNodeTexSky")
+    tex.sky_type = item["kind"]
+    tex.turbidity = 3.0
+    tex.ground_albedo = 0.3
+    tex.sun_direction = job["sun_direction"]
+    for k, v in item.get("settings", {}).items():
+        setattr(tex, k, v)
+    return tex
+
+
 def _blender(job: dict) -> None:
     """In the subprocess: render each world of ``job`` and save .npy files."""
-    import bpy
-    import OpenEXR
+    from _blender_panorama import render_panoramas
 
-    for item in job["worlds"]:
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        sc = bpy.context.scene
-        sc.render.engine = "CYCLES"
-        sc.cycles.device = "CPU"
-        sc.cycles.samples = 16
-        sc.cycles.use_denoising = False
-        sc.view_settings.view_transform = "Standard"
-        sc.render.image_settings.file_format = "OPEN_EXR"
-        sc.render.image_settings.color_depth = "32"
-        world = bpy.data.worlds.new("w")
-        sc.world = world
-        world.use_nodes = True
-        nt = world.node_tree
-        nt.nodes.clear()
-        if item["kind"] == "map":
-            tex = nt.nodes.new("ShaderNodeTexEnvironment")
-            tex.image = bpy.data.images.load(item["map"])
-            tex.image.colorspace_settings.name = "Linear Rec.709"
-        else:
-            tex = nt.nodes.new("ShaderNodeTexSky")
-            tex.sky_type = item["kind"]
-            tex.turbidity = 3.0
-            tex.ground_albedo = 0.3
-            tex.sun_direction = job["sun_direction"]
-            for k, v in item.get("settings", {}).items():
-                setattr(tex, k, v)
-        bg = nt.nodes.new("ShaderNodeBackground")
-        out = nt.nodes.new("ShaderNodeOutputWorld")
-        nt.links.new(tex.outputs["Color"], bg.inputs["Color"])
-        nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
-        cam = bpy.data.cameras.new("c")
-        cam.type = "PANO"
-        cam.panorama_type = "EQUIRECTANGULAR"
-        obj = bpy.data.objects.new("c", cam)
-        sc.collection.objects.link(obj)
-        sc.camera = obj
-        # looking along +X with +Z up: the panorama then has the layout of Blender's own
-        # Environment Texture (checked by the control render of skydome's map)
-        obj.rotation_euler = (np.pi / 2, 0.0, -np.pi / 2)
-        sc.render.resolution_x, sc.render.resolution_y = W, H
-        sc.render.resolution_percentage = 100
-        path = str(Path(job["dir"]) / f"{item['name']}.exr")
-        sc.render.filepath = path
-        bpy.ops.render.render(write_still=True)
-        with OpenEXR.File(path, separate_channels=True) as f:
-            ch = f.channels()
-            img = np.stack([np.array(ch[c].pixels) for c in "RGB"], axis=-1)
-        np.save(Path(job["dir"]) / f"{item['name']}.npy", img)
+    render_panoramas(job, _sky_texture, W, H)
 
 
 def main() -> None:
