@@ -255,6 +255,10 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
         "irradiance": _rgba(irr @ K),
         "irradiance_spectral": _spectral_layers(irr.astype(np.float32)),
     }
+    dens = _density_description(sky, t)
+    if dens is not None:
+        tex["scattering_density"] = _density_texture(t.scattering_density,
+                                                     dens["block_columns"])
     if ground:
         for k in range(ss.shape[0]):
             tex[f"single_scattering_{k}"] = _bruneton_3d(_xyz_4d(ss[k], K))
@@ -271,7 +275,8 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
     channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ",
                 "multiple_scattering": "XYZ", "transmittance": "XYZ",
                 "irradiance": "XYZ", "optical_depth": names,
-                "irradiance_spectral": None, "transmittance_spectral": None}
+                "irradiance_spectral": None, "transmittance_spectral": None,
+                "scattering_density": None}
     channels.update({f"single_scattering_{k}": "XYZ" for k in range(ss.shape[0])})
     desc = {
         "format": LUT_FORMAT, "model": "precomputed",
@@ -353,6 +358,7 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
                                [0.0556434, -0.2040259, 1.0572252]],
         "phase_code": [int(x) for x in t.phase_code],
         "phase_param": [float(x) for x in t.phase_param],
+        "scattering_density": dens,
         "glsl": "export/glsl/precomputed.glsl",
     }
     desc["textures"] = {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32",
@@ -360,6 +366,80 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
                                          else None)}
                         for n, a in tex.items()}
     return tex, desc
+
+
+#: the largest side of a 3-D texture the packed scattering density may have (the common
+#: GL_MAX_3D_TEXTURE_SIZE of desktop GPUs and WebGL2)
+DENSITY_MAX_SIDE = 2048
+
+
+def _density_description(sky, t) -> dict[str, Any] | None:
+    """luts.json's ``scattering_density``: what ``skydomeMultipleScatteringAlong`` needs to
+    integrate the scattering density J of orders 2..N along a view ray as the model does
+    for its observer (its axes, the constituents' density profiles, the quadrature, the
+    observer's sky map); None where the tables hold no J (one scattering order)."""
+    from skydome.models.simulated import precomputed as P
+    from skydome.models.simulated.precomputed._precompute import QUADRATURE_SCALE_M
+
+    J = t.scattering_density
+    if J is None:
+        return None
+    nsc, n_th, n_ph, n_r, n_ms, nl = J.shape
+    layers = -(-nl // 4)
+    blocks = n_th * nsc * layers
+    cols = max(1, min(blocks, DENSITY_MAX_SIDE // n_ms))
+    if -(-blocks // cols) * n_ph > DENSITY_MAX_SIDE or n_r > DENSITY_MAX_SIDE:
+        raise ValueError(f"scattering density shape = {J.shape}: packed, it exceeds "
+                         f"{DENSITY_MAX_SIDE} texels on a side")
+    if len(t.profile_code) > 4 or nsc > 4:
+        raise ValueError(f"constituents = {len(t.profile_code)}, scatterers = {nsc}: the "
+                         "scattering density's description holds at most 4 of each")
+    return {
+        "theta": int(n_th), "phi": int(n_ph), "r": int(n_r), "mu_s": int(n_ms),
+        "scatterers": int(nsc), "layers": int(layers), "block_columns": int(cols),
+        "scatterer_constituent": [int(c) for c in t.scattering_index],
+        "profile_code": [int(c) for c in t.profile_code],
+        "profile_p0_m": [float(x) for x in t.profile_p0],
+        "profile_p1_m": [float(x) for x in t.profile_p1],
+        "quadrature": {"samples": int(sky.integration_samples),
+                       "scale_m": float(QUADRATURE_SCALE_M)},
+        "sky_map": {"ground": int(P._SLICE_GROUND), "sky": int(P._SLICE_SKY),
+                    "phi": int(P._SLICE_PHI)},
+        "layout": "float32 (n_slabs n_phi, n_r, block_columns n_mu_s, 4): block b = "
+                  "((i_theta n_scatterers) + k) layers + layer, four table wavelengths "
+                  "4 layer .. 4 layer + 3 in RGBA (zeros past the last), at x = (b mod "
+                  "block_columns) n_mu_s + i_mu_s, y = i_r, z = (b div block_columns) n_phi "
+                  "+ i_phi",
+        "note": "J_k of orders 2..N per unit number density and solar irradiance "
+                "[m^-1 sr^-1] of scatterer k (constituent scatterer_constituent[k], density "
+                "profile profile_code: 0 exponential exp(-h / p0), 1 tent max(0, 1 - |h - "
+                "p0| / p1), 2 uniform (1 below p0), 3 gaussian exp(-((h - p0) / p1)^2 / 2)); "
+                "axes: theta the angle from the sun and phi the azimuth about the sun from "
+                "its vertical plane (zenith side), both uniform over [0, pi], r and mu_s on "
+                "the 4-D table's mappings; quadrature: samples midpoint nodes per piece of "
+                "a ray split at its lowest point, uniform in ln(1 + u / scale_m), u the "
+                "distance from the piece's dense end; sky_map: the observer's map of orders "
+                "2..N (zenith nodes nadir .. horizon for rays to the ground, horizon .. "
+                "zenith for the others, azimuth nodes over [0, pi] from the sun's)",
+    }
+
+
+def _density_texture(J: np.ndarray, cols: int) -> np.ndarray:
+    """J (k, theta, phi, r, mu_s, l) -> the packed 3-D texture of ``_density_description``:
+    (n_slabs n_phi, n_r, cols n_mu_s, 4), float32."""
+    nsc, n_th, n_ph, n_r, n_ms, nl = J.shape
+    layers = -(-nl // 4)
+    blocks = n_th * nsc * layers
+    slabs = -(-blocks // cols)
+    out = np.zeros((slabs, n_ph, n_r, cols, n_ms, 4), dtype=np.float32)
+    for it in range(n_th):
+        for k in range(nsc):
+            src = np.asarray(J[k, it], dtype=np.float32)              # (phi, r, mu_s, l)
+            for lay in range(layers):
+                b = (it * nsc + k) * layers + lay
+                n4 = min(4, nl - 4 * lay)
+                out[b // cols, :, :, b % cols, :, :n4] = src[..., 4 * lay:4 * lay + n4]
+    return out.reshape(slabs * n_ph, n_r, cols * n_ms, 4)
 
 
 def _constituent_names(sky, n: int) -> list[str]:
