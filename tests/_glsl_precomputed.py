@@ -50,16 +50,19 @@ def texture2d(tex, uv):
 
 
 def texture3d(tex, uvw):
-    """tex (depth, height, width, c); uvw (..., 3)."""
+    """tex (depth, height, width, c); uvw (..., 3). (The texels gathered by flat index,
+    np.take on the (texels, c) view: the same values as tex[z, y, x], faster.)"""
     d, h, w = tex.shape[:3]
+    flat = tex.reshape(-1, tex.shape[-1])
     x0, x1, fx = _axis(uvw[..., 0], w)
     y0, y1, fy = _axis(uvw[..., 1], h)
     z0, z1, fz = _axis(uvw[..., 2], d)
     out = 0.0
     for zi, wz in ((z0, 1 - fz), (z1, fz)):
         for yi, wy in ((y0, 1 - fy), (y1, fy)):
+            row = (zi * h + yi) * w
             for xi, wx in ((x0, 1 - fx), (x1, fx)):
-                out = out + wz * wy * wx * tex[zi, yi, xi]
+                out = out + wz * wy * wx * np.take(flat, row + xi, axis=0)
     return out
 
 

@@ -36,9 +36,10 @@ mapping:
 
 theta_s = acos(mu_s), theta_max = acos(mu_s_min), 0 at mu_s_min (clamped below), 1 at
 the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet radius.
-Bake format 4 (``LUT_FORMAT``) has the reference's texture set and the constants; format
-3 had these axes and per-constituent single scattering only, format 2 [Bru17]'s mu axis,
-format 1 [Bru17]'s mu and mu_s axes.
+Bake format 5 (``LUT_FORMAT``) adds the scattering density of orders 2..N, which the
+shader integrates along the view ray as the model does; format 4 had the reference's
+texture set and the constants; format 3 had these axes and per-constituent single
+scattering only, format 2 [Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes.
 
 References
 ----------
@@ -68,8 +69,10 @@ __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "ba
 #: skydome.precomputed/2), no longer [Bru17]'s; version 3: the mu axis too is the model's
 #: (angle from the local horizon, table format skydome.precomputed/3); version 4: the
 #: reference's texture set (Rayleigh and single Mie scattering, orders 2..N apart,
-#: transmittance, optical depths, irradiance) and the atmosphere's constants
-LUT_FORMAT = "skydome.luts.bruneton-xyz/4"
+#: transmittance, optical depths, irradiance) and the atmosphere's constants; version 5:
+#: the scattering density of orders 2..N (texture scattering_density, luts.json
+#: scattering_density) for the observer's sky as the model renders it
+LUT_FORMAT = "skydome.luts.bruneton-xyz/5"
 #: the hillaire2020 bake (Hillaire's layout, XYZ); version 2: the atmosphere's parameters,
 #: the sun's disc and EXR channels named X, Y, Z (A)
 HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/2"
@@ -174,7 +177,8 @@ def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
     return out
 
 
-def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def bake_precomputed(sky, ground: bool = False,
+                     density: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """(textures, description) of a :class:`PrecomputedSky`: [Bru17]'s textures in CIE XYZ,
     everything an engine needs to draw the sky, the sun, the ground and aerial perspective
     (``export/glsl/precomputed.glsl``).
@@ -207,6 +211,13 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
       surface (orders 1..N), Y in lx for a sun at 1 au; A = 0.
     * ``irradiance_spectral`` (ceil(nl / 4), n_irr_r, n_irr_mu_s, 4): the same per unit
       solar irradiance on the table wavelengths, layer k channel c = wavelength 4 k + c.
+
+    * ``scattering_density`` (with ``density``; :func:`bake` and :func:`write_luts` set
+      it): the scattering density J of orders 2..N per table wavelength (four per texel),
+      packed as luts.json ``scattering_density`` describes (545 MB in float32 at the
+      default sizes): what the model integrates along each view ray for its observer's
+      sky (``skydomeMultipleScatteringAlong``, ``skydomeSkyMapTexel``); the shader's
+      sky and ground from it are the model's to float32 (docs/rendering.md).
 
     ``ground``: also the per-constituent layout that the viewer's shader reads
     (``skydome.viewer``): ``single_scattering_<k>`` (XYZ of constituent k's single
@@ -255,7 +266,7 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
         "irradiance": _rgba(irr @ K),
         "irradiance_spectral": _spectral_layers(irr.astype(np.float32)),
     }
-    dens = _density_description(sky, t)
+    dens = _density_description(sky, t) if density else None
     if dens is not None:
         tex["scattering_density"] = _density_texture(t.scattering_density,
                                                      dens["block_columns"])
@@ -741,7 +752,7 @@ def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any
     if layout == "hillaire":
         return bake_hillaire2020(sky, wavelengths_nm)
     if layout == "bruneton":
-        return bake_precomputed(sky)
+        return bake_precomputed(sky, density=True)
     if layout is not None:
         raise ValueError(f"model {name!r}: lut_layout = {layout!r} is not one of "
                          f"{', '.join(LUT_LAYOUTS)}")
