@@ -20,9 +20,12 @@ wavelength, end values held), E_sun the ASTM G173 solar spectrum and w_l the CIE
 integration weights of the output grid (skydome's default 41 wavelengths), the map that
 ``PrecomputedSky.xyz`` applies. Multiply the baked values by the sun's 1/d^2 factor
 (``Sun.irradiance_scale``) at render time. The textures (scattering, single Mie, orders
-2..N, transmittance, optical depths, irradiance) and the atmosphere's constants are
-described in :func:`bake_precomputed`; ``export/glsl/precomputed.glsl`` renders the sky,
-the sun, the ground and aerial perspective from them.
+2..N, transmittance, optical depths, irradiance, the scattering density of orders 2..N)
+and the atmosphere's constants are described in :func:`bake_precomputed`;
+``export/glsl/precomputed.glsl`` renders the sky, the sun, the ground and aerial
+perspective from them, orders 2..N either from the stored 4-D table (one look-up) or, as
+the model renders its observer's sky, integrated along the view ray from the scattering
+density on a sky map (the ``skydome*Mapped`` functions; [BN08] eq. 8).
 
 The axis mappings: r and nu are [Bru17]'s; mu is the model's own mapping of the angle
 from the local horizon (``precomputed._mapping.mu_unit``, table format 3): on each half
