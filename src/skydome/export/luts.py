@@ -743,11 +743,13 @@ def atmosphere_from_luts(desc: dict[str, Any]):
                       ground_albedo=coefficient(a["ground_albedo"]), name="from-luts")
 
 
-def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def bake(sky, wavelengths_nm=None,
+         density: bool = True) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The bake of ``sky`` in its model's layout (``lut_layout``): Bruneton's
-    (``"bruneton"``, e.g. ``precomputed``) or Hillaire's (``"hillaire"``, e.g.
-    ``hillaire2020``; any object with the precomputed model's ``export_textures``
-    is baked in Bruneton's); ValueError for other models."""
+    (``"bruneton"``, e.g. ``precomputed``, with its scattering density unless ``density``
+    is false) or Hillaire's (``"hillaire"``, e.g. ``hillaire2020``; any object with the
+    precomputed model's ``export_textures`` is baked in Bruneton's); ValueError for other
+    models."""
     name = getattr(sky, "name", type(sky).__name__)
     layout = getattr(sky, "lut_layout", None)
     if layout is None and hasattr(sky, "export_textures"):
@@ -755,7 +757,7 @@ def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any
     if layout == "hillaire":
         return bake_hillaire2020(sky, wavelengths_nm)
     if layout == "bruneton":
-        return bake_precomputed(sky, density=True)
+        return bake_precomputed(sky, density=bool(density))
     if layout is not None:
         raise ValueError(f"model {name!r}: lut_layout = {layout!r} is not one of "
                          f"{', '.join(LUT_LAYOUTS)}")
@@ -812,18 +814,20 @@ def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str, channels) 
 
 
 def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
-               wavelengths_nm=None, progress=None) -> list[Path]:
+               wavelengths_nm=None, progress=None, density: bool = True) -> list[Path]:
     """Write :func:`bake` of ``sky`` into ``folder``: each texture as ``<name>.bin`` (raw
     little-endian float32), ``<name>.npy`` and/or ``<name>.exr`` (float32, or half with
     ``half``; 3-D textures as their slices stacked top to bottom), and ``luts.json``
     describing axes, mappings, units and the XYZ conversion. The folder appears at once,
     complete (:func:`skydome._io.atomic_folder`); into an existing folder each file is
-    renamed into place. ``progress(done, total)`` is called per file. Returns the paths."""
+    renamed into place. ``progress(done, total)`` is called per file. ``density=False``
+    leaves out the precomputed bake's scattering density (545 MB in float32 at the default
+    sizes; the shader's table path does not need it). Returns the paths."""
     from skydome._io import atomic_folder, check_output_folder
 
     formats = check_luts_options(formats, half)
     folder = check_output_folder(folder)
-    tex, desc = bake(sky, wavelengths_nm)
+    tex, desc = bake(sky, wavelengths_nm, density)
     chans = {n: (desc["textures"].get(n) or {}).get("channels") for n in tex}
     exr_scale = {n: 1.0 for n in tex}
     if half:
