@@ -425,7 +425,8 @@ def test_sky_map_equals_the_models_observer_map(baked, sky_maps):
     """Every texel of the shader's sky map (the scattering density integrated along the
     texel's view ray: skydomeMultipleScatteringAlong) = the model's own sky map of orders
     2..N for that observer (multiple_scattering_slice, numba, float64), reduced to XYZ
-    with the bake's weights, to float32 (measured max 1e-6 of the map's largest value)."""
+    with the bake's weights, to float32 (measured max 1.9e-6 of the map's largest
+    value)."""
     import skydome
 
     sky0, tex, desc = baked
@@ -444,7 +445,7 @@ def test_sky_and_ground_mapped_equal_the_model(baked, sky_maps):
     sky map, the Lambertian ground): the sky and the ground as the model's radiance() gives
     them, every direction of the grid (elevation -60..89 deg, the sun's disc is not in
     either), sun at 60, 20, 5, 0 and -2 deg, observer at 0, 1 and 10 km. The goal is 1 %;
-    measured max 1e-6 in X, Y and Z (the bound asserted: 1e-4)."""
+    measured max 1.4e-6 in X, Y and Z (the bound asserted: 1e-4)."""
     import skydome
 
     sky0, tex, desc = baked
