@@ -476,8 +476,8 @@ def test_aerial_perspective_mapped_against_the_model(baked, sky_maps):
     sky map's orders 2..N in place of the table's, in proportion to the segment's share of
     the ray's extinction) against the model's aerial_perspective, error relative to the
     sky's luminance in that direction, 1-60 km, view elevation >= -3 deg, observer at 0, 1
-    and 10 km. The remaining error is the three-channel product T S(point) (the model
-    multiplies spectrally): measured max 1.0-1.5 % (RMS 0.4-0.6 %) with the sun at 60-5
+    and 10 km. The remaining error comes from the three-channel products T S(point) and
+    share x correction (the model forms them per wavelength): measured max 1.0-1.5 % (RMS 0.4-0.6 %) with the sun at 60-5
     deg, 3.8 % / 2.7 % (RMS 0.9 / 1.0 %) at 0 / -2 deg; the bounds are those rounded up.
     Its transmittance is the table path's (test_aerial_perspective_against_the_model)."""
     import skydome
