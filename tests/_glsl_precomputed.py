@@ -50,16 +50,19 @@ def texture2d(tex, uv):
 
 
 def texture3d(tex, uvw):
-    """tex (depth, height, width, c); uvw (..., 3)."""
+    """tex (depth, height, width, c); uvw (..., 3). (The texels gathered by flat index,
+    np.take on the (texels, c) view: the same values as tex[z, y, x], faster.)"""
     d, h, w = tex.shape[:3]
+    flat = tex.reshape(-1, tex.shape[-1])
     x0, x1, fx = _axis(uvw[..., 0], w)
     y0, y1, fy = _axis(uvw[..., 1], h)
     z0, z1, fz = _axis(uvw[..., 2], d)
     out = 0.0
     for zi, wz in ((z0, 1 - fz), (z1, fz)):
         for yi, wy in ((y0, 1 - fy), (y1, fy)):
+            row = (zi * h + yi) * w
             for xi, wx in ((x0, 1 - fx), (x1, fx)):
-                out = out + wz * wy * wx * tex[zi, yi, xi]
+                out = out + wz * wy * wx * np.take(flat, row + xi, axis=0)
     return out
 
 
@@ -342,3 +345,204 @@ def sky_radiance_to_point(scat, mie, mult, od, atm, camera, view, dist, sun):
     return np.maximum(s * rayleigh_phase(atm["rayleighGamma"], nu)[..., None]
                       + m * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None] + n,
                       0.0), t
+
+
+# -- orders 2..N at the observer: the scattering density along the view ray -----------------
+MAX_SAMPLES = 64
+
+
+def density_from_desc(desc: dict) -> dict:
+    """The GLSL struct SkydomeScatteringDensity filled from luts.json."""
+    s = desc["scattering_density"]
+    return {"nTheta": s["theta"], "nPhi": s["phi"], "nR": s["r"], "nMuS": s["mu_s"],
+            "nScatterers": s["scatterers"], "blockColumns": s["block_columns"],
+            "scatterer": list(s["scatterer_constituent"]),
+            "profileCode": list(s["profile_code"]), "profileP0": list(s["profile_p0_m"]),
+            "profileP1": list(s["profile_p1_m"]), "samples": s["quadrature"]["samples"],
+            "scale": s["quadrature"]["scale_m"], "mapGround": s["sky_map"]["ground"],
+            "mapSky": s["sky_map"]["sky"], "mapPhi": s["sky_map"]["phi"]}
+
+
+def log1p_(x):
+    return np.where(np.abs(x) < 1e-4, x * (1.0 - 0.5 * x), np.log(1.0 + x))
+
+
+def expm1_(x):
+    return np.where(np.abs(x) < 1e-4, x * (1.0 + 0.5 * x), np.exp(x) - 1.0)
+
+
+def profile(code, p0, p1, h):
+    if code == 0:
+        return np.exp(-np.maximum(h, 0.0) / p0)
+    if code == 1:
+        return np.maximum(0.0, 1.0 - np.abs(h - p0) / p1)
+    if code == 2:
+        return np.where(h < p0, 1.0, 0.0)
+    if code == 3:
+        x = (h - p0) / p1
+        return np.exp(-0.5 * x * x)
+    return np.zeros_like(h)
+
+
+def piece_node(a, b, dense_at_b, k, n, ts):
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dv = log1p_((b - a) / ts) / float(n)
+    u = ts * expm1_((float(k) + 0.5) * dv)
+    return (b - u if dense_at_b else a + u), (u + ts) * dv
+
+
+def tau4(atm, l, col):
+    return np.stack([col @ atm["extinction"][min(4 * l + c, len(atm["extinction"]) - 1)]
+                     for c in range(4)], -1)
+
+
+def density_uvw(dens, b, f_mu_s, f_r, f_phi, size):
+    bx = b % dens["blockColumns"]
+    bz = b // dens["blockColumns"]
+    return np.stack(np.broadcast_arrays((bx * dens["nMuS"] + f_mu_s + 0.5) / size[0],
+                                        (f_r + 0.5) / size[1],
+                                        (bz * dens["nPhi"] + f_phi + 0.5) / size[2]), -1)
+
+
+def multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground):
+    """skydomeMultipleScatteringAlong, vectorised over rays (mu, mu_s, nu, ground arrays; r
+    an array or a scalar)."""
+    R, Rt = atm["bottomRadius"], atm["topRadius"]
+    H = np.sqrt((Rt - R) * (Rt + R))
+    size = textureSize(density)
+    mu, mu_s, nu, ground = np.broadcast_arrays(*(np.asarray(x) for x in (mu, mu_s, nu, ground)))
+    r = np.broadcast_to(np.asarray(r, dtype=np.float64), mu.shape)
+    layers = (atm["nWavelengths"] + 3) // 4
+    d = np.where(ground, distance_to_ground(r, mu, R), distance_to_top(r, mu, Rt))
+    t_low = np.clip(-r * mu, 0.0, d)
+    f_theta = np.clip(np.arccos(np.clip(nu, -1.0, 1.0)) / PI * (dens["nTheta"] - 1), 0.0,
+                      dens["nTheta"] - 1)
+    it = np.minimum(f_theta.astype(int), dens["nTheta"] - 2)
+    jb = (f_theta - it)[..., None]
+    c0 = columns(od, atm, r, np.where(ground, -mu, mu))
+    acc = [np.zeros(mu.shape + (4,)) for _ in range(layers)]
+    for piece in range(2):
+        a = np.zeros_like(t_low) if piece == 0 else t_low
+        b = t_low if piece == 0 else d
+        live = (b - a > 0.0)[..., None]
+        for q in range(min(dens["samples"], MAX_SAMPLES)):
+            t, w = piece_node(a, b, piece == 0, q, dens["samples"], dens["scale"])
+            rt = radius_along(r, mu, t, R, Rt)
+            mt = np.clip((r * mu + t) / rt, -1.0, 1.0)
+            mu_st = np.clip((r * mu_s + t * nu) / rt, -1.0, 1.0)
+            c1 = columns(od, atm, rt, np.where(ground, -mt, mt))
+            col = np.maximum(np.where(ground[..., None], c1 - c0, c0 - c1), 0.0)
+            f_r = np.clip(rho_(rt, R) / H * (dens["nR"] - 1), 0.0, dens["nR"] - 1)
+            f_mu_s = mu_s_unit(mu_st, atm["muSMin"]) * (dens["nMuS"] - 1)
+            den = np.sqrt(np.maximum((1.0 - nu * nu) * (1.0 - mu_st * mu_st), 0.0))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                cphi = np.where(den < 1e-9, 1.0, np.clip((mt - nu * mu_st) / den, -1.0, 1.0))
+            f_phi = np.clip(np.arccos(cphi) / PI * (dens["nPhi"] - 1), 0.0, dens["nPhi"] - 1)
+            rho = []
+            for k in range(dens["nScatterers"]):
+                ci = dens["scatterer"][k]
+                rho.append(profile(dens["profileCode"][ci], dens["profileP0"][ci],
+                                   dens["profileP1"][ci], rt - R)[..., None])
+            for l in range(layers):
+                tau = tau4(atm, l, col)
+                j = 0.0
+                for k in range(dens["nScatterers"]):
+                    b0 = ((it * dens["nScatterers"]) + k) * layers + l
+                    b1 = (((it + 1) * dens["nScatterers"]) + k) * layers + l
+                    j0 = texture3d(density, density_uvw(dens, b0, f_mu_s, f_r, f_phi, size))
+                    j1 = texture3d(density, density_uvw(dens, b1, f_mu_s, f_r, f_phi, size))
+                    j = j + rho[k] * (j0 * (1.0 - jb) + j1 * jb)
+                acc[l] = acc[l] + np.where(live, w[..., None] * np.exp(-tau) * j, 0.0)
+    xyz = np.zeros(mu.shape + (3,))
+    for j in range(atm["nWavelengths"]):
+        xyz = xyz + atm["xyzWeights"][j] * acc[j // 4][..., j % 4][..., None]
+    return xyz
+
+
+def horizon_zenith(r, R):
+    s = R / r
+    return np.arccos(-np.sqrt(np.maximum(1.0 - s * s, 0.0)))
+
+
+def sky_map_texel(density, od, atm, dens, r, mu_s, tx, ty):
+    """skydomeSkyMapTexel at texels (tx, ty) (integer arrays)."""
+    th_h = horizon_zenith(r, atm["bottomRadius"])
+    ground = ty < dens["mapGround"]
+    th = np.where(ground, PI - (PI - th_h) * ty / (dens["mapGround"] - 1.0),
+                  th_h * (1.0 - (ty - dens["mapGround"]) / (dens["mapSky"] - 1.0)))
+    mu = np.cos(th)
+    cphi = np.cos(PI * tx / (dens["mapPhi"] - 1.0))
+    sv = np.sqrt(np.maximum(1.0 - mu * mu, 0.0)) * np.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+    nu = np.clip(mu * mu_s + sv * cphi, -1.0, 1.0)
+    return multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground)
+
+
+def sky_map(density, od, atm, dens, r, mu_s):
+    """The whole sky map as the render target holds it: (mapGround + mapSky, mapPhi, 4),
+    XYZ in RGB, one skydomeSkyMapTexel per texel."""
+    ty, tx = np.meshgrid(np.arange(dens["mapGround"] + dens["mapSky"]),
+                         np.arange(dens["mapPhi"]), indexing="ij")
+    out = np.zeros(tx.shape + (4,))
+    out[..., :3] = sky_map_texel(density, od, atm, dens, r, mu_s, tx, ty)
+    return out
+
+
+def sky_map_lookup(smap, atm, dens, camera, view, sun):
+    """skydomeSkyMapLookup (camera (3,), view (n, 3))."""
+    r = np.linalg.norm(camera)
+    up = camera / r
+    mu = np.clip(view @ up, -1.0, 1.0)
+    mu_s = np.clip(np.dot(sun, up), -1.0, 1.0)
+    vh = view - mu[..., None] * up
+    sh = sun - mu_s * up
+    dh = np.linalg.norm(vh, axis=-1) * np.linalg.norm(sh)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cphi = np.where(dh > 1e-12, np.clip((vh @ sh) / dh, -1.0, 1.0), 1.0)
+    ground = hits_ground(r, mu, atm["bottomRadius"])
+    th_h = horizon_zenith(r, atm["bottomRadius"])
+    th = np.arccos(mu)
+    n_g = float(dens["mapGround"])
+    n_s = float(dens["mapSky"])
+    f = np.where(ground, np.clip((PI - th) / max(PI - th_h, 1e-12) * (n_g - 1.0), 0.0, n_g - 1.0),
+                 n_g + np.clip((th_h - th) / th_h * (n_s - 1.0), 0.0, n_s - 1.0))
+    n_p = float(dens["mapPhi"])
+    g = np.clip(np.arccos(cphi) / PI * (n_p - 1.0), 0.0, n_p - 1.0)
+    return texture2d(smap, np.stack([(g + 0.5) / n_p, (f + 0.5) / (n_g + n_s)], -1))[..., :3]
+
+
+def radiance_mapped(scat, mie, smap, od, irr_spec, atm, dens, camera, view, sun):
+    """skydomeRadianceMapped (camera (3,) inside the atmosphere, view (n, 3))."""
+    r = np.linalg.norm(camera)
+    mu = np.clip(view @ camera / r, -1.0, 1.0)
+    mu_s = np.clip(np.dot(camera, sun) / r, -1.0, 1.0)
+    nu = np.clip(view @ sun, -1.0, 1.0)
+    if mu_s < atm["muSMin"]:
+        return np.zeros(view.shape[:-1] + (3,))
+    ground = hits_ground(r, mu, atm["bottomRadius"])
+    uvwz = scattering_uvwz(r, mu, mu_s, nu, ground, atm, textureSize(scat))
+    n_nu = float(atm["nuSize"])
+    single = (lookup_4d(scat, uvwz, n_nu) * rayleigh_phase(atm["rayleighGamma"], nu)[..., None]
+              + lookup_4d(mie, uvwz, n_nu)
+              * mie_phase(atm["miePhaseCode"], atm["mieG"], nu)[..., None])
+    ms = sky_map_lookup(smap, atm, dens, camera, view, sun)
+    surface = ground_radiance(od, irr_spec, atm, camera, view, sun)
+    return np.maximum(single + ms + surface, 0.0)
+
+
+def sky_radiance_to_point_mapped(scat, mie, mult, smap, od, atm, dens, camera, view, dist,
+                                 sun):
+    """skydomeSkyRadianceToPointMapped for points camera + dist * view."""
+    ins, t = sky_radiance_to_point(scat, mie, mult, od, atm, camera, view, dist, sun)
+    R = atm["bottomRadius"]
+    r = np.linalg.norm(camera)
+    mu = np.clip(view @ camera / r, -1.0, 1.0)
+    mu_s = np.clip(np.dot(camera, sun) / r, -1.0, 1.0) * np.ones_like(mu)
+    nu = np.clip(view @ sun, -1.0, 1.0)
+    ground = hits_ground(r, mu, R)
+    d_end = np.where(ground, distance_to_ground(r, mu, R), distance_to_top(r, mu, atm["topRadius"]))
+    t_end = transmittance_along(od, atm, np.full_like(mu, r), mu, d_end, ground)
+    share = np.clip((1.0 - t) / np.maximum(1.0 - t_end, 1e-30), 0.0, 1.0)
+    uvwz = scattering_uvwz(r, mu, mu_s, nu, ground, atm, textureSize(scat))
+    table = lookup_4d(mult, uvwz, float(atm["nuSize"]))
+    mapped = sky_map_lookup(smap, atm, dens, camera, view, sun)
+    return np.maximum(ins + share * (mapped - table), 0.0), t

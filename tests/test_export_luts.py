@@ -65,9 +65,11 @@ def test_write_precomputed_luts(small_sky, tmp_path):
     assert "asinh(e/w)/asinh(e_max/w), w = 2 deg" in desc["mappings"]["mu"]
     # [Bru17]'s texture set: Rayleigh and single Mie apart, orders 2..N, transmittance,
     # the constituents' columns (optical depths), the sky's irradiance (XYZ and spectral)
+    # and (format 5) the scattering density of orders 2..N
     assert set(desc["textures"]) == {"scattering", "single_mie_scattering",
                                      "multiple_scattering", "transmittance", "optical_depth",
-                                     "irradiance", "irradiance_spectral"}
+                                     "irradiance", "irradiance_spectral",
+                                     "scattering_density"}
     for name, t in desc["textures"].items():
         raw = np.fromfile(out / t["file"], dtype="<f4").reshape(t["shape"])
         npy = np.load(out / f"{name}.npy")
@@ -76,7 +78,7 @@ def test_write_precomputed_luts(small_sky, tmp_path):
         if t["channels"] == ["X", "Y", "Z"]:
             assert np.all(raw[..., 3] == 0.0)
     assert not [p for p in out.iterdir() if p.name.startswith(".")]     # no temporary left
-    assert len(written) == 2 * 7 + 1
+    assert len(written) == 2 * 8 + 1
 
 
 def test_bake_refuses_other_table_format(tmp_path):
@@ -115,7 +117,7 @@ def test_cli_export_luts_precomputed(tmp_path):
                                   "exr,npy", "--out", str(out), *small])
         assert res.exit_code == 0, res.output
     desc = json.loads((out / "luts.json").read_text())
-    assert desc["format"] == "skydome.luts.bruneton-xyz/4"
+    assert desc["format"] == "skydome.luts.bruneton-xyz/5"
     ms = np.load(out / "multiple_scattering.npy")
     assert ms.shape == (4, 8, 2 * 4, 4)
     ch = read_exr(out / "multiple_scattering.exr")

@@ -20,9 +20,12 @@ wavelength, end values held), E_sun the ASTM G173 solar spectrum and w_l the CIE
 integration weights of the output grid (skydome's default 41 wavelengths), the map that
 ``PrecomputedSky.xyz`` applies. Multiply the baked values by the sun's 1/d^2 factor
 (``Sun.irradiance_scale``) at render time. The textures (scattering, single Mie, orders
-2..N, transmittance, optical depths, irradiance) and the atmosphere's constants are
-described in :func:`bake_precomputed`; ``export/glsl/precomputed.glsl`` renders the sky,
-the sun, the ground and aerial perspective from them.
+2..N, transmittance, optical depths, irradiance, the scattering density of orders 2..N)
+and the atmosphere's constants are described in :func:`bake_precomputed`;
+``export/glsl/precomputed.glsl`` renders the sky, the sun, the ground and aerial
+perspective from them, orders 2..N either from the stored 4-D table (one look-up) or, as
+the model renders its observer's sky, integrated along the view ray from the scattering
+density on a sky map (the ``skydome*Mapped`` functions; [BN08] eq. 8).
 
 The axis mappings: r and nu are [Bru17]'s; mu is the model's own mapping of the angle
 from the local horizon (``precomputed._mapping.mu_unit``, table format 3): on each half
@@ -36,9 +39,10 @@ mapping:
 
 theta_s = acos(mu_s), theta_max = acos(mu_s_min), 0 at mu_s_min (clamped below), 1 at
 the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet radius.
-Bake format 4 (``LUT_FORMAT``) has the reference's texture set and the constants; format
-3 had these axes and per-constituent single scattering only, format 2 [Bru17]'s mu axis,
-format 1 [Bru17]'s mu and mu_s axes.
+Bake format 5 (``LUT_FORMAT``) adds the scattering density of orders 2..N, which the
+shader integrates along the view ray as the model does; format 4 had the reference's
+texture set and the constants; format 3 had these axes and per-constituent single
+scattering only, format 2 [Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes.
 
 References
 ----------
@@ -68,8 +72,10 @@ __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "ba
 #: skydome.precomputed/2), no longer [Bru17]'s; version 3: the mu axis too is the model's
 #: (angle from the local horizon, table format skydome.precomputed/3); version 4: the
 #: reference's texture set (Rayleigh and single Mie scattering, orders 2..N apart,
-#: transmittance, optical depths, irradiance) and the atmosphere's constants
-LUT_FORMAT = "skydome.luts.bruneton-xyz/4"
+#: transmittance, optical depths, irradiance) and the atmosphere's constants; version 5:
+#: the scattering density of orders 2..N (texture scattering_density, luts.json
+#: scattering_density) for the observer's sky as the model renders it
+LUT_FORMAT = "skydome.luts.bruneton-xyz/5"
 #: the hillaire2020 bake (Hillaire's layout, XYZ); version 2: the atmosphere's parameters,
 #: the sun's disc and EXR channels named X, Y, Z (A)
 HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/2"
@@ -174,7 +180,8 @@ def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
     return out
 
 
-def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def bake_precomputed(sky, ground: bool = False,
+                     density: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """(textures, description) of a :class:`PrecomputedSky`: [Bru17]'s textures in CIE XYZ,
     everything an engine needs to draw the sky, the sun, the ground and aerial perspective
     (``export/glsl/precomputed.glsl``).
@@ -207,6 +214,13 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
       surface (orders 1..N), Y in lx for a sun at 1 au; A = 0.
     * ``irradiance_spectral`` (ceil(nl / 4), n_irr_r, n_irr_mu_s, 4): the same per unit
       solar irradiance on the table wavelengths, layer k channel c = wavelength 4 k + c.
+
+    * ``scattering_density`` (with ``density``; :func:`bake` and :func:`write_luts` set
+      it): the scattering density J of orders 2..N per table wavelength (four per texel),
+      packed as luts.json ``scattering_density`` describes (545 MB in float32 at the
+      default sizes): what the model integrates along each view ray for its observer's
+      sky (``skydomeMultipleScatteringAlong``, ``skydomeSkyMapTexel``); the shader's
+      sky and ground from it are the model's to float32 (docs/rendering.md).
 
     ``ground``: also the per-constituent layout that the viewer's shader reads
     (``skydome.viewer``): ``single_scattering_<k>`` (XYZ of constituent k's single
@@ -255,6 +269,10 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
         "irradiance": _rgba(irr @ K),
         "irradiance_spectral": _spectral_layers(irr.astype(np.float32)),
     }
+    dens = _density_description(sky, t) if density else None
+    if dens is not None:
+        tex["scattering_density"] = _density_texture(t.scattering_density,
+                                                     dens["block_columns"])
     if ground:
         for k in range(ss.shape[0]):
             tex[f"single_scattering_{k}"] = _bruneton_3d(_xyz_4d(ss[k], K))
@@ -271,7 +289,8 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
     channels = {"scattering": "XYZ", "single_mie_scattering": "XYZ",
                 "multiple_scattering": "XYZ", "transmittance": "XYZ",
                 "irradiance": "XYZ", "optical_depth": names,
-                "irradiance_spectral": None, "transmittance_spectral": None}
+                "irradiance_spectral": None, "transmittance_spectral": None,
+                "scattering_density": None}
     channels.update({f"single_scattering_{k}": "XYZ" for k in range(ss.shape[0])})
     desc = {
         "format": LUT_FORMAT, "model": "precomputed",
@@ -353,6 +372,7 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
                                [0.0556434, -0.2040259, 1.0572252]],
         "phase_code": [int(x) for x in t.phase_code],
         "phase_param": [float(x) for x in t.phase_param],
+        "scattering_density": dens,
         "glsl": "export/glsl/precomputed.glsl",
     }
     desc["textures"] = {n: {"file": f"{n}.bin", "shape": list(a.shape), "dtype": "float32",
@@ -360,6 +380,80 @@ def bake_precomputed(sky, ground: bool = False) -> tuple[dict[str, np.ndarray], 
                                          else None)}
                         for n, a in tex.items()}
     return tex, desc
+
+
+#: the largest side of a 3-D texture the packed scattering density may have (the common
+#: GL_MAX_3D_TEXTURE_SIZE of desktop GPUs and WebGL2)
+DENSITY_MAX_SIDE = 2048
+
+
+def _density_description(sky, t) -> dict[str, Any] | None:
+    """luts.json's ``scattering_density``: what ``skydomeMultipleScatteringAlong`` needs to
+    integrate the scattering density J of orders 2..N along a view ray as the model does
+    for its observer (its axes, the constituents' density profiles, the quadrature, the
+    observer's sky map); None where the tables hold no J (one scattering order)."""
+    from skydome.models.simulated import precomputed as P
+    from skydome.models.simulated.precomputed._precompute import QUADRATURE_SCALE_M
+
+    J = t.scattering_density
+    if J is None:
+        return None
+    nsc, n_th, n_ph, n_r, n_ms, nl = J.shape
+    layers = -(-nl // 4)
+    blocks = n_th * nsc * layers
+    cols = max(1, min(blocks, DENSITY_MAX_SIDE // n_ms))
+    if -(-blocks // cols) * n_ph > DENSITY_MAX_SIDE or n_r > DENSITY_MAX_SIDE:
+        raise ValueError(f"scattering density shape = {J.shape}: packed, it exceeds "
+                         f"{DENSITY_MAX_SIDE} texels on a side")
+    if len(t.profile_code) > 4 or nsc > 4:
+        raise ValueError(f"constituents = {len(t.profile_code)}, scatterers = {nsc}: the "
+                         "scattering density's description holds at most 4 of each")
+    return {
+        "theta": int(n_th), "phi": int(n_ph), "r": int(n_r), "mu_s": int(n_ms),
+        "scatterers": int(nsc), "layers": int(layers), "block_columns": int(cols),
+        "scatterer_constituent": [int(c) for c in t.scattering_index],
+        "profile_code": [int(c) for c in t.profile_code],
+        "profile_p0_m": [float(x) for x in t.profile_p0],
+        "profile_p1_m": [float(x) for x in t.profile_p1],
+        "quadrature": {"samples": int(sky.integration_samples),
+                       "scale_m": float(QUADRATURE_SCALE_M)},
+        "sky_map": {"ground": int(P._SLICE_GROUND), "sky": int(P._SLICE_SKY),
+                    "phi": int(P._SLICE_PHI)},
+        "layout": "float32 (n_slabs n_phi, n_r, block_columns n_mu_s, 4): block b = "
+                  "((i_theta n_scatterers) + k) layers + layer, four table wavelengths "
+                  "4 layer .. 4 layer + 3 in RGBA (zeros past the last), at x = (b mod "
+                  "block_columns) n_mu_s + i_mu_s, y = i_r, z = (b div block_columns) n_phi "
+                  "+ i_phi",
+        "note": "J_k of orders 2..N per unit number density and solar irradiance "
+                "[m^-1 sr^-1] of scatterer k (constituent scatterer_constituent[k], density "
+                "profile profile_code: 0 exponential exp(-h / p0), 1 tent max(0, 1 - |h - "
+                "p0| / p1), 2 uniform (1 below p0), 3 gaussian exp(-((h - p0) / p1)^2 / 2)); "
+                "axes: theta the angle from the sun and phi the azimuth about the sun from "
+                "its vertical plane (zenith side), both uniform over [0, pi], r and mu_s on "
+                "the 4-D table's mappings; quadrature: samples midpoint nodes per piece of "
+                "a ray split at its lowest point, uniform in ln(1 + u / scale_m), u the "
+                "distance from the piece's dense end; sky_map: the observer's map of orders "
+                "2..N (zenith nodes nadir .. horizon for rays to the ground, horizon .. "
+                "zenith for the others, azimuth nodes over [0, pi] from the sun's)",
+    }
+
+
+def _density_texture(J: np.ndarray, cols: int) -> np.ndarray:
+    """J (k, theta, phi, r, mu_s, l) -> the packed 3-D texture of ``_density_description``:
+    (n_slabs n_phi, n_r, cols n_mu_s, 4), float32."""
+    nsc, n_th, n_ph, n_r, n_ms, nl = J.shape
+    layers = -(-nl // 4)
+    blocks = n_th * nsc * layers
+    slabs = -(-blocks // cols)
+    out = np.zeros((slabs, n_ph, n_r, cols, n_ms, 4), dtype=np.float32)
+    for it in range(n_th):
+        for k in range(nsc):
+            src = np.asarray(J[k, it], dtype=np.float32)              # (phi, r, mu_s, l)
+            for lay in range(layers):
+                b = (it * nsc + k) * layers + lay
+                n4 = min(4, nl - 4 * lay)
+                out[b // cols, :, :, b % cols, :, :n4] = src[..., 4 * lay:4 * lay + n4]
+    return out.reshape(slabs * n_ph, n_r, cols * n_ms, 4)
 
 
 def _constituent_names(sky, n: int) -> list[str]:
@@ -649,11 +743,13 @@ def atmosphere_from_luts(desc: dict[str, Any]):
                       ground_albedo=coefficient(a["ground_albedo"]), name="from-luts")
 
 
-def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def bake(sky, wavelengths_nm=None,
+         density: bool = True) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The bake of ``sky`` in its model's layout (``lut_layout``): Bruneton's
-    (``"bruneton"``, e.g. ``precomputed``) or Hillaire's (``"hillaire"``, e.g.
-    ``hillaire2020``; any object with the precomputed model's ``export_textures``
-    is baked in Bruneton's); ValueError for other models."""
+    (``"bruneton"``, e.g. ``precomputed``, with its scattering density unless ``density``
+    is false) or Hillaire's (``"hillaire"``, e.g. ``hillaire2020``; any object with the
+    precomputed model's ``export_textures`` is baked in Bruneton's); ValueError for other
+    models."""
     name = getattr(sky, "name", type(sky).__name__)
     layout = getattr(sky, "lut_layout", None)
     if layout is None and hasattr(sky, "export_textures"):
@@ -661,7 +757,7 @@ def bake(sky, wavelengths_nm=None) -> tuple[dict[str, np.ndarray], dict[str, Any
     if layout == "hillaire":
         return bake_hillaire2020(sky, wavelengths_nm)
     if layout == "bruneton":
-        return bake_precomputed(sky)
+        return bake_precomputed(sky, density=bool(density))
     if layout is not None:
         raise ValueError(f"model {name!r}: lut_layout = {layout!r} is not one of "
                          f"{', '.join(LUT_LAYOUTS)}")
@@ -718,18 +814,20 @@ def _write_exr(tmp: str, arr: np.ndarray, half: bool, desc_name: str, channels) 
 
 
 def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
-               wavelengths_nm=None, progress=None) -> list[Path]:
+               wavelengths_nm=None, progress=None, density: bool = True) -> list[Path]:
     """Write :func:`bake` of ``sky`` into ``folder``: each texture as ``<name>.bin`` (raw
     little-endian float32), ``<name>.npy`` and/or ``<name>.exr`` (float32, or half with
     ``half``; 3-D textures as their slices stacked top to bottom), and ``luts.json``
     describing axes, mappings, units and the XYZ conversion. The folder appears at once,
     complete (:func:`skydome._io.atomic_folder`); into an existing folder each file is
-    renamed into place. ``progress(done, total)`` is called per file. Returns the paths."""
+    renamed into place. ``progress(done, total)`` is called per file. ``density=False``
+    leaves out the precomputed bake's scattering density (545 MB in float32 at the default
+    sizes; the shader's table path does not need it). Returns the paths."""
     from skydome._io import atomic_folder, check_output_folder
 
     formats = check_luts_options(formats, half)
     folder = check_output_folder(folder)
-    tex, desc = bake(sky, wavelengths_nm)
+    tex, desc = bake(sky, wavelengths_nm, density)
     chans = {n: (desc["textures"].get(n) or {}).get("channels") for n in tex}
     exr_scale = {n: 1.0 for n in tex}
     if half:

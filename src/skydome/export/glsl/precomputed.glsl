@@ -425,3 +425,276 @@ vec3 skydomeSkyRadianceToPoint(sampler3D scattering, sampler3D singleMie,
     return max(s * skydomeRayleighPhase(atm.rayleighGamma, nu)
                + m * skydomeMiePhase(atm.miePhaseCode, atm.mieG, nu) + n, vec3(0.0));
 }
+
+// -- orders 2..N at the observer: the scattering density integrated along the view ray -------
+// The CPU model does not read orders 2..N from the 4-D table for the observer's sky: it
+// integrates the scattering density J of orders 2..N ([BN08] eq. 7, summed over the orders)
+// along each view ray ([BN08] eq. 8),
+//   L_ms(x, v) = int_0^d sum_k rho_k(r_t) J_k(theta, phi, r_t, mu_s_t) T(x, x_t) dt,
+// on a sky map of the observer's view directions (view zenith angle x azimuth from the
+// sun's), then interpolates that map. The bake holds J (texture "scattering_density",
+// spectral, four table wavelengths per texel) and these functions do the same: render the
+// sky map once per sun and observer altitude (skydomeSkyMapTexel, one texel per fragment
+// of a mapPhi x (mapGround + mapSky) target), then read it (skydomeSkyMapLookup) in
+// skydomeRadianceMapped and skydomeSkyRadianceToPointMapped. skydomeMultipleScatteringAlong
+// integrates one ray; it can also be called per pixel (no map).
+const int SKYDOME_PC_MAX_SAMPLES = 64;
+
+// The scattering density's constants (luts.json "scattering_density"): fill once per bake.
+struct SkydomeScatteringDensity {
+    int nTheta;             // "theta": angle from the sun, nodes uniform over [0, pi]
+    int nPhi;               // "phi": azimuth about the sun from its vertical plane (zenith
+                            // side), nodes uniform over [0, pi]
+    int nR;                 // "r": the r mapping of the 4-D table (rho / H)
+    int nMuS;               // "mu_s": the mu_s mapping of the 4-D table
+    int nScatterers;        // "scatterers": J's constituents k (<= 4)
+    int blockColumns;       // "block_columns": blocks per row of the packed texture
+    int scatterer[4];       // "scatterer_constituent"[k]: k's constituent (profile index)
+    int profileCode[4];     // per constituent c: 0 exponential exp(-h / p0), 1 tent
+    float profileP0[4];     // max(0, 1 - |h - p0| / p1), 2 uniform (1 below p0),
+    float profileP1[4];     // 3 gaussian exp(-((h - p0) / p1)^2 / 2) [m]
+    int samples;            // "quadrature"."samples": nodes per piece of a ray
+    float scale;            // "quadrature"."scale_m": ts [m]
+    int mapGround;          // "sky_map"."ground": zenith nodes of rays to the ground
+    int mapSky;             // "sky_map"."sky": zenith nodes of rays to the sky
+    int mapPhi;             // "sky_map"."phi": azimuth nodes over [0, pi]
+};
+
+// ln(1 + x) and exp(x) - 1 without cancellation for small x (GLSL has neither)
+float skydomePcLog1p(float x) {
+    return abs(x) < 1e-4 ? x * (1.0 - 0.5 * x) : log(1.0 + x);
+}
+
+float skydomePcExpm1(float x) {
+    return abs(x) < 1e-4 ? x * (1.0 + 0.5 * x) : exp(x) - 1.0;
+}
+
+// relative density of a constituent at altitude h [m] (skydome.atmosphere.profiles)
+float skydomePcProfile(int code, float p0, float p1, float h) {
+    if (code == 0) return exp(-max(h, 0.0) / p0);
+    if (code == 1) return max(0.0, 1.0 - abs(h - p0) / p1);
+    if (code == 2) return h < p0 ? 1.0 : 0.0;
+    if (code == 3) {
+        float x = (h - p0) / p1;
+        return exp(-0.5 * x * x);
+    }
+    return 0.0;
+}
+
+// node k of the quadrature on the piece [a, b] of a ray, dense at b (denseAtB) or at a: the
+// midpoint rule in v = ln(1 + u / ts), u the distance from the dense end, n nodes,
+// u_k = ts (exp((k + 1/2) dv) - 1), weight (u_k + ts) dv, dv = ln(1 + (b - a) / ts) / n;
+// returns (distance along the ray, weight) [m]
+vec2 skydomePcPieceNode(float a, float b, bool denseAtB, int k, int n, float ts) {
+    float dv = skydomePcLog1p((b - a) / ts) / float(n);
+    float u = ts * skydomePcExpm1((float(k) + 0.5) * dv);
+    return vec2(denseAtB ? b - u : a + u, (u + ts) * dv);
+}
+
+// optical depths of the table wavelengths 4 l .. 4 l + 3 for the columns col [km]
+vec4 skydomePcTau4(SkydomeAtmosphere atm, int l, vec4 col) {
+    vec4 tau;
+    for (int c = 0; c < 4; ++c) {
+        tau[c] = dot(atm.extinction[min(4 * l + c, SKYDOME_PC_MAX_WAVELENGTHS - 1)], col);
+    }
+    return tau;
+}
+
+// texture coordinate in the packed scattering density of block b (((theta node) *
+// nScatterers + k) * layers + layer) at the continuous nodes (fMuS, fR, fPhi): blocks of
+// nMuS x nR x nPhi texels, blockColumns of them along x, the rest in slabs along z
+vec3 skydomePcDensityUvw(SkydomeScatteringDensity dens, int b, float fMuS, float fR,
+                         float fPhi, vec3 size) {
+    int bx = b % dens.blockColumns;
+    int bz = b / dens.blockColumns;
+    return vec3((float(bx * dens.nMuS) + fMuS + 0.5) / size.x, (fR + 0.5) / size.y,
+                (float(bz * dens.nPhi) + fPhi + 0.5) / size.z);
+}
+
+// orders 2..N arriving at radius r along the ray of zenith cosine mu (to the ground where
+// ground is set, else to the top), the sun at zenith cosine muS and at cosine nu from the
+// ray: XYZ [cd m^-2]. Per table wavelength j, sum over the quadrature nodes t_q of
+// w_q T_j(x, x_q) sum_k rho_k(r_q) J_k,j(theta, phi_q, r_q, mu_s_q) ([BN08] eq. 8), T from
+// the difference of two columns to the top (both rays reversed for a ray to the ground,
+// [Bru17] GetTransmittance), rho_k the exact density profile, J interpolated linearly in
+// each of its four axes (theta by hand, the others in hardware), then the XYZ weights K_j.
+vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
+                                    SkydomeAtmosphere atm, SkydomeScatteringDensity dens,
+                                    float r, float mu, float muS, float nu, bool ground) {
+    float R = atm.bottomRadius;
+    float Rt = atm.topRadius;
+    float H = sqrt((Rt - R) * (Rt + R));
+    vec3 size = vec3(textureSize(density, 0));
+    int layers = (atm.nWavelengths + 3) / 4;
+    float d = ground ? skydomePcDistanceToGround(r, mu, R)
+                     : skydomePcDistanceToTop(r, mu, Rt);
+    float tLow = clamp(-r * mu, 0.0, d);
+    float fTheta = clamp(acos(clamp(nu, -1.0, 1.0)) / SKYDOME_PC_PI * float(dens.nTheta - 1),
+                         0.0, float(dens.nTheta - 1));
+    int it = min(int(fTheta), dens.nTheta - 2);
+    float jb = fTheta - float(it);
+    vec4 c0 = skydomeColumns(opticalDepth, atm, r, ground ? -mu : mu);
+    vec4 acc[SKYDOME_PC_MAX_WAVELENGTHS / 4];
+    for (int l = 0; l < SKYDOME_PC_MAX_WAVELENGTHS / 4; ++l) acc[l] = vec4(0.0);
+    for (int piece = 0; piece < 2; ++piece) {
+        float a = piece == 0 ? 0.0 : tLow;
+        float b = piece == 0 ? tLow : d;
+        if (b - a <= 0.0) continue;
+        for (int q = 0; q < SKYDOME_PC_MAX_SAMPLES; ++q) {
+            if (q >= dens.samples) break;
+            vec2 node = skydomePcPieceNode(a, b, piece == 0, q, dens.samples, dens.scale);
+            float t = node.x;
+            float rt = skydomePcRadiusAlong(r, mu, t, R, Rt);
+            float mt = clamp((r * mu + t) / rt, -1.0, 1.0);
+            float muSt = clamp((r * muS + t * nu) / rt, -1.0, 1.0);
+            vec4 c1 = skydomeColumns(opticalDepth, atm, rt, ground ? -mt : mt);
+            vec4 col = max(ground ? c1 - c0 : c0 - c1, vec4(0.0));
+            float fR = clamp(skydomePcRho(rt, R) / H * float(dens.nR - 1), 0.0,
+                             float(dens.nR - 1));
+            float fMuS = skydomePcMuSUnit(muSt, atm.muSMin) * float(dens.nMuS - 1);
+            float den = sqrt(max((1.0 - nu * nu) * (1.0 - muSt * muSt), 0.0));
+            float cphi = den < 1e-9 ? 1.0 : clamp((mt - nu * muSt) / den, -1.0, 1.0);
+            float fPhi = clamp(acos(cphi) / SKYDOME_PC_PI * float(dens.nPhi - 1), 0.0,
+                               float(dens.nPhi - 1));
+            float rho[4];
+            for (int k = 0; k < 4; ++k) {
+                rho[k] = 0.0;
+                if (k >= dens.nScatterers) continue;
+                int cI = dens.scatterer[k];
+                rho[k] = skydomePcProfile(dens.profileCode[cI], dens.profileP0[cI],
+                                          dens.profileP1[cI], rt - R);
+            }
+            for (int l = 0; l < SKYDOME_PC_MAX_WAVELENGTHS / 4; ++l) {
+                if (l >= layers) break;
+                vec4 tau = skydomePcTau4(atm, l, col);
+                vec4 j = vec4(0.0);
+                for (int k = 0; k < 4; ++k) {
+                    if (k >= dens.nScatterers) break;
+                    int b0 = ((it * dens.nScatterers) + k) * layers + l;
+                    int b1 = (((it + 1) * dens.nScatterers) + k) * layers + l;
+                    vec4 j0 = texture(density,
+                                      skydomePcDensityUvw(dens, b0, fMuS, fR, fPhi, size));
+                    vec4 j1 = texture(density,
+                                      skydomePcDensityUvw(dens, b1, fMuS, fR, fPhi, size));
+                    j += rho[k] * (j0 * (1.0 - jb) + j1 * jb);
+                }
+                acc[l] += node.y * exp(-tau) * j;
+            }
+        }
+    }
+    vec3 xyz = vec3(0.0);
+    for (int j = 0; j < SKYDOME_PC_MAX_WAVELENGTHS; ++j) {
+        if (j >= atm.nWavelengths) break;
+        xyz += atm.xyzWeights[j] * acc[j / 4][j % 4];
+    }
+    return xyz;
+}
+
+// zenith angle of the observer's horizon at radius r (pi / 2 on the ground)
+float skydomePcHorizonZenith(float r, float R) {
+    float s = R / r;
+    return acos(-sqrt(max(1.0 - s * s, 0.0)));
+}
+
+// texel (phi node, zenith node) of the sky map for an observer at radius r, the sun at
+// zenith cosine muS: orders 2..N from that node's direction, XYZ [cd m^-2]. Zenith nodes
+// 0 .. mapGround - 1 run uniformly in view zenith angle from the nadir to the horizon (rays
+// to the ground), mapGround .. mapGround + mapSky - 1 from the horizon to the zenith;
+// azimuth nodes uniformly over [0, pi] from the sun's.
+vec3 skydomeSkyMapTexel(sampler3D density, sampler2D opticalDepth, SkydomeAtmosphere atm,
+                        SkydomeScatteringDensity dens, float r, float muS, ivec2 texel) {
+    float thH = skydomePcHorizonZenith(r, atm.bottomRadius);
+    bool ground = texel.y < dens.mapGround;
+    float th = ground
+        ? SKYDOME_PC_PI - (SKYDOME_PC_PI - thH) * float(texel.y) / float(dens.mapGround - 1)
+        : thH * (1.0 - float(texel.y - dens.mapGround) / float(dens.mapSky - 1));
+    float mu = cos(th);
+    float cphi = cos(SKYDOME_PC_PI * float(texel.x) / float(dens.mapPhi - 1));
+    float sv = sqrt(max(1.0 - mu * mu, 0.0)) * sqrt(max(1.0 - muS * muS, 0.0));
+    float nu = clamp(mu * muS + sv * cphi, -1.0, 1.0);
+    return skydomeMultipleScatteringAlong(density, opticalDepth, atm, dens, r, mu, muS, nu,
+                                          ground);
+}
+
+// orders 2..N from the sky map (skydomeSkyMapTexel, LINEAR filtering, CLAMP_TO_EDGE) along
+// viewRay for the camera it was rendered for (inside the atmosphere), XYZ [cd m^-2]
+vec3 skydomeSkyMapLookup(sampler2D skyMap, SkydomeAtmosphere atm,
+                         SkydomeScatteringDensity dens, vec3 camera, vec3 viewRay,
+                         vec3 sunDir) {
+    float r = length(camera);
+    vec3 up = camera / r;
+    float mu = clamp(dot(viewRay, up), -1.0, 1.0);
+    float muS = clamp(dot(sunDir, up), -1.0, 1.0);
+    vec3 vh = viewRay - mu * up;
+    vec3 sh = sunDir - muS * up;
+    float dh = length(vh) * length(sh);
+    float cphi = dh > 1e-12 ? clamp(dot(vh, sh) / dh, -1.0, 1.0) : 1.0;
+    bool ground = skydomePcHitsGround(r, mu, atm.bottomRadius);
+    float thH = skydomePcHorizonZenith(r, atm.bottomRadius);
+    float th = acos(mu);
+    float nG = float(dens.mapGround);
+    float nS = float(dens.mapSky);
+    float f = ground
+        ? clamp((SKYDOME_PC_PI - th) / max(SKYDOME_PC_PI - thH, 1e-12) * (nG - 1.0), 0.0,
+                nG - 1.0)
+        : nG + clamp((thH - th) / thH * (nS - 1.0), 0.0, nS - 1.0);
+    float nP = float(dens.mapPhi);
+    float g = clamp(acos(cphi) / SKYDOME_PC_PI * (nP - 1.0), 0.0, nP - 1.0);
+    return texture(skyMap, vec2((g + 0.5) / nP, (f + 0.5) / (nG + nS))).rgb;
+}
+
+// skydomeRadiance with orders 2..N from the sky map instead of the 4-D table: the sky and
+// the ground as the CPU model renders them (camera inside the atmosphere, the sky map
+// rendered for it); 0 with the sun below mu_s_min (night)
+vec3 skydomeRadianceMapped(sampler3D scattering, sampler3D singleMie, sampler2D skyMap,
+                           sampler2D opticalDepth, sampler2DArray irradianceSpectral,
+                           SkydomeAtmosphere atm, SkydomeScatteringDensity dens, vec3 camera,
+                           vec3 viewRay, vec3 sunDir) {
+    float r = length(camera);
+    float mu = clamp(dot(camera, viewRay) / r, -1.0, 1.0);
+    float muS = clamp(dot(camera, sunDir) / r, -1.0, 1.0);
+    float nu = clamp(dot(viewRay, sunDir), -1.0, 1.0);
+    if (muS < atm.muSMin) return vec3(0.0);
+    bool ground = skydomePcHitsGround(r, mu, atm.bottomRadius);
+    vec4 uvwz = skydomeScatteringUvwz(r, mu, muS, nu, ground, atm,
+                                      vec3(textureSize(scattering, 0)));
+    float nNu = float(atm.nuSize);
+    vec3 single = skydomeLookup4D(scattering, uvwz, nNu)
+        * skydomeRayleighPhase(atm.rayleighGamma, nu)
+        + skydomeLookup4D(singleMie, uvwz, nNu)
+        * skydomeMiePhase(atm.miePhaseCode, atm.mieG, nu);
+    vec3 ms = skydomeSkyMapLookup(skyMap, atm, dens, camera, viewRay, sunDir);
+    vec3 surface = skydomeGroundRadiance(opticalDepth, irradianceSpectral, atm, camera,
+                                         viewRay, sunDir);
+    return max(single + ms + surface, vec3(0.0));
+}
+
+// skydomeSkyRadianceToPoint with the CPU model's correction at the observer's end: orders
+// 2..N there from the sky map instead of the 4-D table, applied in proportion to the
+// segment's share of the whole ray's extinction, (1 - T(d)) / (1 - T(end)) per XYZ channel
+// (0 at distance 0, all of it at the end of the ray, so that a point at the end of the ray
+// gives the sky of skydomeRadianceMapped). Camera inside the atmosphere.
+vec3 skydomeSkyRadianceToPointMapped(sampler3D scattering, sampler3D singleMie,
+                                     sampler3D multiple, sampler2D skyMap,
+                                     sampler2D opticalDepth, SkydomeAtmosphere atm,
+                                     SkydomeScatteringDensity dens, vec3 camera, vec3 point,
+                                     vec3 sunDir, out vec3 transmittanceOut) {
+    vec3 ins = skydomeSkyRadianceToPoint(scattering, singleMie, multiple, opticalDepth, atm,
+                                         camera, point, sunDir, transmittanceOut);
+    float R = atm.bottomRadius;
+    float r = length(camera);
+    vec3 viewRay = normalize(point - camera);
+    float mu = clamp(dot(camera, viewRay) / r, -1.0, 1.0);
+    float muS = clamp(dot(camera, sunDir) / r, -1.0, 1.0);
+    float nu = clamp(dot(viewRay, sunDir), -1.0, 1.0);
+    bool ground = skydomePcHitsGround(r, mu, R);
+    float dEnd = ground ? skydomePcDistanceToGround(r, mu, R)
+                        : skydomePcDistanceToTop(r, mu, atm.topRadius);
+    vec3 tEnd = skydomeTransmittanceAlong(opticalDepth, atm, r, mu, dEnd, ground);
+    vec3 share = clamp((1.0 - transmittanceOut) / max(1.0 - tEnd, vec3(1e-30)), 0.0, 1.0);
+    vec4 uvwz = skydomeScatteringUvwz(r, mu, muS, nu, ground, atm,
+                                      vec3(textureSize(scattering, 0)));
+    vec3 table = skydomeLookup4D(multiple, uvwz, float(atm.nuSize));
+    vec3 mapped = skydomeSkyMapLookup(skyMap, atm, dens, camera, viewRay, sunDir);
+    return max(ins + share * (mapped - table), vec3(0.0));
+}
