@@ -127,7 +127,7 @@ def served(tmp_path_factory):
     root = tmp_path_factory.mktemp("threejs")
     sky = skydome.model("precomputed", sun=skydome.Sun(elevation_deg=20.0,
                                                        azimuth_deg=AZIMUTH))
-    write_luts(sky, root / "luts", ("bin",))
+    write_luts(sky, root / "luts", ("bin",), density=False)   # the module reads tables only
     write_threejs(root / "threejs")
     (root / "threejs" / "harness.html").write_text(HARNESS)
     (root / "three").symlink_to(THREE.resolve(), target_is_directory=True)
