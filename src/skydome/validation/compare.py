@@ -265,8 +265,8 @@ def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulat
                            luminance_level=float("nan"), day=capture.day,
                            luminance_shape={k: dict(nan) for k in ("all", "circumsolar", "horizon", "rest")})
     model, label = _build(name, capture, fast, phase, aerosol)
-    _, used = atmosphere_for(capture, model_phase(name, phase), aerosol)
-    aerosol_used = _aerosol_label(used, aerosol) if name not in ("perez1993", "cie2003") else ""
+    aerosol_used = "" if name in ("perez1993", "cie2003") else \
+        _aerosol_label(atmosphere_for(capture, model_phase(name, phase), aerosol)[1], aerosol)
     if name == "cie2003":
         model, t = _cie_best(capture, lum, keep)
         label = f"analytic (type {t} of best fit)"
