@@ -140,3 +140,34 @@ def test_precomputed_tabulated_single_order_matches_single_scattering(caps):
     pc = sd.model("precomputed", sun=c.sun, atmosphere=atm, orders=1,
                   n_wavelengths=8).luminance(c.directions)
     assert np.allclose(pc, ss, rtol=0.05)
+
+
+def test_cli_days_bad_input():
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-25"])
+    assert res.exit_code == 2 and "day" in res.output and "2013-09-24" in res.output
+    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-24", "--aerosol", "aeronet"])
+    assert res.exit_code == 2 and "aerosol" in res.output
+    res = CliRunner().invoke(app, ["validate", "measured", "--aerosol", "nope"])
+    assert res.exit_code == 2 and "aerosol" in res.output
+    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-24", "--captures", "11:00:00"])
+    assert res.exit_code == 2 and "13:10:00" in res.output
+
+
+def test_cli_every_capture_of_every_day():
+    """--day all: one table per day and one row per capture of each day (a model that needs no
+    aerosol, so that no fit runs)."""
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    res = CliRunner().invoke(app, ["validate", "measured", "--day", "all", "--models", "perez1993"])
+    assert res.exit_code == 0, res.output
+    out = res.stdout if hasattr(res, "stdout") else res.output
+    assert "Day 2013-05-27 (15 captures)" in out and "Day 2013-09-24 (5 captures)" in out
+    rows = [ln for ln in out.splitlines() if ln.startswith("| 2013-")]
+    assert len(rows) == 15 + 5
+    assert sum("| 2013-09-24 | 13:40:00 | perez1993 |" in ln for ln in rows) == 1
