@@ -149,11 +149,13 @@ def test_cli_days_bad_input():
 
     res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-25"])
     assert res.exit_code == 2 and "day" in res.output and "2013-09-24" in res.output
-    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-24", "--aerosol", "aeronet"])
+    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-24",
+                                   "--aerosol", "aeronet"])
     assert res.exit_code == 2 and "aerosol" in res.output
     res = CliRunner().invoke(app, ["validate", "measured", "--aerosol", "nope"])
     assert res.exit_code == 2 and "aerosol" in res.output
-    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-24", "--captures", "11:00:00"])
+    res = CliRunner().invoke(app, ["validate", "measured", "--day", "2013-09-24",
+                                   "--captures", "11:00:00"])
     assert res.exit_code == 2 and "13:10:00" in res.output
 
 

@@ -26,9 +26,10 @@ def main(argv=None) -> int:
     ap.add_argument("--models", default=None)
     ap.add_argument("--fast", action="store_true")
     ap.add_argument("--day", default="2013-05-27")
-    ap.add_argument("--aerosol", default=None, help="aeronet or fitted (default: aeronet where there is one)")
+    ap.add_argument("--aerosol", default=None,
+                    help="aeronet or fitted (default: aeronet where there is one)")
     ap.add_argument("--clock", action="store_true",
-                    help="the clock scan (skydome.validation.fitting.clock_scan) instead of the table")
+                    help="the clock scan (validation.fitting.clock_scan), not the table")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
     a = ap.parse_args(argv)
     if a.figures:
@@ -83,7 +84,8 @@ def figures(results_dir: Path, fig_dir: Path) -> int:
         with open(p, "rb") as f:
             results += pickle.load(f)
     labels = list(dict.fromkeys(r.capture for r in results))
-    caps = {c.label: c for c in load_captures(labels)}
+    day = getattr(results[0], "day", "") or "2013-05-27"
+    caps = {c.label: c for c in load_captures(labels, day=day)}
     order = ["precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
              "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"]
     panels = []

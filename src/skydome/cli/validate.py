@@ -50,12 +50,12 @@ def measured(
     models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996", "single_scattering",
                                          "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")),
                                help="Comma-separated models (also montecarlo, precomputed_accurate)."),
-    captures: Optional[str] = typer.Option(None, help="Comma-separated capture labels HH:MM:SS (default all "
-                                                       "of the day)."),
+    captures: Optional[str] = typer.Option(
+        None, help="Comma-separated capture labels HH:MM:SS (default all of the day)."),
     day: str = typer.Option("2013-05-27", help="2013-05-27, 2013-09-24 or all."),
-    aerosol: str = typer.Option("auto", help="aeronet (the Egbert retrieval; 2013-05-27 only), fitted "
-                                             "(tau440 and alpha fitted to each scan) or auto (aeronet "
-                                             "where there is one, else fitted)."),
+    aerosol: str = typer.Option(
+        "auto", help="aeronet (the Egbert retrieval; 2013-05-27 only), fitted (tau440 and alpha "
+                     "fitted to each scan) or auto (aeronet where there is one, else fitted)."),
     phase: str = typer.Option("tabulated", help="Aerosol phase of the physically based models: tabulated "
                                                 "(AERONET, measured), henyey_greenstein or cornette_shanks."),
     fast: bool = typer.Option(False, "--fast", help="Coarse model settings (quick look)."),

@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table", "EXCLUDED_SAMPLES", "compare_measured", "ModelResult", "model_settings",
+__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
+           "EXCLUDED_SAMPLES", "compare_measured", "ModelResult", "model_settings",
            "measured_luminance"]
 
 #: Samples left out of the statistics: sample 0 (north, low, the first of each scan) reads
