@@ -203,3 +203,23 @@ def test_second_day_fitted_aerosol():
     assert 0.03 < fit.tau440 < 0.06 and 1.4 < fit.alpha < 2.1
     assert abs(r.luminance_level) < 0.10 and r.luminance_rms_outside < 0.16
     assert all(abs(v) < 0.15 for v in r.band_medians.values())
+
+
+@pytest.mark.slow
+def test_first_day_fitted_aerosol():
+    """2013-05-27, 12:45, aerosol fitted to the scan: measured (docs) tau440 0.113, alpha
+    1.66 against AERONET's 0.128 / 0.86 (the steeper spectral dependence the scans ask
+    for), hillaire2020 level +0.1 %, luminance RMS >= 10 deg 10.1 %, band medians +3.6 to
+    +8.9 %: bounds around those, and flatter in wavelength than with the AERONET aerosol
+    (+9.6 % at 400 nm, +40.1 % at 700 nm)."""
+    c = kider2014.load_captures("12:45:00")[0]
+    from skydome.validation.fitting import fit_aerosol
+
+    fit = fit_aerosol(c)
+    assert 0.09 < fit.tau440 < 0.14 and 1.4 < fit.alpha < 2.1
+    r = compare.compare_one("hillaire2020", c, aerosol="fitted")
+    assert abs(r.luminance_level) < 0.06 and r.luminance_rms_outside < 0.12
+    b = r.band_medians
+    assert all(abs(v) < 0.12 for v in b.values())
+    a = compare.compare_one("hillaire2020", c, aerosol="aeronet").band_medians
+    assert abs(b[700.0] - b[400.0]) < 0.5 * abs(a[700.0] - a[400.0])
