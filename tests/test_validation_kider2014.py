@@ -140,3 +140,36 @@ def test_per_sample_sun_moves_during_the_scan():
     move = np.degrees(np.arccos(first @ last))
     assert 1.0 < move < 1.5
     assert el[0] < c.sun.elevation_deg < el[-1] and az[0] < c.sun.azimuth_deg < az[-1]
+
+
+# -- the second day of the data set, 2013-09-24 ----------------------------------------------
+def test_second_day_reads_as_the_raw_files():
+    """2013-09-24: five captures; values checked against the data set's raw files:
+    ``2013-09-24___13.20.00_-_40____225.0___33.749.asd.rad.txt`` reads 3.76306883990765E-02,
+    3.74456606805325E-02, 0.037256121635437, 0.037055965512991, 3.68487983942032E-02 at
+    548-552 nm (mean 0.0372475); ``IRRADIANCE/2013.09.24.13.10.00.txt`` starts
+    ``756.45 2013.09.24.13.10.00``, ``2013.09.24.07.50.03.txt`` ``11.29 2013.09.24.07.50.00``; the
+    07:50 records read 11.29-12.90 W m^-2."""
+    assert kider2014.DAYS == ("2013-05-27", "2013-09-24")
+    labels = kider2014.capture_labels("2013-09-24")
+    assert labels == ("07:50:00", "13:10:00", "13:20:00", "13:30:00", "13:40:00")
+    c = kider2014.load_captures("13:20:00", day="2013-09-24")[0]
+    assert c.day == "2013-09-24" and c.radiance.shape == (81, 131)
+    assert c.azimuth_file_deg[40] == 225.0 and c.elevation_deg[40] == 33.749
+    j = int(np.flatnonzero(c.wavelengths_nm == 550)[0])
+    assert c.radiance[40, j] == pytest.approx(0.0372475, rel=2e-4)
+    gt, gv = kider2014._read_ghi("2013-09-24")
+    assert gt[0] == 7 * 3600 + 50 * 60 and gv[0] == 11.29
+    i = int(np.flatnonzero(gt == 13 * 3600 + 10 * 60)[0])
+    assert gv[i] == 756.45
+    early = kider2014.load_captures("07:50:00", day="2013-09-24")[0]
+    assert 11.29 <= early.ghi_w_m2 <= 12.90
+    # the day's clock: the labels as they are (docs/validation_measured.md)
+    assert c.start.isoformat() == "2013-09-24T13:20:00-04:00"
+
+
+def test_bad_day():
+    with pytest.raises(ValueError, match="day must be one of 2013-05-27, 2013-09-24"):
+        kider2014.load_captures(day="2013-09-25")
+    with pytest.raises(ValueError, match="capture must be one of 07:50:00"):
+        kider2014.load_captures("10:30:00", day="2013-09-24")

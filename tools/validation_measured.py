@@ -1,8 +1,11 @@
 """Run the measured-sky comparison and save what docs/validation_measured.md shows.
 
-    python tools/validation_measured.py OUT_FOLDER [--captures 10:00:00,11:00:00] [--models ...]
+    python tools/validation_measured.py OUT_FOLDER [--day 2013-09-24] [--aerosol fitted]
+        [--captures 10:00:00,11:00:00] [--models ...]
+    python tools/validation_measured.py OUT_FOLDER --clock [--day 2013-09-24]
 
-Writes OUT_FOLDER/validation_measured_table.md (the day's table), results.npz (per model
+Writes OUT_FOLDER/validation_measured_table.md (the day's table, then every capture, as
+``skydome validate measured`` prints them), results_MODEL.pkl (per model
 and capture: the model luminance in the 81 directions and its 400-700 nm spectra) and the
 figures of skydome.imaging.plots_validation.
 """
@@ -22,11 +25,18 @@ def main(argv=None) -> int:
     ap.add_argument("--captures", default=None)
     ap.add_argument("--models", default=None)
     ap.add_argument("--fast", action="store_true")
+    ap.add_argument("--day", default="2013-05-27")
+    ap.add_argument("--aerosol", default=None,
+                    help="aeronet or fitted (default: aeronet where there is one)")
+    ap.add_argument("--clock", action="store_true",
+                    help="the clock scan (validation.fitting.clock_scan), not the table")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
     a = ap.parse_args(argv)
     if a.figures:
         return figures(Path(a.out), Path(a.figures))
-    from skydome.validation.compare import MODELS, compare_measured, day_table
+    if a.clock:
+        return clock(Path(a.out), a.day)
+    from skydome.validation.compare import MODELS, capture_table, compare_measured, day_table
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -35,13 +45,30 @@ def main(argv=None) -> int:
     results = []
     for m in models:
         t = time.time()
-        rs = compare_measured([m], caps, fast=a.fast)
+        rs = compare_measured([m], caps, fast=a.fast, day=a.day, aerosol=a.aerosol)
         results += rs
         print(f"{m}: {time.time() - t:.0f} s for {len(rs)} captures", flush=True)
         with open(out / f"results_{m}.pkl", "wb") as f:
             pickle.dump(rs, f)
-    (out / "validation_measured_table.md").write_text(day_table(results), encoding="utf-8")
-    print(day_table(results))
+    text = day_table(results) + "\n" + capture_table(results)
+    (out / "validation_measured_table.md").write_text(text, encoding="utf-8")
+    print(text)
+    return 0
+
+
+def clock(out: Path, day: str) -> int:
+    """Shape error against the clock offset, at the labelled directions and along the moves."""
+    import numpy as np
+
+    from skydome.validation.fitting import clock_scan
+
+    out.mkdir(parents=True, exist_ok=True)
+    r = clock_scan(day, offsets_min=np.arange(-70.0, 21.0, 10.0))
+    np.savez(out / f"clock_{day}.npz", labels=np.array(r["labels"]), offsets=r["offsets_min"],
+             rms=r["rms"], best=r["best_min"])
+    for lab, b, rr in zip(r["labels"], r["best_min"], r["rms"]):
+        print(f"{day} {lab} best offset [min]: point {b[0]:+.1f} move {b[1]:+.1f}; "
+              f"least shape RMS: point {rr[0].min():.3f} move {rr[1].min():.3f}")
     return 0
 
 
@@ -57,7 +84,8 @@ def figures(results_dir: Path, fig_dir: Path) -> int:
         with open(p, "rb") as f:
             results += pickle.load(f)
     labels = list(dict.fromkeys(r.capture for r in results))
-    caps = {c.label: c for c in load_captures(labels)}
+    day = getattr(results[0], "day", "") or "2013-05-27"
+    caps = {c.label: c for c in load_captures(labels, day=day)}
     order = ["precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
              "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"]
     panels = []

@@ -1,8 +1,9 @@
 """``skydome validate``: models against measured skies.
 
-``skydome validate measured`` compares the models with the Kider et al. 2014 scans of
-2013-05-27 (:func:`skydome.validation.compare.compare_measured`) and prints, or writes
-(``--out table.md``, atomically), the day's table; ``skydome validate closure`` the broadband
+``skydome validate measured`` compares the models with the Kider et al. 2014 scans
+(``--day``: 2013-05-27, 2013-09-24 or all; :func:`skydome.validation.compare.compare_measured`)
+and prints, or writes (``--out table.md``, atomically), each day's table and the table of
+every capture; ``skydome validate closure`` the broadband
 irradiance against the pyranometer (:mod:`skydome.validation.closure`).
 """
 
@@ -18,17 +19,30 @@ validate_app = typer.Typer(add_completion=False, no_args_is_help=True, rich_mark
                            help="Validate the models against measured skies.")
 
 
-def _captures(captures):
-    """The capture labels of a comma-separated option (None: all)."""
-    from skydome.validation.kider2014 import capture_labels
+def _captures(captures, days=None):
+    """The capture labels of a comma-separated option (None: all), each a capture of one of
+    ``days`` (default the first day)."""
+    from skydome.validation.kider2014 import DEFAULT_DAY, capture_labels
 
     if captures is None:
         return None
+    days = [DEFAULT_DAY] if days is None else days
+    valid = list(dict.fromkeys(lab for d in days for lab in capture_labels(d)))
     labs = [c.strip() for c in captures.split(",") if c.strip()]
-    wrong = [c for c in labs if c not in capture_labels()]
+    wrong = [c for c in labs if c not in valid]
     if not labs or wrong:
-        _fail(f"captures = {captures!r}: each must be one of {', '.join(capture_labels())}")
+        _fail(f"captures = {captures!r}: each must be one of {', '.join(valid)}")
     return labs
+
+
+def _days(day):
+    from skydome.validation.kider2014 import DAYS
+
+    if day == "all":
+        return list(DAYS)
+    if day not in DAYS:
+        _fail(f"day = {day!r}: must be one of {', '.join(DAYS)} or all")
+    return [day]
 
 
 @validate_app.command("measured")
@@ -36,23 +50,34 @@ def measured(
     models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996", "single_scattering",
                                          "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")),
                                help="Comma-separated models (also montecarlo, precomputed_accurate)."),
-    captures: Optional[str] = typer.Option(None, help="Comma-separated capture labels HH:MM:SS (default all 15)."),
+    captures: Optional[str] = typer.Option(
+        None, help="Comma-separated capture labels HH:MM:SS (default all of the day)."),
+    day: str = typer.Option("2013-05-27", help="2013-05-27, 2013-09-24 or all."),
+    aerosol: str = typer.Option(
+        "auto", help="aeronet (the Egbert retrieval; 2013-05-27 only), fitted (tau440 and alpha "
+                     "fitted to each scan) or auto (aeronet where there is one, else fitted)."),
     phase: str = typer.Option("tabulated", help="Aerosol phase of the physically based models: tabulated "
                                                 "(AERONET, measured), henyey_greenstein or cornette_shanks."),
     fast: bool = typer.Option(False, "--fast", help="Coarse model settings (quick look)."),
     out: Optional[str] = typer.Option(None, help="Write the Markdown table to this .md file."),
 ) -> None:
-    """Compare models with the Kider et al. 2014 sky scans of 2013-05-27 (Cornell)."""
+    """Compare models with the Kider et al. 2014 sky scans (Cornell): each day's table, then
+    every capture."""
     from pathlib import Path
 
-    from skydome.validation.compare import MODELS, compare_measured, day_table
+    from skydome.validation.compare import MODELS, capture_table, compare_measured, day_table
 
     names = [m.strip() for m in models.split(",") if m.strip()]
     valid = MODELS + ("precomputed_accurate",)
     bad = [m for m in names if m not in valid]
     if not names or bad:
         _fail(f"models = {models!r}: each must be one of {', '.join(valid)}")
-    labs = _captures(captures)
+    days = _days(day)
+    labs = _captures(captures, days)
+    if aerosol not in ("auto", "aeronet", "fitted"):
+        _fail(f"aerosol = {aerosol!r}: must be auto, aeronet or fitted")
+    if aerosol == "aeronet" and days != ["2013-05-27"]:
+        _fail(f"aerosol = 'aeronet' with day = {day!r}: AERONET is shipped for 2013-05-27 only")
     if phase not in ("tabulated", "henyey_greenstein", "cornette_shanks"):
         _fail(f"phase = {phase!r}: must be tabulated, henyey_greenstein or cornette_shanks")
     if out is not None:
@@ -61,12 +86,23 @@ def measured(
             _fail(f"out = {out!r}: must be a .md file")
         if not p.parent.is_dir():
             _fail(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
+    from skydome.validation.kider2014 import capture_labels
+
+    tables, results = [], []
     try:
-        results = compare_measured(names, labs, fast=fast, phase=phase,
-                                   progress=lambda m, c: typer.echo(f"{m} {c}", err=True))
+        for d in days:
+            caps = None if labs is None else [c for c in labs if c in capture_labels(d)]
+            if caps == []:
+                continue
+            rs = compare_measured(names, caps, fast=fast, phase=phase, day=d,
+                                  aerosol=None if aerosol == "auto" else aerosol,
+                                  progress=lambda m, c, d=d: typer.echo(f"{d} {m} {c}", err=True))
+            results += rs
+            tables.append(f"Day {d} ({len(rs) // len(names)} captures), mean over captures:\n\n"
+                          + day_table(rs))
     except (ValueError, TypeError) as exc:
         _fail(str(exc.args[0] if exc.args else exc))
-    table = day_table(results)
+    table = "\n".join(tables) + "\nEvery capture:\n\n" + capture_table(results)
     if out is None:
         typer.echo(table)
         return

@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["arc_directions", "MODELS", "EXCLUDED_SAMPLES", "compare_measured", "ModelResult", "model_settings",
+__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
+           "EXCLUDED_SAMPLES", "compare_measured", "ModelResult", "model_settings",
            "measured_luminance"]
 
 #: Samples left out of the statistics: sample 0 (north, low, the first of each scan) reads
@@ -45,6 +46,14 @@ MODELS = ("precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_sc
 
 PHYSICAL = ("precomputed", "precomputed_accurate", "montecarlo", "hillaire2020", "nishita1996",
             "single_scattering")
+
+#: Aerosol of the physically based models: "aeronet" (the Egbert retrieval nearest in
+#: time; 2013-05-27 only) or "fitted" (tau440 and alpha fitted to the scan itself,
+#: :func:`skydome.validation.fitting.fit_aerosol`)
+AEROSOLS = ("aeronet", "fitted")
+
+#: centres of the 20 nm bands whose median model / measured ratio is reported [nm]
+BANDS_NM = (400.0, 450.0, 500.0, 550.0, 600.0, 650.0, 700.0)
 
 #: wavelengths of the comparison: luminance and xy over 380-780 nm, spectra 400-700 nm
 LUMINANCE_WL = np.arange(380.0, 781.0, 5.0)
@@ -100,6 +109,14 @@ class ModelResult:
     xy_max: float = float("nan")
     model_luminance: np.ndarray | None = None
     model_spectra: np.ndarray | None = None   # (81, n 400-700 nm) for spectral models
+    day: str = ""
+    #: RMS of the luminance error model / measured - 1 (level included) over the kept
+    #: directions at least 10 deg from the sun
+    luminance_rms_outside: float = float("nan")
+    #: band centre [nm] -> median over the kept directions of model / measured - 1 of the
+    #: radiance averaged over the band (+-10 nm); spectral models only
+    band_medians: dict = field(default_factory=dict)
+    aerosol: str = ""
 
 
 def _regions(capture, keep):
@@ -114,12 +131,20 @@ def _regions(capture, keep):
 _ATM_CACHE: dict = {}
 
 
-def atmosphere_for(capture, phase: str = "tabulated"):
-    """The AERONET atmosphere of the retrieval nearest to the capture's mean time."""
-    from skydome.validation.aeronet import aerosol_atmosphere, egbert_20130527, nearest_retrieval
+def atmosphere_for(capture, phase: str = "tabulated", aerosol: str = "aeronet"):
+    """The atmosphere of a capture: with ``aerosol="aeronet"`` the retrieval nearest to the
+    capture's mean time (on a day without one, the Egbert 2013-05-27 14:19 UTC retrieval:
+    :func:`skydome.validation.fitting.base_retrieval`), with ``"fitted"`` tau440 and alpha
+    fitted to the scan (:func:`skydome.validation.fitting.fit_aerosol`)."""
+    from skydome.validation.aeronet import aerosol_atmosphere
+    from skydome.validation.fitting import base_retrieval, fit_aerosol
 
-    r = nearest_retrieval(egbert_20130527(), capture.mean_time)
-    key = (r.time, phase)
+    if aerosol == "fitted":
+        r = fit_aerosol(capture, phase="tabulated")
+        key = (capture.day, capture.label, capture.mean_time, phase, "fitted")
+    else:
+        r = base_retrieval(capture)
+        key = (r.time, phase)
     if key not in _ATM_CACHE:
         _ATM_CACHE[key] = (aerosol_atmosphere(r, phase=phase), r)
     return _ATM_CACHE[key]
@@ -139,22 +164,28 @@ def model_phase(name: str, phase: str) -> str:
     return phase
 
 
-def _build(name, capture, fast, phase):
+def _aerosol_label(r, aerosol):
+    return f"{aerosol} tau440 {r.tau440:.3f} alpha {r.alpha:.2f}"
+
+
+def _build(name, capture, fast, phase, aerosol="aeronet"):
     import skydome as sd
 
     sun = capture.sun
     base = "precomputed" if name == "precomputed_accurate" else name
     if name in PHYSICAL:
         ph = model_phase(name, phase)
-        atm, r = atmosphere_for(capture, ph)
+        atm, r = atmosphere_for(capture, ph, aerosol)
         label = ph if ph == "tabulated" else f"{ph} (g = {float(r.asymmetry()[1]):.3f} measured)"
         return sd.model(base, sun=sun, atmosphere=atm, **model_settings(name, fast)), label
-    _, r = atmosphere_for(capture, phase)
+    _, r = atmosphere_for(capture, phase, aerosol)
     if name == "preetham1999":
         beta = float(r.optical_depth(1000.0))  # Angstrom beta = tau(1 um)
         turbidity = (beta + 0.04586) / 0.04608  # [PSS99] A.2 inverted
-        return sd.model("preetham1999", sun=sun, turbidity=float(np.clip(turbidity, 1.7, 10.0))), \
-            f"analytic (T = {turbidity:.2f} from AERONET beta)"
+        # the model's range is T = 2-10 ([PSS99] fit it there); a clearer sky is clipped
+        clip = " clipped to 2" if turbidity < 2.0 else ""
+        return sd.model("preetham1999", sun=sun, turbidity=float(np.clip(turbidity, 2.0, 10.0))), \
+            f"analytic (T = {turbidity:.2f} from AERONET beta{clip})"
     if name == "hosek_wilkie2012":
         beta = float(r.optical_depth(1000.0))
         turbidity = (beta + 0.04586) / 0.04608  # [PSS99] A.2 inverted: [HW12] use Preetham's T
@@ -220,10 +251,10 @@ def arc_directions(capture, n_sub: int = 8, move: str = "from_previous") -> np.n
 
 
 def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulated",
-                motion: str | None = None, n_sub: int = 8) -> ModelResult:
+                motion: str | None = None, n_sub: int = 8, aerosol: str = "aeronet") -> ModelResult:
     """Errors of model ``name`` on one capture (see the module docstring); ``motion``:
     None (the value at the labelled direction) or a ``move`` of :func:`arc_directions`
-    (each sample as the mean along that move)."""
+    (each sample as the mean along that move); ``aerosol``: one of :data:`AEROSOLS`."""
     from skydome.spectra import spectrum_to_xyz, xyz_to_xy
 
     keep = np.ones(capture.directions.shape[0], bool)
@@ -232,19 +263,27 @@ def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulat
     if name == "perez1993" and not np.isfinite(capture.ghi_w_m2):
         nan = {"rms": float("nan"), "median": float("nan"), "max": float("nan")}
         return ModelResult(model=name, capture=capture.label, phase="no pyranometer record",
-                           luminance_level=float("nan"),
+                           luminance_level=float("nan"), day=capture.day,
                            luminance_shape={k: dict(nan) for k in ("all", "circumsolar", "horizon", "rest")})
-    model, label = _build(name, capture, fast, phase)
+    model, label = _build(name, capture, fast, phase, aerosol)
+    aerosol_used = "" if name in ("perez1993", "cie2003") else \
+        _aerosol_label(atmosphere_for(capture, model_phase(name, phase), aerosol)[1], aerosol)
     if name == "cie2003":
         model, t = _cie_best(capture, lum, keep)
         label = f"analytic (type {t} of best fit)"
     d = arc_directions(capture, n_sub, motion) if motion else capture.directions
     spectra = None
+    bands = {}
     if model.native == "spectral":
         wl = LUMINANCE_WL
         S = model.radiance(d, wl)
         if motion:
             S = S.mean(axis=1)
+        mw = capture.wavelengths_nm
+        for b in BANDS_NM:
+            sm, mm = np.abs(wl - b) <= 10.0, np.abs(mw - b) <= 10.0
+            ratio = S[:, sm].mean(axis=1) / capture.radiance[:, mm].mean(axis=1)
+            bands[b] = float(np.median(ratio[keep]) - 1.0)
         xyz = spectrum_to_xyz(S, wl)
         band = (wl >= SPECTRAL_BAND[0]) & (wl <= SPECTRAL_BAND[1])
         spectra = S[:, band]
@@ -255,9 +294,13 @@ def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulat
     L = xyz[:, 1]
     level = float(L[keep].mean() / lum[keep].mean() - 1.0) if name != "cie2003" else float("nan")
     shape = (L / L[keep].mean()) / (lum / lum[keep].mean()) - 1.0
+    outside = keep & (capture.sun_angle_deg >= 10.0)
+    lrms = float(np.sqrt(np.mean((L[outside] / lum[outside] - 1.0) ** 2))) \
+        if name != "cie2003" else float("nan")
     res = ModelResult(model=name, capture=capture.label, phase=label, luminance_level=level,
                       luminance_shape={k: _stats(shape[m]) for k, m in _regions(capture, keep).items()},
-                      model_luminance=L, model_spectra=spectra)
+                      model_luminance=L, model_spectra=spectra, day=capture.day,
+                      luminance_rms_outside=lrms, band_medians=bands, aerosol=aerosol_used)
     if model.native != "luminance":
         dxy = np.linalg.norm(xyz_to_xy(xyz) - xy, axis=-1)[keep]
         res.xy_rms, res.xy_max = float(np.sqrt(np.mean(dxy ** 2))), float(dxy.max())
@@ -275,8 +318,10 @@ def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulat
 
 
 def compare_measured(models=MODELS, captures=None, *, fast: bool = False,
-                     phase: str = "tabulated", progress=None) -> list[ModelResult]:
-    """Compare ``models`` with the measured captures (all 15 by default, or labels).
+                     phase: str = "tabulated", progress=None, day: str | None = None,
+                     aerosol: str | None = None) -> list[ModelResult]:
+    """Compare ``models`` with the measured captures of ``day`` (all of them by default, or
+    labels).
 
     Parameters
     ----------
@@ -287,6 +332,10 @@ def compare_measured(models=MODELS, captures=None, *, fast: bool = False,
         Coarse settings (tests).
     phase : {"tabulated", "henyey_greenstein", "cornette_shanks"}
         Aerosol phase function of the physically based models.
+    day : str, optional
+        One of :data:`skydome.validation.kider2014.DAYS` (default the first, 2013-05-27).
+    aerosol : {"aeronet", "fitted"}, optional
+        Default: "aeronet" on 2013-05-27, "fitted" on a day without AERONET.
 
     Returns
     -------
@@ -299,12 +348,20 @@ def compare_measured(models=MODELS, captures=None, *, fast: bool = False,
     for m in models:
         check_choice("model", m, MODELS + ("precomputed_accurate",))
     check_choice("phase", phase, ("tabulated", "henyey_greenstein", "cornette_shanks"))
+    from skydome.validation.kider2014 import DAYS, DEFAULT_DAY
+
+    day = DEFAULT_DAY if day is None else check_choice("day", day, DAYS)
+    if aerosol is None:
+        aerosol = "aeronet" if day == "2013-05-27" else "fitted"
+    check_choice("aerosol", aerosol, AEROSOLS)
+    if aerosol == "aeronet" and day != "2013-05-27":
+        raise ValueError(f"aerosol = 'aeronet' has no retrieval for day {day!r}: use 'fitted'")
     if captures is None or (captures and not isinstance(list(captures)[0], Capture)):
-        captures = load_captures(captures)
+        captures = load_captures(captures, day=day)
     out = []
     for m in models:
         for c in captures:
-            out.append(compare_one(m, c, fast=fast, phase=phase))
+            out.append(compare_one(m, c, fast=fast, phase=phase, aerosol=aerosol))
             if progress is not None:
                 progress(m, c.label)
     return out
@@ -337,4 +394,33 @@ def day_table(results) -> str:
         xyr = mean(lambda r: r.xy_rms)
         vals.append("n/a" if not np.isfinite(xyr) else f"{1000 * xyr:.1f}")
         rows.append(f"| {m} | {', '.join(phases)} | " + " | ".join(vals) + " |")
+    return head + "\n".join(rows) + "\n"
+
+
+def capture_table(results) -> str:
+    """A Markdown table with one row per model and capture, in %: the luminance level, the
+    RMS of the luminance error (level included) at least 10 deg from the sun, the shape RMS
+    (all directions, circumsolar, the rest outside the circumsolar and horizon regions), the
+    spectral RMS 400-700 nm, xy RMS (1e-3) and the median model / measured - 1 in each band
+    of :data:`BANDS_NM`."""
+    bands = " | ".join(f"{b:.0f}" for b in BANDS_NM)
+    head = ("| day | capture | model | inputs | level L | L RMS >= 10 deg | shape RMS | "
+            "circumsolar | rest | spectral RMS | xy (1e-3) | " + bands + " |\n"
+            "|" + "---|" * (11 + len(BANDS_NM)) + "\n")
+
+    def f(x, sign=False):
+        if x is None or not np.isfinite(x):
+            return "n/a"
+        return f"{100 * x:+.1f}" if sign else f"{100 * x:.1f}"
+
+    rows = []
+    for r in results:
+        sh = r.luminance_shape
+        xy = "n/a" if not np.isfinite(r.xy_rms) else f"{1000 * r.xy_rms:.1f}"
+        inputs = r.phase + (f"; {r.aerosol}" if r.aerosol else "")
+        vals = [r.day, r.capture, r.model, inputs, f(r.luminance_level, True),
+                f(r.luminance_rms_outside), f(sh["all"]["rms"]), f(sh["circumsolar"]["rms"]),
+                f(sh["rest"]["rms"]), f(r.spectral_rms), xy]
+        vals += [f(r.band_medians.get(b), True) for b in BANDS_NM]
+        rows.append("| " + " | ".join(vals) + " |")
     return head + "\n".join(rows) + "\n"

@@ -1,7 +1,8 @@
-"""The Kider et al. 2014 spectral sky scans of 2013-05-27 (Cornell, Ithaca NY).
+"""The Kider et al. 2014 spectral sky scans of 2013-05-27 and 2013-09-24 (Cornell, Ithaca NY).
 
 :func:`load_captures` reads the compact derived tables shipped in ``skydome/data``
-(``kider2014_20130527_radiance.csv.gz``, ``kider2014_20130527_ghi.csv``; derived by
+(``kider2014_YYYYMMDD_radiance.csv.gz``, ``kider2014_YYYYMMDD_ghi.csv``, one pair per day
+of :data:`DAYS`; derived by
 ``tools/derive_kider2014.py`` from the data set ``sky-measurements-2014``, Apache-2.0) and
 returns one :class:`Capture` per scan: the 81 directions in skydome's East-North-Up frame,
 the time of every sample, the sun (NREL SPA through :func:`skydome.sun.solar_position`) at
@@ -28,8 +29,12 @@ tests/validation/test_kider2014.py):
   shift fixing elevation and azimuth together points to the scanner's clock rather than to
   its azimuth alignment (an azimuth offset would leave the elevation error). Bruneton's
   reader notes the same mismatch and estimates the sun azimuth from the symmetry axis
-  instead. The loader applies :data:`CLOCK_OFFSET_MIN` by default
-  (``load_captures(clock_offset_min=0)`` gives the labels as they are).
+  instead. The loader applies :data:`CLOCK_OFFSET_MIN` to 2013-05-27 by default
+  (``load_captures(clock_offset_min=0)`` gives the labels as they are). Fitting the whole
+  sky's shape instead (:func:`skydome.validation.fitting.clock_scan`) puts that day's shift
+  at about -23 min, and 2013-09-24 at its labels (:data:`CLOCK_OFFSETS_MIN`: 0 for that
+  day); modelling the scanner's motion does not remove the 2013-05-27 shift
+  (docs/validation_measured.md, "Scanner motion and clock").
 
 With the file azimuth read clockwise, or with UTC-5, the data do not fit at any shift near
 zero (see :func:`fit_conventions`).
@@ -44,8 +49,10 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["CLOCK_OFFSET_MIN", "fit_clock_offset", "SITE_LATITUDE_DEG", "SITE_LONGITUDE_DEG", "SITE_ALTITUDE_M", "SCAN_DURATION_S",
-           "Capture", "load_captures", "capture_labels", "fit_conventions", "sun_from_data"]
+__all__ = ["DAYS", "DEFAULT_DAY", "CLOCK_OFFSETS_MIN", "CLOCK_OFFSET_MIN",
+           "fit_clock_offset", "SITE_LATITUDE_DEG", "SITE_LONGITUDE_DEG", "SITE_ALTITUDE_M",
+           "SCAN_DURATION_S", "Capture", "load_captures", "capture_labels",
+           "fit_conventions", "sun_from_data"]
 
 #: Rhodes Hall roof, Cornell University (Kider et al. 2014, sec. 4)
 SITE_LATITUDE_DEG = 42.443449
@@ -61,17 +68,35 @@ EDT = timezone(timedelta(hours=-4), "EDT")
 #: Correction added to the capture labels [min] so that the SPA sun matches the sun seen in
 #: the data (the median best shift over the captures, :func:`fit_clock_offset`)
 CLOCK_OFFSET_MIN = -40.0
+#: The days of the data set (its every day), the first the default
+DAYS = ("2013-05-27", "2013-09-24")
+DEFAULT_DAY = DAYS[0]
+#: Clock correction per day [min]: 2013-05-27 the circumsolar peak's -40 min, 2013-09-24 none
+#: (its scans fit best within 6 min of the labels; docs/validation_measured.md)
+CLOCK_OFFSETS_MIN = {"2013-05-27": CLOCK_OFFSET_MIN, "2013-09-24": 0.0}
 DATE = (2013, 5, 27)
 
-_RADIANCE = "kider2014_20130527_radiance.csv.gz"
-_GHI = "kider2014_20130527_ghi.csv"
+
+def _check_day(day: str) -> str:
+    if day not in DAYS:
+        raise ValueError(f"day must be one of {', '.join(DAYS)}, got {day!r}")
+    return day
 
 
-@lru_cache(maxsize=1)
-def _read_radiance():
+def _date(day: str) -> tuple[int, int, int]:
+    y, m, d = (int(x) for x in _check_day(day).split("-"))
+    return y, m, d
+
+
+def _stem(day: str) -> str:
+    return "kider2014_" + _check_day(day).replace("-", "")
+
+
+@lru_cache(maxsize=4)
+def _read_radiance(day: str = DEFAULT_DAY):
     from skydome.data import DATA_DIR
 
-    with gzip.open(DATA_DIR / _RADIANCE, "rt", encoding="utf-8") as f:
+    with gzip.open(DATA_DIR / f"{_stem(day)}_radiance.csv.gz", "rt", encoding="utf-8") as f:
         lines = [ln for ln in f if ln.strip() and not ln.startswith("#")]
     header = lines[0].strip().split(",")
     wl = np.array([float(h) for h in header[4:]])
@@ -86,12 +111,12 @@ def _read_radiance():
     return tuple(labels), arr, wl
 
 
-@lru_cache(maxsize=1)
-def _read_ghi():
+@lru_cache(maxsize=4)
+def _read_ghi(day: str = DEFAULT_DAY):
     from skydome.data import DATA_DIR
 
     times, vals = [], []
-    with (DATA_DIR / _GHI).open(encoding="utf-8") as f:
+    with (DATA_DIR / f"{_stem(day)}_ghi.csv").open(encoding="utf-8") as f:
         for ln in f:
             if ln.startswith("#") or ln.startswith("time") or not ln.strip():
                 continue
@@ -102,9 +127,10 @@ def _read_ghi():
     return np.array(times, dtype=np.float64), np.array(vals)
 
 
-def capture_labels() -> tuple[str, ...]:
-    """The 15 capture labels (local clock time of the scan start, "HH:MM:SS")."""
-    labels, _, _ = _read_radiance()
+def capture_labels(day: str = DEFAULT_DAY) -> tuple[str, ...]:
+    """The capture labels of ``day`` (local clock time of the scan start, "HH:MM:SS"):
+    15 on 2013-05-27, 5 on 2013-09-24."""
+    labels, _, _ = _read_radiance(_check_day(day))
     return tuple(dict.fromkeys(labels))
 
 
@@ -121,6 +147,8 @@ class Capture:
     ----------
     label : str
         Local clock time of the scan start (EDT), "HH:MM:SS", as the data set labels it.
+    day : str
+        The day, "YYYY-MM-DD" (one of :data:`DAYS`).
     start : datetime
         Scan start, timezone-aware: the label plus the clock correction.
     sample_times : ndarray of datetime (81,)
@@ -146,6 +174,7 @@ class Capture:
     """
 
     label: str
+    day: str
     start: datetime
     sample_times: np.ndarray
     mean_time: datetime
@@ -181,19 +210,19 @@ def _azimuth_from_file(azimuth_file_deg, convention: str = "ccw"):
 
 
 def _capture(label: str, utc_offset_h: float = -4.0, azimuth_convention: str = "ccw",
-             clock_offset_min: float = CLOCK_OFFSET_MIN) -> Capture:
+             clock_offset_min: float = CLOCK_OFFSET_MIN, day: str = DEFAULT_DAY) -> Capture:
     from skydome.sun import Sun, solar_position
 
-    labels, arr, wl = _read_radiance()
+    labels, arr, wl = _read_radiance(day)
     rows = np.array([lab == label for lab in labels])
     if not rows.any():
-        raise ValueError(f"capture must be one of {', '.join(capture_labels())}, got {label!r}")
+        raise ValueError(f"capture must be one of {', '.join(capture_labels(day))}, got {label!r}")
     block = arr[rows]
     order = np.argsort(block[:, 0])
     block = block[order]
     tz = timezone(timedelta(hours=utc_offset_h))
     h, m, s = (int(x) for x in label.split(":"))
-    start = datetime(*DATE, h, m, s, tzinfo=tz) + timedelta(minutes=clock_offset_min)
+    start = datetime(*_date(day), h, m, s, tzinfo=tz) + timedelta(minutes=clock_offset_min)
     n = block.shape[0]
     dt = SCAN_DURATION_S / n
     times = np.array([start + timedelta(seconds=(i + 0.5) * dt) for i in range(n)], dtype=object)
@@ -202,11 +231,11 @@ def _capture(label: str, utc_offset_h: float = -4.0, azimuth_convention: str = "
     az = _azimuth_from_file(az_file, azimuth_convention)
     sun = Sun.from_location(SITE_LATITUDE_DEG, SITE_LONGITUDE_DEG, mean_time)
     s_el, s_az = solar_position(SITE_LATITUDE_DEG, SITE_LONGITUDE_DEG, list(times))
-    gt, gv = _read_ghi()
+    gt, gv = _read_ghi(day)
     t0 = _seconds(label)
     sel = (gt >= t0) & (gt <= t0 + SCAN_DURATION_S)
     ghi = float(np.mean(gv[sel])) if sel.any() else float("nan")
-    return Capture(label=label, start=start, sample_times=times, mean_time=mean_time,
+    return Capture(label=label, day=day, start=start, sample_times=times, mean_time=mean_time,
                    azimuth_file_deg=az_file, elevation_deg=el, azimuth_deg=az,
                    directions=_enu(az, el), wavelengths_nm=np.array(wl),
                    radiance=block[:, 3:].copy(), sun=sun,
@@ -214,23 +243,27 @@ def _capture(label: str, utc_offset_h: float = -4.0, azimuth_convention: str = "
                    sample_sun_azimuth_deg=np.asarray(s_az, dtype=float), ghi_w_m2=ghi)
 
 
-def load_captures(labels=None, clock_offset_min: float = CLOCK_OFFSET_MIN) -> list[Capture]:
-    """The captures of 2013-05-27 (all 15, or those named in ``labels``), with the
-    conventions of the module docstring; ``clock_offset_min`` [min] in [-120, 120] is added
-    to the labels (default :data:`CLOCK_OFFSET_MIN`). The pyranometer GHI is averaged over
-    the labelled scan window (its files share the scanner's clock)."""
+def load_captures(labels=None, clock_offset_min: float | None = None,
+                  day: str = DEFAULT_DAY) -> list[Capture]:
+    """The captures of ``day`` (one of :data:`DAYS`; all of them, or those named in
+    ``labels``), with the conventions of the module docstring; ``clock_offset_min`` [min] in
+    [-120, 120] is added to the labels (default: the day's :data:`CLOCK_OFFSETS_MIN`). The
+    pyranometer GHI is averaged over the labelled scan window."""
     from skydome._validate import check_number
 
+    _check_day(day)
+    if clock_offset_min is None:
+        clock_offset_min = CLOCK_OFFSETS_MIN[day]
     off = check_number("clock_offset_min", clock_offset_min, -120.0, 120.0, "min")
     if labels is None:
-        labels = capture_labels()
+        labels = capture_labels(day)
     elif isinstance(labels, str):
         labels = [labels]
-    valid = capture_labels()
+    valid = capture_labels(day)
     for lab in labels:
         if lab not in valid:
             raise ValueError(f"capture must be one of {', '.join(valid)}, got {lab!r}")
-    return [_capture(lab, clock_offset_min=off) for lab in labels]
+    return [_capture(lab, clock_offset_min=off, day=day) for lab in labels]
 
 
 # -- the conventions, from the data ----------------------------------------------------------
@@ -278,7 +311,7 @@ def _angle_deg(el1, az1, el2, az2):
     return float(np.degrees(np.arccos(np.clip(_enu(az1, el1) @ _enu(az2, el2), -1, 1))))
 
 
-def fit_conventions(labels=None) -> dict:
+def fit_conventions(labels=None, day: str = DEFAULT_DAY) -> dict:
     """Compare the sun seen in the data with SPA under each reading of the files.
 
     For each capture the sun is estimated from the radiance (:func:`sun_from_data`) with the
@@ -289,8 +322,8 @@ def fit_conventions(labels=None) -> dict:
     """
     from skydome.sun import solar_position
 
-    labels = capture_labels() if labels is None else labels
-    labs, arr, wl = _read_radiance()
+    labels = capture_labels(day) if labels is None else labels
+    labs, arr, wl = _read_radiance(_check_day(day))
     out = {}
     for conv in ("ccw", "cw"):
         for off in (-4.0, -5.0):
@@ -303,7 +336,7 @@ def fit_conventions(labels=None) -> dict:
                 L = _band_radiance(block[:, 3:], wl)
                 e_el, e_az = sun_from_data(az, el, L)
                 h, m, s = (int(x) for x in lab.split(":"))
-                t = datetime(*DATE, h, m, s, tzinfo=timezone(timedelta(hours=off))) \
+                t = datetime(*_date(day), h, m, s, tzinfo=timezone(timedelta(hours=off))) \
                     + timedelta(seconds=SCAN_DURATION_S / 2.0)
                 s_el, s_az = solar_position(SITE_LATITUDE_DEG, SITE_LONGITUDE_DEG, t)
                 angles.append(_angle_deg(e_el, e_az, float(s_el), float(s_az)))
@@ -311,7 +344,8 @@ def fit_conventions(labels=None) -> dict:
     return out
 
 
-def fit_clock_offset(labels=None, offsets_min=np.arange(-90.0, 31.0, 1.0)) -> dict:
+def fit_clock_offset(labels=None, offsets_min=np.arange(-90.0, 31.0, 1.0),
+                     day: str = DEFAULT_DAY) -> dict:
     """The clock correction that brings the SPA sun onto the sun seen in the data.
 
     For each capture (labels read as EDT, file azimuth counter-clockwise) the angle between
@@ -321,10 +355,10 @@ def fit_clock_offset(labels=None, offsets_min=np.arange(-90.0, 31.0, 1.0)) -> di
     """
     from skydome.sun import solar_position
 
-    labels = capture_labels() if labels is None else tuple(labels)
+    labels = capture_labels(day) if labels is None else tuple(labels)
     offs = np.asarray(offsets_min, dtype=np.float64)
     angles = np.empty((len(labels), offs.size))
-    for k, c in enumerate(load_captures(labels, clock_offset_min=0.0)):
+    for k, c in enumerate(load_captures(labels, clock_offset_min=0.0, day=day)):
         e_el, e_az = sun_from_data(c.azimuth_deg, c.elevation_deg,
                                    _band_radiance(c.radiance, c.wavelengths_nm))
         ts = [c.mean_time + timedelta(minutes=float(o)) for o in offs]

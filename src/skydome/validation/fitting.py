@@ -1,0 +1,138 @@
+"""What the scans themselves say: the aerosol fitted to a scan, and the scanner's clock.
+
+* :func:`fit_aerosol` fits the aerosol optical depth at 440 nm and its Angstrom exponent
+  (``tau(lambda) = tau440 (lambda / 440)^-alpha``, Angstrom 1929) to one scan's own spectral
+  radiance, 400-700 nm, in the directions at least 10 deg from the sun (sample 0 left out):
+  least squares on ``ln(model / measured)`` with ``hillaire2020`` (its tables take about
+  1 s per atmosphere; the multiple-scattering solvers agree within 1-2 points,
+  docs/validation_measured.md). Everything else is the AERONET retrieval's (phase
+  function, surface albedo; single scattering albedo 0.95 assumed), for a day without
+  AERONET (2013-09-24) the Egbert 2013-05-27 14:19 UTC retrieval's.
+  The fitted level absorbs whatever else is off in level (the scanner's absolute
+  calibration, the ground albedo, the single scattering albedo), so a model's level and
+  colour on a fitted atmosphere are fits, not predictions.
+* :func:`clock_scan` measures, per scan, how well a model's luminance shape follows the
+  measured one when the sun is taken at the label time plus each of a range of offsets,
+  with the model sampled at the labelled directions or as the mean along each of the
+  scanner's moves (:func:`skydome.validation.compare.arc_directions`): the test of whether
+  the scanner's apparent clock shift is its motion.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+__all__ = ["FIT_WAVELENGTHS", "fit_aerosol", "base_retrieval", "clock_scan"]
+
+#: wavelengths of the aerosol fit [nm]
+FIT_WAVELENGTHS = np.arange(400.0, 701.0, 50.0)
+#: bounds of the fit: tau440 and the Angstrom exponent
+TAU440_RANGE = (0.01, 1.5)
+ALPHA_RANGE = (-0.5, 3.0)
+
+_FIT_CACHE: dict = {}
+
+
+def base_retrieval(capture):
+    """The AERONET retrieval a capture's aerosol starts from: the Egbert retrieval nearest
+    in time on 2013-05-27; on another day (no AERONET retrieval shipped), the 14:19 UTC
+    one (its phase function and surface albedo; tau440 and alpha are then fitted)."""
+    from skydome.validation.aeronet import egbert_20130527, nearest_retrieval
+
+    rets = egbert_20130527()
+    if capture.mean_time.date() == rets[0].time.date():
+        return nearest_retrieval(rets, capture.mean_time)
+    return max(rets, key=lambda r: r.time)
+
+
+def _fit_mask(capture):
+    from skydome.validation.compare import EXCLUDED_SAMPLES
+
+    keep = capture.sun_angle_deg >= 10.0
+    keep[list(EXCLUDED_SAMPLES)] = False
+    return keep
+
+
+def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated"):
+    """The aerosol (tau440, alpha) that best reproduces the scan's 400-700 nm radiance.
+
+    Returns an :class:`~skydome.validation.aeronet.AeronetRetrieval` (the base retrieval of
+    :func:`base_retrieval` with tau440 and alpha replaced) and caches it per capture.
+    """
+    from scipy.optimize import least_squares
+
+    import skydome as sd
+    from skydome._validate import check_choice
+    from skydome.validation.aeronet import aerosol_atmosphere
+
+    check_choice("model", model, ("hillaire2020", "precomputed"))
+    key = (capture.day, capture.label, capture.mean_time, model, phase)
+    if key in _FIT_CACHE:
+        return _FIT_CACHE[key]
+    base = base_retrieval(capture)
+    keep = _fit_mask(capture)
+    wl = FIT_WAVELENGTHS
+    idx = [int(np.argmin(np.abs(capture.wavelengths_nm - w))) for w in wl]
+    meas = np.log(capture.radiance[keep][:, idx])
+    d = capture.directions[keep]
+
+    def resid(p):
+        r = dataclasses.replace(base, tau440=float(np.exp(p[0])), alpha=float(p[1]))
+        m = sd.model(model, sun=capture.sun, atmosphere=aerosol_atmosphere(r, phase=phase),
+                     n_wavelengths=wl.size)
+        S = np.maximum(m.radiance(d, wl), 1e-30)
+        return (np.log(S) - meas).ravel()
+
+    lo = [np.log(TAU440_RANGE[0]), ALPHA_RANGE[0]]
+    hi = [np.log(TAU440_RANGE[1]), ALPHA_RANGE[1]]
+    p0 = [np.log(np.clip(base.tau440, *TAU440_RANGE)), float(np.clip(base.alpha, *ALPHA_RANGE))]
+    sol = least_squares(resid, p0, bounds=(lo, hi), diff_step=2e-3, x_scale=[0.3, 0.3],
+                        xtol=1e-3, ftol=1e-4, max_nfev=40)
+    out = dataclasses.replace(base, tau440=float(np.exp(sol.x[0])), alpha=float(sol.x[1]))
+    _FIT_CACHE[key] = out
+    return out
+
+
+def clock_scan(day: str, labels=None, offsets_min=np.arange(-60.0, 11.0, 10.0), *,
+               motions=(None, "from_previous"), model: str = "hillaire2020") -> dict:
+    """Shape error of ``model``'s luminance against each scan for a range of clock offsets.
+
+    For each capture, offset [min] (added to the labels) and motion (None: the model at the
+    labelled directions; "from_previous": the mean along the move from the previous sample)
+    the RMS of ``ln(model / measured)`` minus its mean over the 80 kept directions (a shape
+    error, free of the level). The aerosol is the AERONET retrieval nearest in time
+    (:func:`base_retrieval`), not fitted: a fit would follow the sun it is given.
+    Returns ``{"labels", "offsets_min", "motions", "rms" (captures, motions, offsets),
+    "best_min" (captures, motions)}``; ``best_min`` is the minimum of a parabola through the
+    best grid offset and its neighbours.
+    """
+    from skydome.validation.compare import EXCLUDED_SAMPLES, compare_one, measured_luminance
+    from skydome.validation.kider2014 import capture_labels, load_captures
+
+    labels = capture_labels(day) if labels is None else tuple(labels)
+    offs = np.asarray(offsets_min, dtype=np.float64)
+    rms = np.empty((len(labels), len(motions), offs.size))
+    for j, off in enumerate(offs):
+        for k, c in enumerate(load_captures(labels, clock_offset_min=float(off), day=day)):
+            lum, _ = measured_luminance(c)
+            keep = np.ones(lum.size, bool)
+            keep[list(EXCLUDED_SAMPLES)] = False
+            for i, mo in enumerate(motions):
+                r = compare_one(model, c, motion=mo, aerosol="aeronet")
+                e = np.log(r.model_luminance[keep] / lum[keep])
+                rms[k, i, j] = float(np.sqrt(np.mean((e - e.mean()) ** 2)))
+    best = np.empty(rms.shape[:2])
+    for k in range(rms.shape[0]):
+        for i in range(rms.shape[1]):
+            j = int(np.argmin(rms[k, i]))
+            if 0 < j < offs.size - 1:
+                y0, y1, y2 = rms[k, i, j - 1:j + 2]
+                den = y0 - 2 * y1 + y2
+                step = offs[j + 1] - offs[j]
+                best[k, i] = offs[j] + (0.5 * (y0 - y2) / den * step if den > 0 else 0.0)
+            else:
+                best[k, i] = offs[j]
+    return {"labels": labels, "offsets_min": offs, "motions": tuple(motions), "rms": rms,
+            "best_min": best}
