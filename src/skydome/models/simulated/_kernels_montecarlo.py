@@ -351,6 +351,55 @@ def _forced_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_node
 
 
 @njit(cache=True, inline="always")
+def _uniform_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_nodes, tau_cam):
+    """The camera ray's first collision drawn uniformly in distance over the air
+    (segment_sun's second sampler, see :func:`_trace_one`). Returns (ok, t, mu_t of its
+    interval, mu_s, q): q = the density of :func:`_forced_collision` at t times the ray's
+    length, mu_t e^-tau L / (1 - T), and the local scattering coefficients in cw[MUS]."""
+    length = node_t[n_nodes - 1] - node_t[0]
+    t = node_t[0] + _rand(state) * length
+    lo = 0
+    hi = n_nodes - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if node_t[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    dt = node_t[hi] - node_t[lo]
+    if dt <= 0.0 or length <= 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0
+    mut = (node_tau[hi] - node_tau[lo]) / dt
+    tau = node_tau[lo] + mut * (t - node_t[lo])
+    q = mut * math.exp(-tau) * length / -math.expm1(-tau_cam)
+    rr = radius_along(cam_r0, cam_mu, t)
+    mus = 0.0
+    for c in range(ic.shape[1]):
+        cw[MUS, c] = cw[SCA, c] * profile_density(ic[PROFILE, c], cw[P0, c], cw[P1, c], rr - R)
+        mus += cw[MUS, c]
+    return mut > 0.0, t, mut, mus, q
+
+
+@njit(cache=True, inline="always")
+def _forced_density(node_t, node_tau, n_nodes, tau_cam, t):
+    """The density of :func:`_forced_collision` at distance t, mu_t e^-tau / (1 - T)
+    (mu_t of t's interval, tau linear in it)."""
+    lo = 0
+    hi = n_nodes - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if node_t[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    dt = node_t[hi] - node_t[lo]
+    if dt <= 0.0:
+        return 0.0
+    mut = (node_tau[hi] - node_tau[lo]) / dt
+    return mut * math.exp(-(node_tau[lo] + mut * (t - node_t[lo]))) / -math.expm1(-tau_cam)
+
+
+@njit(cache=True, inline="always")
 def _delta_track(ic, cw, R, state, r, mu, t0, t_end):
     """Delta tracking (Woodcock) along [0, t_end] against the segment's majorant.
     Returns (collided, t, mu_t, mu_s) at the real collision (per constituent in cw[MUS])."""
@@ -427,6 +476,7 @@ def _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt, l, sx, 
 
 
 N_SEGMENT = 48       # geometric midpoint nodes per piece of a segment (segment_sun)
+CAMERA_MIX = 0.5     # segment_sun: share of camera-ray collisions drawn by optical depth
 
 
 @njit(cache=True)
@@ -717,8 +767,27 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
                     else:
                         collided = True
                         w0 = -math.expm1(-tau_cam)
-                        ok, t, mut, mus = _forced_collision(ic, cw, R, node_t, node_tau, state,
-                                                            r0, cam_mu, n_nodes, tau_cam)
+                        if not segment_sun:
+                            ok, t, mut, mus = _forced_collision(ic, cw, R, node_t, node_tau,
+                                                                state, r0, cam_mu, n_nodes,
+                                                                tau_cam)
+                        else:
+                            # one-sample mixture: with probability CAMERA_MIX the optical
+                            # depth's density p1, else uniform in distance, p2 = 1 / L;
+                            # weight p1 / (a p1 + (1 - a) p2) = q / (a q + 1 - a), q = p1 L
+                            # (the rare collision high on the ray, near the sunlit air,
+                            # otherwise a heavy tail of the estimate in deep twilight)
+                            if _rand(state) < CAMERA_MIX:
+                                ok, t, mut, mus = _forced_collision(ic, cw, R, node_t,
+                                                                    node_tau, state, r0, cam_mu,
+                                                                    n_nodes, tau_cam)
+                                q = _forced_density(node_t, node_tau, n_nodes, tau_cam, t) * (
+                                    node_t[n_nodes - 1] - node_t[0])
+                            else:
+                                ok, t, mut, mus, q = _uniform_collision(
+                                    ic, cw, R, node_t, node_tau, state, r0, cam_mu, n_nodes,
+                                    tau_cam)
+                            w0 *= q / (CAMERA_MIX * q + 1.0 - CAMERA_MIX)
                         if not ok:
                             break
                 else:
