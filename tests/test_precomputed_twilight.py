@@ -31,6 +31,7 @@ from skydome.atmosphere import Atmosphere
 DATA = Path(__file__).parent / "data"
 CIVIL = DATA / "twilight_montecarlo_550nm.npz"
 DEEP = DATA / "twilight_montecarlo_550nm_deep.npz"
+SEGMENT = DATA / "twilight_montecarlo_550nm_segment.npz"
 
 
 @pytest.fixture(scope="module")
@@ -157,3 +158,54 @@ def test_observer_single_scattering_is_opt_in(sky):
     assert np.all(np.isfinite(a)) and np.all(a > 0) and not np.allclose(a, b, rtol=1e-3)
     p = next(q for q in type(sky).parameters if q.name == "twilight_single_scattering")
     assert p.default is False and p.kind == "bool"
+
+
+# -- the reference configuration (twilight_reference=True) -----------------------------------
+@pytest.fixture(scope="module")
+def reference_sky():
+    ref = np.load(CIVIL)
+    return sd.model("precomputed", sun=sd.Sun(elevation_deg=-4.0, azimuth_deg=180.0),
+                    table_wavelengths_nm=list(ref["wavelengths_nm"]),
+                    atmosphere=Atmosphere.earth(aerosol_optical_depth=0.2),
+                    twilight_reference=True)
+
+
+def test_reference_configuration_settings(reference_sky):
+    """The switch sets the reference settings; a setting given explicitly wins."""
+    from skydome.models.simulated.precomputed import TWILIGHT_REFERENCE_SETTINGS
+
+    for k, v in TWILIGHT_REFERENCE_SETTINGS.items():
+        assert getattr(reference_sky, k) == v, k
+    assert reference_sky.twilight_single_scattering is True
+    p = next(q for q in type(reference_sky).parameters if q.name == "twilight_reference")
+    assert p.default is False and p.kind == "bool"
+    with pytest.raises(ValueError, match="twilight_single_scattering"):
+        sd.model("precomputed", sun=sd.Sun(elevation_deg=-5.0, azimuth_deg=0.0),
+                 twilight_reference=True, twilight_single_scattering=False)
+
+
+# (sun elevation, reference, target RMS of the model's own error, bound on the reference's
+# RMS noise). The reference's noise adds to the measured difference in quadrature, so the
+# bound on the measured RMS is sqrt(target^2 + noise^2), with the reference's noise held
+# under half the target so that it cannot decide the test. Measured RMS (max), see
+# docs/models.md, "Twilight: the reference configuration".
+REFERENCE_CASES = [(-4.0, CIVIL, 0.03, 0.005),
+                   (-6.0, CIVIL, 0.03, 0.015),
+                   (-8.0, SEGMENT, 0.10, 0.05),
+                   (-10.0, SEGMENT, 0.10, 0.05),
+                   (-12.0, SEGMENT, 0.10, 0.05)]
+
+
+@pytest.mark.parametrize("elevation, path, target, noise_bound", REFERENCE_CASES)
+def test_reference_configuration_against_monte_carlo(reference_sky, elevation, path, target,
+                                                     noise_bound):
+    """``twilight_reference=True`` within 3 % RMS of ``montecarlo`` to sun -6 deg and 10 %
+    to -12 deg (the issue's bounds for a fitted model's data set), five directions, 550 nm:
+    at -4 / -6 deg against the 10^7-path vertex-estimator reference, at -8 / -10 / -12 deg
+    against the segment-estimator reference (montecarlo ``next_event="segment"``,
+    tools/twilight_references.py; the file's ``command`` says how)."""
+    rel, noise = _errors(reference_sky, path, elevation)
+    noise_rms = np.sqrt(np.mean(noise ** 2))
+    assert noise_rms < noise_bound
+    rms = np.sqrt(np.mean(rel ** 2))
+    assert rms < np.hypot(target, noise_rms), (rms, rel)

@@ -146,6 +146,7 @@ class PrecomputedSky(SkyModel):
     lut_layout = "bruneton"
     airlight = True
     own_ground = "sun_and_sky"            # [Bru17] GetSunAndSkyIrradiance
+    twilight_reference = False            # (files saved before the switch existed)
     summary = "Bruneton-style precomputed multiple scattering tables (spectral, any atmosphere)."
     parameters = (
         *ATMOSPHERE_PARAMETERS,
