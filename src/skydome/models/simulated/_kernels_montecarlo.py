@@ -40,7 +40,9 @@ the estimate stays unbiased up to the quadrature. The ground's next event is kep
 twilight most collisions lie in the earth's shadow and the sunlit air is reached only by
 the rare path that collides there; the integral gathers the sunlit part of every segment
 instead, so that a path's estimate is rarely zero (the sunlit air above the shadow is what
-lights the deep-twilight sky).
+lights the deep-twilight sky). With it the camera ray's first collision is drawn from a
+one-sample mixture of the optical depth's density and a uniform one (CAMERA_MIX), so that a
+collision high on the ray, near the sunlit air, is not a rare event of large weight.
 
 Polarisation (Stokes vector (I, Q, U, V)): the path carries the 4x4 matrix A that maps a
 Stokes vector of the current backward segment (in its reference frame) to the camera's
