@@ -133,7 +133,8 @@ def run_reference(args):
     for elev in [float(x) for x in args.elevations.split(",")]:
         mc = sd.model("montecarlo", sun=sd.Sun(elevation_deg=elev, azimuth_deg=SUN_AZIMUTH_DEG),
                       atmosphere=Atmosphere.earth(aerosol_optical_depth=AOD),
-                      samples=args.samples, seed=args.seed, max_order=args.max_order)
+                      samples=args.samples, seed=args.seed, max_order=args.max_order,
+                      next_event=args.next_event)
         t0 = time.perf_counter()
         c0 = time.process_time()
         L, E = mc.radiance_with_error(dirs, wl)
@@ -155,7 +156,8 @@ def run_reference(args):
         out.update(directions=dirs, weights_sr=w, wavelengths_nm=wl,
                    provenance=np.str_(
                        "skydome montecarlo (backward path tracing, all orders, next-event "
-                       "estimation towards the sun), benchmarks/twilight_reference.py reference; "
+                       f"estimation towards the sun: next_event={args.next_event!r}), "
+                       "benchmarks/twilight_reference.py reference; "
                        f"Atmosphere.earth(aerosol_optical_depth={AOD}); sun azimuth "
                        f"{SUN_AZIMUTH_DEG:g} deg; max_order {args.max_order}; keys '<elev>' "
                        "radiance [W m^-2 sr^-1 nm^-1] (directions, wavelengths), '<elev>_err' its standard error, "
@@ -276,6 +278,8 @@ def main(argv=None):
     r.add_argument("--merge", action="store_true", help="pool with the file's paths of the same sky")
     r.add_argument("--max-order", type=int, default=None,
                    help="highest scattering order (a diagnostic: where the noise comes from)")
+    r.add_argument("--next-event", default="vertex", choices=("vertex", "segment"),
+                   help="montecarlo's next_event (segment: for deep twilight)")
     r.add_argument("--out", required=True)
     r.add_argument("--test-set", action="store_true", help="the test's 5 directions")
     r.add_argument("--wavelengths", default="", help="e.g. 550 (default: 6 over 400-700 nm)")

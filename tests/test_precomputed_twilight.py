@@ -9,13 +9,19 @@ direction, seed 11; relative standard error 0.2-0.5 % at -4 deg, RMS 0.3 %, and 
 at -6 deg, RMS 1.2 %) and tests/data/twilight_montecarlo_550nm_deep.npz (sun -8 and -10 deg,
 ``tools/twilight_references.py``, 2 x 10^7 paths per direction, seed 21; 1.1-3.7 % at
 -8 deg, RMS 2.8 %, and 3.0-10.0 % at -10 deg, RMS 7.6 %); each file's ``command`` and
-``provenance`` say how it was made.
+``provenance`` say how it was made; tests/data/twilight_montecarlo_550nm_segment.npz (sun
+-8, -10, -12 deg, montecarlo ``next_event="segment"``, seed 31, 5 x 10^5 / 10^6 / 4 x 10^6
+paths per direction, RMS noise 1.64 / 2.04 / 1.96 %; one run per elevation of
+``python tools/twilight_references.py tests/data/twilight_montecarlo_550nm_segment.npz
+--next-event segment --seed 31 --samples N --elevations=E``, the file's ``command`` holding
+the last) for the reference configuration ``twilight_reference=True``.
 
-The bounds are the errors measured at this state of the model (single scattering
-integrated at the observer with the sun below the horizon, 48 mu_s nodes on the knee at
-92 deg) rounded up by about a tenth: they guard against regressions, they are not the
-accuracy wanted for a fitted model's data set (3 % RMS to -6 deg, 10 % to -12 deg), which
-this state does not reach (docs/models.md, "Twilight: single scattering at the observer").
+The bounds of the default tables' tests are the errors measured at this state of the model
+(single scattering integrated at the observer with the sun below the horizon, 48 mu_s nodes
+on the knee at 92 deg) rounded up by about a tenth: they guard against regressions, they are
+not the accuracy wanted for a fitted model's data set (3 % RMS to -6 deg, 10 % to -12 deg),
+which the default tables do not reach (docs/models.md, "Twilight: single scattering at the
+observer"). The reference configuration's tests (the end of this file) hold that accuracy.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ from skydome.atmosphere import Atmosphere
 DATA = Path(__file__).parent / "data"
 CIVIL = DATA / "twilight_montecarlo_550nm.npz"
 DEEP = DATA / "twilight_montecarlo_550nm_deep.npz"
+SEGMENT = DATA / "twilight_montecarlo_550nm_segment.npz"
 
 
 @pytest.fixture(scope="module")
@@ -157,3 +164,56 @@ def test_observer_single_scattering_is_opt_in(sky):
     assert np.all(np.isfinite(a)) and np.all(a > 0) and not np.allclose(a, b, rtol=1e-3)
     p = next(q for q in type(sky).parameters if q.name == "twilight_single_scattering")
     assert p.default is False and p.kind == "bool"
+
+
+# -- the reference configuration (twilight_reference=True) -----------------------------------
+@pytest.fixture(scope="module")
+def reference_sky():
+    ref = np.load(CIVIL)
+    return sd.model("precomputed", sun=sd.Sun(elevation_deg=-4.0, azimuth_deg=180.0),
+                    table_wavelengths_nm=list(ref["wavelengths_nm"]),
+                    atmosphere=Atmosphere.earth(aerosol_optical_depth=0.2),
+                    twilight_reference=True)
+
+
+def test_reference_configuration_settings(reference_sky):
+    """The switch sets the reference settings; a setting given explicitly wins."""
+    from skydome.models.simulated.precomputed import TWILIGHT_REFERENCE_SETTINGS
+
+    for k, v in TWILIGHT_REFERENCE_SETTINGS.items():
+        assert getattr(reference_sky, k) == v, k
+    assert reference_sky.twilight_single_scattering is True
+    p = next(q for q in type(reference_sky).parameters if q.name == "twilight_reference")
+    assert p.default is False and p.kind == "bool"
+    with pytest.raises(ValueError, match="twilight_single_scattering"):
+        sd.model("precomputed", sun=sd.Sun(elevation_deg=-5.0, azimuth_deg=0.0),
+                 twilight_reference=True, twilight_single_scattering=False)
+
+
+# (sun elevation, reference, target RMS of the model's own error, bound on the reference's
+# RMS noise). The reference's noise adds to the measured difference in quadrature, so the
+# bound on the measured RMS is sqrt(target^2 + noise^2), with the reference's noise held
+# under half the target so that it cannot decide the test. Measured RMS (max) / reference
+# noise: -4 deg 1.58 (3.5) / 0.32 %, -6 deg 2.54 (4.9) / 1.18 %, -8 deg 2.02 (3.1) / 1.64 %,
+# -10 deg 2.79 (5.4) / 2.04 %, -12 deg 2.77 (3.4) / 1.96 % (docs/models.md, "Twilight: the
+# reference configuration").
+REFERENCE_CASES = [(-4.0, CIVIL, 0.03, 0.005),
+                   (-6.0, CIVIL, 0.03, 0.015),
+                   (-8.0, SEGMENT, 0.10, 0.03),
+                   (-10.0, SEGMENT, 0.10, 0.03),
+                   (-12.0, SEGMENT, 0.10, 0.03)]
+
+
+@pytest.mark.parametrize("elevation, path, target, noise_bound", REFERENCE_CASES)
+def test_reference_configuration_against_monte_carlo(reference_sky, elevation, path, target,
+                                                     noise_bound):
+    """``twilight_reference=True`` within 3 % RMS of ``montecarlo`` to sun -6 deg and 10 %
+    to -12 deg (the issue's bounds for a fitted model's data set), five directions, 550 nm:
+    at -4 / -6 deg against the 10^7-path vertex-estimator reference, at -8 / -10 / -12 deg
+    against the segment-estimator reference (montecarlo ``next_event="segment"``,
+    tools/twilight_references.py; the file's ``command`` says how)."""
+    rel, noise = _errors(reference_sky, path, elevation)
+    noise_rms = np.sqrt(np.mean(noise ** 2))
+    assert noise_rms < noise_bound
+    rms = np.sqrt(np.mean(rel ** 2))
+    assert rms < np.hypot(target, noise_rms), (rms, rel)

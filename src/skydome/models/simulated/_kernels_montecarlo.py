@@ -26,6 +26,24 @@ Estimator (per direction, per wavelength, per path):
   inverting its cumulative distribution), the Lambertian ground by cosine sampling;
 * Russian roulette after ``RR_ORDER`` scattering orders.
 
+With ``segment_sun`` (unpolarised only) the next-event estimate of each collision in the
+air is replaced by its expected value given the segment's direction, integrated along the
+segment before it is tracked (:func:`_segment_sun`): for the camera ray with the forced
+collision of weight 1 - T and pdf mu_t e^-tau / (1 - T), and for a later segment with
+delta tracking's pdf mu_t e^-tau, the expected contribution of the next collision's
+next event is
+
+    E_sun int_0^t_end T(0, t) sum_c mu_s,c(t) p_c(theta_s(t)) T_sun(t) dt,
+
+the estimator's own integrand times the collision density, so the path is unchanged and
+the estimate stays unbiased up to the quadrature. The ground's next event is kept. In
+twilight most collisions lie in the earth's shadow and the sunlit air is reached only by
+the rare path that collides there; the integral gathers the sunlit part of every segment
+instead, so that a path's estimate is rarely zero (the sunlit air above the shadow is what
+lights the deep-twilight sky). With it the camera ray's first collision is drawn from a
+one-sample mixture of the optical depth's density and a uniform one (CAMERA_MIX), so that a
+collision high on the ray, near the sunlit air, is not a rare event of large weight.
+
 Polarisation (Stokes vector (I, Q, U, V)): the path carries the 4x4 matrix A that maps a
 Stokes vector of the current backward segment (in its reference frame) to the camera's
 frame. At a scattering vertex A <- A L(phi) F(Theta) / F11(Theta) with L the rotation from the
@@ -50,7 +68,7 @@ from skydome.transport._medium import EXPONENTIAL, UNIFORM, profile_density
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, RAYLEIGH, TABULATED,
                                       phase_value, rayleigh_gamma, rayleigh_rho,
                                       sample_henyey_greenstein, sample_tabulated, tabulated_phase)
-from skydome.transport._quadrature import geometric_edge, geometric_step
+from skydome.transport._quadrature import geometric_edge, geometric_node, geometric_step
 
 RR_ORDER = 4          # Russian roulette from this scattering order on
 N_CAMERA = 128        # optical-depth nodes per piece of the camera ray
@@ -335,6 +353,55 @@ def _forced_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_node
 
 
 @njit(cache=True, inline="always")
+def _uniform_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_nodes, tau_cam):
+    """The camera ray's first collision drawn uniformly in distance over the air
+    (segment_sun's second sampler, see :func:`_trace_one`). Returns (ok, t, mu_t of its
+    interval, mu_s, q): q = the density of :func:`_forced_collision` at t times the ray's
+    length, mu_t e^-tau L / (1 - T), and the local scattering coefficients in cw[MUS]."""
+    length = node_t[n_nodes - 1] - node_t[0]
+    t = node_t[0] + _rand(state) * length
+    lo = 0
+    hi = n_nodes - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if node_t[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    dt = node_t[hi] - node_t[lo]
+    if dt <= 0.0 or length <= 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0
+    mut = (node_tau[hi] - node_tau[lo]) / dt
+    tau = node_tau[lo] + mut * (t - node_t[lo])
+    q = mut * math.exp(-tau) * length / -math.expm1(-tau_cam)
+    rr = radius_along(cam_r0, cam_mu, t)
+    mus = 0.0
+    for c in range(ic.shape[1]):
+        cw[MUS, c] = cw[SCA, c] * profile_density(ic[PROFILE, c], cw[P0, c], cw[P1, c], rr - R)
+        mus += cw[MUS, c]
+    return mut > 0.0, t, mut, mus, q
+
+
+@njit(cache=True, inline="always")
+def _forced_density(node_t, node_tau, n_nodes, tau_cam, t):
+    """The density of :func:`_forced_collision` at distance t, mu_t e^-tau / (1 - T)
+    (mu_t of t's interval, tau linear in it)."""
+    lo = 0
+    hi = n_nodes - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if node_t[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    dt = node_t[hi] - node_t[lo]
+    if dt <= 0.0:
+        return 0.0
+    mut = (node_tau[hi] - node_tau[lo]) / dt
+    return mut * math.exp(-(node_tau[lo] + mut * (t - node_t[lo]))) / -math.expm1(-tau_cam)
+
+
+@njit(cache=True, inline="always")
 def _delta_track(ic, cw, R, state, r, mu, t0, t_end):
     """Delta tracking (Woodcock) along [0, t_end] against the segment's majorant.
     Returns (collided, t, mu_t, mu_s) at the real collision (per constituent in cw[MUS])."""
@@ -408,6 +475,123 @@ def _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt, l, sx, 
                 else:
                     p += phase_value(code, cw[PHP, c], cth) * cw[MUS, c]
         est[0] += scale * p / mus * tr
+
+
+N_SEGMENT = 48       # geometric midpoint nodes per piece of a segment (segment_sun)
+CAMERA_MIX = 0.5     # segment_sun: share of camera-ray collisions drawn by optical depth
+
+
+@njit(cache=True)
+def _shadow_cuts(px, py, pz, wx, wy, wz, sx, sy, sz, R, t_end, cuts, n):
+    """Append to cuts[n:] the distances in (0, t_end) where the ray p + t w crosses the
+    boundary of the planet's shadow for the sun direction s: the cylinder of radius R
+    about the axis through the centre along s, on the night side ((p + t w) . s < 0).
+    With the parts of p and w perpendicular to s, |p_perp + t w_perp|^2 = R^2 gives
+    a t^2 + 2 b t + c = 0, a = 1 - (w.s)^2, b = p.w - (p.s)(w.s), c = |p|^2 - (p.s)^2 - R^2.
+    Returns the new count."""
+    ws = wx * sx + wy * sy + wz * sz
+    ps = px * sx + py * sy + pz * sz
+    a = 1.0 - ws * ws
+    if a <= 1e-14:
+        return n
+    b = px * wx + py * wy + pz * wz - ps * ws
+    c = px * px + py * py + pz * pz - ps * ps - R * R
+    disc = b * b - a * c
+    if disc <= 0.0:
+        return n
+    sq = math.sqrt(disc)
+    for sign in (-1.0, 1.0):
+        t = (-b + sign * sq) / a
+        if 0.0 < t < t_end and ps + t * ws < 0.0:
+            cuts[n] = t
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def _segment_sun(ic, cw, ph_table, table, scol, cuts, state, R, Rt, l, sx, sy, sz, cos_alpha,
+                 px, py, pz, wx, wy, wz, t_end):
+    """The expected next-event estimate of the next collision along the segment
+    p + t w, t in [0, t_end] (per unit solar irradiance and path weight):
+    int_0^t_end T(0, t) sum_c mu_s,c(t) p_c(w_s . w) T_sun(t) dt with w_s one direction
+    drawn uniformly in the sun's disc for the whole segment (as the vertex estimate draws
+    one per vertex), T_sun(t) = 0 in the planet's shadow for w_s.
+
+    Quadrature: the segment is cut at its lowest point and at the shadow boundary's
+    crossings (:func:`_shadow_cuts`), so that on each piece the integrand is smooth and
+    either lit or dark; each piece gets N_SEGMENT nodes of the geometric midpoint rule of
+    ``transport._quadrature`` dense at its lower end; T(0, t) accumulates the extinction
+    at the nodes (midpoint rule, half the own node's share)."""
+    nc = ic.shape[1]
+    if t_end <= 0.0:
+        return 0.0
+    wsx, wsy, wsz = _sun_sample(sx, sy, sz, cos_alpha, state)
+    cth = wsx * wx + wsy * wy + wsz * wz
+    r = math.sqrt(px * px + py * py + pz * pz)
+    mu = (px * wx + py * wy + pz * wz) / r
+    n = 0
+    cuts[n] = 0.0
+    n += 1
+    t_low = -r * mu
+    if 0.0 < t_low < t_end:
+        cuts[n] = t_low
+        n += 1
+    n = _shadow_cuts(px, py, pz, wx, wy, wz, wsx, wsy, wsz, R, t_end, cuts, n)
+    cuts[n] = t_end
+    n += 1
+    # sort the (at most 5) cuts
+    for i in range(1, n):
+        v = cuts[i]
+        j = i - 1
+        while j >= 0 and cuts[j] > v:
+            cuts[j + 1] = cuts[j]
+            j -= 1
+        cuts[j + 1] = v
+    # phase function mixture per constituent (the angle to the sun is fixed on the segment)
+    total = 0.0
+    tau = 0.0
+    for k in range(n - 1):
+        a = cuts[k]
+        b = cuts[k + 1]
+        if b - a <= 0.0:
+            continue
+        tm = 0.5 * (a + b)
+        qx, qy, qz = px + tm * wx, py + tm * wy, pz + tm * wz
+        rm = math.sqrt(qx * qx + qy * qy + qz * qz)
+        lit = not ray_hits_ground(rm, (qx * wsx + qy * wsy + qz * wsz) / rm, R)
+        dense_at_b = b <= t_low            # the piece before the lowest point descends
+        dv = geometric_step(b - a, N_SEGMENT, SCALE_M)
+        for kk in range(N_SEGMENT):
+            kq = N_SEGMENT - 1 - kk if dense_at_b else kk
+            u, w = geometric_node(kq, dv, SCALE_M)
+            t = b - u if dense_at_b else a + u
+            qx, qy, qz = px + t * wx, py + t * wy, pz + t * wz
+            rq = math.sqrt(qx * qx + qy * qy + qz * qz)
+            h = rq - R
+            mut = 0.0
+            for c in range(nc):
+                d = profile_density(ic[PROFILE, c], cw[P0, c], cw[P1, c], h)
+                mut += cw[EXT, c] * d
+                cw[MUS, c] = cw[SCA, c] * d
+            tau_node = tau + 0.5 * mut * w
+            if lit:
+                mu_s = (qx * wsx + qy * wsy + qz * wsz) / rq
+                if not ray_hits_ground(rq, mu_s, R):
+                    lookup_columns(table, rq, mu_s, R, Rt, scol)
+                    ts = 0.0
+                    for c in range(nc):
+                        ts += cw[EXT, c] * scol[c]
+                    p = 0.0
+                    for c in range(nc):
+                        if cw[MUS, c] > 0.0:
+                            code = ic[PHASE, c]
+                            if code == TABULATED:
+                                p += tabulated_phase(ph_table, c, l, cth) * cw[MUS, c]
+                            else:
+                                p += phase_value(code, cw[PHP, c], cth) * cw[MUS, c]
+                    total += w * math.exp(-tau_node - ts) * p
+            tau += mut * w
+    return total
 
 
 @njit(cache=True, inline="always")
@@ -498,7 +682,7 @@ def _ground_bounce(A, state, nx, ny, nz):
 
 @njit(cache=True)
 def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed,
-               polarised, max_order, mean, err):
+               polarised, max_order, mean, err, segment_sun=False):
     """Mean and standard error of n_samples paths for direction i at wavelength l."""
     # -- the record's arrays, read once ---------------------------------------------------
     R = m.R
@@ -526,6 +710,7 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
     scol = np.empty(nc)                 # light-path columns
     node_t = np.empty(2 * N_CAMERA + 1)      # camera-ray nodes [m]
     node_tau = np.empty(2 * N_CAMERA + 1)    # cumulative optical depth there
+    cuts = np.empty(8)                       # segment_sun: the pieces' ends
     esun = e_sun[l]
     alb = m.albedo[l]
     s1 = np.zeros(4)
@@ -561,6 +746,17 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
                 r = math.sqrt(px * px + py * py + pz * pz)
                 mu = (px * wx + py * wy + pz * wz) / r
                 t0, t_end, hits_ground = ray_segment(r, mu, R, Rt)
+                if segment_sun and (branch == 0 or not first):
+                    # the next collision's next event, integrated along the segment (its
+                    # forced collision's weight 1 - T cancels for the camera ray)
+                    if first:
+                        est[0] += esun * _segment_sun(
+                            ic, cw, ph_table, table, scol, cuts, state, R, Rt, l, sx, sy, sz,
+                            cos_alpha, px, py, pz, wx, wy, wz, c_t1)
+                    else:
+                        est[0] += w0 * weight * esun * _segment_sun(
+                            ic, cw, ph_table, table, scol, cuts, state, R, Rt, l, sx, sy, sz,
+                            cos_alpha, px, py, pz, wx, wy, wz, t_end)
                 if first:
                     first = False
                     mus = 0.0
@@ -573,8 +769,27 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
                     else:
                         collided = True
                         w0 = -math.expm1(-tau_cam)
-                        ok, t, mut, mus = _forced_collision(ic, cw, R, node_t, node_tau, state,
-                                                            r0, cam_mu, n_nodes, tau_cam)
+                        if not segment_sun:
+                            ok, t, mut, mus = _forced_collision(ic, cw, R, node_t, node_tau,
+                                                                state, r0, cam_mu, n_nodes,
+                                                                tau_cam)
+                        else:
+                            # one-sample mixture: with probability CAMERA_MIX the optical
+                            # depth's density p1, else uniform in distance, p2 = 1 / L;
+                            # weight p1 / (a p1 + (1 - a) p2) = q / (a q + 1 - a), q = p1 L
+                            # (the rare collision high on the ray, near the sunlit air,
+                            # otherwise a heavy tail of the estimate in deep twilight)
+                            if _rand(state) < CAMERA_MIX:
+                                ok, t, mut, mus = _forced_collision(ic, cw, R, node_t,
+                                                                    node_tau, state, r0, cam_mu,
+                                                                    n_nodes, tau_cam)
+                                q = _forced_density(node_t, node_tau, n_nodes, tau_cam, t) * (
+                                    node_t[n_nodes - 1] - node_t[0])
+                            else:
+                                ok, t, mut, mus, q = _uniform_collision(
+                                    ic, cw, R, node_t, node_tau, state, r0, cam_mu, n_nodes,
+                                    tau_cam)
+                            w0 *= q / (CAMERA_MIX * q + 1.0 - CAMERA_MIX)
                         if not ok:
                             break
                 else:
@@ -590,9 +805,10 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
                         break                               # pure absorber
                     weight *= mus / mut                     # local single-scattering albedo
                     rloc = math.sqrt(px * px + py * py + pz * pz)
-                    _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt, l,
-                                    sx, sy, sz, cos_alpha, px, py, pz, wx, wy, wz, ax, ay, az,
-                                    rloc, mus, w0 * weight * esun, polarised)
+                    if not segment_sun:
+                        _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt,
+                                        l, sx, sy, sz, cos_alpha, px, py, pz, wx, wy, wz, ax,
+                                        ay, az, rloc, mus, w0 * weight * esun, polarised)
                     if max_order >= 0 and order >= max_order:
                         break
                     wx, wy, wz, ax, ay, az = _scatter(ic, cw, ph_cdf, A, state, l, wx, wy, wz,
@@ -627,7 +843,7 @@ def _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_sampl
 
 @njit(parallel=True, cache=True)
 def trace(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, polarised,
-          max_order, mean, err):
+          max_order, mean, err, segment_sun=False):
     """Monte Carlo radiance (Stokes vector) from each direction through the medium m,
     ``mean`` and its standard error ``err``, both (n, nl, 4) (only component 0 when not
     ``polarised``).
@@ -635,15 +851,16 @@ def trace(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, p
     ``dirs`` (n, 3) unit vectors the light arrives from; ``zen_ref`` (n, 3) the parallel axis
     of each camera ray's Stokes frame; ``sun`` (3,) unit vector to the sun's centre;
     ``cos_alpha`` cosine of the sun's angular radius; ``table`` the light-path column table;
-    ``max_order`` < 0 for no limit.
+    ``max_order`` < 0 for no limit; ``segment_sun`` (unpolarised only): the next event of
+    each collision in the air integrated along the segment before it (module docstring).
     """
     trace_rows(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, polarised,
-               max_order, mean, err, 0, dirs.shape[0])
+               max_order, mean, err, 0, dirs.shape[0], segment_sun)
 
 
 @njit(parallel=True, cache=True)
 def trace_rows(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed, polarised,
-               max_order, mean, err, start, stop):
+               max_order, mean, err, start, stop, segment_sun=False):
     """:func:`trace` for the directions ``start`` .. ``stop`` - 1 only (the others untouched).
     Each (direction, wavelength) keeps the random stream of its index in ``dirs``, so
     tracing the rows in blocks gives the same numbers as tracing them at once."""
@@ -652,7 +869,7 @@ def trace_rows(dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, se
         i = start + idx // nl
         l = idx % nl
         _trace_one(i, l, dirs, zen_ref, r0, sun, cos_alpha, m, e_sun, table, n_samples, seed,
-                   polarised, max_order, mean, err)
+                   polarised, max_order, mean, err, segment_sun)
 
 
 @njit(cache=True)
