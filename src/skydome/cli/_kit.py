@@ -476,8 +476,15 @@ class _Progress:
 
 
 def _build_model(cls, progress: "_Progress", **kwargs):
-    """Construct a model, showing the progress its set-up reports (precomputed tables...)."""
+    """Construct a model, showing the progress its set-up reports (precomputed tables...).
+
+    numba's target is started first without SciPy's BLAS probe (0.25-0.3 s of a command's
+    start-up; :mod:`skydome._numba_start`): a command line process runs skydome's kernels,
+    none of which needs it."""
+    from skydome._numba_start import start_numba_without_blas
     from skydome._progress import reporting
+
+    start_numba_without_blas()
 
     with reporting(progress):
         return cls(**kwargs)
@@ -589,8 +596,10 @@ def _sky(model, extra, sun: dict, check=None, progress=None):
     and its ``--name value`` parameters, then ``check()`` (the command's own options), then
     the sun (the options of :func:`sun_options`); returns the constructed sky (its set-up's
     progress shown on ``progress`` when given)."""
+    from skydome._numba_start import start_numba_without_blas
     from skydome.models import get_model_class
 
+    start_numba_without_blas()  # before a model's kernels load (see _build_model)
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     if check is not None:
