@@ -599,12 +599,12 @@ def _sky(model, extra, sun: dict, check=None, progress=None):
     from skydome._numba_start import start_numba_without_blas
     from skydome.models import get_model_class
 
-    start_numba_without_blas()  # before a model's kernels load (see _build_model)
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     if check is not None:
         check()
     position = _sun_from(sun)
+    start_numba_without_blas()  # before the model's kernels load (see _build_model)
     if progress is None:
         return cls(sun=position, **params)
     return _build_model(cls, progress, sun=position, **params)

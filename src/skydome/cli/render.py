@@ -51,10 +51,7 @@ def _render(extra, model, out, sun: dict, projection, size, wavelengths, exposur
     from skydome.imaging.image import check_output_path
     from skydome.spectra import wavelength_grid
 
-    # 1. validate everything before any work (numba started first: see _kit._build_model)
-    from skydome._numba_start import start_numba_without_blas
-
-    start_numba_without_blas()
+    # 1. validate everything before any work
     cls = get_model_class(model)
     params = _parse_model_params(cls, extra)
     check_choice("projection", projection, PROJECTIONS)
