@@ -14,9 +14,13 @@ and the 512 px fisheye render of the precomputed sky (the shortest ``skydome ren
 Then, in fresh ``python -m skydome`` processes (tables and numba caches warm), the
 commands ``export envmap --size 4096x2048 --half`` for each model and
 ``render --sun-elevation 30 --out x.png``, the best of ``--repeat`` runs (wall and the
-child's CPU time). The machine is shared: compare runs made at the same load (printed).
+child's CPU time), after one untimed run of each. The children run with Python's bytecode
+cache on (``PYTHONDONTWRITEBYTECODE`` removed from their environment), as an installed
+package has it. The machine is shared: compare runs made at the same load (printed), and
+CPU times rather than wall times.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_envmap_path.py [--repeat N] [--no-cli]``
+Run: ``PYTHONPATH=src python benchmarks/bench_envmap_path.py [--repeat N] [--no-cli]``;
+for a before/after pair run it once with each tree's ``src`` on ``PYTHONPATH``.
 """
 
 from __future__ import annotations
@@ -24,7 +28,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import resource
 import subprocess
 import sys
 import tempfile
@@ -80,30 +83,57 @@ def in_process(folder: str) -> None:
     _row("save (png)", w2, c2)
 
 
-def _cli(args, repeat: int) -> tuple[float, float]:
-    best = (float("inf"), float("inf"))
-    for _ in range(repeat):
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "skydome", *args], check=True,
-                       capture_output=True)
-        wall = time.perf_counter() - t0
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-        best = min(best, (wall, cpu))
-    return best
+def _env(src):
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # bytecode cached, as an installed package's
+    if src is not None:
+        env["PYTHONPATH"] = src
+    return env
 
 
-def fresh_processes(folder: str, repeat: int) -> None:
-    print(f"fresh processes (python -m skydome, best of {repeat})", flush=True)
-    for name in MODELS:
-        out = os.path.join(folder, f"cli_{name}.exr")
-        w, c = _cli(["export", "envmap", "--model", name, "--size", SIZE, "--half",
-                     "--out", out], repeat)
-        _row(f"export envmap {name}", w, c)
-    w, c = _cli(["render", "--sun-elevation", "30", "--out", os.path.join(folder, "x.png")],
-                repeat)
-    _row("render --sun-elevation 30 (512 px)", w, c)
+def _cli_once(args, env) -> tuple[float, float, float]:
+    """(wall [s], CPU [s], peak RSS [MB]) of one ``python -m skydome`` run."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen([sys.executable, "-m", "skydome", *args], stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL, env=env)
+    _, status, ru = os.wait4(p.pid, 0)
+    wall = time.perf_counter() - t0
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise RuntimeError(f"skydome {' '.join(args)} failed")
+    return wall, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0
+
+
+def _commands(folder):
+    cmds = [(f"export envmap {name}", ["export", "envmap", "--model", name, "--size", SIZE,
+                                       "--half", "--out", os.path.join(folder, f"{name}.exr")])
+            for name in MODELS]
+    cmds.append(("render --sun-elevation 30 (512 px)",
+                 ["render", "--sun-elevation", "30", "--out", os.path.join(folder, "x.png")]))
+    return cmds
+
+
+def fresh_processes(folder: str, repeat: int, trees) -> None:
+    """Each command in fresh processes, the trees' runs alternating (A, B, A, B, ...) after
+    one untimed run each (bytecode and kernel caches warm): best wall, best CPU, the median
+    CPU and the peak RSS per tree."""
+    import statistics
+
+    print(f"fresh processes (python -m skydome, best of {repeat}, trees alternating)",
+          flush=True)
+    for label, args in _commands(folder):
+        for src in trees:
+            _cli_once(args, _env(src))
+        runs = {src: [] for src in trees}
+        for _ in range(repeat):
+            for src in trees:
+                runs[src].append(_cli_once(args, _env(src)))
+        for src in trees:
+            r = runs[src]
+            name = label if src is None else f"{label} [{src}]"
+            print(f"  {name:34s} wall {min(x[0] for x in r):6.2f} s   cpu "
+                  f"{min(x[1] for x in r):6.2f} s (median "
+                  f"{statistics.median(x[1] for x in r):.2f})   peak RSS "
+                  f"{max(x[2] for x in r):6.0f} MB", flush=True)
 
 
 def main() -> None:
@@ -111,6 +141,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=2, help="fresh-process runs per command")
     ap.add_argument("--no-cli", action="store_true", help="skip the fresh processes")
     ap.add_argument("--no-inprocess", action="store_true", help="skip the in-process stages")
+    ap.add_argument("--trees", nargs="+", default=None, metavar="SRC",
+                    help="src folders to compare in the fresh processes (alternating); "
+                    "default the PYTHONPATH as it is")
     a = ap.parse_args()
     cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo")
                 if ln.startswith("model name")), platform.processor())
@@ -120,7 +153,7 @@ def main() -> None:
         if not a.no_inprocess:
             in_process(folder)
         if not a.no_cli:
-            fresh_processes(folder, a.repeat)
+            fresh_processes(folder, a.repeat, a.trees or [None])
     print(f"load average at end {os.getloadavg()[0]:.1f}")
 
 

@@ -9,13 +9,14 @@ each round (gendaymtx, then each skydome case):
 - ``gendaymtx -m MF -of y.wea > g.mtx``;
 - ``skydome skymatrix --weather y.wea --order 0 --sun-position radiance``: gendaymtx's
   definition (the same .wea, Radiance's solar position, one point per patch), with the
-  default backend (numba) and with ``--backend numpy`` (no numba start-up); both through
-  ``python -m skydome``, whose typer-free path takes these command lines;
+  default backend (``auto``: numpy, no numba start-up) and with ``--backend numba`` (the
+  default before); both through ``python -m skydome``, whose typer-free path takes these
+  command lines;
 - the same from the TMY3 file (pvlib.iotools read, pandas and pvlib imported);
 - skydome's defaults (adaptive patch means, SPA suns) from the same .wea as gendaymtx (the
   like-for-like case of a default run) and from the TMY3 file, and from the TMY3 file with
-  the former default, order 4; the defaults' rule from the .wea with ``--backend numpy``
-  (the adaptive rule without numba);
+  the former default, order 4; the defaults from the .wea with ``--backend numba`` (the
+  adaptive rule on the numba kernel, the default before);
 - in process (kernels compiled, weather parsed): the order-0 matrix (Radiance sun; numba
   and numpy backends), the default one (adaptive, SPA suns) and order 4 (SPA suns) filled
   into the file's memory map, the part of a run that is the matrix and its file;
@@ -54,12 +55,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_single_scattering import machine, write_section  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-#: The floor: skydome's sky-matrix modules imported and the cached kernel (float32, as a
-#: "float" file takes) loaded and run on two hours of the Tregenza patches.
+#: The floor of a numba run (``--backend numba``): skydome's sky-matrix modules imported and
+#: the cached kernel (float32, as a "float" file takes) loaded and run on two hours of the
+#: Tregenza patches. (The default backend starts no numba: its floor is ``import numpy``
+#: and the skydome modules.)
 _FLOOR = ("import numpy as np; from skydome.daylighting.skymatrix import perez_sky_matrix, "
           "start_numba_without_blas; {start}"
           "perez_sky_matrix([600.0, 0.0], [100.0, 0.0], [[0.0, -0.5, 0.75 ** 0.5]] * 2, [172, 172], "
-          "order=0, dtype=np.float32, out=np.zeros((146, 2, 3), np.float32))")
+          "order=0, dtype=np.float32, out=np.zeros((146, 2, 3), np.float32), backend='numba')")
 
 
 def _radiance():
@@ -132,9 +135,9 @@ def main(argv=None):
                     sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--order", "0",
                            "--sun-position", "radiance", "--out", str(tmp / "s.mtx")],
                     senv, False),
-                "skydome CLI, .wea, order 0, Radiance sun, --backend numpy": (
+                "skydome CLI, .wea, order 0, Radiance sun, --backend numba": (
                     sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--order", "0",
-                           "--sun-position", "radiance", "--backend", "numpy", "--out",
+                           "--sun-position", "radiance", "--backend", "numba", "--out",
                            str(tmp / "s.mtx")], senv, False),
                 "skydome CLI, TMY3, order 0, Radiance sun": (
                     sky + ["--weather", str(tmy3), "--patches", spec, "--order", "0",
@@ -143,9 +146,9 @@ def main(argv=None):
                 "skydome CLI, .wea, defaults (adaptive, SPA)": (
                     sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--out",
                            str(tmp / "s.mtx")], senv, False),
-                "skydome CLI, .wea, defaults (adaptive, SPA), --backend numpy": (
+                "skydome CLI, .wea, defaults (adaptive, SPA), --backend numba": (
                     sky + ["--weather", str(tmp / "y.wea"), "--patches", spec, "--backend",
-                           "numpy", "--out", str(tmp / "s.mtx")], senv, False),
+                           "numba", "--out", str(tmp / "s.mtx")], senv, False),
                 "skydome CLI, TMY3, defaults (adaptive, SPA)": (
                     sky + ["--weather", str(tmy3), "--patches", spec, "--out",
                            str(tmp / "s.mtx")], senv, False),
@@ -161,7 +164,8 @@ def main(argv=None):
                     "start-up floor: import numba": (py + ["import numba"], senv, False),
                     "start-up floor: import pvlib (TMY3/EPW input)": (
                         py + ["import pvlib"], senv, False),
-                    "start-up floor: skydome + cached kernel, 2 hours (as the CLI)": (
+                    "start-up floor: skydome + cached numba kernel, 2 hours (as --backend "
+                    "numba)": (
                         py + [_FLOOR.format(start="start_numba_without_blas(); ")], senv,
                         False),
                     "start-up floor: the same, numba's own start (SciPy BLAS probe)": (
@@ -176,16 +180,16 @@ def main(argv=None):
                     _keep_best(best, name, *_timed(cmd, out, e, to_out))
                     loads.append(os.getloadavg()[0])
                 for name, wx, o, sp, be in (
-                        ("skydome in process, matrix + file, order 0, Radiance sun", w, 0,
-                         "radiance", "numba"),
+                        ("skydome in process, matrix + file, order 0, Radiance sun, numba "
+                         "backend", w, 0, "radiance", "numba"),
                         ("skydome in process, matrix + file, order 0, Radiance sun, numpy "
-                         "backend", w, 0, "radiance", "numpy"),
-                        ("skydome in process, matrix + file, defaults (adaptive, SPA)", w_spa,
-                         "adaptive", "spa", "numba"),
-                        ("skydome in process, matrix + file, defaults (adaptive, SPA), numpy "
-                         "backend", w_spa, "adaptive", "spa", "numpy"),
-                        ("skydome in process, matrix + file, order 4, SPA", w_spa, 4, "spa",
-                         "numba")):
+                         "backend (default)", w, 0, "radiance", "numpy"),
+                        ("skydome in process, matrix + file, adaptive, SPA, numba backend",
+                         w_spa, "adaptive", "spa", "numba"),
+                        ("skydome in process, matrix + file, defaults (adaptive, SPA, numpy "
+                         "backend)", w_spa, "adaptive", "spa", "numpy"),
+                        ("skydome in process, matrix + file, order 4, SPA, numba backend",
+                         w_spa, 4, "spa", "numba")):
                     (tmp / "s.mtx").unlink(missing_ok=True)
                     r0 = resource.getrusage(resource.RUSAGE_SELF)
                     t = time.perf_counter()

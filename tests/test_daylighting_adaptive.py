@@ -120,13 +120,13 @@ def test_tiers_of_one_order_are_that_order_bit_for_bit(days):
     from skydome.daylighting import _kernels as DK
 
     ps = patches("reinhart:2")
-    perez_sky_matrix_from_weather(days, patches=ps, order=2)
+    perez_sky_matrix_from_weather(days, patches=ps, order=2, backend="numba")
     n_sig = len(DK.fill_perez_sky.signatures)
     for q in (1, 3):
         rule = AdaptiveRule(near_order=q, mid_order=q, far_order=q, far_az_order=q,
                             horizon_order=1)
-        a = perez_sky_matrix_from_weather(days, patches=ps, order=rule)
-        b = perez_sky_matrix_from_weather(days, patches=ps, order=q)
+        a = perez_sky_matrix_from_weather(days, patches=ps, order=rule, backend="numba")
+        b = perez_sky_matrix_from_weather(days, patches=ps, order=q, backend="numba")
         assert np.array_equal(a.sky, b.sky)
     assert len(DK.fill_perez_sky.signatures) == n_sig  # one compiled kernel for every rule
 

@@ -172,15 +172,18 @@ def test_kernel_independent_of_thread_count_and_storage(days):
 
     ps = patches("reinhart:2")
     n0 = numba.get_num_threads()
-    ref = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32)
+    ref = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32,
+                                         backend="numba")
     try:
         numba.set_num_threads(1)
-        one = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32)
+        one = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32,
+                                             backend="numba")
     finally:
         numba.set_num_threads(n0)
     assert np.array_equal(one.sky, ref.sky)
     out = np.zeros((len(ps), len(days), 3), dtype=np.float32)
-    m = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32, out=out)
+    m = perez_sky_matrix_from_weather(days, patches=ps, order=1, dtype=np.float32,
+                                      out=out, backend="numba")
     assert np.shares_memory(m.sky, out) and np.array_equal(out, ref.radiance_layout())
     assert np.any(out > 0.0)
 
@@ -194,13 +197,14 @@ def test_read_only_inputs_same_bits_and_no_new_compilation(days):
     sd = days.radiance_sun_directions()
     rho = np.full(len(days), 0.25)
     ref = perez_sky_matrix(days.dni, days.dhi, sd, days.day_of_year, patches="tregenza",
-                           order=1, ground_reflectance=rho)
+                           order=1, ground_reflectance=rho, backend="numba")
     n_sig = len(DK.fill_perez_sky.signatures)
     ro = [np.array(a) for a in (days.dni, days.dhi, sd, rho)]
     for a in ro:
         a.flags.writeable = False
     m = perez_sky_matrix(ro[0], ro[1], ro[2], days.day_of_year, patches="tregenza", order=1,
-                         ground_reflectance=np.broadcast_to(ro[3], ro[3].shape))
+                         ground_reflectance=np.broadcast_to(ro[3], ro[3].shape),
+                         backend="numba")
     assert np.array_equal(m.sky, ref.sky)
     assert len(DK.fill_perez_sky.signatures) == n_sig
 

@@ -136,6 +136,12 @@ def write_exr(path, header: dict, channels: dict, target=None) -> None:
     disk (OpenEXR raises RuntimeError "... No space left on device"), EIO otherwise."""
     import OpenEXR
 
+    # OpenEXR compresses the file's blocks on its global thread pool when it has one (none
+    # by default): the same bytes, and on two cores half the wall time of a 4096 x 2048 ZIP
+    # map (docs/performance.md); the caller's setting is restored
+    threads = OpenEXR.global_thread_count()
+    if threads == 0:
+        OpenEXR.set_global_thread_count(min(os.cpu_count() or 1, 8))
     try:
         with OpenEXR.File(header, channels) as f:
             f.write(os.fspath(path))
@@ -146,6 +152,9 @@ def write_exr(path, header: dict, channels: dict, target=None) -> None:
                 raise OSError(code, os.strerror(code), os.fspath(target or path)) from None
         raise OSError(errno.EIO, f"OpenEXR could not write the file ({text})",
                       os.fspath(target or path)) from None
+    finally:
+        if threads == 0:
+            OpenEXR.set_global_thread_count(0)
 
 
 def write_npy(path, array) -> None:

@@ -98,6 +98,26 @@ class Projection:
                 acc += self._jacobian(r0 + dr, c0 + dc)
         return np.where(mask, acc / (n * n), 0.0)
 
+    def solid_angles_at(self, flat_index) -> np.ndarray:
+        """Solid angles [sr] of the pixels ``flat_index`` (indices into the flattened (H, W)
+        image, row-major): ``solid_angles().reshape(-1)[flat_index]``, computed for those
+        pixels alone where the projection uses the generic rule of :meth:`solid_angles`
+        (the same 4 x 4 midpoint sums in the same order, so the same bits), else taken
+        from the whole image's."""
+        flat_index = np.asarray(flat_index, dtype=np.int64)
+        if type(self).solid_angles is not Projection.solid_angles:
+            return self.solid_angles().reshape(-1)[flat_index]
+        r0 = (flat_index // self.width).astype(np.float64)
+        c0 = (flat_index % self.width).astype(np.float64)
+        inside = np.all(np.isfinite(self.direction_from_pixel(r0 + 0.5, c0 + 0.5)), axis=-1)
+        n = 4
+        offs = (np.arange(n) + 0.5) / n
+        acc = np.zeros(flat_index.shape)
+        for dr in offs:
+            for dc in offs:
+                acc += self._jacobian(r0 + dr, c0 + dc)
+        return np.where(inside, acc / (n * n), 0.0)
+
     def direction_from_pixel(self, row, col) -> np.ndarray:
         """Unit direction(s) (..., 3) at continuous pixel coordinates; NaN where the
         position maps to no direction (outside the image or the projection's disc)."""

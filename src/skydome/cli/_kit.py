@@ -476,8 +476,15 @@ class _Progress:
 
 
 def _build_model(cls, progress: "_Progress", **kwargs):
-    """Construct a model, showing the progress its set-up reports (precomputed tables...)."""
+    """Construct a model, showing the progress its set-up reports (precomputed tables...).
+
+    numba's target is started first without SciPy's BLAS probe (0.25-0.3 s of a command's
+    start-up; :mod:`skydome._numba_start`): a command line process runs skydome's kernels,
+    none of which needs it."""
+    from skydome._numba_start import start_numba_without_blas
     from skydome._progress import reporting
+
+    start_numba_without_blas()
 
     with reporting(progress):
         return cls(**kwargs)
@@ -589,6 +596,7 @@ def _sky(model, extra, sun: dict, check=None, progress=None):
     and its ``--name value`` parameters, then ``check()`` (the command's own options), then
     the sun (the options of :func:`sun_options`); returns the constructed sky (its set-up's
     progress shown on ``progress`` when given)."""
+    from skydome._numba_start import start_numba_without_blas
     from skydome.models import get_model_class
 
     cls = get_model_class(model)
@@ -596,6 +604,7 @@ def _sky(model, extra, sun: dict, check=None, progress=None):
     if check is not None:
         check()
     position = _sun_from(sun)
+    start_numba_without_blas()  # before the model's kernels load (see _build_model)
     if progress is None:
         return cls(sun=position, **params)
     return _build_model(cls, progress, sun=position, **params)

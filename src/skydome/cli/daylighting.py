@@ -73,8 +73,8 @@ def skymatrix_cmd(
                                 help="run on a local Dask cluster of N processes (0: in process)"),
     chunk_hours: int = typer.Option(D["chunk_hours"], "--chunk-hours", help="hours per Dask chunk"),
     backend: str = typer.Option(D["backend"], "--backend",
-                                help="numba (default) | numpy (no numba start-up; equal "
-                                "to rounding) | auto (numpy for perez1993)"),
+                                help="auto (default: numpy for perez1993) | numpy (no numba "
+                                "start-up) | numba (the parallel kernel; equal to rounding)"),
 ):
     """Annual sky matrix (patches x hours) from a weather file, Radiance-compatible.
 

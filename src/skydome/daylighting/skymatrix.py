@@ -144,7 +144,7 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
                      order=PEREZ_DEFAULT_ORDER, sun: str = "spread", components: str = "rgb",
                      dew_point_c=11.0, ground_reflectance=0.2,
                      sky_color=GENDAYMTX_SKY_COLOR, dtype=np.float64,
-                     out=None, backend: str = "numba") -> SkyMatrix:
+                     out=None, backend: str = "auto") -> SkyMatrix:
     """Perez (1993) sky matrix of many hours in one vectorised pass.
 
     Parameters
@@ -190,13 +190,14 @@ def perez_sky_matrix(dni, dhi, sun_directions, day_of_year, *, patches="tregenza
         "numpy": the same arithmetic vectorised with numpy over blocks of hours
         (:mod:`skydome.daylighting._numpy_sky`; every rule: the adaptive one as its far rule
         for every patch-hour, then the patch-hours nearer the sun with their finer rule),
-        which needs no numba (its import is 0.4-0.5 s of a run's start-up); "auto" takes
-        numpy. Both give the same float64 matrix to rounding (relative 1e-12; 1.2e-14
-        measured for the adaptive rule over the sample year), not bit for bit; a float32 matrix from "numpy" is the float32
-        product of the float32-rounded patch mean and hour factor, within 2.4e-7 relative
-        of the kernel's once-rounded value (docs/daylighting.md, "Backends and the fast
-        command line"), and "numpy" raises ValueError on a value that is not finite in
-        ``dtype``. The default "numba" keeps every earlier result's bits.
+        which needs no numba (its import is 0.4-0.5 s of a run's start-up); "auto" (the
+        default) takes numpy. Both give the same float64 matrix to rounding (relative
+        1e-12; 1.2e-14 measured for the adaptive rule over the sample year), not bit for
+        bit; a float32 matrix from "numpy" is the float32 product of the float32-rounded
+        patch mean and hour factor, within 2.4e-7 relative of the kernel's once-rounded
+        value (docs/daylighting.md, "Backends and the fast command line"), and "numpy"
+        raises ValueError on a value that is not finite in ``dtype``. "numba" reproduces
+        the bits of results made before "auto" became the default.
 
     Returns
     -------
@@ -321,29 +322,10 @@ def _numpy_backend(backend, rule, order) -> bool:
 def start_numba_without_blas() -> bool:
     """Initialise numba's CPU target without importing SciPy's BLAS bindings (for a process
     that only runs the sky-matrix kernels, e.g. ``skydome skymatrix``); True if it did.
+    The Perez kernels use no BLAS. See :func:`skydome._numba_start.start_numba_without_blas`."""
+    from skydome._numba_start import start_numba_without_blas as start
 
-    Numba's target initialisation imports ``numba.np.arraymath``, which probes for BLAS by
-    importing ``scipy.linalg.cython_blas`` and with it all of ``scipy.linalg`` (0.25-0.30 s
-    of CPU on a 2-core EPYC, a quarter of a run's start-up). The Perez kernels use no BLAS.
-    The import is made to fail during the initialisation only (the module entry is set to
-    None and removed again), so that numba records "no BLAS" for ``np.correlate`` and
-    ``np.convolve`` (it then compiles them as plain loops) while ``np.dot`` and
-    ``np.linalg`` still find SciPy when a kernel that uses them is compiled later. Does
-    nothing if numba's target or SciPy's BLAS bindings are loaded already."""
-    import sys
-
-    name = "scipy.linalg.cython_blas"
-    if "numba.np.arraymath" in sys.modules or name in sys.modules:
-        return False
-    sys.modules[name] = None  # ``import`` of a None entry raises ImportError
-    try:
-        from numba.core.registry import cpu_target
-
-        cpu_target.target_context.refresh()  # loads the registries: numba.np.arraymath
-    finally:
-        if sys.modules.get(name, 0) is None:
-            del sys.modules[name]
-    return True
+    return start()
 
 
 def warm_kernels() -> None:
@@ -427,7 +409,7 @@ def perez_sky_matrix_file(path, weather, *, sun_position: str = "spa", fmt: str 
     shape = (len(ps), len(weather), ncomp)
     order = kwargs.get("order", PEREZ_DEFAULT_ORDER)
     # the numpy backend checks every value it writes (and raises): no second reading of the map
-    backend = kwargs.get("backend", "numba")
+    backend = kwargs.get("backend", "auto")
     checked = backend != "numba" and _numpy_backend(backend, quadrature_rule(ps, order), order)
     with matrix_file(path, *shape, fmt=fmt, info=info, overwrite=overwrite,
                      check_finite=not checked) as body:

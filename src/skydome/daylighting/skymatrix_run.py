@@ -17,7 +17,7 @@ SKYMATRIX_DEFAULTS = {
     "weather": None, "out": None, "patches": "tregenza", "model": "perez1993",
     "components": None, "sun": None, "aod_from": None, "param": [], "order": None,
     "sun_position": "spa", "fmt": "float", "albedo": "0.2", "overwrite": False,
-    "scheduler": None, "workers": 0, "chunk_hours": 730, "backend": "numba",
+    "scheduler": None, "workers": 0, "chunk_hours": 730, "backend": "auto",
     "connect_timeout": 10.0,
 }
 
@@ -50,7 +50,7 @@ def order_option(order, model, fail=_refuse):
 
 def run_perez_skymatrix(*, weather, out, ps, components, sun, aod_from, param, order,
                         sun_position, fmt, albedo, overwrite, scheduler, workers, chunk_hours,
-                        model, fail=_refuse, guard=_call, echo=_quiet, backend="numba",
+                        model, fail=_refuse, guard=_call, echo=_quiet, backend="auto",
                         connect_timeout=10.0):
     """The perez1993 ``skymatrix`` command with parsed options (``ps`` the PatchSet, ``order``
     from :func:`order_option`): validates everything, then computes and writes the matrix

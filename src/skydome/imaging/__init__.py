@@ -175,8 +175,15 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
         rows = (slice(first + start, first + min(start + chunk, total)) if idx is None
                 else idx[start:start + chunk])
         d = flat_dirs[rows]
+        direct = False
         if fused:
-            v = np.asarray(sample(d), dtype=np.float64) @ to_xyz
+            s = np.asarray(sample(d), dtype=np.float64)
+            direct = idx is None and s.shape == (d.shape[0], to_xyz.shape[0])
+            if direct:
+                # straight into the image's run of pixels (the same product, no copy)
+                v = np.matmul(s, to_xyz, out=flat_data[rows])
+            else:
+                v = s @ to_xyz
         else:
             v = np.asarray(sky.radiance(d, wl) if spectral else sky.xyz(d), dtype=np.float64)
         if v.shape != (d.shape[0], n_ch):
@@ -184,7 +191,8 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
                              f"expected {(d.shape[0], n_ch)}")
         if not np.all(np.isfinite(v)):
             raise ValueError(f"model {getattr(sky, 'name', sky)!r} returned NaN or infinite values")
-        flat_data[rows] = v
+        if not direct:
+            flat_data[rows] = v
         if progress is not None:
             progress(min(start + chunk, total), total)
     if fused:

@@ -133,7 +133,7 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
     if not np.any(below):
         return None
     if ground == "black":
-        np.copyto(data, 0.0, where=below[..., None])    # (no gather through a boolean index)
+        _fill(data, below, 0.0)
         return "black"
     if ground == "model" and np.any(data[below] > 0.0):
         if (getattr(sky, "own_ground", None) == "sun"
@@ -145,6 +145,19 @@ def apply_ground(sky, data: np.ndarray, dirs: np.ndarray, mask: np.ndarray, wl, 
         return "the model's own ground-hit rays"
     rho = _albedo(sky, wl, ground)
     L = conv(np.asarray(rho) * horizontal_irradiance(sky, wl) / np.pi)
-    np.copyto(data, np.maximum(L, 0.0), where=below[..., None])
+    _fill(data, below, np.maximum(L, 0.0))
     return (f"Lambertian, albedo {np.round(np.ravel(rho), 4).tolist()}, lit by the model's "
             "sky and sun (observer on the ground)")
+
+
+def _fill(data: np.ndarray, where: np.ndarray, value) -> None:
+    """``data[where] = value`` in place (``data`` (H, W, C), ``where`` (H, W) bool): one
+    slice assignment where the pixels are one run in memory (a lat-long map's lower half),
+    else ``np.copyto`` through the mask (no gather through a boolean index)."""
+    flat = where.reshape(-1)
+    n = int(np.count_nonzero(flat))
+    first = int(np.argmax(flat)) if n else 0
+    if data.flags.c_contiguous and bool(flat[first:first + n].all()):
+        data.reshape(-1, data.shape[-1])[first:first + n] = value
+    else:
+        np.copyto(data, value, where=where[..., None])

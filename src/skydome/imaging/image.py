@@ -215,16 +215,40 @@ class SkyImage:
         known, pixels below the horizon (the ground) are left out. None if no pixel
         qualifies. It keys :meth:`auto_exposure` and stands for the adapting luminance of
         the scene in the colourfulness gain (:func:`skydome.imaging.display.hunt_chroma_gain`)."""
+        held = getattr(self, "_held_adapting", None)
+        if held:                   # computed once for the picture being made (_held)
+            return held[0]
+        if held is not None:
+            held.append(self._adapting_luminance())
+            return held[0]
+        return self._adapting_luminance()
+
+    def _adapting_luminance(self) -> float | None:
         sel = self.mask
         if self.projection is not None:
             dirs, _ = self.projection.directions()
             if np.any(sel & (dirs[..., 2] > 0.0)):
                 sel = sel & (dirs[..., 2] > 0.0)
-        Y = self.luminance()[sel]
+        Y = (self.data[..., 1] if self.kind == "xyz" else self.luminance())[sel]
         Y = Y[(Y > 0.0) & (Y <= AUTO_EXPOSURE_CUTOFF)]
         if Y.size == 0:
             return None
         return float(np.exp(np.mean(np.log(_DELTA + Y))))  # [Rei02] eq. 1
+
+    def _held(self):
+        """Context in which :meth:`adapting_luminance` is computed once (the exposure and the
+        chroma gain of one picture both need it; each costs the pixel directions and a
+        logarithm per sky pixel)."""
+        import contextlib
+
+        @contextlib.contextmanager
+        def held():
+            self._held_adapting = []
+            try:
+                yield
+            finally:
+                del self._held_adapting
+        return held()
 
     def auto_exposure(self) -> float:
         """Exposure multiplier k [m^2/cd] mapping the log-average luminance of the sky
@@ -283,7 +307,9 @@ class SkyImage:
             :mod:`skydome.imaging.display`); False shows the chromaticities as they are.
         """
         check_choice("tonemap", tonemap, TONEMAPS)
-        return self._display(self.exposure_multiplier(exposure, ev100), tonemap, self.chroma_gain(hunt))
+        with self._held():
+            return self._display(self.exposure_multiplier(exposure, ev100), tonemap,
+                                 self.chroma_gain(hunt))
 
     def _display(self, k: float, tonemap: str, gain: float) -> np.ndarray:
         from skydome.imaging.display import display_transform, scale_chroma
@@ -314,8 +340,9 @@ class SkyImage:
         elif suffix == ".hdr":
             _atomic_write(p, self._write_hdr)
         else:
-            k = self.exposure_multiplier(exposure, ev100)
-            gain = self.chroma_gain(hunt)
+            with self._held():
+                k = self.exposure_multiplier(exposure, ev100)
+                gain = self.chroma_gain(hunt)
             display = self._display(k, tonemap, gain)
             from skydome.imaging.display import exposure_to_ev100
 

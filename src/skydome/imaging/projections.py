@@ -115,6 +115,14 @@ class Equirect(Projection):
         band = np.sin(edges[:-1]) - np.sin(edges[1:])
         return np.repeat((band * 2.0 * np.pi / self.width)[:, None], self.width, axis=1)
 
+    def solid_angles_at(self, flat_index) -> np.ndarray:
+        """Exact solid angles [sr] of the pixels ``flat_index`` (row-major flat indices), as
+        :meth:`solid_angles` gives them."""
+        row = np.asarray(flat_index, dtype=np.int64) // self.width
+        top = 0.5 * np.pi - self._span * row / self.height
+        bottom = 0.5 * np.pi - self._span * (row + 1) / self.height
+        return (np.sin(top) - np.sin(bottom)) * 2.0 * np.pi / self.width
+
 
 class _Polar(Projection):
     """Square image, zenith at the centre, angle from the zenith = ``scale * rho`` where

@@ -301,13 +301,23 @@ def draw_sun_disc(data: np.ndarray, projection, mask: np.ndarray, sun, L_sun,
     acc = np.zeros((cells.size, L_sun.size))
     np.add.at(acc, inv, w[ok])
     cov = np.bincount(inv, weights=geom, minlength=cells.size)
-    omega_pix = projection.solid_angles().reshape(-1)[cells]
+    omega_pix = _solid_angles_at(projection, cells)
     good = omega_pix > 0.0
     cells, acc, cov, omega_pix = cells[good], acc[good], cov[good], omega_pix[good]
     view = data.reshape(-1, data.shape[-1])
     keep = 1.0 - np.minimum(cov / omega_pix, 1.0)
     view[cells] = view[cells] * keep[:, None] + acc * L_sun / omega_pix[:, None]
     return float(cov.sum() / (2.0 * np.pi * (1.0 - np.cos(r))))
+
+
+def _solid_angles_at(projection, cells) -> np.ndarray:
+    """Solid angles [sr] of the pixels ``cells`` (flat indices): those pixels' alone where
+    the projection can (the disc covers a few of a picture's pixels), else the whole
+    image's."""
+    at = getattr(projection, "solid_angles_at", None)
+    if callable(at):
+        return np.asarray(at(cells), dtype=np.float64)
+    return projection.solid_angles().reshape(-1)[cells]
 
 
 # --------------------------------------------------------------------------------------
