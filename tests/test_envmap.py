@@ -382,3 +382,18 @@ def test_exact_pixel_solid_angles_match_the_jacobian(proj):
     from skydome.imaging.projections import Projection
 
     np.testing.assert_allclose(proj.solid_angles(), Projection.solid_angles(proj), rtol=2e-3)
+
+
+@pytest.mark.parametrize("size", [64, 255, 256])
+def test_radiance_fisheye_rim_pixels_have_finite_solid_angles(size):
+    """The Radiance convention's angular fisheye is a disc: its rim pixels (centre inside,
+    corners outside) once got NaN from the sub-samples outside the disc. Every solid angle is
+    finite and non-negative, and they add up to the hemisphere's 2 pi sr (geometry) within
+    the rim's whole-pixel rule (a pixel counts whole when its centre is inside)."""
+    p = MapProjection("radiance", size, size)
+    omega = p.solid_angles()
+    assert np.all(np.isfinite(omega)) and np.all(omega >= 0.0)
+    rim_share = 4.0 * size / (np.pi * size * size / 4.0)       # ~ rim pixels / disc pixels
+    assert abs(omega.sum() / (2.0 * np.pi) - 1.0) < 0.1 * rim_share
+    flat = np.arange(size * size)
+    np.testing.assert_array_equal(p.solid_angles_at(flat), omega.reshape(-1))

@@ -88,15 +88,26 @@ class Projection:
         sphere) or 2 pi (hemisphere).
         """
         _, mask = self.directions()
-        n = 4
-        offs = (np.arange(n) + 0.5) / n
         r0, c0 = np.meshgrid(np.arange(self.height, dtype=np.float64),
                              np.arange(self.width, dtype=np.float64), indexing="ij")
-        acc = np.zeros(self.shape)
+        return np.where(mask, self._pixel_jacobian_mean(r0, c0), 0.0)
+
+    def _pixel_jacobian_mean(self, r0, c0) -> np.ndarray:
+        """The Jacobian's 4 x 4 midpoint mean over the pixels with corners (r0, c0). On a
+        disc's rim the sub-samples outside the disc (no direction, a NaN Jacobian) are left
+        out, so that a rim pixel counts whole with the mean of its inside samples (the rule
+        of :meth:`solid_angles`); inside, the same sums in the same order as ever."""
+        n = 4
+        offs = (np.arange(n) + 0.5) / n
+        acc = np.zeros(np.shape(r0))
+        count = np.zeros(np.shape(r0))
         for dr in offs:
             for dc in offs:
-                acc += self._jacobian(r0 + dr, c0 + dc)
-        return np.where(mask, acc / (n * n), 0.0)
+                j = self._jacobian(r0 + dr, c0 + dc)
+                ok = np.isfinite(j)
+                acc += np.where(ok, j, 0.0)
+                count += ok
+        return np.where(count == n * n, acc / (n * n), acc / np.maximum(count, 1.0))
 
     def solid_angles_at(self, flat_index) -> np.ndarray:
         """Solid angles [sr] of the pixels ``flat_index`` (indices into the flattened (H, W)
@@ -110,13 +121,7 @@ class Projection:
         r0 = (flat_index // self.width).astype(np.float64)
         c0 = (flat_index % self.width).astype(np.float64)
         inside = np.all(np.isfinite(self.direction_from_pixel(r0 + 0.5, c0 + 0.5)), axis=-1)
-        n = 4
-        offs = (np.arange(n) + 0.5) / n
-        acc = np.zeros(flat_index.shape)
-        for dr in offs:
-            for dc in offs:
-                acc += self._jacobian(r0 + dr, c0 + dc)
-        return np.where(inside, acc / (n * n), 0.0)
+        return np.where(inside, self._pixel_jacobian_mean(r0, c0), 0.0)
 
     def direction_from_pixel(self, row, col) -> np.ndarray:
         """Unit direction(s) (..., 3) at continuous pixel coordinates; NaN where the
