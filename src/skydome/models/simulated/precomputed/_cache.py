@@ -54,6 +54,8 @@ import zlib
 
 import numpy as np
 
+from skydome._io import write_npy
+
 # bump when the tables' meaning or layout changes (mapping, units, fields)
 # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches;
 # 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset;
@@ -75,6 +77,12 @@ HALF_MIN_BYTES = 8 << 20
 _HALF = ("scattering_density", "multiple_scattering")
 _RECOMPUTED = ("single_scattering",)
 _EXP = ".exp"                          # the file of a half table's row exponents
+_DENSITY = "scattering_density"
+_QUAD = ".quadratic"                   # its constituents stored as a quadratic form
+# largest residual of that form, relative to the largest value of each (r, mu_s, wavelength)
+# column, for a constituent to be stored as one (float32 rounding: about 1e-6)
+QUADRATIC_TOL = 1e-5
+_COLUMNS = 2048                        # columns of J per step of the fit and its evaluation
 # the largest scaled value of a row is in [2^HALF_TOP, 2^(HALF_TOP + 1)): below float16's
 # largest finite value (65504 < 2^16) after rounding, and 2^28 above its smallest normal
 HALF_TOP = 14
@@ -179,19 +187,22 @@ def _npy_header(f, dtype, shape) -> None:
             "shape": tuple(int(n) for n in shape)})
 
 
-def _write_half(file: str, exp_file: str, name: str, slabs, shape, back=None) -> dict:
+def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
     """Write the float32 table ``name`` of ``shape`` given as consecutive ``slabs`` along its
     first axis to ``file`` (float16: ``<name>.npy``) and ``exp_file`` (int8 row exponents:
-    ``<name>.exp.npy``); returns their checksum records. ``back``: an array of ``shape`` (float32)
-    that receives the decoded values (what a later read gives), slab by slab (it may be the
-    table itself). _NotFinite where a value is not finite (or too large for the format)."""
+    ``<name>.exp.npy``); returns their checksum records. Each slab (C-contiguous float32)
+    receives the decoded values in place (what a later read gives): a slab that is a view of
+    the table makes the table serve them. _NotFinite where a value is not finite (or too
+    large for the format)."""
     nl = int(shape[-1])
     exps = np.empty(int(np.prod(shape[:-1])), dtype=np.int8)
     done, crc = 0, 0
     with open(file, "wb") as f:
         _npy_header(f, np.float16, shape)
         for slab in slabs:
-            flat = np.ascontiguousarray(slab, dtype=np.float32).reshape(-1, nl)
+            if slab.dtype != np.float32 or not slab.flags.c_contiguous:
+                raise ValueError(f"a slab of {name} is not C-contiguous float32")
+            flat = slab.reshape(-1, nl)
             step = max(1, _CHECK_BYTES // (4 * nl))
             for i in range(0, flat.shape[0], step):
                 h, e = _encode_half(flat[i:i + step])
@@ -201,26 +212,23 @@ def _write_half(file: str, exp_file: str, name: str, slabs, shape, back=None) ->
                 crc = zlib.crc32(data, crc)
                 f.write(data)
                 exps[done:done + e.size] = e
-                if back is not None:
-                    out = back.reshape(-1, nl)[done:done + e.size]
-                    _decode_half(h, e, out)
+                _decode_half(h, e, flat[i:i + step])
                 done += e.size
     if done != exps.size:
         raise ValueError(f"{done} rows written for a table {tuple(shape)}")
     exps = exps.reshape(tuple(shape[:-1]))
-    from skydome._io import write_npy
-
     write_npy(exp_file, exps)
     rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
            "shape": [int(n) for n in shape]}
     return {name: rec, name + _EXP: _record(exps, zlib.crc32(memoryview(exps.reshape(-1))))}
 
 
-def _read_half(path: str, name: str, sums: dict) -> np.ndarray:
+def _read_half(path: str, name: str, sums: dict, out=None) -> np.ndarray:
     """The float32 table ``name`` of the entry ``path`` decoded from its half-precision
     files, checked as it is read (CRC-32 of both files, finite values) in steps of
     :data:`_CHECK_BYTES`, through file reads (no mapping: only the decoded table is
-    resident); DamagedEntry where a check fails."""
+    resident); DamagedEntry where a check fails. ``out``: a C-contiguous float32 array of
+    the table's shape to decode into (else a new one)."""
     exps = _map(os.path.join(path, name + _EXP + ".npy"))
     _verify(name + _EXP, exps, sums.get(name + _EXP))
     rec = sums.get(name)
@@ -237,7 +245,10 @@ def _read_half(path: str, name: str, sums: dict) -> np.ndarray:
             raise DamagedEntry(f"{name}.npy has shape {shape} {dtype}, recorded "
                                f"{rec.get('shape')} {rec.get('dtype')}")
         nl = int(shape[-1])
-        out = np.empty(shape, dtype=np.float32)
+        if out is None:
+            out = np.empty(shape, dtype=np.float32)
+        elif out.shape != tuple(shape) or out.dtype != np.float32 or not out.flags.c_contiguous:
+            raise DamagedEntry(f"{name}.npy has shape {shape}, expected {out.shape}")
         flat, e_flat = out.reshape(-1, nl), exps.reshape(-1)
         step = max(1, _CHECK_BYTES // (2 * nl))
         buf = np.empty(step * nl, dtype=np.float16)
@@ -257,6 +268,107 @@ def _read_half(path: str, name: str, sums: dict) -> np.ndarray:
         raise DamagedEntry(f"the checksum of {name}.npy does not match")
     if not finite:
         raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
+    return out
+
+
+def _quadratic_basis(n_th: int, n_ph: int) -> np.ndarray:
+    """(n_th n_ph, 6) float64: 1, o_x, o_z, o_x^2, o_z^2, o_x o_z at the scattering density's
+    outgoing directions o = (sin th cos ph, sin th sin ph, cos th) in the sun's frame (th, ph
+    on [0, pi], the grid of ``_precompute._DensityQuadrature``). A phase function of degree
+    <= 2 in the cosine (Rayleigh's, [BN08] eq. 2 with depolarisation; isotropic) gives
+    J(o) = int P(o . i) L(i) di = a0 int L + a1 o . int L i + a2 o^T (int L i i^T) o: a
+    quadratic form in o, exactly for any quadrature of the incident directions; the incident
+    field is mirror-symmetric about the sun's vertical plane (o_y -> -o_y), so the terms odd
+    in o_y vanish and o_y^2 = 1 - o_x^2 - o_z^2."""
+    th = np.linspace(0.0, np.pi, n_th)[:, None]
+    ph = np.linspace(0.0, np.pi, n_ph)[None, :]
+    ox = (np.sin(th) * np.cos(ph)).ravel()
+    oz = np.broadcast_to(np.cos(th), (n_th, n_ph)).ravel()
+    return np.stack([np.ones_like(ox), ox, oz, ox * ox, oz * oz, ox * oz], axis=1)
+
+
+def _quadratic_fit(J: np.ndarray) -> tuple[list, np.ndarray]:
+    """(constituents, coefficients): the scattering constituents of J (scattering, theta,
+    phi, r, mu_s, wavelength) that are a quadratic form in the outgoing direction
+    (:func:`_quadratic_basis`) to :data:`QUADRATIC_TOL` in every (r, mu_s, wavelength)
+    column, and their least-squares coefficients, float64 (n, 6, r, mu_s, wavelength)."""
+    nsc, n_th, n_ph = J.shape[:3]
+    B = _quadratic_basis(n_th, n_ph)
+    Bp = np.linalg.pinv(B)
+    ks, coefs = [], []
+    for k in range(nsc):
+        A = J[k].reshape(n_th * n_ph, -1)
+        C = np.empty((6, A.shape[1]))
+        ok = True
+        for c0 in range(0, A.shape[1], _COLUMNS):
+            a = A[:, c0:c0 + _COLUMNS].astype(np.float64)
+            C[:, c0:c0 + _COLUMNS] = c = Bp @ a
+            res = np.abs(B @ c - a).max(axis=0)
+            if not np.all(res <= QUADRATIC_TOL * np.abs(a).max(axis=0)):
+                ok = False
+                break
+        if ok:
+            ks.append(k)
+            coefs.append(C.reshape((6,) + J.shape[3:]))
+    return ks, (np.stack(coefs) if coefs else np.zeros((0, 6) + J.shape[3:]))
+
+
+def _quadratic_eval(coef: np.ndarray, out: np.ndarray) -> None:
+    """``out`` (theta, phi, r, mu_s, wavelength) float32 = the quadratic form of ``coef``
+    (6, r, mu_s, wavelength) at the outgoing directions."""
+    B = _quadratic_basis(out.shape[0], out.shape[1])
+    flat = out.reshape(B.shape[0], -1)
+    c = coef.reshape(6, -1)
+    for c0 in range(0, flat.shape[1], _COLUMNS):
+        flat[:, c0:c0 + _COLUMNS] = B @ c[:, c0:c0 + _COLUMNS]
+
+
+def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
+    """Write the table ``name`` (float32 ``a``, the tables' own array) into ``folder`` in
+    half precision: for the scattering density, the constituents that are a quadratic form
+    in the outgoing direction as its coefficients (float64, ``<name>.quadratic.npy``) and
+    the others as float16 (:func:`_write_half`); every other table all as float16. ``a``
+    receives the values a later read gives. Returns (checksum records of the files, the
+    "quadratic" record of meta.json: {name: {"constituents", "shape"}} or {})."""
+    ks, coef = _quadratic_fit(a) if name == _DENSITY else ([], None)
+    recs, extra = {}, {}
+    if ks:
+        crc, finite = _check(coef)
+        if not finite:
+            raise _NotFinite(name)
+        write_npy(os.path.join(folder, name + _QUAD + ".npy"), coef)
+        recs[name + _QUAD] = _record(coef, crc)
+        extra[name] = {"constituents": ks, "shape": [int(n) for n in a.shape]}
+        for j, k in enumerate(ks):
+            _quadratic_eval(coef[j], a[k])
+    rest = [k for k in range(a.shape[0]) if k not in ks]
+    recs.update(_write_half(os.path.join(folder, name + ".npy"),
+                            os.path.join(folder, name + _EXP + ".npy"), name,
+                            [a[k:k + 1] for k in rest], (len(rest),) + a.shape[1:]))
+    return recs, extra
+
+
+def _read_table(path: str, name: str, sums: dict, quad) -> np.ndarray:
+    """The half-precision table ``name`` of the entry ``path``, decoded (:func:`_read_half`)
+    and, where ``quad`` (its "quadratic" record) says so, its quadratic-form constituents
+    evaluated from their coefficients."""
+    if quad is None:
+        return _read_half(path, name, sums)
+    shape = tuple(int(n) for n in quad["shape"])
+    ks = [int(k) for k in quad["constituents"]]
+    out = np.empty(shape, dtype=np.float32)
+    rest = [k for k in range(shape[0]) if k not in ks]
+    if rest == list(range(rest[0], rest[-1] + 1)) if rest else True:
+        lo = rest[0] if rest else 0
+        _read_half(path, name, sums, out=out[lo:lo + len(rest)])
+    else:
+        out[rest] = _read_half(path, name, sums)
+    coef = _map(os.path.join(path, name + _QUAD + ".npy"))
+    _verify(name + _QUAD, coef, sums.get(name + _QUAD))
+    if coef.shape != (len(ks), 6) + shape[3:]:
+        raise DamagedEntry(f"{name}{_QUAD}.npy has shape {coef.shape}")
+    for j, k in enumerate(ks):
+        _quadratic_eval(coef[j], out[k])
     return out
 
 
@@ -326,11 +438,12 @@ def load(k: str):
         if not isinstance(sums, dict):
             raise DamagedEntry("meta.json has no checksums")
         half = meta.get("encoded", {})
+        quad = meta.get("quadratic", {})
         for name in meta["arrays"]:
-            if name.endswith(_EXP) and name[:-len(_EXP)] in half:
-                continue                 # read with its table
+            if name.rsplit(".", 1)[0] in half and "." in name:
+                continue                 # read with its table (exponents, coefficients)
             if name in half:
-                arrays[name] = _read_half(path, name, sums)
+                arrays[name] = _read_table(path, name, sums, quad.get(name))
                 continue
             arrays[name] = _map(os.path.join(path, name + ".npy"))
             _verify(name, arrays[name], sums.get(name))
@@ -466,10 +579,19 @@ def _add_half_table(path, meta, shape, slabs):
     file = os.path.join(path, _STORED + ".npy")
     exp_file = os.path.join(path, _STORED + _EXP + ".npy")
     out = np.empty(shape, dtype=np.float32)
+
+    def into_out():         # each slab copied into the table, decoded there in place
+        row = 0
+        for slab in slabs:
+            part = out[row:row + slab.shape[0]]
+            part[...] = slab
+            row += slab.shape[0]
+            yield part
+
     try:
         with atomic_file(file, suffix=".npy") as tmp, \
                 atomic_file(exp_file, suffix=".npy") as etmp:
-            recs = _write_half(tmp, etmp, _STORED, slabs, shape, back=out)
+            recs = _write_half(tmp, etmp, _STORED, into_out(), shape)
             meta.setdefault("checksums", {}).update(recs)
             meta.setdefault("encoded", {})[_STORED] = "half"
             with atomic_file(os.path.join(path, _META)) as mtmp, open(mtmp, "w") as f:
@@ -507,7 +629,7 @@ def store(k: str, tables) -> str | None:
             half.add(name)
     if sum(a.nbytes // (2 if n in half else 1) for n, a in arrays.items()) > limit:
         return None
-    from skydome._io import atomic_folder, write_npy
+    from skydome._io import atomic_folder
 
     folder = cache_dir()
     path = _path(k)
@@ -516,7 +638,7 @@ def store(k: str, tables) -> str | None:
         if os.path.isdir(path):
             _remove(path)
         with atomic_folder(path) as tmp:
-            names, scalars, sums = [], {}, {}
+            names, scalars, sums, quadratic = [], {}, {}, {}
             for name, a in arrays.items():
                 if a.ndim == 0:
                     scalars[name] = a.item()
@@ -524,13 +646,12 @@ def store(k: str, tables) -> str | None:
                 a = np.ascontiguousarray(a)
                 if name in half:
                     # the tables' own array receives the decoded values, so that this model
-                    # serves what a later cache hit reads (a float32 array: arrays() gives
-                    # the table itself, not a copy)
-                    back = getattr(tables, name)
-                    sums.update(_write_half(os.path.join(tmp, name + ".npy"),
-                                            os.path.join(tmp, name + _EXP + ".npy"), name,
-                                            [a], a.shape, back=back))
-                    names += [name, name + _EXP]
+                    # serves what a later cache hit reads (a C-contiguous float32 array:
+                    # arrays() gives the table itself, not a copy)
+                    recs, extra = _store_half(tmp, name, getattr(tables, name))
+                    sums.update(recs)
+                    names += list(recs)
+                    quadratic.update(extra)
                     continue
                 crc, finite = _check(a)
                 if not finite:    # never cache a table that is not finite
@@ -541,7 +662,8 @@ def store(k: str, tables) -> str | None:
             with open(os.path.join(tmp, _META), "w") as f:
                 json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
                            "scalars": scalars, "checksums": sums,
-                           "encoded": {n: "half" for n in sorted(half)}}, f)
+                           "encoded": {n: "half" for n in sorted(half)},
+                           "quadratic": quadratic}, f)
     except _NotFinite:
         return None
     except (OSError, ValueError) as exc:   # ValueError: the cache folder is not writable
