@@ -126,7 +126,9 @@ class PrecomputedSky(SkyModel):
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
         (``from_cache`` says which). Folder ``$SKYDOME_CACHE_DIR`` or the user cache folder;
-        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); :func:`clear_cache`.
+        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 1.5 GB); :func:`clear_cache`. The
+        cache stores the large tables in half precision (the sky within 2.7e-4 of float32
+        tables, docs/performance.md) and computes single scattering again when used.
     """
 
     name = "precomputed"

@@ -9,7 +9,7 @@ and the tables are recomputed. The arrays are memory-mapped when read.
 
 **Stored in the precision the sky needs.** Tables of at least :data:`HALF_MIN_BYTES` are
 stored as float16 with a power-of-two scale per row of wavelengths (``<name>.npy`` and its
-int8 exponents ``<name>.exp.npy``; relative rounding <= 2^-12 = 2.4e-4 per value, and no
+int8 exponents ``<name>.exp.npy``; relative rounding <= 2^-11 = 4.9e-4 per value, and no
 underflow within 2^28 of the row's largest value) and decoded to float32 when read; the
 single-scattering table is not stored where the entry can compute it again (it is, from the
 columns and the medium the entry holds, bit for bit: the observer's two r nodes for the
@@ -36,7 +36,7 @@ without that file (not built yet, or an unreadable file, which is removed) is st
 the table is built again on first use.
 
 Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydome")`` /
-``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 2 GB); after each
+``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 1.5 GB); after each
 write the least recently used files are removed until the folder fits. Files are written
 to a temporary name in the folder and renamed, so a reader never sees a partial file. A write
 that fails (a full disk, a read-only folder) is not an error: the tables are used from memory,
@@ -70,7 +70,9 @@ from skydome._io import write_npy
 # wavelengths, "encoded"); the single-scattering table not stored where it can be computed
 # again from the entry (it is, on use: the observer's two r nodes, or the whole table)
 CACHE_FORMAT = "skydome.precomputed-cache/12"
-DEFAULT_LIMIT_BYTES = 2_000_000_000   # five table sets at the default settings (0.39 GB each)
+# five table sets at the default settings: 0.27 GB each with the stored table of orders
+# 2..N, 0.14 GB without it (1.28 GB each in format 11)
+DEFAULT_LIMIT_BYTES = 1_500_000_000
 # tables of at least this many bytes are stored in half precision (_HALF) or left out
 # where the entry can compute them again (_RECOMPUTED); smaller ones exactly as they are
 HALF_MIN_BYTES = 8 << 20
@@ -171,7 +173,7 @@ def _pow2(e: np.ndarray) -> np.ndarray:
 
 def _encode_half(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(float16 values, int8 exponents) of the float32 rows (n, n_wavelengths): value =
-    h 2^e, h rounded to nearest (relative error <= 2^-12 where |h| >= 2^-14)."""
+    h 2^e, h rounded to nearest (relative error <= 2^-11 where |h| >= 2^-14)."""
     e = _half_exponents(rows)
     return np.ascontiguousarray((rows * _pow2(-e)).astype(np.float16)), e
 
