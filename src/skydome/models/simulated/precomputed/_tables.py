@@ -138,7 +138,7 @@ class Tables:
             builder = self.__dict__.get("_ss_builder")
             if builder is None:
                 return self.build_single_scattering()[:, first:end]
-            if len(rows) > 8:
+            if len(rows) >= 4:       # 31 MB each at the defaults: a few altitudes
                 rows.clear()
             rows[(first, end)] = builder(self, (first, end))
         return rows[(first, end)]
