@@ -208,13 +208,14 @@ def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
             step = max(1, _CHECK_BYTES // (4 * nl))
             for i in range(0, flat.shape[0], step):
                 h, e = _encode_half(flat[i:i + step])
-                if not np.isfinite(h).all():
+                _decode_half(h, e, flat[i:i + step])
+                # NaN, inf and values too large for float16 decode to NaN or inf
+                if not np.isfinite(flat[i:i + step]).all():
                     raise _NotFinite(name)
                 data = memoryview(h.reshape(-1)).cast("B")
                 crc = zlib.crc32(data, crc)
                 f.write(data)
                 exps[done:done + e.size] = e
-                _decode_half(h, e, flat[i:i + step])
                 done += e.size
     if done != exps.size:
         raise ValueError(f"{done} rows written for a table {tuple(shape)}")
