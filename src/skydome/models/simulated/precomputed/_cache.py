@@ -295,26 +295,31 @@ def _quadratic_fit(J: np.ndarray) -> tuple[list, np.ndarray]:
     """(constituents, coefficients): the scattering constituents of J (scattering, theta,
     phi, r, mu_s, wavelength) that are a quadratic form in the outgoing direction
     (:func:`_quadratic_basis`) to :data:`QUADRATIC_TOL` in every (r, mu_s, wavelength)
-    column, and their least-squares coefficients, float64 (n, 6, r, mu_s, wavelength)."""
+    column, and their least-squares coefficients, float32 (n, 6, r, mu_s, wavelength).
+    In float32 (one product for the coefficients, the residual a block of columns at a
+    time): its rounding, about 1e-6 of a column's largest value, is well within the
+    tolerance."""
     nsc, n_th, n_ph = J.shape[:3]
-    B = _quadratic_basis(n_th, n_ph)
-    Bp = np.linalg.pinv(B)
+    B64 = _quadratic_basis(n_th, n_ph)
+    B = B64.astype(np.float32)
+    Bp = np.linalg.pinv(B64).astype(np.float32)
     ks, coefs = [], []
     for k in range(nsc):
         A = J[k].reshape(n_th * n_ph, -1)
-        C = np.empty((6, A.shape[1]))
+        C = Bp @ A
         ok = True
         for c0 in range(0, A.shape[1], _COLUMNS):
-            a = A[:, c0:c0 + _COLUMNS].astype(np.float64)
-            C[:, c0:c0 + _COLUMNS] = c = Bp @ a
-            res = np.abs(B @ c - a).max(axis=0)
-            if not np.all(res <= QUADRATIC_TOL * np.abs(a).max(axis=0)):
+            a = A[:, c0:c0 + _COLUMNS]
+            r = B @ C[:, c0:c0 + _COLUMNS]
+            np.subtract(r, a, out=r)
+            np.abs(r, out=r)
+            if not np.all(r.max(axis=0) <= QUADRATIC_TOL * np.abs(a).max(axis=0)):
                 ok = False
                 break
         if ok:
             ks.append(k)
             coefs.append(C.reshape((6,) + J.shape[3:]))
-    return ks, (np.stack(coefs) if coefs else np.zeros((0, 6) + J.shape[3:]))
+    return ks, (np.stack(coefs) if coefs else np.zeros((0, 6) + J.shape[3:], np.float32))
 
 
 def _quadratic_eval(coef: np.ndarray, out: np.ndarray) -> None:
@@ -323,13 +328,14 @@ def _quadratic_eval(coef: np.ndarray, out: np.ndarray) -> None:
     B = _quadratic_basis(out.shape[0], out.shape[1]).astype(np.float32)
     # one float32 product (6 terms per value: rounding about 1e-7 of the largest term, far
     # below QUADRATIC_TOL), written straight into the table
-    np.matmul(B, coef.reshape(6, -1).astype(np.float32), out=out.reshape(B.shape[0], -1))
+    np.matmul(B, np.asarray(coef, dtype=np.float32).reshape(6, -1),
+              out=out.reshape(B.shape[0], -1))
 
 
 def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
     """Write the table ``name`` (float32 ``a``, the tables' own array) into ``folder`` in
     half precision: for the scattering density, the constituents that are a quadratic form
-    in the outgoing direction as its coefficients (float64, ``<name>.quadratic.npy``) and
+    in the outgoing direction as its coefficients (float32, ``<name>.quadratic.npy``) and
     the others as float16 (:func:`_write_half`); every other table all as float16. ``a``
     receives the values a later read gives. Returns (checksum records of the files, the
     "quadratic" record of meta.json: {name: {"constituents", "shape"}} or {})."""
