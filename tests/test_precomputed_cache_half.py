@@ -157,6 +157,28 @@ def test_single_scattering_is_computed_again_bit_for_bit():
     assert np.array_equal(hit._t.single_scattering, exact._t.single_scattering)
 
 
+def test_ground_rows_of_single_scattering_are_stored_and_served_without_the_kernel(
+        monkeypatch):
+    """The first two r nodes (a ground observer's) are stored exactly; a hit serves the
+    ground's sky from them without computing single scattering."""
+    exact = tiny(cache=False)
+    tiny()
+    stored = np.load(os.path.join(entry(), "single_scattering_ground.npy"))
+    assert np.array_equal(stored, exact._t.single_scattering[:, :2])
+    from skydome.models.simulated.precomputed import _single
+
+    with monkeypatch.context() as mp:
+        mp.setattr(_single, "single_scattering_rows", lambda *a, **k: 1 / 0)
+        hit = tiny()
+        assert hit.from_cache and hit.observer_altitude_m == 0.0
+        rad = hit.radiance(DIRS, WL)
+        assert not hit._t.has_single_scattering
+    assert np.array_equal(rad, tiny().radiance(DIRS, WL))
+    assert np.array_equal(rad, tiny(observer_altitude_m=0.0).radiance(DIRS, WL))
+    # the same sky as the exact tables' to float16's rounding of the density
+    assert np.abs(rad / exact.radiance(DIRS, WL) - 1).max() <= HALF_ULP
+
+
 def test_stored_table_in_half_precision_joins_the_entry_and_is_read_on_use(monkeypatch):
     exact = tiny(cache=False)
     first = tiny()

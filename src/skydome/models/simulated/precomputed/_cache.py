@@ -78,6 +78,7 @@ DEFAULT_LIMIT_BYTES = 1_500_000_000
 HALF_MIN_BYTES = 8 << 20
 _HALF = ("scattering_density", "multiple_scattering")
 _RECOMPUTED = ("single_scattering",)
+_GROUND = "single_scattering_ground"    # its first two r nodes, stored as they are
 _EXP = ".exp"                          # the file of a half table's row exponents
 _DENSITY = "scattering_density"
 _QUAD = ".quadratic"                   # its constituents stored as a quadratic form
@@ -634,6 +635,9 @@ def store(k: str, tables) -> str | None:
             continue
         if name in _RECOMPUTED and tables.single_scattering_samples > 0 and tables.has_density:
             del arrays[name]             # computed again from the entry when used
+            # but a ground observer's two r nodes kept (exactly): the sky's radiance at the
+            # ground reads them, without computing them or loading their kernel
+            arrays[_GROUND] = np.ascontiguousarray(a[:, :2])
         elif name in _HALF + _RECOMPUTED and a.dtype == np.float32 and a.ndim >= 2:
             half.add(name)
     if sum(a.nbytes // (2 if n in half else 1) for n, a in arrays.items()) > limit:

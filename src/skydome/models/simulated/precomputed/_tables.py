@@ -84,6 +84,10 @@ class Tables:
     # node) or "subset" (_precompute.stored_table_nodes, interpolated)
     stored_table_samples: int = _scalar("int", 0)
     stored_table: str = _scalar("str", "full")
+    # the single-scattering table's first two r nodes (a ground observer's), kept where the
+    # whole table is not (the on-disk cache): single_scattering_rows(0, 2) reads them
+    single_scattering_ground: np.ndarray | None = _axes("scattering", "r", "mu", "mu_s", "nu",
+                                                        "wavelength", optional=True)
     # the 4-D tables' (r, mu, mu_s, nu) node counts, and the single-scattering table's
     # quadrature nodes per ray piece (what build_single_scattering needs; 0: not recorded)
     scattering_shape: np.ndarray | None = _axes("axis", dtype="int64", optional=True)
@@ -133,6 +137,9 @@ class Tables:
         ss = self.__dict__.get("_" + _LAZY_SS)
         if ss is not None:
             return ss[:, first:end]
+        ground = self.single_scattering_ground
+        if ground is not None and end <= ground.shape[1]:
+            return ground[:, first:end]
         rows = self.__dict__.setdefault("_ss_rows", {})
         if (first, end) not in rows:
             builder = self.__dict__.get("_ss_builder")
