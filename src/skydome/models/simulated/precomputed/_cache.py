@@ -13,7 +13,9 @@ int8 exponents ``<name>.exp.npy``; relative rounding <= 2^-11 = 4.9e-4 per value
 underflow within 2^28 of the row's largest value) and decoded to float32 when read; the
 single-scattering table is not stored where the entry can compute it again (it is, from the
 columns and the medium the entry holds, bit for bit: the observer's two r nodes for the
-sky's radiance, the whole table on first use for aerial perspective and the exports). A
+sky's radiance, the whole table on first use for aerial perspective and the exports),
+except its first two r nodes (``single_scattering_ground``, a ground observer's, as they
+are). A
 model whose tables are stored serves the decoded values from then on, so that a cache hit
 serves what the first build did. docs/performance.md gives the sizes and the accuracy cost.
 
@@ -70,8 +72,8 @@ from skydome._io import write_npy
 # wavelengths, "encoded"); the single-scattering table not stored where it can be computed
 # again from the entry (it is, on use: the observer's two r nodes, or the whole table)
 CACHE_FORMAT = "skydome.precomputed-cache/12"
-# five table sets at the default settings: 0.27 GB each with the stored table of orders
-# 2..N, 0.14 GB without it (1.28 GB each in format 11)
+# five table sets at the default settings: 0.30 GB each with the stored table of orders
+# 2..N, 0.17 GB without it (1.28 GB each in format 11)
 DEFAULT_LIMIT_BYTES = 1_500_000_000
 # tables of at least this many bytes are stored in half precision (_HALF) or left out
 # where the entry can compute them again (_RECOMPUTED); smaller ones exactly as they are
