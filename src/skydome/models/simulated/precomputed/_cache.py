@@ -69,8 +69,9 @@ from skydome._io import write_npy
 # by Gauss-Legendre in v (7 nodes per piece; 10 midpoint nodes before)
 # 11: meta.json holds every array's CRC-32, dtype and shape ("checksums"), checked on load
 # 12: the large tables in half precision (float16 and a power-of-two scale per row of
-# wavelengths, "encoded"); the single-scattering table not stored where it can be computed
-# again from the entry (it is, on use: the observer's two r nodes, or the whole table)
+# wavelengths, "encoded"; the scattering density's Rayleigh constituent as a quadratic form);
+# the single-scattering table not stored where it can be computed again from the entry (it
+# is, on use: the observer's two r nodes, or the whole table), but for its first two r nodes
 CACHE_FORMAT = "skydome.precomputed-cache/12"
 # five table sets at the default settings: 0.30 GB each with the stored table of orders
 # 2..N, 0.17 GB without it (1.28 GB each in format 11)
