@@ -302,8 +302,9 @@ class PrecomputedSky(SkyModel):
         ss = self._t.single_scattering_rows(ir, ir + 2)
 
         def sl(t, i):
-            out = ((1 - a) * ((1 - c) * t[..., i, :, ims, :, :] + c * t[..., i, :, ims + 1, :, :])
-                   + a * ((1 - c) * t[..., i + 1, :, ims, :, :] + c * t[..., i + 1, :, ims + 1, :, :]))
+            lo, hi = t[..., i, :, :, :, :], t[..., i + 1, :, :, :, :]
+            out = ((1 - a) * ((1 - c) * lo[..., ims, :, :] + c * lo[..., ims + 1, :, :])
+                   + a * ((1 - c) * hi[..., ims, :, :] + c * hi[..., ims + 1, :, :]))
             return np.ascontiguousarray(out, dtype=np.float64)
 
         mu_s = float(self.sun.direction[2])
