@@ -134,7 +134,9 @@ class PrecomputedSky(SkyModel):
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
         (``from_cache`` says which). Folder ``$SKYDOME_CACHE_DIR`` or the user cache folder;
-        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); :func:`clear_cache`.
+        size limit ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 1.5 GB); :func:`clear_cache`. The
+        cache stores the large tables in half precision (the sky within 2.7e-4 of float32
+        tables, docs/performance.md) and computes single scattering again when used.
     """
 
     name = "precomputed"
@@ -254,9 +256,10 @@ class PrecomputedSky(SkyModel):
         if not hit:
             tables = precompute(props, wl, p)
             _cache.store(k, tables)
+        # single scattering where the entry does not hold it, computed on first use
+        attach_stored_table_builder(tables)
         if not tables.has_multiple_scattering:
             # the stored table, built on first use, is written into the entry then
-            attach_stored_table_builder(tables)
             tables.set_multiple_scattering_sink(
                 lambda shape, slabs: _cache.add_stored_table(k, shape, slabs))
         return tables, hit
@@ -313,21 +316,24 @@ class PrecomputedSky(SkyModel):
         from skydome.models.simulated.precomputed import _mapping, _multiple
 
         R, Rt = self._R, self._Rt
-        ss = self._t.single_scattering
-        n_r, n_ms = ss.shape[1], ss.shape[3]     # the stored table's (r, mu, mu_s, nu) too
+        n_r, _, n_ms, _, nl = self._t.table_shape   # single scattering's and the stored table's
         ir, a = _mapping.r_index(self._r0, n_r, R, Rt)
         x = _mapping.mu_s_unit(float(self.sun.direction[2]), self._mu_s_min)
         ims, c = _mapping._split(x * (n_ms - 1), n_ms)
+        # single scattering at the observer's two r nodes only (computed where the tables
+        # do not hold the whole table: 2 / n_r of it)
+        ss = self._t.single_scattering_rows(ir, ir + 2)
 
-        def sl(t):
-            out = ((1 - a) * ((1 - c) * t[..., ir, :, ims, :, :] + c * t[..., ir, :, ims + 1, :, :])
-                   + a * ((1 - c) * t[..., ir + 1, :, ims, :, :] + c * t[..., ir + 1, :, ims + 1, :, :]))
+        def sl(t, i):
+            lo, hi = t[..., i, :, :, :, :], t[..., i + 1, :, :, :, :]
+            out = ((1 - a) * ((1 - c) * lo[..., ims, :, :] + c * lo[..., ims + 1, :, :])
+                   + a * ((1 - c) * hi[..., ims, :, :] + c * hi[..., ims + 1, :, :]))
             return np.ascontiguousarray(out, dtype=np.float64)
 
         mu_s = float(self.sun.direction[2])
         if table_only or not self._t.has_density or mu_s < self._mu_s_min:
             # the stored table (built here on its first read)
-            return sl(ss), sl(self._t.multiple_scattering)
+            return sl(ss, 0), sl(self._t.multiple_scattering, ir)
         # orders 2..N integrated at the observer's own r and mu_s (the aureole of the
         # multiply scattered light is too sharp for the table's mu_s and nu nodes), cached
         cache = self.__dict__.setdefault("_slice_cache", {})
@@ -340,7 +346,7 @@ class PrecomputedSky(SkyModel):
                                  th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
             ground = np.arange(n_g + n_s) < n_g
             cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
-            out = np.empty((n_g + n_s, _SLICE_PHI, ss.shape[-1]))
+            out = np.empty((n_g + n_s, _SLICE_PHI, nl))
             _multiple.multiple_scattering_slice(t.scattering_density, tables_medium(t),
                                                 t.scattering_index, t.columns, self._mu_s_min,
                                                 self._r0, mu_s, int(self.integration_samples),
@@ -349,7 +355,7 @@ class PrecomputedSky(SkyModel):
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out
-        return sl(ss), cache[key]
+        return sl(ss, 0), cache[key]
 
     def _slice_geometry(self, table=False):
         """``geom`` of :func:`._render.render_observer`: (n_ground, n_sky,

@@ -7,6 +7,18 @@ ground albedo) and every table setting. A different atmosphere field or setting 
 different key; an entry that cannot be read (truncated, corrupt, another format) is deleted
 and the tables are recomputed. The arrays are memory-mapped when read.
 
+**Stored in the precision the sky needs.** Tables of at least :data:`HALF_MIN_BYTES` are
+stored as float16 with a power-of-two scale per row of wavelengths (``<name>.npy`` and its
+int8 exponents ``<name>.exp.npy``; relative rounding <= 2^-11 = 4.9e-4 per value, and no
+underflow within 2^28 of the row's largest value) and decoded to float32 when read; the
+single-scattering table is not stored where the entry can compute it again (it is, from the
+columns and the medium the entry holds, bit for bit: the observer's two r nodes for the
+sky's radiance, the whole table on first use for aerial perspective and the exports),
+except its first two r nodes (``single_scattering_ground``, a ground observer's, as they
+are). A
+model whose tables are stored serves the decoded values from then on, so that a cache hit
+serves what the first build did. docs/performance.md gives the sizes and the accuracy cost.
+
 **Verified on load.** ``meta.json`` records, for every array, its dtype, shape and the CRC-32
 (:func:`zlib.crc32`) of its bytes, computed as the array is written; a load reads every array
 once, compares its CRC-32 and checks that it holds finite values only. An entry that fails
@@ -26,7 +38,7 @@ without that file (not built yet, or an unreadable file, which is removed) is st
 the table is built again on first use.
 
 Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydome")`` /
-``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 6 GB); after each
+``precomputed``. Size limit: ``$SKYDOME_CACHE_LIMIT_BYTES`` (default 1.5 GB); after each
 write the least recently used files are removed until the folder fits. Files are written
 to a temporary name in the folder and renamed, so a reader never sees a partial file. A write
 that fails (a full disk, a read-only folder) is not an error: the tables are used from memory,
@@ -44,6 +56,8 @@ import zlib
 
 import numpy as np
 
+from skydome._io import write_npy
+
 # bump when the tables' meaning or layout changes (mapping, units, fields)
 # 3: the mu axis of _mapping.mu_unit; 4: orders >= 3 from ray integrals, wavelength batches;
 # 5: orders >= 3 batched with shared geometry, opt-in coarse grids and stored-table subset;
@@ -54,8 +68,30 @@ import numpy as np
 # 10: the precomputation's ray integrals of J (orders >= 3, ground irradiance of orders >= 2)
 # by Gauss-Legendre in v (7 nodes per piece; 10 midpoint nodes before)
 # 11: meta.json holds every array's CRC-32, dtype and shape ("checksums"), checked on load
-CACHE_FORMAT = "skydome.precomputed-cache/11"
-DEFAULT_LIMIT_BYTES = 6_000_000_000   # four table sets at the default settings (1.3 GB each)
+# 12: the large tables in half precision (float16 and a power-of-two scale per row of
+# wavelengths, "encoded"; the scattering density's Rayleigh constituent as a quadratic form);
+# the single-scattering table not stored where it can be computed again from the entry (it
+# is, on use: the observer's two r nodes, or the whole table), but for its first two r nodes
+CACHE_FORMAT = "skydome.precomputed-cache/12"
+# five table sets at the default settings: 0.30 GB each with the stored table of orders
+# 2..N, 0.17 GB without it (1.28 GB each in format 11)
+DEFAULT_LIMIT_BYTES = 1_500_000_000
+# tables of at least this many bytes are stored in half precision (_HALF) or left out
+# where the entry can compute them again (_RECOMPUTED); smaller ones exactly as they are
+HALF_MIN_BYTES = 8 << 20
+_HALF = ("scattering_density", "multiple_scattering")
+_RECOMPUTED = ("single_scattering",)
+_GROUND = "single_scattering_ground"    # its first two r nodes, stored as they are
+_EXP = ".exp"                          # the file of a half table's row exponents
+_DENSITY = "scattering_density"
+_QUAD = ".quadratic"                   # its constituents stored as a quadratic form
+# largest residual of that form, relative to the largest value of each (r, mu_s, wavelength)
+# column, for a constituent to be stored as one (float32 rounding: about 1e-6)
+QUADRATIC_TOL = 1e-5
+_COLUMNS = 2048                        # columns of J per step of the fit and its evaluation
+# the largest scaled value of a row is in [2^HALF_TOP, 2^(HALF_TOP + 1)): below float16's
+# largest finite value (65504 < 2^16) after rounding, and 2^28 above its smallest normal
+HALF_TOP = 14
 _META = "meta.json"
 _STORED = "multiple_scattering"       # the lazily added table's file (without .npy)
 _CHECK_BYTES = 1 << 24                # bytes per step of the load-time check (16 MiB)
@@ -123,6 +159,232 @@ def _verify(name: str, a: np.ndarray, rec) -> None:
         raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
 
 
+def _half_exponents(rows: np.ndarray) -> np.ndarray:
+    """The int8 exponent e of each row of ``rows`` (n, n_wavelengths): its largest absolute
+    value divided by 2^e lies in [2^HALF_TOP, 2^(HALF_TOP + 1)) (e clipped to [-127, 127], so
+    that 2^-e is a finite float32; 0 for a row of zeros)."""
+    m = np.max(np.abs(rows), axis=1)
+    e = np.zeros(m.shape, dtype=np.int32)
+    pos = m > 0
+    e[pos] = np.frexp(m[pos])[1] - 1 - HALF_TOP      # frexp: m = f 2^x, f in [0.5, 1)
+    return np.clip(e, -127, 127).astype(np.int8)
+
+
+def _pow2(e: np.ndarray) -> np.ndarray:
+    """2^e as float32 (exact: a power of two, |e| <= 127), for broadcasting over a row."""
+    return np.ldexp(np.float32(1.0), e.astype(np.int32))[:, None]
+
+
+def _encode_half(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(float16 values, int8 exponents) of the float32 rows (n, n_wavelengths): value =
+    h 2^e, h rounded to nearest (relative error <= 2^-11 where |h| >= 2^-14)."""
+    e = _half_exponents(rows)
+    return np.ascontiguousarray((rows * _pow2(-e)).astype(np.float16)), e
+
+
+def _decode_half(h: np.ndarray, e: np.ndarray, out: np.ndarray) -> None:
+    """``out`` (n, n_wavelengths) float32 = h 2^e (exact: a float16 times a power of two)."""
+    np.multiply(h, _pow2(e), out=out, dtype=np.float32)
+
+
+def _npy_header(f, dtype, shape) -> None:
+    np.lib.format.write_array_header_1_0(
+        f, {"descr": np.lib.format.dtype_to_descr(np.dtype(dtype)), "fortran_order": False,
+            "shape": tuple(int(n) for n in shape)})
+
+
+def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
+    """Write the float32 table ``name`` of ``shape`` given as consecutive ``slabs`` along its
+    first axis to ``file`` (float16: ``<name>.npy``) and ``exp_file`` (int8 row exponents:
+    ``<name>.exp.npy``); returns their checksum records. Each slab (C-contiguous float32)
+    receives the decoded values in place (what a later read gives): a slab that is a view of
+    the table makes the table serve them. _NotFinite where a value is not finite (or too
+    large for the format)."""
+    nl = int(shape[-1])
+    exps = np.empty(int(np.prod(shape[:-1])), dtype=np.int8)
+    done, crc = 0, 0
+    with open(file, "wb") as f:
+        _npy_header(f, np.float16, shape)
+        for slab in slabs:
+            if slab.dtype != np.float32 or not slab.flags.c_contiguous:
+                raise ValueError(f"a slab of {name} is not C-contiguous float32")
+            flat = slab.reshape(-1, nl)
+            step = max(1, _CHECK_BYTES // (4 * nl))
+            for i in range(0, flat.shape[0], step):
+                h, e = _encode_half(flat[i:i + step])
+                _decode_half(h, e, flat[i:i + step])
+                # NaN, inf and values too large for float16 decode to NaN or inf
+                if not np.isfinite(flat[i:i + step]).all():
+                    raise _NotFinite(name)
+                data = memoryview(h.reshape(-1)).cast("B")
+                crc = zlib.crc32(data, crc)
+                f.write(data)
+                exps[done:done + e.size] = e
+                done += e.size
+    if done != exps.size:
+        raise ValueError(f"{done} rows written for a table {tuple(shape)}")
+    exps = exps.reshape(tuple(shape[:-1]))
+    write_npy(exp_file, exps)
+    rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
+           "shape": [int(n) for n in shape]}
+    return {name: rec, name + _EXP: _record(exps, zlib.crc32(memoryview(exps.reshape(-1))))}
+
+
+def _read_half(path: str, name: str, sums: dict, out=None) -> np.ndarray:
+    """The float32 table ``name`` of the entry ``path`` decoded from its half-precision
+    files, checked as it is read (CRC-32 of both files, finite values) in steps of
+    :data:`_CHECK_BYTES`, through file reads (no mapping: only the decoded table is
+    resident); DamagedEntry where a check fails. ``out``: a C-contiguous float32 array of
+    the table's shape to decode into (else a new one)."""
+    exps = _map(os.path.join(path, name + _EXP + ".npy"))
+    _verify(name + _EXP, exps, sums.get(name + _EXP))
+    rec = sums.get(name)
+    if not isinstance(rec, dict):
+        raise DamagedEntry(f"{name}.npy has no checksum")
+    with open(os.path.join(path, name + ".npy"), "rb") as f:
+        version = np.lib.format.read_magic(f)
+        read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                else np.lib.format.read_array_header_2_0)
+        shape, fortran, dtype = read(f)
+        if (dtype != np.float16 or fortran or list(shape) != rec.get("shape")
+                or rec.get("dtype") != np.dtype(np.float16).str
+                or tuple(shape[:-1]) != exps.shape):
+            raise DamagedEntry(f"{name}.npy has shape {shape} {dtype}, recorded "
+                               f"{rec.get('shape')} {rec.get('dtype')}")
+        nl = int(shape[-1])
+        if out is None:
+            out = np.empty(shape, dtype=np.float32)
+        elif out.shape != tuple(shape) or out.dtype != np.float32 or not out.flags.c_contiguous:
+            raise DamagedEntry(f"{name}.npy has shape {shape}, expected {out.shape}")
+        flat, e_flat = out.reshape(-1, nl), exps.reshape(-1)
+        step = max(1, _CHECK_BYTES // (2 * nl))
+        buf = np.empty(step * nl, dtype=np.float16)
+        crc, finite = 0, True
+        for i in range(0, flat.shape[0], step):
+            k = min(step, flat.shape[0] - i)
+            b = buf[:k * nl]
+            view = memoryview(b).cast("B")
+            if f.readinto(view) != b.nbytes:
+                raise DamagedEntry(f"{name}.npy is truncated")
+            crc = zlib.crc32(view, crc)
+            _decode_half(b.reshape(k, nl), e_flat[i:i + k], flat[i:i + k])
+            # float16 NaN and inf decode to float32 NaN and inf (checked there: faster)
+            finite = finite and bool(np.isfinite(flat[i:i + k]).all())
+        if f.read(1):
+            raise DamagedEntry(f"{name}.npy is longer than its shape")
+    if crc != rec.get("crc32"):
+        raise DamagedEntry(f"the checksum of {name}.npy does not match")
+    if not finite:
+        raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
+    return out
+
+
+def _quadratic_basis(n_th: int, n_ph: int) -> np.ndarray:
+    """(n_th n_ph, 6) float64: 1, o_x, o_z, o_x^2, o_z^2, o_x o_z at the scattering density's
+    outgoing directions o = (sin th cos ph, sin th sin ph, cos th) in the sun's frame (th, ph
+    on [0, pi], the grid of ``_precompute._DensityQuadrature``). A phase function of degree
+    <= 2 in the cosine (Rayleigh's, [BN08] eq. 2 with depolarisation; isotropic) gives
+    J(o) = int P(o . i) L(i) di = a0 int L + a1 o . int L i + a2 o^T (int L i i^T) o: a
+    quadratic form in o, exactly for any quadrature of the incident directions; the incident
+    field is mirror-symmetric about the sun's vertical plane (o_y -> -o_y), so the terms odd
+    in o_y vanish and o_y^2 = 1 - o_x^2 - o_z^2."""
+    th = np.linspace(0.0, np.pi, n_th)[:, None]
+    ph = np.linspace(0.0, np.pi, n_ph)[None, :]
+    ox = (np.sin(th) * np.cos(ph)).ravel()
+    oz = np.broadcast_to(np.cos(th), (n_th, n_ph)).ravel()
+    return np.stack([np.ones_like(ox), ox, oz, ox * ox, oz * oz, ox * oz], axis=1)
+
+
+def _quadratic_fit(J: np.ndarray) -> tuple[list, np.ndarray]:
+    """(constituents, coefficients): the scattering constituents of J (scattering, theta,
+    phi, r, mu_s, wavelength) that are a quadratic form in the outgoing direction
+    (:func:`_quadratic_basis`) to :data:`QUADRATIC_TOL` in every (r, mu_s, wavelength)
+    column, and their least-squares coefficients, float32 (n, 6, r, mu_s, wavelength).
+    In float32 (one product for the coefficients, the residual a block of columns at a
+    time): its rounding, about 1e-6 of a column's largest value, is well within the
+    tolerance."""
+    nsc, n_th, n_ph = J.shape[:3]
+    B64 = _quadratic_basis(n_th, n_ph)
+    B = B64.astype(np.float32)
+    Bp = np.linalg.pinv(B64).astype(np.float32)
+    ks, coefs = [], []
+    for k in range(nsc):
+        A = J[k].reshape(n_th * n_ph, -1)
+        C = Bp @ A
+        ok = True
+        for c0 in range(0, A.shape[1], _COLUMNS):
+            a = A[:, c0:c0 + _COLUMNS]
+            r = B @ C[:, c0:c0 + _COLUMNS]
+            np.subtract(r, a, out=r)
+            np.abs(r, out=r)
+            if not np.all(r.max(axis=0) <= QUADRATIC_TOL * np.abs(a).max(axis=0)):
+                ok = False
+                break
+        if ok:
+            ks.append(k)
+            coefs.append(C.reshape((6,) + J.shape[3:]))
+    return ks, (np.stack(coefs) if coefs else np.zeros((0, 6) + J.shape[3:], np.float32))
+
+
+def _quadratic_eval(coef: np.ndarray, out: np.ndarray) -> None:
+    """``out`` (theta, phi, r, mu_s, wavelength), C-contiguous float32 = the quadratic form
+    of ``coef`` (6, r, mu_s, wavelength) at the outgoing directions."""
+    B = _quadratic_basis(out.shape[0], out.shape[1]).astype(np.float32)
+    # one float32 product (6 terms per value: rounding about 1e-7 of the largest term, far
+    # below QUADRATIC_TOL), written straight into the table
+    np.matmul(B, np.asarray(coef, dtype=np.float32).reshape(6, -1),
+              out=out.reshape(B.shape[0], -1))
+
+
+def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
+    """Write the table ``name`` (float32 ``a``, the tables' own array) into ``folder`` in
+    half precision: for the scattering density, the constituents that are a quadratic form
+    in the outgoing direction as its coefficients (float32, ``<name>.quadratic.npy``) and
+    the others as float16 (:func:`_write_half`); every other table all as float16. ``a``
+    receives the values a later read gives. Returns (checksum records of the files, the
+    "quadratic" record of meta.json: {name: {"constituents", "shape"}} or {})."""
+    ks, coef = _quadratic_fit(a) if name == _DENSITY else ([], None)
+    recs, extra = {}, {}
+    if ks:
+        crc, finite = _check(coef)
+        if not finite:
+            raise _NotFinite(name)
+        write_npy(os.path.join(folder, name + _QUAD + ".npy"), coef)
+        recs[name + _QUAD] = _record(coef, crc)
+        extra[name] = {"constituents": ks, "shape": [int(n) for n in a.shape]}
+        for j, k in enumerate(ks):
+            _quadratic_eval(coef[j], a[k])
+    rest = [k for k in range(a.shape[0]) if k not in ks]
+    recs.update(_write_half(os.path.join(folder, name + ".npy"),
+                            os.path.join(folder, name + _EXP + ".npy"), name,
+                            [a[k:k + 1] for k in rest], (len(rest),) + a.shape[1:]))
+    return recs, extra
+
+
+def _read_table(path: str, name: str, sums: dict, quad) -> np.ndarray:
+    """The half-precision table ``name`` of the entry ``path``, decoded (:func:`_read_half`)
+    and, where ``quad`` (its "quadratic" record) says so, its quadratic-form constituents
+    evaluated from their coefficients."""
+    if quad is None:
+        return _read_half(path, name, sums)
+    shape = tuple(int(n) for n in quad["shape"])
+    ks = [int(k) for k in quad["constituents"]]
+    out = np.empty(shape, dtype=np.float32)
+    rest = [k for k in range(shape[0]) if k not in ks]
+    if rest == list(range(rest[0], rest[-1] + 1)) if rest else True:
+        lo = rest[0] if rest else 0
+        _read_half(path, name, sums, out=out[lo:lo + len(rest)])
+    else:
+        out[rest] = _read_half(path, name, sums)
+    coef = _map(os.path.join(path, name + _QUAD + ".npy"))
+    _verify(name + _QUAD, coef, sums.get(name + _QUAD))
+    if coef.shape != (len(ks), 6) + shape[3:]:
+        raise DamagedEntry(f"{name}{_QUAD}.npy has shape {coef.shape}")
+    for j, k in enumerate(ks):
+        _quadratic_eval(coef[j], out[k])
+    return out
+
+
 def cache_dir() -> str:
     """The cache folder (not created)."""
     env = os.environ.get("SKYDOME_CACHE_DIR")
@@ -188,7 +450,14 @@ def load(k: str):
         sums = meta.get("checksums")
         if not isinstance(sums, dict):
             raise DamagedEntry("meta.json has no checksums")
+        half = meta.get("encoded", {})
+        quad = meta.get("quadratic", {})
         for name in meta["arrays"]:
+            if name.rsplit(".", 1)[0] in half and "." in name:
+                continue                 # read with its table (exponents, coefficients)
+            if name in half:
+                arrays[name] = _read_table(path, name, sums, quad.get(name))
+                continue
             arrays[name] = _map(os.path.join(path, name + ".npy"))
             _verify(name, arrays[name], sums.get(name))
         tables = Tables.from_arrays(arrays)
@@ -221,21 +490,41 @@ def _reason(exc: BaseException) -> str:
 
 def _load_stored_table(path, tables, meta):
     """Memory-map the entry's stored table into ``tables`` where the file is there, matches
-    the tables (float32, the single-scattering table's shape without its first axis) and its
-    recorded checksum, and is finite; a file that fails is removed (the table is built again
-    on use), with a note on stderr."""
+    the tables (float32, the 4-D tables' shape) and its recorded checksum, and is finite; a
+    file that fails is removed (the table is built again on use), with a note on stderr. A
+    table in half precision is read and checked on its first use instead
+    (:meth:`._tables.Tables.set_multiple_scattering_reader`): the sky's radiance does not
+    read it."""
     file = os.path.join(path, _STORED + ".npy")
     if not os.path.exists(file):
         return
+
+    def failed(exc):
+        _remove(file)
+        _remove(os.path.join(path, _STORED + _EXP + ".npy"))
+        _note(f"table cache entry {path} is damaged ({_reason(exc)}); its table of orders "
+              "2..N is built again when used")
+
+    if _STORED in meta.get("encoded", {}):
+        def reader():
+            try:
+                ms = _read_half(path, _STORED, meta["checksums"])
+                if ms.shape != tables.table_shape:
+                    raise DamagedEntry(f"{_STORED}.npy has shape {ms.shape}")
+            except Exception as exc:
+                failed(exc)
+                return None
+            return ms
+
+        tables.set_multiple_scattering_reader(reader)
+        return
     try:
         ms = _map(file)
-        if ms.dtype != np.float32 or ms.shape != tables.single_scattering.shape[1:]:
+        if ms.dtype != np.float32 or ms.shape != tables.table_shape:
             raise DamagedEntry(f"{_STORED}.npy has shape {ms.shape} {ms.dtype}")
         _verify(_STORED, ms, meta["checksums"].get(_STORED))
     except Exception as exc:
-        _remove(file)
-        _note(f"table cache entry {path} is damaged ({_reason(exc)}); its table of orders "
-              "2..N is built again when used")
+        failed(exc)
         return
     tables.multiple_scattering = ms
 
@@ -258,6 +547,8 @@ def add_stored_table(k: str, shape, slabs):
             meta = json.load(f)
         if meta.get("cache_key") != k or meta.get("cache_format") != CACHE_FORMAT:
             return None
+        if 4 * int(np.prod(shape)) >= HALF_MIN_BYTES:
+            return _add_half_table(path, meta, shape, slabs)
         with atomic_file(file, suffix=".npy") as tmp:
             with open(tmp, "wb") as f:
                 np.lib.format.write_array_header_1_0(
@@ -292,6 +583,41 @@ def add_stored_table(k: str, shape, slabs):
     return out
 
 
+def _add_half_table(path, meta, shape, slabs):
+    """:func:`add_stored_table` in half precision: the table's two files and its records in
+    ``meta.json`` (written before the table's file gets its name), then the cache trimmed;
+    returns the decoded table (what a later read gives)."""
+    from skydome._io import atomic_file
+
+    file = os.path.join(path, _STORED + ".npy")
+    exp_file = os.path.join(path, _STORED + _EXP + ".npy")
+    out = np.empty(shape, dtype=np.float32)
+
+    def into_out():         # each slab copied into the table, decoded there in place
+        row = 0
+        for slab in slabs:
+            part = out[row:row + slab.shape[0]]
+            part[...] = slab
+            row += slab.shape[0]
+            yield part
+
+    try:
+        with atomic_file(file, suffix=".npy") as tmp, \
+                atomic_file(exp_file, suffix=".npy") as etmp:
+            recs = _write_half(tmp, etmp, _STORED, into_out(), shape)
+            meta.setdefault("checksums", {}).update(recs)
+            meta.setdefault("encoded", {})[_STORED] = "half"
+            with atomic_file(os.path.join(path, _META)) as mtmp, open(mtmp, "w") as f:
+                json.dump(meta, f)
+    except OSError as exc:
+        _write_failed(path, exc)
+        return None
+    except (ValueError, _NotFinite):
+        return None
+    _evict(cache_dir(), limit_bytes(), keep=path)
+    return out
+
+
 class _NotFinite(Exception):
     pass
 
@@ -305,9 +631,21 @@ def store(k: str, tables) -> str | None:
     error)."""
     limit = limit_bytes()
     arrays = tables.arrays()
-    if sum(a.nbytes for a in arrays.values()) > limit:
+    half = set()
+    for name in list(arrays):
+        a = arrays[name]
+        if a.nbytes < HALF_MIN_BYTES:
+            continue
+        if name in _RECOMPUTED and tables.single_scattering_samples > 0 and tables.has_density:
+            del arrays[name]             # computed again from the entry when used
+            # but a ground observer's two r nodes kept (exactly): the sky's radiance at the
+            # ground reads them, without computing them or loading their kernel
+            arrays[_GROUND] = np.ascontiguousarray(a[:, :2])
+        elif name in _HALF + _RECOMPUTED and a.dtype == np.float32 and a.ndim >= 2:
+            half.add(name)
+    if sum(a.nbytes // (2 if n in half else 1) for n, a in arrays.items()) > limit:
         return None
-    from skydome._io import atomic_folder, write_npy
+    from skydome._io import atomic_folder
 
     folder = cache_dir()
     path = _path(k)
@@ -316,12 +654,21 @@ def store(k: str, tables) -> str | None:
         if os.path.isdir(path):
             _remove(path)
         with atomic_folder(path) as tmp:
-            names, scalars, sums = [], {}, {}
+            names, scalars, sums, quadratic = [], {}, {}, {}
             for name, a in arrays.items():
                 if a.ndim == 0:
                     scalars[name] = a.item()
                     continue
                 a = np.ascontiguousarray(a)
+                if name in half:
+                    # the tables' own array receives the decoded values, so that this model
+                    # serves what a later cache hit reads (a C-contiguous float32 array:
+                    # arrays() gives the table itself, not a copy)
+                    recs, extra = _store_half(tmp, name, getattr(tables, name))
+                    sums.update(recs)
+                    names += list(recs)
+                    quadratic.update(extra)
+                    continue
                 crc, finite = _check(a)
                 if not finite:    # never cache a table that is not finite
                     raise _NotFinite(name)
@@ -330,7 +677,9 @@ def store(k: str, tables) -> str | None:
                 sums[name] = _record(a, crc)
             with open(os.path.join(tmp, _META), "w") as f:
                 json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
-                           "scalars": scalars, "checksums": sums}, f)
+                           "scalars": scalars, "checksums": sums,
+                           "encoded": {n: "half" for n in sorted(half)},
+                           "quadratic": quadratic}, f)
     except _NotFinite:
         return None
     except (OSError, ValueError) as exc:   # ValueError: the cache folder is not writable

@@ -35,6 +35,7 @@ def save(model, path) -> None:
     from skydome._io import atomic_write
 
     model._t.build_multiple_scattering()
+    model._t.build_single_scattering()
     atomic_write(path, lambda tmp: np.savez(
         tmp, meta=np.array(json.dumps(meta(model), default=_json_default)), **model._t.arrays()),
         suffix=".npz")
@@ -65,10 +66,9 @@ def load(cls, path, sun=None):
         if np.issubdtype(a.dtype, np.floating) and not np.all(np.isfinite(a)):
             raise ValueError(f"{path} is damaged: table {k!r} holds NaN or infinite values")
     tables = Tables.from_arrays(arrays)
-    if not tables.has_multiple_scattering:
-        from skydome.models.simulated.precomputed._precompute import attach_stored_table_builder
+    from skydome.models.simulated.precomputed._precompute import attach_stored_table_builder
 
-        attach_stored_table_builder(tables)
+    attach_stored_table_builder(tables)
     obj = cls.__new__(cls)
     for p in cls.parameters:
         if p.name in m:

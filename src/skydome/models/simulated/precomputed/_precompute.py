@@ -368,18 +368,45 @@ def _precompute_tables(props, wl, p):
                     mu_s_min=mu_s_min, sun_angular_radius_rad=alpha,
                     precompute_seconds=time.perf_counter() - t_start, phase_table=pt_tab,
                     stored_table_samples=n_q_ms, stored_table=p.get("stored_table", "full"),
-                    **dens)
+                    scattering_shape=np.array(ss.shape[1:5], dtype=np.int64),
+                    single_scattering_samples=int(p["integration_samples"]), **dens)
     attach_stored_table_builder(tables)
     return tables
 
 
 def attach_stored_table_builder(tables):
     """Give ``tables`` (:class:`._tables.Tables`) the builder of its stored table of orders
-    2..N (:func:`stored_table_of`, :func:`stored_table_slabs`, looked up when called);
-    returns ``tables``."""
+    2..N (:func:`stored_table_of`, :func:`stored_table_slabs`, looked up when called) and,
+    where they record how (``single_scattering_samples``, the medium's profiles), of its
+    single-scattering table (:func:`single_scattering_of`); returns ``tables``."""
     tables.set_multiple_scattering_builder(lambda t: stored_table_of(t),
                                            lambda t: stored_table_slabs(t))
+    if tables.single_scattering_samples > 0 and tables.has_density:
+        tables.set_single_scattering_builder(lambda t, rows: single_scattering_of(t, rows))
     return tables
+
+
+def single_scattering_of(t, rows=None):
+    """Step 2 again for the tables ``t`` (:class:`._tables.Tables`), from what they hold (the
+    columns, the medium of :func:`tables_medium`, the scattering coefficients, the
+    quadrature): the single-scattering table, the same values bit for bit as the
+    precomputation's (the same kernel on the same inputs), or only its r nodes
+    ``rows = (first, end)`` (:func:`._single.single_scattering_rows`)."""
+    from skydome.models.simulated.precomputed import _single
+
+    n_r, n_mu, n_ms, n_nu, nl = t.table_shape
+    m = tables_medium(t)
+    col = np.ascontiguousarray(t.columns, dtype=np.float64)
+    trans = np.exp(-np.einsum("cij,cl->ijl", col, m.extinction)).astype(np.float32)
+    beta_s = np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64)
+    sc_idx = np.ascontiguousarray(t.scattering_index, dtype=np.int64)
+    first, end = (0, n_r) if rows is None else (int(rows[0]), int(rows[1]))
+    out = np.empty((sc_idx.size, end - first, n_mu, n_ms, n_nu, nl), dtype=np.float32)
+    _single.single_scattering_rows(col, trans, m, sc_idx, beta_s, float(t.mu_s_min),
+                                   float(t.sun_angular_radius_rad),
+                                   int(t.single_scattering_samples), QUADRATURE_SCALE_M, n_r,
+                                   first, out)
+    return out
 
 
 def stored_table_of(t, r_range=None):
@@ -390,7 +417,7 @@ def stored_table_of(t, r_range=None):
     stored_table_nodes, interpolated in the logarithm. Zeros where the tables hold no
     density (orders < 2). ``r_range`` = (first, end): only those r nodes of the full table
     (the default table only), the same values as the whole table's rows."""
-    shape = t.single_scattering.shape[1:]
+    shape = t.table_shape
     if not t.has_density:
         return np.zeros(shape, dtype=np.float32)
     if t.stored_table_samples < 1:
@@ -415,7 +442,7 @@ def stored_table_slabs(t, slab_bytes=None):
     C order; concatenated along r they are the table), each within ``slab_bytes`` (at least
     one r node; default ``STORED_SLAB_BYTES``), so that a writer holds one slab at a time;
     the subset table in one piece (its interpolation reads every r node)."""
-    shape = t.single_scattering.shape[1:]
+    shape = t.table_shape
     slab_bytes = STORED_SLAB_BYTES if slab_bytes is None else slab_bytes
     if t.stored_table != "full" or not t.has_density:
         yield stored_table_of(t)

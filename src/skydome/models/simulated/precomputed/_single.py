@@ -19,7 +19,7 @@ from skydome.transport._kernels import profile_density
 
 
 # -- precomputation ---------------------------------------------------------------------------------
-@njit(parallel=True, cache=True, fastmath=True)
+@njit(cache=True)
 def single_scattering_table(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n_q, ts, out):
     """Single scattering per scattering constituent, without its phase function ([Bru17]
     ComputeSingleScattering, [BN08] eq. 4 without P):
@@ -38,8 +38,21 @@ def single_scattering_table(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n
     shared by all sun geometries; the wavelength axis is innermost and contiguous (float32,
     accumulated in float32: 2 x 20 positive terms, relative rounding < 1e-6). A nu node
     that :func:`._mapping.cell_nu` clamps onto its neighbour's nu (about 12 % of them at
-    the default sizes) is the same ray and sun geometry: copied, not integrated again."""
-    nsc, n_r, n_mu, n_ms, n_nu, nl = out.shape
+    the default sizes) is the same ray and sun geometry: copied, not integrated again.
+
+    The whole table: :func:`single_scattering_rows` from r node 0."""
+    single_scattering_rows(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n_q, ts,
+                           out.shape[1], 0, out)
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def single_scattering_rows(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n_q, ts, n_r,
+                          r0, out):
+    """The r nodes r0 .. r0 + out.shape[1] - 1 of the n_r-node table of
+    :func:`single_scattering_table` (the same values, bit for bit: the same loop body),
+    into ``out`` (scattering, rows, mu, mu_s, nu, wavelength); the observer's two r nodes
+    cost 2 / n_r of the table."""
+    nsc, n_rows, n_mu, n_ms, n_nu, nl = out.shape
     R = m.R
     Rt = m.Rt
     codes = m.profile_code
@@ -53,14 +66,14 @@ def single_scattering_table(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n
     mus = mu_s_nodes(n_ms, mu_s_min)
     # the rays interleaved over the threads' static shares of the loop (the cost varies
     # with r and mu): work item j is ray (j % g) * s + j // g, s = 16 rays per group
-    n_rays = n_r * n_mu
+    n_rays = n_rows * n_mu
     s_grp = 16 if n_rays % 16 == 0 else 1
     n_grp = n_rays // s_grp
     order = np.empty(n_rays, dtype=np.int64)
     for j in range(n_rays):
         order[j] = (j % n_grp) * s_grp + j // n_grp
     for jdx in prange(n_rays):
-        idx = order[jdx]
+        idx = r0 * n_mu + order[jdx]
         tq = np.empty(2 * n_q)
         wq = np.empty(2 * n_q)
         w1 = np.empty(nc)
@@ -146,4 +159,5 @@ def single_scattering_table(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n
                 acc[k] = acc[k - 1]
             for kk in range(nsc):
                 for l in range(nl):
-                    out[kk, ir, imu, k // n_nu, k % n_nu, l] = beta_s_sc[kk, l] * acc[k, kk, l]
+                    out[kk, ir - r0, imu, k // n_nu, k % n_nu, l] = (beta_s_sc[kk, l]
+                                                                     * acc[k, kk, l])

@@ -32,8 +32,9 @@ def _scalar(kind, default):
     return field(default=default, metadata={"scalar": kind})
 
 
-# the lazily built field (see Tables.multiple_scattering)
+# the lazily built fields (see Tables.multiple_scattering, Tables.single_scattering)
 _LAZY = "multiple_scattering"
+_LAZY_SS = "single_scattering"
 
 
 @dataclass
@@ -47,8 +48,6 @@ class Tables:
     columns: np.ndarray = _axes("constituent", "r", "mu", dtype="float64")
     # extinction coefficient at reference density [m^-1]
     beta_e: np.ndarray = _axes("constituent", "wavelength", dtype="float64")
-    # single scattering per scattering constituent, without its phase function
-    single_scattering: np.ndarray = _axes("scattering", "r", "mu", "mu_s", "nu", "wavelength")
     # sky irradiance on a horizontal surface, orders 1..N and the remainder (dimensionless)
     irradiance: np.ndarray = _axes("r", "mu_s", "wavelength", dtype="float64")
     phase_code: np.ndarray = _axes("scattering", dtype="int64")
@@ -72,6 +71,11 @@ class Tables:
     # uniform in the scattering angle over [0, pi]) on the table wavelengths [sr^-1]
     phase_table: np.ndarray | None = _axes("scattering", "angle", "wavelength", dtype="float64",
                                            optional=True)
+    # single scattering per scattering constituent, without its phase function: None until
+    # first read where a builder is given (computed then from the columns and the medium,
+    # see build_single_scattering; the on-disk cache does not store it)
+    single_scattering: np.ndarray | None = _axes("scattering", "r", "mu", "mu_s", "nu",
+                                                 "wavelength", optional=True)
     # orders 2..N (+ the geometric remainder), full radiance [sr^-1]: None until first read
     # (built then from scattering_density, see build_multiple_scattering; zeros without it)
     multiple_scattering: np.ndarray | None = _axes("r", "mu", "mu_s", "nu", "wavelength",
@@ -80,10 +84,77 @@ class Tables:
     # node) or "subset" (_precompute.stored_table_nodes, interpolated)
     stored_table_samples: int = _scalar("int", 0)
     stored_table: str = _scalar("str", "full")
+    # the single-scattering table's first two r nodes (a ground observer's), kept where the
+    # whole table is not (the on-disk cache): single_scattering_rows(0, 2) reads them
+    single_scattering_ground: np.ndarray | None = _axes("scattering", "r", "mu", "mu_s", "nu",
+                                                        "wavelength", optional=True)
+    # the 4-D tables' (r, mu, mu_s, nu) node counts, and the single-scattering table's
+    # quadrature nodes per ray piece (what build_single_scattering needs; 0: not recorded)
+    scattering_shape: np.ndarray | None = _axes("axis", dtype="int64", optional=True)
+    single_scattering_samples: int = _scalar("int", 0)
 
     @property
     def has_density(self) -> bool:
         return self.scattering_density is not None
+
+    @property
+    def table_shape(self) -> tuple:
+        """(n_r, n_mu, n_mu_s, n_nu, n_wavelengths) of the 4-D tables (single scattering
+        without its first axis, the stored table of orders 2..N)."""
+        ss = self.__dict__.get("_" + _LAZY_SS)
+        if ss is not None:
+            return tuple(int(n) for n in ss.shape[1:])
+        if self.scattering_shape is None:
+            raise ValueError("the tables hold neither single scattering nor its shape "
+                             "(scattering_shape)")
+        return tuple(int(n) for n in self.scattering_shape) + (self.table_wavelengths_nm.size,)
+
+    @property
+    def has_single_scattering(self) -> bool:
+        """Whether the single-scattering table is computed (or was read)."""
+        return self.__dict__.get("_" + _LAZY_SS) is not None
+
+    def build_single_scattering(self) -> np.ndarray:
+        """The single-scattering table: computed now if it is not yet, by the builder that
+        :meth:`set_single_scattering_builder` gave (the precomputation's step 2 on the
+        columns and medium these tables hold: the same values, bit for bit). ValueError
+        where it is not there and no builder was given."""
+        ss = self.__dict__.get("_" + _LAZY_SS)
+        if ss is not None:
+            return ss
+        builder = self.__dict__.get("_ss_builder")
+        if builder is None:
+            raise ValueError("the single-scattering table is not computed and these tables "
+                             "have no builder: give one with set_single_scattering_builder")
+        self.single_scattering = builder(self, None)
+        return self.__dict__["_" + _LAZY_SS]
+
+    def single_scattering_rows(self, first: int, end: int) -> np.ndarray:
+        """The single-scattering table's r nodes first..end-1 (scattering, rows, mu, mu_s,
+        nu, wavelength): a view of the table where it is there, else only those rows
+        computed (the same values as the table's; the observer's two r nodes cost 2 / n_r
+        of the table), kept for the next call with the same rows."""
+        ss = self.__dict__.get("_" + _LAZY_SS)
+        if ss is not None:
+            return ss[:, first:end]
+        ground = self.single_scattering_ground
+        if ground is not None and end <= ground.shape[1]:
+            return ground[:, first:end]
+        rows = self.__dict__.setdefault("_ss_rows", {})
+        if (first, end) not in rows:
+            builder = self.__dict__.get("_ss_builder")
+            if builder is None:
+                return self.build_single_scattering()[:, first:end]
+            if len(rows) >= 4:       # 31 MB each at the defaults: a few altitudes
+                rows.clear()
+            rows[(first, end)] = builder(self, (first, end))
+        return rows[(first, end)]
+
+    def set_single_scattering_builder(self, builder) -> None:
+        """How the single-scattering table is computed when it is not there:
+        ``builder(tables, rows)`` -> float32 array, the whole table (``rows`` None) or its r
+        nodes ``rows = (first, end)``."""
+        self.__dict__["_ss_builder"] = builder
 
     @property
     def kernel_phase_table(self) -> np.ndarray:
@@ -116,8 +187,14 @@ class Tables:
                              "set_multiple_scattering_builder")
         whole, slabs = builder
         sink = self.__dict__.get("_sink")
+        reader = self.__dict__.pop("_reader", None)
+        if reader is not None:
+            ms = reader()           # the table from a file (None: unreadable, built again)
+            if ms is not None:
+                self.multiple_scattering = ms
+                return self.__dict__["_" + _LAZY]
         if sink is not None:
-            ms = sink(self.single_scattering.shape[1:], slabs(self))
+            ms = sink(self.table_shape, slabs(self))
         if ms is None:
             ms = whole(self)
         self.multiple_scattering = ms
@@ -128,6 +205,11 @@ class Tables:
         the single-scattering table's shape without its first axis) and
         ``slabs(tables) -> iterator`` of its consecutive r slabs (for a sink)."""
         self.__dict__["_builder"] = (whole, slabs)
+
+    def set_multiple_scattering_reader(self, reader) -> None:
+        """``reader() -> array or None``: where the stored table is on disk (the cache), how
+        it is read on first use (before any builder); None: it could not be, build it."""
+        self.__dict__["_reader"] = reader
 
     def set_multiple_scattering_sink(self, sink) -> None:
         """``sink(shape, slabs) -> array or None``: called when the stored table is built,
@@ -140,7 +222,8 @@ class Tables:
         the stored table of orders 2..N while it is not built left out), for ``np.savez``."""
         out = {}
         for f in dataclasses.fields(self):
-            v = self.__dict__.get("_" + _LAZY) if f.name == _LAZY else getattr(self, f.name)
+            v = (self.__dict__.get("_" + f.name) if f.name in (_LAZY, _LAZY_SS)
+                 else getattr(self, f.name))
             if v is not None:
                 out[f.name] = np.asarray(v)
         return out
@@ -179,12 +262,30 @@ def _set_multiple_scattering(self, value):
                                   else np.ascontiguousarray(value, dtype=np.float32))
 
 
+def _get_single_scattering(self):
+    ss = self.__dict__.get("_" + _LAZY_SS)
+    return ss if ss is not None else self.build_single_scattering()
+
+
+def _set_single_scattering(self, value):
+    self.__dict__["_" + _LAZY_SS] = (None if value is None
+                                     else np.ascontiguousarray(value, dtype=np.float32))
+
+
 # the field as a property (set after @dataclass, which took its default None for __init__):
 # reading it builds the table on first use; None (the default) leaves it to be built
 Tables.multiple_scattering = property(
     _get_multiple_scattering, _set_multiple_scattering,
     doc="orders 2..N (+ the geometric remainder), full radiance per unit solar irradiance "
         "[sr^-1], axes (r, mu, mu_s, nu, wavelength); built on first read")
+
+
+# the same for single scattering: computed on first read where the tables do not hold it
+Tables.single_scattering = property(
+    _get_single_scattering, _set_single_scattering,
+    doc="single scattering per scattering constituent without its phase function, per unit "
+        "solar irradiance, axes (scattering, r, mu, mu_s, nu, wavelength); computed on first "
+        "read where it is not held")
 
 
 def axes(name: str) -> tuple:

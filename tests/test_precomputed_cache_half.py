@@ -1,0 +1,242 @@
+"""Cache format 12 of the ``precomputed`` model: the large tables in half precision (float16
+and a power-of-two scale per row of wavelengths), the scattering density's Rayleigh
+constituent as its quadratic form in the outgoing direction, and the single-scattering
+table computed again from the entry instead of stored.
+
+The tiny tables of these tests are below ``_cache.HALF_MIN_BYTES`` (stored exactly, as in
+test_precomputed_cache.py); here that threshold is set to 0 so that they take the path of
+the default tables. Each test has a cache folder of its own."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+import skydome as sd
+from skydome.models.simulated.precomputed import _cache, _precompute
+from skydome.transport.geometry import direction_from_angles
+
+TINY = dict(scattering_r_size=4, scattering_mu_size=8, scattering_mu_s_size=4,
+            scattering_nu_size=2, irradiance_mu_s_size=4, irradiance_r_size=4,
+            transmittance_mu_size=8, transmittance_r_size=4, orders=2,
+            table_wavelengths_nm=[450.0, 550.0, 650.0])
+SUN = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
+WL = [450.0, 550.0, 650.0]
+DIRS = direction_from_angles([89.0, 60.0, 20.0, 5.0, -3.0], [0.0, 45.0, 90.0, 180.0, 270.0])
+# float16's rounding: 11 significant bits, half a unit in the last place relative
+HALF_ULP = 2.0 ** -11
+# below float16's normal range (2^-14, with the row's largest value scaled into
+# [2^14, 2^15): 2^28 below it) the step is 2^-24, i.e. at most 2^-38 of the row's largest
+SUBNORMAL = 2.0 ** -38
+
+
+def within_half(decoded, exact):
+    """|decoded - exact| <= 2^-11 |exact| + 2^-38 x the largest |value| of its row (the
+    last axis, wavelengths): float16's rounding of the scaled value, normal or subnormal."""
+    bound = HALF_ULP * np.abs(exact) + SUBNORMAL * np.abs(exact).max(axis=-1, keepdims=True)
+    return bool(np.all(np.abs(decoded.astype(np.float64) - exact) <= bound))
+
+
+def tiny(**kw):
+    return sd.model("precomputed", sun=SUN, **{**TINY, **kw})
+
+
+@pytest.fixture(autouse=True)
+def half_for_every_size(monkeypatch, tmp_path):
+    """Half precision for every table size, and a cache folder of the test's own."""
+    monkeypatch.setattr(_cache, "HALF_MIN_BYTES", 0)
+    monkeypatch.setenv("SKYDOME_CACHE_DIR", str(tmp_path / "cache"))
+
+
+def entry():
+    d = _cache.cache_dir()
+    (name,) = [n for n in os.listdir(d) if not n.startswith(".")]
+    return os.path.join(d, name)
+
+
+def test_half_rows_round_to_nearest_within_their_precision():
+    """Values spanning 2^-100 .. 2^10 in one array (rows of different magnitude, a row of
+    zeros, rows over 2^20 and 2^40 in range): each decoded value is the nearest float16 of
+    the scaled value, so within half a unit in the last place (2^-11 relative where the
+    scaled value is normal, within 2^28 of the row's largest; 2^-38 of the row's largest
+    below); zeros stay zeros."""
+    rng = np.random.default_rng(5)
+    rows = (rng.uniform(0.5, 1.0, (6, 20)) * 2.0 ** rng.integers(-60, 10, (6, 1)))
+    rows[3] = 0.0
+    rows[4] *= 2.0 ** np.linspace(-20, 0, 20)
+    rows[5] *= 2.0 ** np.linspace(-40, 0, 20)          # 12 decades: partly subnormal
+    rows = rows.astype(np.float32)
+    h, e = _cache._encode_half(rows)
+    assert h.dtype == np.float16 and e.dtype == np.int8
+    out = np.empty_like(rows)
+    _cache._decode_half(h, e, out)
+    assert np.all(out[3] == 0.0)
+    assert within_half(out, rows.astype(np.float64))
+    rel = np.abs(out[:5][rows[:5] != 0] / rows[:5][rows[:5] != 0] - 1.0)
+    assert rel.max() <= HALF_ULP                        # rows within 2^28: relative
+    # the largest value of each non-zero row is scaled into [2^14, 2^15)
+    top = np.abs(h.astype(np.float32)).max(axis=1)[np.any(rows != 0, axis=1)]
+    assert np.all((top >= 2.0 ** 14) & (top < 2.0 ** 15))
+
+
+def test_entry_layout_and_sizes():
+    m = tiny()
+    path = entry()
+    names = sorted(os.listdir(path))
+    assert "single_scattering.npy" not in names         # computed again from the entry
+    meta = json.load(open(os.path.join(path, "meta.json")))
+    assert meta["cache_format"] == "skydome.precomputed-cache/12"
+    assert meta["encoded"] == {"scattering_density": "half"}
+    # the Rayleigh constituent (phase code 0) as a quadratic form, the aerosol's in float16
+    rayleigh = [int(k) for k in np.nonzero(m._t.phase_code == 0)[0]]
+    assert meta["quadratic"]["scattering_density"]["constituents"] == rayleigh
+    half = np.load(os.path.join(path, "scattering_density.npy"))
+    J = m._t.scattering_density
+    assert half.dtype == np.float16 and half.shape == (J.shape[0] - 1,) + J.shape[1:]
+    assert np.load(os.path.join(path, "scattering_density.exp.npy")).shape == half.shape[:-1]
+    coef = np.load(os.path.join(path, "scattering_density.quadratic.npy"))
+    assert coef.shape == (1, 6) + J.shape[3:]
+
+
+def test_stored_values_against_the_exact_tables_and_a_hit_serves_the_same():
+    """The first model (whose tables were stored) serves the stored precision; a later hit
+    serves the same values bit for bit; both are within the formats' rounding of a model
+    built without the cache (float32 tables): the density's float16 constituent within
+    float16's rounding (:func:`within_half`), its quadratic-form constituent within 1e-5
+    of each column's largest value (QUADRATIC_TOL), the sky's radiance within 2^-11 (a
+    weighted sum of them)."""
+    exact = tiny(cache=False)
+    first = tiny()
+    assert not first.from_cache
+    second = tiny()
+    assert second.from_cache
+    Je, J1, J2 = (x._t.scattering_density for x in (exact, first, second))
+    assert np.array_equal(J1, J2)
+    ray = int(np.nonzero(exact._t.phase_code == 0)[0][0])
+    mie = 1 - ray
+    assert within_half(J1[mie], Je[mie].astype(np.float64))
+    colmax = np.abs(Je[ray]).max(axis=(0, 1))
+    assert np.all(np.abs(J1[ray] - Je[ray]).max(axis=(0, 1)) <= _cache.QUADRATIC_TOL * colmax)
+    r0, r1, r2 = (x.radiance(DIRS, WL) for x in (exact, first, second))
+    assert np.array_equal(r1, r2)
+    assert np.abs(r1 / r0 - 1).max() <= HALF_ULP
+
+
+def test_mie_only_density_is_not_taken_for_a_quadratic_form():
+    """A constituent whose phase function is not a polynomial of degree <= 2 (the aerosol's
+    Cornette-Shanks) fails the fit's residual test; a made-up quadratic field passes it and
+    comes back from its coefficients."""
+    m = tiny(cache=False)
+    J = np.array(m._t.scattering_density)
+    ks, coef = _cache._quadratic_fit(J)
+    assert ks == [int(k) for k in np.nonzero(m._t.phase_code == 0)[0]]
+    n_th, n_ph = J.shape[1:3]
+    th = np.linspace(0, np.pi, n_th)[:, None]
+    ph = np.linspace(0, np.pi, n_ph)[None, :]
+    ox, oz = np.sin(th) * np.cos(ph), np.cos(th) + 0 * ph
+    field = (2.0 + 0.3 * ox - 0.7 * oz + 0.5 * ox * ox + 0.2 * oz * oz - 0.4 * ox * oz)
+    J[0] = field[..., None, None, None] * np.arange(1, 1 + np.prod(J.shape[3:])).reshape(
+        J.shape[3:])
+    J[1] = J[0] * (1.0 + 0.2 * np.cos(3 * ph))[..., None, None, None]   # not quadratic
+    ks, coef = _cache._quadratic_fit(J)
+    assert ks == [0]
+    back = np.empty_like(J[0])
+    _cache._quadratic_eval(coef[0], back)
+    assert np.abs(back / J[0] - 1).max() <= _cache.QUADRATIC_TOL
+
+
+def test_single_scattering_is_computed_again_bit_for_bit():
+    exact = tiny(cache=False)
+    tiny()
+    hit = tiny()
+    assert hit.from_cache and not hit._t.has_single_scattering
+    rows = hit._t.single_scattering_rows(1, 3)           # the observer's two r nodes only
+    assert not hit._t.has_single_scattering
+    assert np.array_equal(rows, exact._t.single_scattering[:, 1:3])
+    assert np.array_equal(hit._t.single_scattering, exact._t.single_scattering)
+
+
+def test_ground_rows_of_single_scattering_are_stored_and_served_without_the_kernel(
+        monkeypatch):
+    """The first two r nodes (a ground observer's) are stored exactly; a hit serves the
+    ground's sky from them without computing single scattering."""
+    exact = tiny(cache=False)
+    tiny()
+    stored = np.load(os.path.join(entry(), "single_scattering_ground.npy"))
+    assert np.array_equal(stored, exact._t.single_scattering[:, :2])
+    from skydome.models.simulated.precomputed import _single
+
+    with monkeypatch.context() as mp:
+        mp.setattr(_single, "single_scattering_rows", lambda *a, **k: 1 / 0)
+        hit = tiny()
+        assert hit.from_cache and hit.observer_altitude_m == 0.0
+        rad = hit.radiance(DIRS, WL)
+        assert not hit._t.has_single_scattering
+    assert np.array_equal(rad, tiny().radiance(DIRS, WL))
+    assert np.array_equal(rad, tiny(observer_altitude_m=0.0).radiance(DIRS, WL))
+    # the same sky as the exact tables' to float16's rounding of the density
+    assert np.abs(rad / exact.radiance(DIRS, WL) - 1).max() <= HALF_ULP
+
+
+def test_stored_table_in_half_precision_joins_the_entry_and_is_read_on_use(monkeypatch):
+    exact = tiny(cache=False)
+    first = tiny()
+    ap1 = first.aerial_perspective(DIRS, 5e3, WL)
+    path = entry()
+    assert np.load(os.path.join(path, "multiple_scattering.npy")).dtype == np.float16
+    # the table is a positively weighted integral of the stored density (within float16's
+    # rounding, or QUADRATIC_TOL, of the exact one), then rounded to float16 itself
+    ms_e = exact._t.multiple_scattering.astype(np.float64)
+    ms_1 = first._t.multiple_scattering
+    bound = ((2 * HALF_ULP + _cache.QUADRATIC_TOL) * np.abs(ms_e)
+             + 2 * SUBNORMAL * np.abs(ms_e).max(axis=-1, keepdims=True))
+    assert np.all(np.abs(ms_1 - ms_e) <= bound)
+    from skydome.models.simulated.precomputed import _multiple
+
+    monkeypatch.setattr(_multiple, "multiple_scattering_table", lambda *a, **k: 1 / 0)
+    monkeypatch.setattr(_precompute, "precompute", lambda *a, **k: 1 / 0)
+    hit = tiny()
+    assert hit.from_cache and not hit._t.has_multiple_scattering      # read on first use
+    ap2 = hit.aerial_perspective(DIRS, 5e3, WL)
+    assert np.array_equal(ap1[0], ap2[0]) and np.array_equal(ap1[1], ap2[1])
+
+
+def _flip(path, n=64):
+    data = bytearray(open(path, "rb").read())
+    header = len(data) - np.load(path, mmap_mode="r").nbytes
+    a = header + (len(data) - header - n) // 2
+    data[a:a + n] = bytes(255 - b for b in data[a:a + n])
+    open(path, "wb").write(bytes(data))
+
+
+@pytest.mark.parametrize("file", ["scattering_density", "scattering_density.exp",
+                                  "scattering_density.quadratic"])
+def test_flipped_bytes_in_a_half_table_rebuild_the_entry(file, capfd):
+    fresh = tiny(cache=False)
+    first = tiny()
+    _flip(os.path.join(entry(), file + ".npy"))
+    capfd.readouterr()
+    again = tiny()
+    assert not again.from_cache
+    note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
+    assert len(note) == 1 and "damaged" in note[0] and file + ".npy" in note[0], note
+    assert np.array_equal(again.radiance(DIRS, WL), first.radiance(DIRS, WL))
+    assert np.abs(again.radiance(DIRS, WL) / fresh.radiance(DIRS, WL) - 1).max() <= HALF_ULP
+    assert tiny().from_cache
+
+
+def test_damaged_half_stored_table_is_built_again_on_use(capfd):
+    first = tiny()
+    ap = first.aerial_perspective(DIRS, 5e3, WL)
+    file = os.path.join(entry(), "multiple_scattering.npy")
+    _flip(file)
+    capfd.readouterr()
+    again = tiny()
+    assert again.from_cache
+    ap2 = again.aerial_perspective(DIRS, 5e3, WL)      # read, found damaged, built again
+    note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
+    assert len(note) == 1 and "multiple_scattering.npy" in note[0], note
+    assert np.array_equal(ap[1], ap2[1])
+    assert os.path.exists(file)                         # and stored again
+    assert tiny().aerial_perspective(DIRS, 5e3, WL)[1].tolist() == ap[1].tolist()
