@@ -206,13 +206,13 @@ def machine() -> str:
 
 
 def block(rows, venv_rows, load0, load1) -> str:
-    lines = ["| command | cold: wall, CPU, peak RSS | warm: wall, CPU, peak RSS |",
-             "|---|---|---|"]
+    lines = ["| command | cold: wall | CPU | peak RSS | warm: wall | CPU | peak RSS |",
+             "|---|---|---|---|---|---|---|"]
     for c, cold, warm in rows:
         note = " (warm pass: empty table cache)" if c.new_atmosphere else ""
         lines.append(f"| `{c.name}`{note} | {_fmt(cold)} | {_fmt(warm)} |")
     if venv_rows:
-        lines += ["", "| fresh virtual environment | wall, CPU, peak RSS |", "|---|---|"]
+        lines += ["", "| fresh virtual environment | wall | CPU | peak RSS |", "|---|---|---|---|"]
         lines += [f"| {name} | {_fmt(r)} |" for name, r in venv_rows]
     lines += ["", f"Machine: {machine()}. Load average {load0:.1f} at the start, "
                   f"{load1:.1f} at the end."]
