@@ -13,9 +13,13 @@ are compiled. Per run the script prints the wall time, the CPU time of the proce
 children (user + system, from ``wait4``) and the peak resident memory (``ru_maxrss``).
 
 ``--fresh-venv`` adds the scenario of issue 27's first target: a new virtual environment,
-``pip install --no-deps .`` of this checkout (the dependencies come from the running
-interpreter's environment through a ``.pth`` file, so no index is needed), empty caches, then
-``skydome render --sun-elevation 30 --out x.png``.
+``pip install --no-deps .`` of this checkout (the runtime dependencies come from the running
+interpreter's environment through a ``.pth`` file; pip's isolated build environment takes
+setuptools, numpy, scipy, numba and threadpoolctl from the configured index or wheel folder,
+numba, llvmlite and numpy pinned to the running environment's versions), an empty table
+cache and no ``NUMBA_CACHE_DIR``, then ``skydome render --sun-elevation 30 --out x.png``
+twice. ``SKYDOME_BUILD_KERNELS=0`` in the environment gives the wheel without its kernels
+(the "before" figures).
 
 ``--prewarm`` runs ``python -m skydome.apps.warmup --kernels`` (the set-up's kernel step) into
 the cold numba folder first, to show the cold command as it is after the set-up.
