@@ -3,13 +3,13 @@
 Everything else about the package is in pyproject.toml. After the sources are copied into
 the build folder, ``python -m skydome.apps.warmup --kernels`` runs on that copy with numba's
 cache in the package's own ``__pycache__`` folders (numba's in-tree cache), so the wheel
-carries the compiled precomputation, render and display kernels. numba 0.68 and later (numba
-pull request 10659; 0.67 and earlier used the file's modification time and size) key a cache entry on the source
-file's content (a SHA-256 of it), the numba and Python versions and the CPU (name and
-features), so the entries stay valid wherever pip puts the files and whatever modification
-times it gives them; on another CPU, numba version or Python they are ignored and the
-kernels compile on first use as before (tests/test_kernel_build_cache.py checks the
-installed numba).
+carries the compiled precomputation, render and display kernels. numba 0.68 and later
+(numba pull request 10659; 0.67 and earlier used the file's modification time and size) key
+a cache entry on the source file's content (a SHA-256 of it), the numba and Python versions
+and the CPU (name and features), so the entries stay valid wherever pip puts the files and
+whatever modification times it gives them; on another CPU, numba version or Python they are
+ignored and the kernels compile on first use as before (tests/test_kernel_build_cache.py
+checks the installed numba).
 
 ``SKYDOME_BUILD_KERNELS=0`` skips the step. It is skipped, with one line, when the build
 environment cannot import skydome's dependencies; editable installs (``pip install -e``)
