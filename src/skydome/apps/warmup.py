@@ -20,6 +20,25 @@ PRECOMPUTE_WARM_SIZES = dict(scattering_r_size=8, scattering_mu_size=32, scatter
                              irradiance_r_size=8, sphere_samples=8, high_order_sphere_samples=8)
 
 
+def warm_kernels(verbose: bool = True) -> float:
+    """Compile the kernels of the default render path into numba's on-disk cache without
+    touching the table cache: a small precomputation of the default atmosphere and
+    wavelengths (:data:`PRECOMPUTE_WARM_SIZES`: the default tables' kernel specialisations,
+    table sizes aside), a tiny fisheye from it and its display transform. Run by the
+    package build (``setup.py``) and by :func:`warm`; returns the seconds it took."""
+    import skydome as sd
+    from skydome.imaging import make_projection
+
+    t0 = time.perf_counter()
+    sun = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
+    model = sd.model("precomputed", sun=sun, cache=False, **PRECOMPUTE_WARM_SIZES)
+    sd.render(model, make_projection("fisheye", "16"), output="xyz").to_srgb()
+    if verbose:
+        print(f"warm: default render path compiled ({time.perf_counter() - t0:.1f} s)",
+              flush=True)
+    return time.perf_counter() - t0
+
+
 def warm(verbose: bool = True) -> float:
     """Build the default precomputed tables (cached), render a tiny image with the default
     model and the analytic models' kernels, and compile the sky-matrix kernel (``skydome
@@ -56,4 +75,11 @@ def warm(verbose: bool = True) -> float:
 
 
 if __name__ == "__main__":
-    print(f"warm: done in {warm():.1f} s")
+    import sys
+
+    if sys.argv[1:] == ["--kernels"]:
+        print(f"warm: kernels done in {warm_kernels():.1f} s")
+    elif sys.argv[1:]:
+        sys.exit("usage: python -m skydome.apps.warmup [--kernels]")
+    else:
+        print(f"warm: done in {warm():.1f} s")
