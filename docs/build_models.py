@@ -8,7 +8,7 @@ ORDER = [
     "atmosphere", "spectra", "sun", "transport", "rendering", "illuminance",
     "cie", "perez", "preetham", "hosek_wilkie",
     "klassen_kaneda", "nishita1993", "nishita1996_dobashi1995", "oneil_dobashi2002",
-    "montecarlo", "precomputed", "hillaire2020", "validation",
+    "montecarlo", "precomputed", "hillaire2020", "fitted", "validation",
     "comparison",
 ]
 EFFECTS_ORDER = ["effects_timelapse", "effects_twilight", "effects_airlight", "effects_mie",

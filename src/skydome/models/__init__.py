@@ -79,8 +79,9 @@ model does not declare, airlight without ``aerial_perspective`` or ``turbidity``
 unknown ``own_ground``).
 
 Models register themselves with :func:`register`; the registry discovers every module in
-``skydome.models.analytic`` and ``skydome.models.simulated`` on first use, so adding a
-model needs no edit here. Model modules must not import numba at module level.
+``skydome.models.analytic``, ``skydome.models.simulated`` and ``skydome.models.fitted`` on
+first use, so adding a model needs no edit here. Model modules must not import numba at
+module level.
 """
 
 from __future__ import annotations
@@ -502,7 +503,7 @@ def resolve_atmosphere(p: dict[str, Any], given: dict[str, Any]):
 # -- registry -------------------------------------------------------------------------------
 _REGISTRY: dict[str, type[SkyModel]] = {}
 _DISCOVERED = False
-_PACKAGES = ("skydome.models.analytic", "skydome.models.simulated")
+_PACKAGES = ("skydome.models.analytic", "skydome.models.simulated", "skydome.models.fitted")
 
 
 #: The values of ``SkyModel.own_ground``.

@@ -1,0 +1,182 @@
+"""``fitted``: skydome's own fitted sky model, the ``precomputed`` reference at analytic speed.
+
+A low-rank angular basis per sun-elevation node, with coefficients interpolated over the
+atmosphere (aerosol optical depth at 550 nm, ground albedo), the observer's altitude and the
+sun's elevation, fitted to spectral skies of the ``precomputed`` model (Bruneton 2017 as
+built by skydome, validated against DISORT and Monte Carlo: docs/validation.md). The data
+set is made by tools/fitted_dataset.py (on Dask) and the coefficients by
+tools/fit_fitted.py; :mod:`._coefficients` describes the representation, :mod:`._grid` the
+nodes and the view grid, docs/models.md ("fitted") the range and the measured errors.
+
+Per model (one configuration) the angular table is built once (a few milliseconds: one
+small matrix product per albedo node and neighbouring elevation node); every direction is
+then a bilinear lookup in a numba kernel (:mod:`._kernels`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skydome._validate import as_wavelengths
+from skydome.models import Parameter, SkyModel, register
+from skydome.models.fitted import _grid
+
+__all__ = ["FittedSky"]
+
+#: Wavelengths the model answers [nm] (its table wavelengths span them).
+WAVELENGTH_RANGE_NM = (300.0, 1100.0)
+
+
+@register
+class FittedSky(SkyModel):
+    """skydome's fitted sky: the ``precomputed`` reference at analytic speed, spectral.
+
+    Parameters
+    ----------
+    sun : skydome.Sun
+        Sun position; elevation in [-2, 90] deg (the range where the reference is
+        validated within 3 % RMS against Monte Carlo: docs/validation.md).
+    aerosol_optical_depth : float
+        Vertical aerosol optical depth at 550 nm, in [0, 1] (Angstrom exponent 1.3, the
+        aerosol of ``Atmosphere.earth``).
+    ground_albedo : float
+        Grey Lambertian ground albedo, in [0, 1].
+    observer_altitude_m : float [m]
+        Observer altitude above the ground, in [0, 15000].
+
+    Notes
+    -----
+    The atmosphere is ``Atmosphere.earth(aerosol_optical_depth=..., ground_albedo=...)``
+    with its other constituents at their defaults (ozone 300 DU, water vapour 1.42 cm,
+    mixed gases). The reference's table wavelengths are 300-1100 nm every 20 nm; other
+    wavelengths are interpolated linearly between them relative to the solar spectrum (as
+    ``precomputed`` does). Below the horizon the model returns the reference's ground
+    (Lambertian, lit by the sun and the sky, seen through the air), for an observer on
+    the ground as above it. Errors against the reference on a held-out grid:
+    docs/models.md, "fitted".
+    """
+
+    name = "fitted"
+    reference = ("skydome's fitted model (low-rank angular basis per sun elevation, "
+                 "fitted to the precomputed reference: Bruneton 2017 as built by skydome)")
+    native = "spectral"
+    summary = "skydome's own fit of the precomputed reference (spectral, sun -2..90 deg, 0-15 km)"
+    own_ground = "sun_and_sky"
+    sun_elevation_range_deg = _grid.SUN_ELEVATION_RANGE_DEG
+    parameters = (
+        Parameter("aerosol_optical_depth", "", 0.1, *_grid.AOD_RANGE,
+                  "vertical aerosol optical depth at 550 nm (Angstrom exponent 1.3)"),
+        Parameter("ground_albedo", "", 0.1, *_grid.ALBEDO_RANGE,
+                  "grey Lambertian ground albedo"),
+        Parameter("observer_altitude_m", "m", 0.0, *_grid.ALTITUDE_RANGE_M,
+                  "observer altitude above the ground"),
+    )
+
+    def _setup(self, p, given):
+        super()._setup(p, given)
+        from skydome.models.fitted import _coefficients
+
+        self._c = _coefficients.load()
+        self._table_wl = self._c["wavelengths_nm"]
+        # [sr^-1] per unit extraterrestrial irradiance, (rows, phi, n_table_wavelengths)
+        self._table = _coefficients.radiance_grid(
+            self._c, self.aerosol_optical_depth, self.ground_albedo,
+            float(self.sun.elevation_deg), self.observer_altitude_m)
+        self._theta_h = _grid.horizon_zenith_rad(self.observer_altitude_m)
+        az = math.radians(float(self.sun.azimuth_deg))
+        self._sin_az, self._cos_az = math.sin(az), math.cos(az)
+        self._derived: dict = {}
+
+    # -- tables per output ---------------------------------------------------------------
+    def _weights(self, wl: np.ndarray) -> np.ndarray:
+        """(n_table, n): linear interpolation from the table wavelengths to ``wl``, times
+        the extraterrestrial solar irradiance at ``wl`` [W m^-2 nm^-1] (the sun's distance
+        included)."""
+        from skydome.spectra import solar_irradiance
+
+        tw = self._table_wl
+        x = np.clip(wl, tw[0], tw[-1])
+        j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
+        f = (x - tw[j]) / (tw[j + 1] - tw[j])
+        W = np.zeros((tw.size, wl.size))
+        W[j, np.arange(wl.size)] = 1.0 - f
+        W[j + 1, np.arange(wl.size)] += f
+        return W * (solar_irradiance(wl) * self.sun.irradiance_scale)[None, :]
+
+    def _derived_table(self, key, make):
+        t = self._derived.get(key)
+        if t is None:
+            if len(self._derived) > 8:
+                self._derived.clear()
+            t = self._derived[key] = np.ascontiguousarray(make(), dtype=np.float64)
+        return t
+
+    def _xyz_matrix(self) -> np.ndarray:
+        """(n_table, 3): table values -> CIE XYZ [cd m^-2] through the default wavelength
+        grid (as the base class integrates a spectral model's radiance)."""
+        from skydome.spectra import K_M, default_wavelengths, integration_weights
+
+        wl = default_wavelengths()
+        return self._weights(wl) @ integration_weights(wl, "linear") * K_M
+
+    def _lookup(self, directions, table) -> np.ndarray:
+        from skydome.models.analytic._kernels_analytic import flat_directions
+        from skydome.models.fitted import _kernels
+
+        flat, lead = flat_directions(directions)     # checked in one pass, not copied
+        out = np.empty((flat.shape[0], table.shape[2]))
+        _kernels.lookup(flat, table, self._theta_h, self._sin_az, self._cos_az, out)
+        return out.reshape(lead + (table.shape[2],))
+
+    # -- the protocol --------------------------------------------------------------------
+    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] arriving from ``directions`` (..., 3),
+        shape (..., n_wavelengths); wavelengths in [300, 1100] nm."""
+        wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
+        key = ("wl", wl.tobytes())
+        table = self._derived_table(key, lambda: self._table @ self._weights(wl))
+        return self._lookup(directions, table)
+
+    def _spectral_basis(self, wavelengths_nm):
+        """(sample, B): ``radiance(d, wavelengths_nm) == sample(d) @ B``, sample(d) the
+        table values (n, n_table) [sr^-1] and B the interpolation to ``wavelengths_nm``
+        times the solar spectrum, so that a renderer folds B into its spectrum -> XYZ
+        weights (skydome.imaging.render)."""
+        wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
+        return (lambda d: self._lookup(d, self._table)), self._weights(wl)
+
+    def xyz(self, directions) -> np.ndarray:
+        """CIE 1931 XYZ, Y = luminance [cd m^-2], shape (..., 3)."""
+        return self._lookup(directions, self._derived_table(
+            "xyz", lambda: self._table @ self._xyz_matrix()))
+
+    def luminance(self, directions) -> np.ndarray:
+        """Luminance [cd m^-2], shape (...)."""
+        return self._lookup(directions, self._derived_table(
+            "y", lambda: self._table @ self._xyz_matrix()[:, 1:2]))[..., 0]
+
+    def sun_transmittance(self, wavelengths_nm) -> np.ndarray:
+        """Transmittance of the air along the path to the sun's centre, (n,), in [0, 1]
+        (linear between the table wavelengths)."""
+        from skydome.models.fitted import _coefficients
+
+        wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
+        t = _coefficients.sun_transmittance(self._c, self.aerosol_optical_depth,
+                                            float(self.sun.elevation_deg),
+                                            self.observer_altitude_m)
+        return np.interp(wl, self._table_wl, t)
+
+    def sun_radiance(self, wavelengths_nm) -> np.ndarray:
+        """Radiance of the sun's disc [W m^-2 sr^-1 nm^-1], shape (n,): E_sun / Omega_sun
+        x the transmittance x the fraction of the disc above the horizon."""
+        from skydome.models.fitted import _coefficients
+        from skydome.spectra import solar_irradiance
+
+        wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
+        vis = _coefficients.sun_visible_fraction(float(self.sun.elevation_deg),
+                                                 self.observer_altitude_m,
+                                                 float(self.sun.angular_radius_deg))
+        e = solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr
+        return e * self.sun_transmittance(wl) * vis

@@ -1,0 +1,125 @@
+"""The data set of the ``fitted`` model: one chunk per atmosphere, computed by the
+``precomputed`` reference, and its reader.
+
+A chunk (one atmosphere: aerosol optical depth at 550 nm and ground albedo) is the array
+(n_elevations, n_altitudes, N_SKY + N_GROUND + 1, N_PHI, n_wavelengths) float32:
+
+* rows 0 .. N_SKY + N_GROUND - 1: the radiance per unit extraterrestrial irradiance
+  [sr^-1] (``PrecomputedSky.radiance_table``) on the view grid of :mod:`._grid`, sun at
+  azimuth 180 deg, at each (sun elevation, observer altitude) node (the held-out grid: at
+  the centres of the view grid's cells, N_SKY + N_GROUND - 2 rows of N_PHI - 1);
+* the last row, azimuth column 0: the sun's disc radiance over E_sun / Omega_sun
+  (``sun_radiance`` divided by the extraterrestrial solar radiance; the transmittance
+  along the path to the sun times the fraction of the disc above the horizon).
+
+The reference runs with ``cache=False`` (a chunk is computed once; the table cache would
+hold a 1.3 GB entry per atmosphere) and its table wavelengths set to
+:data:`._grid.WAVELENGTHS_NM`.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from skydome.models.fitted import _grid
+
+#: Angstrom exponent of the aerosol (Atmosphere.earth's default).
+ANGSTROM_ALPHA = 1.3
+
+
+def atmosphere(aod: float, albedo: float):
+    """The reference atmosphere of a data-set node: ``Atmosphere.earth`` with the aerosol
+    optical depth ``aod`` at 550 nm (Angstrom exponent 1.3) and the grey ground albedo
+    ``albedo``; every other constituent at its default (ozone 300 DU, water 1.42 cm)."""
+    from skydome.atmosphere import Atmosphere
+
+    return Atmosphere.earth(aerosol_optical_depth=float(aod), angstrom_alpha=ANGSTROM_ALPHA,
+                            ground_albedo=float(albedo))
+
+
+def chunk_key(aod: float, albedo: float) -> str:
+    return f"aod{aod:.3f}_albedo{albedo:.3f}"
+
+
+def compute_chunk(aod: float, albedo: float, elevations_deg, altitudes_m,
+                  midpoints: bool = False, twilight_reference: bool = False) -> np.ndarray:
+    """One atmosphere's chunk (module docstring), by the ``precomputed`` model; with
+    ``midpoints`` on the centres of the view grid's cells (the held-out grid); with
+    ``twilight_reference`` in ``precomputed``'s twilight reference configuration (its
+    ``twilight_reference=True``, validated to sun -12 deg; about 4x the CPU)."""
+    import skydome as sd
+
+    el = np.asarray(elevations_deg, dtype=np.float64)
+    alt = np.asarray(altitudes_m, dtype=np.float64)
+    wl = _grid.WAVELENGTHS_NM
+    extra = {"twilight_reference": True} if twilight_reference else {}
+    ref = sd.model("precomputed", sun=sd.Sun(elevation_deg=float(el[0]), azimuth_deg=180.0),
+                   atmosphere=atmosphere(aod, albedo), table_wavelengths_nm=wl, cache=False,
+                   **extra)
+    n_dir = _grid.N_SKY + _grid.N_GROUND - (2 if midpoints else 0)
+    n_phi = _grid.N_PHI - (1 if midpoints else 0)
+    out = np.zeros((el.size, alt.size, n_dir + 1, n_phi, wl.size), dtype=np.float32)
+    from skydome.spectra import solar_irradiance
+
+    e_sun = solar_irradiance(wl)
+    for j, h in enumerate(alt):
+        d = _grid.directions(float(h), 180.0, midpoints)
+        for i, e in enumerate(el):
+            sun = sd.Sun(elevation_deg=float(e), azimuth_deg=180.0)
+            m = ref.with_sun(sun, observer_altitude_m=float(h))
+            out[i, j, :n_dir] = m.radiance_table(d)
+            out[i, j, n_dir, 0] = m.sun_radiance(wl) * sun.solid_angle_sr / (
+                e_sun * sun.irradiance_scale)
+    return out
+
+
+class DataSet:
+    """A data-set folder written by tools/fitted_dataset.py: ``grid.json`` (the nodes) and
+    one verified chunk per atmosphere (:mod:`skydome.distributed`)."""
+
+    def __init__(self, folder):
+        self.folder = Path(folder)
+        meta = json.loads((self.folder / "grid.json").read_text())
+        self.meta = meta
+        self.elevations_deg = np.array(meta["elevations_deg"])
+        self.altitudes_m = np.array(meta["altitudes_m"])
+        self.atmospheres = [tuple(a) for a in meta["atmospheres"]]
+        self.wavelengths_nm = np.array(meta["wavelengths_nm"])
+        self.midpoints = meta["view_grid"].get("directions") == "cell centres"
+
+    def chunk(self, aod: float, albedo: float) -> np.ndarray:
+        """The chunk of one atmosphere (verified against its recorded hash)."""
+        from skydome.distributed import assemble_chunks
+
+        return assemble_chunks(self.folder, [chunk_key(aod, albedo)])
+
+    def sky(self, aod, albedo):
+        """(radiance (n_e, n_h, N_SKY + N_GROUND, N_PHI, n_wl) [sr^-1], sun factor
+        (n_e, n_h, n_wl))."""
+        c = self.chunk(aod, albedo)
+        return c[:, :, :-1], c[:, :, -1, 0]
+
+
+def write_grid(folder, elevations_deg, altitudes_m, atmospheres,
+               midpoints: bool = False, twilight_reference: bool = False) -> None:
+    """Record the data set's nodes in ``folder/grid.json`` (atomically)."""
+    from skydome._io import atomic_file
+
+    meta = {"elevations_deg": [float(x) for x in elevations_deg],
+            "altitudes_m": [float(x) for x in altitudes_m],
+            "atmospheres": [[float(a), float(b)] for a, b in atmospheres],
+            "wavelengths_nm": [float(x) for x in _grid.WAVELENGTHS_NM],
+            "view_grid": {"n_sky": _grid.N_SKY, "n_ground": _grid.N_GROUND,
+                          "n_phi": _grid.N_PHI, "a_phi": _grid.A_PHI,
+                          "directions": "cell centres" if midpoints else "nodes"},
+            "reference": ("precomputed (" + ("twilight_reference=True" if twilight_reference
+                                             else "defaults")
+                          + ", cache=False, table_wavelengths_nm as above)"),
+            "written": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    with atomic_file(Path(folder) / "grid.json") as tmp:
+        Path(tmp).write_text(json.dumps(meta, indent=1))

@@ -1,0 +1,122 @@
+"""The grids of the ``fitted`` model: its parameter nodes, its view directions, its
+wavelengths.
+
+One definition, read by the data-set generator (tools/fitted_dataset.py), the fit
+(tools/fit_fitted.py) and the evaluator, so that a node means the same everywhere.
+
+View directions
+---------------
+A direction is given by its zenith angle theta and its azimuth from the sun's vertical
+plane phi in [0, 180] deg (the sky is symmetric about that plane). The horizon of an
+observer at altitude h lies at theta_h = 90 deg + dip, dip = acos(R / (R + h)) (a spherical
+earth of radius R, :data:`skydome.constants.EARTH_RADIUS`): 0 at the ground, 3.93 deg at
+15 km. The sky (theta < theta_h) and the ground (theta > theta_h) are two grids, so that
+the step of brightness at the horizon is never interpolated across, and both follow the
+horizon as the observer climbs:
+
+* sky, ``N_SKY`` nodes: theta = (theta_h - EPS) (1 - x^2), x uniform in [0, 1] (x = 0
+  just above the horizon): nodes densest at the horizon (first cell 0.02 deg), 2.9 deg
+  apart at the zenith;
+* ground, ``N_GROUND`` nodes: theta = theta_h + EPS + (180 deg - theta_h - EPS) x^2,
+  densest at the horizon (first cell 0.35-0.39 deg);
+* azimuth, ``N_PHI`` nodes: phi = 180 deg (A t + (1 - A) t^2), t uniform in [0, 1]:
+  0.86 deg apart next to the sun's vertical, 4.9 deg on the side opposite it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skydome.constants import EARTH_RADIUS
+
+#: Sky, ground and azimuth nodes of the view grid.
+N_SKY, N_GROUND, N_PHI = 64, 16, 64
+#: The linear share of the azimuth mapping.
+A_PHI = 0.3
+#: The first sky and ground nodes lie this far [rad] (0.005 deg) above and below the
+#: horizon, which belongs to neither. (The data set of the shipped coefficients was
+#: computed with the nodes theta_h (1 - x^2) and theta_h + (180 deg - theta_h) x^2 but for
+#: those two end nodes: within 0.005 deg of the nodes of these mappings.)
+EPS = math.radians(0.005)
+
+#: Table wavelengths of the data set [nm]: 300-1100 nm every 20 nm (the reference's table
+#: grid; values between them are interpolated linearly, relative to the solar spectrum).
+WAVELENGTHS_NM = np.arange(300.0, 1100.0 + 1e-9, 20.0)
+
+#: The model's parameter range (inclusive).
+SUN_ELEVATION_RANGE_DEG = (-2.0, 90.0)
+ALTITUDE_RANGE_M = (0.0, 15000.0)
+AOD_RANGE = (0.0, 1.0)
+ALBEDO_RANGE = (0.0, 1.0)
+
+#: The fitting nodes (the data set's parameter grid).
+SUN_ELEVATION_NODES_DEG = np.array([-2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
+                                    19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
+ALTITUDE_NODES_M = np.array([0.0, 1000.0, 3000.0, 7000.0, 15000.0])
+AOD_NODES = np.array([0.0, 0.05, 0.1, 0.25, 0.5, 1.0])
+#: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
+#: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
+ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
+
+#: The held-out grid: none of its values is a fitting node.
+HELDOUT_SUN_ELEVATION_DEG = np.array([-1.5, 0.5, 4.0, 8.5, 16.0, 28.0, 45.0, 70.0])
+HELDOUT_ALTITUDE_M = np.array([0.0, 500.0, 5000.0, 15000.0])
+HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
+                       (0.7, 0.2))                 # (AOD at 550 nm, albedo)
+
+
+def horizon_zenith_rad(altitude_m: float) -> float:
+    """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius
+    :data:`EARTH_RADIUS`: pi/2 + acos(R / (R + h))."""
+    return 0.5 * math.pi + math.acos(EARTH_RADIUS / (EARTH_RADIUS + max(altitude_m, 0.0)))
+
+
+def sky_x():
+    return np.linspace(0.0, 1.0, N_SKY)
+
+
+def ground_x():
+    return np.linspace(0.0, 1.0, N_GROUND)
+
+
+def phi_nodes_rad() -> np.ndarray:
+    """Azimuths from the sun's vertical plane [rad], (N_PHI,)."""
+    t = np.linspace(0.0, 1.0, N_PHI)
+    return math.pi * (A_PHI * t + (1.0 - A_PHI) * t * t)
+
+
+def theta_nodes_rad(altitude_m: float, midpoints: bool = False
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(sky, ground) zenith angles [rad] of the view grid for an observer at
+    ``altitude_m``: (N_SKY,) from the horizon up, (N_GROUND,) from the horizon down (with
+    ``midpoints`` the centres of the cells between them, in the mapped coordinate x)."""
+    th_h = horizon_zenith_rad(altitude_m)
+    xs, xg = sky_x(), ground_x()
+    if midpoints:
+        xs, xg = 0.5 * (xs[1:] + xs[:-1]), 0.5 * (xg[1:] + xg[:-1])
+    sky = (th_h - EPS) * (1.0 - xs * xs)
+    ground = th_h + EPS + (math.pi - th_h - EPS) * xg * xg
+    return sky, ground
+
+
+def directions(altitude_m: float, sun_azimuth_deg: float = 180.0,
+               midpoints: bool = False) -> np.ndarray:
+    """The view grid's unit directions (East-North-Up) for an observer at ``altitude_m``
+    with the sun at ``sun_azimuth_deg``: shape (N_SKY + N_GROUND, N_PHI, 3), the sky rows
+    first. ``midpoints``: the centres of the grid's cells instead (in the mapped
+    coordinates), (N_SKY + N_GROUND - 2, N_PHI - 1, 3): the directions farthest from every
+    node, where the held-out grid measures the model."""
+    sky, ground = theta_nodes_rad(altitude_m, midpoints)
+    if midpoints:
+        t = np.linspace(0.0, 1.0, N_PHI)
+        t = 0.5 * (t[1:] + t[:-1])
+        phi = math.pi * (A_PHI * t + (1.0 - A_PHI) * t * t)
+    else:
+        phi = phi_nodes_rad()
+    th = np.concatenate([sky, ground])[:, None]
+    az = math.radians(sun_azimuth_deg) + phi[None, :]
+    st = np.sin(th)
+    return np.stack(np.broadcast_arrays(st * np.sin(az), st * np.cos(az), np.cos(th)),
+                    axis=-1)

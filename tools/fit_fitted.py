@@ -1,0 +1,146 @@
+"""Fit the ``fitted`` sky model's coefficients to its data set.
+
+    python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
+
+DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
+representation is described in skydome/models/fitted/_coefficients.py):
+
+1. per node and wavelength, s = the mean radiance over the sky part of the view grid and
+   y = ln(L / s + DELTA);
+2. per sun-elevation node, the mean of y and its leading singular vectors over every
+   atmosphere, altitude and wavelength of that node (a randomised SVD, Halko, Martinsson &
+   Tropp 2011, alg. 4.4 with 2 power iterations, in float32, with a fixed seed so that a
+   rerun gives the same file), the sky and the ground apart;
+3. the coefficients: y minus the mean, projected on the basis;
+4. the sun: ln T, T = the sun factor of the data set over the visible fraction of the disc
+   (nodes where the disc is hidden take the value per unit air mass of the nearest
+   elevation node above).
+
+Writes FILE (default: the package's skydome/models/fitted/data/fitted_coefficients.npz)
+atomically and prints the fit residual on the fitting nodes (RMS of y; the accuracy of the
+model is measured on held-out nodes by tools/fitted_accuracy.py, not here).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def randomized_basis(X: np.ndarray, k: int, seed: int = 29) -> np.ndarray:
+    """The k leading right singular vectors of X (rows are samples): (k, n_cols)."""
+    rng = np.random.default_rng(seed)
+    omega = rng.standard_normal((X.shape[1], k + 10)).astype(X.dtype)
+    Y = X @ omega
+    for _ in range(2):
+        Q, _ = np.linalg.qr(Y)
+        Z, _ = np.linalg.qr(X.T @ Q)
+        Y = X @ Z
+    Q, _ = np.linalg.qr(Y)
+    _, _, vt = np.linalg.svd(Q.T @ X, full_matrices=False)
+    return vt[:k]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("dataset")
+    ap.add_argument("--out", default=None)
+    ap.add_argument("--k-sky", type=int, default=32)
+    ap.add_argument("--k-ground", type=int, default=12)
+    a = ap.parse_args(argv)
+    for name, v in (("--k-sky", a.k_sky), ("--k-ground", a.k_ground)):
+        if not 1 <= v <= 256:
+            print(f"error: {name} = {v} is out of range [1, 256]", file=sys.stderr)
+            return 2
+    from skydome._io import atomic_file
+    from skydome.models.fitted import _grid
+    from skydome.models.fitted._coefficients import (COEFFICIENT_FILE, DELTA, air_mass,
+                                                     sun_visible_fraction)
+    from skydome.models.fitted._dataset import DataSet
+    from skydome.sun import Sun
+
+    t0 = time.perf_counter()
+    ds = DataSet(a.dataset)
+    aods = np.array(sorted({x for x, _ in ds.atmospheres}))
+    albs = np.array(sorted({x for _, x in ds.atmospheres}))
+    el, alt, wl = ds.elevations_deg, ds.altitudes_m, ds.wavelengths_nm
+    n_sky = _grid.N_SKY * _grid.N_PHI
+    n_dir = (_grid.N_SKY + _grid.N_GROUND) * _grid.N_PHI
+    shape = (aods.size, albs.size, el.size, alt.size, wl.size)
+    Y = np.empty(shape + (n_dir,), dtype=np.float32)
+    log_s = np.empty(shape, dtype=np.float32)
+    sun_f = np.empty((aods.size, el.size, alt.size, wl.size))
+    for i, aod in enumerate(aods):
+        for j, alb in enumerate(albs):
+            L, sun = ds.sky(aod, alb)                    # (e, h, rows, phi, wl), (e, h, wl)
+            L = np.moveaxis(L.astype(np.float64), -1, 2).reshape(el.size, alt.size, wl.size,
+                                                                   n_dir)
+            s = L[..., :n_sky].mean(axis=-1)
+            log_s[i, j] = np.log(s)
+            Y[i, j] = np.log(np.maximum(L, 0.0) / s[..., None] + DELTA)
+            if j == 0:
+                sun_f[i] = sun
+            print(f"read AOD {aod:g} albedo {alb:g}", flush=True)
+    out = {"aod_nodes": aods, "albedo_nodes": albs, "elevation_nodes_deg": el,
+           "altitude_nodes_m": alt, "wavelengths_nm": wl}
+    resid = {}
+    for part, cols, k in (("sky", slice(0, n_sky), a.k_sky),
+                          ("ground", slice(n_sky, n_dir), a.k_ground)):
+        n_c = cols.stop - cols.start
+        means = np.empty((el.size, n_c), dtype=np.float32)
+        bases = np.empty((el.size, k, n_c), dtype=np.float32)
+        coef = np.empty(shape + (k,), dtype=np.float32)
+        sq, cnt = 0.0, 0
+        for e in range(el.size):
+            X = Y[:, :, e, :, :, cols]                             # (a, b, h, wl, n_c)
+            Xf = X.reshape(-1, n_c)
+            mean = Xf.mean(axis=0, dtype=np.float64).astype(np.float32)
+            B = randomized_basis(Xf - mean, k)
+            C = (Xf - mean) @ B.T
+            means[e], bases[e] = mean, B
+            coef[:, :, e] = C.reshape(X.shape[:-1] + (k,))
+            R = Xf - mean - C @ B
+            sq += float(np.sum(R.astype(np.float64) ** 2))
+            cnt += R.size
+        resid[part] = float(np.sqrt(sq / cnt))
+        out[f"{part}_mean"], out[f"{part}_basis"], out[f"coef_{part}"] = means, bases, coef
+        print(f"{part}: {k} terms, RMS residual of y on the fitting nodes {resid[part]:.4f}",
+              flush=True)
+    out["log_scale"] = log_s
+    # the sun: ln T at the nodes where the disc shows, the nearest elevation above elsewhere
+    alpha = Sun(elevation_deg=45.0, azimuth_deg=0.0).angular_radius_deg
+    lt = np.empty_like(sun_f)
+    for h_i, h in enumerate(alt):
+        vis = np.array([sun_visible_fraction(e, h, alpha) for e in el])
+        ok = vis > 0.05
+        for e_i in range(el.size):
+            src = e_i if ok[e_i] else int(np.argmax(ok & (np.arange(el.size) > e_i)))
+            v = sun_visible_fraction(el[src], h, alpha)
+            # a hidden node: the nearest visible one's ln T per unit air mass
+            lt[:, e_i, h_i] = np.log(np.clip(sun_f[:, src, h_i] / v, 1e-30, 1.0)) * (
+                air_mass(el[e_i]) / air_mass(el[src]))
+    out["log_sun_transmittance"] = lt.astype(np.float32)
+    meta = {"dataset_grid": ds.meta, "k_sky": a.k_sky, "k_ground": a.k_ground,
+            "delta": DELTA, "fit_residual_rms_y": resid,
+            "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
+                       f"--k-ground {a.k_ground}",
+            "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    out["meta"] = np.array(json.dumps(meta))
+    target = Path(a.out) if a.out else COEFFICIENT_FILE
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_file(target) as tmp:
+        np.savez_compressed(tmp, **out)
+    print(f"wrote {target} ({target.stat().st_size / 1e6:.1f} MB) in "
+          f"{time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,200 @@
+"""Measure the ``fitted`` model on its held-out grid, against the ``precomputed`` reference.
+
+    python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
+        [--json OUT.json]
+
+HELDOUT is a folder written by ``tools/fitted_dataset.py --grid heldout``: the reference's
+spectral skies (computed by ``precomputed`` itself, never by the fitted model) at parameter
+values that are not fitting nodes (AOD and albedo off the nodes, sun elevations and
+altitudes between them) and at directions in the centres of the view grid's cells. For
+each regime (sun above 20 deg, 0-20 deg, 0 to -2 deg; observer on the ground, at 0.5-5 km,
+at 15 km) it prints the luminance RMS and largest relative error and the spectral ones
+(every table wavelength 300-1100 nm) over the sky more than 5 deg from the sun, the same
+luminance figures for ``hosek_wilkie2012`` (observer on the ground, sun above the horizon;
+turbidity from the AOD by Preetham's beta = 0.04608 T - 0.04586 and Angstrom's law with
+alpha 1.3), the ground seen from above (below the horizon) and the sun's transmittance.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REGIMES = (("sun > 20 deg", 20.0, 90.0), ("sun 0-20 deg", 0.0, 20.0),
+           ("sun -2 to 0 deg", -2.0, 0.0))
+HEIGHTS = (("ground", 0.0, 0.0), ("0.5-5 km", 1.0, 14000.0), ("15 km", 15000.0, 15000.0))
+
+
+def turbidity_from_aod(aod: float) -> float:
+    """Preetham turbidity with the AOD at 550 nm: beta = AOD (0.55)^1.3 (Angstrom, alpha
+    1.3), beta = 0.04608 T - 0.04586 ([PSS99] A.2)."""
+    beta = aod * 0.55 ** 1.3
+    return (beta + 0.04586) / 0.04608
+
+
+def interp_matrix(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """(n_src, n_dst) linear interpolation weights (np.interp of each unit vector)."""
+    eye = np.eye(src.size)
+    return np.stack([np.interp(dst, src, eye[i]) for i in range(src.size)])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("heldout")
+    ap.add_argument("--figure", default=None)
+    ap.add_argument("--json", default=None)
+    a = ap.parse_args(argv)
+    import skydome as sd
+    from skydome.models.fitted import _grid
+    from skydome.models.fitted._dataset import DataSet
+    from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
+        solar_irradiance
+
+    ds = DataSet(a.heldout)
+    if not ds.midpoints:
+        print("error: HELDOUT must be made with --grid heldout", file=sys.stderr)
+        return 2
+    wl = ds.wavelengths_nm
+    dwl = default_wavelengths()
+    to_default = interp_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
+    e_table = solar_irradiance(wl)
+    acc: dict = {}
+
+    def add(key, err):
+        acc.setdefault(key, []).append(np.abs(np.ravel(err)))
+
+    sun_err = []
+    examples = []
+    for aod, alb in ds.atmospheres:
+        L_all, sunf = ds.sky(aod, alb)
+        for i, el in enumerate(ds.elevations_deg):
+            for j, h in enumerate(ds.altitudes_m):
+                sun = sd.Sun(elevation_deg=float(el), azimuth_deg=180.0)
+                d = _grid.directions(float(h), 180.0, midpoints=True)
+                n_sky = _grid.N_SKY - 1
+                ref = L_all[i, j].astype(np.float64)                    # (78, 63, n_wl)
+                gamma = np.degrees(np.arccos(np.clip(d @ sun.direction, -1, 1)))
+                keep = gamma > 5.0
+                sky = np.zeros(keep.shape, bool)
+                sky[:n_sky] = True
+                m = sd.model("fitted", sun=sun, aerosol_optical_depth=aod, ground_albedo=alb,
+                             observer_altitude_m=float(h))
+                y_ref = luminance_from_spectrum(ref @ to_default, dwl)
+                y_fit = m.luminance(d)
+                s_ref = ref * e_table
+                s_fit = m.radiance(d, wl)
+                rel_y = (y_fit - y_ref) / y_ref
+                pos = s_ref > 0
+                rel_s = np.where(pos, (s_fit - s_ref) / np.where(pos, s_ref, 1.0), 0.0)
+                reg = next(r for r, lo, hi in REGIMES if lo <= el <= hi)
+                hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
+                add((reg, hgt, "fitted", "Y"), rel_y[sky & keep])
+                add((reg, hgt, "fitted", "spectral"), rel_s[sky & keep][pos[sky & keep]])
+                if h > 0:
+                    add((reg, hgt, "fitted", "ground Y"), rel_y[~sky])
+                if h == 0 and el >= 0:
+                    hw = sd.model("hosek_wilkie2012", sun=sun,
+                                  turbidity=turbidity_from_aod(aod), albedo=alb)
+                    y_hw = hw.luminance(d)
+                    add((reg, hgt, "hosek_wilkie2012", "Y"),
+                        ((y_hw - y_ref) / y_ref)[sky & keep])
+                # the sun: the reference's factor against the model's transmittance x vis
+                t_ref = sunf[i, j]
+                t_fit = m.sun_radiance(wl) * sun.solid_angle_sr / e_table
+                if t_ref[wl == 560.0][0] > 1e-3:
+                    sun_err.append((float(el), float(h), aod,
+                                    float(np.max(np.abs(t_fit / t_ref - 1.0)[wl >= 400]))))
+                if (aod, alb) == ds.atmospheres[0] and h in (0.0, 15000.0) and \
+                        el in (45.0, 4.0, -1.5):
+                    examples.append((el, h, y_ref, rel_y))
+    rows = []
+    print(f"held-out grid: {len(ds.atmospheres)} atmospheres "
+          f"{ds.atmospheres}, sun {list(ds.elevations_deg)} deg, altitude "
+          f"{list(ds.altitudes_m)} m; relative errors more than 5 deg from the sun")
+    print("| regime | observer | model | luminance RMS | luminance max | spectral RMS | "
+          "spectral max | ground (below horizon) luminance RMS / max |")
+    print("|---|---|---|---|---|---|---|---|")
+    for reg, _, _ in REGIMES:
+        for hgt, _, _ in HEIGHTS:
+            for model in ("fitted", "hosek_wilkie2012"):
+                y = acc.get((reg, hgt, model, "Y"))
+                if y is None:
+                    continue
+                y = np.concatenate(y)
+                s = acc.get((reg, hgt, model, "spectral"))
+                g = acc.get((reg, hgt, model, "ground Y"))
+                row = {"regime": reg, "observer": hgt, "model": model,
+                       "Y_rms": float(np.sqrt(np.mean(y ** 2))), "Y_max": float(y.max())}
+                cells = [f"{100 * row['Y_rms']:.2f} %", f"{100 * row['Y_max']:.1f} %"]
+                if s is not None:
+                    s = np.concatenate(s)
+                    row.update(S_rms=float(np.sqrt(np.mean(s ** 2))), S_max=float(s.max()))
+                    cells += [f"{100 * row['S_rms']:.2f} %", f"{100 * row['S_max']:.1f} %"]
+                else:
+                    cells += ["-", "-"]
+                if g is not None:
+                    g = np.concatenate(g)
+                    row.update(G_rms=float(np.sqrt(np.mean(g ** 2))), G_max=float(g.max()))
+                    cells.append(f"{100 * row['G_rms']:.2f} / {100 * row['G_max']:.1f} %")
+                else:
+                    cells.append("-")
+                rows.append(row)
+                print(f"| {reg} | {hgt} | {model} | " + " | ".join(cells) + " |")
+    if sun_err:
+        se = np.array([x[3] for x in sun_err])
+        print(f"sun transmittance (400-1100 nm, where it exceeds 1e-3 at 560 nm): largest "
+              f"relative error {100 * se.max():.2f} %, median {100 * np.median(se):.2f} % "
+              f"over {se.size} held-out nodes")
+    if a.json:
+        Path(a.json).write_text(json.dumps({"rows": rows, "sun": sun_err}, indent=1))
+    if a.figure and examples:
+        _figure(a.figure, examples, ds.atmospheres[0])
+    return 0
+
+
+def _figure(path, examples, atm):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from skydome._io import atomic_file
+    from skydome.models.fitted import _grid
+
+    n = len(examples)
+    fig, ax = plt.subplots(2, n, figsize=(3.0 * n, 5.6), squeeze=False)
+    t = np.linspace(0.0, 1.0, _grid.N_PHI)
+    t = 0.5 * (t[1:] + t[:-1])
+    phi = 180.0 * (_grid.A_PHI * t + (1.0 - _grid.A_PHI) * t * t)
+    for k, (el, h, y_ref, rel) in enumerate(examples):
+        th = np.degrees(np.arccos(np.clip(_grid.directions(h, 180.0, True)[:, 0, 2], -1, 1)))
+        order = np.argsort(th)           # the sky rows run from the horizon up: sort them
+        th, y_ref, rel = th[order], y_ref[order], rel[order]
+        im = ax[0, k].pcolormesh(phi, th, np.log10(np.maximum(y_ref, 1e-6)), shading="auto",
+                                 cmap="magma")
+        fig.colorbar(im, ax=ax[0, k], label="log10 cd/m2")
+        im = ax[1, k].pcolormesh(phi, th, 100 * rel, shading="auto", cmap="RdBu_r",
+                                 vmin=-5, vmax=5)
+        fig.colorbar(im, ax=ax[1, k], label="fitted - ref [%]")
+        for r in (0, 1):
+            ax[r, k].invert_yaxis()
+            ax[r, k].axhline(np.degrees(_grid.horizon_zenith_rad(h)), color="k", lw=0.5)
+            ax[r, k].set_xlabel("azimuth from sun [deg]")
+        ax[0, k].set_title(f"sun {el:g} deg, {h / 1000:g} km", fontsize=9)
+        ax[0, k].set_ylabel("view zenith [deg]")
+        ax[1, k].set_ylabel("view zenith [deg]")
+    fig.suptitle(f"fitted vs precomputed at held-out nodes (AOD {atm[0]:g}, albedo "
+                 f"{atm[1]:g}): reference luminance (top), error (bottom)", fontsize=10)
+    fig.tight_layout()
+    with atomic_file(path) as tmp:
+        fig.savefig(tmp, dpi=90)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

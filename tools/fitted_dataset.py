@@ -1,0 +1,93 @@
+"""Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
+
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|small] [--scheduler ADDR]
+        [--workers N] [--twilight-reference]
+
+One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
+every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
+sun zenith and altitude, so one precomputation serves a whole chunk
+(skydome/models/fitted/_dataset.py says what a chunk holds). The chunks run on Dask
+(``skydome.distributed``: a local cluster of ``--workers`` processes by default,
+``--scheduler tcp://HOST:PORT`` for a cluster whose workers see OUT); a rerun skips the
+chunks already in OUT (verified by their hash), so an interrupted run resumes. A progress
+bar shows the chunks; at the end the run prints its cost (wall time, chunks computed).
+
+Grids (skydome/models/fitted/_grid.py):
+
+* ``fit``: the fitting nodes (6 AOD x 3 albedo = 18 atmospheres, 18 sun elevations
+  -2..90 deg, 5 altitudes 0..15 km);
+* ``heldout``: the held-out grid (5 atmospheres, their albedos off the nodes, 8 sun
+  elevations and 4 altitudes of which only 0 and 15 km are fitting nodes), every view
+  direction at the centre of a cell of the view grid (the farthest from its nodes);
+* ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+
+def grid(name: str):
+    """(elevations [deg], altitudes [m], atmospheres [(aod, albedo)]) of a named grid."""
+    from skydome.models.fitted import _grid as G
+
+    if name == "fit":
+        atm = [(float(a), float(b)) for a in G.AOD_NODES for b in G.ALBEDO_NODES]
+        return G.SUN_ELEVATION_NODES_DEG, G.ALTITUDE_NODES_M, atm
+    if name == "heldout":
+        atm = list(G.HELDOUT_ATMOSPHERES)
+        return G.HELDOUT_SUN_ELEVATION_DEG, G.HELDOUT_ALTITUDE_M, atm
+    if name == "small":
+        return G.SUN_ELEVATION_NODES_DEG, G.ALTITUDE_NODES_M, [(0.1, 0.0), (0.1, 0.5)]
+    raise ValueError(f"--grid = {name!r} is not one of fit, heldout, small")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
+    ap.add_argument("--grid", default="fit", choices=("fit", "heldout", "small"))
+    ap.add_argument("--scheduler", default=None,
+                    help="Dask scheduler address (default: a local cluster)")
+    ap.add_argument("--twilight-reference", action="store_true",
+                    help="run precomputed in its twilight reference configuration "
+                         "(twilight_reference=True: validated to sun -12 deg, about 4x the "
+                         "CPU); needed for fitting nodes below -2 deg")
+    ap.add_argument("--workers", type=int, default=1,
+                    help="local cluster processes (default 1: each precomputation already "
+                         "uses every core through numba)")
+    a = ap.parse_args(argv)
+    if not 1 <= a.workers <= 256:
+        print(f"error: --workers = {a.workers} is out of range [1, 256]", file=sys.stderr)
+        return 2
+    from skydome.distributed import Chunk, check_scheduler, run_chunks
+    from skydome.models.fitted import _dataset
+
+    try:
+        check_scheduler(a.scheduler, "--scheduler")
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    el, alt, atms = grid(a.grid)
+    mid = a.grid == "heldout"       # held out in direction too: the cells' centres
+    chunks = [Chunk(_dataset.chunk_key(aod, alb), _dataset.compute_chunk,
+                    (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference))
+              for aod, alb in atms]
+    t0, c0 = time.perf_counter(), time.process_time()
+    report = run_chunks(chunks, a.out, scheduler=a.scheduler, n_workers=a.workers,
+                        progress=True)
+    _dataset.write_grid(a.out, el, alt, atms, mid, a.twilight_reference)
+    wall = time.perf_counter() - t0
+    n = len(report.computed)
+    print(f"\n{n} chunk(s) computed, {len(report.verified)} already there; "
+          f"{wall:.1f} s wall ({wall / max(n, 1):.1f} s per computed chunk of "
+          f"{len(el) * len(alt)} sun/altitude nodes); client CPU "
+          f"{time.process_time() - c0:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
