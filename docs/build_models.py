@@ -30,15 +30,22 @@ paper, and what it was checked against, with the numbers. This file is assembled
 """
 
 
-def main() -> None:
+def assembled() -> dict:
+    """{target path: its text assembled from docs/sections/}."""
     allsec = {p.stem: p for p in (HERE / "sections").glob("*.md")}
     effects = {k: v for k, v in allsec.items() if k.startswith("effects_")}
     models = {k: v for k, v in allsec.items() if k not in effects}
-    build(models, ORDER, HEADER, HERE / "models.md")
-    build(effects, EFFECTS_ORDER, EFFECTS_HEADER, HERE / "effects.md")
+    return {HERE / "models.md": build(models, ORDER, HEADER),
+            HERE / "effects.md": build(effects, EFFECTS_ORDER, EFFECTS_HEADER)}
 
 
-def build(sections, order, header, target) -> None:
+def main() -> None:
+    for target, text in assembled().items():
+        target.write_text(text)
+        print(f"wrote {target}")
+
+
+def build(sections, order, header) -> str:
     names = [n for n in order if n in sections] + sorted(set(sections) - set(order))
     toc = []
     body = []
@@ -48,9 +55,7 @@ def build(sections, order, header, target) -> None:
         title = next((ln.lstrip("# ").strip() for ln in text.splitlines() if ln.startswith("#")), n)
         toc.append(f"- [{title}](sections/{n}.md)")
         body.append(text)
-    out = header + "## Contents\n\n" + "\n".join(toc) + "\n\n" + "\n\n".join(body)
-    target.write_text(out)
-    print(f"wrote {target} ({len(names)} sections)")
+    return header + "## Contents\n\n" + "\n".join(toc) + "\n\n" + "\n\n".join(body)
 
 
 if __name__ == "__main__":
