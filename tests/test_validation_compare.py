@@ -180,7 +180,7 @@ def test_second_day_clock_is_the_labels():
     at the label time than 40 minutes earlier (the shift 2013-05-27 was given), at the
     labelled directions and along the scanner's moves alike. Measured (docs): shape RMS of
     ln(model / measured) 0.169 (point) / 0.147 (moves) near the label time."""
-    from skydome.validation.fitting import clock_scan
+    from skydome.validation.compare import clock_scan
 
     r = clock_scan("2013-09-24", ["13:20:00"], offsets_min=[-40.0, 0.0])
     rms = r["rms"][0]

@@ -29,7 +29,7 @@ def main(argv=None) -> int:
     ap.add_argument("--aerosol", default=None,
                     help="aeronet or fitted (default: aeronet where there is one)")
     ap.add_argument("--clock", action="store_true",
-                    help="the clock scan (validation.fitting.clock_scan), not the table")
+                    help="the clock scan (validation.compare.clock_scan), not the table")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
     a = ap.parse_args(argv)
     if a.figures:
@@ -60,7 +60,7 @@ def clock(out: Path, day: str) -> int:
     """Shape error against the clock offset, at the labelled directions and along the moves."""
     import numpy as np
 
-    from skydome.validation.fitting import clock_scan
+    from skydome.validation.compare import clock_scan
 
     out.mkdir(parents=True, exist_ok=True)
     r = clock_scan(day, offsets_min=np.arange(-70.0, 21.0, 10.0))

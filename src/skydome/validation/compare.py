@@ -29,16 +29,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
-           "EXCLUDED_SAMPLES", "compare_measured", "ModelResult", "model_settings",
-           "measured_luminance"]
+from skydome.validation.kider2014 import EXCLUDED_SAMPLES  # samples left out of statistics
 
-#: Samples left out of the statistics: sample 0 (north, low, the first of each scan) reads
-#: 25-42 % below the mean of its two ring neighbours in every capture from 10:00 on, more
-#: than 10 % below any other sample of the ring by that measure (bar its neighbours)
-#: (tests/test_validation_kider2014.py); Bruneton notes it seems systematically wrong
-#: (clear-sky-models, measured_atmosphere.cc).
-EXCLUDED_SAMPLES = (0,)
+__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
+           "EXCLUDED_SAMPLES", "clock_scan", "compare_measured", "ModelResult", "model_settings",
+           "measured_luminance"]
 
 #: Models compared by default, in the table's order.
 MODELS = ("precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
@@ -424,3 +419,45 @@ def capture_table(results) -> str:
         vals += [f(r.band_medians.get(b), True) for b in BANDS_NM]
         rows.append("| " + " | ".join(vals) + " |")
     return head + "\n".join(rows) + "\n"
+
+
+def clock_scan(day: str, labels=None, offsets_min=np.arange(-60.0, 11.0, 10.0), *,
+               motions=(None, "from_previous"), model: str = "hillaire2020") -> dict:
+    """Shape error of ``model``'s luminance against each scan for a range of clock offsets.
+
+    For each capture, offset [min] (added to the labels) and motion (None: the model at the
+    labelled directions; "from_previous": the mean along the move from the previous sample)
+    the RMS of ``ln(model / measured)`` minus its mean over the 80 kept directions (a shape
+    error, free of the level). The aerosol is the AERONET retrieval nearest in time
+    (:func:`skydome.validation.fitting.base_retrieval`), not fitted: a fit would follow the sun it is given.
+    Returns ``{"labels", "offsets_min", "motions", "rms" (captures, motions, offsets),
+    "best_min" (captures, motions)}``; ``best_min`` is the minimum of a parabola through the
+    best grid offset and its neighbours.
+    """
+    from skydome.validation.kider2014 import capture_labels, load_captures
+
+    labels = capture_labels(day) if labels is None else tuple(labels)
+    offs = np.asarray(offsets_min, dtype=np.float64)
+    rms = np.empty((len(labels), len(motions), offs.size))
+    for j, off in enumerate(offs):
+        for k, c in enumerate(load_captures(labels, clock_offset_min=float(off), day=day)):
+            lum, _ = measured_luminance(c)
+            keep = np.ones(lum.size, bool)
+            keep[list(EXCLUDED_SAMPLES)] = False
+            for i, mo in enumerate(motions):
+                r = compare_one(model, c, motion=mo, aerosol="aeronet")
+                e = np.log(r.model_luminance[keep] / lum[keep])
+                rms[k, i, j] = float(np.sqrt(np.mean((e - e.mean()) ** 2)))
+    best = np.empty(rms.shape[:2])
+    for k in range(rms.shape[0]):
+        for i in range(rms.shape[1]):
+            j = int(np.argmin(rms[k, i]))
+            if 0 < j < offs.size - 1:
+                y0, y1, y2 = rms[k, i, j - 1:j + 2]
+                den = y0 - 2 * y1 + y2
+                step = offs[j + 1] - offs[j]
+                best[k, i] = offs[j] + (0.5 * (y0 - y2) / den * step if den > 0 else 0.0)
+            else:
+                best[k, i] = offs[j]
+    return {"labels": labels, "offsets_min": offs, "motions": tuple(motions), "rms": rms,
+            "best_min": best}

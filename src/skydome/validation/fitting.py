@@ -11,7 +11,7 @@
   The fitted level absorbs whatever else is off in level (the scanner's absolute
   calibration, the ground albedo, the single scattering albedo), so a model's level and
   colour on a fitted atmosphere are fits, not predictions.
-* :func:`clock_scan` measures, per scan, how well a model's luminance shape follows the
+* :func:`skydome.validation.compare.clock_scan` measures, per scan, how well a model's luminance shape follows the
   measured one when the sun is taken at the label time plus each of a range of offsets,
   with the model sampled at the labelled directions or as the mean along each of the
   scanner's moves (:func:`skydome.validation.compare.arc_directions`): the test of whether
@@ -24,7 +24,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["FIT_WAVELENGTHS", "fit_aerosol", "base_retrieval", "clock_scan"]
+__all__ = ["FIT_WAVELENGTHS", "fit_aerosol", "base_retrieval"]
 
 #: wavelengths of the aerosol fit [nm]
 FIT_WAVELENGTHS = np.arange(400.0, 701.0, 50.0)
@@ -48,7 +48,7 @@ def base_retrieval(capture):
 
 
 def _fit_mask(capture):
-    from skydome.validation.compare import EXCLUDED_SAMPLES
+    from skydome.validation.kider2014 import EXCLUDED_SAMPLES
 
     keep = capture.sun_angle_deg >= 10.0
     keep[list(EXCLUDED_SAMPLES)] = False
@@ -93,46 +93,3 @@ def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated
     out = dataclasses.replace(base, tau440=float(np.exp(sol.x[0])), alpha=float(sol.x[1]))
     _FIT_CACHE[key] = out
     return out
-
-
-def clock_scan(day: str, labels=None, offsets_min=np.arange(-60.0, 11.0, 10.0), *,
-               motions=(None, "from_previous"), model: str = "hillaire2020") -> dict:
-    """Shape error of ``model``'s luminance against each scan for a range of clock offsets.
-
-    For each capture, offset [min] (added to the labels) and motion (None: the model at the
-    labelled directions; "from_previous": the mean along the move from the previous sample)
-    the RMS of ``ln(model / measured)`` minus its mean over the 80 kept directions (a shape
-    error, free of the level). The aerosol is the AERONET retrieval nearest in time
-    (:func:`base_retrieval`), not fitted: a fit would follow the sun it is given.
-    Returns ``{"labels", "offsets_min", "motions", "rms" (captures, motions, offsets),
-    "best_min" (captures, motions)}``; ``best_min`` is the minimum of a parabola through the
-    best grid offset and its neighbours.
-    """
-    from skydome.validation.compare import EXCLUDED_SAMPLES, compare_one, measured_luminance
-    from skydome.validation.kider2014 import capture_labels, load_captures
-
-    labels = capture_labels(day) if labels is None else tuple(labels)
-    offs = np.asarray(offsets_min, dtype=np.float64)
-    rms = np.empty((len(labels), len(motions), offs.size))
-    for j, off in enumerate(offs):
-        for k, c in enumerate(load_captures(labels, clock_offset_min=float(off), day=day)):
-            lum, _ = measured_luminance(c)
-            keep = np.ones(lum.size, bool)
-            keep[list(EXCLUDED_SAMPLES)] = False
-            for i, mo in enumerate(motions):
-                r = compare_one(model, c, motion=mo, aerosol="aeronet")
-                e = np.log(r.model_luminance[keep] / lum[keep])
-                rms[k, i, j] = float(np.sqrt(np.mean((e - e.mean()) ** 2)))
-    best = np.empty(rms.shape[:2])
-    for k in range(rms.shape[0]):
-        for i in range(rms.shape[1]):
-            j = int(np.argmin(rms[k, i]))
-            if 0 < j < offs.size - 1:
-                y0, y1, y2 = rms[k, i, j - 1:j + 2]
-                den = y0 - 2 * y1 + y2
-                step = offs[j + 1] - offs[j]
-                best[k, i] = offs[j] + (0.5 * (y0 - y2) / den * step if den > 0 else 0.0)
-            else:
-                best[k, i] = offs[j]
-    return {"labels": labels, "offsets_min": offs, "motions": tuple(motions), "rms": rms,
-            "best_min": best}

@@ -63,6 +63,7 @@ from numba import njit, prange
 
 from skydome.transport._geometry import (radius_along, radius_along_above, ray_hits_ground,
                                         ray_segment, safe_sqrt)
+from skydome.transport._kernels import _sort_small
 from skydome.transport._tables import lookup_columns
 from skydome.transport._medium import EXPONENTIAL, UNIFORM, profile_density
 from skydome.transport._phase import (CORNETTE_SHANKS, HENYEY_GREENSTEIN, RAYLEIGH, TABULATED,
@@ -325,20 +326,28 @@ def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44):
 
 
 @njit(cache=True, inline="always")
+def _bracket(nodes, n_nodes, x):
+    """(lo, lo + 1): the interval of the ascending nodes[:n_nodes] that holds x, by
+    bisection (nodes[lo] <= x; the last interval for x beyond the end)."""
+    lo = 0
+    hi = n_nodes - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if nodes[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo, hi
+
+
+@njit(cache=True, inline="always")
 def _forced_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_nodes, tau_cam):
     """The camera ray's first collision, forced inside the air by inverting its tabulated
     optical depth: tau* = -ln(1 - xi (1 - T)). Returns (ok, t, mu_t of the interval, mu_s)
     and the local scattering coefficients in cw[MUS]."""
     w0 = -math.expm1(-tau_cam)
     target = -math.log1p(-_rand(state) * w0)
-    lo = 0
-    hi = n_nodes - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if node_tau[mid] <= target:
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = _bracket(node_tau, n_nodes, target)
     dtau = node_tau[hi] - node_tau[lo]
     if dtau <= 0.0:
         return False, 0.0, 0.0, 0.0          # (measure zero: xi at the very end)
@@ -360,14 +369,7 @@ def _uniform_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_nod
     length, mu_t e^-tau L / (1 - T), and the local scattering coefficients in cw[MUS]."""
     length = node_t[n_nodes - 1] - node_t[0]
     t = node_t[0] + _rand(state) * length
-    lo = 0
-    hi = n_nodes - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if node_t[mid] <= t:
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = _bracket(node_t, n_nodes, t)
     dt = node_t[hi] - node_t[lo]
     if dt <= 0.0 or length <= 0.0:
         return False, 0.0, 0.0, 0.0, 0.0
@@ -386,14 +388,7 @@ def _uniform_collision(ic, cw, R, node_t, node_tau, state, cam_r0, cam_mu, n_nod
 def _forced_density(node_t, node_tau, n_nodes, tau_cam, t):
     """The density of :func:`_forced_collision` at distance t, mu_t e^-tau / (1 - T)
     (mu_t of t's interval, tau linear in it)."""
-    lo = 0
-    hi = n_nodes - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if node_t[mid] <= t:
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = _bracket(node_t, n_nodes, t)
     dt = node_t[hi] - node_t[lo]
     if dt <= 0.0:
         return 0.0
@@ -539,14 +534,7 @@ def _segment_sun(ic, cw, ph_table, table, scol, cuts, state, R, Rt, l, sx, sy, s
     n = _shadow_cuts(px, py, pz, wx, wy, wz, wsx, wsy, wsz, R, t_end, cuts, n)
     cuts[n] = t_end
     n += 1
-    # sort the (at most 5) cuts
-    for i in range(1, n):
-        v = cuts[i]
-        j = i - 1
-        while j >= 0 and cuts[j] > v:
-            cuts[j + 1] = cuts[j]
-            j -= 1
-        cuts[j + 1] = v
+    _sort_small(cuts, n)                     # the (at most 5) cuts in order
     # phase function mixture per constituent (the angle to the sun is fixed on the segment)
     total = 0.0
     tau = 0.0
