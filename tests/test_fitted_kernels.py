@@ -66,11 +66,22 @@ def test_lookup_matches_the_grid_mappings(elevation, azimuth, altitude):
     rng = np.random.default_rng(11)
     d = rng.normal(size=(20000, 3)) * rng.uniform(0.01, 100.0, size=(20000, 1))
     ref = _reference_lookup(sky, d)
-    spectral_basis, _ = sky._spectral_basis([550.0])
-    got = spectral_basis(d)
+    got = sky._lookup(d, sky._table)
     assert got.shape == ref.shape
     # the angles agree within a few units in the last place, which the square-root
     # mappings amplify next to the horizon's node: 1e-9 relative is far above that and far
     # below any change of cell or weight
     scale = np.maximum(np.abs(ref), 1e-12 * np.abs(ref).max())
     assert np.max(np.abs(got - ref) / scale) < 1e-9
+
+
+def test_spectral_basis_is_the_radiance():
+    """The renderer's basis (only the table wavelengths that reach the request) gives the
+    model's radiance: sample(d) @ B == radiance(d, wl)."""
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=20.0, azimuth_deg=100.0))
+    d = np.random.default_rng(2).normal(size=(5000, 3))
+    for wl in (np.linspace(380.0, 780.0, 41), [300.0], [555.0, 1100.0]):
+        sample, B = sky._spectral_basis(wl)
+        full = sky._lookup(d, sky._table) @ sky._weights(np.asarray(wl, float))
+        np.testing.assert_allclose(sample(d) @ B, full, rtol=1e-12, atol=0.0)
+        np.testing.assert_allclose(sky.radiance(d, wl), full, rtol=1e-12, atol=0.0)

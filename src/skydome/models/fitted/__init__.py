@@ -141,11 +141,18 @@ class FittedSky(SkyModel):
 
     def _spectral_basis(self, wavelengths_nm):
         """(sample, B): ``radiance(d, wavelengths_nm) == sample(d) @ B``, sample(d) the
-        table values (n, n_table) [sr^-1] and B the interpolation to ``wavelengths_nm``
-        times the solar spectrum, so that a renderer folds B into its spectrum -> XYZ
+        table values (n, n_used) [sr^-1] at the table wavelengths that ``wavelengths_nm``
+        reach and B the interpolation from them to ``wavelengths_nm`` times the solar
+        spectrum, so that a renderer folds B into its spectrum -> XYZ
         weights (skydome.imaging.render)."""
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
-        return (lambda d: self._lookup(d, self._table)), self._weights(wl)
+        B = self._weights(wl)
+        # only the table wavelengths that reach ``wavelengths_nm`` (380-780 nm: 21 of the
+        # 41): the other rows of B are zero, so the product is the same, at half the cost
+        used = np.flatnonzero(np.any(B != 0.0, axis=1))
+        j0, j1 = (int(used[0]), int(used[-1]) + 1) if used.size else (0, 1)
+        table = self._derived_table(("rows", j0, j1), lambda: self._table[:, :, j0:j1])
+        return (lambda d: self._lookup(d, table)), B[j0:j1]
 
     def xyz(self, directions) -> np.ndarray:
         """CIE 1931 XYZ, Y = luminance [cd m^-2], shape (..., 3)."""
