@@ -8,7 +8,7 @@ time of a 4096 x 2048 lat-long environment map of each model
 (``skydome.export.envmap.render_envmap``, what ``skydome export envmap`` computes before it
 writes the file). Kernels are compiled (and numba's cache filled) before the clock starts.
 
-Run:  python benchmarks/bench_fitted.py [--n 4000000] [--repeat 3] [--no-envmap]
+Run:  python benchmarks/bench_fitted.py [--n 2000000] [--repeat 3] [--no-envmap]
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def _best(f, repeat):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--n", type=int, default=4_000_000, help="directions per call")
+    ap.add_argument("--n", type=int, default=2_000_000, help="directions per call")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--no-envmap", action="store_true")
     a = ap.parse_args(argv)
