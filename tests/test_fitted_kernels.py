@@ -85,3 +85,16 @@ def test_spectral_basis_is_the_radiance():
         full = sky._lookup(d, sky._table) @ sky._weights(np.asarray(wl, float))
         np.testing.assert_allclose(sample(d) @ B, full, rtol=1e-12, atol=0.0)
         np.testing.assert_allclose(sky.radiance(d, wl), full, rtol=1e-12, atol=0.0)
+
+
+def test_extreme_lengths_give_the_same_values():
+    """Directions whose squares overflow or vanish are looked up like their unit vectors."""
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=200.0))
+    u = np.random.default_rng(4).normal(size=(300, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    u = np.vstack([u, [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
+    ref = sky.luminance(u)
+    for scale in (1e-300, 1e-160, 1e160, 1e300):
+        got = sky.luminance(u * scale)
+        assert np.all(np.isfinite(got)) and np.all(got >= 0.0)
+        np.testing.assert_allclose(got, ref, rtol=1e-9)

@@ -93,6 +93,9 @@ def lookup(d, table, theta_h, sin_az, cos_az, out):
     inv_ground = 1.0 / (math.pi - theta_h - EPS)
     for i in prange(n):
         x, y, z = d[i, 0], d[i, 1], d[i, 2]
+        m = max(abs(x), abs(y), abs(z))
+        if m > 1e150 or m < 1e-150:          # squares would overflow or vanish: rescale
+            x, y, z = x / m, y / m, z / m
         th = _atan2_pos(math.sqrt(x * x + y * y), z)
         sky = th < theta_h
         u_sky = math.sqrt(max(1.0 - th * inv_sky, 0.0)) * (N_SKY - 1)
