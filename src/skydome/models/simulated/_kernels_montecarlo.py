@@ -326,6 +326,21 @@ def _mat_rot_scatter(A, c2, s2, f12, f22, f33, f44):
 
 
 @njit(cache=True, inline="always")
+def _mixture_phase(ic, cw, ph_table, l, cth, nc):
+    """sum_c mu_s,c P_c(cos theta): the constituents' phase functions weighted by their
+    local scattering coefficients cw[MUS] (tabulated ones at wavelength index l)."""
+    p = 0.0
+    for c in range(nc):
+        if cw[MUS, c] > 0.0:
+            code = ic[PHASE, c]
+            if code == TABULATED:
+                p += tabulated_phase(ph_table, c, l, cth) * cw[MUS, c]
+            else:
+                p += phase_value(code, cw[PHP, c], cth) * cw[MUS, c]
+    return p
+
+
+@njit(cache=True, inline="always")
 def _bracket(nodes, n_nodes, x):
     """(lo, lo + 1): the interval of the ascending nodes[:n_nodes] that holds x, by
     bisection (nodes[lo] <= x; the last interval for x beyond the end)."""
@@ -461,15 +476,7 @@ def _next_event_sun(ic, cw, ph_table, table, scol, A, est, state, R, Rt, l, sx, 
         # L(phi) (v0, v1, 0, 0)
         _mat_apply(A, v0, c2 * v1, -s2r * v1, 0.0, est, scale / mus * tr, True)
     else:
-        p = 0.0
-        for c in range(nc):
-            if cw[MUS, c] > 0.0:
-                code = ic[PHASE, c]
-                if code == TABULATED:
-                    p += tabulated_phase(ph_table, c, l, cth) * cw[MUS, c]
-                else:
-                    p += phase_value(code, cw[PHP, c], cth) * cw[MUS, c]
-        est[0] += scale * p / mus * tr
+        est[0] += scale * _mixture_phase(ic, cw, ph_table, l, cth, nc) / mus * tr
 
 
 N_SEGMENT = 48       # geometric midpoint nodes per piece of a segment (segment_sun)
@@ -569,14 +576,7 @@ def _segment_sun(ic, cw, ph_table, table, scol, cuts, state, R, Rt, l, sx, sy, s
                     ts = 0.0
                     for c in range(nc):
                         ts += cw[EXT, c] * scol[c]
-                    p = 0.0
-                    for c in range(nc):
-                        if cw[MUS, c] > 0.0:
-                            code = ic[PHASE, c]
-                            if code == TABULATED:
-                                p += tabulated_phase(ph_table, c, l, cth) * cw[MUS, c]
-                            else:
-                                p += phase_value(code, cw[PHP, c], cth) * cw[MUS, c]
+                    p = _mixture_phase(ic, cw, ph_table, l, cth, nc)
                     total += w * math.exp(-tau_node - ts) * p
             tau += mut * w
     return total
