@@ -67,7 +67,8 @@ def _cpu_sky(elevation: float, params: dict):
 
 def _gpu(page, elevation, params, projection, w, h, opts=None):
     values = {"sun_elevation": elevation, "sun_azimuth": SUN_AZIMUTH_DEG, **params}
-    flat = page.evaluate("([m, v, w, h, p, o]) => window.skydomeViewer.renderFloat(m, v, w, h, p, o)",
+    flat = page.evaluate("([m, v, w, h, p, o]) => "
+                         "window.skydomeViewer.renderFloat(m, v, w, h, p, o)",
                          ["fitted", values, w, h, projection, opts or {}])
     return np.asarray(flat, dtype=np.float64).reshape(h, w, 3)
 

@@ -44,9 +44,11 @@ FITTED_FORMAT = "skydome.luts.fitted-xyz/1"
 ELEVATION_STEP_DEG = 1.0
 #: Step of the sun texture's elevation axis [deg] (at most): geometric interpolation of
 #: the transmitted sun between 1 deg steps is 10 % off at 1.5 deg (ln T follows the air
-#: mass, not the elevation); 0.1 deg steps are 100 times closer (the error of linear
-#: interpolation goes with the step squared).
-SUN_ELEVATION_STEP_DEG = 0.1
+#: mass, not the elevation), between 0.1 deg steps 0.48 % at 0.15 deg; the error goes
+#: with the step squared. A texture of at most :data:`SUN_TEXTURE_MAX` texels (the
+#: smallest GL_MAX_TEXTURE_SIZE of OpenGL ES 3.0) takes a larger step where needed.
+SUN_ELEVATION_STEP_DEG = 0.05
+SUN_TEXTURE_MAX = 2048
 #: The floor of the shader's logarithm (XYZ values in cd m^-2).
 LOG_FLOOR = 1e-30
 
@@ -85,7 +87,8 @@ def bake_fitted(sky, step_deg: float = ELEVATION_STEP_DEG
         tab[k, :, :, :3] = cls(sun=s, **params).xyz_table()
     # the sun: the transmittance depends on the sun's elevation alone, not on the angular
     # table, so one model answers it for every elevation with its sun replaced
-    sun_elev = elevation_axis(lo, hi, SUN_ELEVATION_STEP_DEG)
+    sun_elev = elevation_axis(lo, hi, max(SUN_ELEVATION_STEP_DEG,
+                                          (hi - lo) / (SUN_TEXTURE_MAX - 1)))
     sun_tex = np.zeros((sun_elev.size, 4))
     m = copy.copy(sky)
     for k, e in enumerate(sun_elev):

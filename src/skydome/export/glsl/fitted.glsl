@@ -118,8 +118,8 @@ float skydomeFittedSunVisibleFraction(SkydomeFitted f, float elevationRad) {
 }
 
 // The radiance of the sun's disc seen through the air (uniform disc): XYZ, Y in cd m^-2
-// (texture sun on its own axis, interpolated geometrically in elevation as the sky). This is the radiance
-// of the parts of the disc above the horizon; its mean over the whole disc
+// (texture sun on its own axis, interpolated geometrically in elevation as the sky): the
+// radiance of the parts of the disc above the horizon; its mean over the whole disc
 // (FittedSky.sun_radiance) is skydomeFittedSunMeanRadiance.
 vec3 skydomeFittedSunRadiance(sampler2D sun, SkydomeFitted f, vec3 sunDir) {
     int i0;
