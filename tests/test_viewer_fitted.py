@@ -145,3 +145,18 @@ def test_fitted_sun_disc(browser_page):  # noqa: F811
         assert want[1] > 0.0
         np.testing.assert_allclose(flux, want, rtol=0.02)
     assert not [m for m in messages if m[0] in ("error", "pageerror") or "GL_" in m[1]]
+
+
+@pytest.mark.parametrize("query,message", [
+    ({"sun_elevation": "-20"}, r"sun\.elevation_deg = -20 deg is out of range"),
+    ({"sun_elevation": "5", "observer_altitude_m": "20000"},
+     r"observer_altitude_m = 20000 m is out of range \[0, 15000\]"),
+    ({"sun_elevation": "5", "ground_albedo": "nan"}, "ground_albedo = nan"),
+])
+def test_fitted_request_refused_before_work(query, message):
+    """A value outside the model's range is refused by the server's check (400 with this
+    message) before any table is built."""
+    from skydome.viewer.server import check_scene_request
+
+    with pytest.raises(ValueError, match=message):
+        check_scene_request({"model": "fitted", "sun_azimuth": "0", **query})
