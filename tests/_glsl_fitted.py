@@ -36,10 +36,20 @@ def axis(first, step, count, elevation_deg):
     return i0, i1, x - float(i0)
 
 
+def mix(x, y, a):
+    """GLSL mix(x, y, a) = x (1 - a) + y a; with a boolean a, the selection y where a."""
+    if isinstance(a, np.ndarray) and a.dtype == bool:
+        return np.where(a, y, x)
+    return x * (1.0 - a) + y * a
+
+
+def blend(a, b, w):
+    geo = np.exp(mix(np.log(np.maximum(a, 1e-30)), np.log(np.maximum(b, 1e-30)), w))
+    return mix(mix(a, b, w), geo, np.minimum(a, b) > 0.0)
+
+
 def texel(sky, row, col, i0, i1, w):
-    a = np.maximum(sky[i0, row, col, :3], 1e-30)
-    b = np.maximum(sky[i1, row, col, :3], 1e-30)
-    return np.exp(np.log(a) * (1.0 - w) + np.log(b) * w)       # GLSL mix(x, y, a)
+    return blend(sky[i0, row, col, :3], sky[i1, row, col, :3], w)
 
 
 def fitted_sky(sky, f, d, sun_dir):
@@ -91,9 +101,7 @@ def sun_visible_fraction(f, elevation_rad):
 def sun_radiance(sun, f, sun_dir):
     i0, i1, w = axis(f["sunElevationFirstDeg"], f["sunElevationStepDeg"],
                      f["sunElevationCount"], sun_elevation_deg(sun_dir))
-    a = np.maximum(sun[i0, :3], 1e-30)
-    b = np.maximum(sun[i1, :3], 1e-30)
-    return np.exp(np.log(a) * (1.0 - w) + np.log(b) * w) * f["irradianceScale"]
+    return blend(sun[i0, :3], sun[i1, :3], w) * f["irradianceScale"]
 
 
 def sun_mean_radiance(sun, f, sun_dir):

@@ -21,7 +21,8 @@ Textures (little-endian float32, RGBA, Y in cd m^-2 for a sun at 1 au: multiply 
   mass, which is strongly curved in elevation near the horizon); A = 0. As a GL texture:
   n_sun_elevations wide, 1 high.
 
-Between the elevation slices the shader interpolates geometrically (linearly in ln XYZ):
+Between the elevation slices the shader interpolates geometrically (linearly in ln XYZ;
+linearly where either value is 0, which the model's clamp can give):
 the sky darkens about exponentially as the sun sets, and the model itself interpolates
 its logarithm linearly in elevation between its nodes. Against the CPU model at
 elevations between the slices (1 deg steps) the bake stays above 50 dB PSNR
@@ -109,7 +110,8 @@ def bake_fitted(sky, step_deg: float = ELEVATION_STEP_DEG
         "elevation_axis": {"first_deg": float(elev[0]), "step_deg": float(elev[1] - elev[0]),
                            "count": int(elev.size),
                            "interpolation": "geometric between neighbouring slices "
-                                            f"(linear in ln max(XYZ, {LOG_FLOOR:g}))"},
+                                            f"(linear in ln max(XYZ, {LOG_FLOOR:g})); "
+                                            "linear where either value is 0"},
         "sun_elevation_axis": {"first_deg": float(sun_elev[0]),
                                "step_deg": float(sun_elev[1] - sun_elev[0]),
                                "count": int(sun_elev.size),

@@ -9,7 +9,8 @@
 // kernel skydome.models.fitted._kernels.lookup line for line (the inverse mappings of
 // fitted._grid, then bilinear weights between four texels, read with texelFetch: no
 // hardware filtering) in the two layers around the sun's elevation, and interpolates
-// between the layers geometrically (linearly in ln XYZ). Sampler state: any (texelFetch).
+// between the layers geometrically (linearly in ln XYZ; linearly where a value is 0).
+// Sampler state: any (texelFetch).
 //
 // Frame: East-North-Up (x east, y north, z up), unit vectors, azimuth from north towards
 // east. Values: CIE 1931 XYZ, Y in cd m^-2, for a sun at 1 au, times irradianceScale
@@ -56,11 +57,17 @@ void skydomeFittedAxis(float first, float step, int count, float elevationDeg, o
     w = x - float(i0);
 }
 
-// one texel, interpolated geometrically between two layers (max(., 1e-30): the log floor)
+// between two values of neighbouring elevations: geometric (linear in ln) where both are
+// positive, linear where either is 0 (a value the model clamped to 0)
+vec3 skydomeFittedBlend(vec3 a, vec3 b, float w) {
+    vec3 geo = exp(mix(log(max(a, vec3(1e-30))), log(max(b, vec3(1e-30))), w));
+    return mix(mix(a, b, w), geo, greaterThan(min(a, b), vec3(0.0)));
+}
+
+// one texel, interpolated between two layers
 vec3 skydomeFittedTexel(sampler2DArray sky, int row, int col, int i0, int i1, float w) {
-    vec3 a = max(texelFetch(sky, ivec3(col, row, i0), 0).rgb, vec3(1e-30));
-    vec3 b = max(texelFetch(sky, ivec3(col, row, i1), 0).rgb, vec3(1e-30));
-    return exp(mix(log(a), log(b), w));
+    return skydomeFittedBlend(texelFetch(sky, ivec3(col, row, i0), 0).rgb,
+                              texelFetch(sky, ivec3(col, row, i1), 0).rgb, w);
 }
 
 // The sky (and the ground below the horizon) seen from direction dir with the sun at
@@ -127,9 +134,8 @@ vec3 skydomeFittedSunRadiance(sampler2D sun, SkydomeFitted f, vec3 sunDir) {
     float w;
     skydomeFittedAxis(f.sunElevationFirstDeg, f.sunElevationStepDeg, f.sunElevationCount,
                       skydomeFittedSunElevationDeg(sunDir), i0, i1, w);
-    vec3 a = max(texelFetch(sun, ivec2(i0, 0), 0).rgb, vec3(1e-30));
-    vec3 b = max(texelFetch(sun, ivec2(i1, 0), 0).rgb, vec3(1e-30));
-    return exp(mix(log(a), log(b), w)) * f.irradianceScale;
+    return skydomeFittedBlend(texelFetch(sun, ivec2(i0, 0), 0).rgb,
+                              texelFetch(sun, ivec2(i1, 0), 0).rgb, w) * f.irradianceScale;
 }
 
 // The disc's mean radiance, the visible fraction included (FittedSky.sun_radiance in XYZ).
