@@ -8,7 +8,8 @@ its own table) and ``sun_radiance`` in the same directions and at the same sun, 
 independently of the bake: exact (to float32) at the bake's elevation slices, and at
 elevations halfway between them (where the shader interpolates between slices) within the
 viewer's PSNR floor of 40 dB (tests/test_viewer_shaders.py). The GLSL itself compiles with
-the Khronos reference compiler as GLSL ES 3.00 and GLSL 3.30.
+the Khronos reference compiler as GLSL ES 3.00 and GLSL 3.30, and runs in WebGL2 (headless
+Chromium, SwiftShader) against the CPU model.
 """
 
 from __future__ import annotations
@@ -220,3 +221,134 @@ def test_bad_input_refused_before_work(tmp_path):
         assert res.exit_code == 2, (args, res.output)
         assert msg in res.output, (args, res.output)
         assert not bad.exists()
+
+
+_PAGE_JS = """
+async ([frag, sky, sun, dims, f, sunDir, w, h]) => {
+  const canvas = document.createElement("canvas");
+  const gl = canvas.getContext("webgl2");
+  if (!gl || !gl.getExtension("EXT_color_buffer_float")) return "no WebGL2 float target";
+  const f32 = (b64) => { const s = atob(b64), u = new Uint8Array(s.length);
+                         for (let i = 0; i < s.length; ++i) u[i] = s.charCodeAt(i);
+                         return new Float32Array(u.buffer); };
+  const sh = (type, text) => { const x = gl.createShader(type); gl.shaderSource(x, text);
+    gl.compileShader(x); if (!gl.getShaderParameter(x, gl.COMPILE_STATUS))
+      throw new Error(gl.getShaderInfoLog(x)); return x; };
+  const p = gl.createProgram();
+  gl.attachShader(p, sh(gl.VERTEX_SHADER, "#version 300 es\\nin vec2 a;\\n" +
+                        "void main() { gl_Position = vec4(a, 0.0, 1.0); }"));
+  gl.attachShader(p, sh(gl.FRAGMENT_SHADER, frag));
+  gl.bindAttribLocation(p, 0, "a");
+  gl.linkProgram(p);
+  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
+  gl.useProgram(p);
+  const [nl, rows, cols, ns] = dims;
+  const t0 = gl.createTexture();
+  gl.activeTexture(gl.TEXTURE0);
+  gl.bindTexture(gl.TEXTURE_2D_ARRAY, t0);
+  gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA32F, cols, rows, nl);
+  gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, 0, cols, rows, nl, gl.RGBA, gl.FLOAT, f32(sky));
+  const t1 = gl.createTexture();
+  gl.activeTexture(gl.TEXTURE1);
+  gl.bindTexture(gl.TEXTURE_2D, t1);
+  gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, ns, 1);
+  gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, ns, 1, gl.RGBA, gl.FLOAT, f32(sun));
+  for (const t of [gl.TEXTURE_2D_ARRAY, gl.TEXTURE_2D]) {
+    gl.activeTexture(t === gl.TEXTURE_2D ? gl.TEXTURE1 : gl.TEXTURE0);
+    gl.texParameteri(t, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(t, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+  }
+  gl.uniform1i(gl.getUniformLocation(p, "skyTex"), 0);
+  gl.uniform1i(gl.getUniformLocation(p, "sunTex"), 1);
+  for (const [k, v] of Object.entries(f)) {
+    const loc = gl.getUniformLocation(p, "fit." + k);
+    if (["nSky", "nGround", "nPhi", "elevationCount", "sunElevationCount"].includes(k))
+      gl.uniform1i(loc, v); else gl.uniform1f(loc, v);
+  }
+  gl.uniform3fv(gl.getUniformLocation(p, "sunDir"), sunDir);
+  gl.uniform2f(gl.getUniformLocation(p, "size"), w, h);
+  const tex = gl.createTexture();
+  gl.activeTexture(gl.TEXTURE2);
+  gl.bindTexture(gl.TEXTURE_2D, tex);
+  gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, w, h);
+  const fb = gl.createFramebuffer();
+  gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+  gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+  const buf = gl.createBuffer();
+  gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+  gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
+  gl.enableVertexAttribArray(0);
+  gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
+  gl.viewport(0, 0, w, h);
+  gl.drawArrays(gl.TRIANGLES, 0, 3);
+  const out = new Float32Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, out);
+  return Array.from(out);
+}
+"""
+
+_FRAG_MAIN = """
+uniform sampler2DArray skyTex; uniform sampler2D sunTex; uniform SkydomeFitted fit;
+uniform vec3 sunDir; uniform vec2 size;
+out vec4 o;
+void main() {
+    // skydome.imaging.projections.Equirect(w, h) at the pixel centre (gl_FragCoord rows
+    // count from the bottom): elevation 90 deg - 180 deg row / h, azimuth 360 deg col / w
+    float row = size.y - gl_FragCoord.y;
+    float el = 0.5 * SKYDOME_FITTED_PI - SKYDOME_FITTED_PI * row / size.y;
+    float az = 2.0 * SKYDOME_FITTED_PI * gl_FragCoord.x / size.x;
+    vec3 d = vec3(cos(el) * sin(az), cos(el) * cos(az), sin(el));
+    // the sun's function compiled and linked too (its value is checked by the
+    // transcription; 0 x it leaves the sky alone)
+    o = vec4(skydomeFittedSky(skyTex, fit, d, sunDir) + 0.0 * skydomeFittedSunMeanRadiance(
+        sunTex, fit, sunDir), 1.0);
+}
+"""
+
+
+def test_glsl_in_chromium_against_the_cpu_model(baked):
+    """fitted.glsl itself in WebGL2 (headless Chromium, SwiftShader, float32), on the two
+    layers of the bake around the sun (the struct's axis set to them), over the whole
+    sphere (equirect 128 x 64) against the CPU model at that sun: PSNR >= 40 dB at
+    elevations between the layers."""
+    import base64
+
+    from _viewer import CHROMIUM, CHROMIUM_ARGS, have_browser
+
+    if not have_browser():
+        pytest.skip("headless Chromium or Playwright missing")
+    from playwright.sync_api import sync_playwright
+
+    desc, sky, sun = baked
+    e, se = desc["elevation_axis"], desc["sun_elevation_axis"]
+    frag = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
+            "precision highp sampler2DArray;\n" + GLSL.read_text() + _FRAG_MAIN)
+    d = _directions()
+    w, h = d.shape[1], d.shape[0]
+
+    def b64(a):
+        return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode()
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        page = browser.new_page()
+        for el in (45.5, 3.5, e["first_deg"] + 0.5 * e["step_deg"]):
+            k = int((el - e["first_deg"]) // e["step_deg"])
+            ks = int((el - se["first_deg"]) // se["step_deg"])
+            f = glsl.struct_from_desc(desc)
+            f.update({"elevationFirstDeg": e["first_deg"] + k * e["step_deg"],
+                      "elevationCount": 2, "sunElevationCount": 2,
+                      "sunElevationFirstDeg": se["first_deg"] + ks * se["step_deg"]})
+            cpu = _cpu(el)
+            s = np.asarray(cpu.sun.direction, dtype=np.float64)
+            layers = sky[k:k + 2]
+            out = page.evaluate(_PAGE_JS, [frag, b64(layers), b64(sun[ks:ks + 2]),
+                                           list(layers.shape[:3]) + [2], f, s.tolist(), w, h])
+            assert not isinstance(out, str), out
+            gpu = np.asarray(out, dtype=np.float64).reshape(h, w, 4)[::-1, :, :3]
+            gpu = gpu * cpu.sun.irradiance_scale
+            ref = np.asarray(cpu.xyz(d))
+            value = psnr_db(gpu, ref)
+            print(f"fitted.glsl in Chromium, sun {el:g} deg: PSNR {value:.1f} dB")
+            assert np.all(np.isfinite(gpu)) and value >= PSNR_FLOOR_DB
+        browser.close()
