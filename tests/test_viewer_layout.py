@@ -33,7 +33,8 @@ from _viewer import (CHROMIUM, CHROMIUM_ARGS, have_browser, viewer_url,  # noqa:
                      wait_ready, warm_precomputed)
 
 SIZES = [(1280, 720), (1920, 1080)]
-SKY_MODELS = ["precomputed", "preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020"]
+SKY_MODELS = ["precomputed", "preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020",
+              "fitted"]
 SUN = {"sun_elevation": 20.0, "sun_azimuth": 170.0}
 VIEW = (180.0, 15.0, 90.0)           # the page's default camera: south, 15 deg up, 90 deg wide
 

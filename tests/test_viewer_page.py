@@ -16,7 +16,8 @@ import pytest
 
 from _viewer import browser_page, viewer_url, warm_precomputed  # noqa: F401 - fixtures
 
-MODELS = ["preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020", "precomputed"]
+MODELS = ["preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020", "precomputed",
+          "fitted"]
 
 
 def _wait_idle(page, timeout_s=60.0):

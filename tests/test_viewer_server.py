@@ -175,9 +175,11 @@ def test_models_route(viewer_url):  # noqa: F811
     assert status == 200
     models = json.loads(body)
     assert set(models) == {"preetham1999", "hoffman_preetham2002", "oneil2005", "hillaire2020",
-                           "precomputed", "dobashi2002"}
+                           "precomputed", "fitted", "dobashi2002"}
     assert [p["name"] for p in models["preetham1999"]["parameters"]] == ["turbidity"]
     assert [p["name"] for p in models["dobashi2002"]["parameters"]] == ["turbidity", "shafts", "n_planes"]
+    assert [p["name"] for p in models["fitted"]["parameters"]] == [
+        "aerosol_optical_depth", "ground_albedo", "observer_altitude_m"]
 
 
 @pytest.mark.parametrize("host", ["0.0.0.0", "::", "192.168.1.10", "example.com", ""])

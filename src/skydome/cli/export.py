@@ -191,7 +191,8 @@ def luts_cmd(
     **sun,
 ):
     """Bake the model's tables for a real-time renderer: precomputed in Bruneton's layout,
-    hillaire2020 in Hillaire's (+ luts.json: axes, mappings, units, XYZ conversion)."""
+    hillaire2020 in Hillaire's, fitted as its XYZ tables over sun elevation (+ luts.json:
+    axes, mappings, units, XYZ conversion)."""
     _run(_luts, ctx.args, model, out, format, half, sun)
 
 

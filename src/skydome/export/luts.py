@@ -2,7 +2,9 @@
 texture layout and the hillaire2020 model's tables in Hillaire's, reduced to CIE XYZ the
 way Bruneton reduces his spectral tables (:func:`bake`, :func:`write_luts`; the command
 ``skydome export luts``). The hillaire2020 bake is described in :func:`bake_hillaire2020`;
-its shader-side lookups are in ``export/glsl/hillaire2020.glsl``.
+its shader-side lookups are in ``export/glsl/hillaire2020.glsl``. The ``fitted`` model's
+bake (its XYZ tables over sun elevation, for ``export/glsl/fitted.glsl``) is in
+:mod:`skydome.export.fitted_luts`.
 
 Bruneton (2017) stores the 4-D scattering function S(r, mu, mu_s, nu) in a 3-D texture:
 x = nu and mu_s together (``x = (i_nu + u_mu_s) / NU_SIZE``: blocks of mu_s, one per nu
@@ -81,7 +83,7 @@ LUT_FORMAT = "skydome.luts.bruneton-xyz/5"
 HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/2"
 #: the bakes by layout: a model declares its layout as ``lut_layout`` (skydome.models,
 #: capabilities), so that :func:`lut_models` lists it and :func:`bake` bakes it
-LUT_LAYOUTS = ("bruneton", "hillaire")
+LUT_LAYOUTS = ("bruneton", "hillaire", "fitted")
 #: file formats of :func:`write_luts`
 LUT_FILE_FORMATS = ("exr", "npy", "bin")
 #: the model's table format whose axes this bake describes
@@ -747,15 +749,20 @@ def bake(sky, wavelengths_nm=None,
          density: bool = True) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The bake of ``sky`` in its model's layout (``lut_layout``): Bruneton's
     (``"bruneton"``, e.g. ``precomputed``, with its scattering density unless ``density``
-    is false) or Hillaire's (``"hillaire"``, e.g. ``hillaire2020``; any object with the
-    precomputed model's ``export_textures`` is baked in Bruneton's); ValueError for other
-    models."""
+    is false), Hillaire's (``"hillaire"``, e.g. ``hillaire2020``; any object with the
+    precomputed model's ``export_textures`` is baked in Bruneton's) or the fitted model's
+    (``"fitted"``: its XYZ tables over sun elevation, :mod:`skydome.export.fitted_luts`);
+    ValueError for other models."""
     name = getattr(sky, "name", type(sky).__name__)
     layout = getattr(sky, "lut_layout", None)
     if layout is None and hasattr(sky, "export_textures"):
         layout = "bruneton"         # an object that exports the precomputed model's tables
     if layout == "hillaire":
         return bake_hillaire2020(sky, wavelengths_nm)
+    if layout == "fitted":          # the fitted model's XYZ tables over sun elevation
+        from skydome.export.fitted_luts import bake_fitted
+
+        return bake_fitted(sky)
     if layout == "bruneton":
         return bake_precomputed(sky, density=bool(density))
     if layout is not None:

@@ -19,6 +19,8 @@ Nothing physical is computed in the page that is not also computed here or in th
   :func:`skydome.effects.dobashi2002.build_tables` reduced to XYZ per constituent (the
   phase functions do not depend on the wavelength, so the reduction is exact), for the
   effect's fixed extent (the scene's march range) and every view cosine.
+* ``fitted``: the configuration's angular table in XYZ (``FittedSky.xyz_table``, the
+  table the model's ``xyz()`` looks up) and the constants of its view grid's mappings.
 
 References
 ----------
@@ -485,9 +487,30 @@ def _dobashi(view) -> dict[str, Any]:
     return out
 
 
+def _fitted(sky) -> dict[str, Any]:
+    """The fitted model's angular table of this configuration in XYZ (FittedSky.xyz_table,
+    the table its xyz() looks up; built on the CPU in milliseconds) as an RGBA32F texture,
+    rows = the view grid's zenith-angle nodes, columns = its azimuth nodes, and the
+    constants of the inverse mappings (skydome.models.fitted._grid, _kernels.lookup)."""
+    import math
+
+    from skydome.models.fitted import _grid
+
+    tab = sky.xyz_table()                                   # (rows, N_PHI, 3) [cd m^-2]
+    rgba = np.zeros(tab.shape[:2] + (4,))
+    rgba[..., :3] = tab
+    th_h = _grid.horizon_zenith_rad(sky.observer_altitude_m)
+    az = math.radians(float(sky.sun.azimuth_deg))
+    return {"table_b64": _b64(rgba), "n": [_grid.N_SKY, _grid.N_GROUND, _grid.N_PHI],
+            "theta_h": th_h, "inv_sky": 1.0 / (th_h - _grid.EPS),
+            "inv_ground": 1.0 / (math.pi - th_h - _grid.EPS), "eps": _grid.EPS,
+            "a_phi": _grid.A_PHI, "sun_az": [math.sin(az), math.cos(az)]}
+
+
 #: The numbers of each shader (``viewer_shader``), by shader.
 _BUILDERS = {"preetham1999": _preetham, "hoffman_preetham2002": _hoffman, "oneil2005": _oneil,
-             "hillaire2020": _hillaire, "precomputed": _precomputed, "dobashi2002": _dobashi}
+             "hillaire2020": _hillaire, "precomputed": _precomputed, "dobashi2002": _dobashi,
+             "fitted": _fitted}
 
 
 def shader_scene(query: Mapping[str, str]) -> dict[str, Any]:

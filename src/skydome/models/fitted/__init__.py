@@ -64,6 +64,11 @@ class FittedSky(SkyModel):
     native = "spectral"
     summary = "skydome's own fit of the precomputed reference (spectral, sun -2..90 deg, 0-15 km)"
     own_ground = "sun_and_sky"
+    #: the viewer's shader (viewer/static/shaders/fitted.glsl: the lookup of xyz_table) and
+    #: the engine bake (export/fitted_luts.py, export/glsl/fitted.glsl)
+    viewer_shader = "fitted"
+    viewer_parameters = ("aerosol_optical_depth", "ground_albedo", "observer_altitude_m")
+    lut_layout = "fitted"
     sun_elevation_range_deg = _grid.SUN_ELEVATION_RANGE_DEG
     parameters = (
         Parameter("aerosol_optical_depth", "", 0.1, *_grid.AOD_RANGE,
@@ -158,6 +163,11 @@ class FittedSky(SkyModel):
         """CIE 1931 XYZ, Y = luminance [cd m^-2], shape (..., 3)."""
         return self._lookup(directions, self._derived_table(
             "xyz", lambda: self._table @ self._xyz_matrix()))
+
+    def xyz_table(self) -> np.ndarray:
+        """The angular table that :meth:`xyz` looks up: CIE 1931 XYZ [cd m^-2] on the view
+        grid of :mod:`._grid`, (N_SKY + N_GROUND, N_PHI, 3) (for the GLSL evaluators)."""
+        return self._derived_table("xyz", lambda: self._table @ self._xyz_matrix())
 
     def luminance(self, directions) -> np.ndarray:
         """Luminance [cd m^-2], shape (...)."""

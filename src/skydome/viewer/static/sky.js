@@ -105,6 +105,13 @@ SETTERS.dobashi2002 = (gl, u, s) => {
   gl.uniformMatrix3fv(u("u_xyz_to_srgb"), false, s.xyz_to_srgb);
 };
 
+SETTERS.fitted = (gl, u, s) => {
+  gl.uniform1i(u("u_fitted"), 13);
+  gl.uniform3i(u("u_fitted_n"), ...s.n);
+  for (const k of ["theta_h", "inv_sky", "inv_ground", "eps", "a_phi"]) gl.uniform1f(u(`u_${k}`), s[k]);
+  gl.uniform2f(u("u_sun_az"), ...s.sun_az);
+};
+
 // extra shader sources a model's program includes between common.glsl and its own
 const INCLUDES = { precomputed: ["transport"], dobashi2002: ["transport"] };
 
@@ -142,6 +149,24 @@ const PREPASSES = {
       r.precomputed = { key: s.lut_key, tex };
     }
     r.precomputed.tex.forEach(([unit, t]) => { gl.activeTexture(gl.TEXTURE0 + unit); gl.bindTexture(gl.TEXTURE_3D, t); });
+    gl.activeTexture(gl.TEXTURE0);
+  },
+
+  // fitted: upload the configuration's XYZ table (once per scene) as an RGBA32F texture
+  // on unit 13, read with texelFetch (the shader interpolates as the CPU kernel does)
+  async fitted(r, s) {
+    const gl = r.gl;
+    if (r.fitted?.scene !== s) {
+      if (r.fitted) gl.deleteTexture(r.fitted.tex);
+      const [ns, ng, np] = s.n, tex = gl.createTexture();
+      gl.activeTexture(gl.TEXTURE13);
+      gl.bindTexture(gl.TEXTURE_2D, tex);
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, np, ns + ng);
+      gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, np, ns + ng, gl.RGBA, gl.FLOAT, f32FromBase64(s.table_b64));
+      for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
+      r.fitted = { scene: s, tex };
+    }
+    gl.activeTexture(gl.TEXTURE13); gl.bindTexture(gl.TEXTURE_2D, r.fitted.tex);
     gl.activeTexture(gl.TEXTURE0);
   },
 
@@ -406,7 +431,7 @@ export class SkyRenderer {
       gl.uniform3fv(u("u_up"), camera.up);
       gl.uniform1f(u("u_tan_half_fov"), camera.tanHalfFov);
       gl.uniform3fv(u("u_sun"), v.scene.sun.direction);
-      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002"].includes(v.scene.shader) ? 1 : 0);
+      gl.uniform1i(u("u_shows_ground"), ["hillaire2020", "precomputed", "dobashi2002", "fitted"].includes(v.scene.shader) ? 1 : 0);
       gl.uniform1i(u("u_output"), v.output || 0);
       gl.uniform1f(u("u_ap_distance"), v.distance || 0);
       SETTERS[v.scene.shader](gl, u, v.scene);

@@ -1,0 +1,156 @@
+// skydome: the fitted sky model (skydome.models.fitted) in GLSL ES 3.00 / GLSL 3.30, over
+// its bake (`skydome export luts --model fitted`: textures sky and sun, luts.json).
+//
+// The bake holds, for one atmosphere and observer altitude, the model's angular table in
+// CIE XYZ at every sun elevation of its range (luts.json "elevation_axis"): one layer of
+// the 2-D array texture `sky` per elevation, N_PHI texels wide (the azimuth from the sun's
+// vertical plane) and N_SKY + N_GROUND high (the zenith angle: the sky's rows from the
+// horizon up, then the ground's from the horizon down). skydomeFittedSky mirrors the CPU
+// kernel skydome.models.fitted._kernels.lookup line for line (the inverse mappings of
+// fitted._grid, then bilinear weights between four texels, read with texelFetch: no
+// hardware filtering) in the two layers around the sun's elevation, and interpolates
+// between the layers geometrically (linearly in ln XYZ; linearly where a value is 0).
+// Sampler state: any (texelFetch).
+//
+// Frame: East-North-Up (x east, y north, z up), unit vectors, azimuth from north towards
+// east. Values: CIE 1931 XYZ, Y in cd m^-2, for a sun at 1 au, times irradianceScale
+// (Sun.irradiance_scale = 1 / distance_au^2).
+
+const float SKYDOME_FITTED_PI = 3.14159265358979;
+
+// Fill from luts.json: view_grid.n_sky, n_ground, n_phi, theta_h_rad, inv_sky,
+// inv_ground, eps_rad, a_phi; elevation_axis.first_deg, step_deg, count;
+// sun_elevation_axis.first_deg, step_deg, count; sun.angular_radius_rad;
+// irradianceScale from the sun's distance (1 at 1 au).
+struct SkydomeFitted {
+    int nSky;
+    int nGround;
+    int nPhi;
+    float thetaH;             // the horizon's zenith angle [rad] (pi/2 + the dip)
+    float invSky;             // 1 / (thetaH - eps)
+    float invGround;          // 1 / (pi - thetaH - eps)
+    float eps;                // the end nodes' distance from the horizon [rad]
+    float aPhi;               // the linear share of the azimuth mapping
+    float elevationFirstDeg;
+    float elevationStepDeg;
+    int elevationCount;
+    float sunElevationFirstDeg;   // the sun texture's own (finer) axis
+    float sunElevationStepDeg;
+    int sunElevationCount;
+    float sunAngularRadius;   // [rad]
+    float irradianceScale;
+};
+
+// the sun's elevation [deg] from its unit direction
+float skydomeFittedSunElevationDeg(vec3 sunDir) {
+    return degrees(atan(sunDir.z, length(sunDir.xy)));
+}
+
+// (node i0, node i1 = i0 + 1 or i0, fraction w) of an elevation on an axis of count
+// nodes from first in steps of step [deg], clamped to its range
+void skydomeFittedAxis(float first, float step, int count, float elevationDeg, out int i0,
+                       out int i1, out float w) {
+    float x = (elevationDeg - first) / step;
+    x = clamp(x, 0.0, float(count - 1));
+    i0 = min(int(x), max(count - 2, 0));
+    i1 = min(i0 + 1, count - 1);
+    w = x - float(i0);
+}
+
+// between two values of neighbouring elevations: geometric (linear in ln) where both are
+// positive, linear where either is 0 (a value the model clamped to 0)
+vec3 skydomeFittedBlend(vec3 a, vec3 b, float w) {
+    vec3 geo = exp(mix(log(max(a, vec3(1e-30))), log(max(b, vec3(1e-30))), w));
+    return mix(mix(a, b, w), geo, greaterThan(min(a, b), vec3(0.0)));
+}
+
+// one texel, interpolated between two layers
+vec3 skydomeFittedTexel(sampler2DArray sky, int row, int col, int i0, int i1, float w) {
+    return skydomeFittedBlend(texelFetch(sky, ivec3(col, row, i0), 0).rgb,
+                              texelFetch(sky, ivec3(col, row, i1), 0).rgb, w);
+}
+
+// The sky (and the ground below the horizon) seen from direction dir with the sun at
+// sunDir: XYZ, Y in cd m^-2 ([_kernels.lookup]).
+vec3 skydomeFittedSky(sampler2DArray sky, SkydomeFitted f, vec3 dir, vec3 sunDir) {
+    int i0;
+    int i1;
+    float w;
+    skydomeFittedAxis(f.elevationFirstDeg, f.elevationStepDeg, f.elevationCount,
+                      skydomeFittedSunElevationDeg(sunDir), i0, i1, w);
+    // the sun's azimuth (sin, cos); a sun at the zenith: azimuth 0
+    float ns = length(sunDir.xy);
+    float sinAz = ns > 0.0 ? sunDir.x / ns : 0.0;
+    float cosAz = ns > 0.0 ? sunDir.y / ns : 1.0;
+    // zenith angle: pi/2 - atan(z, rho) keeps float32's digits at the horizon
+    float th = 0.5 * SKYDOME_FITTED_PI - atan(dir.z, length(dir.xy));
+    bool isSky = th < f.thetaH;
+    float uSky = sqrt(max(1.0 - th * f.invSky, 0.0)) * float(f.nSky - 1);
+    float uGround = sqrt(max((th - f.thetaH - f.eps) * f.invGround, 0.0))
+                  * float(f.nGround - 1);
+    float u = isSky ? uSky : uGround;
+    int base = isSky ? 0 : f.nSky;
+    int nu = isSky ? f.nSky : f.nGround;
+    int iu = min(int(u), nu - 2);
+    float fu = u - float(iu);
+    // azimuth from the sun's vertical plane, folded into [0, pi]
+    float cp = dir.x * sinAz + dir.y * cosAz;
+    float sp = abs(dir.x * cosAz - dir.y * sinAz);
+    bool zero = sp == 0.0 && cp == 0.0;           // the zenith or the nadir: phi = 0
+    float phi = (zero ? 0.0 : atan(sp, cp)) * (1.0 / SKYDOME_FITTED_PI);
+    float a = f.aPhi;
+    float b = 1.0 - f.aPhi;
+    float t = (-a + sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * float(f.nPhi - 1);
+    int it = min(int(t), f.nPhi - 2);
+    float ft = max(t - float(it), 0.0);
+    int r0 = base + iu;
+    vec3 v00 = skydomeFittedTexel(sky, r0, it, i0, i1, w);
+    vec3 v01 = skydomeFittedTexel(sky, r0, it + 1, i0, i1, w);
+    vec3 v10 = skydomeFittedTexel(sky, r0 + 1, it, i0, i1, w);
+    vec3 v11 = skydomeFittedTexel(sky, r0 + 1, it + 1, i0, i1, w);
+    vec3 xyz = (1.0 - fu) * ((1.0 - ft) * v00 + ft * v01) + fu * ((1.0 - ft) * v10 + ft * v11);
+    return xyz * f.irradianceScale;
+}
+
+// Fraction of the sun's disc above the observer's horizon
+// (skydome.models.fitted._coefficients.sun_visible_fraction): the area of a disc of radius
+// alpha above a straight horizon at u radii below its centre,
+// 1 - (acos(u) - u sqrt(1 - u^2)) / pi, u = (elevation + dip) / alpha.
+float skydomeFittedSunVisibleFraction(SkydomeFitted f, float elevationRad) {
+    float dip = f.thetaH - 0.5 * SKYDOME_FITTED_PI;
+    float u = (elevationRad + dip) / f.sunAngularRadius;
+    if (u >= 1.0) return 1.0;
+    if (u <= -1.0) return 0.0;
+    return 1.0 - (acos(u) - u * sqrt(1.0 - u * u)) / SKYDOME_FITTED_PI;
+}
+
+// The radiance of the sun's disc seen through the air (uniform disc): XYZ, Y in cd m^-2
+// (texture sun on its own axis, interpolated geometrically in elevation as the sky): the
+// radiance of the parts of the disc above the horizon; its mean over the whole disc
+// (FittedSky.sun_radiance) is skydomeFittedSunMeanRadiance.
+vec3 skydomeFittedSunRadiance(sampler2D sun, SkydomeFitted f, vec3 sunDir) {
+    int i0;
+    int i1;
+    float w;
+    skydomeFittedAxis(f.sunElevationFirstDeg, f.sunElevationStepDeg, f.sunElevationCount,
+                      skydomeFittedSunElevationDeg(sunDir), i0, i1, w);
+    return skydomeFittedBlend(texelFetch(sun, ivec2(i0, 0), 0).rgb,
+                              texelFetch(sun, ivec2(i1, 0), 0).rgb, w) * f.irradianceScale;
+}
+
+// The disc's mean radiance, the visible fraction included (FittedSky.sun_radiance in XYZ).
+vec3 skydomeFittedSunMeanRadiance(sampler2D sun, SkydomeFitted f, vec3 sunDir) {
+    float e = atan(sunDir.z, length(sunDir.xy));
+    return skydomeFittedSunRadiance(sun, f, sunDir) * skydomeFittedSunVisibleFraction(f, e);
+}
+
+// The sky with the sun's disc: inside the disc and above the horizon the disc's radiance
+// replaces the sky (a uniform disc; skydome's renders add limb darkening).
+vec3 skydomeFittedSkyWithSun(sampler2DArray sky, sampler2D sun, SkydomeFitted f, vec3 dir,
+                             vec3 sunDir) {
+    float gamma = atan(length(cross(dir, sunDir)), dot(dir, sunDir));
+    float th = 0.5 * SKYDOME_FITTED_PI - atan(dir.z, length(dir.xy));
+    if (gamma < f.sunAngularRadius && th < f.thetaH)
+        return skydomeFittedSunRadiance(sun, f, sunDir);
+    return skydomeFittedSky(sky, f, dir, sunDir);
+}

@@ -1,0 +1,109 @@
+"""A numpy transcription of src/skydome/export/glsl/fitted.glsl, function by function and
+line by line (vectorised over directions, float64), with GLSL ``texelFetch`` emulated by
+indexing the bake's arrays as it writes them: ``sky`` (layers, rows, columns, 4), ``sun``
+(count, 4); ``f`` is a dict with the fields of the GLSL struct SkydomeFitted
+(:func:`struct_from_desc`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+PI = 3.14159265358979
+
+
+def struct_from_desc(desc: dict, irradiance_scale: float = 1.0) -> dict:
+    """The struct's fields filled from luts.json, as the shader's host code would."""
+    g, e, se = desc["view_grid"], desc["elevation_axis"], desc["sun_elevation_axis"]
+    return {"nSky": g["n_sky"], "nGround": g["n_ground"], "nPhi": g["n_phi"],
+            "thetaH": g["theta_h_rad"], "invSky": g["inv_sky"], "invGround": g["inv_ground"],
+            "eps": g["eps_rad"], "aPhi": g["a_phi"], "elevationFirstDeg": e["first_deg"],
+            "elevationStepDeg": e["step_deg"], "elevationCount": e["count"],
+            "sunElevationFirstDeg": se["first_deg"], "sunElevationStepDeg": se["step_deg"],
+            "sunElevationCount": se["count"],
+            "sunAngularRadius": desc["sun"]["angular_radius_rad"],
+            "irradianceScale": irradiance_scale}
+
+
+def sun_elevation_deg(sun_dir):
+    return np.degrees(np.arctan2(sun_dir[2], np.hypot(sun_dir[0], sun_dir[1])))
+
+
+def axis(first, step, count, elevation_deg):
+    x = (elevation_deg - first) / step
+    x = min(max(x, 0.0), float(count - 1))
+    i0 = min(int(x), max(count - 2, 0))
+    i1 = min(i0 + 1, count - 1)
+    return i0, i1, x - float(i0)
+
+
+def mix(x, y, a):
+    """GLSL mix(x, y, a) = x (1 - a) + y a; with a boolean a, the selection y where a."""
+    if isinstance(a, np.ndarray) and a.dtype == bool:
+        return np.where(a, y, x)
+    return x * (1.0 - a) + y * a
+
+
+def blend(a, b, w):
+    geo = np.exp(mix(np.log(np.maximum(a, 1e-30)), np.log(np.maximum(b, 1e-30)), w))
+    return mix(mix(a, b, w), geo, np.minimum(a, b) > 0.0)
+
+
+def texel(sky, row, col, i0, i1, w):
+    return blend(sky[i0, row, col, :3], sky[i1, row, col, :3], w)
+
+
+def fitted_sky(sky, f, d, sun_dir):
+    """skydomeFittedSky for directions d (..., 3)."""
+    i0, i1, w = axis(f["elevationFirstDeg"], f["elevationStepDeg"], f["elevationCount"],
+                     sun_elevation_deg(sun_dir))
+    ns = float(np.hypot(sun_dir[0], sun_dir[1]))
+    sin_az = sun_dir[0] / ns if ns > 0.0 else 0.0
+    cos_az = sun_dir[1] / ns if ns > 0.0 else 1.0
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    th = 0.5 * PI - np.arctan2(z, np.hypot(x, y))
+    is_sky = th < f["thetaH"]
+    u_sky = np.sqrt(np.maximum(1.0 - th * f["invSky"], 0.0)) * (f["nSky"] - 1)
+    u_ground = np.sqrt(np.maximum((th - f["thetaH"] - f["eps"]) * f["invGround"], 0.0)) \
+        * (f["nGround"] - 1)
+    u = np.where(is_sky, u_sky, u_ground)
+    base = np.where(is_sky, 0, f["nSky"])
+    nu = np.where(is_sky, f["nSky"], f["nGround"])
+    iu = np.minimum(u.astype(int), nu - 2)                     # int(): truncation, u >= 0
+    fu = (u - iu)[..., None]
+    cp = x * sin_az + y * cos_az
+    sp = np.abs(x * cos_az - y * sin_az)
+    zero = (sp == 0.0) & (cp == 0.0)
+    phi = np.where(zero, 0.0, np.arctan2(sp, cp)) * (1.0 / PI)
+    a = f["aPhi"]
+    b = 1.0 - f["aPhi"]
+    t = (-a + np.sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * (f["nPhi"] - 1)
+    it = np.minimum(t.astype(int), f["nPhi"] - 2)
+    ft = np.maximum(t - it, 0.0)[..., None]
+    r0 = base + iu
+    v00 = texel(sky, r0, it, i0, i1, w)
+    v01 = texel(sky, r0, it + 1, i0, i1, w)
+    v10 = texel(sky, r0 + 1, it, i0, i1, w)
+    v11 = texel(sky, r0 + 1, it + 1, i0, i1, w)
+    xyz = (1.0 - fu) * ((1.0 - ft) * v00 + ft * v01) + fu * ((1.0 - ft) * v10 + ft * v11)
+    return xyz * f["irradianceScale"]
+
+
+def sun_visible_fraction(f, elevation_rad):
+    dip = f["thetaH"] - 0.5 * PI
+    u = (elevation_rad + dip) / f["sunAngularRadius"]
+    if u >= 1.0:
+        return 1.0
+    if u <= -1.0:
+        return 0.0
+    return 1.0 - (np.arccos(u) - u * np.sqrt(1.0 - u * u)) / PI
+
+
+def sun_radiance(sun, f, sun_dir):
+    i0, i1, w = axis(f["sunElevationFirstDeg"], f["sunElevationStepDeg"],
+                     f["sunElevationCount"], sun_elevation_deg(sun_dir))
+    return blend(sun[i0, :3], sun[i1, :3], w) * f["irradianceScale"]
+
+
+def sun_mean_radiance(sun, f, sun_dir):
+    e = np.arctan2(sun_dir[2], np.hypot(sun_dir[0], sun_dir[1]))
+    return sun_radiance(sun, f, sun_dir) * sun_visible_fraction(f, e)
