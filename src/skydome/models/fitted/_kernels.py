@@ -12,6 +12,13 @@ are computed by :func:`_atan2_pos`, an arctangent of our own made of arithmetic 
 a few units in the last place (tests/test_fitted_kernels.py checks it against
 ``math.atan2``, and the lookups against the inverse mappings written with numpy).
 
+The kernel works in blocks of :data:`BLOCK` directions: first the cells and weights of the
+whole block, in a loop of arithmetic and selects only (no call, no branch), which LLVM
+vectorises (SIMD across the block's directions), then the table reads. It also counts
+the non-finite and zero-length rows itself (on the bits of the floats, which fastmath
+leaves alone), so that the caller needs no separate pass over the directions to check
+them; such rows are looked up as the zenith meanwhile and the caller raises.
+
 This module imports numba: the model imports it lazily, in its evaluation methods.
 """
 
