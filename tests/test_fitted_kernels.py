@@ -32,7 +32,11 @@ def test_atan2_pos_matches_the_library_atan2():
 
 def _reference_lookup(sky, d):
     """The bilinear lookup with numpy's arccos / arctan2 (the mappings of _grid.py)."""
-    table = sky._table
+    return _reference_lookup_table(sky, sky._table, d)
+
+
+def _reference_lookup_table(sky, table, d):
+    """The same in the angular table ``table`` (N_SKY + N_GROUND, N_PHI, C)."""
     u = d / np.linalg.norm(d, axis=1)[:, None]
     th = np.arccos(np.clip(u[:, 2], -1.0, 1.0))
     th_h = _grid.horizon_zenith_rad(sky.observer_altitude_m)
@@ -98,3 +102,108 @@ def test_extreme_lengths_give_the_same_values():
         got = sky.luminance(u * scale)
         assert np.all(np.isfinite(got)) and np.all(got >= 0.0)
         np.testing.assert_allclose(got, ref, rtol=1e-9)
+
+
+@pytest.mark.parametrize("n", [0, 1, 255, 256, 257, 3001])
+def test_luminance_and_xyz_match_the_grid_mappings(n):
+    """The kernel's one-channel and three-channel paths (and the block edges of its loop)
+    against the numpy lookup in the luminance and XYZ tables, over the whole sphere."""
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=12.0, azimuth_deg=300.0),
+                   observer_altitude_m=7000.0, aerosol_optical_depth=0.3)
+    d = np.random.default_rng(n).normal(size=(n, 3))
+    m = sky._xyz_matrix()
+    for got, table in ((sky.xyz(d), sky._table @ m),
+                       (sky.luminance(d)[:, None], sky._table @ m[:, 1:2])):
+        ref = _reference_lookup_table(sky, table, d)
+        assert got.shape == ref.shape == (n, table.shape[2])
+        if n:
+            scale = np.maximum(np.abs(ref), 1e-12 * np.abs(ref).max())
+            assert np.max(np.abs(got - ref) / scale) < 1e-9
+            assert np.all(got >= 0.0)
+
+
+def test_axes_and_grid_nodes_match_the_grid_mappings():
+    """The zenith, the nadir, the horizon, the sun's vertical plane and the grid's own
+    nodes (where a cell index changes) against the numpy lookup."""
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=3.0, azimuth_deg=90.0),
+                   observer_altitude_m=15000.0)
+    nodes = _grid.directions(15000.0, 90.0).reshape(-1, 3)
+    mids = _grid.directions(15000.0, 90.0, midpoints=True).reshape(-1, 3)
+    axes = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0],
+                     [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 1e-9], [1.0, 0.0, -1e-9],
+                     [1e-12, 0.0, 1.0], [-1e-12, 1e-12, -1.0]])
+    d = np.vstack([nodes, mids, axes])
+    table = sky._table @ sky._xyz_matrix()
+    ref = _reference_lookup_table(sky, table, d)
+    got = sky.xyz(d)
+    scale = np.maximum(np.abs(ref), 1e-12 * np.abs(ref).max())
+    # at a node the cell may be the one below or above it: the value is the same there,
+    # up to the node's rounding in the mappings (1e-9 relative covers it)
+    assert np.max(np.abs(got - ref) / scale) < 1e-9
+
+
+@pytest.mark.parametrize("bad, message", [
+    (np.nan, "NaN or infinite"), (np.inf, "NaN or infinite"), (-np.inf, "NaN or infinite"),
+    (0.0, "zero-length")])
+def test_bad_directions_give_the_checks_errors(bad, message):
+    """The kernel's own count of non-finite and zero-length rows raises the same errors as
+    the shared check (flat_directions of the analytic models), wherever the row is."""
+    from skydome.models.analytic._kernels_analytic import flat_directions
+
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=200.0))
+    rng = np.random.default_rng(8)
+    for n, row, col in ((1, 0, 2), (1000, 0, 0), (1000, 999, 1), (1000, 517, 2)):
+        d = rng.normal(size=(n, 3))
+        d[row] = [1.0, 0.5, 2.0] if bad != 0.0 else 0.0
+        d[row, col] = bad
+        with pytest.raises(ValueError, match=message) as ours:
+            sky.luminance(d)
+        with pytest.raises(ValueError) as shared:
+            flat_directions(d)
+        assert str(ours.value) == str(shared.value)
+        for f in (sky.xyz, lambda v: sky.radiance(v, [550.0, 700.0])):
+            with pytest.raises(ValueError, match=message):
+                f(d)
+    # both kinds at once: the non-finite row is named first, as by the shared check
+    d = rng.normal(size=(600, 3))
+    d[10] = 0.0
+    d[400, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        sky.luminance(d)
+    for shape in [(4, 2), (), (2,)]:
+        with pytest.raises(ValueError, match=r"shape \(\.\.\., 3\)"):
+            sky.luminance(np.ones(shape))
+
+
+def test_leading_shapes_and_layouts():
+    """Any leading shape, a non-contiguous view and a read-only array give the values of
+    the same directions as one C-contiguous (N, 3) array."""
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=50.0, azimuth_deg=10.0))
+    d = np.random.default_rng(9).normal(size=(6, 7, 3))
+    flat = sky.xyz(d.reshape(-1, 3))
+    np.testing.assert_array_equal(sky.xyz(d), flat.reshape(6, 7, 3))
+    # (the luminance table is its own product of the spectral table: rounding apart)
+    np.testing.assert_allclose(sky.luminance(d), flat[:, 1].reshape(6, 7), rtol=1e-13)
+    f = np.asfortranarray(d.reshape(-1, 3))
+    np.testing.assert_array_equal(sky.xyz(f), flat)
+    r = d.reshape(-1, 3).copy()
+    r.setflags(write=False)
+    np.testing.assert_array_equal(sky.xyz(r), flat)
+    np.testing.assert_array_equal(sky.xyz(d[0, 0]), flat[0])
+
+
+def test_threads_give_identical_values():
+    """Every thread has its own block buffers: the values do not depend on the number of
+    threads (the values themselves are checked against numpy above)."""
+    import numba
+
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=20.0, azimuth_deg=70.0))
+    d = np.random.default_rng(12).normal(size=(300_000, 3))
+    n = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = sky.xyz(d)
+    finally:
+        numba.set_num_threads(n)
+    for _ in range(3):
+        np.testing.assert_array_equal(sky.xyz(d), one)

@@ -127,13 +127,24 @@ class FittedSky(SkyModel):
         return self._weights(wl) @ integration_weights(wl, "linear") * K_M
 
     def _lookup(self, directions, table) -> np.ndarray:
-        from skydome.models.analytic._kernels_analytic import flat_directions
         from skydome.models.fitted import _kernels
 
-        flat, lead = flat_directions(directions)     # checked in one pass, not copied
-        out = np.empty((flat.shape[0], table.shape[2]))
-        _kernels.lookup(flat, table, self._theta_h, self._sin_az, self._cos_az, out)
-        return out.reshape(lead + (table.shape[2],))
+        # the checks of flat_directions (skydome.models.analytic), with its messages: the
+        # kernel counts the non-finite and zero-length rows in its own pass over the array
+        d = np.asarray(directions, dtype=np.float64)
+        if d.ndim == 0 or d.shape[-1] != 3:
+            raise ValueError(f"directions must have shape (..., 3), got {d.shape}")
+        lead = d.shape[:-1]
+        flat = np.ascontiguousarray(d.reshape(-1, 3))
+        c = table.shape[2]
+        out = np.empty((flat.shape[0], c))
+        n_bad, n_zero = _kernels.lookup(flat, flat.view(np.int64), table.reshape(-1), c,
+                                        self._theta_h, self._sin_az, self._cos_az, out)
+        if n_bad:
+            raise ValueError("directions contains NaN or infinite values")
+        if n_zero:
+            raise ValueError("directions contains zero-length vectors")
+        return out.reshape(lead + (c,))
 
     # -- the protocol --------------------------------------------------------------------
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
