@@ -478,16 +478,23 @@ class _Progress:
 def _build_model(cls, progress: "_Progress", **kwargs):
     """Construct a model, showing the progress its set-up reports (precomputed tables...).
 
-    numba's target is started first without SciPy's BLAS probe (0.25-0.3 s of a command's
+    numba's target is started without SciPy's BLAS probe (0.25-0.3 s of a command's
     start-up; :mod:`skydome._numba_start`): a command line process runs skydome's kernels,
-    none of which needs it."""
-    from skydome._numba_start import start_numba_without_blas
+    none of which needs it. The start (about 0.5 s of CPU, Python holding the interpreter
+    lock) runs on a second thread while the model is constructed: a cached precomputed
+    model reads and decodes its tables meanwhile (file reads, CRC-32, NumPy, which release
+    the lock), so that on two cores the two overlap; a model whose construction calls a
+    kernel waits for the start there (numba's import and compiler locks)."""
+    from skydome._numba_start import start_numba_in_background
     from skydome._progress import reporting
 
-    start_numba_without_blas()
-
-    with reporting(progress):
-        return cls(**kwargs)
+    start = start_numba_in_background()
+    try:
+        with reporting(progress):
+            return cls(**kwargs)
+    finally:
+        if start is not None:
+            start.join()
 
 
 def _check_date(value: str) -> str:
