@@ -426,9 +426,15 @@ class SkyImage:
             for k, v in text.items():
                 info.add_text(k, v)
             im = Image.fromarray(np.round(display * 255.0).astype(np.uint8), mode="RGB")
-            im.save(tmp, format="PNG", pnginfo=info)
+            im.save(tmp, format="PNG", pnginfo=info, compress_level=PNG_COMPRESS_LEVEL)
         else:
             write_png16(tmp, np.round(display * 65535.0).astype(np.uint16), text)
+
+
+# zlib level of 8-bit PNGs: the shortest render's 512 x 512 picture took 120 ms to encode at
+# Pillow's default (6) and 26 ms at 1, for 90 kB against 131 kB (the same pixels; a shared
+# 2-core EPYC, best of 5; docs/performance.md)
+PNG_COMPRESS_LEVEL = 1
 
 
 def _software() -> str:
