@@ -95,6 +95,11 @@ _ALIASES = {"elevation_deg": "--sun-elevation", "azimuth_deg": "--sun-azimuth",
 _LEAD = re.compile(r"^([a-z][a-z0-9_]*) = ")
 
 
+# (long options, takes model options) of a command run without typer's parser
+# (:mod:`skydome.cli.render_fast`), for the error lines of :func:`_run`
+_FAST_COMMAND: tuple[set[str], bool] | None = None
+
+
 def _current_options() -> tuple[set[str], bool]:
     """The long options of the running command, and whether it takes model options."""
     try:
@@ -103,7 +108,7 @@ def _current_options() -> tuple[set[str], bool]:
         from click import get_current_context
     ctx = get_current_context(silent=True)
     if ctx is None:
-        return set(), False
+        return _FAST_COMMAND if _FAST_COMMAND is not None else (set(), False)
     opts = {o for prm in ctx.command.params for o in getattr(prm, "opts", ()) if o.startswith("--")}
     return opts, bool(ctx.allow_extra_args)
 
