@@ -226,9 +226,15 @@ class SkyImage:
     def _adapting_luminance(self) -> float | None:
         sel = self.mask
         if self.projection is not None:
-            dirs, _ = self.projection.directions()
-            if np.any(sel & (dirs[..., 2] > 0.0)):
-                sel = sel & (dirs[..., 2] > 0.0)
+            # the pixels above the horizon: given by render() for its projection (the
+            # directions it sampled), else from the projection's directions
+            known = getattr(self, "_above_horizon", None)
+            if known is not None and known[0] is self.projection:
+                up = known[1]
+            else:
+                up = self.projection.directions()[0][..., 2] > 0.0
+            if np.any(sel & up):
+                sel = sel & up
         Y = (self.data[..., 1] if self.kind == "xyz" else self.luminance())[sel]
         Y = Y[(Y > 0.0) & (Y <= AUTO_EXPOSURE_CUTOFF)]
         if Y.size == 0:
