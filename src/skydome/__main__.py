@@ -49,12 +49,20 @@ def main() -> None:  # console-script entry point
         finally:
             gc.enable()
     if argv[:1] == ["render"]:
+        # One picture, then the process ends: Python's cyclic collector, set off again and
+        # again by the allocations of the imports (numba's above all), ran 271 times in a
+        # warm shortest render for 0.10-0.11 s of CPU (timed by gc.callbacks, two runs on
+        # the 2-core EPYC of docs/performance.md; the render leaves no cycles worth
+        # collecting). It is on again for a command line the fast path leaves to typer.
+        gc.disable()
         from skydome.cli.render_fast import fast_render
 
         try:
             code = fast_render(argv[1:])
         except KeyboardInterrupt:  # pragma: no cover
             sys.exit(130)
+        finally:
+            gc.enable()
         if code is not None:
             sys.exit(code)
     from skydome.cli import main as cli_main
