@@ -27,7 +27,8 @@ naming the entry; the stored table of orders 2..N (below) is checked the same wa
 it fails, removed and built again on first use. Cost: the whole entry is read once per load
 (CRC-32 runs at 2.2 GB/s, the finiteness check at about 10 GB/s on one core of the 2-core EPYC
 of docs/performance.md; BLAKE2b at 0.74 GB/s would triple it); docs/performance.md gives the
-load times measured.
+load times measured. A half-precision table's finiteness is found on its float16 bits as they
+are decoded (:func:`_decode_half_checked`), in the same pass.
 
 The stored 4-D table of orders 2..N is built after the precomputation, on its first read
 (:meth:`._tables.Tables.build_multiple_scattering`); it is then added to the same entry as
