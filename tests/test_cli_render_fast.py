@@ -108,3 +108,29 @@ def test_a_render_writes_the_same_picture_as_the_typer_command(tmp_path):
     assert fast.stdout.rsplit(",", 1)[0] == slow.stdout.rsplit(",", 1)[0]
     ia, ib = Image.open(a / "x.png"), Image.open(b / "x.png")
     assert np.array_equal(np.asarray(ia), np.asarray(ib)) and ia.text == ib.text
+
+
+def test_entry_point_runs_the_fast_path_with_the_cyclic_collector_off(monkeypatch):
+    """``skydome render ...`` tries the fast path first, with Python's cyclic collector off
+    during it and on again afterwards; a command line the fast path leaves (None) goes to
+    the typer application with the collector on."""
+    import gc
+
+    import skydome.__main__ as entry
+    from skydome.cli import render_fast
+
+    seen = []
+    for code in (0, 2):
+        monkeypatch.setattr(render_fast, "fast_render",
+                            lambda argv, code=code: seen.append((argv, gc.isenabled())) or code)
+        monkeypatch.setattr(sys, "argv", ["skydome", "render", "--out", "x.png"])
+        with pytest.raises(SystemExit) as e:
+            entry.main()
+        assert e.value.code == code and gc.isenabled()
+    assert seen == [(["--out", "x.png"], False)] * 2
+    import skydome.cli.root as root
+
+    monkeypatch.setattr(render_fast, "fast_render", lambda argv: None)
+    monkeypatch.setattr(root, "main", lambda: seen.append(("typer", gc.isenabled())))
+    entry.main()
+    assert seen[-1] == ("typer", True)
