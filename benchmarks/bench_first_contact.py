@@ -24,8 +24,17 @@ twice. ``SKYDOME_BUILD_KERNELS=0`` in the environment gives the wheel without it
 ``--prewarm`` runs ``python -m skydome.apps.warmup --kernels`` (the set-up's kernel step) into
 the cold numba folder first, to show the cold command as it is after the set-up.
 
+``--warm-only N`` skips the cold pass: each command runs once untimed in the caches the
+environment names (numba's cache of the checkout or ``NUMBA_CACHE_DIR``, the table cache of
+``SKYDOME_CACHE_DIR`` or the user's), which fills them if needed, then N times timed, each
+line with the 1-minute load average at its start (the machine's load moves the wall time).
+
+The commands run without ``PYTHONDONTWRITEBYTECODE`` (an installed package has its
+bytecode compiled at install; with the variable set, every process compiles skydome's
+modules again, about 0.2 s of a warm render).
+
 Run: ``.venv/bin/python benchmarks/bench_first_contact.py [--quick] [--only NAME ...]
-[--fresh-venv] [--write]``; ``--write`` replaces the ``bench:first_contact`` block of
+[--fresh-venv] [--warm-only N] [--write]``; ``--write`` replaces the ``bench:first_contact`` block of
 docs/performance.md.
 """
 
@@ -115,11 +124,14 @@ def run(argv, env, cwd) -> Run:
 
 def environment(numba_dir, table_dir, extra_path=None) -> dict:
     env = dict(os.environ)
-    env["NUMBA_CACHE_DIR"] = str(numba_dir)
-    env["SKYDOME_CACHE_DIR"] = str(table_dir)
+    if numba_dir is not None:
+        env["NUMBA_CACHE_DIR"] = str(numba_dir)
+    if table_dir is not None:
+        env["SKYDOME_CACHE_DIR"] = str(table_dir)
     if extra_path is not None:
         env["PYTHONPATH"] = str(extra_path)
     env.pop("NUMBA_DISABLE_JIT", None)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 
 
@@ -151,6 +163,39 @@ def bench_commands(commands, python, prewarm: bool, work: Path) -> list:
         rows.append((c, cold, warm))
         shutil.rmtree(d, ignore_errors=True)
     return rows
+
+
+def bench_warm(commands, python, repeat: int, work: Path) -> list:
+    """Each command once untimed in the environment's own caches (filling them where
+    needed), then ``repeat`` timed runs; rows of (command, [(load average, Run), ...])."""
+    rows = []
+    for c in commands:
+        out = Path(tempfile.mkdtemp(prefix="fc-warm-", dir=work))
+        env = environment(None, None)
+        argv = [python, "-m", "skydome"] + [a.format(out=out) for a in c.argv]
+        first = run(argv, env, out)
+        print(f"{c.name:50s} fill {_fmt(first)}", flush=True)
+        runs = []
+        for _ in range(repeat):
+            load = os.getloadavg()[0]
+            r = run(argv, env, out)
+            print(f"{c.name:50s} warm {_fmt(r)} (load {load:.1f})", flush=True)
+            runs.append((load, r))
+        rows.append((c, runs))
+        shutil.rmtree(out, ignore_errors=True)
+    return rows
+
+
+def warm_block(rows) -> str:
+    lines = ["| command | runs: wall, CPU (1-min load average) | best wall | best CPU | peak RSS |",
+             "|---|---|---|---|---|"]
+    for c, runs in rows:
+        each = "; ".join(f"{r.wall:.2f} s, {r.cpu:.2f} s ({load:.1f})" for load, r in runs)
+        lines.append(f"| `{c.name}` | {each} | {min(r.wall for _, r in runs):.2f} s | "
+                     f"{min(r.cpu for _, r in runs):.2f} s | "
+                     f"{max(r.rss_gb for _, r in runs):.2f} GB |")
+    lines += ["", f"Machine: {machine()}."]
+    return "\n".join(lines)
 
 
 def bench_fresh_venv(work: Path) -> list:
@@ -244,6 +289,8 @@ def main(argv=None) -> None:
     ap.add_argument("--no-commands", action="store_true", help="skip the command list")
     ap.add_argument("--prewarm", action="store_true",
                     help="run the set-up's kernel step before each cold command")
+    ap.add_argument("--warm-only", type=int, default=0, metavar="N",
+                    help="no cold pass: N timed runs in the environment's own caches")
     ap.add_argument("--write", action="store_true", help="update docs/performance.md")
     a = ap.parse_args(argv)
     cmds = [c for c in COMMANDS if c.quick or not a.quick]
@@ -258,6 +305,10 @@ def main(argv=None) -> None:
         # the commands import this checkout's skydome
         os.environ["PYTHONPATH"] = os.pathsep.join(
             [str(ROOT / "src")] + [p for p in [os.environ.get("PYTHONPATH")] if p])
+        if a.warm_only:
+            text = warm_block(bench_warm(cmds, sys.executable, a.warm_only, Path(work)))
+            print(text)
+            return
         rows = bench_commands(cmds, sys.executable, a.prewarm, Path(work))
         venv_rows = bench_fresh_venv(Path(work)) if a.fresh_venv else []
     text = block(rows, venv_rows, load0, os.getloadavg()[0])

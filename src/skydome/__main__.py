@@ -2,8 +2,9 @@
 
 A plain perez1993 ``skymatrix`` command line is run without the CLI framework
 (:func:`skydome.cli.skymatrix_fast.fast_skymatrix`: no typer, and with ``--backend
-numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run); every other
-command line, and any that the
+numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run), and a plain
+``render`` command line without typer's application and parser
+(:func:`skydome.cli.render_fast.fast_render`); every other command line, and any that a
 fast path does not take, goes to the typer application :mod:`skydome.cli`.
 """
 
@@ -47,6 +48,23 @@ def main() -> None:  # console-script entry point
             sys.exit(130)
         finally:
             gc.enable()
+    if argv[:1] == ["render"]:
+        # One picture, then the process ends: Python's cyclic collector, set off again and
+        # again by the allocations of the imports (numba's above all), ran 271 times in a
+        # warm shortest render for 0.10-0.11 s of CPU (timed by gc.callbacks, two runs on
+        # the 2-core EPYC of docs/performance.md; the render leaves no cycles worth
+        # collecting). It is on again for a command line the fast path leaves to typer.
+        gc.disable()
+        from skydome.cli.render_fast import fast_render
+
+        try:
+            code = fast_render(argv[1:])
+        except KeyboardInterrupt:  # pragma: no cover
+            sys.exit(130)
+        finally:
+            gc.enable()
+        if code is not None:
+            sys.exit(code)
     from skydome.cli import main as cli_main
 
     cli_main()

@@ -95,6 +95,11 @@ _ALIASES = {"elevation_deg": "--sun-elevation", "azimuth_deg": "--sun-azimuth",
 _LEAD = re.compile(r"^([a-z][a-z0-9_]*) = ")
 
 
+# (long options, takes model options) of a command run without typer's parser
+# (:mod:`skydome.cli.render_fast`), for the error lines of :func:`_run`
+_FAST_COMMAND: tuple[set[str], bool] | None = None
+
+
 def _current_options() -> tuple[set[str], bool]:
     """The long options of the running command, and whether it takes model options."""
     try:
@@ -103,7 +108,7 @@ def _current_options() -> tuple[set[str], bool]:
         from click import get_current_context
     ctx = get_current_context(silent=True)
     if ctx is None:
-        return set(), False
+        return _FAST_COMMAND if _FAST_COMMAND is not None else (set(), False)
     opts = {o for prm in ctx.command.params for o in getattr(prm, "opts", ()) if o.startswith("--")}
     return opts, bool(ctx.allow_extra_args)
 
@@ -478,16 +483,23 @@ class _Progress:
 def _build_model(cls, progress: "_Progress", **kwargs):
     """Construct a model, showing the progress its set-up reports (precomputed tables...).
 
-    numba's target is started first without SciPy's BLAS probe (0.25-0.3 s of a command's
+    numba's target is started without SciPy's BLAS probe (0.25-0.3 s of a command's
     start-up; :mod:`skydome._numba_start`): a command line process runs skydome's kernels,
-    none of which needs it."""
-    from skydome._numba_start import start_numba_without_blas
+    none of which needs it. The start (about 0.5 s of CPU, Python holding the interpreter
+    lock) runs on a second thread while the model is constructed: a cached precomputed
+    model reads and decodes its tables meanwhile (file reads, CRC-32, NumPy, which release
+    the lock), so that on two cores the two overlap; a model whose construction calls a
+    kernel waits for the start there (numba's import and compiler locks)."""
+    from skydome._numba_start import start_numba_in_background
     from skydome._progress import reporting
 
-    start_numba_without_blas()
-
-    with reporting(progress):
-        return cls(**kwargs)
+    start = start_numba_in_background()
+    try:
+        with reporting(progress):
+            return cls(**kwargs)
+    finally:
+        if start is not None:
+            start.join()
 
 
 def _check_date(value: str) -> str:

@@ -251,6 +251,8 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
     image = SkyImage(data, "spectral" if spectral else "xyz", wl if spectral else None, mask,
                      projection, meta)
     image.sun_light = sun_light
+    # for the exposure's adapting luminance: not the projection's directions a second time
+    image._above_horizon = (projection, dirs[..., 2] > 0.0)
     return image
 
 

@@ -1,0 +1,136 @@
+"""``skydome render`` for a plain command line, without building the typer application.
+
+typer (0.29) builds the command line's whole application (27 commands) and, for each option
+of the command it runs, a pydantic ``TypeAdapter`` that converts its value: for ``skydome
+render`` (19 options) that and the imports it needs (pydantic's validators, typing
+introspection, ``importlib.metadata`` for pydantic's plugins) were 0.15-0.2 s of CPU of a
+warm ``skydome render --sun-elevation 30 --out x.png`` (about 2 s) on a 2-core EPYC
+(docs/performance.md). :func:`fast_render`, which ``skydome`` (:mod:`skydome.__main__`) tries
+first for a ``render`` command line, reads the command's options from the signature of the
+typer command :func:`skydome.cli.render.render` (names, types, defaults: one declaration) and
+parses a plain command line itself: each option of that command at most once, spelled
+``--name value`` (a flag alone), a number written as plain decimal digits. It then calls the
+command's own work (:func:`skydome.cli.render._render` through :func:`skydome.cli._kit._run`)
+with the values typer would have passed, so that the work, its output and its errors (one
+line on stderr naming the option, exit code 2) are the same. Anything else (help, a model's
+own options such as ``--turbidity 3``, ``--name=value``, a repeated option, a value it does
+not read as plainly valid) goes to the typer command, untouched: the fast path prints
+nothing and does nothing before it has decided to take the command line.
+"""
+
+from __future__ import annotations
+
+import inspect
+import re
+
+# a number as every parser reads it alike: decimal digits, an optional fraction and exponent
+_FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_INT = re.compile(r"[+-]?\d+")
+
+
+def _kind(annotation) -> str | None:
+    """'str', 'int', 'float' or 'flag' of an option's annotation (a string under postponed
+    annotations, else a type or typing form), None for any other."""
+    text = annotation if isinstance(annotation, str) else repr(annotation)
+    text = text.replace("typing.", "").replace("<class '", "").replace("'>", "")
+    return {"str": "str", "Optional[str]": "str", "int": "int", "float": "float",
+            "Optional[float]": "float", "bool": "flag"}.get(text)
+
+
+def command_options(command) -> dict | None:
+    """{long option: (parameter, kind, default)} of a typer command declared with typer
+    options (the command's ``ctx`` left out), or None where an option is of a kind this
+    parser does not take (a bool option without a flag of its own, a list, another type).
+    A required option has the default ``...``."""
+    opts = {}
+    for name, p in inspect.signature(command).parameters.items():
+        if name == "ctx":
+            continue
+        info = p.default
+        kind = _kind(p.annotation)
+        decls = tuple(getattr(info, "param_decls", ()) or ())
+        if kind is None or not hasattr(info, "default"):
+            return None
+        if kind == "flag":
+            if len(decls) != 1 or "/" in decls[0] or info.default is not False:
+                return None
+        elif decls:
+            return None
+        opt = decls[0] if decls else "--" + name.replace("_", "-")
+        opts[opt] = (name, kind, info.default)
+    return opts
+
+
+def parse(argv, opts: dict) -> dict | None:
+    """{parameter: value} of a plain command line over ``opts`` (:func:`command_options`),
+    every parameter given its default where not given, or None where the command line is
+    not plain (see the module's notes) or a required option is missing."""
+    values = {}
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a not in opts or opts[a][0] in values:
+            return None
+        name, kind, _ = opts[a]
+        if kind == "flag":
+            values[name] = True
+            i += 1
+            continue
+        if i + 1 >= len(argv):
+            return None
+        v = argv[i + 1]
+        if kind == "float":
+            if not _FLOAT.fullmatch(v):
+                return None
+            values[name] = float(v)
+        elif kind == "int":
+            if not _INT.fullmatch(v):
+                return None
+            values[name] = int(v)
+        else:
+            if v.startswith("-") or not v:
+                return None
+            values[name] = v
+        i += 2
+    for name, kind, default in opts.values():
+        if name not in values:
+            if default is ...:
+                return None
+            values[name] = default
+    return values
+
+
+def fast_render(argv) -> int | None:
+    """Run a plain ``skydome render`` command line in this process without the typer
+    application; the exit code (0, or 2 after a one-line error), or None where the typer
+    command should take the command line (nothing has been done then)."""
+    from skydome.cli import _kit
+    from skydome.cli.render import render
+
+    opts = command_options(render)
+    if opts is None:
+        return None
+    v = parse(argv, opts)
+    if v is None:
+        return None
+    import typer
+
+    from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE, _run
+    from skydome.cli.render import _render
+
+    sun = {k: v.pop(k) for k in SUN_BY_ANGLES_OR_PLACE if k in v}
+    args = [v.pop(k) for k in ("model", "out")] + [sun] + [
+        v.pop(k) for k in ("projection", "size", "wavelengths", "exposure", "tonemap", "bits")]
+    args += [not v.pop("no_sun"), v.pop("ev100"), v.pop("sun_light"), not v.pop("no_hunt")]
+    if v:       # an option of the command that this call does not pass on: typer's
+        return None
+    # the errors of _run name the command's options as in the typer command
+    _kit._FAST_COMMAND = (set(opts), True)
+    try:
+        _run(_render, [], *args)
+    except typer.Exit as exc:
+        return int(exc.exit_code)
+    finally:
+        _kit._FAST_COMMAND = None
+    return 0
+
