@@ -143,12 +143,13 @@ class MapProjection(_Cached, Projection):
         if not np.array_equal(up, (0.0, 0.0, 1.0)):
             return Projection.directions(self)
         h = conv.direction_from_uv(u, np.full_like(u, 0.5))   # sin(pi / 2) = 1 exactly
-        h[:, 2] = 0.0                                         # cos(pi / 2) is 6e-17, not 0
+        from skydome.export._kernels_envmap import latlong_directions
+
         s, c = np.sin(np.pi * v), np.cos(np.pi * v)
         d = np.empty((self.height, self.width, 3))
-        np.multiply(s[:, None], h[None, :, 0], out=d[..., 0])
-        np.multiply(s[:, None], h[None, :, 1], out=d[..., 1])
-        d[..., 2] = c[:, None]
+        # d = (s h_x, s h_y, c), one parallel pass (h's z, cos(pi / 2), is 6e-17: unused)
+        latlong_directions(s, c, np.ascontiguousarray(h[:, 0]), np.ascontiguousarray(h[:, 1]),
+                           d)
         return d, np.ones((self.height, self.width), dtype=bool)
 
     def _jacobian(self, row, col) -> np.ndarray:
@@ -365,8 +366,9 @@ class EnvironmentMap:
             targets = [(p.with_name(f"{p.stem}_{names[f]}{p.suffix}"), self.images[f]) for f in FACES]
         else:
             targets = [(p, self.assembled())]
-        if half and max(float(np.max(im)) for _, im in targets) > HALF_MAX:
-            raise ValueError(f"the map's largest value {max(float(np.max(im)) for _, im in targets):.4g} "
+        largest = max(float(np.max(im)) for _, im in targets) if half else None
+        if half and largest > HALF_MAX:
+            raise ValueError(f"the map's largest value {largest:.4g} "
                              f"exceeds the half-float range ({HALF_MAX:g}): the sun in the map "
                              "needs float32 (drop half) or export the sun as a light")
         import os
@@ -403,7 +405,6 @@ class EnvironmentMap:
 
         from skydome.imaging.image import _SRGB_CHROMATICITIES
 
-        dtype = np.float16 if half else np.float32
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
                   "chromaticities": _SRGB_CHROMATICITIES,
                   # RGB (1, 1, 1) is 683 cd m^-2 on the photometric scale of the module
@@ -411,7 +412,7 @@ class EnvironmentMap:
                   "whiteLuminance": self.units.luminance_per_unit}
         header.update(self._header())
         header["units"] = self.units.description
-        ch = {c: np.ascontiguousarray(im[..., i].astype(dtype)) for i, c in enumerate("RGB")}
+        ch = dict(zip("RGB", _channel_planes(im, half)))
         from skydome._io import write_exr
 
         write_exr(tmp, header, ch)       # a full disk: OSError ENOSPC (OpenEXR: RuntimeError)
@@ -433,6 +434,25 @@ class EnvironmentMap:
         with open(tmp, "wb") as f:
             f.write(head)
             f.write(rgbe_encode(np.maximum(im, 0.0) * scale).tobytes())
+
+
+def _channel_planes(im: np.ndarray, half: bool) -> tuple[np.ndarray, ...]:
+    """The R, G and B planes (H, W) of an (H, W, 3) image as half or float32, each
+    contiguous: ``im[..., i].astype(float16 or float32)`` bit for bit, in one parallel pass
+    (:mod:`skydome.export._kernels_envmap`)."""
+    from skydome.export._kernels_envmap import float32_planes, half_planes
+
+    im = np.ascontiguousarray(im, dtype=np.float64)
+    H, W = im.shape[:2]
+    flat = im.reshape(-1, 3)
+    if half:
+        out = np.empty((3, H * W), dtype=np.uint16)
+        half_planes(flat.view(np.uint64), out)
+        out = out.view(np.float16)
+    else:
+        out = np.empty((3, H * W), dtype=np.float32)
+        float32_planes(flat, out)
+    return tuple(out[i].reshape(H, W) for i in range(3))
 
 
 def check_map_path(path, half: bool = False) -> Path:
@@ -502,21 +522,20 @@ def check_envmap_options(convention, layout, size, sun="separate", ground="lambe
     return conv, layout, _parse_size(layout, size)
 
 
-def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray, block: int = 262144) -> np.ndarray:
+def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """The map's linear sRGB / 683 (H, W, 3) of an XYZ image, out-of-gamut negatives
-    clipped, 0 where masked; computed in place in ``xyz`` (returned), in blocks of pixels:
-    no full-size temporaries (on a 4096 x 2048 map each costs more in fresh pages than
-    the arithmetic)."""
-    from skydome.spectra import xyz_to_linear_srgb
+    clipped, 0 where masked; computed in place in ``xyz`` (returned) by one parallel numba
+    pass (:func:`skydome.export._kernels_envmap.xyz_to_map_rgb`: the values of
+    ``np.maximum(xyz_to_linear_srgb(xyz) / 683, 0)``, no full-size temporaries)."""
+    from skydome.export._kernels_envmap import xyz_to_map_rgb
+    from skydome.spectra import _M_XYZ_TO_SRGB
 
     if not mask.all():
         xyz[~mask] = 0.0
-    flat = xyz.reshape(-1, 3)
-    for start in range(0, flat.shape[0], block):
-        b = flat[start:start + block]
-        b[...] = xyz_to_linear_srgb(b)
-        b /= K_M
-        np.maximum(b, 0.0, out=b)                      # out-of-gamut negatives clipped
+    if not (xyz.flags.c_contiguous and xyz.dtype == np.float64):
+        xyz = np.ascontiguousarray(xyz, dtype=np.float64)
+    if xyz_to_map_rgb(xyz.reshape(-1, 3), _M_XYZ_TO_SRGB, K_M):
+        raise ValueError("xyz contains NaN or infinite values")
     return xyz
 
 
