@@ -134,23 +134,37 @@ class MapProjection(_Cached, Projection):
         sin and cos per row and per column instead of per pixel), the same values, bit for
         bit, as direction_from_pixel at every centre (the tool -> ENU matrices are signed
         permutations: exact)."""
+        if self._latlong_axes() is None:
+            return Projection.directions(self)
+        return self._latlong_rows(0, self.height), np.ones(self.shape, dtype=bool)
+
+    def _latlong_axes(self):
+        """(sin, cos) of the rows' zenith angles and (h_x, h_y) of the columns' horizontal
+        unit vectors of a lat-long map with +z up (cached), else None."""
         if self.layout != "latlong":
-            return Projection.directions(self)
-        v = (np.arange(self.height, dtype=np.float64) + 0.5) / self.height
-        u = (np.arange(self.width, dtype=np.float64) + 0.5) / self.width
-        conv = self.convention
-        up = conv.direction_from_uv(0.0, 0.0)
-        if not np.array_equal(up, (0.0, 0.0, 1.0)):
-            return Projection.directions(self)
-        h = conv.direction_from_uv(u, np.full_like(u, 0.5))   # sin(pi / 2) = 1 exactly
+            return None
+        if getattr(self, "_axes", None) is None:
+            conv = self.convention
+            if not np.array_equal(conv.direction_from_uv(0.0, 0.0), (0.0, 0.0, 1.0)):
+                self._axes = ()
+                return None
+            v = (np.arange(self.height, dtype=np.float64) + 0.5) / self.height
+            u = (np.arange(self.width, dtype=np.float64) + 0.5) / self.width
+            h = conv.direction_from_uv(u, np.full_like(u, 0.5))   # sin(pi / 2) = 1 exactly
+            # z = cos(pi v) (h's own z, cos(pi / 2), is 6e-17 and unused)
+            self._axes = (np.sin(np.pi * v), np.cos(np.pi * v), np.ascontiguousarray(h[:, 0]),
+                          np.ascontiguousarray(h[:, 1]))
+        return self._axes or None
+
+    def _latlong_rows(self, r0: int, r1: int) -> np.ndarray:
+        """Directions (r1 - r0, W, 3) of rows r0:r1 of a separable lat-long map: (s h_x,
+        s h_y, c) in one parallel pass."""
         from skydome.export._kernels_envmap import latlong_directions
 
-        s, c = np.sin(np.pi * v), np.cos(np.pi * v)
-        d = np.empty((self.height, self.width, 3))
-        # d = (s h_x, s h_y, c), one parallel pass (h's z, cos(pi / 2), is 6e-17: unused)
-        latlong_directions(s, c, np.ascontiguousarray(h[:, 0]), np.ascontiguousarray(h[:, 1]),
-                           d)
-        return d, np.ones((self.height, self.width), dtype=bool)
+        s, c, hx, hy = self._latlong_axes()
+        d = np.empty((r1 - r0, self.width, 3))
+        latlong_directions(s[r0:r1], c[r0:r1], hx, hy, d)
+        return d
 
     def _jacobian(self, row, col) -> np.ndarray:
         if self.layout == "latlong":
@@ -170,6 +184,96 @@ class MapProjection(_Cached, Projection):
         if self.layout == "equiarea":
             return np.full(self.shape, 4.0 * np.pi / (self.width * self.height))
         return Projection.solid_angles(self)
+
+
+class _LatLongBand(Projection):
+    """Rows r0:r1 of a separable lat-long :class:`MapProjection` as a projection of their
+    own (a map rendered in bands of rows: each band's directions, pixels and the model's
+    values are those rows' of the whole map's)."""
+
+    def __init__(self, parent: MapProjection, r0: int, r1: int):
+        self.parent = parent
+        self.r0 = r0
+        self.width = parent.width
+        self.height = r1 - r0
+        self.name = parent.name
+        self._convention = parent._convention
+
+    def directions(self):
+        return (self.parent._latlong_rows(self.r0, self.r0 + self.height),
+                np.ones(self.shape, dtype=bool))
+
+    def direction_from_pixel(self, row, col) -> np.ndarray:
+        return self.parent.direction_from_pixel(np.asarray(row, dtype=np.float64) + self.r0,
+                                                col)
+
+    def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
+        r, c = self.parent.pixel_from_direction(directions)
+        return r - self.r0, c
+
+    def _jacobian(self, row, col) -> np.ndarray:
+        return self.parent._jacobian(np.asarray(row, dtype=np.float64) + self.r0, col)
+
+    def describe(self) -> dict[str, Any]:
+        return dict(self.parent.describe(), rows=[self.r0, self.r0 + self.height])
+
+
+def _sky_rows(proj: MapProjection) -> int | None:
+    """The number of rows with z = cos(zenith) >= 0 (the model's, above the horizon) of a
+    separable lat-long map when they are its first rows, else None."""
+    axes = proj._latlong_axes()
+    if axes is None:
+        return None
+    c = axes[1]
+    n = int(np.count_nonzero(c >= 0.0))
+    return n if bool(np.all(c[:n] >= 0.0)) else None
+
+
+def _render_latlong_bands(sky, proj: MapProjection, wl, ground, progress, chunk: int = 262144):
+    """(the map's RGB (H, W, 3), the render's sun light) of a separable lat-long map
+    rendered in bands of rows, each band's XYZ turned into the map's RGB while it is in
+    the cache (:func:`_xyz_to_map_rgb`); ``ground`` a render ground other than "model".
+
+    The same values as one :func:`skydome.imaging.render` of the whole map: every pixel's
+    direction and every model value are the same (a band is a whole number of the render's
+    chunks where the width divides ``chunk``, as the whole map's sky is), and the rows
+    below the horizon (z = cos(zenith) < 0 along a whole row) hold the render's ground,
+    the same value in every pixel (a black or Lambertian ground): rendered for one row
+    and copied. What it saves is memory: the whole map's directions (24 bytes a pixel)
+    are never held, and on the 2-core virtual machine of docs/performance.md the first
+    touch of fresh memory costs about 1 ms per MB."""
+    from skydome.imaging import render
+
+    render_ = getattr(render, "__wrapped__", render)     # render_envmap holds BLAS's limit
+    H, W = proj.height, proj.width
+    n_sky = _sky_rows(proj)
+    rgb = np.empty((H, W, 3))
+    rows = max(1, chunk // W)
+    light = None
+
+    def band(r0, r1):
+        img = render_(sky, _LatLongBand(proj, r0, r1), wl, draw_sun=False, output="xyz",
+                      ground=ground, chunk=chunk)
+        rgb[r0:r1] = _xyz_to_map_rgb(img.data, img.mask)
+        if progress is not None:
+            progress(r1 * W, H * W)
+        return img.sun_light
+
+    for r0 in range(0, n_sky, rows):
+        light = band(r0, min(r0 + rows, n_sky))
+    if n_sky < H:
+        ground_light = band(n_sky, n_sky + 1)
+        light = ground_light if light is None else light
+        first = rgb[n_sky]
+        if n_sky + 1 < H:
+            if np.all(first == first[0]):
+                rgb[n_sky + 1:] = first
+                if progress is not None:
+                    progress(H * W, H * W)
+            else:                                        # not a uniform ground: every row
+                for r0 in range(n_sky + 1, H, rows):
+                    band(r0, min(r0 + rows, H))
+    return rgb, light
 
 
 # -- cube faces [GL46] table 8.19 ------------------------------------------------------------
@@ -614,11 +718,16 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
             # render reports the pixels it samples (not those the ground replaces)
             if progress is not None:
                 progress(base + (size if k >= n else k * size // max(n, 1)), total)
-        img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
-                     ground=render_ground)
-        images[name] = _xyz_to_map_rgb(img.data, img.mask)   # (the image's own array)
+        if (isinstance(proj, MapProjection) and render_ground != "model"
+                and _sky_rows(proj) is not None):
+            images[name], sun_light = _render_latlong_bands(sky, proj, wl, render_ground,
+                                                            prog)
+        else:
+            img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
+                         ground=render_ground)
+            images[name] = _xyz_to_map_rgb(img.data, img.mask)   # (the image's own array)
+            sun_light = img.sun_light                  # the same for every image
         done[0] += proj.width * proj.height
-        sun_light = img.sun_light                      # the same for every image
 
     # the image's own sun light, in the convention (None: no sun above the horizon)
     light = None if sun_light is None else sun_light_from(sun_light, sky.sun, conv,
