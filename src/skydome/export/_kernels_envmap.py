@@ -114,17 +114,19 @@ def _half_bits(d):
 
 
 @njit(parallel=True, cache=True)
-def half_planes(bits, out):
-    """Interleaved float64 pixels (bits (n, 3) as uint64) -> the half bits of each channel,
-    out (3, n) uint16: float64 -> float16 as numpy's astype rounds it."""
+def half_planes(bits, r, g, b):
+    """Interleaved float64 pixels (bits (n, 3) as uint64) -> the half bits of each channel
+    in r, g, b (n,) uint16: float64 -> float16 as numpy's astype rounds it."""
     for i in prange(bits.shape[0]):
-        for c in range(3):
-            out[c, i] = _half_bits(bits[i, c])
+        r[i] = _half_bits(bits[i, 0])
+        g[i] = _half_bits(bits[i, 1])
+        b[i] = _half_bits(bits[i, 2])
 
 
 @njit(parallel=True, cache=True)
-def float32_planes(flat, out):
-    """Interleaved float64 pixels (n, 3) -> float32 planes out (3, n) (IEEE rounding)."""
+def float32_planes(flat, r, g, b):
+    """Interleaved float64 pixels (n, 3) -> float32 planes r, g, b (n,) (IEEE rounding)."""
     for i in prange(flat.shape[0]):
-        for c in range(3):
-            out[c, i] = np.float32(flat[i, c])
+        r[i] = np.float32(flat[i, 0])
+        g[i] = np.float32(flat[i, 1])
+        b[i] = np.float32(flat[i, 2])

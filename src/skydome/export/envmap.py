@@ -549,14 +549,16 @@ def _channel_planes(im: np.ndarray, half: bool) -> tuple[np.ndarray, ...]:
     im = np.ascontiguousarray(im, dtype=np.float64)
     H, W = im.shape[:2]
     flat = im.reshape(-1, 3)
+    # three planes, not one (3, n) block: each small enough to come from memory the
+    # process has already touched (fresh pages cost more than the conversion)
     if half:
-        out = np.empty((3, H * W), dtype=np.uint16)
-        half_planes(flat.view(np.uint64), out)
-        out = out.view(np.float16)
+        out = [np.empty(H * W, dtype=np.uint16) for _ in range(3)]
+        half_planes(flat.view(np.uint64), *out)
+        out = [o.view(np.float16) for o in out]
     else:
-        out = np.empty((3, H * W), dtype=np.float32)
-        float32_planes(flat, out)
-    return tuple(out[i].reshape(H, W) for i in range(3))
+        out = [np.empty(H * W, dtype=np.float32) for _ in range(3)]
+        float32_planes(flat, *out)
+    return tuple(o.reshape(H, W) for o in out)
 
 
 def check_map_path(path, half: bool = False) -> Path:
