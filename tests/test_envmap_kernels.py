@@ -114,3 +114,28 @@ def test_latlong_directions_equal_direction_from_pixel(conv):
     ref = p.direction_from_pixel(rows, cols)
     assert m.all()
     assert np.array_equal(d, ref)
+
+
+@pytest.mark.parametrize("size,ground", [("96x48", "lambertian"), ("100x51", "black"),
+                                         ("64x33", 0.5)])
+def test_bands_equal_one_render_of_the_whole_map(size, ground):
+    """A lat-long map rendered in bands of rows (and its ground row copied) holds the
+    pixels of one imaging.render of the whole map, bit for bit (odd heights put a row on
+    the horizon; widths that do not divide the chunk shift the chunk boundaries)."""
+    import skydome as sd
+    from skydome.export.envmap import MapProjection, _xyz_to_map_rgb, render_envmap
+    from skydome.imaging import render
+    from skydome.spectra import wavelength_grid
+
+    sky = sd.model("preetham1999", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=135.0))
+    wl = wavelength_grid(380.0, 780.0, n=16)
+    W, H = (int(v) for v in size.split("x"))
+    kw = {"ground": "lambertian", "ground_albedo": ground} if isinstance(ground, float) else {
+        "ground": ground}
+    env = render_envmap(sky, "skydome", size, wavelengths_nm=wl, **kw)
+    proj = MapProjection("skydome", W, H)
+    img = render(sky, proj, wl, draw_sun=False, output="xyz",
+                 ground=ground if isinstance(ground, float) else ground, chunk=1000)
+    ref = _xyz_to_map_rgb(img.data, img.mask)
+    assert np.array_equal(env.images["map"], ref)
+    assert env.sun_light is not None and img.sun_light is not None
