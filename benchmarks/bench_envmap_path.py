@@ -17,8 +17,8 @@ commands ``export envmap --size 4096x2048 --half`` for each model and
 child's CPU time, its peak RSS and its minor page faults: the fresh memory it touched,
 which on a virtual machine costs about 1 ms per MB), after one untimed run of each. The
 children run with Python's bytecode cache on (``PYTHONDONTWRITEBYTECODE`` removed from
-their environment), as an installed package has it. The machine is shared: compare runs made at the same load (printed), and
-CPU times rather than wall times.
+their environment), as an installed package has it. The machine is shared: compare runs
+made at the same load (printed), and CPU times and page faults rather than wall times.
 
 Run: ``PYTHONPATH=src python benchmarks/bench_envmap_path.py [--repeat N] [--no-cli]
 [--models NAME ...] [--no-render] [--trees BEFORE/src AFTER/src]``.
