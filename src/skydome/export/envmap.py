@@ -16,9 +16,10 @@ the ``photometric`` units; a convention may name its tool's own units instead
 The sky and the ground come from :func:`skydome.imaging.render` through a
 :class:`MapProjection` (the convention's pixel layout as a skydome projection), without
 the sun (a lat-long map in bands of rows, the same pixels as one render of the whole map
-with less memory: :func:`_render_latlong_bands`); the sun is the render's own sun light (``SkyImage.sun_light``), either left out
-(exported as a light, ``EnvironmentMap.sun_light``) or added energy-true into the pixel
-that holds its centre (``sun="map"``). Below the horizon the map holds, by default, the
+with less memory: :func:`_render_latlong_bands`); the sun is the render's own sun light
+(``SkyImage.sun_light``), either left out (exported as a light,
+``EnvironmentMap.sun_light``) or added energy-true into the pixel that holds its centre
+(``sun="map"``). Below the horizon the map holds, by default, the
 render's Lambertian ground (:mod:`skydome.imaging.ground`: ``L = albedo E_h / pi`` with
 E_h the model's sky and sun on a horizontal plane, and the model's albedo,
 :func:`skydome.imaging.ground.model_albedo`, or the one given); ``ground="black"`` leaves
