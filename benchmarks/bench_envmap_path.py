@@ -1,7 +1,7 @@
 """Environment map and shortest-render path: wall and CPU time per stage, warm caches.
 
 In process, for a 4096x2048 lat-long half-float map of ``hosek_wilkie2012``,
-``preetham1999`` and ``precomputed`` (sun at 30 deg, azimuth 135 deg, the CLI's 16
+``preetham1999``, ``fitted`` and ``precomputed`` (sun at 30 deg, azimuth 135 deg, the CLI's 16
 wavelengths, Lambertian ground, the sun as a separate light) it prints the stages of
 :func:`skydome.export.envmap.render_envmap` and the write:
 
@@ -14,13 +14,14 @@ and the 512 px fisheye render of the precomputed sky (the shortest ``skydome ren
 Then, in fresh ``python -m skydome`` processes (tables and numba caches warm), the
 commands ``export envmap --size 4096x2048 --half`` for each model and
 ``render --sun-elevation 30 --out x.png``, the best of ``--repeat`` runs (wall and the
-child's CPU time), after one untimed run of each. The children run with Python's bytecode
-cache on (``PYTHONDONTWRITEBYTECODE`` removed from their environment), as an installed
-package has it. The machine is shared: compare runs made at the same load (printed), and
-CPU times rather than wall times.
+child's CPU time, its peak RSS and its minor page faults: the fresh memory it touched,
+which on a virtual machine costs about 1 ms per MB), after one untimed run of each. The
+children run with Python's bytecode cache on (``PYTHONDONTWRITEBYTECODE`` removed from
+their environment), as an installed package has it. The machine is shared: compare runs
+made at the same load (printed), and CPU times and page faults rather than wall times.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_envmap_path.py [--repeat N] [--no-cli]``;
-for a before/after pair run it once with each tree's ``src`` on ``PYTHONPATH``.
+Run: ``PYTHONPATH=src python benchmarks/bench_envmap_path.py [--repeat N] [--no-cli]
+[--models NAME ...] [--no-render] [--trees BEFORE/src AFTER/src]``.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import sys
 import tempfile
 import time
 
-MODELS = ("hosek_wilkie2012", "preetham1999", "precomputed")
+MODELS = ("hosek_wilkie2012", "preetham1999", "fitted", "precomputed")
 SIZE = "4096x2048"
 
 
@@ -47,7 +48,7 @@ def _row(name, wall, cpu):
     print(f"  {name:34s} wall {wall:6.2f} s   cpu {cpu:6.2f} s", flush=True)
 
 
-def in_process(folder: str) -> None:
+def in_process(folder: str, models=MODELS) -> None:
     import skydome as sd
     from skydome.export.envmap import MapProjection, render_envmap
     from skydome.imaging import Fisheye, render
@@ -56,7 +57,7 @@ def in_process(folder: str) -> None:
     wl = wavelength_grid(380.0, 780.0, n=16)
     sun = sd.Sun(elevation_deg=30.0, azimuth_deg=135.0)
     W, H = (int(v) for v in SIZE.split("x"))
-    for name in MODELS:
+    for name in models:
         print(f"{name}: {SIZE} half EXR, in process", flush=True)
         sky, w, c = _clock(lambda: sd.model(name, sun=sun))
         _row("model (warm caches)", w, c)
@@ -91,8 +92,9 @@ def _env(src):
     return env
 
 
-def _cli_once(args, env) -> tuple[float, float, float]:
-    """(wall [s], CPU [s], peak RSS [MB]) of one ``python -m skydome`` run."""
+def _cli_once(args, env) -> tuple[float, float, float, float]:
+    """(wall [s], CPU [s], peak RSS [MB], minor page faults [MB of 4 KiB pages]) of one
+    ``python -m skydome`` run."""
     t0 = time.perf_counter()
     p = subprocess.Popen([sys.executable, "-m", "skydome", *args], stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, env=env)
@@ -100,27 +102,29 @@ def _cli_once(args, env) -> tuple[float, float, float]:
     wall = time.perf_counter() - t0
     if os.waitstatus_to_exitcode(status) != 0:
         raise RuntimeError(f"skydome {' '.join(args)} failed")
-    return wall, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0
+    return wall, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0, ru.ru_minflt * 4.0 / 1024.0
 
 
-def _commands(folder):
+def _commands(folder, models=MODELS, render=True):
     cmds = [(f"export envmap {name}", ["export", "envmap", "--model", name, "--size", SIZE,
                                        "--half", "--out", os.path.join(folder, f"{name}.exr")])
-            for name in MODELS]
-    cmds.append(("render --sun-elevation 30 (512 px)",
-                 ["render", "--sun-elevation", "30", "--out", os.path.join(folder, "x.png")]))
+            for name in models]
+    if render:
+        cmds.append(("render --sun-elevation 30 (512 px)",
+                     ["render", "--sun-elevation", "30", "--out",
+                      os.path.join(folder, "x.png")]))
     return cmds
 
 
-def fresh_processes(folder: str, repeat: int, trees) -> None:
+def fresh_processes(folder: str, repeat: int, trees, models=MODELS, render=True) -> None:
     """Each command in fresh processes, the trees' runs alternating (A, B, A, B, ...) after
     one untimed run each (bytecode and kernel caches warm): best wall, best CPU, the median
-    CPU and the peak RSS per tree."""
+    CPU, the median wall, the peak RSS and the fewest page faults per tree."""
     import statistics
 
     print(f"fresh processes (python -m skydome, best of {repeat}, trees alternating)",
           flush=True)
-    for label, args in _commands(folder):
+    for label, args in _commands(folder, models, render):
         for src in trees:
             _cli_once(args, _env(src))
         runs = {src: [] for src in trees}
@@ -132,8 +136,10 @@ def fresh_processes(folder: str, repeat: int, trees) -> None:
             name = label if src is None else f"{label} [{src}]"
             print(f"  {name:34s} wall {min(x[0] for x in r):6.2f} s   cpu "
                   f"{min(x[1] for x in r):6.2f} s (median "
-                  f"{statistics.median(x[1] for x in r):.2f})   peak RSS "
-                  f"{max(x[2] for x in r):6.0f} MB", flush=True)
+                  f"{statistics.median(x[1] for x in r):.2f}) (median wall "
+                  f"{statistics.median(x[0] for x in r):.2f})   peak RSS "
+                  f"{max(x[2] for x in r):6.0f} MB   page faults {min(x[3] for x in r):5.0f} MB",
+                  flush=True)
 
 
 def main() -> None:
@@ -141,6 +147,10 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=2, help="fresh-process runs per command")
     ap.add_argument("--no-cli", action="store_true", help="skip the fresh processes")
     ap.add_argument("--no-inprocess", action="store_true", help="skip the in-process stages")
+    ap.add_argument("--models", nargs="+", default=list(MODELS), metavar="NAME",
+                    help=f"models of the envmap commands (default {' '.join(MODELS)})")
+    ap.add_argument("--no-render", action="store_true",
+                    help="skip the shortest render command in the fresh processes")
     ap.add_argument("--trees", nargs="+", default=None, metavar="SRC",
                     help="src folders to compare in the fresh processes (alternating); "
                     "default the PYTHONPATH as it is")
@@ -151,9 +161,9 @@ def main() -> None:
           f"load average at start {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as folder:
         if not a.no_inprocess:
-            in_process(folder)
+            in_process(folder, a.models)
         if not a.no_cli:
-            fresh_processes(folder, a.repeat, a.trees or [None])
+            fresh_processes(folder, a.repeat, a.trees or [None], a.models, not a.no_render)
     print(f"load average at end {os.getloadavg()[0]:.1f}")
 
 

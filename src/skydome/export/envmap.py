@@ -15,9 +15,11 @@ the ``photometric`` units; a convention may name its tool's own units instead
 
 The sky and the ground come from :func:`skydome.imaging.render` through a
 :class:`MapProjection` (the convention's pixel layout as a skydome projection), without
-the sun; the sun is the render's own sun light (``SkyImage.sun_light``), either left out
-(exported as a light, ``EnvironmentMap.sun_light``) or added energy-true into the pixel
-that holds its centre (``sun="map"``). Below the horizon the map holds, by default, the
+the sun (a lat-long map in bands of rows, the same pixels as one render of the whole map
+with less memory: :func:`_render_latlong_bands`); the sun is the render's own sun light
+(``SkyImage.sun_light``), either left out (exported as a light,
+``EnvironmentMap.sun_light``) or added energy-true into the pixel that holds its centre
+(``sun="map"``). Below the horizon the map holds, by default, the
 render's Lambertian ground (:mod:`skydome.imaging.ground`: ``L = albedo E_h / pi`` with
 E_h the model's sky and sun on a horizontal plane, and the model's albedo,
 :func:`skydome.imaging.ground.model_albedo`, or the one given); ``ground="black"`` leaves
@@ -134,22 +136,37 @@ class MapProjection(_Cached, Projection):
         sin and cos per row and per column instead of per pixel), the same values, bit for
         bit, as direction_from_pixel at every centre (the tool -> ENU matrices are signed
         permutations: exact)."""
+        if self._latlong_axes() is None:
+            return Projection.directions(self)
+        return self._latlong_rows(0, self.height), np.ones(self.shape, dtype=bool)
+
+    def _latlong_axes(self):
+        """(sin, cos) of the rows' zenith angles and (h_x, h_y) of the columns' horizontal
+        unit vectors of a lat-long map with +z up (cached), else None."""
         if self.layout != "latlong":
-            return Projection.directions(self)
-        v = (np.arange(self.height, dtype=np.float64) + 0.5) / self.height
-        u = (np.arange(self.width, dtype=np.float64) + 0.5) / self.width
-        conv = self.convention
-        up = conv.direction_from_uv(0.0, 0.0)
-        if not np.array_equal(up, (0.0, 0.0, 1.0)):
-            return Projection.directions(self)
-        h = conv.direction_from_uv(u, np.full_like(u, 0.5))   # sin(pi / 2) = 1 exactly
-        h[:, 2] = 0.0                                         # cos(pi / 2) is 6e-17, not 0
-        s, c = np.sin(np.pi * v), np.cos(np.pi * v)
-        d = np.empty((self.height, self.width, 3))
-        np.multiply(s[:, None], h[None, :, 0], out=d[..., 0])
-        np.multiply(s[:, None], h[None, :, 1], out=d[..., 1])
-        d[..., 2] = c[:, None]
-        return d, np.ones((self.height, self.width), dtype=bool)
+            return None
+        if getattr(self, "_axes", None) is None:
+            conv = self.convention
+            if not np.array_equal(conv.direction_from_uv(0.0, 0.0), (0.0, 0.0, 1.0)):
+                self._axes = ()
+                return None
+            v = (np.arange(self.height, dtype=np.float64) + 0.5) / self.height
+            u = (np.arange(self.width, dtype=np.float64) + 0.5) / self.width
+            h = conv.direction_from_uv(u, np.full_like(u, 0.5))   # sin(pi / 2) = 1 exactly
+            # z = cos(pi v) (h's own z, cos(pi / 2), is 6e-17 and unused)
+            self._axes = (np.sin(np.pi * v), np.cos(np.pi * v), np.ascontiguousarray(h[:, 0]),
+                          np.ascontiguousarray(h[:, 1]))
+        return self._axes or None
+
+    def _latlong_rows(self, r0: int, r1: int) -> np.ndarray:
+        """Directions (r1 - r0, W, 3) of rows r0:r1 of a separable lat-long map: (s h_x,
+        s h_y, c) in one parallel pass."""
+        from skydome.export._kernels_envmap import latlong_directions
+
+        s, c, hx, hy = self._latlong_axes()
+        d = np.empty((r1 - r0, self.width, 3))
+        latlong_directions(s[r0:r1], c[r0:r1], hx, hy, d)
+        return d
 
     def _jacobian(self, row, col) -> np.ndarray:
         if self.layout == "latlong":
@@ -169,6 +186,96 @@ class MapProjection(_Cached, Projection):
         if self.layout == "equiarea":
             return np.full(self.shape, 4.0 * np.pi / (self.width * self.height))
         return Projection.solid_angles(self)
+
+
+class _LatLongBand(Projection):
+    """Rows r0:r1 of a separable lat-long :class:`MapProjection` as a projection of their
+    own (a map rendered in bands of rows: each band's directions, pixels and the model's
+    values are those rows' of the whole map's)."""
+
+    def __init__(self, parent: MapProjection, r0: int, r1: int):
+        self.parent = parent
+        self.r0 = r0
+        self.width = parent.width
+        self.height = r1 - r0
+        self.name = parent.name
+        self._convention = parent._convention
+
+    def directions(self):
+        return (self.parent._latlong_rows(self.r0, self.r0 + self.height),
+                np.ones(self.shape, dtype=bool))
+
+    def direction_from_pixel(self, row, col) -> np.ndarray:
+        return self.parent.direction_from_pixel(np.asarray(row, dtype=np.float64) + self.r0,
+                                                col)
+
+    def pixel_from_direction(self, directions) -> tuple[np.ndarray, np.ndarray]:
+        r, c = self.parent.pixel_from_direction(directions)
+        return r - self.r0, c
+
+    def _jacobian(self, row, col) -> np.ndarray:
+        return self.parent._jacobian(np.asarray(row, dtype=np.float64) + self.r0, col)
+
+    def describe(self) -> dict[str, Any]:
+        return dict(self.parent.describe(), rows=[self.r0, self.r0 + self.height])
+
+
+def _sky_rows(proj: MapProjection) -> int | None:
+    """The number of rows with z = cos(zenith) >= 0 (the model's, above the horizon) of a
+    separable lat-long map when they are its first rows, else None."""
+    axes = proj._latlong_axes()
+    if axes is None:
+        return None
+    c = axes[1]
+    n = int(np.count_nonzero(c >= 0.0))
+    return n if bool(np.all(c[:n] >= 0.0)) else None
+
+
+def _render_latlong_bands(sky, proj: MapProjection, wl, ground, progress, chunk: int = 262144):
+    """(the map's RGB (H, W, 3), the render's sun light) of a separable lat-long map
+    rendered in bands of rows, each band's XYZ turned into the map's RGB while it is in
+    the cache (:func:`_xyz_to_map_rgb`); ``ground`` a render ground other than "model".
+
+    The same values as one :func:`skydome.imaging.render` of the whole map: every pixel's
+    direction and every model value are the same (a band is a whole number of the render's
+    chunks where the width divides ``chunk``, as the whole map's sky is), and the rows
+    below the horizon (z = cos(zenith) < 0 along a whole row) hold the render's ground,
+    the same value in every pixel (a black or Lambertian ground): rendered for one row
+    and copied. What it saves is memory: the whole map's directions (24 bytes a pixel)
+    are never held, and on the 2-core virtual machine of docs/performance.md the first
+    touch of fresh memory costs about 1 ms per MB."""
+    from skydome.imaging import render
+
+    render_ = getattr(render, "__wrapped__", render)     # render_envmap holds BLAS's limit
+    H, W = proj.height, proj.width
+    n_sky = _sky_rows(proj)
+    rgb = np.empty((H, W, 3))
+    rows = max(1, chunk // W)
+    light = None
+
+    def band(r0, r1):
+        img = render_(sky, _LatLongBand(proj, r0, r1), wl, draw_sun=False, output="xyz",
+                      ground=ground, chunk=chunk)
+        rgb[r0:r1] = _xyz_to_map_rgb(img.data, img.mask)
+        if progress is not None:
+            progress(r1 * W, H * W)
+        return img.sun_light
+
+    for r0 in range(0, n_sky, rows):
+        light = band(r0, min(r0 + rows, n_sky))
+    if n_sky < H:
+        ground_light = band(n_sky, n_sky + 1)
+        light = ground_light if light is None else light
+        first = rgb[n_sky]
+        if n_sky + 1 < H:
+            if np.all(first == first[0]):
+                rgb[n_sky + 1:] = first
+                if progress is not None:
+                    progress(H * W, H * W)
+            else:                                        # not a uniform ground: every row
+                for r0 in range(n_sky + 1, H, rows):
+                    band(r0, min(r0 + rows, H))
+    return rgb, light
 
 
 # -- cube faces [GL46] table 8.19 ------------------------------------------------------------
@@ -365,8 +472,9 @@ class EnvironmentMap:
             targets = [(p.with_name(f"{p.stem}_{names[f]}{p.suffix}"), self.images[f]) for f in FACES]
         else:
             targets = [(p, self.assembled())]
-        if half and max(float(np.max(im)) for _, im in targets) > HALF_MAX:
-            raise ValueError(f"the map's largest value {max(float(np.max(im)) for _, im in targets):.4g} "
+        largest = max(float(np.max(im)) for _, im in targets) if half else None
+        if half and largest > HALF_MAX:
+            raise ValueError(f"the map's largest value {largest:.4g} "
                              f"exceeds the half-float range ({HALF_MAX:g}): the sun in the map "
                              "needs float32 (drop half) or export the sun as a light")
         import os
@@ -403,7 +511,6 @@ class EnvironmentMap:
 
         from skydome.imaging.image import _SRGB_CHROMATICITIES
 
-        dtype = np.float16 if half else np.float32
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
                   "chromaticities": _SRGB_CHROMATICITIES,
                   # RGB (1, 1, 1) is 683 cd m^-2 on the photometric scale of the module
@@ -411,7 +518,7 @@ class EnvironmentMap:
                   "whiteLuminance": self.units.luminance_per_unit}
         header.update(self._header())
         header["units"] = self.units.description
-        ch = {c: np.ascontiguousarray(im[..., i].astype(dtype)) for i, c in enumerate("RGB")}
+        ch = dict(zip("RGB", _channel_planes(im, half)))
         from skydome._io import write_exr
 
         write_exr(tmp, header, ch)       # a full disk: OSError ENOSPC (OpenEXR: RuntimeError)
@@ -433,6 +540,27 @@ class EnvironmentMap:
         with open(tmp, "wb") as f:
             f.write(head)
             f.write(rgbe_encode(np.maximum(im, 0.0) * scale).tobytes())
+
+
+def _channel_planes(im: np.ndarray, half: bool) -> tuple[np.ndarray, ...]:
+    """The R, G and B planes (H, W) of an (H, W, 3) image as half or float32, each
+    contiguous: ``im[..., i].astype(float16 or float32)`` bit for bit, in one parallel pass
+    (:mod:`skydome.export._kernels_envmap`)."""
+    from skydome.export._kernels_envmap import float32_planes, half_planes
+
+    im = np.ascontiguousarray(im, dtype=np.float64)
+    H, W = im.shape[:2]
+    flat = im.reshape(-1, 3)
+    # three planes, not one (3, n) block: each small enough to come from memory the
+    # process has already touched (fresh pages cost more than the conversion)
+    if half:
+        out = [np.empty(H * W, dtype=np.uint16) for _ in range(3)]
+        half_planes(flat.view(np.uint64), *out)
+        out = [o.view(np.float16) for o in out]
+    else:
+        out = [np.empty(H * W, dtype=np.float32) for _ in range(3)]
+        float32_planes(flat, *out)
+    return tuple(o.reshape(H, W) for o in out)
 
 
 def check_map_path(path, half: bool = False) -> Path:
@@ -502,21 +630,20 @@ def check_envmap_options(convention, layout, size, sun="separate", ground="lambe
     return conv, layout, _parse_size(layout, size)
 
 
-def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray, block: int = 262144) -> np.ndarray:
+def _xyz_to_map_rgb(xyz: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """The map's linear sRGB / 683 (H, W, 3) of an XYZ image, out-of-gamut negatives
-    clipped, 0 where masked; computed in place in ``xyz`` (returned), in blocks of pixels:
-    no full-size temporaries (on a 4096 x 2048 map each costs more in fresh pages than
-    the arithmetic)."""
-    from skydome.spectra import xyz_to_linear_srgb
+    clipped, 0 where masked; computed in place in ``xyz`` (returned) by one parallel numba
+    pass (:func:`skydome.export._kernels_envmap.xyz_to_map_rgb`: the values of
+    ``np.maximum(xyz_to_linear_srgb(xyz) / 683, 0)``, no full-size temporaries)."""
+    from skydome.export._kernels_envmap import xyz_to_map_rgb
+    from skydome.spectra import _M_XYZ_TO_SRGB
 
     if not mask.all():
         xyz[~mask] = 0.0
-    flat = xyz.reshape(-1, 3)
-    for start in range(0, flat.shape[0], block):
-        b = flat[start:start + block]
-        b[...] = xyz_to_linear_srgb(b)
-        b /= K_M
-        np.maximum(b, 0.0, out=b)                      # out-of-gamut negatives clipped
+    if not (xyz.flags.c_contiguous and xyz.dtype == np.float64):
+        xyz = np.ascontiguousarray(xyz, dtype=np.float64)
+    if xyz_to_map_rgb(xyz.reshape(-1, 3), _M_XYZ_TO_SRGB, K_M):
+        raise ValueError("xyz contains NaN or infinite values")
     return xyz
 
 
@@ -595,11 +722,16 @@ def render_envmap(sky, convention: str = "skydome", size: Any = "1024x512",
             # render reports the pixels it samples (not those the ground replaces)
             if progress is not None:
                 progress(base + (size if k >= n else k * size // max(n, 1)), total)
-        img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
-                     ground=render_ground)
-        images[name] = _xyz_to_map_rgb(img.data, img.mask)   # (the image's own array)
+        if (isinstance(proj, MapProjection) and render_ground != "model"
+                and _sky_rows(proj) is not None):
+            images[name], sun_light = _render_latlong_bands(sky, proj, wl, render_ground,
+                                                            prog)
+        else:
+            img = render(sky, proj, wl, draw_sun=False, progress=prog, output="xyz",
+                         ground=render_ground)
+            images[name] = _xyz_to_map_rgb(img.data, img.mask)   # (the image's own array)
+            sun_light = img.sun_light                  # the same for every image
         done[0] += proj.width * proj.height
-        sun_light = img.sun_light                      # the same for every image
 
     # the image's own sun light, in the convention (None: no sun above the horizon)
     light = None if sun_light is None else sun_light_from(sun_light, sky.sun, conv,
