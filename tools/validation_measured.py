@@ -3,6 +3,12 @@
     python tools/validation_measured.py OUT_FOLDER [--day 2013-09-24|all] [--aerosol fitted]
         [--captures 10:00:00,11:00:00] [--models ...]
     python tools/validation_measured.py OUT_FOLDER --clock [--day 2013-09-24]
+    python tools/validation_measured.py docs/validation_measured.md --update-doc [--models fitted]
+
+``--update-doc`` reruns every block of the page between ``<!-- begin: skydome validate
+measured OPTIONS -->`` and ``<!-- end -->`` with those options and puts what the command
+prints there; with ``--models`` only those models' rows are rerun and replaced (the other
+rows stay), e.g. after a change of the fitted model's coefficients.
 
 Writes OUT_FOLDER/validation_measured_table.md (each day's table, then every capture,
 exactly as ``skydome validate measured`` prints them with the same options: both call
@@ -33,10 +39,15 @@ def main(argv=None) -> int:
     ap.add_argument("--clock", action="store_true",
                     help="the clock scan (validation.compare.clock_scan), not the table")
     ap.add_argument("--shape", action="store_true",
-                    help="the shape-error study: ring offsets of OUT's results.pkl and hillaire2020 "
+                    help="the shape-error study: ring offsets of OUT's results.pkl and "
+                         "hillaire2020 "
                          "refitted with other aerosol profiles, ground albedo, observer altitude")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
+    ap.add_argument("--update-doc", action="store_true",
+                    help="OUT is a Markdown page: rerun its marked command blocks in place")
     a = ap.parse_args(argv)
+    if a.update_doc:
+        return update_doc(Path(a.out), a.models)
     if a.figures:
         return figures(Path(a.out), Path(a.figures))
     if a.clock:
@@ -66,6 +77,80 @@ def main(argv=None) -> int:
     (out / "validation_measured_table.md").write_text(text, encoding="utf-8")
     print(text)
     print(f"{time.time() - t0:.0f} s", file=sys.stderr)
+    return 0
+
+
+_BEGIN = "<!-- begin: skydome validate measured"
+_END = "<!-- end -->"
+
+
+def _block_options(line: str) -> dict:
+    """The options of a begin marker: ``--day``, ``--aerosol``, ``--models``, ``--phase``,
+    ``--captures`` (the command's, with its defaults)."""
+    words = line[len(_BEGIN):].replace("-->", "").split()
+    opts = {"day": "2013-05-27", "aerosol": "auto", "models": None, "phase": "tabulated",
+            "captures": None}
+    for k, v in zip(words[::2], words[1::2]):
+        if not k.startswith("--") or k[2:] not in opts:
+            raise SystemExit(f"unknown option {k!r} in {line.strip()!r}")
+        opts[k[2:]] = v
+    return opts
+
+
+def _replace_rows(old: str, new: str, models) -> str:
+    """``old`` with the table rows of ``models`` replaced by ``new``'s (same tables)."""
+    def model_of(row):
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        return cells[2] if row.startswith("| 2013-") else cells[0]
+
+    new_rows = [ln for ln in new.splitlines() if ln.startswith("| ") and model_of(ln) in models]
+    out, it = [], iter(new_rows)
+    for ln in old.splitlines():
+        if ln.startswith("| ") and not ln.startswith("| model") and not ln.startswith("| day") \
+                and model_of(ln) in models:
+            out.append(next(it))
+        else:
+            out.append(ln)
+    if next(it, None) is not None:
+        raise SystemExit("the rerun gave more rows than the page holds: rerun the whole block")
+    return "\n".join(out) + "\n"
+
+
+def update_doc(page: Path, models) -> int:
+    """Rerun each marked block of ``page`` (see the module docstring) and write it back."""
+    from skydome._io import atomic_write
+    from skydome.validation.compare import measured_report
+    from skydome.validation.kider2014 import DAYS
+
+    only = models.split(",") if models else None
+    lines = page.read_text(encoding="utf-8").splitlines(keepends=True)
+    out, i = [], 0
+    while i < len(lines):
+        out.append(lines[i])
+        if not lines[i].startswith(_BEGIN):
+            i += 1
+            continue
+        o = _block_options(lines[i])
+        j = i + 1
+        while not lines[j].startswith(_END):
+            j += 1
+        old = "".join(lines[i + 1:j])
+        names = (o["models"].split(",") if o["models"] else
+                 ["precomputed", "hillaire2020", "nishita1996", "single_scattering", "fitted",
+                  "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"])
+        run = [m for m in names if only is None or m in only]
+        if run:
+            days = list(DAYS) if o["day"] == "all" else [o["day"]]
+            caps = o["captures"].split(",") if o["captures"] else None
+            print(f"rerunning {lines[i].strip()} for {', '.join(run)}", file=sys.stderr)
+            text, _ = measured_report(run, days, caps, phase=o["phase"],
+                                      aerosol=None if o["aerosol"] == "auto" else o["aerosol"])
+            new = text if only is None else _replace_rows(old, text, set(run))
+            out.append(new if new.endswith("\n") else new + "\n")
+        else:
+            out.append(old)
+        i = j
+    atomic_write(page, lambda tmp: Path(tmp).write_text("".join(out), encoding="utf-8"))
     return 0
 
 
