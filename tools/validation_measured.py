@@ -54,7 +54,8 @@ def main(argv=None) -> int:
         return clock(Path(a.out), a.day)
     if a.shape:
         return shape(Path(a.out), a.captures)
-    from skydome.validation.compare import measured_report
+    from skydome.validation import fitting
+    from skydome.validation.compare import compare_measured, report_text
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -64,17 +65,37 @@ def main(argv=None) -> int:
     caps = a.captures.split(",") if a.captures else None
     days = ["2013-05-27", "2013-09-24"] if a.day == "all" else [a.day]
     t0 = time.time()
+    # the aerosol fits of an earlier, interrupted run of the same folder (the fit is the
+    # costly part of a rerun; the precomputed tables come from the table cache)
+    fits = out / "fits.pkl"
+    if fits.exists():
+        with open(fits, "rb") as f:
+            fitting._FIT_CACHE.update(pickle.load(f))
 
-    def progress(d, m, c):
-        print(f"{time.time() - t0:7.0f} s  {d} {m} {c}", file=sys.stderr, flush=True)
+    def progress(m, c):
+        print(f"{time.time() - t0:7.0f} s  {m} {c}", file=sys.stderr, flush=True)
 
-    # the same function the command calls: the table is what `skydome validate measured`
-    # prints with these options
-    text, results = measured_report(models, days, caps, fast=a.fast, phase=a.phase,
-                                    aerosol=a.aerosol, progress=progress)
-    with open(out / "results.pkl", "wb") as f:
-        pickle.dump(results, f)
-    (out / "validation_measured_table.md").write_text(text, encoding="utf-8")
+    from skydome.validation.kider2014 import capture_labels
+
+    # model by model, saving after each: the text is report_text of all results, the same
+    # function measured_report (the command) formats them with, so the table is what
+    # `skydome validate measured` prints with these options
+    results, done = [], []
+    for m in models:
+        for d in days:
+            cd = None if caps is None else [c for c in caps if c in capture_labels(d)]
+            if cd == []:
+                continue
+            results += compare_measured([m], cd, fast=a.fast, phase=a.phase, day=d,
+                                        aerosol=a.aerosol, progress=progress)
+        done.append(m)
+        with open(out / "results.pkl", "wb") as f:
+            pickle.dump(results, f)
+        with open(fits, "wb") as f:
+            pickle.dump(dict(fitting._FIT_CACHE), f)
+        text = report_text(results, done, days)
+        name = "validation_measured_table.md" if done == models else "partial_table.md"
+        (out / name).write_text(text, encoding="utf-8")
     print(text)
     print(f"{time.time() - t0:.0f} s", file=sys.stderr)
     return 0

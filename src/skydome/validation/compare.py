@@ -33,7 +33,7 @@ from skydome.validation.kider2014 import EXCLUDED_SAMPLES  # samples left out of
 
 __all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
            "EXCLUDED_SAMPLES", "clock_scan", "compare_measured", "ModelResult", "model_settings",
-           "measured_luminance", "measured_report"]
+           "measured_luminance", "measured_report", "report_text"]
 
 #: Models compared by default, in the table's order.
 MODELS = ("precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
@@ -386,18 +386,31 @@ def measured_report(models, days, captures=None, *, fast: bool = False,
     from skydome.validation.kider2014 import capture_labels
 
     names = [models] if isinstance(models, str) else list(models)
-    tables, results = [], []
+    results = []
     for d in days:
         caps = None if captures is None else [c for c in captures if c in capture_labels(d)]
         if caps == []:
             continue
         cb = None if progress is None else (lambda m, c, d=d: progress(d, m, c))
-        rs = compare_measured(names, caps, fast=fast, phase=phase, day=d, aerosol=aerosol,
-                              progress=cb)
-        results += rs
-        tables.append(f"Day {d} ({len(rs) // len(names)} captures), mean over captures:\n\n"
-                      + day_table(rs))
-    return "\n".join(tables) + "\nEvery capture:\n\n" + capture_table(results), results
+        results += compare_measured(names, caps, fast=fast, phase=phase, day=d, aerosol=aerosol,
+                                    progress=cb)
+    return report_text(results, names, days), results
+
+
+def report_text(results, models, days) -> str:
+    """The text of :func:`measured_report` from its results (in any order): per day the
+    day's table, then the table of every capture, days in the order of ``days``, models in
+    the order of ``models``, captures in time order."""
+    names = list(models)
+    rs = sorted(results, key=lambda r: (list(days).index(r.day), names.index(r.model),
+                                        r.capture))
+    tables = []
+    for d in days:
+        rd = [r for r in rs if r.day == d]
+        if rd:
+            tables.append(f"Day {d} ({len(rd) // len(names)} captures), mean over captures:\n\n"
+                          + day_table(rd))
+    return "\n".join(tables) + "\nEvery capture:\n\n" + capture_table(rs)
 
 
 def day_table(results) -> str:
