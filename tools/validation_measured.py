@@ -241,6 +241,8 @@ def shape(out: Path, captures) -> int:
                     f"{e[i]:.0f}-{e[i + 1]:.0f}: {100 * med[i]:+.1f}" for i in range(med.size)))
     labs = (captures.split(",") if captures else
             ["2013-05-27/12:00:00", "2013-09-24/13:20:00"])
+    if captures == "none":  # the ring offsets of OUT's results only
+        labs = []
     lines.append("")
     lines.append("hillaire2020, aerosol refitted per variant:")
     for lab in labs:
