@@ -108,7 +108,13 @@ _END = "<!-- end -->"
 def _block_options(line: str) -> dict:
     """The options of a begin marker: ``--day``, ``--aerosol``, ``--models``, ``--phase``,
     ``--captures`` (the command's, with its defaults)."""
-    words = line[len(_BEGIN):].replace("-->", "").split()
+    raw = line[len(_BEGIN):].replace("-->", "").split()
+    words = []
+    for w in raw:  # a list may run on to the next line after a comma
+        if words and words[-1].endswith(","):
+            words[-1] += w
+        else:
+            words.append(w)
     opts = {"day": "2013-05-27", "aerosol": "auto", "models": None, "phase": "tabulated",
             "captures": None}
     for k, v in zip(words[::2], words[1::2]):
@@ -151,7 +157,12 @@ def update_doc(page: Path, models) -> int:
         if not lines[i].startswith(_BEGIN):
             i += 1
             continue
-        o = _block_options(lines[i])
+        k = i
+        while "-->" not in lines[k]:  # the marker may span lines
+            k += 1
+            out.append(lines[k])
+        o = _block_options(" ".join(ln.strip() for ln in lines[i:k + 1]))
+        i = k
         j = i + 1
         while not lines[j].startswith(_END):
             j += 1
@@ -163,7 +174,7 @@ def update_doc(page: Path, models) -> int:
         if run:
             days = list(DAYS) if o["day"] == "all" else [o["day"]]
             caps = o["captures"].split(",") if o["captures"] else None
-            print(f"rerunning {lines[i].strip()} for {', '.join(run)}", file=sys.stderr)
+            print(f"rerunning {o} for {', '.join(run)}", file=sys.stderr)
             text, _ = measured_report(run, days, caps, phase=o["phase"],
                                       aerosol=None if o["aerosol"] == "auto" else o["aerosol"])
             new = text if only is None else _replace_rows(old, text, set(run))
@@ -308,7 +319,7 @@ def figures(results_dir: Path, fig_dir: Path) -> int:
     for k in keys:
         lum, _ = measured_luminance(caps[k])
         sel = lum_of(k, skip=("cie2003", "preetham1999", "perez1993", "hillaire2020",
-                              "single_scattering"))
+                              "single_scattering", "hosek_wilkie2012"))
         panels.append((caps[k], lum, sel))
     pv.plot_luminance_vs_scattering_angle(
         panels, fig_dir / "validation_measured_scattering_angle.png",

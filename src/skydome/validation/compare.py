@@ -17,7 +17,10 @@ The physically based models take the same atmosphere: Rayleigh (Ciddor 1996, Kin
 factor), the AERONET aerosol of the retrieval nearest in time (tabulated measured phase
 function), ozone 300 DU and the inversion's own surface albedo (see
 :func:`skydome.validation.aeronet.aerosol_atmosphere`). The analytic models take the inputs
-they need: Preetham turbidity from the AERONET Angstrom beta ([PSS99] A.2 inverted),
+they need: Preetham and Hosek-Wilkie turbidity from the aerosol's Angstrom beta (its
+optical depth at 1 um, AERONET or fitted; [PSS99] A.2 inverted), skydome's ``fitted``
+model the aerosol optical depth at 550 nm and the surface albedo at 550 nm (its own
+aerosol otherwise: Angstrom 1.3, Cornette-Shanks g = 0.76),
 Perez 1993 DNI/DHI from the pyranometer GHI by the Erbs et al. 1982 split
 (``pvlib.irradiance.erbs``), CIE 2003 the sky type of best fit to the measured luminance
 shape (its level is then not a prediction and is not reported).
