@@ -1,11 +1,18 @@
 """Run the measured-sky comparison and save what docs/validation_measured.md shows.
 
-    python tools/validation_measured.py OUT_FOLDER [--day 2013-09-24] [--aerosol fitted]
+    python tools/validation_measured.py OUT_FOLDER [--day 2013-09-24|all] [--aerosol fitted]
         [--captures 10:00:00,11:00:00] [--models ...]
     python tools/validation_measured.py OUT_FOLDER --clock [--day 2013-09-24]
+    python tools/validation_measured.py docs/validation_measured.md --update-doc [--models fitted]
 
-Writes OUT_FOLDER/validation_measured_table.md (the day's table, then every capture, as
-``skydome validate measured`` prints them), results_MODEL.pkl (per model
+``--update-doc`` reruns every block of the page between ``<!-- begin: skydome validate
+measured OPTIONS -->`` and ``<!-- end -->`` with those options and puts what the command
+prints there; with ``--models`` only those models' rows are rerun and replaced (the other
+rows stay), e.g. after a change of the fitted model's coefficients.
+
+Writes OUT_FOLDER/validation_measured_table.md (each day's table, then every capture,
+exactly as ``skydome validate measured`` prints them with the same options: both call
+``skydome.validation.compare.measured_report``), results.pkl (per model
 and capture: the model luminance in the 81 directions and its 400-700 nm spectra) and the
 figures of skydome.imaging.plots_validation.
 """
@@ -25,34 +32,157 @@ def main(argv=None) -> int:
     ap.add_argument("--captures", default=None)
     ap.add_argument("--models", default=None)
     ap.add_argument("--fast", action="store_true")
-    ap.add_argument("--day", default="2013-05-27")
+    ap.add_argument("--day", default="2013-05-27", help="2013-05-27, 2013-09-24 or all")
+    ap.add_argument("--phase", default="tabulated")
     ap.add_argument("--aerosol", default=None,
                     help="aeronet or fitted (default: aeronet where there is one)")
     ap.add_argument("--clock", action="store_true",
                     help="the clock scan (validation.compare.clock_scan), not the table")
+    ap.add_argument("--shape", action="store_true",
+                    help="the shape-error study: ring offsets of OUT's results.pkl and "
+                         "hillaire2020 "
+                         "refitted with other aerosol profiles, ground albedo, observer altitude")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
+    ap.add_argument("--update-doc", action="store_true",
+                    help="OUT is a Markdown page: rerun its marked command blocks in place")
     a = ap.parse_args(argv)
+    if a.update_doc:
+        return update_doc(Path(a.out), a.models)
     if a.figures:
         return figures(Path(a.out), Path(a.figures))
     if a.clock:
         return clock(Path(a.out), a.day)
-    from skydome.validation.compare import MODELS, capture_table, compare_measured, day_table
+    if a.shape:
+        return shape(Path(a.out), a.captures)
+    from skydome.validation import fitting
+    from skydome.validation.compare import compare_measured, report_text
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    models = a.models.split(",") if a.models else list(MODELS)
+    models = a.models.split(",") if a.models else [
+        "precomputed", "hillaire2020", "nishita1996", "single_scattering", "fitted",
+        "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"]
     caps = a.captures.split(",") if a.captures else None
-    results = []
+    days = ["2013-05-27", "2013-09-24"] if a.day == "all" else [a.day]
+    t0 = time.time()
+    # the aerosol fits of an earlier, interrupted run of the same folder (the fit is the
+    # costly part of a rerun; the precomputed tables come from the table cache)
+    fits = out / "fits.pkl"
+    if fits.exists():
+        with open(fits, "rb") as f:
+            fitting._FIT_CACHE.update(pickle.load(f))
+
+    def progress(m, c):
+        print(f"{time.time() - t0:7.0f} s  {m} {c}", file=sys.stderr, flush=True)
+
+    from skydome.validation.kider2014 import capture_labels
+
+    # model by model, saving after each: the text is report_text of all results, the same
+    # function measured_report (the command) formats them with, so the table is what
+    # `skydome validate measured` prints with these options
+    results, done = [], []
     for m in models:
-        t = time.time()
-        rs = compare_measured([m], caps, fast=a.fast, day=a.day, aerosol=a.aerosol)
-        results += rs
-        print(f"{m}: {time.time() - t:.0f} s for {len(rs)} captures", flush=True)
-        with open(out / f"results_{m}.pkl", "wb") as f:
-            pickle.dump(rs, f)
-    text = day_table(results) + "\n" + capture_table(results)
-    (out / "validation_measured_table.md").write_text(text, encoding="utf-8")
+        for d in days:
+            cd = None if caps is None else [c for c in caps if c in capture_labels(d)]
+            if cd == []:
+                continue
+            results += compare_measured([m], cd, fast=a.fast, phase=a.phase, day=d,
+                                        aerosol=a.aerosol, progress=progress)
+        done.append(m)
+        with open(out / "results.pkl", "wb") as f:
+            pickle.dump(results, f)
+        with open(fits, "wb") as f:
+            pickle.dump(dict(fitting._FIT_CACHE), f)
+        text = report_text(results, done, days)
+        name = "validation_measured_table.md" if done == models else "partial_table.md"
+        (out / name).write_text(text, encoding="utf-8")
     print(text)
+    print(f"{time.time() - t0:.0f} s", file=sys.stderr)
+    return 0
+
+
+_BEGIN = "<!-- begin: skydome validate measured"
+_END = "<!-- end -->"
+
+
+def _block_options(line: str) -> dict:
+    """The options of a begin marker: ``--day``, ``--aerosol``, ``--models``, ``--phase``,
+    ``--captures`` (the command's, with its defaults)."""
+    raw = line[len(_BEGIN):].replace("-->", "").split()
+    words = []
+    for w in raw:  # a list may run on to the next line after a comma
+        if words and words[-1].endswith(","):
+            words[-1] += w
+        else:
+            words.append(w)
+    opts = {"day": "2013-05-27", "aerosol": "auto", "models": None, "phase": "tabulated",
+            "captures": None}
+    for k, v in zip(words[::2], words[1::2]):
+        if not k.startswith("--") or k[2:] not in opts:
+            raise SystemExit(f"unknown option {k!r} in {line.strip()!r}")
+        opts[k[2:]] = v
+    return opts
+
+
+def _replace_rows(old: str, new: str, models) -> str:
+    """``old`` with the table rows of ``models`` replaced by ``new``'s (same tables)."""
+    def model_of(row):
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        return cells[2] if row.startswith("| 2013-") else cells[0]
+
+    new_rows = [ln for ln in new.splitlines() if ln.startswith("| ") and model_of(ln) in models]
+    out, it = [], iter(new_rows)
+    for ln in old.splitlines():
+        if ln.startswith("| ") and not ln.startswith("| model") and not ln.startswith("| day") \
+                and model_of(ln) in models:
+            out.append(next(it))
+        else:
+            out.append(ln)
+    if next(it, None) is not None:
+        raise SystemExit("the rerun gave more rows than the page holds: rerun the whole block")
+    return "\n".join(out) + "\n"
+
+
+def update_doc(page: Path, models) -> int:
+    """Rerun each marked block of ``page`` (see the module docstring) and write it back."""
+    from skydome._io import atomic_write
+    from skydome.validation.compare import measured_report
+    from skydome.validation.kider2014 import DAYS
+
+    only = models.split(",") if models else None
+    lines = page.read_text(encoding="utf-8").splitlines(keepends=True)
+    out, i = [], 0
+    while i < len(lines):
+        out.append(lines[i])
+        if not lines[i].startswith(_BEGIN):
+            i += 1
+            continue
+        k = i
+        while "-->" not in lines[k]:  # the marker may span lines
+            k += 1
+            out.append(lines[k])
+        o = _block_options(" ".join(ln.strip() for ln in lines[i:k + 1]))
+        i = k
+        j = i + 1
+        while not lines[j].startswith(_END):
+            j += 1
+        old = "".join(lines[i + 1:j])
+        names = (o["models"].split(",") if o["models"] else
+                 ["precomputed", "hillaire2020", "nishita1996", "single_scattering", "fitted",
+                  "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"])
+        run = [m for m in names if only is None or m in only]
+        if run:
+            days = list(DAYS) if o["day"] == "all" else [o["day"]]
+            caps = o["captures"].split(",") if o["captures"] else None
+            print(f"rerunning {o} for {', '.join(run)}", file=sys.stderr)
+            text, _ = measured_report(run, days, caps, phase=o["phase"],
+                                      aerosol=None if o["aerosol"] == "auto" else o["aerosol"])
+            new = text if only is None else _replace_rows(old, text, set(run))
+            out.append(new if new.endswith("\n") else new + "\n")
+        else:
+            out.append(old)
+        i = j
+    atomic_write(page, lambda tmp: Path(tmp).write_text("".join(out), encoding="utf-8"))
     return 0
 
 
@@ -72,48 +202,143 @@ def clock(out: Path, day: str) -> int:
     return 0
 
 
-def figures(results_dir: Path, fig_dir: Path) -> int:
+#: the variants of the shape study: (name, aerosol_atmosphere keywords, model keywords)
+SHAPE_VARIANTS = (
+    ("as published (H 1.2 km, Egbert albedo, sea level)", {}, {}),
+    ("aerosol scale height 2.5 km", {"aerosol_scale_height_m": 2500.0}, {}),
+    ("grey ground albedo 0.2", {"ground_albedo": 0.2}, {}),
+    ("observer 250 m up (the site)", {}, {"observer_altitude_m": 250.0}),
+)
+
+
+def shape(out: Path, captures) -> int:
+    """The shape error one step further: (1) per-ring offsets at equal angle from the sun
+    (compare.ring_offsets) of every model in OUT/results.pkl; (2) hillaire2020 with the
+    aerosol refitted under each of SHAPE_VARIANTS on a few captures: luminance RMS >= 10 deg,
+    shape RMS and the median shape error per bin of the angle from the sun."""
     import numpy as np
 
+    from skydome.validation import compare
+    from skydome.validation.aeronet import aerosol_atmosphere
+    from skydome.validation.fitting import fit_aerosol
+    from skydome.validation.kider2014 import load_captures
+
+    import skydome as sd
+
+    lines = []
+    pk = out / "results.pkl"
+    if pk.exists():
+        with open(pk, "rb") as f:
+            results = pickle.load(f)
+        caps = {}
+        for d in dict.fromkeys(r.day for r in results):
+            caps.update({(d, c.label): c for c in load_captures(
+                list(dict.fromkeys(r.capture for r in results if r.day == d)), day=d)})
+        lines.append("Ring offsets at equal angle from the sun (exp(constant) - 1, %; "
+                     "rings 12.1 / 33.7 / 53.4 / 71.9 / 90 deg), RMS of ln before / after:")
+        for m in dict.fromkeys(r.model for r in results):
+            for d in [None] + list(dict.fromkeys(r.day for r in results)):
+                pairs = [(caps[(r.day, r.capture)], r.model_luminance) for r in results
+                         if r.model == m and (d is None or r.day == d)
+                         and r.model_luminance is not None and m != "cie2003"]
+                if not pairs:
+                    continue
+                ro = compare.ring_offsets(pairs)
+                offs = " / ".join(f"{100 * v:+.1f}" for v in ro["offset"])
+                lines.append(f"  {m:18s} {d or 'both days':10s} {offs}   "
+                             f"{ro['rms_before']:.3f} / {ro['rms_after']:.3f}")
+                e, med, n = compare.angle_profile(pairs)
+                lines.append("      by angle from the sun " + ", ".join(
+                    f"{e[i]:.0f}-{e[i + 1]:.0f}: {100 * med[i]:+.1f}" for i in range(med.size)))
+    labs = (captures.split(",") if captures else
+            ["2013-05-27/12:00:00", "2013-09-24/13:20:00"])
+    if captures == "none":  # the ring offsets of OUT's results only
+        labs = []
+    lines.append("")
+    lines.append("hillaire2020, aerosol refitted per variant:")
+    for lab in labs:
+        day, label = lab.split("/")
+        c = load_captures([label], day=day)[0]
+        for name, akw, mkw in SHAPE_VARIANTS:
+            t = time.time()
+            r = fit_aerosol(c, atmosphere_kw=akw, model_kw=mkw)
+            m = sd.model("hillaire2020", sun=c.sun, atmosphere=aerosol_atmosphere(r, **akw), **mkw)
+            L = m.xyz(c.directions)[:, 1]
+            lum, _ = compare.measured_luminance(c)
+            keep = np.ones(lum.size, bool)
+            keep[list(compare.EXCLUDED_SAMPLES)] = False
+            outside = keep & (c.sun_angle_deg >= 10.0)
+            lrms = float(np.sqrt(np.mean((L[outside] / lum[outside] - 1.0) ** 2)))
+            sh = (L / L[keep].mean()) / (lum / lum[keep].mean()) - 1.0
+            srms = float(np.sqrt(np.mean(sh[keep] ** 2)))
+            e, med, _ = compare.angle_profile([(c, L)])
+            prof = ", ".join(f"{e[i]:.0f}-{e[i + 1]:.0f}: {100 * med[i]:+.1f}"
+                             for i in range(med.size))
+            ro = compare.ring_offsets([(c, L)])
+            lines.append(f"  {day} {label} {name}: tau440 {r.tau440:.3f} alpha {r.alpha:.2f}; "
+                         f"L RMS >= 10 deg {100 * lrms:.1f} %, shape RMS {100 * srms:.1f} %; "
+                         f"by angle {prof}; rings " +
+                         " / ".join(f"{100 * v:+.1f}" for v in ro["offset"]) +
+                         f" ({time.time() - t:.0f} s)")
+            print(lines[-1], flush=True)
+    (out / "shape_study.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    print("\n".join(lines))
+    return 0
+
+
+def figures(results_dir: Path, fig_dir: Path) -> int:
+    """The figures of docs/validation_measured.md from RESULTS_DIR/results*.pkl (one run of
+    both days): luminance against the angle from the sun (six captures of both days), the
+    spectra and the shape error maps of 2013-05-27 12:00 and 2013-09-24 13:20, the scan
+    order of 2013-05-27 12:00."""
     from skydome.imaging import plots_validation as pv
     from skydome.validation.compare import LUMINANCE_WL, SPECTRAL_BAND, measured_luminance
     from skydome.validation.kider2014 import load_captures
 
     results = []
-    for p in sorted(results_dir.glob("results_*.pkl")):
+    for p in sorted(results_dir.glob("results*.pkl")):
         with open(p, "rb") as f:
             results += pickle.load(f)
-    labels = list(dict.fromkeys(r.capture for r in results))
-    day = getattr(results[0], "day", "") or "2013-05-27"
-    caps = {c.label: c for c in load_captures(labels, day=day)}
-    order = ["precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
-             "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"]
-    panels = []
-    for lab in labels:
-        lum, _ = measured_luminance(caps[lab])
-        models = {r.model: r.model_luminance for r in results
-                  if r.capture == lab and r.model_luminance is not None}
-        models = {m: models[m] for m in order if m in models and m != "cie2003"}
-        panels.append((caps[lab], lum, models))
-    pv.plot_luminance_vs_scattering_angle(panels, fig_dir / "validation_measured_scattering_angle.png",
-                                          title="Kider et al. 2014, 2013-05-27: luminance in the 81 directions")
-    lab = "12:00:00" if "12:00:00" in labels else labels[0]
-    wl = LUMINANCE_WL[(LUMINANCE_WL >= SPECTRAL_BAND[0]) & (LUMINANCE_WL <= SPECTRAL_BAND[1])]
-    spec = {r.model: r.model_spectra for r in results if r.capture == lab and r.model_spectra is not None}
-    pv.plot_spectra(caps[lab], wl, spec, fig_dir / "validation_measured_spectra.png")
-    lum, _ = measured_luminance(caps[lab])
-    maps = {r.model: r.model_luminance for r in results if r.capture == lab and r.model_luminance is not None}
-    maps = {m: maps[m] for m in order if m in maps}
-    pv.plot_error_maps(caps[lab], lum, maps, fig_dir / "validation_measured_error_maps.png")
-    # the scanner's motion: hillaire2020 at the labelled directions and along each move
-    from skydome.validation.compare import compare_one
+    caps = {}
+    for d in dict.fromkeys(r.day for r in results):
+        labs = list(dict.fromkeys(r.capture for r in results if r.day == d))
+        caps.update({(d, c.label): c for c in load_captures(labs, day=d)})
+    aer = sorted({r.aerosol.split(" ")[0] for r in results if r.aerosol})
+    order = ["precomputed", "montecarlo", "hillaire2020", "nishita1996", "fitted",
+             "single_scattering", "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"]
 
-    point = compare_one("hillaire2020", caps[lab])
-    arc = compare_one("hillaire2020", caps[lab], motion="from_previous")
-    pv.plot_scan_order(caps[lab], lum, {"hillaire2020 at the labelled directions": point.model_luminance,
-                                        "hillaire2020 along each move": arc.model_luminance},
-                       fig_dir / "validation_measured_scan_order.png",
-                       title=f"capture {lab}: point sampling and the mean along the scanner's move")
+    def lum_of(key, skip=()):
+        got = {r.model: r.model_luminance for r in results
+               if (r.day, r.capture) == key and r.model_luminance is not None}
+        return {m: got[m] for m in order if m in got and m not in skip}
+
+    want = [("2013-05-27", "09:30:00"), ("2013-05-27", "11:00:00"), ("2013-05-27", "12:00:00"),
+            ("2013-05-27", "13:30:00"), ("2013-09-24", "07:50:00"), ("2013-09-24", "13:20:00")]
+    keys = [k for k in want if k in caps] or list(caps)[:6]
+    panels = []
+    for k in keys:
+        lum, _ = measured_luminance(caps[k])
+        sel = lum_of(k, skip=("cie2003", "preetham1999", "perez1993", "hillaire2020",
+                              "single_scattering", "hosek_wilkie2012"))
+        panels.append((caps[k], lum, sel))
+    pv.plot_luminance_vs_scattering_angle(
+        panels, fig_dir / "validation_measured_scattering_angle.png",
+        title=f"Kider et al. 2014 ({', '.join(k[0] + ' ' + k[1][:5] for k in keys)}), aerosol "
+              f"{'/'.join(aer)}: luminance in the 81 directions")
+    wl = LUMINANCE_WL[(LUMINANCE_WL >= SPECTRAL_BAND[0]) & (LUMINANCE_WL <= SPECTRAL_BAND[1])]
+    for k, suffix in ((("2013-05-27", "12:00:00"), ""), (("2013-09-24", "13:20:00"), "_20130924")):
+        if k not in caps:
+            continue
+        spec = {r.model: r.model_spectra for r in results
+                if (r.day, r.capture) == k and r.model_spectra is not None}
+        spec = {m: spec[m] for m in order if m in spec}
+        pv.plot_spectra(caps[k], wl, spec, fig_dir / f"validation_measured_spectra{suffix}.png",
+                        title=f"{k[0]} {k[1]}, aerosol {'/'.join(aer)}")
+        lum, _ = measured_luminance(caps[k])
+        pv.plot_error_maps(caps[k], lum, lum_of(k),
+                           fig_dir / f"validation_measured_error_maps{suffix}.png",
+                           title=f"{k[0]} {k[1]}, aerosol {'/'.join(aer)}: luminance shape error "
+                                 "(sun: star)")
     return 0
 
 

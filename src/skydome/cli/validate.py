@@ -47,8 +47,9 @@ def _days(day):
 
 @validate_app.command("measured")
 def measured(
-    models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996", "single_scattering",
-                                         "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")),
+    models: str = typer.Option(",".join(("precomputed", "hillaire2020", "nishita1996",
+                                         "single_scattering", "fitted", "preetham1999",
+                                         "hosek_wilkie2012", "perez1993", "cie2003")),
                                help="Comma-separated models (also montecarlo, precomputed_accurate)."),
     captures: Optional[str] = typer.Option(
         None, help="Comma-separated capture labels HH:MM:SS (default all of the day)."),
@@ -65,7 +66,7 @@ def measured(
     every capture."""
     from pathlib import Path
 
-    from skydome.validation.compare import MODELS, capture_table, compare_measured, day_table
+    from skydome.validation.compare import MODELS, measured_report
 
     names = [m.strip() for m in models.split(",") if m.strip()]
     valid = MODELS + ("precomputed_accurate",)
@@ -86,23 +87,12 @@ def measured(
             _fail(f"out = {out!r}: must be a .md file")
         if not p.parent.is_dir():
             _fail(f"out = {out!r}: folder {str(p.parent)!r} does not exist")
-    from skydome.validation.kider2014 import capture_labels
-
-    tables, results = [], []
     try:
-        for d in days:
-            caps = None if labs is None else [c for c in labs if c in capture_labels(d)]
-            if caps == []:
-                continue
-            rs = compare_measured(names, caps, fast=fast, phase=phase, day=d,
-                                  aerosol=None if aerosol == "auto" else aerosol,
-                                  progress=lambda m, c, d=d: typer.echo(f"{d} {m} {c}", err=True))
-            results += rs
-            tables.append(f"Day {d} ({len(rs) // len(names)} captures), mean over captures:\n\n"
-                          + day_table(rs))
+        table, _ = measured_report(names, days, labs, fast=fast, phase=phase,
+                                   aerosol=None if aerosol == "auto" else aerosol,
+                                   progress=lambda d, m, c: typer.echo(f"{d} {m} {c}", err=True))
     except (ValueError, TypeError) as exc:
         _fail(str(exc.args[0] if exc.args else exc))
-    table = "\n".join(tables) + "\nEvery capture:\n\n" + capture_table(results)
     if out is None:
         typer.echo(table)
         return

@@ -17,7 +17,10 @@ The physically based models take the same atmosphere: Rayleigh (Ciddor 1996, Kin
 factor), the AERONET aerosol of the retrieval nearest in time (tabulated measured phase
 function), ozone 300 DU and the inversion's own surface albedo (see
 :func:`skydome.validation.aeronet.aerosol_atmosphere`). The analytic models take the inputs
-they need: Preetham turbidity from the AERONET Angstrom beta ([PSS99] A.2 inverted),
+they need: Preetham and Hosek-Wilkie turbidity from the aerosol's Angstrom beta (its
+optical depth at 1 um, AERONET or fitted; [PSS99] A.2 inverted), skydome's ``fitted``
+model the aerosol optical depth at 550 nm and the surface albedo at 550 nm (its own
+aerosol otherwise: Angstrom 1.3, Cornette-Shanks g = 0.76),
 Perez 1993 DNI/DHI from the pyranometer GHI by the Erbs et al. 1982 split
 (``pvlib.irradiance.erbs``), CIE 2003 the sky type of best fit to the measured luminance
 shape (its level is then not a prediction and is not reported).
@@ -33,11 +36,11 @@ from skydome.validation.kider2014 import EXCLUDED_SAMPLES  # samples left out of
 
 __all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
            "EXCLUDED_SAMPLES", "clock_scan", "compare_measured", "ModelResult", "model_settings",
-           "measured_luminance"]
+           "measured_luminance", "measured_report", "report_text"]
 
 #: Models compared by default, in the table's order.
 MODELS = ("precomputed", "montecarlo", "hillaire2020", "nishita1996", "single_scattering",
-          "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")
+          "fitted", "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003")
 
 PHYSICAL = ("precomputed", "precomputed_accurate", "montecarlo", "hillaire2020", "nishita1996",
             "single_scattering")
@@ -174,20 +177,30 @@ def _build(name, capture, fast, phase, aerosol="aeronet"):
         label = ph if ph == "tabulated" else f"{ph} (g = {float(r.asymmetry()[1]):.3f} measured)"
         return sd.model(base, sun=sun, atmosphere=atm, **model_settings(name, fast)), label
     _, r = atmosphere_for(capture, phase, aerosol)
+    src = "AERONET" if aerosol == "aeronet" else "fitted"
     if name == "preetham1999":
         beta = float(r.optical_depth(1000.0))  # Angstrom beta = tau(1 um)
         turbidity = (beta + 0.04586) / 0.04608  # [PSS99] A.2 inverted
         # the model's range is T = 2-10 ([PSS99] fit it there); a clearer sky is clipped
         clip = " clipped to 2" if turbidity < 2.0 else ""
         return sd.model("preetham1999", sun=sun, turbidity=float(np.clip(turbidity, 2.0, 10.0))), \
-            f"analytic (T = {turbidity:.2f} from AERONET beta{clip})"
+            f"analytic (T = {turbidity:.2f} from {src} beta{clip})"
+    if name == "fitted":
+        # skydome's fitted model takes the aerosol optical depth at 550 nm only (its aerosol:
+        # Angstrom 1.3, Cornette-Shanks g 0.76, ssa 0.9, scale height 1.2 km, as
+        # Atmosphere.earth): the capture's tau550 (AERONET or fitted), and a grey ground
+        # albedo, the inversion's surface albedo at 550 nm
+        aod = float(r.optical_depth(550.0))
+        albedo = float(np.interp(550.0, r.albedo_wavelengths_nm, r.surface_albedo))
+        return sd.model("fitted", sun=sun, aerosol_optical_depth=aod, ground_albedo=albedo), \
+            f"fitted (AOD550 {aod:.3f}, Angstrom 1.3, albedo {albedo:.2f})"
     if name == "hosek_wilkie2012":
         beta = float(r.optical_depth(1000.0))
         turbidity = (beta + 0.04586) / 0.04608  # [PSS99] A.2 inverted: [HW12] use Preetham's T
         albedo = float(np.interp(550.0, r.albedo_wavelengths_nm, r.surface_albedo))
         return sd.model("hosek_wilkie2012", sun=sun, turbidity=float(np.clip(turbidity, 1.0, 10.0)),
                         albedo=albedo), \
-            f"analytic (T = {turbidity:.2f} from AERONET beta, albedo {albedo:.2f})"
+            f"analytic (T = {turbidity:.2f} from {src} beta, albedo {albedo:.2f})"
     if name == "perez1993":
         import pvlib
 
@@ -362,6 +375,47 @@ def compare_measured(models=MODELS, captures=None, *, fast: bool = False,
     return out
 
 
+def measured_report(models, days, captures=None, *, fast: bool = False,
+                    phase: str = "tabulated", aerosol: str | None = None,
+                    progress=None) -> tuple[str, list[ModelResult]]:
+    """The text ``skydome validate measured`` prints, and the results it comes from.
+
+    For each of ``days`` (captures among ``captures``, all by default) the day's table
+    (:func:`day_table`), then one table of every capture (:func:`capture_table`).
+    ``progress(day, model, label)`` is called after each model and capture. The command
+    and ``tools/validation_measured.py`` (which also saves the results for the figures)
+    both call this, so the published tables are what the command prints.
+    """
+    from skydome.validation.kider2014 import capture_labels
+
+    names = [models] if isinstance(models, str) else list(models)
+    results = []
+    for d in days:
+        caps = None if captures is None else [c for c in captures if c in capture_labels(d)]
+        if caps == []:
+            continue
+        cb = None if progress is None else (lambda m, c, d=d: progress(d, m, c))
+        results += compare_measured(names, caps, fast=fast, phase=phase, day=d, aerosol=aerosol,
+                                    progress=cb)
+    return report_text(results, names, days), results
+
+
+def report_text(results, models, days) -> str:
+    """The text of :func:`measured_report` from its results (in any order): per day the
+    day's table, then the table of every capture, days in the order of ``days``, models in
+    the order of ``models``, captures in time order."""
+    names = list(models)
+    rs = sorted(results, key=lambda r: (list(days).index(r.day), names.index(r.model),
+                                        r.capture))
+    tables = []
+    for d in days:
+        rd = [r for r in rs if r.day == d]
+        if rd:
+            tables.append(f"Day {d} ({len(rd) // len(names)} captures), mean over captures:\n\n"
+                          + day_table(rd))
+    return "\n".join(tables) + "\nEvery capture:\n\n" + capture_table(rs)
+
+
 def day_table(results) -> str:
     """A Markdown table: per model, the mean over captures of each error [%] (xy in 1e-3)."""
     by = {}
@@ -461,3 +515,80 @@ def clock_scan(day: str, labels=None, offsets_min=np.arange(-60.0, 11.0, 10.0), 
                 best[k, i] = offs[j]
     return {"labels": labels, "offsets_min": offs, "motions": tuple(motions), "rms": rms,
             "best_min": best}
+
+
+#: elevations of the scanner's four rings [deg] (the zenith sample is the fifth "ring")
+RING_ELEVATIONS_DEG = (12.1, 33.7, 53.4, 71.9, 90.0)
+
+
+def ring_offsets(pairs, *, bins_deg=np.arange(10.0, 181.0, 10.0)) -> dict:
+    """Each ring's error at equal angle from the sun: the scanner's per-ring response test.
+
+    ``pairs``: sequence of (capture, model luminance (81,)). The error ``e = ln(model /
+    measured)`` of every kept direction (sample 0 and directions outside ``bins_deg``, by
+    default the circumsolar ones < 10 deg from the sun, left out) of all captures is fitted
+    by least squares as the sum of a constant per capture (the level), a constant per bin of
+    the angle from the sun (what a phase function or aerosol amount error does) and a
+    constant per ring. The ring constants, centred on their sample-weighted mean, are what
+    no error depending only on the angle from the sun can make: the instrument's response
+    per elevation, or a model error in the vertical (the aerosol profile, the air mass
+    towards the horizon). Rings are told apart because the sun moves between captures, so
+    each ring meets many angles.
+
+    Returns ``{"rings_deg", "offset" (rings,) as exp(constant) - 1, "count" (rings,),
+    "rms_before", "rms_after"}`` (RMS of e about the capture constants alone, and of the
+    residual of the full fit).
+    """
+    edges = np.asarray(bins_deg, dtype=np.float64)
+    rings = np.asarray(RING_ELEVATIONS_DEG)
+    nb, nr, nc = edges.size - 1, rings.size, len(pairs)
+    rows_c, rows_b, rows_r, ys = [], [], [], []
+    for k, (cap, model_lum) in enumerate(pairs):
+        lum, _ = measured_luminance(cap)
+        keep = np.ones(lum.size, bool)
+        keep[list(EXCLUDED_SAMPLES)] = False
+        g = cap.sun_angle_deg
+        keep &= (g >= edges[0]) & (g < edges[-1])
+        e = np.log(np.asarray(model_lum, dtype=np.float64) / lum)
+        ring = np.argmin(np.abs(cap.elevation_deg[:, None] - rings[None, :]), axis=1)
+        b = np.clip(np.digitize(g, edges) - 1, 0, nb - 1)
+        idx = np.flatnonzero(keep)
+        rows_c += [k] * idx.size
+        rows_b += list(b[idx])
+        rows_r += list(ring[idx])
+        ys += list(e[idx])
+    y = np.asarray(ys)
+    n = y.size
+    A = np.zeros((n, nc + nb + nr))
+    A[np.arange(n), rows_c] = 1.0
+    A[np.arange(n), nc + np.asarray(rows_b)] = 1.0
+    A[np.arange(n), nc + nb + np.asarray(rows_r)] = 1.0
+    x, *_ = np.linalg.lstsq(A, y, rcond=None)
+    count = np.bincount(rows_r, minlength=nr)
+    rc = x[nc + nb:]
+    rc = rc - np.sum(rc * count) / count.sum()
+    cap_only = y - np.array([y[np.asarray(rows_c) == k].mean() for k in rows_c])
+    return {"rings_deg": rings, "offset": np.expm1(rc), "count": count,
+            "rms_before": float(np.sqrt(np.mean(cap_only ** 2))),
+            "rms_after": float(np.sqrt(np.mean((y - A @ x) ** 2)))}
+
+
+def angle_profile(pairs, *, bins_deg=(10.0, 20.0, 40.0, 60.0, 80.0, 100.0, 120.0, 180.0)):
+    """Median of ``model / measured - 1`` (each normalised by its mean over the kept
+    directions) in bins of the angle from the sun, over all captures of ``pairs``
+    (sequence of (capture, model luminance)). Returns (bin edges, medians (bins,),
+    counts (bins,))."""
+    edges = np.asarray(bins_deg, dtype=np.float64)
+    vals = [[] for _ in range(edges.size - 1)]
+    for cap, model_lum in pairs:
+        lum, _ = measured_luminance(cap)
+        keep = np.ones(lum.size, bool)
+        keep[list(EXCLUDED_SAMPLES)] = False
+        L = np.asarray(model_lum, dtype=np.float64)
+        s = (L / L[keep].mean()) / (lum / lum[keep].mean()) - 1.0
+        b = np.digitize(cap.sun_angle_deg, edges) - 1
+        for i in np.flatnonzero(keep):
+            if 0 <= b[i] < edges.size - 1:
+                vals[b[i]].append(s[i])
+    med = np.array([float(np.median(v)) if v else float("nan") for v in vals])
+    return edges, med, np.array([len(v) for v in vals])

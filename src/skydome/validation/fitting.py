@@ -55,11 +55,16 @@ def _fit_mask(capture):
     return keep
 
 
-def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated"):
+def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated",
+                atmosphere_kw: dict | None = None, model_kw: dict | None = None):
     """The aerosol (tau440, alpha) that best reproduces the scan's 400-700 nm radiance.
 
     Returns an :class:`~skydome.validation.aeronet.AeronetRetrieval` (the base retrieval of
     :func:`base_retrieval` with tau440 and alpha replaced) and caches it per capture.
+    ``atmosphere_kw`` (e.g. ``aerosol_scale_height_m``, ``ground_albedo``) goes to
+    :func:`~skydome.validation.aeronet.aerosol_atmosphere` and ``model_kw`` (e.g.
+    ``observer_altitude_m``) to the model: the sensitivity runs of
+    docs/validation_measured.md refit the aerosol with them.
     """
     from scipy.optimize import least_squares
 
@@ -68,7 +73,9 @@ def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated
     from skydome.validation.aeronet import aerosol_atmosphere
 
     check_choice("model", model, ("hillaire2020", "precomputed"))
-    key = (capture.day, capture.label, capture.mean_time, model, phase)
+    atmosphere_kw, model_kw = dict(atmosphere_kw or {}), dict(model_kw or {})
+    key = (capture.day, capture.label, capture.mean_time, model, phase,
+           repr(sorted(atmosphere_kw.items())), repr(sorted(model_kw.items())))
     if key in _FIT_CACHE:
         return _FIT_CACHE[key]
     base = base_retrieval(capture)
@@ -80,8 +87,9 @@ def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated
 
     def resid(p):
         r = dataclasses.replace(base, tau440=float(np.exp(p[0])), alpha=float(p[1]))
-        m = sd.model(model, sun=capture.sun, atmosphere=aerosol_atmosphere(r, phase=phase),
-                     n_wavelengths=wl.size)
+        m = sd.model(model, sun=capture.sun,
+                     atmosphere=aerosol_atmosphere(r, phase=phase, **atmosphere_kw),
+                     n_wavelengths=wl.size, **model_kw)
         S = np.maximum(m.radiance(d, wl), 1e-30)
         return (np.log(S) - meas).ravel()
 
