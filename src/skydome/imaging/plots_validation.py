@@ -17,7 +17,8 @@ __all__ = ["plot_luminance_vs_scattering_angle", "plot_spectra", "plot_error_map
 
 _STYLE = {"precomputed": ("C0", "o"), "hillaire2020": ("C1", "s"), "nishita1996": ("C2", "^"),
           "single_scattering": ("C3", "v"), "montecarlo": ("C4", "D"), "preetham1999": ("C5", "P"),
-          "perez1993": ("C6", "X"), "cie2003": ("C7", "*"), "precomputed_accurate": ("C8", "h")}
+          "perez1993": ("C6", "X"), "cie2003": ("C7", "*"), "precomputed_accurate": ("C8", "h"),
+          "fitted": ("C9", "d"), "hosek_wilkie2012": ("saddlebrown", "p")}
 
 
 def _keep(n, excluded):
@@ -38,7 +39,7 @@ def plot_luminance_vs_scattering_angle(panels, path, *, excluded=(0,), title=Non
         g = cap.sun_angle_deg
         ax.semilogy(g[k], meas[k], "ko", ms=5, label="measured", zorder=5)
         for m, L in models.items():
-            c, mk = _STYLE.get(m, ("C9", "."))
+            c, mk = _STYLE.get(m, ("0.5", "."))
             ax.semilogy(g[k], L[k], mk, color=c, ms=3.5, alpha=0.8, label=m)
         ax.semilogy(g[~k], meas[~k], "kx", ms=7, label="sample 0 (excluded)")
         ax.set_xlabel("angle from the sun [deg]")
@@ -63,7 +64,7 @@ def plot_spectra(capture, wavelengths_nm, models, path, *, samples=(80, 24, 44, 
     for ax, i in zip(axes.flat, samples):
         ax.plot(capture.wavelengths_nm, capture.radiance[i], "k-", lw=1.5, label="measured")
         for m, S in models.items():
-            c, _ = _STYLE.get(m, ("C9", "."))
+            c, _ = _STYLE.get(m, ("0.5", "."))
             ax.plot(wavelengths_nm, S[i], "-", color=c, lw=1.0, label=m)
         ax.set_xlim(350, 1000)
         ax.set_xlabel("wavelength [nm]")
