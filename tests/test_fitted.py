@@ -59,8 +59,9 @@ def test_finite_and_non_negative_over_the_range(el, aod, albedo, h):
         assert np.all(np.isfinite(a)) and np.all(a >= 0.0)
     assert L.shape == (d.shape[0], 3) and xyz.shape == (d.shape[0], 3)
     # the sky above the horizon is lit: at sun -2 deg and above the darkest fitted sky is
-    # > 1e-3 cd/m2; at -12 deg the reference's darkest held-out sky is DARKEST_12 cd/m2
-    assert np.all(Y[d[:, 2] > 0.05] > (1e-3 if el >= -2.0 else 1e-6))
+    # > 1e-3 cd/m2; at -12 deg the data set's darkest sky (precomputed, every atmosphere
+    # and altitude) is 1.1e-3 cd/m2: a tenth of it bounds the model from below
+    assert np.all(Y[d[:, 2] > 0.05] > (1e-3 if el >= -2.0 else 1e-4))
     np.testing.assert_allclose(Y, xyz[:, 1], rtol=1e-9)
 
 
