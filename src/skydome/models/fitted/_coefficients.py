@@ -23,8 +23,9 @@ the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
   elevation nodes around the sun's elevation, then y and ln s cubic in elevation (ln s:
   the sky's brightness, which falls by orders of magnitude per degree in twilight, is
   interpolated in its logarithm), L = s (exp(y) - DELTA);
-* in AOD (:func:`aod_stencil`): up to 0.1, L linear between the nodes 0, 0.05, 0.1;
-  above, ln L linear between the nodes from 0.1 up;
+* in AOD (:func:`aod_stencil`), with the sun above the horizon: up to 0.1, L quadratic
+  over the nodes 0, 0.05, 0.1; above, ln L between the nodes from 0.1 up; with the sun
+  below -1 deg, L linear in sqrt(AOD); between -1 and 0 deg the two blended linearly;
 * between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
   ground under a scattering atmosphere,
 
@@ -138,34 +139,47 @@ def stencil(nodes: np.ndarray, x: float, order: int = 1) -> list[tuple[int, floa
     return out
 
 
-def aod_stencil(aod_nodes: np.ndarray, aod: float) -> tuple[list[tuple[int, float]], bool]:
-    """(stencil, in ln L) over the AOD nodes: up to the third node (0.1) L itself over
-    the nodes 0, 0.05, 0.1 (in a thin haze the aerosol's light grows in proportion to its
+def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
+                ) -> tuple[list[tuple[int, float]], bool]:
+    """(stencil, in ln L) over the AOD nodes (the choices measured on the held-out grid:
+    docs/models.md, "fitted").
+
+    Sun above the horizon: up to the third node (0.1) L itself, quadratic over the nodes
+    0, 0.05, 0.1 (in a thin haze the aerosol's light grows nearly in proportion to its
     optical depth, which ln L would turn into a geometric mean); above it ln L over the
     nodes from 0.1 up (a thick haze attenuates the long paths near the horizon
-    exponentially); the degree :data:`ELEMENT_ORDER` ["aod"]."""
-    if aod_nodes.size < 4 or aod <= float(aod_nodes[2]):
-        return stencil(aod_nodes[:3], aod, ELEMENT_ORDER["aod"]), False
-    return [(i + 2, w) for i, w in stencil(aod_nodes[2:], aod, ELEMENT_ORDER["aod"])], True
+    exponentially). Sun below the horizon (``twilight``): L linear in sqrt(AOD) between
+    the two nodes around it (the twilight sky changes fastest with the first aerosol)."""
+    nodes = np.asarray(aod_nodes, dtype=np.float64)
+    if twilight:
+        return stencil(np.sqrt(nodes), math.sqrt(max(aod, 0.0)), 1), False
+    if nodes.size < 4 or aod <= float(nodes[2]):
+        return stencil(nodes[:3], aod, ELEMENT_ORDER["aod"]), False
+    return [(i + 2, w) for i, w in stencil(nodes[2:], aod, ELEMENT_ORDER["aod"])], True
 
 
 #: Degrees of the interpolation between nodes (measured on the held-out grid:
 #: docs/models.md, "fitted"): y and ln s cubic in sun elevation, coefficients and ln s
-#: quadratic in altitude, L (or ln L) linear in AOD (quadratic in L over 0, 0.05, 0.1 was
-#: worse in twilight: 12.5 % RMS on the ground at sun -6 to -12 deg, against 5.3 %).
-ELEMENT_ORDER = {"elevation": 3, "altitude": 2, "aod": 1}
+#: quadratic in altitude, L (or ln L) quadratic in AOD with the sun above the horizon.
+ELEMENT_ORDER = {"elevation": 3, "altitude": 2, "aod": 2}
+#: Between these sun elevations [deg] the day and twilight AOD interpolations are blended
+#: linearly (no step at sunset).
+AOD_BLEND_DEG = (-1.0, 0.0)
 
 
 def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
                   altitude_m: float) -> np.ndarray:
     """The radiance per unit extraterrestrial irradiance [sr^-1] of a configuration on the
     view grid at the table wavelengths: (N_SKY + N_GROUND, N_PHI, n_wl), >= 0."""
-    st_a, in_log = aod_stencil(np.asarray(c["aod_nodes"]), aod)
+    lo, hi = AOD_BLEND_DEG
+    f = min(max((elevation_deg - lo) / (hi - lo), 0.0), 1.0)    # 1: day, 0: twilight
+    parts = [(w, aod_stencil(c["aod_nodes"], aod, tw)) for w, tw in ((f, False),
+                                                                     (1.0 - f, True))
+             if w > 0.0]
     st_e = stencil(c["elevation_nodes_deg"], elevation_deg, ELEMENT_ORDER["elevation"])
     st_h = stencil(c["altitude_nodes_m"], altitude_m, ELEMENT_ORDER["altitude"])
     ks = [k for k, _ in st_e]
     we = np.array([w for _, w in st_e])
-    n_sky = _grid.N_SKY * _grid.N_PHI
     # the bases of the stencil's elevation nodes stacked: one product per AOD node (the
     # last stack kept for the next configuration, most often at the same nodes)
     last = c.get("_stacked")
@@ -176,25 +190,34 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
     basis_sky, basis_ground = last[1]
     mean_sky = np.einsum("k,kd->d", we, c["sky_mean"][ks].astype(np.float64))
     mean_ground = np.einsum("k,kd->d", we, c["ground_mean"][ks].astype(np.float64))
-    per_albedo = []
-    for j in range(c["albedo_nodes"].size):
-        acc = 0.0
-        for i, wi in st_a:
-            if wi == 0.0:
-                continue
+    cache: dict = {}
+
+    def at_node(i, j):
+        """L at AOD node i, albedo node j, interpolated in elevation and altitude."""
+        if (i, j) not in cache:
             # coefficients and ln s of each elevation node, interpolated in altitude
             cs = sum(wh * c["coef_sky"][i, j, ks, h] for h, wh in st_h)       # (k, wl, n)
             cg = sum(wh * c["coef_ground"][i, j, ks, h] for h, wh in st_h)
-            log_s = sum(wh * c["log_scale"][i, j, ks, h] for h, wh in st_h)   # (k, wl)
-            log_s = we @ log_s
+            log_s = we @ sum(wh * c["log_scale"][i, j, ks, h] for h, wh in st_h)
             # (wl, k n) in float32: y to 1e-7, far below the fit's residual
             cs = np.concatenate(list(we[:, None, None] * cs), axis=-1).astype(np.float32)
             cg = np.concatenate(list(we[:, None, None] * cg), axis=-1).astype(np.float32)
             y = np.concatenate([mean_sky + cs @ basis_sky, mean_ground + cg @ basis_ground],
                                axis=1)
-            L = np.exp(log_s)[:, None] * np.maximum(np.exp(y) - DELTA, 0.0)
-            acc = acc + wi * (np.log(np.maximum(L, TINY)) if in_log else L)
-        per_albedo.append(np.exp(acc) if in_log else np.maximum(acc, 0.0))
+            cache[i, j] = np.exp(log_s)[:, None] * np.maximum(np.exp(y) - DELTA, 0.0)
+        return cache[i, j]
+
+    per_albedo = []
+    for j in range(c["albedo_nodes"].size):
+        total = 0.0
+        for wp, (st_a, in_log) in parts:
+            acc = 0.0
+            for i, wi in st_a:
+                if wi != 0.0:
+                    L = at_node(i, j)
+                    acc = acc + wi * (np.log(np.maximum(L, TINY)) if in_log else L)
+            total = total + wp * (np.exp(acc) if in_log else np.maximum(acc, 0.0))
+        per_albedo.append(total)
     L = albedo_form(c["albedo_nodes"], per_albedo, albedo)
     n_wl = c["wavelengths_nm"].size
     return np.ascontiguousarray(
