@@ -162,8 +162,9 @@ def test_coefficient_file_covers_the_declared_range():
 #: (``twilight_reference=True``, validated against Monte Carlo to -12 deg), as the data set.
 TWILIGHT_CASE = dict(aod=0.08, albedo=0.35, el=-8.5, h=1000.0)
 #: Bounds: the figures measured for the regime on the held-out grid (docs/models.md,
-#: "fitted", clear, sun -6 to -12 deg at 0.4-4.5 km: 4.9 % RMS, 54.5 % max), rounded up.
-TWILIGHT_RMS_BOUND, TWILIGHT_MAX_BOUND = 0.06, 0.55
+#: "fitted", clear, sun -6 to -12 deg at 0.4-4.5 km: 9.07 % RMS, 206 % max), rounded up:
+#: the model's documented accuracy, not a tighter promise.
+TWILIGHT_RMS_BOUND, TWILIGHT_MAX_BOUND = 0.10, 2.1
 
 
 @pytest.mark.slow
