@@ -26,8 +26,8 @@ def _dirs(n=400, seed=3, upper=False):
 
 
 @pytest.mark.parametrize("kw, name, rng", [
-    ({"aerosol_optical_depth": 1.2}, "aerosol_optical_depth", "[0, 1]"),
-    ({"aerosol_optical_depth": -0.01}, "aerosol_optical_depth", "[0, 1]"),
+    ({"aerosol_optical_depth": 0.3}, "aerosol_optical_depth", "[0, 0.25]"),
+    ({"aerosol_optical_depth": -0.01}, "aerosol_optical_depth", "[0, 0.25]"),
     ({"ground_albedo": 1.5}, "ground_albedo", "[0, 1]"),
     ({"observer_altitude_m": 15001.0}, "observer_altitude_m", "[0, 15000]"),
 ])
@@ -39,15 +39,15 @@ def test_out_of_range_parameters_refused_with_name_value_and_range(kw, name, rng
 
 
 def test_sun_below_the_fitted_range_refused():
-    with pytest.raises(ValueError, match=r"sun.elevation_deg = -3 deg is out of range "
-                                         r"\[-2, 90\] deg for model 'fitted'"):
-        sd.model("fitted", sun=sd.Sun(elevation_deg=-3, azimuth_deg=0))
+    with pytest.raises(ValueError, match=r"sun.elevation_deg = -12.5 deg is out of range "
+                                         r"\[-12, 90\] deg for model 'fitted'"):
+        sd.model("fitted", sun=sd.Sun(elevation_deg=-12.5, azimuth_deg=0))
 
 
-@pytest.mark.parametrize("el", [-2.0, -0.3, 0.0, 0.27, 12.3, 89.99, 90.0])
-@pytest.mark.parametrize("aod, albedo, h", [(0.0, 0.0, 0.0), (1.0, 1.0, 15000.0),
-                                            (0.37, 0.61, 2345.0), (0.0, 1.0, 15000.0),
-                                            (1.0, 0.0, 0.0)])
+@pytest.mark.parametrize("el", [-12.0, -7.3, -2.0, -0.3, 0.0, 0.27, 12.3, 89.99, 90.0])
+@pytest.mark.parametrize("aod, albedo, h", [(0.0, 0.0, 0.0), (0.25, 1.0, 15000.0),
+                                            (0.17, 0.61, 2345.0), (0.0, 1.0, 15000.0),
+                                            (0.25, 0.0, 0.0)])
 def test_finite_and_non_negative_over_the_range(el, aod, albedo, h):
     sky = sd.model("fitted", sun=sd.Sun(elevation_deg=el, azimuth_deg=37.0),
                    aerosol_optical_depth=aod, ground_albedo=albedo, observer_altitude_m=h)
@@ -58,8 +58,10 @@ def test_finite_and_non_negative_over_the_range(el, aod, albedo, h):
     for a in (L, xyz, Y, sky.sun_radiance([300.0, 555.0, 1100.0])):
         assert np.all(np.isfinite(a)) and np.all(a >= 0.0)
     assert L.shape == (d.shape[0], 3) and xyz.shape == (d.shape[0], 3)
-    # the sky above the horizon is lit (the darkest fitted sky, sun -2 deg, is > 1e-3 cd/m2)
-    assert np.all(Y[d[:, 2] > 0.05] > 1e-3)
+    # the sky above the horizon is lit: at sun -2 deg and above the darkest fitted sky is
+    # > 1e-3 cd/m2; at -12 deg the data set's darkest sky (precomputed, every atmosphere
+    # and altitude) is 1.1e-3 cd/m2: a tenth of it bounds the model from below
+    assert np.all(Y[d[:, 2] > 0.05] > (1e-3 if el >= -2.0 else 1e-4))
     np.testing.assert_allclose(Y, xyz[:, 1], rtol=1e-9)
 
 
@@ -152,3 +154,35 @@ def test_coefficient_file_covers_the_declared_range():
     assert c["meta"]["dataset_grid"]["view_grid"]["n_sky"] == _grid.N_SKY
     n = len(c["elevation_nodes_deg"])
     assert c["sky_basis"].shape == (n, c["meta"]["k_sky"], _grid.N_SKY * _grid.N_PHI)
+
+
+#: The twilight point: one atmosphere off the nodes (AOD 0.08, albedo 0.35), the sun at -8.5
+#: deg (between the nodes -10 and -8), the observer at 1 km (between 0.7 and 1.5 km); the
+#: reference is ``precomputed`` in its twilight reference configuration
+#: (``twilight_reference=True``, validated against Monte Carlo to -12 deg), as the data set.
+TWILIGHT_CASE = dict(aod=0.08, albedo=0.35, el=-8.5, h=1000.0)
+#: Bounds: the figures measured for the regime on the held-out grid (docs/models.md,
+#: "fitted", clear, sun -6 to -12 deg at 0.4-4.5 km: 9.07 % RMS, 206 % max), rounded up:
+#: the model's documented accuracy, not a tighter promise.
+TWILIGHT_RMS_BOUND, TWILIGHT_MAX_BOUND = 0.10, 2.1
+
+
+@pytest.mark.slow
+def test_twilight_luminance_at_a_held_out_point_against_live_precomputed():
+    """About 70 s of CPU (the reference's twilight configuration): one such test."""
+    t = TWILIGHT_CASE
+    sun = sd.Sun(elevation_deg=t["el"], azimuth_deg=200.0)
+    ref = sd.model("precomputed", sun=sun,
+                   atmosphere=sd.Atmosphere.earth(aerosol_optical_depth=t["aod"],
+                                                  ground_albedo=t["albedo"]),
+                   table_wavelengths_nm=np.arange(380.0, 781.0, 20.0), cache=False,
+                   twilight_reference=True).with_sun(sun, observer_altitude_m=t["h"])
+    fit = sd.model("fitted", sun=sun, aerosol_optical_depth=t["aod"],
+                   ground_albedo=t["albedo"], observer_altitude_m=t["h"])
+    d = _dirs(300, seed=17, upper=True)[:300]
+    y_ref = ref.luminance(d)
+    y_fit = fit.luminance(d)
+    assert np.all(y_ref > 0.0)
+    rel = y_fit / y_ref - 1.0
+    rms, worst = float(np.sqrt(np.mean(rel ** 2))), float(np.max(np.abs(rel)))
+    assert rms <= TWILIGHT_RMS_BOUND and worst <= TWILIGHT_MAX_BOUND, (rms, worst)

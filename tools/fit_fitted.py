@@ -1,6 +1,7 @@
 """Fit the ``fitted`` sky model's coefficients to its data set.
 
     python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
+        [--float16]
 
 DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
 representation is described in skydome/models/fitted/_coefficients.py):
@@ -15,6 +16,14 @@ representation is described in skydome/models/fitted/_coefficients.py):
 4. the sun: ln T, T = the sun factor of the data set over the visible fraction of the disc
    (nodes where the disc is hidden take the value per unit air mass of the nearest
    elevation node above).
+
+With ``--float16`` the coefficients and the bases are stored in float16, each row of
+coefficients (one node and wavelength) and each basis vector divided by its largest
+magnitude (the scales in float32): half the file, for the rounding error measured in
+docs/models.md ("fitted").
+
+DATASET may lack some atmospheres (a data set still being generated): the fit then uses
+the AOD nodes whose every albedo node is there, and says which it left out.
 
 Writes FILE (default: the package's skydome/models/fitted/data/fitted_coefficients.npz)
 atomically and prints the fit residual on the fitting nodes (RMS of y; the accuracy of the
@@ -54,6 +63,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=None)
     ap.add_argument("--k-sky", type=int, default=32)
     ap.add_argument("--k-ground", type=int, default=12)
+    ap.add_argument("--float16", action="store_true",
+                    help="store coefficients and bases in float16 with a scale per row")
     a = ap.parse_args(argv)
     for name, v in (("--k-sky", a.k_sky), ("--k-ground", a.k_ground)):
         if not 1 <= v <= 256:
@@ -67,9 +78,17 @@ def main(argv=None) -> int:
     from skydome.sun import Sun
 
     t0 = time.perf_counter()
-    ds = DataSet(a.dataset)
-    aods = np.array(sorted({x for x, _ in ds.atmospheres}))
+    ds = DataSet(a.dataset, require_all=False)
     albs = np.array(sorted({x for _, x in ds.atmospheres}))
+    present = set(ds.present)
+    aods_all = sorted({x for x, _ in ds.atmospheres})
+    aods = np.array([x for x in aods_all if all((x, b) in present for b in albs)])
+    if aods.size < len(aods_all):
+        print(f"AOD nodes left out (an albedo chunk missing): "
+              f"{sorted(set(aods_all) - set(aods.tolist()))}", flush=True)
+    if aods.size < 2:
+        print("error: fewer than two complete AOD nodes in the data set", file=sys.stderr)
+        return 2
     el, alt, wl = ds.elevations_deg, ds.altitudes_m, ds.wavelengths_nm
     n_sky = _grid.N_SKY * _grid.N_PHI
     n_dir = (_grid.N_SKY + _grid.N_GROUND) * _grid.N_PHI
@@ -130,8 +149,17 @@ def main(argv=None) -> int:
     meta = {"dataset_grid": ds.meta, "k_sky": a.k_sky, "k_ground": a.k_ground,
             "delta": DELTA, "fit_residual_rms_y": resid,
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
-                       f"--k-ground {a.k_ground}",
+                       f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    if a.float16:
+        for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis"):
+            v = out[key]
+            scale = np.max(np.abs(v), axis=-1).astype(np.float32)
+            scale = np.where(scale > 0.0, scale, 1.0)
+            out[key] = (v / scale[..., None]).astype(np.float16)
+            out[key + "_scale"] = scale
+    meta["float16"] = bool(a.float16)
+    meta["aod_nodes_fitted"] = [float(x) for x in aods]
     out["meta"] = np.array(json.dumps(meta))
     target = Path(a.out) if a.out else COEFFICIENT_FILE
     target.parent.mkdir(parents=True, exist_ok=True)

@@ -7,8 +7,8 @@ HELDOUT is a folder written by ``tools/fitted_dataset.py --grid heldout``: the r
 spectral skies (computed by ``precomputed`` itself, never by the fitted model) at parameter
 values that are not fitting nodes (AOD and albedo off the nodes, sun elevations and
 altitudes between them) and at directions in the centres of the view grid's cells. For
-each regime (sun above 20 deg, 0-20 deg, 0 to -2 deg; observer on the ground, at 0.5-5 km,
-at 15 km) it prints the luminance RMS and largest relative error and the spectral ones
+each regime (sun above 20 deg, 0-20 deg, 0 to -6 deg, -6 to -12 deg; observer on the
+ground, at 0.4-4.5 km, at 15 km) it prints the luminance RMS and largest relative error and the spectral ones
 (every table wavelength 300-1100 nm) over the sky more than 5 deg from the sun, the same
 luminance figures for ``hosek_wilkie2012`` (observer on the ground, sun above the horizon;
 turbidity from the AOD by Preetham's beta = 0.04608 T - 0.04586 and Angstrom's law with
@@ -26,8 +26,10 @@ from pathlib import Path
 import numpy as np
 
 REGIMES = (("sun > 20 deg", 20.0, 90.0), ("sun 0-20 deg", 0.0, 20.0),
-           ("sun -2 to 0 deg", -2.0, 0.0))
-HEIGHTS = (("ground", 0.0, 0.0), ("0.5-5 km", 1.0, 14000.0), ("15 km", 15000.0, 15000.0))
+           ("sun 0 to -6 deg", -6.0, 0.0), ("sun -6 to -12 deg", -12.0, -6.0))
+HEIGHTS = (("ground", 0.0, 0.0), ("0.4-4.5 km", 1.0, 14000.0), ("15 km", 15000.0, 15000.0))
+#: The two atmosphere classes of the tables: clear (AOD <= 0.1) and hazy.
+CLASSES = (("clear", 0.0, 0.1), ("hazy", 0.1, 1.0))
 
 
 def turbidity_from_aod(aod: float) -> float:
@@ -55,7 +57,13 @@ def main(argv=None) -> int:
     from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
         solar_irradiance
 
-    ds = DataSet(a.heldout)
+    ds = DataSet(a.heldout, require_all=False, grid="heldout")
+    lo_aod, hi_aod = _grid.AOD_RANGE
+    atmospheres = [x for x in ds.present if lo_aod <= x[0] <= hi_aod]
+    left = sorted(set(ds.atmospheres) - set(atmospheres))
+    if left:
+        print(f"held-out atmospheres left out (no chunk, or outside the model's AOD range "
+              f"[{lo_aod:g}, {hi_aod:g}]): {left}")
     if not ds.midpoints:
         print("error: HELDOUT must be made with --grid heldout", file=sys.stderr)
         return 2
@@ -70,7 +78,7 @@ def main(argv=None) -> int:
 
     sun_err = []
     examples = []
-    for aod, alb in ds.atmospheres:
+    for aod, alb in atmospheres:
         L_all, sunf = ds.sky(aod, alb)
         for i, el in enumerate(ds.elevations_deg):
             for j, h in enumerate(ds.altitudes_m):
@@ -93,6 +101,8 @@ def main(argv=None) -> int:
                 rel_s = np.where(pos, (s_fit - s_ref) / np.where(pos, s_ref, 1.0), 0.0)
                 reg = next(r for r, lo, hi in REGIMES if lo <= el <= hi)
                 hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
+                cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
+                hgt = (cls, hgt)
                 add((reg, hgt, "fitted", "Y"), rel_y[sky & keep])
                 add((reg, hgt, "fitted", "spectral"), rel_s[sky & keep][pos[sky & keep]])
                 if h > 0:
@@ -109,42 +119,31 @@ def main(argv=None) -> int:
                 if t_ref[wl == 560.0][0] > 1e-3:
                     sun_err.append((float(el), float(h), aod,
                                     float(np.max(np.abs(t_fit / t_ref - 1.0)[wl >= 400]))))
-                if (aod, alb) == ds.atmospheres[0] and h in (0.0, 15000.0) and \
-                        el in (45.0, 4.0, -1.5):
+                if (aod, alb) == atmospheres[0] and h in (0.0, 15000.0) and \
+                        el in (45.0, 4.0, -4.5, -9.0):
                     examples.append((el, h, y_ref, rel_y))
     rows = []
-    print(f"held-out grid: {len(ds.atmospheres)} atmospheres "
-          f"{ds.atmospheres}, sun {list(ds.elevations_deg)} deg, altitude "
+    print(f"held-out grid: {len(atmospheres)} atmospheres "
+          f"{atmospheres}, sun {list(ds.elevations_deg)} deg, altitude "
           f"{list(ds.altitudes_m)} m; relative errors more than 5 deg from the sun")
-    print("| regime | observer | model | luminance RMS | luminance max | spectral RMS | "
-          "spectral max | ground (below horizon) luminance RMS / max |")
-    print("|---|---|---|---|---|---|---|---|")
-    for reg, _, _ in REGIMES:
-        for hgt, _, _ in HEIGHTS:
-            for model in ("fitted", "hosek_wilkie2012"):
-                y = acc.get((reg, hgt, model, "Y"))
-                if y is None:
-                    continue
-                y = np.concatenate(y)
-                s = acc.get((reg, hgt, model, "spectral"))
-                g = acc.get((reg, hgt, model, "ground Y"))
-                row = {"regime": reg, "observer": hgt, "model": model,
-                       "Y_rms": float(np.sqrt(np.mean(y ** 2))), "Y_max": float(y.max())}
-                cells = [f"{100 * row['Y_rms']:.2f} %", f"{100 * row['Y_max']:.1f} %"]
-                if s is not None:
-                    s = np.concatenate(s)
-                    row.update(S_rms=float(np.sqrt(np.mean(s ** 2))), S_max=float(s.max()))
-                    cells += [f"{100 * row['S_rms']:.2f} %", f"{100 * row['S_max']:.1f} %"]
-                else:
-                    cells += ["-", "-"]
-                if g is not None:
-                    g = np.concatenate(g)
-                    row.update(G_rms=float(np.sqrt(np.mean(g ** 2))), G_max=float(g.max()))
-                    cells.append(f"{100 * row['G_rms']:.2f} / {100 * row['G_max']:.1f} %")
-                else:
-                    cells.append("-")
-                rows.append(row)
-                print(f"| {reg} | {hgt} | {model} | " + " | ".join(cells) + " |")
+    for cls, _, _ in CLASSES:
+        print(f"\n{cls}:\n")
+        print("| sun | observer | model | luminance RMS | luminance max | spectral RMS | "
+              "spectral max | ground view luminance RMS / max |")
+        print("|---|---|---|---|---|---|---|---|")
+        for reg, _, _ in REGIMES:
+            for hgt, _, _ in HEIGHTS:
+                for model in ("fitted", "hosek_wilkie2012"):
+                    row = _row(acc, reg, (cls, hgt), model)
+                    if row is None:
+                        continue
+                    rows.append(row)
+                    cells = [f"{100 * row['Y_rms']:.2f} %", f"{100 * row['Y_max']:.1f} %"]
+                    cells += ([f"{100 * row['S_rms']:.2f} %", f"{100 * row['S_max']:.1f} %"]
+                              if "S_rms" in row else ["-", "-"])
+                    cells.append(f"{100 * row['G_rms']:.2f} / {100 * row['G_max']:.1f} %"
+                                 if "G_rms" in row else "-")
+                    print(f"| {reg[4:]} | {hgt} | {model} | " + " | ".join(cells) + " |")
     if sun_err:
         se = np.array([x[3] for x in sun_err])
         print(f"sun transmittance (400-1100 nm, where it exceeds 1e-3 at 560 nm): largest "
@@ -153,8 +152,25 @@ def main(argv=None) -> int:
     if a.json:
         Path(a.json).write_text(json.dumps({"rows": rows, "sun": sun_err}, indent=1))
     if a.figure and examples:
-        _figure(a.figure, examples, ds.atmospheres[0])
+        _figure(a.figure, examples, atmospheres[0])
     return 0
+
+
+def _row(acc, reg, key, model):
+    """RMS and largest relative error of one cell of the table (None: no data)."""
+    y = acc.get((reg, key, model, "Y"))
+    if y is None:
+        return None
+    y = np.concatenate(y)
+    row = {"regime": reg, "class": key[0], "observer": key[1], "model": model,
+           "Y_rms": float(np.sqrt(np.mean(y ** 2))), "Y_max": float(y.max())}
+    for tag, name in (("S", "spectral"), ("G", "ground Y")):
+        v = acc.get((reg, key, model, name))
+        if v is not None:
+            v = np.concatenate(v)
+            row.update({f"{tag}_rms": float(np.sqrt(np.mean(v ** 2))),
+                        f"{tag}_max": float(v.max())})
+    return row
 
 
 def _figure(path, examples, atm):
@@ -166,28 +182,32 @@ def _figure(path, examples, atm):
     from skydome._io import atomic_file
     from skydome.models.fitted import _grid
 
-    n = len(examples)
-    fig, ax = plt.subplots(2, n, figsize=(3.0 * n, 5.6), squeeze=False)
+    els = sorted({e[0] for e in examples}, reverse=True)
+    hs = sorted({e[1] for e in examples})
+    n = len(els)
+    # per altitude two rows: the reference's luminance, the model's error
+    fig, ax = plt.subplots(2 * len(hs), n, figsize=(3.0 * n, 2.8 * 2 * len(hs)),
+                           squeeze=False)
     t = np.linspace(0.0, 1.0, _grid.N_PHI)
     t = 0.5 * (t[1:] + t[:-1])
     phi = 180.0 * (_grid.A_PHI * t + (1.0 - _grid.A_PHI) * t * t)
-    for k, (el, h, y_ref, rel) in enumerate(examples):
+    for el, h, y_ref, rel in examples:
+        k, r0 = els.index(el), 2 * hs.index(h)
         th = np.degrees(np.arccos(np.clip(_grid.directions(h, 180.0, True)[:, 0, 2], -1, 1)))
         order = np.argsort(th)           # the sky rows run from the horizon up: sort them
         th, y_ref, rel = th[order], y_ref[order], rel[order]
-        im = ax[0, k].pcolormesh(phi, th, np.log10(np.maximum(y_ref, 1e-6)), shading="auto",
-                                 cmap="magma")
-        fig.colorbar(im, ax=ax[0, k], label="log10 cd/m2")
-        im = ax[1, k].pcolormesh(phi, th, 100 * rel, shading="auto", cmap="RdBu_r",
-                                 vmin=-5, vmax=5)
-        fig.colorbar(im, ax=ax[1, k], label="fitted - ref [%]")
-        for r in (0, 1):
+        im = ax[r0, k].pcolormesh(phi, th, np.log10(np.maximum(y_ref, 1e-9)),
+                                  shading="auto", cmap="magma")
+        fig.colorbar(im, ax=ax[r0, k], label="log10 cd/m2")
+        im = ax[r0 + 1, k].pcolormesh(phi, th, 100 * rel, shading="auto", cmap="RdBu_r",
+                                      vmin=-5, vmax=5)
+        fig.colorbar(im, ax=ax[r0 + 1, k], label="fitted - ref [%]")
+        for r in (r0, r0 + 1):
             ax[r, k].invert_yaxis()
             ax[r, k].axhline(np.degrees(_grid.horizon_zenith_rad(h)), color="k", lw=0.5)
-            ax[r, k].set_xlabel("azimuth from sun [deg]")
-        ax[0, k].set_title(f"sun {el:g} deg, {h / 1000:g} km", fontsize=9)
-        ax[0, k].set_ylabel("view zenith [deg]")
-        ax[1, k].set_ylabel("view zenith [deg]")
+            ax[r, k].set_ylabel("view zenith [deg]")
+        ax[r0 + 1, k].set_xlabel("azimuth from sun [deg]")
+        ax[r0, k].set_title(f"sun {el:g} deg, {h / 1000:g} km", fontsize=9)
     fig.suptitle(f"fitted vs precomputed at held-out nodes (AOD {atm[0]:g}, albedo "
                  f"{atm[1]:g}): reference luminance (top), error (bottom)", fontsize=10)
     fig.tight_layout()

@@ -1,7 +1,7 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
     python tools/fitted_dataset.py OUT [--grid fit|heldout|small] [--scheduler ADDR]
-        [--workers N] [--twilight-reference]
+        [--workers N] [--twilight-reference] [--max-aod A]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -14,11 +14,12 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (6 AOD x 3 albedo = 18 atmospheres, 18 sun elevations
-  -2..90 deg, 5 altitudes 0..15 km);
-* ``heldout``: the held-out grid (5 atmospheres, their albedos off the nodes, 8 sun
-  elevations and 4 altitudes of which only 0 and 15 km are fitting nodes), every view
-  direction at the centre of a cell of the view grid (the farthest from its nodes);
+* ``fit``: the fitting nodes (6 AOD x 3 albedo = 18 atmospheres, 26 sun elevations
+  -12..90 deg, 7 altitudes 0..15 km);
+* ``heldout``: the held-out grid (5 atmospheres, their albedos off the nodes, 13 sun
+  elevations -11..70 deg off the nodes and 5 altitudes of which only 0 and 15 km are
+  fitting nodes), every view direction at the centre of a cell of the view grid (the
+  farthest from its nodes);
 * ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
 """
 
@@ -55,7 +56,11 @@ def main(argv=None) -> int:
     ap.add_argument("--twilight-reference", action="store_true",
                     help="run precomputed in its twilight reference configuration "
                          "(twilight_reference=True: validated to sun -12 deg, about 4x the "
-                         "CPU); needed for fitting nodes below -2 deg")
+                         "CPU); the shipped coefficients are fitted to it (sun nodes down "
+                         "to -12 deg)")
+    ap.add_argument("--max-aod", type=float, default=None,
+                    help="leave out the grid's atmospheres whose AOD exceeds this (a data set "
+                         "for a model fitted to a subset of the AOD nodes)")
     ap.add_argument("--workers", type=int, default=1,
                     help="local cluster processes (default 1: each precomputation already "
                          "uses every core through numba)")
@@ -72,6 +77,11 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     el, alt, atms = grid(a.grid)
+    if a.max_aod is not None:
+        if not 0.0 <= a.max_aod <= 1.0:
+            print(f"error: --max-aod = {a.max_aod:g} is out of range [0, 1]", file=sys.stderr)
+            return 2
+        atms = [x for x in atms if x[0] <= a.max_aod + 1e-12]
     mid = a.grid == "heldout"       # held out in direction too: the cells' centres
     chunks = [Chunk(_dataset.chunk_key(aod, alb), _dataset.compute_chunk,
                     (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference))

@@ -36,11 +36,13 @@ class FittedSky(SkyModel):
     Parameters
     ----------
     sun : skydome.Sun
-        Sun position; elevation in [-2, 90] deg (the range where the reference is
-        validated within 3 % RMS against Monte Carlo: docs/validation.md).
+        Sun position; elevation in [-12, 90] deg: noon to the end of nautical twilight
+        (the data set comes from ``precomputed`` in its twilight reference configuration,
+        validated against Monte Carlo to -12 deg: docs/validation.md).
     aerosol_optical_depth : float
-        Vertical aerosol optical depth at 550 nm, in [0, 1] (Angstrom exponent 1.3, the
-        aerosol of ``Atmosphere.earth``).
+        Vertical aerosol optical depth at 550 nm, in [0, 0.25] (Angstrom exponent 1.3,
+        the aerosol of ``Atmosphere.earth``; the AOD nodes 0.5 and 1 of the data set are
+        not in this version's fit).
     ground_albedo : float
         Grey Lambertian ground albedo, in [0, 1].
     observer_altitude_m : float [m]
@@ -62,7 +64,8 @@ class FittedSky(SkyModel):
     reference = ("skydome's fitted model (low-rank angular basis per sun elevation, "
                  "fitted to the precomputed reference: Bruneton 2017 as built by skydome)")
     native = "spectral"
-    summary = "skydome's own fit of the precomputed reference (spectral, sun -2..90 deg, 0-15 km)"
+    summary = ("skydome's own fit of the precomputed reference (spectral, sun -12..90 deg, "
+               "0-15 km)")
     own_ground = "sun_and_sky"
     #: the viewer's shader (viewer/static/shaders/fitted.glsl: the lookup of xyz_table) and
     #: the engine bake (export/fitted_luts.py, export/glsl/fitted.glsl)

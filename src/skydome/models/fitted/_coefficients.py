@@ -16,12 +16,18 @@ sun-elevation node,
 
 the basis B_k and mean_k from a truncated singular value decomposition of every y of that
 elevation node (every atmosphere, altitude and wavelength), the sky and the ground apart
-(``K_SKY`` and ``K_GROUND`` terms). A configuration between the nodes takes c and ln s
-interpolated linearly in altitude at its two neighbouring elevation nodes, y interpolated
-linearly in elevation, L per AOD node and albedo node, L linear in AOD; between the albedo
-nodes 0,
-1/2 and 1 the radiance follows the form of a Lambertian ground under a scattering
-atmosphere,
+(``K_SKY`` and ``K_GROUND`` terms). A configuration between the nodes (:func:`stencil`,
+the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
+
+* at each AOD and albedo node, c and ln s quadratic in altitude (three nodes) at the four
+  elevation nodes around the sun's elevation, then y and ln s cubic in elevation (ln s:
+  the sky's brightness, which falls by orders of magnitude per degree in twilight, is
+  interpolated in its logarithm), L = s (exp(y) - DELTA);
+* in AOD (:func:`aod_stencil`), with the sun above the horizon: up to 0.1, L quadratic
+  over the nodes 0, 0.05, 0.1; above, ln L between the nodes from 0.1 up; with the sun
+  below -1 deg, L linear in sqrt(AOD); between -1 and 0 deg the two blended linearly;
+* between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
+  ground under a scattering atmosphere,
 
     L(b) = L_0 + b G / (1 - b S)
 
@@ -53,6 +59,8 @@ COEFFICIENT_FILE = Path(__file__).parent / "data" / "fitted_coefficients.npz"
 
 #: Offset of the logarithm (relative to the mean sky radiance).
 DELTA = 1e-3
+#: Floor of L [sr^-1] where ln L is interpolated (in AOD).
+TINY = 1e-30
 #: Scale heights of ``Atmosphere.earth``'s aerosol and air [m] (survey section 4, eq. 7)
 #: and the air's vertical optical depth at 550 nm (Atmosphere.earth().vertical_optical_depth).
 AEROSOL_SCALE_HEIGHT_M = 1200.0
@@ -70,6 +78,12 @@ def load(path: str | None = None) -> dict:
     with np.load(p, allow_pickle=False) as z:
         out = {k: z[k] for k in z.files}
     out["meta"] = json.loads(str(out["meta"]))
+    # a file written with --float16: each row of coefficients and each basis vector over
+    # its largest magnitude, the scales beside them
+    for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis"):
+        scale = out.pop(key + "_scale", None)
+        if scale is not None:
+            out[key] = out[key].astype(np.float32) * scale[..., None]
     return out
 
 
@@ -98,46 +112,114 @@ def sun_visible_fraction(elevation_deg: float, altitude_m: float,
     return 1.0 - (math.acos(u) - u * math.sqrt(1.0 - u * u)) / math.pi
 
 
-def _part(c: dict, part: str, k: int, coef: np.ndarray) -> np.ndarray:
-    """y on one part ("sky" or "ground") of the grid at elevation node k: (n_wl, n_dir)."""
-    return c[f"{part}_mean"][k][None, :] + coef @ c[f"{part}_basis"][k]
+def stencil(nodes: np.ndarray, x: float, order: int = 1) -> list[tuple[int, float]]:
+    """[(node index, weight)]: Lagrange interpolation of degree ``order`` (1 linear, 2
+    quadratic, 3 cubic) at x over the ``order + 1`` nodes around it (the stencil shifted
+    inside the nodes at their ends; quadratic: the third node on the side x is nearer);
+    x clamped to the nodes' span. The weights sum to 1 and reproduce the node values at
+    the nodes."""
+    nodes = np.asarray(nodes, dtype=np.float64)
+    i, f = bracket(nodes, x)
+    if order <= 1 or nodes.size <= 2:
+        return [(i, 1.0 - f), (i + 1, f)]
+    order = min(order, nodes.size - 1)
+    x = float(nodes[i] + f * (nodes[i + 1] - nodes[i]))
+    if order == 2:
+        lo = i - 1 if (f < 0.5 and i > 0) or i + 2 >= nodes.size else i
+    else:
+        lo = min(max(i - (order - 1) // 2, 0), nodes.size - order - 1)
+    idx = range(lo, lo + order + 1)
+    out = []
+    for p in idx:
+        w = 1.0
+        for q in idx:
+            if q != p:
+                w *= (x - nodes[q]) / (nodes[p] - nodes[q])
+        out.append((p, w))
+    return out
+
+
+def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
+                ) -> tuple[list[tuple[int, float]], bool]:
+    """(stencil, in ln L) over the AOD nodes (the choices measured on the held-out grid:
+    docs/models.md, "fitted").
+
+    Sun above the horizon: up to the third node (0.1) L itself, quadratic over the nodes
+    0, 0.05, 0.1 (in a thin haze the aerosol's light grows nearly in proportion to its
+    optical depth, which ln L would turn into a geometric mean); above it ln L over the
+    nodes from 0.1 up (a thick haze attenuates the long paths near the horizon
+    exponentially). Sun below the horizon (``twilight``): L linear in sqrt(AOD) between
+    the two nodes around it (the twilight sky changes fastest with the first aerosol)."""
+    nodes = np.asarray(aod_nodes, dtype=np.float64)
+    if twilight:
+        return stencil(np.sqrt(nodes), math.sqrt(max(aod, 0.0)), 1), False
+    if nodes.size < 4 or aod <= float(nodes[2]):
+        return stencil(nodes[:3], aod, ELEMENT_ORDER["aod"]), False
+    return [(i + 2, w) for i, w in stencil(nodes[2:], aod, ELEMENT_ORDER["aod"])], True
+
+
+#: Degrees of the interpolation between nodes (measured on the held-out grid:
+#: docs/models.md, "fitted"): y and ln s cubic in sun elevation, coefficients and ln s
+#: quadratic in altitude, L (or ln L) quadratic in AOD with the sun above the horizon.
+ELEMENT_ORDER = {"elevation": 3, "altitude": 2, "aod": 2}
+#: Between these sun elevations [deg] the day and twilight AOD interpolations are blended
+#: linearly (no step at sunset).
+AOD_BLEND_DEG = (-1.0, 0.0)
 
 
 def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
                   altitude_m: float) -> np.ndarray:
     """The radiance per unit extraterrestrial irradiance [sr^-1] of a configuration on the
     view grid at the table wavelengths: (N_SKY + N_GROUND, N_PHI, n_wl), >= 0."""
-    ia, fa = bracket(c["aod_nodes"], aod)
-    ie, fe = bracket(c["elevation_nodes_deg"], elevation_deg)
-    ih, fh = bracket(c["altitude_nodes_m"], altitude_m)
-    n_wl = c["wavelengths_nm"].size
-    n_sky = _grid.N_SKY * _grid.N_PHI
+    lo, hi = AOD_BLEND_DEG
+    f = min(max((elevation_deg - lo) / (hi - lo), 0.0), 1.0)    # 1: day, 0: twilight
+    parts = [(w, aod_stencil(c["aod_nodes"], aod, tw)) for w, tw in ((f, False),
+                                                                     (1.0 - f, True))
+             if w > 0.0]
+    st_e = stencil(c["elevation_nodes_deg"], elevation_deg, ELEMENT_ORDER["elevation"])
+    st_h = stencil(c["altitude_nodes_m"], altitude_m, ELEMENT_ORDER["altitude"])
+    ks = [k for k, _ in st_e]
+    we = np.array([w for _, w in st_e])
+    # the bases of the stencil's elevation nodes stacked: one product per AOD node (the
+    # last stack kept for the next configuration, most often at the same nodes)
+    last = c.get("_stacked")
+    if last is None or last[0] != tuple(ks):
+        last = c["_stacked"] = (tuple(ks), tuple(
+            np.concatenate([c[f"{part}_basis"][k] for k in ks]).astype(np.float32)
+            for part in ("sky", "ground")))
+    basis_sky, basis_ground = last[1]
+    mean_sky = np.einsum("k,kd->d", we, c["sky_mean"][ks].astype(np.float64))
+    mean_ground = np.einsum("k,kd->d", we, c["ground_mean"][ks].astype(np.float64))
+    cache: dict = {}
+
+    def at_node(i, j):
+        """L at AOD node i, albedo node j, interpolated in elevation and altitude."""
+        if (i, j) not in cache:
+            # coefficients and ln s of each elevation node, interpolated in altitude
+            cs = sum(wh * c["coef_sky"][i, j, ks, h] for h, wh in st_h)       # (k, wl, n)
+            cg = sum(wh * c["coef_ground"][i, j, ks, h] for h, wh in st_h)
+            log_s = we @ sum(wh * c["log_scale"][i, j, ks, h] for h, wh in st_h)
+            # (wl, k n) in float32: y to 1e-7, far below the fit's residual
+            cs = np.concatenate(list(we[:, None, None] * cs), axis=-1).astype(np.float32)
+            cg = np.concatenate(list(we[:, None, None] * cg), axis=-1).astype(np.float32)
+            y = np.concatenate([mean_sky + cs @ basis_sky, mean_ground + cg @ basis_ground],
+                               axis=1)
+            cache[i, j] = np.exp(log_s)[:, None] * np.maximum(np.exp(y) - DELTA, 0.0)
+        return cache[i, j]
+
     per_albedo = []
     for j in range(c["albedo_nodes"].size):
-        L = 0.0
-        for i, wi in ((ia, 1.0 - fa), (ia + 1, fa)):
-            if wi == 0.0:
-                continue
-            y = np.zeros((n_wl, n_sky + _grid.N_GROUND * _grid.N_PHI))
-            log_s = np.zeros(n_wl)
-            for k, wk in ((ie, 1.0 - fe), (ie + 1, fe)):
-                if wk == 0.0:
-                    continue
-                cs = np.zeros((n_wl, c["coef_sky"].shape[-1]))
-                cg = np.zeros((n_wl, c["coef_ground"].shape[-1]))
-                for h, wh in ((ih, 1.0 - fh), (ih + 1, fh)):
-                    if wh == 0.0:
-                        continue
-                    cs += wh * c["coef_sky"][i, j, k, h]
-                    cg += wh * c["coef_ground"][i, j, k, h]
-                    log_s += wk * wh * c["log_scale"][i, j, k, h]
-                y[:, :n_sky] += wk * _part(c, "sky", k, cs)
-                y[:, n_sky:] += wk * _part(c, "ground", k, cg)
-            # linear in AOD: the aerosol's light (its aureole above all) grows in proportion
-            # to its optical depth in a thin haze, which ln L would turn into a geometric mean
-            L = L + wi * np.exp(log_s)[:, None] * np.maximum(np.exp(y) - DELTA, 0.0)
-        per_albedo.append(L)
+        total = 0.0
+        for wp, (st_a, in_log) in parts:
+            acc = 0.0
+            for i, wi in st_a:
+                if wi != 0.0:
+                    L = at_node(i, j)
+                    acc = acc + wi * (np.log(np.maximum(L, TINY)) if in_log else L)
+            total = total + wp * (np.exp(acc) if in_log else np.maximum(acc, 0.0))
+        per_albedo.append(total)
     L = albedo_form(c["albedo_nodes"], per_albedo, albedo)
+    n_wl = c["wavelengths_nm"].size
     return np.ascontiguousarray(
         L.T.reshape(_grid.N_SKY + _grid.N_GROUND, _grid.N_PHI, n_wl))
 
@@ -186,9 +268,15 @@ def sun_transmittance(c: dict, aod: float, elevation_deg: float,
     return np.clip(np.exp(lt * air_mass(elevation_deg)), 0.0, 1.0)
 
 
+#: Below this elevation [deg] :func:`air_mass` keeps its value there: Kasten & Young's
+#: formula is monotonic down to it (m = 63 at -2 deg) and turns back below (m = 35 at -3
+#: deg, and undefined beyond z = 96.08 deg); deeper, ln T is interpolated linearly.
+AIR_MASS_FLOOR_DEG = -2.0
+
+
 def air_mass(elevation_deg: float) -> float:
     """Relative optical air mass of Kasten & Young 1989 (eq. 3: m = 1 / (cos z + 0.50572
-    (96.07995 deg - z)^-1.6364), z the zenith angle), the scale of ln T in elevation; valid
-    to z = 96.08 deg, so elevations in [-2, 90] deg."""
-    z = 90.0 - float(elevation_deg)
+    (96.07995 deg - z)^-1.6364), z the zenith angle), the scale of ln T in elevation;
+    elevations below :data:`AIR_MASS_FLOOR_DEG` take its value there."""
+    z = 90.0 - max(float(elevation_deg), AIR_MASS_FLOOR_DEG)
     return 1.0 / (math.cos(math.radians(z)) + 0.50572 * (96.07995 - z) ** -1.6364)

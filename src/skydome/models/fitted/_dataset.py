@@ -81,15 +81,25 @@ class DataSet:
     """A data-set folder written by tools/fitted_dataset.py: ``grid.json`` (the nodes) and
     one verified chunk per atmosphere (:mod:`skydome.distributed`)."""
 
-    def __init__(self, folder):
+    def __init__(self, folder, require_all: bool = True, grid: str = "fit"):
+        """``require_all=False``: a data set still being generated (its ``grid.json`` may
+        be missing: the grid is then the one named ``grid``, "fit" or "heldout", in
+        tools/fitted_dataset.py); :attr:`present` lists the atmospheres whose chunk is
+        there."""
         self.folder = Path(folder)
-        meta = json.loads((self.folder / "grid.json").read_text())
+        gj = self.folder / "grid.json"
+        if gj.is_file() or require_all:
+            meta = json.loads(gj.read_text())
+        else:
+            meta = _grid_meta(grid)
         self.meta = meta
         self.elevations_deg = np.array(meta["elevations_deg"])
         self.altitudes_m = np.array(meta["altitudes_m"])
         self.atmospheres = [tuple(a) for a in meta["atmospheres"]]
         self.wavelengths_nm = np.array(meta["wavelengths_nm"])
         self.midpoints = meta["view_grid"].get("directions") == "cell centres"
+        self.present = [(a, b) for a, b in self.atmospheres
+                        if (self.folder / (chunk_key(a, b) + ".npy.sha256")).is_file()]
 
     def chunk(self, aod: float, albedo: float) -> np.ndarray:
         """The chunk of one atmosphere (verified against its recorded hash)."""
@@ -102,6 +112,25 @@ class DataSet:
         (n_e, n_h, n_wl))."""
         c = self.chunk(aod, albedo)
         return c[:, :, :-1], c[:, :, -1, 0]
+
+
+def _grid_meta(grid: str) -> dict:
+    """The grid.json of a ``--grid fit`` or ``--grid heldout`` data set (as write_grid
+    records it), for a data set whose generation has not finished."""
+    if grid == "fit":
+        atm = [[float(a), float(b)] for a in _grid.AOD_NODES for b in _grid.ALBEDO_NODES]
+        el, alt, mid = _grid.SUN_ELEVATION_NODES_DEG, _grid.ALTITUDE_NODES_M, False
+    elif grid == "heldout":
+        atm = [[float(a), float(b)] for a, b in _grid.HELDOUT_ATMOSPHERES]
+        el, alt, mid = _grid.HELDOUT_SUN_ELEVATION_DEG, _grid.HELDOUT_ALTITUDE_M, True
+    else:
+        raise ValueError(f"grid = {grid!r} is not one of fit, heldout")
+    return {"elevations_deg": [float(x) for x in el], "altitudes_m": [float(x) for x in alt],
+            "atmospheres": atm, "wavelengths_nm": [float(x) for x in _grid.WAVELENGTHS_NM],
+            "view_grid": {"n_sky": _grid.N_SKY, "n_ground": _grid.N_GROUND,
+                          "n_phi": _grid.N_PHI, "a_phi": _grid.A_PHI,
+                          "directions": "cell centres" if mid else "nodes"},
+            "reference": f"precomputed (grid.json not written yet: the {grid} grid assumed)"}
 
 
 def write_grid(folder, elevations_deg, altitudes_m, atmospheres,

@@ -46,23 +46,30 @@ EPS = math.radians(0.005)
 WAVELENGTHS_NM = np.arange(300.0, 1100.0 + 1e-9, 20.0)
 
 #: The model's parameter range (inclusive).
-SUN_ELEVATION_RANGE_DEG = (-2.0, 90.0)
+SUN_ELEVATION_RANGE_DEG = (-12.0, 90.0)
 ALTITUDE_RANGE_M = (0.0, 15000.0)
-AOD_RANGE = (0.0, 1.0)
+#: AOD: the shipped coefficients are fitted to the AOD nodes 0-0.25 (the data set's chunks at
+#: 0.5 and 1 were not computed for this version: rerunning tools/fitted_dataset.py resumes
+#: them, and a refit on them restores 0-1 here).
+AOD_RANGE = (0.0, 0.25)
 ALBEDO_RANGE = (0.0, 1.0)
 
 #: The fitting nodes (the data set's parameter grid).
-SUN_ELEVATION_NODES_DEG = np.array([-2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
+SUN_ELEVATION_NODES_DEG = np.array([-12.0, -10.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0, -2.0,
+                                    -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
                                     19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
-ALTITUDE_NODES_M = np.array([0.0, 1000.0, 3000.0, 7000.0, 15000.0])
+#: Altitude nodes: denser in the aerosol's first scale heights (1.2 km), where the
+#: radiance changes fastest with altitude.
+ALTITUDE_NODES_M = np.array([0.0, 700.0, 1500.0, 3000.0, 6000.0, 10000.0, 15000.0])
 AOD_NODES = np.array([0.0, 0.05, 0.1, 0.25, 0.5, 1.0])
 #: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
 #: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
 ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
 
 #: The held-out grid: none of its values is a fitting node.
-HELDOUT_SUN_ELEVATION_DEG = np.array([-1.5, 0.5, 4.0, 8.5, 16.0, 28.0, 45.0, 70.0])
-HELDOUT_ALTITUDE_M = np.array([0.0, 500.0, 5000.0, 15000.0])
+HELDOUT_SUN_ELEVATION_DEG = np.array([-11.0, -9.0, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
+                                      16.0, 28.0, 45.0, 70.0])
+HELDOUT_ALTITUDE_M = np.array([0.0, 400.0, 2200.0, 4500.0, 15000.0])
 HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
                        (0.7, 0.2))                 # (AOD at 550 nm, albedo)
 
