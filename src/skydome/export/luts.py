@@ -180,6 +180,22 @@ def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
     return out
 
 
+def _xyz_bruneton_3d(tabs, K: np.ndarray) -> np.ndarray:
+    """sum_k tabs[k] @ K packed as :func:`_bruneton_3d` packs it, one r slab at a time:
+    ``tabs`` (r, mu, mu_s, nu, l) float32 tables summed in float64 per slab and stored once
+    in the float32 texture (r, mu, nu * mu_s, 4). The same values as ``_bruneton_3d(sum_k
+    _xyz_4d(tabs[k], K))`` without the float64 (r, mu, mu_s, nu, 3) temporaries of the whole
+    table (each as large as the texture itself, twice over)."""
+    n_r, n_mu, n_ms, n_nu, _ = tabs[0].shape
+    out = np.zeros((n_r, n_mu, n_nu, n_ms, 4), dtype=np.float32)
+    for i in range(n_r):
+        acc = np.zeros((n_mu, n_ms, n_nu, 3))
+        for tab in tabs:
+            acc += tab[i].astype(np.float64) @ K
+        out[i, ..., :3] = acc.transpose(0, 2, 1, 3)
+    return out.reshape(n_r, n_mu, n_nu * n_ms, 4)
+
+
 def bake_precomputed(sky, ground: bool = False,
                      density: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """(textures, description) of a :class:`PrecomputedSky`: [Bru17]'s textures in CIE XYZ,
@@ -249,21 +265,16 @@ def bake_precomputed(sky, ground: bool = False,
     if len(t.beta_e) > 4:
         raise ValueError(f"constituents = {len(t.beta_e)}: the optical_depth texture holds at "
                          "most 4 (after folding the absorbers)")
-    scat = np.zeros(ms.shape[:-1] + (3,))
-    for k in ray:
-        scat += _xyz_4d(ss[k], K)
-    mie_xyz = np.zeros_like(scat)
-    for k in mie:
-        mie_xyz += _xyz_4d(ss[k], K)
     cols = np.asarray(t.columns, dtype=np.float64)             # (c, r, mu)
     trans = np.exp(-np.einsum("cij,cl->ijl", cols, t.beta_e))  # (r, mu, l)
     od = np.zeros(cols.shape[1:] + (4,), dtype=np.float32)
     od[..., :cols.shape[0]] = cols.transpose(1, 2, 0) * 1e-3      # km: half floats hold it
     irr = np.asarray(t.irradiance, dtype=np.float64)           # (r, mu_s, l)
     tex = {
-        "scattering": _bruneton_3d(scat),
-        "single_mie_scattering": _bruneton_3d(mie_xyz),
-        "multiple_scattering": _bruneton_3d(_xyz_4d(ms, K)),
+        "scattering": _xyz_bruneton_3d([ss[k] for k in ray], K),
+        "single_mie_scattering": (_xyz_bruneton_3d([ss[k] for k in mie], K) if mie else
+                                  np.zeros((n_r, n_mu, n_nu * n_ms, 4), dtype=np.float32)),
+        "multiple_scattering": _xyz_bruneton_3d([ms], K),
         "transmittance": _rgba(trans @ Kn),
         "optical_depth": od,
         "irradiance": _rgba(irr @ K),
@@ -275,7 +286,7 @@ def bake_precomputed(sky, ground: bool = False,
                                                      dens["block_columns"])
     if ground:
         for k in range(ss.shape[0]):
-            tex[f"single_scattering_{k}"] = _bruneton_3d(_xyz_4d(ss[k], K))
+            tex[f"single_scattering_{k}"] = _xyz_bruneton_3d([ss[k]], K)
         tex["transmittance_spectral"] = _spectral_layers(trans.astype(np.float32))
     names = _constituent_names(sky, cols.shape[0])
     sca = np.asarray(t.scattering_coefficient, dtype=np.float64)   # (k, l)
@@ -764,12 +775,12 @@ def bake(sky, wavelengths_nm=None,
     raise ValueError(f"model = {name!r} has no LUT bake; valid: {', '.join(lut_models())}")
 
 
-def _npy_bytes(arr: np.ndarray) -> bytes:
-    import io
-
-    buf = io.BytesIO()
-    np.save(buf, arr)
-    return buf.getvalue()
+def _write_npy(target, arr: np.ndarray) -> None:
+    """``np.save``'s bytes straight into the file: no in-memory copy of the whole file (an
+    io.BytesIO and its getvalue() were two copies of each texture, 545 MB apiece for the
+    scattering density)."""
+    with open(target, "wb") as fh:
+        np.lib.format.write_array(fh, arr, allow_pickle=False)
 
 
 def check_luts_options(formats=("npy", "bin"), half: bool = False) -> tuple[str, ...]:
@@ -870,7 +881,7 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
                 with open(target, "wb") as fh:
                     fh.write(memoryview(arr.reshape(-1)).cast("B"))
             elif f == "npy":
-                target.write_bytes(_npy_bytes(arr))
+                _write_npy(target, arr)
             else:
                 _write_exr(str(target), arr * np.float32(exr_scale[n]) if exr_scale[n] != 1.0
                            else arr, half, n, chans[n])
