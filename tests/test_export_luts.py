@@ -50,6 +50,41 @@ def small_sky():
                          irradiance_mu_s_size=8, irradiance_r_size=4)
 
 
+def test_bake_reduces_single_scattering_in_slabs(monkeypatch):
+    """The bake reduces single scattering to XYZ a few r nodes at a time without computing
+    the whole table (Tables.single_scattering_slabs); each texel is the XYZ of the model's
+    own single-scattering table (the whole table, computed afterwards by the same builder)
+    summed over the constituents of its phase group, at [Bru17]'s packed position."""
+    import skydome
+    from skydome.export import luts
+    from skydome.models.simulated.precomputed import _tables
+
+    sky = skydome.model("precomputed", sun=skydome.Sun(elevation_deg=30.0, azimuth_deg=180.0),
+                        n_wavelengths=4, scattering_r_size=4, scattering_mu_size=8,
+                        scattering_mu_s_size=4, scattering_nu_size=2, orders=2,
+                        transmittance_mu_size=16, transmittance_r_size=8,
+                        irradiance_mu_s_size=8, irradiance_r_size=4)
+    t = sky._t
+    t.__dict__.pop("_" + _tables._LAZY_SS, None)       # as loaded from the cache
+    monkeypatch.setattr(luts, "SINGLE_SLAB_ROWS", 3)     # two slabs of the 4 r nodes
+    tex, _ = luts.bake_precomputed(sky, ground=True, density=False)
+    assert not t.has_single_scattering                    # the table was not held whole
+    with pytest.raises(ValueError, match="step = 0"):
+        next(t.single_scattering_slabs(0))
+    ss = t.build_single_scattering().astype(np.float64)  # (k, r, mu, mu_s, nu, l)
+    K = luts.xyz_weights_for_table(t.table_wavelengths_nm)
+    ray = [k for k, c in enumerate(t.phase_code) if c == 0]
+    mie = [k for k, c in enumerate(t.phase_code) if c != 0]
+    n_ms = ss.shape[3]
+    for name, ks in [("scattering", ray), ("single_mie_scattering", mie),
+                     *[(f"single_scattering_{k}", [k]) for k in range(ss.shape[0])]]:
+        want = np.einsum("krmsnl,lc->rmsnc", ss[ks], K)
+        for ir, im, ims, inu in [(0, 0, 0, 0), (3, 7, 3, 1), (2, 5, 1, 0), (1, 2, 3, 1)]:
+            texel = tex[name][ir, im, inu * n_ms + ims]
+            assert np.allclose(texel[:3], want[ir, im, ims, inu], rtol=1e-6, atol=0.0), name
+            assert texel[3] == 0.0
+
+
 def test_write_precomputed_luts(small_sky, tmp_path):
     from skydome.export.luts import LUT_FORMAT, write_precomputed_luts
 

@@ -182,6 +182,55 @@ def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
     return out
 
 
+def _xyz_bruneton_3d(tabs, K: np.ndarray) -> np.ndarray:
+    """sum_k tabs[k] @ K packed as :func:`_bruneton_3d` packs it, one r slab at a time:
+    ``tabs`` (r, mu, mu_s, nu, l) float32 tables summed in float64 per slab and stored once
+    in the float32 texture (r, mu, nu * mu_s, 4). The same values as ``_bruneton_3d(sum_k
+    _xyz_4d(tabs[k], K))`` without the float64 (r, mu, mu_s, nu, 3) temporaries of the whole
+    table (each as large as the texture itself, twice over)."""
+    n_r, n_mu, n_ms, n_nu, _ = tabs[0].shape
+    out = np.zeros((n_r, n_mu, n_nu, n_ms, 4), dtype=np.float32)
+    for i in range(n_r):
+        acc = np.zeros((n_mu, n_ms, n_nu, 3))
+        for tab in tabs:
+            acc += tab[i].astype(np.float64) @ K
+        out[i, ..., :3] = acc.transpose(0, 2, 1, 3)
+    return out.reshape(n_r, n_mu, n_nu * n_ms, 4)
+
+
+#: r nodes of single scattering per slab of the bake's pass over it (8: 126 MB at the
+#: default sizes instead of the whole table's 503 MB)
+SINGLE_SLAB_ROWS = 8
+
+
+def _single_xyz(t, K: np.ndarray, ray, mie, ground: bool, shape) -> dict[str, np.ndarray]:
+    """The XYZ textures of single scattering (:func:`_bruneton_3d`'s packing): ``scattering``
+    (the Rayleigh group), ``single_mie_scattering`` (the Mie group; zeros without one) and,
+    with ``ground``, ``single_scattering_<k>`` per scatterer; reduced in one pass over the
+    table's r nodes, a slab of :data:`SINGLE_SLAB_ROWS` at a time
+    (``Tables.single_scattering_slabs``: the table is not held whole where it is not
+    already there). Each r node's values are those of :func:`_xyz_bruneton_3d` of the
+    whole table (the same float64 sums in the same order)."""
+    n_r, n_mu, n_ms, n_nu = shape
+    out: dict[str, np.ndarray] = {}
+    groups: dict[str, list[int]] = {}
+    for first, end, rows in t.single_scattering_slabs(SINGLE_SLAB_ROWS):
+        if not groups:
+            groups = {"scattering": list(ray), "single_mie_scattering": list(mie)}
+            if ground:
+                groups.update({f"single_scattering_{k}": [k] for k in range(rows.shape[0])})
+            out = {n: np.zeros((n_r, n_mu, n_nu, n_ms, 4), dtype=np.float32) for n in groups}
+        for i in range(first, end):
+            for n, ks in groups.items():
+                if not ks:
+                    continue
+                acc = np.zeros((n_mu, n_ms, n_nu, 3))
+                for k in ks:
+                    acc += rows[k, i - first].astype(np.float64) @ K
+                out[n][i, ..., :3] = acc.transpose(0, 2, 1, 3)
+    return {n: a.reshape(n_r, n_mu, n_nu * n_ms, 4) for n, a in out.items()}
+
+
 def bake_precomputed(sky, ground: bool = False,
                      density: bool = False) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """(textures, description) of a :class:`PrecomputedSky`: [Bru17]'s textures in CIE XYZ,
@@ -245,27 +294,22 @@ def bake_precomputed(sky, ground: bool = False,
     nl = wl.size
     K = xyz_weights_for_table(wl)
     Kn = K / K.sum(axis=0)
-    ss = t.single_scattering                                   # (k, r, mu, mu_s, nu, l)
     ms = t.multiple_scattering                                 # built on first read
     n_r, n_mu, n_ms, n_nu = ms.shape[:4]
     if len(t.beta_e) > 4:
         raise ValueError(f"constituents = {len(t.beta_e)}: the optical_depth texture holds at "
                          "most 4 (after folding the absorbers)")
-    scat = np.zeros(ms.shape[:-1] + (3,))
-    for k in ray:
-        scat += _xyz_4d(ss[k], K)
-    mie_xyz = np.zeros_like(scat)
-    for k in mie:
-        mie_xyz += _xyz_4d(ss[k], K)
     cols = np.asarray(t.columns, dtype=np.float64)             # (c, r, mu)
     trans = np.exp(-np.einsum("cij,cl->ijl", cols, t.beta_e))  # (r, mu, l)
     od = np.zeros(cols.shape[1:] + (4,), dtype=np.float32)
     od[..., :cols.shape[0]] = cols.transpose(1, 2, 0) * 1e-3      # km: half floats hold it
     irr = np.asarray(t.irradiance, dtype=np.float64)           # (r, mu_s, l)
+    single = _single_xyz(t, K, ray, mie, ground, (n_r, n_mu, n_ms, n_nu))
+    n_sc = sum(1 for n in single if n.startswith("single_scattering_"))
     tex = {
-        "scattering": _bruneton_3d(scat),
-        "single_mie_scattering": _bruneton_3d(mie_xyz),
-        "multiple_scattering": _bruneton_3d(_xyz_4d(ms, K)),
+        "scattering": single.pop("scattering"),
+        "single_mie_scattering": single.pop("single_mie_scattering"),
+        "multiple_scattering": _xyz_bruneton_3d([ms], K),
         "transmittance": _rgba(trans @ Kn),
         "optical_depth": od,
         "irradiance": _rgba(irr @ K),
@@ -276,8 +320,7 @@ def bake_precomputed(sky, ground: bool = False,
         tex["scattering_density"] = _density_texture(t.scattering_density,
                                                      dens["block_columns"])
     if ground:
-        for k in range(ss.shape[0]):
-            tex[f"single_scattering_{k}"] = _bruneton_3d(_xyz_4d(ss[k], K))
+        tex.update(single)
         tex["transmittance_spectral"] = _spectral_layers(trans.astype(np.float32))
     names = _constituent_names(sky, cols.shape[0])
     sca = np.asarray(t.scattering_coefficient, dtype=np.float64)   # (k, l)
@@ -293,7 +336,7 @@ def bake_precomputed(sky, ground: bool = False,
                 "irradiance": "XYZ", "optical_depth": names,
                 "irradiance_spectral": None, "transmittance_spectral": None,
                 "scattering_density": None}
-    channels.update({f"single_scattering_{k}": "XYZ" for k in range(ss.shape[0])})
+    channels.update({f"single_scattering_{k}": "XYZ" for k in range(n_sc)})
     desc = {
         "format": LUT_FORMAT, "model": "precomputed",
         "reference": "E. Bruneton, Precomputed Atmospheric Scattering: a New Implementation "
@@ -771,12 +814,12 @@ def bake(sky, wavelengths_nm=None,
     raise ValueError(f"model = {name!r} has no LUT bake; valid: {', '.join(lut_models())}")
 
 
-def _npy_bytes(arr: np.ndarray) -> bytes:
-    import io
-
-    buf = io.BytesIO()
-    np.save(buf, arr)
-    return buf.getvalue()
+def _write_npy(target, arr: np.ndarray) -> None:
+    """``np.save``'s bytes straight into the file: no in-memory copy of the whole file (an
+    io.BytesIO and its getvalue() were two copies of each texture, 545 MB apiece for the
+    scattering density)."""
+    with open(target, "wb") as fh:
+        np.lib.format.write_array(fh, arr, allow_pickle=False)
 
 
 def check_luts_options(formats=("npy", "bin"), half: bool = False) -> tuple[str, ...]:
@@ -877,7 +920,7 @@ def write_luts(sky, folder, formats=("npy", "bin"), half: bool = False,
                 with open(target, "wb") as fh:
                     fh.write(memoryview(arr.reshape(-1)).cast("B"))
             elif f == "npy":
-                target.write_bytes(_npy_bytes(arr))
+                _write_npy(target, arr)
             else:
                 _write_exr(str(target), arr * np.float32(exr_scale[n]) if exr_scale[n] != 1.0
                            else arr, half, n, chans[n])

@@ -150,6 +150,26 @@ class Tables:
             rows[(first, end)] = builder(self, (first, end))
         return rows[(first, end)]
 
+    def single_scattering_slabs(self, step: int):
+        """The single-scattering table's r nodes in slabs of ``step``: yields (first, end,
+        rows), rows = the table's r nodes first..end-1 as :meth:`single_scattering_rows`
+        gives them (the same values), but a slab computed here is not kept: a pass over the
+        whole table (the LUT bake's) holds one slab at a time instead of the table (503 MB
+        at the default sizes)."""
+        if int(step) < 1:
+            raise ValueError(f"step = {step!r} is not a number of r nodes >= 1")
+        n_r = self.table_shape[0]
+        ss = self.__dict__.get("_" + _LAZY_SS)
+        builder = self.__dict__.get("_ss_builder")
+        for first in range(0, n_r, int(step)):
+            end = min(n_r, first + int(step))
+            if ss is not None:
+                yield first, end, ss[:, first:end]
+            elif builder is None:
+                yield first, end, self.build_single_scattering()[:, first:end]
+            else:
+                yield first, end, builder(self, (first, end))
+
     def set_single_scattering_builder(self, builder) -> None:
         """How the single-scattering table is computed when it is not there:
         ``builder(tables, rows)`` -> float32 array, the whole table (``rows`` None) or its r
