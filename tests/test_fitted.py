@@ -26,8 +26,8 @@ def _dirs(n=400, seed=3, upper=False):
 
 
 @pytest.mark.parametrize("kw, name, rng", [
-    ({"aerosol_optical_depth": 0.3}, "aerosol_optical_depth", "[0, 0.25]"),
-    ({"aerosol_optical_depth": -0.01}, "aerosol_optical_depth", "[0, 0.25]"),
+    ({"aerosol_optical_depth": 1.2}, "aerosol_optical_depth", "[0, 1]"),
+    ({"aerosol_optical_depth": -0.01}, "aerosol_optical_depth", "[0, 1]"),
     ({"ground_albedo": 1.5}, "ground_albedo", "[0, 1]"),
     ({"observer_altitude_m": 15001.0}, "observer_altitude_m", "[0, 15000]"),
 ])

@@ -40,9 +40,8 @@ class FittedSky(SkyModel):
         (the data set comes from ``precomputed`` in its twilight reference configuration,
         validated against Monte Carlo to -12 deg: docs/validation.md).
     aerosol_optical_depth : float
-        Vertical aerosol optical depth at 550 nm, in [0, 0.25] (Angstrom exponent 1.3,
-        the aerosol of ``Atmosphere.earth``; the AOD nodes 0.5 and 1 of the data set are
-        not in this version's fit).
+        Vertical aerosol optical depth at 550 nm, in [0, 1] (Angstrom exponent 1.3, the
+        aerosol of ``Atmosphere.earth``).
     ground_albedo : float
         Grey Lambertian ground albedo, in [0, 1].
     observer_altitude_m : float [m]

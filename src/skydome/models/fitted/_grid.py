@@ -48,10 +48,7 @@ WAVELENGTHS_NM = np.arange(300.0, 1100.0 + 1e-9, 20.0)
 #: The model's parameter range (inclusive).
 SUN_ELEVATION_RANGE_DEG = (-12.0, 90.0)
 ALTITUDE_RANGE_M = (0.0, 15000.0)
-#: AOD: the shipped coefficients are fitted to the AOD nodes 0-0.25 (the data set's chunks at
-#: 0.5 and 1 were not computed for this version: rerunning tools/fitted_dataset.py resumes
-#: them, and a refit on them restores 0-1 here).
-AOD_RANGE = (0.0, 0.25)
+AOD_RANGE = (0.0, 1.0)
 ALBEDO_RANGE = (0.0, 1.0)
 
 #: The fitting nodes (the data set's parameter grid).
