@@ -819,7 +819,17 @@ def _write_npy(target, arr: np.ndarray) -> None:
     io.BytesIO and its getvalue() were two copies of each texture, 545 MB apiece for the
     scattering density)."""
     with open(target, "wb") as fh:
-        np.lib.format.write_array(fh, arr, allow_pickle=False)
+        # through a plain ``write`` (numpy then writes buffered chunks of about 16 MiB) rather
+        # than the file itself, for which numpy calls ``tofile``: its OSError on a full disk
+        # ("N requested and M written") carries no errno, where ``write``'s is ENOSPC
+        np.lib.format.write_array(_PlainWriter(fh), arr, allow_pickle=False)
+
+
+class _PlainWriter:
+    """A file seen only through its ``write`` (see :func:`_write_npy`)."""
+
+    def __init__(self, fh):
+        self.write = fh.write
 
 
 def check_luts_options(formats=("npy", "bin"), half: bool = False) -> tuple[str, ...]:
