@@ -15,6 +15,19 @@ import os
 import sys
 
 
+def _run_fast(fast, args, collector_off: bool):
+    """``fast(args)`` (a fast path of :func:`main`) with Python's cyclic collector off while
+    it runs if ``collector_off``, Ctrl-C as exit 130; the collector is on again after."""
+    if collector_off:
+        gc.disable()
+    try:
+        return fast(args)
+    except KeyboardInterrupt:  # pragma: no cover
+        sys.exit(130)
+    finally:
+        gc.enable()
+
+
 def main() -> None:  # console-script entry point
     argv = sys.argv[1:]
     # Before numpy is imported: no transparent huge pages for its large arrays (a matrix
@@ -29,7 +42,8 @@ def main() -> None:  # console-script entry point
         from skydome.cli.skymatrix_fast import fast_skymatrix, parse_fast_options
 
         opts = parse_fast_options(argv[1:])  # no numpy imported yet
-        if opts is not None and opts["model"] == "perez1993":
+        perez = opts is not None and opts["model"] == "perez1993"
+        if perez:
             # A perez1993 matrix makes no BLAS call worth a second thread (its matrix
             # products are of at most 2^18 multiply-adds). Started with a thread per core,
             # numpy's OpenBLAS cost 0.16 s of CPU for `import numpy` against 0.10 s with one
@@ -37,32 +51,20 @@ def main() -> None:  # console-script entry point
             # (MF:4, numpy backend, .wea) took 0.56 s of CPU against 0.46 s (best of eight,
             # interleaved). A value set by the user is kept.
             os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-            # A short run that leaves no reference cycles worth collecting: Python's cyclic
-            # collector, triggered by the allocations of the imports, took 4 % of the
-            # samples of a profiled run (perf, five runs)
-            gc.disable()
-        try:
-            if fast_skymatrix(argv[1:]):
-                sys.exit(0)
-        except KeyboardInterrupt:  # pragma: no cover
-            sys.exit(130)
-        finally:
-            gc.enable()
+        # A short run that leaves no reference cycles worth collecting: Python's cyclic
+        # collector, triggered by the allocations of the imports, took 4 % of the samples
+        # of a profiled run (perf, five runs)
+        if _run_fast(fast_skymatrix, argv[1:], collector_off=perez):
+            sys.exit(0)
     if argv[:1] == ["render"]:
         # One picture, then the process ends: Python's cyclic collector, set off again and
         # again by the allocations of the imports (numba's above all), ran 271 times in a
         # warm shortest render for 0.10-0.11 s of CPU (timed by gc.callbacks, two runs on
         # the 2-core EPYC of docs/performance.md; the render leaves no cycles worth
         # collecting). It is on again for a command line the fast path leaves to typer.
-        gc.disable()
         from skydome.cli.render_fast import fast_render
 
-        try:
-            code = fast_render(argv[1:])
-        except KeyboardInterrupt:  # pragma: no cover
-            sys.exit(130)
-        finally:
-            gc.enable()
+        code = _run_fast(fast_render, argv[1:], collector_off=True)
         if code is not None:
             sys.exit(code)
     from skydome.cli import main as cli_main
