@@ -19,6 +19,16 @@ CHROMIUM_ARGS = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader",
                  "--disable-quic"]
 
 
+def psnr_db(test, ref) -> float:
+    """10 log10(peak^2 / MSE), peak = max |ref| over all pixels and channels (the PSNR of
+    every shader test against its CPU model)."""
+    import numpy as np
+
+    mse = float(np.mean((np.asarray(test) - np.asarray(ref)) ** 2))
+    peak = float(np.max(np.abs(ref)))
+    return float("inf") if mse == 0.0 else 10.0 * np.log10(peak * peak / mse)
+
+
 def have_browser() -> bool:
     try:
         import playwright  # noqa: F401

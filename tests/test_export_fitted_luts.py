@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 import _glsl_fitted as glsl
+from _viewer import psnr_db
 
 GLSL = Path(__file__).parents[1] / "src/skydome/export/glsl/fitted.glsl"
 PSNR_FLOOR_DB = 40.0
@@ -89,11 +90,6 @@ def _directions():
 
     d, _ = Equirect(128, 64).directions()          # the whole sphere: sky and ground
     return d
-
-
-def psnr_db(test, ref):
-    mse = float(np.mean((test - ref) ** 2))
-    return float("inf") if mse == 0.0 else 10.0 * np.log10(float(np.max(np.abs(ref))) ** 2 / mse)
 
 
 def _cpu_sun_xyz(sky):

@@ -32,7 +32,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import _glsl_precomputed as G  # noqa: E402
-from _viewer import CHROMIUM, CHROMIUM_ARGS, have_browser  # noqa: E402
+from _viewer import CHROMIUM, CHROMIUM_ARGS, have_browser, psnr_db  # noqa: E402
 
 ROOT = Path(__file__).parents[1]
 THREE = Path(os.environ.get("SKYDOME_THREE_DIR",
@@ -82,13 +82,6 @@ try {
 } catch (e) { h.error = String(e); }
 </script></body></html>
 """
-
-
-def psnr_db(test: np.ndarray, ref: np.ndarray) -> float:
-    """10 log10(peak^2 / MSE), peak = max |ref| (tests/test_viewer_shaders.py)."""
-    mse = float(np.mean((test - ref) ** 2))
-    peak = float(np.max(np.abs(ref)))
-    return float("inf") if mse == 0.0 else 10.0 * np.log10(peak * peak / mse)
 
 
 def test_psnr_self_check():

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from _viewer import browser_page, viewer_url  # noqa: F401 - fixtures
+from _viewer import browser_page, psnr_db, viewer_url  # noqa: F401 - fixtures
 
 W, H = 128, 64
 PSNR_FLOOR_DB = 40.0
@@ -44,13 +44,6 @@ CASES = [(45.0, {}), (5.0, {}), (_twilight_deg(), {}),
          (20.0, {"aerosol_optical_depth": 0.5, "ground_albedo": 0.8,
                  "observer_altitude_m": 5000.0}),
          (_twilight_deg(), {"aerosol_optical_depth": 0.05, "observer_altitude_m": 15000.0})]
-
-
-def psnr_db(test: np.ndarray, ref: np.ndarray) -> float:
-    """10 log10(peak^2 / MSE), peak = max |ref| over all pixels and channels."""
-    mse = float(np.mean((test - ref) ** 2))
-    peak = float(np.max(np.abs(ref)))
-    return float("inf") if mse == 0.0 else 10.0 * np.log10(peak * peak / mse)
 
 
 def test_psnr_self_check():

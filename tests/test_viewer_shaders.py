@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _viewer import browser_page, viewer_url  # noqa: F401 - fixtures
+from _viewer import browser_page, psnr_db, viewer_url  # noqa: F401 - fixtures
 
 W, H = 128, 64
 PSNR_FLOOR_DB = 40.0
@@ -35,13 +35,6 @@ VIEWS = [(m, el, p) for m, els, p in CASES for el in els]
 SUN_AZIMUTH_DEG = 135.0
 
 FIGURES: dict[str, float] = {}
-
-
-def psnr_db(test: np.ndarray, ref: np.ndarray) -> float:
-    """10 log10(peak^2 / MSE), peak = max |ref| over all pixels and channels."""
-    mse = float(np.mean((test - ref) ** 2))
-    peak = float(np.max(np.abs(ref)))
-    return float("inf") if mse == 0.0 else 10.0 * np.log10(peak * peak / mse)
 
 
 def _cpu_model(model: str, elevation: float, params: dict):
