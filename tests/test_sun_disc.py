@@ -99,6 +99,28 @@ def test_real_model_sun_flux():
         assert gain == pytest.approx(E, rel=0.01)
 
 
+@pytest.mark.parametrize("elev", [0.0, 0.1])
+def test_disc_of_a_model_whose_sun_radiance_counts_the_horizon(elev):
+    # fitted (as precomputed) gives sun_radiance = its disc's flux / Omega_sun, the part
+    # below its horizon left out (sun_visible_fraction()); the drawn disc and the sun light
+    # must carry that flux once, not cut the hidden part away a second time. Oracle: the
+    # model's flux sun_radiance x Omega_sun; the drawn disc is limb-darkened where the
+    # model's fraction is a uniform disc's, which moves the flux by +0.3 % with the horizon
+    # through the centre (flat circular segment, Neckel 2005 law; docs/models.md, "fitted").
+    sun = Sun(elevation_deg=elev, azimuth_deg=180.0)
+    sky = sd.model("fitted", sun=sun)
+    assert 0.4 < sky.sun_visible_fraction() < 0.8
+    # red and near infrared: through ~38 air masses the blue disc is darker than the sky it
+    # hides, which this flux balance does not count
+    wl = [650.0, 800.0, 1000.0]
+    p = Equirect(2048)
+    with_sun, without = render(sky, p, wl), render(sky, p, wl, draw_sun=False)
+    gain = np.einsum("hwc,hw->c", with_sun.data - without.data, p.solid_angles())
+    E = sky.sun_radiance(wl) * sun.solid_angle_sr
+    assert gain == pytest.approx(E, rel=0.03)
+    assert np.asarray(without.sun_light.irradiance) == pytest.approx(E, rel=0.03)
+
+
 def test_luminance_and_xyz_models_get_their_sun():
     sun = Sun(elevation_deg=40.0, azimuth_deg=90.0)
     perez = sd.model("perez1993", sun=sun, epsilon=3.0, delta=0.2)

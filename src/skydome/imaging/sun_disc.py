@@ -168,6 +168,14 @@ def sun_disc_radiance(sky, wavelengths_nm=None) -> np.ndarray | None:
     if not np.all(np.isfinite(L)) or np.any(L < 0.0):
         raise ValueError(f"sun radiance of model {getattr(sky, 'name', sky)!r} has "
                          "non-finite or negative values")
+    # Models whose sun_radiance is the disc's flux over Omega_sun (the mean radiance x the
+    # fraction of the disc above their own horizon: precomputed, fitted) say so through
+    # sun_visible_fraction(); the disc's pixels carry the visible part's radiance, and
+    # draw_sun_disc / sun_light take the fraction above the horizon themselves.
+    vis_fn = getattr(sky, "sun_visible_fraction", None)
+    if callable(vis_fn):
+        vis = float(vis_fn())
+        L = L / vis if vis > 0.0 else np.zeros_like(L)
     return L
 
 

@@ -198,15 +198,21 @@ class FittedSky(SkyModel):
                                             self.observer_altitude_m)
         return np.interp(wl, self._table_wl, t)
 
+    def sun_visible_fraction(self) -> float:
+        """Fraction of the sun's disc (uniform) above the observer's horizon, which
+        :meth:`sun_radiance` includes."""
+        from skydome.models.fitted import _coefficients
+
+        return float(_coefficients.sun_visible_fraction(float(self.sun.elevation_deg),
+                                                        self.observer_altitude_m,
+                                                        float(self.sun.angular_radius_deg)))
+
     def sun_radiance(self, wavelengths_nm) -> np.ndarray:
         """Radiance of the sun's disc [W m^-2 sr^-1 nm^-1], shape (n,): E_sun / Omega_sun
-        x the transmittance x the fraction of the disc above the horizon."""
-        from skydome.models.fitted import _coefficients
+        x the transmittance x the fraction of the disc above the horizon
+        (:meth:`sun_visible_fraction`)."""
         from skydome.spectra import solar_irradiance
 
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
-        vis = _coefficients.sun_visible_fraction(float(self.sun.elevation_deg),
-                                                 self.observer_altitude_m,
-                                                 float(self.sun.angular_radius_deg))
         e = solar_irradiance(wl) * self.sun.irradiance_scale / self.sun.solid_angle_sr
-        return e * self.sun_transmittance(wl) * vis
+        return e * self.sun_transmittance(wl) * self.sun_visible_fraction()

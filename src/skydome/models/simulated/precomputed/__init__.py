@@ -459,15 +459,20 @@ class PrecomputedSky(SkyModel):
         _lookup.columns_at(self._t.columns, r, mu, self._R, self._Rt, cs)
         return np.exp(-(cs @ self._t.beta_e))
 
-    def sun_radiance(self, wavelengths_nm) -> np.ndarray:
-        """Radiance of the sun's disc [W m^-2 sr^-1 nm^-1]: E_sun / Omega_sun x T(observer ->
-        top) x the fraction of the disc above the horizon; 0 when the planet hides it."""
+    def sun_visible_fraction(self) -> float:
+        """Fraction of the sun's disc above the observer's horizon (0 when the planet
+        hides it), which :meth:`sun_radiance` includes."""
         from skydome.models.simulated.precomputed import _lookup
 
+        mu_s = float(self.sun.direction[2])
+        return float(_lookup.sun_visible_fraction(self._r0, mu_s, self._R, self._alpha))
+
+    def sun_radiance(self, wavelengths_nm) -> np.ndarray:
+        """Radiance of the sun's disc [W m^-2 sr^-1 nm^-1]: E_sun / Omega_sun x T(observer ->
+        top) x the fraction of the disc above the horizon (:meth:`sun_visible_fraction`)."""
         wl = as_wavelengths(wavelengths_nm)
         mu_s = float(self.sun.direction[2])
-        vis = _lookup.sun_visible_fraction(self._r0, mu_s, self._R, self._alpha)
-        t = self._transmittance_table(self._r0, mu_s) * vis
+        t = self._transmittance_table(self._r0, mu_s) * self.sun_visible_fraction()
         return self._to_wavelengths(t[None, :], wl)[0] / self.sun.solid_angle_sr
 
     def irradiance_components(self, wavelengths_nm):
