@@ -21,6 +21,11 @@ Textures (little-endian float32, RGBA, Y in cd m^-2 for a sun at 1 au: multiply 
   mass, which is strongly curved in elevation near the horizon); A = 0. As a GL texture:
   n_sun_elevations wide, 1 high.
 
+luts.json also carries ``sun.limb_darkening`` (the coefficients of mu^0..mu^5 of Neckel's
+centre-to-limb law at the X, Y and Z channels' wavelengths, divided by its disc mean: the
+disc as ``skydome.render`` draws it, skydome.imaging.sun_disc) and ``xyz_to_linear_srgb``
+(row-major), for the shader's disc and the three.js module's RGB output.
+
 Between the elevation slices the shader interpolates geometrically (linearly in ln XYZ;
 linearly where either value is 0, which the model's clamp can give):
 the sky darkens about exponentially as the sun sets, and the model itself interpolates

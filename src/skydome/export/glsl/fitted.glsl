@@ -12,6 +12,11 @@
 // between the layers geometrically (linearly in ln XYZ; linearly where a value is 0).
 // Sampler state: any (texelFetch).
 //
+// The sun's disc (skydomeFittedSunDisc, skydomeFittedSkyWithSun): the transmitted sun's
+// mean radiance (texture sun) times Neckel's (2005) centre-to-limb law per channel (the
+// struct's limb, from luts.json), as skydome.render draws the disc into an XYZ image: its
+// integral over the disc is the CPU model's sun_radiance x the disc's solid angle.
+//
 // Frame: East-North-Up (x east, y north, z up), unit vectors, azimuth from north towards
 // east. Values: CIE 1931 XYZ, Y in cd m^-2, for a sun at 1 au, times irradianceScale
 // (Sun.irradiance_scale = 1 / distance_au^2).
