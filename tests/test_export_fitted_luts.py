@@ -38,7 +38,9 @@ void main() {
     vec3 m = skydomeFittedSunMeanRadiance(sunTex, fit, sunDir);
     vec3 w = skydomeFittedSkyWithSun(skyTex, sunTex, fit, dir, sunDir);
     vec3 disc = skydomeFittedSunDisc(sunTex, fit, dir, sunDir);
-    colour = vec4(s + m + w + disc, 1.0);
+    vec3 px = skydomeFittedSkyWithSunPixel(skyTex, sunTex, fit, dir, dFdx(dir), dFdy(dir),
+                                           sunDir);
+    colour = vec4(s + m + w + disc + px, 1.0);
 }
 """
 

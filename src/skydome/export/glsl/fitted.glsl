@@ -188,3 +188,37 @@ vec3 skydomeFittedSkyWithSun(sampler2DArray sky, sampler2D sun, SkydomeFitted f,
         return skydomeFittedSunRadiance(sun, f, sunDir) * skydomeFittedLimbDarkening(f, gamma);
     return skydomeFittedSky(sky, f, dir, sunDir);
 }
+
+// The sky with the sun's disc over a pixel's footprint, energy-true for a disc larger or
+// smaller than the pixel (as skydome.render spreads the disc's flux over the pixels it
+// covers): dirDx, dirDy are the view direction's change to the next pixel across and up
+// (dFdx(dir), dFdy(dir), taken in uniform control flow). Near the disc the pixel is split
+// into n x n parts (n = ceil(16 pixel / disc radius), 2..16); each part inside the disc
+// and above the horizon replaces the sky it covers by the disc's radiance there, so the
+// pixel gains the flux of the disc that falls into it.
+vec3 skydomeFittedSkyWithSunPixel(sampler2DArray sky, sampler2D sun, SkydomeFitted f,
+                                  vec3 dir, vec3 dirDx, vec3 dirDy, vec3 sunDir) {
+    vec3 L = skydomeFittedSky(sky, f, dir, sunDir);
+    float ps = max(length(dirDx), length(dirDy));        // the pixel's size [rad]
+    float a = f.sunAngularRadius;
+    float gamma = atan(length(cross(dir, sunDir)), dot(dir, sunDir));
+    if (!(gamma < a + 1.5 * ps)) return L;
+    int n = int(clamp(ceil(16.0 * ps / a), 2.0, 16.0));
+    float cover = 0.0;
+    vec3 acc = vec3(0.0);
+    for (int i = 0; i < 16; ++i) {
+        if (i >= n) break;
+        for (int j = 0; j < 16; ++j) {
+            if (j >= n) break;
+            vec3 q = normalize(dir + ((float(i) + 0.5) / float(n) - 0.5) * dirDx
+                               + ((float(j) + 0.5) / float(n) - 0.5) * dirDy);
+            float g;
+            if (skydomeFittedInDisc(f, q, sunDir, g)) {
+                cover += 1.0;
+                acc += skydomeFittedLimbDarkening(f, g);
+            }
+        }
+    }
+    float inv = 1.0 / float(n * n);
+    return L * (1.0 - cover * inv) + skydomeFittedSunRadiance(sun, f, sunDir) * acc * inv;
+}

@@ -20,10 +20,10 @@
 // sRGB (or CIE XYZ with sky.output = 'xyz') in cd m^-2 times sky.exposure, then the
 // renderer's tone mapping and output colour space (three's shader chunks). Values are for
 // a sun at 1 au (sky.sunScale multiplies them, e.g. skydome's Sun.irradiance_scale).
-// The sun's disc, drawn where a pixel's centre lies inside it: precomputed, the uniform
-// radiance of the model's sun seen through the air, added to the sky; fitted, the disc
+// The sun's disc: precomputed, the uniform radiance of the model's sun seen through the
+// air, added to the sky where a pixel's centre lies inside the disc; fitted, the disc
 // limb-darkened as skydome.render draws it (Neckel 2005 at 600, 555, 450 nm for X, Y, Z),
-// in place of the sky it covers.
+// in place of the sky it covers, over each pixel's footprint (energy-true at any size).
 
 import * as THREE from 'three';
 
@@ -197,7 +197,9 @@ const HOST_RADIANCE = {
     L += skydomeSunRadiance(opticalDepthTex, atm, r, dot(skyCamera, skySunDir) / r);
   }`,
   fitted: `
-  vec3 L = skyDisc ? skydomeFittedSkyWithSun(skyTex, sunTex, fit, v, skySunDir)
+  vec3 vdx = dFdx(v);                         // the pixel's footprint, for the disc
+  vec3 vdy = dFdy(v);
+  vec3 L = skyDisc ? skydomeFittedSkyWithSunPixel(skyTex, sunTex, fit, v, vdx, vdy, skySunDir)
                    : skydomeFittedSky(skyTex, fit, v, skySunDir);`,
 };
 
