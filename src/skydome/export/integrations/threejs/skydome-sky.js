@@ -135,6 +135,10 @@ export async function loadSkydomeLuts(lutsUrl, options = {}) {
                        document.baseURI);
   const desc = await fetchOk(new URL('luts.json', base), 'description').then((r) => r.json());
   const kind = bakeKind(desc);
+  if (kind === 'fitted' && !(desc.sun?.limb_darkening && desc.xyz_to_linear_srgb)) {
+    throw new Error('skydome-sky: luts.json has no sun.limb_darkening or ' +
+                    'xyz_to_linear_srgb (a fitted bake of an older skydome): export it again');
+  }
   const shaderUrl = options.shaderUrl ?? new URL(`${kind}.glsl`, import.meta.url);
   const names = kind === 'fitted' ? ['sky', 'sun']
     : ['scattering', 'single_mie_scattering', 'multiple_scattering', 'transmittance',
