@@ -21,7 +21,8 @@ def struct_from_desc(desc: dict, irradiance_scale: float = 1.0) -> dict:
             "sunElevationFirstDeg": se["first_deg"], "sunElevationStepDeg": se["step_deg"],
             "sunElevationCount": se["count"],
             "sunAngularRadius": desc["sun"]["angular_radius_rad"],
-            "irradianceScale": irradiance_scale}
+            "irradianceScale": irradiance_scale,
+            "limb": desc["sun"]["limb_darkening"]["coefficients_xyz"]}
 
 
 def sun_elevation_deg(sun_dir):
@@ -107,3 +108,36 @@ def sun_radiance(sun, f, sun_dir):
 def sun_mean_radiance(sun, f, sun_dir):
     e = np.arctan2(sun_dir[2], np.hypot(sun_dir[0], sun_dir[1]))
     return sun_radiance(sun, f, sun_dir) * sun_visible_fraction(f, e)
+
+
+def limb_darkening(f, gamma):
+    """skydomeFittedLimbDarkening for angles gamma (...,): (..., 3)."""
+    gamma = np.asarray(gamma, dtype=np.float64)
+    rho = np.sin(gamma) / np.sin(f["sunAngularRadius"])
+    mu = np.sqrt(np.maximum(1.0 - rho * rho, 0.0))[..., None]
+    c = np.asarray(f["limb"], dtype=np.float64)
+    out = c[5] * np.ones_like(mu)
+    for k in range(4, -1, -1):
+        out = out * mu + c[k]
+    return np.where((gamma < f["sunAngularRadius"])[..., None], np.maximum(out, 0.0), 0.0)
+
+
+def in_disc(f, d, sun_dir):
+    """skydomeFittedInDisc for directions d (..., 3): (inside, gamma)."""
+    gamma = np.arctan2(np.linalg.norm(np.cross(d, sun_dir), axis=-1), d @ sun_dir)
+    th = 0.5 * PI - np.arctan2(d[..., 2], np.hypot(d[..., 0], d[..., 1]))
+    return (gamma < f["sunAngularRadius"]) & (th < f["thetaH"]), gamma
+
+
+def sun_disc(sun, f, d, sun_dir):
+    """skydomeFittedSunDisc for directions d (..., 3)."""
+    inside, gamma = in_disc(f, d, sun_dir)
+    val = sun_radiance(sun, f, sun_dir) * limb_darkening(f, gamma)
+    return np.where(inside[..., None], val, 0.0)
+
+
+def sky_with_sun(sky, sun, f, d, sun_dir):
+    """skydomeFittedSkyWithSun for directions d (..., 3)."""
+    inside, gamma = in_disc(f, d, sun_dir)
+    disc = sun_radiance(sun, f, sun_dir) * limb_darkening(f, gamma)
+    return np.where(inside[..., None], disc, fitted_sky(sky, f, d, sun_dir))

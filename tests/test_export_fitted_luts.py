@@ -37,7 +37,10 @@ void main() {
     vec3 s = skydomeFittedSky(skyTex, fit, dir, sunDir);
     vec3 m = skydomeFittedSunMeanRadiance(sunTex, fit, sunDir);
     vec3 w = skydomeFittedSkyWithSun(skyTex, sunTex, fit, dir, sunDir);
-    colour = vec4(s + m + w, 1.0);
+    vec3 disc = skydomeFittedSunDisc(sunTex, fit, dir, sunDir);
+    vec3 px = skydomeFittedSkyWithSunPixel(skyTex, sunTex, fit, dir, dFdx(dir), dFdy(dir),
+                                           sunDir);
+    colour = vec4(s + m + w + disc + px, 1.0);
 }
 """
 
@@ -202,6 +205,101 @@ def test_sun_between_the_steps_against_the_cpu_model(baked):
     assert worst[0] <= 0.005, worst
 
 
+def _disc_grid(s, n=801):
+    """Directions (n, n, 3) on a tangent-plane grid around the sun's direction s, 1.2
+    disc radii across at most, and each one's solid angle [sr]."""
+    from skydome.imaging.sun_disc import _tangent_frame
+
+    e1, e2 = _tangent_frame(s)
+    h = np.tan(np.radians(0.2666 * 1.25))
+    x = np.linspace(-h, h, n)
+    X, Y = np.meshgrid(x, x)
+    v = s + X[..., None] * e1 + Y[..., None] * e2
+    norm = np.linalg.norm(v, axis=-1)
+    dx = x[1] - x[0]
+    return v / norm[..., None], dx * dx / norm ** 3         # dOmega = dA cos / r^2
+
+
+@pytest.mark.parametrize("elevation", [45.0, 5.0])
+def test_sun_disc_flux_and_profile(baked, elevation):
+    """skydomeFittedSunDisc (transcribed) over a fine grid around the sun: its integral
+    equals the CPU model's sun_radiance in XYZ x the disc's solid angle within 1 % (the
+    grid's own error: 0.01 %), and its profile is [Nec05]'s centre-to-limb law as
+    skydome.imaging.sun_disc gives it at the X, Y, Z channels' wavelengths (600, 555,
+    450 nm), the CPU renders' disc, within 1e-6; 0 outside the disc."""
+    from skydome.imaging import sun_disc as sd
+
+    desc, _, sun = baked
+    f = glsl.struct_from_desc(desc)
+    cpu = _cpu(elevation)
+    s = np.asarray(cpu.sun.direction, dtype=np.float64)
+    d, omega = _disc_grid(s)
+    got = glsl.sun_disc(sun, f, d, s) * cpu.sun.irradiance_scale
+    flux = np.sum(got * omega[..., None], axis=(0, 1))
+    ref = _cpu_sun_xyz(cpu) * cpu.sun.solid_angle_sr
+    print(f"fitted.glsl disc, sun {elevation:g} deg: flux / (sun_radiance Omega) - 1 = "
+          f"{np.array2string(flux / ref - 1.0, precision=5)}")
+    np.testing.assert_allclose(flux, ref, rtol=0.01)
+    r = np.radians(cpu.sun.angular_radius_deg)
+    ang = np.arccos(np.clip(d @ s, -1.0, 1.0))
+    inside = ang < r
+    ch = np.asarray(sd.XYZ_CHANNEL_WAVELENGTHS_NM)
+    mu = np.sqrt(np.clip(1.0 - (np.sin(ang[inside]) / np.sin(r)) ** 2, 0.0, 1.0))
+    law = _cpu_sun_xyz(cpu) * sd.limb_darkening(mu, ch) / sd.limb_darkening_mean(ch)
+    np.testing.assert_allclose(got[inside], law, rtol=1e-6)
+    assert np.all(got[~inside] == 0.0)
+
+
+def test_sun_disc_at_the_horizon(baked):
+    """The disc straddling the horizon (observer at 1 km: the horizon 1.0 deg below eye
+    level), its centre 0.6 radii below it, on it and 0.5 radii above it:
+    skydomeFittedSunDisc is the limb-darkened radiance of the transmitted sun above the
+    horizon alone (skydomeFittedSkyWithSun the sky below it). Its integral equals that of
+    [Nec05]'s law (skydome.imaging.sun_disc) over the visible part, scaled to the model's
+    transmitted sun (sun_radiance / its visible fraction), within 1 %; against the model's
+    own sun_radiance x the disc's solid angle, which counts the visible area as uniform, the
+    same within 1 % with the horizon through the centre (by symmetry), and otherwise the
+    difference the limb darkening makes (the rim that stays up is darker), printed."""
+    from skydome.imaging import sun_disc as sd
+    from skydome.models.fitted import _coefficients
+
+    desc, sky, sun = baked
+    f = glsl.struct_from_desc(desc)
+    dip = np.degrees(f["thetaH"]) - 90.0
+    ch = np.asarray(sd.XYZ_CHANNEL_WAVELENGTHS_NM)
+    lines = []
+    for u in (-0.6, 0.0, 0.5):
+        el = -dip + u * 0.2666
+        cpu = _cpu(el)
+        s = np.asarray(cpu.sun.direction, dtype=np.float64)
+        d, omega = _disc_grid(s)
+        got = glsl.sun_disc(sun, f, d, s) * cpu.sun.irradiance_scale
+        flux = np.sum(got * omega[..., None], axis=(0, 1))
+        th = 0.5 * glsl.PI - np.arctan2(d[..., 2], np.hypot(d[..., 0], d[..., 1]))
+        below = th >= f["thetaH"]
+        assert np.any(below) and np.any(got[~below] > 0.0)
+        assert np.all(got[below] == 0.0)                          # nothing below
+        drawn = glsl.sky_with_sun(sky, sun, f, d, s)
+        assert np.array_equal(drawn[below], glsl.fitted_sky(sky, f, d, s)[below])
+        vis = _coefficients.sun_visible_fraction(el, PARAMS["observer_altitude_m"],
+                                                 cpu.sun.angular_radius_deg)
+        r = np.radians(cpu.sun.angular_radius_deg)
+        ang = np.arccos(np.clip(d @ s, -1.0, 1.0))
+        up = (ang < r) & ~below
+        mu = np.sqrt(np.clip(1.0 - (np.sin(ang[up]) / np.sin(r)) ** 2, 0.0, 1.0))
+        law = np.sum(sd.limb_darkening(mu, ch) / sd.limb_darkening_mean(ch)
+                     * omega[up][:, None], axis=0)
+        ref = _cpu_sun_xyz(cpu) / vis * law
+        model = _cpu_sun_xyz(cpu) * cpu.sun.solid_angle_sr
+        np.testing.assert_allclose(flux, ref, rtol=0.01)
+        if u == 0.0:
+            np.testing.assert_allclose(flux, model, rtol=0.01)
+        lines.append(f"centre {u:+.1f} radii from the horizon: visible area {vis:.3f}, "
+                     f"flux / law - 1 = {flux[1] / ref[1] - 1:+.1e}, flux / (sun_radiance "
+                     f"Omega) - 1 = {flux[1] / model[1] - 1:+.3f} (Y)")
+    print("fitted.glsl disc at the horizon:\n  " + "\n  ".join(lines))
+
+
 def test_bad_input_refused_before_work(tmp_path):
     """A value outside the model's range: one line naming it, exit 2, nothing on disk."""
     from typer.testing import CliRunner
@@ -257,8 +355,9 @@ async ([frag, sky, sun, dims, f, sunDir, w, h]) => {
   gl.uniform1i(gl.getUniformLocation(p, "skyTex"), 0);
   gl.uniform1i(gl.getUniformLocation(p, "sunTex"), 1);
   for (const [k, v] of Object.entries(f)) {
-    const loc = gl.getUniformLocation(p, "fit." + k);
-    if (["nSky", "nGround", "nPhi", "elevationCount", "sunElevationCount"].includes(k))
+    const loc = gl.getUniformLocation(p, "fit." + k + (k === "limb" ? "[0]" : ""));
+    if (k === "limb") gl.uniform3fv(loc, v.flat());
+    else if (["nSky", "nGround", "nPhi", "elevationCount", "sunElevationCount"].includes(k))
       gl.uniform1i(loc, v); else gl.uniform1f(loc, v);
   }
   gl.uniform3fv(gl.getUniformLocation(p, "sunDir"), sunDir);

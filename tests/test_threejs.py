@@ -19,12 +19,9 @@ measure); floor 40 dB (issue 28; Bruneton's GPU-vs-CPU tests give 35-47 dB).
 
 from __future__ import annotations
 
-import functools
-import http.server
 import json
 import os
 import sys
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -32,56 +29,13 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import _glsl_precomputed as G  # noqa: E402
-from _viewer import CHROMIUM, CHROMIUM_ARGS, have_browser, psnr_db  # noqa: E402
+from _threejs import ROOT, missing, pinhole_dirs, static_server, wait, write_site  # noqa: E402
+from _viewer import CHROMIUM, CHROMIUM_ARGS, psnr_db  # noqa: E402
 
-ROOT = Path(__file__).parents[1]
-THREE = Path(os.environ.get("SKYDOME_THREE_DIR",
-                            ROOT / ".vendor" / "npm" / "node_modules" / "three"))
 PSNR_FLOOR_DB = 40.0
 W, H = 128, 64
 AZIMUTH = 135.0
 FIGURES: dict[str, float] = {}
-
-HARNESS = """<!DOCTYPE html><html><head><meta charset="utf-8"><link rel="icon" href="data:,">
-<script type="importmap">{ "imports": { "three": "../three/build/three.module.js" } }</script>
-</head><body><script type="module">
-import * as THREE from 'three';
-import { loadSkydomeSky } from './skydome-sky.js';
-const renderer = new THREE.WebGLRenderer();
-const h = { ready: false };
-window.harness = h;
-function read(rt, w, hh) {
-  const px = new Float32Array(w * hh * 4);
-  renderer.readRenderTargetPixels(rt, 0, 0, w, hh, px);
-  const out = new Array(w * hh * 3);                 // rows top to bottom, RGB
-  for (let j = 0; j < hh; ++j) for (let i = 0; i < w; ++i) for (let c = 0; c < 3; ++c)
-    out[3 * (j * w + i) + c] = px[4 * ((hh - 1 - j) * w + i) + c];
-  return out;
-}
-h.equirect = (el, az, w, hh, scale) => {
-  h.sky.setSun(el, az); h.sky.sunScale = scale; h.sky.sunDisc = false;
-  const rt = h.sky.renderEquirect(renderer, w, hh);
-  const out = read(rt, w, hh); rt.dispose(); return out;
-};
-h.pinhole = (el, az, w, hh, fov, look, scale, disc) => {
-  h.sky.setSun(el, az); h.sky.sunScale = scale; h.sky.sunDisc = disc;
-  const camera = new THREE.PerspectiveCamera(fov, w / hh, 0.1, 100);
-  camera.position.set(1, 2, 3);                       // anywhere: the sky is at infinity
-  camera.lookAt(camera.position.clone().add(new THREE.Vector3(...look)));
-  camera.updateMatrixWorld();
-  const scene = new THREE.Scene(); scene.add(h.sky);
-  const rt = new THREE.WebGLRenderTarget(w, hh, { type: THREE.FloatType });
-  renderer.setRenderTarget(rt); renderer.render(scene, camera); renderer.setRenderTarget(null);
-  const out = read(rt, w, hh); rt.dispose();
-  return { pixels: out, matrixWorld: camera.matrixWorld.elements };
-};
-try {
-  h.sky = await loadSkydomeSky('../luts/');
-  h.sky.output = 'xyz'; h.sky.exposure = 1.0;
-  h.ready = true;
-} catch (e) { h.error = String(e); }
-</script></body></html>
-"""
 
 
 def test_psnr_self_check():
@@ -90,17 +44,21 @@ def test_psnr_self_check():
 
 
 def test_write_threejs_ships_the_one_shader(tmp_path):
-    """The pack holds the module, the example and a byte copy of export/glsl's shader."""
+    """The pack holds the module, the example and byte copies of export/glsl's shaders
+    (precomputed.glsl and fitted.glsl)."""
     from skydome.export.integrations.threejs import write_threejs
 
     paths = write_threejs(tmp_path / "pack")
-    assert sorted(p.name for p in paths) == ["example.html", "precomputed.glsl",
+    assert sorted(p.name for p in paths) == ["example.html", "fitted.glsl", "precomputed.glsl",
                                              "skydome-sky.js"]
     glsl = ROOT / "src/skydome/export/glsl/precomputed.glsl"
     assert (tmp_path / "pack/precomputed.glsl").read_bytes() == glsl.read_bytes()
+    fitted = ROOT / "src/skydome/export/glsl/fitted.glsl"
+    assert (tmp_path / "pack/fitted.glsl").read_bytes() == fitted.read_bytes()
     js = (tmp_path / "pack/skydome-sky.js").read_text()
     # the module carries none of the shader's functions itself: it runs the fetched file
-    assert "skydomeScatteringUvwz" not in js and "from 'three'" in js
+    assert "skydomeScatteringUvwz" not in js and "skydomeFittedAxis" not in js
+    assert "from 'three'" in js
     with pytest.raises(ValueError, match="out"):
         write_threejs(tmp_path / "pack/skydome-sky.js")
 
@@ -109,37 +67,21 @@ def test_write_threejs_ships_the_one_shader(tmp_path):
 def served(tmp_path_factory):
     """(url, sky, textures, desc): the pack, three and a bake of the default precomputed
     sky on a local static server."""
-    if not have_browser():
-        pytest.skip("headless Chromium or Playwright missing (scripts/_setup test installs them)")
-    if not (THREE / "build" / "three.module.js").exists():
-        pytest.skip(f"npm's three missing ({THREE}; scripts/_setup test installs it with npm)")
+    why = missing()
+    if why:
+        pytest.skip(why)
     import skydome
-    from skydome.export.integrations.threejs import write_threejs
     from skydome.export.luts import bake_precomputed, write_luts
 
     root = tmp_path_factory.mktemp("threejs")
     sky = skydome.model("precomputed", sun=skydome.Sun(elevation_deg=20.0,
                                                        azimuth_deg=AZIMUTH))
     write_luts(sky, root / "luts", ("bin",), density=False)   # the module reads tables only
-    write_threejs(root / "threejs")
-    (root / "threejs" / "harness.html").write_text(HARNESS)
-    (root / "three").symlink_to(THREE.resolve(), target_is_directory=True)
+    write_site(root)
     tex, desc = bake_precomputed(sky)
     assert json.loads((root / "luts" / "luts.json").read_text())["sizes"] == desc["sizes"]
-
-    class Quiet(http.server.SimpleHTTPRequestHandler):
-        def log_message(self, *args):
-            pass
-
-    srv = http.server.ThreadingHTTPServer(("127.0.0.1", 0),
-                                          functools.partial(Quiet, directory=str(root)))
-    t = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    t.start()
-    yield (f"http://127.0.0.1:{srv.server_address[1]}", sky,
-           {k: v.astype(np.float64) for k, v in tex.items()}, desc, root)
-    srv.shutdown()
-    t.join()
-    srv.server_close()
+    with static_server(root) as url:
+        yield (url, sky, {k: v.astype(np.float64) for k, v in tex.items()}, desc, root)
 
 
 @pytest.fixture(scope="module")
@@ -152,17 +94,6 @@ def browser(served):
         b.close()
 
 
-def _wait(page, expr: str, timeout_s: float = 120.0) -> None:
-    import time
-
-    t0 = time.monotonic()
-    while not page.evaluate(f"() => !!({expr} && {expr}.ready)"):
-        err = page.evaluate(f"() => ({expr} && {expr}.error) || ''")
-        if err or time.monotonic() - t0 > timeout_s:
-            raise AssertionError(f"page not ready: {err or 'timeout'}")
-        time.sleep(0.2)
-
-
 @pytest.fixture(scope="module")
 def harness(served, browser):
     url = served[0]
@@ -171,7 +102,7 @@ def harness(served, browser):
     page.on("console", lambda m: messages.append((m.type, m.text)))
     page.on("pageerror", lambda e: messages.append(("pageerror", str(e))))
     page.goto(f"{url}/threejs/harness.html")
-    _wait(page, "window.harness")
+    wait(page, "window.harness")
     yield page, messages
     assert not [m for m in messages if m[0] in ("error", "pageerror")], messages
     page.close()
@@ -217,19 +148,6 @@ def test_equirect_against_the_cpu_render(served, harness, elevation):
     assert p_model >= PSNR_FLOOR_DB
 
 
-def _pinhole_dirs(matrix_world, w, h, fov_deg):
-    """ENU directions through the pixel centres of three's PerspectiveCamera (vertical
-    fov, aspect w / h, looking down its -z), rows top to bottom."""
-    m = np.asarray(matrix_world, dtype=np.float64).reshape(4, 4).T     # column-major
-    t = np.tan(np.radians(fov_deg) / 2.0)
-    x = ((np.arange(w) + 0.5) / w * 2.0 - 1.0) * t * w / h
-    y = (1.0 - (np.arange(h) + 0.5) / h * 2.0) * t
-    cam = np.stack(np.broadcast_arrays(x[None, :], y[:, None], -1.0), -1)
-    world = cam @ m[:3, :3].T
-    world /= np.linalg.norm(world, axis=-1, keepdims=True)
-    return np.stack([world[..., 0], -world[..., 2], world[..., 1]], -1)
-
-
 @pytest.mark.parametrize("elevation", [20.0, 5.0])
 def test_pinhole_view_against_the_model(served, harness, elevation):
     """The sky mesh through a three.js PerspectiveCamera (128 x 64, 90 deg vertical field
@@ -245,7 +163,7 @@ def test_pinhole_view_against_the_model(served, harness, elevation):
                         "false)", [elevation, AZIMUTH, W, H, 90.0, look,
                                    sky.sun.irradiance_scale])
     gpu = np.asarray(res["pixels"], dtype=np.float64).reshape(H, W, 3)
-    d = _pinhole_dirs(res["matrixWorld"], W, H, 90.0)
+    d = pinhole_dirs(res["matrixWorld"], W, H, 90.0)
     assert (d[..., 2] < 0).any() and (d[..., 2] > 0).any()       # ground and sky in view
     ref = np.asarray(sky.xyz(d.reshape(-1, 3)), dtype=np.float64).reshape(H, W, 3)
     tr = _transcription(served, sky, d)
@@ -275,7 +193,7 @@ def test_sun_disc(served, harness):
     res = page.evaluate("([e, a, w, h, f, l, s]) => window.harness.pinhole(e, a, w, h, f, l, s, "
                         "true)", [elevation, AZIMUTH, n, n, fov, look, sky.sun.irradiance_scale])
     gpu = np.asarray(res["pixels"], dtype=np.float64).reshape(n, n, 3)
-    d = _pinhole_dirs(res["matrixWorld"], n, n, fov)
+    d = pinhole_dirs(res["matrixWorld"], n, n, fov)
     ang = np.degrees(np.arccos(np.clip(d @ s, -1.0, 1.0)))
     r = sky.sun.angular_radius_deg
     sky_xyz = np.asarray(sky.xyz(d.reshape(-1, 3)), dtype=np.float64).reshape(n, n, 3)
@@ -310,7 +228,7 @@ def test_example_page(served, browser):
     page.on("console", lambda m: messages.append((m.type, m.text)))
     page.on("pageerror", lambda e: messages.append(("pageerror", str(e))))
     page.goto(f"{url}/threejs/example.html")
-    _wait(page, "window.skydomeExample")
+    wait(page, "window.skydomeExample")
     for key, value in (("#elevation", "12"), ("#azimuth", "180"), ("#ev", "15")):
         page.fill(key, value)
         page.dispatch_event(key, "input")

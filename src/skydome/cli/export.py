@@ -300,10 +300,11 @@ def blender_addon_cmd(
 def threejs_cmd(
     out: str = typer.Option(..., help="Output folder (created complete, or its files "
                                       "replaced): the ES module, its example page and the "
-                                      "shader."),
+                                      "shaders."),
 ):
-    """Write the three.js module that draws the precomputed sky from an `export luts
-    --model precomputed --format bin` folder, with an example page (docs/rendering.md)."""
+    """Write the three.js module that draws the precomputed or the fitted sky from an
+    `export luts --model precomputed|fitted --format bin` folder, with an example page
+    (docs/rendering.md)."""
     from skydome.export.integrations.threejs import write_threejs
 
     written = _run(write_threejs, out)

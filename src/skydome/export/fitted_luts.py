@@ -21,6 +21,11 @@ Textures (little-endian float32, RGBA, Y in cd m^-2 for a sun at 1 au: multiply 
   mass, which is strongly curved in elevation near the horizon); A = 0. As a GL texture:
   n_sun_elevations wide, 1 high.
 
+luts.json also carries ``sun.limb_darkening`` (the coefficients of mu^0..mu^5 of Neckel's
+centre-to-limb law at the X, Y and Z channels' wavelengths, divided by its disc mean: the
+disc as ``skydome.render`` draws it, skydome.imaging.sun_disc) and ``xyz_to_linear_srgb``
+(row-major), for the shader's disc and the three.js module's RGB output.
+
 Between the elevation slices the shader interpolates geometrically (linearly in ln XYZ;
 linearly where either value is 0, which the model's clamp can give):
 the sky darkens about exponentially as the sun sets, and the model itself interpolates
@@ -69,7 +74,9 @@ def bake_fitted(sky, step_deg: float = ELEVATION_STEP_DEG
     distance of ``sky`` do not matter (the shader takes the sun's direction, the values are
     at 1 au)."""
     from skydome.constants import K_M
+    from skydome.imaging import sun_disc
     from skydome.models.fitted import _grid
+    from skydome.spectra import xyz_to_linear_srgb
     from skydome.spectra import default_wavelengths, integration_weights, solar_irradiance
     from skydome.sun import Sun
 
@@ -100,6 +107,10 @@ def bake_fitted(sky, step_deg: float = ELEVATION_STEP_DEG
         raise ValueError("the fitted bake has non-finite or negative values")
     th_h = _grid.horizon_zenith_rad(sky.observer_altitude_m)
     s0 = Sun(elevation_deg=45.0, azimuth_deg=180.0, angular_radius_deg=radius)
+    # the disc's centre-to-limb law as skydome.render draws it into an XYZ image ([Nec05] at
+    # the channels' wavelengths, divided by its disc mean so that the disc averages to 1)
+    ch = np.asarray(sun_disc.XYZ_CHANNEL_WAVELENGTHS_NM)
+    limb = sun_disc._neckel_coefficients(ch) / sun_disc.limb_darkening_mean(ch)[:, None]
     desc = {
         "format": FITTED_FORMAT,
         "model": sky.name,
@@ -128,9 +139,17 @@ def bake_fitted(sky, step_deg: float = ELEVATION_STEP_DEG
                        "from the sun's vertical plane, folded into [0, pi]"},
         "sun": {"angular_radius_deg": radius, "angular_radius_rad": math.radians(radius),
                 "solid_angle_sr": float(s0.solid_angle_sr),
-                "note": "texture sun: the disc's radiance through the air (uniform disc); "
-                        "the mean over the disc is that times the fraction above the "
-                        "horizon (skydomeFittedSunVisibleFraction)"},
+                "note": "texture sun: the disc's mean radiance through the air; the mean "
+                        "over the whole disc is that times the fraction above the horizon "
+                        "(skydomeFittedSunVisibleFraction); limb_darkening spreads it over "
+                        "the disc (skydomeFittedSunDisc)",
+                "limb_darkening": {
+                    "law": "Neckel 2005, I(mu) / I_mean = sum_k c_k mu^k, mu = sqrt(1 - "
+                           "rho^2), rho = sin(angle from the centre) / sin(angular radius)",
+                    "channel_wavelengths_nm": [float(v) for v in ch],
+                    "coefficients_xyz": [[float(v) for v in row] for row in limb.T]}},
+        "xyz_to_linear_srgb": [[float(v) for v in row]
+                               for row in xyz_to_linear_srgb(np.eye(3)).T],
         "textures": {
             "sky": {"file": "sky.bin", "shape": list(tab.shape), "dtype": "float32",
                     "channels": "XYZ",

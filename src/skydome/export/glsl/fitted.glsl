@@ -12,6 +12,11 @@
 // between the layers geometrically (linearly in ln XYZ; linearly where a value is 0).
 // Sampler state: any (texelFetch).
 //
+// The sun's disc (skydomeFittedSunDisc, skydomeFittedSkyWithSun): the transmitted sun's
+// mean radiance (texture sun) times Neckel's (2005) centre-to-limb law per channel (the
+// struct's limb, from luts.json), as skydome.render draws the disc into an XYZ image: its
+// integral over the disc is the CPU model's sun_radiance x the disc's solid angle.
+//
 // Frame: East-North-Up (x east, y north, z up), unit vectors, azimuth from north towards
 // east. Values: CIE 1931 XYZ, Y in cd m^-2, for a sun at 1 au, times irradianceScale
 // (Sun.irradiance_scale = 1 / distance_au^2).
@@ -21,6 +26,7 @@ const float SKYDOME_FITTED_PI = 3.14159265358979;
 // Fill from luts.json: view_grid.n_sky, n_ground, n_phi, theta_h_rad, inv_sky,
 // inv_ground, eps_rad, a_phi; elevation_axis.first_deg, step_deg, count;
 // sun_elevation_axis.first_deg, step_deg, count; sun.angular_radius_rad;
+// sun.limb_darkening.coefficients_xyz (six rows: the X, Y, Z coefficients of mu^0..mu^5);
 // irradianceScale from the sun's distance (1 at 1 au).
 struct SkydomeFitted {
     int nSky;
@@ -39,6 +45,7 @@ struct SkydomeFitted {
     int sunElevationCount;
     float sunAngularRadius;   // [rad]
     float irradianceScale;
+    vec3 limb[6];             // I(mu) / I_mean = sum_k limb[k] mu^k per channel X, Y, Z
 };
 
 // the sun's elevation [deg] from its unit direction
@@ -124,10 +131,10 @@ float skydomeFittedSunVisibleFraction(SkydomeFitted f, float elevationRad) {
     return 1.0 - (acos(u) - u * sqrt(1.0 - u * u)) / SKYDOME_FITTED_PI;
 }
 
-// The radiance of the sun's disc seen through the air (uniform disc): XYZ, Y in cd m^-2
-// (texture sun on its own axis, interpolated geometrically in elevation as the sky): the
-// radiance of the parts of the disc above the horizon; its mean over the whole disc
-// (FittedSky.sun_radiance) is skydomeFittedSunMeanRadiance.
+// The mean radiance of the sun's disc seen through the air: XYZ, Y in cd m^-2 (texture
+// sun on its own axis, interpolated geometrically in elevation as the sky), over the parts
+// of the disc above the horizon; its mean over the whole disc (FittedSky.sun_radiance) is
+// skydomeFittedSunMeanRadiance; skydomeFittedSunDisc spreads it over the disc.
 vec3 skydomeFittedSunRadiance(sampler2D sun, SkydomeFitted f, vec3 sunDir) {
     int i0;
     int i1;
@@ -144,13 +151,74 @@ vec3 skydomeFittedSunMeanRadiance(sampler2D sun, SkydomeFitted f, vec3 sunDir) {
     return skydomeFittedSunRadiance(sun, f, sunDir) * skydomeFittedSunVisibleFraction(f, e);
 }
 
-// The sky with the sun's disc: inside the disc and above the horizon the disc's radiance
-// replaces the sky (a uniform disc; skydome's renders add limb darkening).
+// The sun's centre-to-limb darkening I(mu) / I_mean per channel at gamma [rad] from the
+// disc's centre, as skydome.render draws the disc into an XYZ image ([Nec05] at 600, 555
+// and 450 nm for X, Y, Z; its mean over the disc is 1); 0 outside the disc.
+vec3 skydomeFittedLimbDarkening(SkydomeFitted f, float gamma) {
+    float rho = sin(gamma) / sin(f.sunAngularRadius);   // distance from the centre [radii]
+    float mu = sqrt(max(1.0 - rho * rho, 0.0));         // cos of the heliocentric angle
+    vec3 I = f.limb[5];
+    for (int k = 4; k >= 0; --k) I = I * mu + f.limb[k];    // Horner: sum_k limb[k] mu^k
+    return gamma < f.sunAngularRadius ? max(I, vec3(0.0)) : vec3(0.0);
+}
+
+// Whether direction dir lies inside the sun's disc and above the horizon; gamma: its
+// angle from the disc's centre [rad].
+bool skydomeFittedInDisc(SkydomeFitted f, vec3 dir, vec3 sunDir, out float gamma) {
+    gamma = atan(length(cross(dir, sunDir)), dot(dir, sunDir));
+    float th = 0.5 * SKYDOME_FITTED_PI - atan(dir.z, length(dir.xy));
+    return gamma < f.sunAngularRadius && th < f.thetaH;
+}
+
+// The sun's disc in direction dir: XYZ, Y in cd m^-2; the limb-darkened radiance of the
+// disc seen through the air where dir lies inside the disc and above the horizon, else 0.
+// Its integral over the disc is FittedSky.sun_radiance x the disc's solid angle.
+vec3 skydomeFittedSunDisc(sampler2D sun, SkydomeFitted f, vec3 dir, vec3 sunDir) {
+    float gamma;
+    if (!skydomeFittedInDisc(f, dir, sunDir, gamma)) return vec3(0.0);
+    return skydomeFittedSunRadiance(sun, f, sunDir) * skydomeFittedLimbDarkening(f, gamma);
+}
+
+// The sky with the sun's disc: inside the disc and above the horizon the disc's
+// (limb-darkened) radiance replaces the sky, as skydome.render draws it.
 vec3 skydomeFittedSkyWithSun(sampler2DArray sky, sampler2D sun, SkydomeFitted f, vec3 dir,
                              vec3 sunDir) {
-    float gamma = atan(length(cross(dir, sunDir)), dot(dir, sunDir));
-    float th = 0.5 * SKYDOME_FITTED_PI - atan(dir.z, length(dir.xy));
-    if (gamma < f.sunAngularRadius && th < f.thetaH)
-        return skydomeFittedSunRadiance(sun, f, sunDir);
+    float gamma;
+    if (skydomeFittedInDisc(f, dir, sunDir, gamma))
+        return skydomeFittedSunRadiance(sun, f, sunDir) * skydomeFittedLimbDarkening(f, gamma);
     return skydomeFittedSky(sky, f, dir, sunDir);
+}
+
+// The sky with the sun's disc over a pixel's footprint, energy-true for a disc larger or
+// smaller than the pixel (as skydome.render spreads the disc's flux over the pixels it
+// covers): dirDx, dirDy are the view direction's change to the next pixel across and up
+// (dFdx(dir), dFdy(dir), taken in uniform control flow). Near the disc the pixel is split
+// into n x n parts (n = ceil(16 pixel / disc radius), 2..16); each part inside the disc
+// and above the horizon replaces the sky it covers by the disc's radiance there, so the
+// pixel gains the flux of the disc that falls into it.
+vec3 skydomeFittedSkyWithSunPixel(sampler2DArray sky, sampler2D sun, SkydomeFitted f,
+                                  vec3 dir, vec3 dirDx, vec3 dirDy, vec3 sunDir) {
+    vec3 L = skydomeFittedSky(sky, f, dir, sunDir);
+    float ps = max(length(dirDx), length(dirDy));        // the pixel's size [rad]
+    float a = f.sunAngularRadius;
+    float gamma = atan(length(cross(dir, sunDir)), dot(dir, sunDir));
+    if (!(gamma < a + 1.5 * ps)) return L;
+    int n = int(clamp(ceil(16.0 * ps / a), 2.0, 16.0));
+    float cover = 0.0;
+    vec3 acc = vec3(0.0);
+    for (int i = 0; i < 16; ++i) {
+        if (i >= n) break;
+        for (int j = 0; j < 16; ++j) {
+            if (j >= n) break;
+            vec3 q = normalize(dir + ((float(i) + 0.5) / float(n) - 0.5) * dirDx
+                               + ((float(j) + 0.5) / float(n) - 0.5) * dirDy);
+            float g;
+            if (skydomeFittedInDisc(f, q, sunDir, g)) {
+                cover += 1.0;
+                acc += skydomeFittedLimbDarkening(f, g);
+            }
+        }
+    }
+    float inv = 1.0 / float(n * n);
+    return L * (1.0 - cover * inv) + skydomeFittedSunRadiance(sun, f, sunDir) * acc * inv;
 }

@@ -1,9 +1,11 @@
-// skydome's precomputed sky in a three.js scene.
+// skydome's skies in a three.js scene: the precomputed model and the fitted model.
 //
-// Draws the sky, the ground behind the air and the sun's disc from the files that
-// `skydome export luts --model precomputed --format bin --out DIR` writes (luts.json and
-// the raw float32 .bin textures), with skydome's own shader, precomputed.glsl (fetched at
-// run time: the one source of the shader, shipped next to this module by
+// Draws the sky, the ground and the sun's disc from the files that
+// `skydome export luts --model precomputed --format bin --out DIR` or
+// `skydome export luts --model fitted --format bin --out DIR` writes (luts.json and the raw
+// float32 .bin textures), with skydome's own shader for the bake (luts.json's model and
+// format pick it): precomputed.glsl or fitted.glsl, fetched at run time (the one source of
+// each shader, shipped next to this module by
 // `skydome.export.integrations.threejs.write_threejs`). Only dependency: three (imported
 // as the bare specifier 'three', resolved by the page's import map).
 //
@@ -18,8 +20,10 @@
 // sRGB (or CIE XYZ with sky.output = 'xyz') in cd m^-2 times sky.exposure, then the
 // renderer's tone mapping and output colour space (three's shader chunks). Values are for
 // a sun at 1 au (sky.sunScale multiplies them, e.g. skydome's Sun.irradiance_scale).
-// The sun's disc has the uniform radiance of the model's sun seen through the air
-// (no limb darkening), drawn where a pixel's centre lies inside the disc.
+// The sun's disc: precomputed, the uniform radiance of the model's sun seen through the
+// air, added to the sky where a pixel's centre lies inside the disc; fitted, the disc
+// limb-darkened as skydome.render draws it (Neckel 2005 at 600, 555, 450 nm for X, Y, Z),
+// in place of the sky it covers, over each pixel's footprint (energy-true at any size).
 
 import * as THREE from 'three';
 
@@ -31,8 +35,10 @@ async function fetchOk(url, what) {
   return res;
 }
 
-// one texture of the bake, as its luts.json entry describes it (float32 RGBA, C order)
-async function loadTexture(base, name, entry) {
+// one texture of the bake, as its luts.json entry describes it (float32 RGBA, C order);
+// layered: a 4-D entry is a 2-D array texture (else a 3-D texture); nearest: NEAREST
+// filters (a shader that reads it with texelFetch; float32 LINEAR needs an extension)
+async function loadTexture(base, name, entry, { layered = false, nearest = false } = {}) {
   const buf = await (await fetchOk(new URL(entry.file, base), `texture ${name}`)).arrayBuffer();
   const data = new Float32Array(buf);
   const shape = entry.shape;
@@ -42,9 +48,11 @@ async function loadTexture(base, name, entry) {
                     `shape ${JSON.stringify(shape)} (RGBA expected)`);
   }
   let tex;
-  if (shape.length === 3) {
+  if (shape.length === 2) {
+    tex = new THREE.DataTexture(data, shape[0], 1, THREE.RGBAFormat, THREE.FloatType);
+  } else if (shape.length === 3) {
     tex = new THREE.DataTexture(data, shape[1], shape[0], THREE.RGBAFormat, THREE.FloatType);
-  } else if (name === 'irradiance_spectral') {
+  } else if (layered || name === 'irradiance_spectral') {
     tex = new THREE.DataArrayTexture(data, shape[2], shape[1], shape[0]);
   } else {
     tex = new THREE.Data3DTexture(data, shape[2], shape[1], shape[0]);
@@ -52,8 +60,8 @@ async function loadTexture(base, name, entry) {
   }
   tex.format = THREE.RGBAFormat;
   tex.type = THREE.FloatType;
-  tex.minFilter = THREE.LinearFilter;
-  tex.magFilter = THREE.LinearFilter;
+  tex.minFilter = nearest ? THREE.NearestFilter : THREE.LinearFilter;
+  tex.magFilter = nearest ? THREE.NearestFilter : THREE.LinearFilter;
   tex.wrapS = THREE.ClampToEdgeWrapping;
   tex.wrapT = THREE.ClampToEdgeWrapping;
   tex.generateMipmaps = false;
@@ -87,34 +95,66 @@ function atmosphereUniform(desc) {
   };
 }
 
-/** Fetch a precomputed bake (luts.json + .bin textures) and the shader.
- * @param {string|URL} lutsUrl folder of `skydome export luts --model precomputed`
- * @param {{shaderUrl?: string|URL}} options shaderUrl: precomputed.glsl (default: next to
- *   this module)
- * @returns {Promise<{desc: object, textures: object, glsl: string}>} */
+// the GLSL struct SkydomeFitted filled from luts.json (export/glsl/fitted.glsl); the sun's
+// distance is applied by the host code (skySunScale), so irradianceScale = 1
+function fittedUniform(desc) {
+  const g = desc.view_grid;
+  const e = desc.elevation_axis;
+  const se = desc.sun_elevation_axis;
+  return {
+    nSky: g.n_sky, nGround: g.n_ground, nPhi: g.n_phi, thetaH: g.theta_h_rad,
+    invSky: g.inv_sky, invGround: g.inv_ground, eps: g.eps_rad, aPhi: g.a_phi,
+    elevationFirstDeg: e.first_deg, elevationStepDeg: e.step_deg, elevationCount: e.count,
+    sunElevationFirstDeg: se.first_deg, sunElevationStepDeg: se.step_deg,
+    sunElevationCount: se.count, sunAngularRadius: desc.sun.angular_radius_rad,
+    irradianceScale: 1.0,
+    limb: desc.sun.limb_darkening.coefficients_xyz.map((c) => new THREE.Vector3(...c)),
+  };
+}
+
+const FITTED_FORMAT = 'skydome.luts.fitted-xyz/1';
+
+// 'precomputed' or 'fitted': the shader that draws the bake luts.json describes
+function bakeKind(desc) {
+  if (desc.format === FITTED_FORMAT) return 'fitted';
+  if (desc.model === 'precomputed') return 'precomputed';
+  throw new Error(`skydome-sky: luts.json model = ${JSON.stringify(desc.model)}, format = ` +
+                  `${JSON.stringify(desc.format)}; drawn: 'precomputed' bakes and ` +
+                  `'${FITTED_FORMAT}' bakes (skydome export luts --model precomputed or ` +
+                  '--model fitted, --format bin)');
+}
+
+/** Fetch a bake (luts.json + .bin textures) and the shader that draws it.
+ * @param {string|URL} lutsUrl folder of `skydome export luts --model precomputed` or
+ *   `--model fitted` (with --format bin)
+ * @param {{shaderUrl?: string|URL}} options shaderUrl: the shader (default: next to this
+ *   module, precomputed.glsl or fitted.glsl as luts.json says)
+ * @returns {Promise<{desc: object, textures: object, glsl: string, kind: string}>} */
 export async function loadSkydomeLuts(lutsUrl, options = {}) {
   const base = new URL(String(lutsUrl).endsWith('/') ? String(lutsUrl) : `${lutsUrl}/`,
                        document.baseURI);
-  const shaderUrl = options.shaderUrl ?? new URL('precomputed.glsl', import.meta.url);
-  const [desc, glsl] = await Promise.all([
-    fetchOk(new URL('luts.json', base), 'description').then((r) => r.json()),
-    fetchOk(shaderUrl, 'shader').then((r) => r.text()),
-  ]);
-  if (desc.model !== 'precomputed') {
-    throw new Error(`skydome-sky: luts.json model = ${JSON.stringify(desc.model)}; only ` +
-                    "'precomputed' bakes are drawn (skydome export luts --model precomputed)");
+  const desc = await fetchOk(new URL('luts.json', base), 'description').then((r) => r.json());
+  const kind = bakeKind(desc);
+  if (kind === 'fitted' && !(desc.sun?.limb_darkening && desc.xyz_to_linear_srgb)) {
+    throw new Error('skydome-sky: luts.json has no sun.limb_darkening or ' +
+                    'xyz_to_linear_srgb (a fitted bake of an older skydome): export it again');
   }
-  const names = ['scattering', 'single_mie_scattering', 'multiple_scattering',
-                 'transmittance', 'optical_depth', 'irradiance_spectral'];
+  const shaderUrl = options.shaderUrl ?? new URL(`${kind}.glsl`, import.meta.url);
+  const names = kind === 'fitted' ? ['sky', 'sun']
+    : ['scattering', 'single_mie_scattering', 'multiple_scattering', 'transmittance',
+       'optical_depth', 'irradiance_spectral'];
   for (const n of names) {
     const files = (desc.files ?? {})[n];
     if (!desc.textures[n] || (files && !files.includes(`${n}.bin`))) {
       throw new Error(`skydome-sky: ${n}.bin missing from the bake (export with --format bin)`);
     }
   }
-  const list = await Promise.all(names.map((n) => loadTexture(base, n, desc.textures[n])));
+  const how = kind === 'fitted' ? { layered: true, nearest: true } : {};
+  const [glsl, ...list] = await Promise.all([
+    fetchOk(shaderUrl, 'shader').then((r) => r.text()),
+    ...names.map((n) => loadTexture(base, n, desc.textures[n], how))]);
   const textures = Object.fromEntries(names.map((n, i) => [n, list[i]]));
-  return { desc, textures, glsl };
+  return { desc, textures, glsl, kind };
 }
 
 const VERTEX_SKY = /* glsl */ `
@@ -130,9 +170,9 @@ const VERTEX_QUAD = /* glsl */ `
 void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }
 `;
 
-// the host code around precomputed.glsl: uniforms, the view direction, the sun's disc
-function fragmentShader(glsl, equirect) {
-  return `${glsl}
+// the host code around the shader: uniforms, the view direction, the sun's disc
+const HOST_UNIFORMS = {
+  precomputed: `
 uniform sampler3D scatteringTex;
 uniform sampler3D singleMieTex;
 uniform sampler3D multipleTex;
@@ -141,22 +181,17 @@ uniform sampler2D opticalDepthTex;
 uniform sampler2DArray irradianceSpectralTex;
 uniform SkydomeAtmosphere atm;
 uniform vec3 skyCamera;        // from the planet's centre, East-North-Up [m]
-uniform vec3 skySunDir;        // East-North-Up
-uniform float skyExposure;
-uniform float skySunScale;
-uniform float skyCosDisc;      // cos of the disc's angular radius; 2 = no disc
-uniform bool skyOutputXYZ;
-uniform mat3 skyXyzToRgb;
-${equirect ? 'uniform vec2 skySize; uniform float skySpan;' : 'varying vec3 vDirection;'}
-void main() {
-${equirect ? `
-  // skydome's Equirect: row from the top, azimuth = 360 deg col / W from north
-  float row = skySize.y - gl_FragCoord.y;
-  float el = 0.5 * SKYDOME_PC_PI - skySpan * row / skySize.y;
-  float az = 2.0 * SKYDOME_PC_PI * gl_FragCoord.x / skySize.x;
-  vec3 v = vec3(cos(el) * sin(az), cos(el) * cos(az), sin(el));` : `
-  vec3 d = normalize(vDirection);
-  vec3 v = vec3(d.x, -d.z, d.y);              // three.js (east, up, south) -> ENU`}
+uniform float skyCosDisc;      // cos of the disc's angular radius; 2 = no disc`,
+  fitted: `
+uniform sampler2DArray skyTex;
+uniform sampler2D sunTex;
+uniform SkydomeFitted fit;
+uniform bool skyDisc;          // draw the sun's disc`,
+};
+
+// the radiance L (XYZ, cd m^-2 at 1 au) in direction v (East-North-Up)
+const HOST_RADIANCE = {
+  precomputed: `
   vec3 L = skydomeRadiance(scatteringTex, singleMieTex, multipleTex, transmittanceTex,
                            opticalDepthTex, irradianceSpectralTex, atm, skyCamera, v,
                            skySunDir);
@@ -164,7 +199,34 @@ ${equirect ? `
   if (dot(v, skySunDir) >= skyCosDisc
       && !skydomePcHitsGround(r, dot(skyCamera, v) / r, atm.bottomRadius)) {
     L += skydomeSunRadiance(opticalDepthTex, atm, r, dot(skyCamera, skySunDir) / r);
-  }
+  }`,
+  fitted: `
+  vec3 vdx = dFdx(v);                         // the pixel's footprint, for the disc
+  vec3 vdy = dFdy(v);
+  vec3 L = skyDisc ? skydomeFittedSkyWithSunPixel(skyTex, sunTex, fit, v, vdx, vdy, skySunDir)
+                   : skydomeFittedSky(skyTex, fit, v, skySunDir);`,
+};
+
+function fragmentShader(kind, glsl, equirect) {
+  return `${glsl}
+${HOST_UNIFORMS[kind]}
+uniform vec3 skySunDir;        // East-North-Up
+uniform float skyExposure;
+uniform float skySunScale;
+uniform bool skyOutputXYZ;
+uniform mat3 skyXyzToRgb;
+${equirect ? 'uniform vec2 skySize; uniform float skySpan;' : 'varying vec3 vDirection;'}
+void main() {
+${equirect ? `
+  // skydome's Equirect: row from the top, azimuth = 360 deg col / W from north
+  const float PI_ = 3.14159265358979;
+  float row = skySize.y - gl_FragCoord.y;
+  float el = 0.5 * PI_ - skySpan * row / skySize.y;
+  float az = 2.0 * PI_ * gl_FragCoord.x / skySize.x;
+  vec3 v = vec3(cos(el) * sin(az), cos(el) * cos(az), sin(el));` : `
+  vec3 d = normalize(vDirection);
+  vec3 v = vec3(d.x, -d.z, d.y);              // three.js (east, up, south) -> ENU`}
+${HOST_RADIANCE[kind]}
   L *= skySunScale;
   vec3 c = skyOutputXYZ ? L : skyXyzToRgb * L;
   gl_FragColor = vec4(c * skyExposure, 1.0);
@@ -176,11 +238,26 @@ ${equirect ? `
 
 /** The sky as a THREE.Mesh (a box drawn around the camera on the far plane). */
 export class SkydomeSky extends THREE.Mesh {
-  /** @param {{desc: object, textures: object, glsl: string}} luts from loadSkydomeLuts */
+  /** @param {{desc: object, textures: object, glsl: string, kind?: string}} luts from
+   *   loadSkydomeLuts */
   constructor(luts) {
     const { desc, textures, glsl } = luts;
+    const kind = luts.kind ?? bakeKind(desc);
     const m = desc.xyz_to_linear_srgb;
-    const uniforms = {
+    const common = {
+      skySunDir: { value: new THREE.Vector3(0, 0, 1) },
+      skyExposure: { value: 1.0 },
+      skySunScale: { value: 1.0 },
+      skyOutputXYZ: { value: false },
+      // luts.json's matrix is row-major; Matrix3.set takes rows
+      skyXyzToRgb: { value: new THREE.Matrix3().set(...m[0], ...m[1], ...m[2]) },
+    };
+    const own = kind === 'fitted' ? {
+      skyTex: { value: textures.sky },
+      sunTex: { value: textures.sun },
+      fit: { value: fittedUniform(desc) },
+      skyDisc: { value: true },
+    } : {
       scatteringTex: { value: textures.scattering },
       singleMieTex: { value: textures.single_mie_scattering },
       multipleTex: { value: textures.multiple_scattering },
@@ -189,17 +266,12 @@ export class SkydomeSky extends THREE.Mesh {
       irradianceSpectralTex: { value: textures.irradiance_spectral },
       atm: { value: atmosphereUniform(desc) },
       skyCamera: { value: new THREE.Vector3(0, 0, desc.bottom_radius_m) },
-      skySunDir: { value: new THREE.Vector3(0, 0, 1) },
-      skyExposure: { value: 1.0 },
-      skySunScale: { value: 1.0 },
       skyCosDisc: { value: Math.cos(desc.sun.disc_angular_radius_deg * DEG) },
-      skyOutputXYZ: { value: false },
-      // luts.json's matrix is row-major; Matrix3.set takes rows
-      skyXyzToRgb: { value: new THREE.Matrix3().set(...m[0], ...m[1], ...m[2]) },
     };
+    const uniforms = { ...own, ...common };
     const material = new THREE.ShaderMaterial({
       name: 'SkydomeSky', uniforms, vertexShader: VERTEX_SKY,
-      fragmentShader: fragmentShader(glsl, false), side: THREE.BackSide,
+      fragmentShader: fragmentShader(kind, glsl, false), side: THREE.BackSide,
       depthWrite: false,
     });
     super(new THREE.BoxGeometry(1, 1, 1), material);
@@ -208,16 +280,27 @@ export class SkydomeSky extends THREE.Mesh {
     this.renderOrder = -1;
     this.desc = desc;
     this.glsl = glsl;
-    this._discCos = uniforms.skyCosDisc.value;
+    /** 'precomputed' or 'fitted': the bake's model */
+    this.kind = kind;
+    if (kind === 'fitted') {
+      const e = desc.elevation_axis;
+      this._elevationRange = [e.first_deg, e.first_deg + (e.count - 1) * e.step_deg];
+    } else {
+      this._elevationRange = [-90, 90];
+      this._discCos = uniforms.skyCosDisc.value;
+    }
     this.setSun(30, 180);
   }
 
-  /** Sun elevation above the horizon and azimuth from north towards east [deg]. */
+  /** Sun elevation above the horizon and azimuth from north towards east [deg] (a fitted
+   * bake: within its elevation axis, the model's range). */
   setSun(elevationDeg, azimuthDeg) {
     const el = Number(elevationDeg);
     const az = Number(azimuthDeg);
-    if (!Number.isFinite(el) || el < -90 || el > 90) {
-      throw new RangeError(`sun elevation = ${elevationDeg}: valid range -90..90 deg`);
+    const [lo, hi] = this._elevationRange;
+    if (!Number.isFinite(el) || el < lo - 1e-9 || el > hi + 1e-9) {
+      throw new RangeError(`sun elevation = ${elevationDeg}: valid range ${lo}..${hi} deg` +
+                           (this.kind === 'fitted' ? ' (the fitted bake\'s range)' : ''));
     }
     if (!Number.isFinite(az)) throw new RangeError(`sun azimuth = ${azimuthDeg}: not a number`);
     const ce = Math.cos(el * DEG);
@@ -233,14 +316,27 @@ export class SkydomeSky extends THREE.Mesh {
     return target.set(s.x, s.z, -s.y);
   }
 
-  /** Observer altitude above the ground [m], 0..top of the atmosphere. */
+  /** Observer altitude above the ground [m], 0..top of the atmosphere (a fitted bake:
+   * the altitude it was baked for, model_parameters.observer_altitude_m, alone). */
   set altitude(m) {
+    if (this.kind === 'fitted') {
+      const h = this.altitude;
+      if (m !== h) {
+        throw new RangeError(`altitude = ${m}: this fitted bake is for ${h} m (export ` +
+                             'another with skydome export luts --model fitted ' +
+                             '--observer-altitude-m)');
+      }
+      return;
+    }
     const top = this.desc.top_radius_m - this.desc.bottom_radius_m;
     if (!(m >= 0 && m <= top)) throw new RangeError(`altitude = ${m}: valid range 0..${top} m`);
     this.material.uniforms.skyCamera.value.set(0, 0, this.desc.bottom_radius_m + m);
   }
 
-  get altitude() { return this.material.uniforms.skyCamera.value.z - this.desc.bottom_radius_m; }
+  get altitude() {
+    if (this.kind === 'fitted') return this.desc.model_parameters.observer_altitude_m;
+    return this.material.uniforms.skyCamera.value.z - this.desc.bottom_radius_m;
+  }
 
   /** Multiplier from cd m^-2 to the renderer's linear values [m^2 cd^-1]. */
   set exposure(k) { this.material.uniforms.skyExposure.value = k; }
@@ -253,9 +349,16 @@ export class SkydomeSky extends THREE.Mesh {
   get sunScale() { return this.material.uniforms.skySunScale.value; }
 
   /** Draw the sun's disc (default true). */
-  set sunDisc(on) { this.material.uniforms.skyCosDisc.value = on ? this._discCos : 2.0; }
+  set sunDisc(on) {
+    const u = this.material.uniforms;
+    if (this.kind === 'fitted') u.skyDisc.value = !!on;
+    else u.skyCosDisc.value = on ? this._discCos : 2.0;
+  }
 
-  get sunDisc() { return this.material.uniforms.skyCosDisc.value <= 1.0; }
+  get sunDisc() {
+    const u = this.material.uniforms;
+    return this.kind === 'fitted' ? u.skyDisc.value : u.skyCosDisc.value <= 1.0;
+  }
 
   /** 'rgb' (linear sRGB, default) or 'xyz' (CIE 1931 XYZ). */
   set output(o) {
@@ -280,7 +383,7 @@ export class SkydomeSky extends THREE.Mesh {
         name: 'SkydomeSkyEquirect',
         uniforms: { ...this.material.uniforms, skySize: { value: new THREE.Vector2() },
                     skySpan: { value: Math.PI } },
-        vertexShader: VERTEX_QUAD, fragmentShader: fragmentShader(this.glsl, true),
+        vertexShader: VERTEX_QUAD, fragmentShader: fragmentShader(this.kind, this.glsl, true),
         depthTest: false, depthWrite: false, toneMapped: false,
       });
       const quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), mat);
