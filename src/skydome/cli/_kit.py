@@ -157,6 +157,12 @@ def _run(func, *args, **kwargs):
     except OSError as exc:
         where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
         _fail(f"could not write{where}: {exc.strerror or exc}")
+    finally:
+        # a table cache entry written beside the command's work (_build_model) is complete
+        # when the command returns
+        cache = sys.modules.get("skydome.models.simulated.precomputed._cache")
+        if cache is not None:
+            cache.wait_for_writes()
 
 
 def _available_memory() -> int:
@@ -492,10 +498,14 @@ def _build_model(cls, progress: "_Progress", **kwargs):
     kernel waits for the start there (numba's import and compiler locks)."""
     from skydome._numba_start import start_numba_in_background
     from skydome._progress import reporting
+    from skydome.models.simulated.precomputed import _cache as table_cache
 
     start = start_numba_in_background()
     try:
-        with reporting(progress):
+        # a new precomputed atmosphere's cache entry is written on a thread beside the
+        # command's next steps (the render, the picture), and complete before the command
+        # ends (_run waits for it; the interpreter would too)
+        with reporting(progress), table_cache.background_writes():
             return cls(**kwargs)
     finally:
         if start is not None:
