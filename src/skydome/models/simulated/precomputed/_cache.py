@@ -330,14 +330,20 @@ def _encode_table(name: str, slabs, shape) -> _Encoded:
 
 def _write_encoded(file: str, exp_file: str, name: str, enc: _Encoded) -> dict:
     """Write the encoded table ``enc`` (:func:`_encode_table`) to ``file`` and ``exp_file``
-    as :func:`_write_half` does (the same bytes); returns their checksum records."""
+    as :func:`_write_half` does (the same bytes); returns their checksum records. Each chunk
+    is let go once written (``enc.chunks`` is empty after), so that the memory they hold
+    shrinks as the write goes on."""
     crc = 0
     with open(file, "wb") as f:
         _npy_header(f, np.float16, enc.shape)
-        for h in enc.chunks:
+        chunks, enc.chunks = enc.chunks, []
+        chunks.reverse()
+        while chunks:
+            h = chunks.pop()
             data = memoryview(h.reshape(-1)).cast("B")
             crc = zlib.crc32(data, crc)
             f.write(data)
+            del data, h
     write_npy(exp_file, enc.exps)
     rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
            "shape": [int(n) for n in enc.shape]}
