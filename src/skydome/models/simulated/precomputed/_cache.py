@@ -43,7 +43,10 @@ Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydo
 write the least recently used files are removed until the folder fits. Files are written
 to a temporary name in the folder and renamed, so a reader never sees a partial file. A write
 that fails (a full disk, a read-only folder) is not an error: the tables are used from memory,
-and the process says so once, in one line on stderr.
+and the process says so once, in one line on stderr. Within :func:`background_writes` (the
+command line's model construction) a new entry's tables are encoded at once and its files
+written on a (non-daemon) thread while the caller goes on; :func:`wait_for_writes` waits
+for it, and every later load, store and clear does so first.
 """
 
 from __future__ import annotations
