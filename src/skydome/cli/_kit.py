@@ -496,16 +496,25 @@ def _build_model(cls, progress: "_Progress", **kwargs):
     model reads and decodes its tables meanwhile (file reads, CRC-32, NumPy, which release
     the lock), so that on two cores the two overlap; a model whose construction calls a
     kernel waits for the start there (numba's import and compiler locks)."""
+    import contextlib
+
     from skydome._numba_start import start_numba_in_background
     from skydome._progress import reporting
-    from skydome.models.simulated.precomputed import _cache as table_cache
 
+    # a new precomputed atmosphere's cache entry is written on a thread beside the command's
+    # next steps (the render, the picture), and complete before the command ends (_run
+    # waits for it; the interpreter would too); the table cache's module is not imported
+    # for a model that does not use it
+    writes = contextlib.nullcontext()
+    cache_module = "skydome.models.simulated.precomputed._cache"
+    if (cls.__module__.startswith("skydome.models.simulated.precomputed")
+            or cache_module in sys.modules):
+        import importlib
+
+        writes = importlib.import_module(cache_module).background_writes()
     start = start_numba_in_background()
     try:
-        # a new precomputed atmosphere's cache entry is written on a thread beside the
-        # command's next steps (the render, the picture), and complete before the command
-        # ends (_run waits for it; the interpreter would too)
-        with reporting(progress), table_cache.background_writes():
+        with reporting(progress), writes:
             return cls(**kwargs)
     finally:
         if start is not None:
