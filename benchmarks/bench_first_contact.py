@@ -27,7 +27,9 @@ the cold numba folder first, to show the cold command as it is after the set-up.
 ``--warm-only N`` skips the cold pass: each command runs once untimed in the caches the
 environment names (numba's cache of the checkout or ``NUMBA_CACHE_DIR``, the table cache of
 ``SKYDOME_CACHE_DIR`` or the user's), which fills them if needed, then N times timed, each
-line with the 1-minute load average at its start (the machine's load moves the wall time).
+line with the 1-minute load average at its start (the machine's load moves the wall time);
+a "new atmosphere" command's timed runs each get a new, empty table cache (numba's cache
+warm: the figure of issue 27's "a new atmosphere as a command").
 
 The commands run without ``PYTHONDONTWRITEBYTECODE`` (an installed package has its
 bytecode compiled at install; with the variable set, every process compiles skydome's
@@ -176,7 +178,13 @@ def bench_warm(commands, python, repeat: int, work: Path) -> list:
         first = run(argv, env, out)
         print(f"{c.name:50s} fill {_fmt(first)}", flush=True)
         runs = []
-        for _ in range(repeat):
+        for i in range(repeat):
+            if c.new_atmosphere:
+                # numba's cache as the environment has it (warm after the fill), the table
+                # cache a new empty folder: an atmosphere met for the first time
+                tab = out / f"tables-{i}"
+                tab.mkdir()
+                env = environment(None, tab)
             load = os.getloadavg()[0]
             r = run(argv, env, out)
             print(f"{c.name:50s} warm {_fmt(r)} (load {load:.1f})", flush=True)

@@ -62,6 +62,40 @@ def test_other_command_lines_are_left_to_typer(argv):
     assert parse(argv, OPTS) is None
 
 
+def test_a_models_own_options_are_passed_on_in_their_order():
+    extra = []
+    v = parse(["--out", "x.png", "--turbidity", "3", "--size", "40", "--ground-albedo", "0.2",
+               "--turbidity", "4"], OPTS, extra)
+    assert v is not None and v["size"] == "40" and v["out"] == "x.png"
+    assert extra == ["--turbidity", "3", "--ground-albedo", "0.2", "--turbidity", "4"]
+
+
+@pytest.mark.parametrize("argv", [
+    ["--out", "x.png", "--turbidity"],                 # a missing value
+    ["--out", "x.png", "--turbidity", "-3"],           # a value that looks like an option
+    ["--out", "x.png", "--turbidity", "--size"],
+    ["--out", "x.png", "--turbidity=3"],
+    ["--out", "x.png", "--help", "x"],
+    ["--out", "x.png", "--Turbidity", "3"],            # not a plain option name
+    ["--out", "x.png", "-t", "3"],
+])
+def test_model_options_that_are_not_plain_are_left_to_typer(argv):
+    assert parse(argv, OPTS, []) is None
+
+
+def test_fast_path_runs_the_command_with_the_model_options(monkeypatch):
+    """``fast_render`` calls the command's work with the model's options as typer's extra
+    arguments (the list ``_render`` reads them from)."""
+    from skydome.cli import _kit, render_fast
+
+    seen = []
+    monkeypatch.setattr(_kit, "_run", lambda func, *a: seen.append(a))
+    assert render_fast.fast_render(["--model", "preetham1999", "--turbidity", "4", "--out",
+                                    "x.png"]) == 0
+    assert seen and seen[0][0] == ["--turbidity", "4"] and seen[0][1:3] == ("preetham1999",
+                                                                            "x.png")
+
+
 def _both(args, cwd):
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
     fast = subprocess.run([sys.executable, "-m", "skydome", "render", *args], cwd=cwd,
@@ -82,6 +116,9 @@ def _both(args, cwd):
     ["--exposure", "1", "--ev100", "3", "--out", "a.png"],
     ["--lat", "48.2", "--out", "a.png"],
     ["--out", "no-such-folder/a.png"],
+    ["--out", "a.png", "--turbidity", "99"],          # a model's option out of its range
+    ["--out", "a.png", "--no-such-option", "1"],      # a model option the model has not
+    ["--model", "preetham1999", "--turbidity", "abc", "--out", "a.png"],
 ])
 def test_bad_input_gives_the_typer_commands_line_and_exit_code(args, tmp_path):
     fast, slow = _both(args, tmp_path)
@@ -91,14 +128,15 @@ def test_bad_input_gives_the_typer_commands_line_and_exit_code(args, tmp_path):
     assert os.listdir(tmp_path) == []
 
 
-def test_a_render_writes_the_same_picture_as_the_typer_command(tmp_path):
+@pytest.mark.parametrize("model_options", [[], ["--turbidity", "4.5"]])
+def test_a_render_writes_the_same_picture_as_the_typer_command(tmp_path, model_options):
     from PIL import Image
 
     a, b = tmp_path / "a", tmp_path / "b"
     a.mkdir()
     b.mkdir()
-    args = ["--model", "preetham1999", "--sun-elevation", "20", "--sun-azimuth", "120",
-            "--size", "40", "--out", "x.png"]
+    args = ["--model", "preetham1999", "--sun-elevation", "20", *model_options,
+            "--sun-azimuth", "120", "--size", "40", "--out", "x.png"]
     fast = subprocess.run([sys.executable, "-m", "skydome", "render", *args], cwd=a,
                           capture_output=True, text=True, timeout=600)
     slow = subprocess.run([sys.executable, "-c", TYPER, "render", *args], cwd=b,

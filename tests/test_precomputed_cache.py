@@ -197,6 +197,38 @@ def test_cli_cache_info_and_clear():
     assert files() == []
 
 
+def test_cli_render_of_a_new_atmosphere_leaves_its_entry_complete(tmp_path, monkeypatch):
+    """`skydome render` of an atmosphere not in the cache writes its entry on a thread
+    beside the render (cli._kit._build_model: ``_cache.background_writes``); when the
+    command returns the entry is complete: no write pending, and a model of the same
+    settings reads it."""
+    import threading
+
+    from typer.testing import CliRunner
+
+    from skydome.cli import app
+
+    writers = []
+    real = _cache._write_entry
+
+    def recorded(*a, **k):
+        writers.append(threading.current_thread().name)
+        return real(*a, **k)
+
+    monkeypatch.setattr(_cache, "_write_entry", recorded)
+
+    opts = []
+    for k, v in {**TINY, "n_wavelengths": 1}.items():
+        if k != "table_wavelengths_nm":
+            opts += ["--" + k.replace("_", "-"), str(v)]
+    res = CliRunner().invoke(app, ["render", "--sun-elevation", "30", "--size", "16", "--out",
+                                   str(tmp_path / "x.png")] + opts)
+    assert res.exit_code == 0, res.output
+    assert writers == ["skydome-cache-write"]
+    assert not _cache._PENDING and len(files()) == 1
+    assert tiny().from_cache
+
+
 # -- the stored table of orders 2..N: built on first use, added to the entry -----------------
 STORED = _cache._STORED + ".npy"
 AP = (direction_from_angles([30.0, 5.0], [0.0, 180.0]), 2e3, [550.0])

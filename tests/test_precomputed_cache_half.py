@@ -293,3 +293,73 @@ def test_not_finite_in_a_half_table_with_its_checksum_updated_rebuilds_the_entry
     note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
     assert len(note) == 1 and "NaN or infinite" in note[0], note
     assert np.array_equal(again.radiance(DIRS, WL), first.radiance(DIRS, WL))
+
+
+def _entry_files(path):
+    """{file name: bytes} of a cache entry, meta.json without the precomputation's time."""
+    out = {}
+    for n in sorted(os.listdir(path)):
+        data = open(os.path.join(path, n), "rb").read()
+        if n == "meta.json":
+            meta = json.loads(data)
+            meta["scalars"].pop("precompute_seconds")
+            data = json.dumps(meta).encode()
+        out[n] = data
+    return out
+
+
+def test_entry_written_in_the_background_is_the_entry_written_at_once(monkeypatch, tmp_path):
+    """Within ``background_writes`` (the command line's construction) the entry's files are
+    written on a thread: the model serves the same values as one whose entry was written
+    at once (the large tables are encoded before the constructor returns), a second model
+    meanwhile reads the entry (the load waits for the write), and the files are those of
+    the entry written at once, byte for byte (the precomputation's time apart)."""
+    monkeypatch.setenv("SKYDOME_CACHE_DIR", str(tmp_path / "at-once"))
+    at_once = tiny()
+    files_at_once = _entry_files(entry())
+    monkeypatch.setenv("SKYDOME_CACHE_DIR", str(tmp_path / "background"))
+    started = []
+    real = _cache._write_entry
+
+    def slow(*a, **k):          # the write still running when the second model loads
+        started.append(True)
+        import time
+        time.sleep(0.3)
+        return real(*a, **k)
+
+    monkeypatch.setattr(_cache, "_write_entry", slow)
+    with _cache.background_writes():
+        first = tiny()
+    assert not first.from_cache
+    second = tiny()
+    assert started and second.from_cache and not _cache._PENDING
+    r = [x.radiance(DIRS, WL) for x in (at_once, first, second)]
+    assert np.array_equal(r[0], r[1]) and np.array_equal(r[1], r[2])
+    assert _entry_files(entry()) == files_at_once
+
+
+def test_table_encoded_on_threads_is_numpys_float16_of_each_row(monkeypatch, tmp_path):
+    """A table split into many steps (a small step size) and encoded on 1 or 3 threads
+    writes the same file, and each value read back is NumPy's float16 cast of the value
+    divided by its row's power of two (the row's largest value in [2^14, 2^15)), times it
+    again; the table itself receives those values."""
+    rng = np.random.default_rng(7)
+    table = (rng.uniform(0.0, 1.0, (2, 50, 20)) * 2.0 ** rng.integers(-30, 5, (2, 50, 1)))
+    table = table.astype(np.float32)
+    scale = 2.0 ** (np.floor(np.log2(np.abs(table).max(axis=-1, keepdims=True))) - 14)
+    expected = (table / scale).astype(np.float16).astype(np.float64) * scale
+    monkeypatch.setattr(_cache, "_CHECK_BYTES", 4 * 20 * 7)       # 7 rows per step
+    written = []
+    for threads in (1, 3):
+        monkeypatch.setattr(_cache, "_encode_threads", lambda n=threads: n)
+        a = table.copy()
+        enc = _cache._encode_table("t", [a[0:1], a[1:2]], a.shape)
+        assert len(enc.chunks) == 2 * 8
+        f, fe = str(tmp_path / f"t{threads}.npy"), str(tmp_path / f"t{threads}.exp.npy")
+        sums = _cache._write_encoded(f, fe, "t", enc)
+        back = _cache._read_half(str(tmp_path), f"t{threads}", {f"t{threads}": sums["t"],
+                                 f"t{threads}.exp": sums["t.exp"]})
+        assert np.array_equal(back, expected.astype(np.float32))
+        assert np.array_equal(a, back)
+        written.append(open(f, "rb").read() + open(fe, "rb").read())
+    assert written[0] == written[1]

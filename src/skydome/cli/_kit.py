@@ -157,6 +157,12 @@ def _run(func, *args, **kwargs):
     except OSError as exc:
         where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
         _fail(f"could not write{where}: {exc.strerror or exc}")
+    finally:
+        # a table cache entry written beside the command's work (_build_model) is complete
+        # when the command returns
+        cache = sys.modules.get("skydome.models.simulated.precomputed._cache")
+        if cache is not None:
+            cache.wait_for_writes()
 
 
 def _available_memory() -> int:
@@ -490,12 +496,25 @@ def _build_model(cls, progress: "_Progress", **kwargs):
     model reads and decodes its tables meanwhile (file reads, CRC-32, NumPy, which release
     the lock), so that on two cores the two overlap; a model whose construction calls a
     kernel waits for the start there (numba's import and compiler locks)."""
+    import contextlib
+
     from skydome._numba_start import start_numba_in_background
     from skydome._progress import reporting
 
+    # a new precomputed atmosphere's cache entry is written on a thread beside the command's
+    # next steps (the render, the picture), and complete before the command ends (_run
+    # waits for it; the interpreter would too); the table cache's module is not imported
+    # for a model that does not use it
+    writes = contextlib.nullcontext()
+    cache_module = "skydome.models.simulated.precomputed._cache"
+    if (cls.__module__.startswith("skydome.models.simulated.precomputed")
+            or cache_module in sys.modules):
+        import importlib
+
+        writes = importlib.import_module(cache_module).background_writes()
     start = start_numba_in_background()
     try:
-        with reporting(progress):
+        with reporting(progress), writes:
             return cls(**kwargs)
     finally:
         if start is not None:

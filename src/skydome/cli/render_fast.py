@@ -9,13 +9,16 @@ warm ``skydome render --sun-elevation 30 --out x.png`` (about 2 s) on a 2-core E
 first for a ``render`` command line, reads the command's options from the signature of the
 typer command :func:`skydome.cli.render.render` (names, types, defaults: one declaration) and
 parses a plain command line itself: each option of that command at most once, spelled
-``--name value`` (a flag alone), a number written as plain decimal digits. It then calls the
-command's own work (:func:`skydome.cli.render._render` through :func:`skydome.cli._kit._run`)
-with the values typer would have passed, so that the work, its output and its errors (one
-line on stderr naming the option, exit code 2) are the same. Anything else (help, a model's
-own options such as ``--turbidity 3``, ``--name=value``, a repeated option, a value it does
-not read as plainly valid) goes to the typer command, untouched: the fast path prints
-nothing and does nothing before it has decided to take the command line.
+``--name value`` (a flag alone), a number written as plain decimal digits, and a model's own
+options as ``--name value`` pairs (e.g. ``--turbidity 3``: a name that is not the command's,
+a value that does not start with ``-``), passed on in their order as typer passes them (the
+command's extra arguments; the model's parameter parser reads them in both cases). It then
+calls the command's own work (:func:`skydome.cli.render._render` through
+:func:`skydome.cli._kit._run`) with the values typer would have passed, so that the work, its
+output and its errors (one line on stderr naming the option, exit code 2) are the same.
+Anything else (help, ``--name=value``, a repeated option of the command, a value it does not
+read as plainly valid) goes to the typer command, untouched: the fast path prints nothing and
+does nothing before it has decided to take the command line.
 """
 
 from __future__ import annotations
@@ -61,14 +64,29 @@ def command_options(command) -> dict | None:
     return opts
 
 
-def parse(argv, opts: dict) -> dict | None:
+# a model option's name as the fast path takes it: --name (letters, digits, hyphens)
+_MODEL_OPTION = re.compile(r"--[a-z][a-z0-9-]*")
+
+
+def parse(argv, opts: dict, extra: list | None = None) -> dict | None:
     """{parameter: value} of a plain command line over ``opts`` (:func:`command_options`),
     every parameter given its default where not given, or None where the command line is
-    not plain (see the module's notes) or a required option is missing."""
+    not plain (see the module's notes) or a required option is missing.
+
+    ``extra``: a list that receives a model's own options, ``--name value`` pairs of a name
+    that is not the command's (nor ``--help``) and a value that does not start with ``-``,
+    in their order (what typer passes on as the command's extra arguments); without it
+    such a command line is not plain."""
     values = {}
     i = 0
     while i < len(argv):
         a = argv[i]
+        if (extra is not None and a not in opts and a != "--help"
+                and _MODEL_OPTION.fullmatch(a) and i + 1 < len(argv)
+                and argv[i + 1] and not argv[i + 1].startswith("-")):
+            extra += [a, argv[i + 1]]
+            i += 2
+            continue
         if a not in opts or opts[a][0] in values:
             return None
         name, kind, _ = opts[a]
@@ -110,7 +128,8 @@ def fast_render(argv) -> int | None:
     opts = command_options(render)
     if opts is None:
         return None
-    v = parse(argv, opts)
+    extra: list = []
+    v = parse(argv, opts, extra)
     if v is None:
         return None
     import typer
@@ -127,7 +146,7 @@ def fast_render(argv) -> int | None:
     # the errors of _run name the command's options as in the typer command
     _kit._FAST_COMMAND = (set(opts), True)
     try:
-        _run(_render, [], *args)
+        _run(_render, extra, *args)
     except typer.Exit as exc:
         return int(exc.exit_code)
     finally:

@@ -43,16 +43,22 @@ Folder: ``$SKYDOME_CACHE_DIR`` if set, else ``platformdirs.user_cache_dir("skydo
 write the least recently used files are removed until the folder fits. Files are written
 to a temporary name in the folder and renamed, so a reader never sees a partial file. A write
 that fails (a full disk, a read-only folder) is not an error: the tables are used from memory,
-and the process says so once, in one line on stderr.
+and the process says so once, in one line on stderr. Within :func:`background_writes` (the
+command line's model construction) a new entry's tables are encoded at once and its files
+written on a (non-daemon) thread while the caller goes on; :func:`wait_for_writes` waits
+for it, and every later load, store and clear does so first.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
 import json
 import os
 import shutil
 import sys
+import threading
 import zlib
 
 import numpy as np
@@ -247,11 +253,7 @@ def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
             flat = slab.reshape(-1, nl)
             step = max(1, _CHECK_BYTES // (4 * nl))
             for i in range(0, flat.shape[0], step):
-                h, e = _encode_half(flat[i:i + step])
-                _decode_half(h, e, flat[i:i + step])
-                # NaN, inf and values too large for float16 decode to NaN or inf
-                if not np.isfinite(flat[i:i + step]).all():
-                    raise _NotFinite(name)
+                h, e = _encode_rows(flat[i:i + step], name)
                 data = memoryview(h.reshape(-1)).cast("B")
                 crc = zlib.crc32(data, crc)
                 f.write(data)
@@ -264,6 +266,92 @@ def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
     rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
            "shape": [int(n) for n in shape]}
     return {name: rec, name + _EXP: _record(exps, zlib.crc32(memoryview(exps.reshape(-1))))}
+
+
+def _encode_rows(rows: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """(float16 values, int8 exponents) of the float32 ``rows`` (n, n_wavelengths)
+    (:func:`_encode_half`), ``rows`` receiving the decoded values in place (what a later
+    read gives: :func:`_decode_half_checked`, the reader's decoding); _NotFinite where a
+    value is not finite (NaN and inf, and values too large for the format, encode to NaN or
+    inf)."""
+    h, e = _encode_half(rows)
+    if not _decode_half_checked(h, e, rows):
+        raise _NotFinite(name)
+    return h, e
+
+
+def _encode_threads() -> int:
+    """Threads of the encoding of a large table (:func:`_encode_table`): the cores this
+    process may use, at most 4."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        n = os.cpu_count() or 1
+    return max(1, min(4, n))
+
+
+class _Encoded:
+    """A float32 table encoded in half precision in memory (:func:`_encode_table`): its
+    float16 chunks in file order and its int8 row exponents, written by
+    :func:`_write_encoded`."""
+
+    def __init__(self, shape, chunks, exps):
+        self.shape, self.chunks, self.exps = tuple(int(n) for n in shape), chunks, exps
+
+
+def _encode_table(name: str, slabs, shape) -> _Encoded:
+    """Encode the float32 table ``name`` of ``shape`` given as consecutive C-contiguous
+    ``slabs`` along its first axis, each receiving the decoded values in place
+    (:func:`_encode_rows`), in steps of :data:`_CHECK_BYTES` shared out between
+    :func:`_encode_threads` threads (NumPy's casts and reductions release the interpreter
+    lock: the scattering density's aerosol constituent took 0.9-1.2 s on one thread of the
+    2-core EPYC of docs/performance.md). The same chunks, values and exponents as
+    :func:`_write_half` writes; held in memory (half the table's float32 size) until
+    :func:`_write_encoded` writes them. _NotFinite as there."""
+    nl = int(shape[-1])
+    parts = []
+    for slab in slabs:
+        if slab.dtype != np.float32 or not slab.flags.c_contiguous:
+            raise ValueError(f"a slab of {name} is not C-contiguous float32")
+        flat = slab.reshape(-1, nl)
+        step = max(1, _CHECK_BYTES // (4 * nl))
+        parts += [flat[i:i + step] for i in range(0, flat.shape[0], step)]
+    n = min(_encode_threads(), len(parts))
+    if n <= 1:
+        out = [_encode_rows(p, name) for p in parts]
+    else:
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(max_workers=n) as pool:
+            out = list(pool.map(lambda p: _encode_rows(p, name), parts))
+    rows = sum(p.shape[0] for p in parts)
+    if rows != int(np.prod(shape[:-1])):
+        raise ValueError(f"{rows} rows encoded for a table {tuple(shape)}")
+    exps = (np.concatenate([e for _, e in out]) if out else np.empty(0, dtype=np.int8))
+    return _Encoded(shape, [h for h, _ in out], exps.reshape(tuple(shape[:-1])))
+
+
+def _write_encoded(file: str, exp_file: str, name: str, enc: _Encoded) -> dict:
+    """Write the encoded table ``enc`` (:func:`_encode_table`) to ``file`` and ``exp_file``
+    as :func:`_write_half` does (the same bytes); returns their checksum records. Each chunk
+    is let go once written (``enc.chunks`` is empty after), so that the memory they hold
+    shrinks as the write goes on."""
+    crc = 0
+    with open(file, "wb") as f:
+        _npy_header(f, np.float16, enc.shape)
+        chunks, enc.chunks = enc.chunks, []
+        chunks.reverse()
+        while chunks:
+            h = chunks.pop()
+            data = memoryview(h.reshape(-1)).cast("B")
+            crc = zlib.crc32(data, crc)
+            f.write(data)
+            del data, h
+    write_npy(exp_file, enc.exps)
+    rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
+           "shape": [int(n) for n in enc.shape]}
+    return {name: rec,
+            name + _EXP: _record(enc.exps, zlib.crc32(memoryview(enc.exps.reshape(-1))))}
 
 
 def _read_half(path: str, name: str, sums: dict, out=None) -> np.ndarray:
@@ -371,29 +459,50 @@ def _quadratic_eval(coef: np.ndarray, out: np.ndarray) -> None:
               out=out.reshape(B.shape[0], -1))
 
 
-def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
-    """Write the table ``name`` (float32 ``a``, the tables' own array) into ``folder`` in
+def _encode_store_half(name: str, a: np.ndarray):
+    """Encode the table ``name`` (float32 ``a``, the tables' own array) for the entry in
     half precision: for the scattering density, the constituents that are a quadratic form
     in the outgoing direction as its coefficients (float32, ``<name>.quadratic.npy``) and
-    the others as float16 (:func:`_write_half`); every other table all as float16. ``a``
-    receives the values a later read gives. Returns (checksum records of the files, the
-    "quadratic" record of meta.json: {name: {"constituents", "shape"}} or {})."""
+    the others as float16 (:func:`_encode_table`); every other table all as float16. ``a``
+    receives the values a later read gives. Returns (coefficients with their CRC-32 or
+    None, the encoded rest, the "quadratic" record of meta.json: {name: {"constituents",
+    "shape"}} or {}), for :func:`_write_store_half`."""
     ks, coef = _quadratic_fit(a) if name == _DENSITY else ([], None)
-    recs, extra = {}, {}
+    quad, extra = None, {}
     if ks:
         crc, finite = _check(coef)
         if not finite:
             raise _NotFinite(name)
-        write_npy(os.path.join(folder, name + _QUAD + ".npy"), coef)
-        recs[name + _QUAD] = _record(coef, crc)
+        quad = (coef, crc)
         extra[name] = {"constituents": ks, "shape": [int(n) for n in a.shape]}
         for j, k in enumerate(ks):
             _quadratic_eval(coef[j], a[k])
     rest = [k for k in range(a.shape[0]) if k not in ks]
-    recs.update(_write_half(os.path.join(folder, name + ".npy"),
-                            os.path.join(folder, name + _EXP + ".npy"), name,
-                            [a[k:k + 1] for k in rest], (len(rest),) + a.shape[1:]))
-    return recs, extra
+    enc = _encode_table(name, [a[k:k + 1] for k in rest], (len(rest),) + a.shape[1:])
+    return quad, enc, extra
+
+
+def _write_store_half(folder: str, name: str, encoded) -> dict:
+    """Write what :func:`_encode_store_half` encoded into ``folder``; returns the files'
+    checksum records."""
+    quad, enc, _ = encoded
+    recs = {}
+    if quad is not None:
+        coef, crc = quad
+        write_npy(os.path.join(folder, name + _QUAD + ".npy"), coef)
+        recs[name + _QUAD] = _record(coef, crc)
+    recs.update(_write_encoded(os.path.join(folder, name + ".npy"),
+                               os.path.join(folder, name + _EXP + ".npy"), name, enc))
+    return recs
+
+
+def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
+    """Write the table ``name`` (float32 ``a``, the tables' own array) into ``folder`` in
+    half precision (:func:`_encode_store_half`, then :func:`_write_store_half`). ``a``
+    receives the values a later read gives. Returns (checksum records of the files, the
+    "quadratic" record of meta.json: {name: {"constituents", "shape"}} or {})."""
+    encoded = _encode_store_half(name, a)
+    return _write_store_half(folder, name, encoded), encoded[2]
 
 
 def _read_table(path: str, name: str, sums: dict, quad) -> np.ndarray:
@@ -473,6 +582,7 @@ def load(k: str):
     start-up reads only the header of each file and pages come in as the tables are used."""
     from skydome.models.simulated.precomputed._tables import Tables
 
+    wait_for_writes()
     path = _path(k)
     if not os.path.isdir(path):
         return None
@@ -573,6 +683,7 @@ def add_stored_table(k: str, shape, slabs):
     (the caller then builds the table in memory)."""
     from skydome._io import atomic_file
 
+    wait_for_writes()
     path = _path(k)
     file = os.path.join(path, _STORED + ".npy")
     meta_file = os.path.join(path, _META)
@@ -657,13 +768,60 @@ class _NotFinite(Exception):
     pass
 
 
-def store(k: str, tables) -> str | None:
+# entries being written on background threads (store with background writes), and the lock
+# of that list
+_PENDING: list = []
+_PENDING_LOCK = threading.Lock()
+_BACKGROUND = False
+
+
+@contextlib.contextmanager
+def background_writes():
+    """Meanwhile (in this process), :func:`store` encodes a new entry's tables at once (the
+    tables then serve the values a later read gives, as before) and writes its files on a
+    background thread, so that the caller goes on (e.g. renders) while they are written.
+    The thread is not a daemon: the interpreter waits for it before it exits, so the entry
+    is written, or (an error, a signal) none is (the files go to a temporary folder renamed
+    when complete). Every later :func:`load`, :func:`store`, :func:`add_stored_table` and
+    :func:`clear_cache` waits for it first; :func:`wait_for_writes` waits explicitly (the
+    command line does, when its command ends)."""
+    global _BACKGROUND
+    before = _BACKGROUND
+    _BACKGROUND = True
+    try:
+        yield
+    finally:
+        _BACKGROUND = before
+
+
+def wait_for_writes() -> None:
+    """Wait for every entry being written on a background thread (:func:`background_writes`)."""
+    while True:
+        with _PENDING_LOCK:
+            pending = [t for t in _PENDING if t is not threading.current_thread()]
+        if not pending:
+            return
+        for t in pending:
+            t.join()
+            with _PENDING_LOCK:
+                if t in _PENDING:
+                    _PENDING.remove(t)
+
+
+def store(k: str, tables, background: bool | None = None) -> str | None:
     """Write ``tables`` under key ``k`` (a folder of ``.npy`` files and ``meta.json``,
     written under a temporary name and renamed; the stored table of orders 2..N only where
     it is built, else :func:`add_stored_table` adds it later) and trim the cache to the
     size limit; returns the path, or None where the folder cannot be written or the tables
     alone exceed the limit (the cache is a convenience: a failure to write it is not an
-    error)."""
+    error).
+
+    The large tables are encoded first (:func:`_encode_store_half`; the tables' own arrays
+    then hold the decoded values), then the files written. ``background`` (default: within
+    :func:`background_writes`): the files are written on a thread and the path the entry
+    will have is returned at once (a failure is said on stderr, as without)."""
+    wait_for_writes()
+    background = _BACKGROUND if background is None else bool(background)
     limit = limit_bytes()
     arrays = tables.arrays()
     half = set()
@@ -680,33 +838,79 @@ def store(k: str, tables) -> str | None:
             half.add(name)
     if sum(a.nbytes // (2 if n in half else 1) for n, a in arrays.items()) > limit:
         return None
-    from skydome._io import atomic_folder
-
     folder = cache_dir()
     path = _path(k)
+    order, plain = list(arrays), {}
+    try:
+        # in this thread: the checks of the tables stored as they are (never cache a table
+        # that is not finite), the cache folder, then the encoding; the tables' own arrays
+        # receive the decoded values, so that this model serves what a later cache hit
+        # reads (a C-contiguous float32 array: arrays() gives the table itself, not a copy)
+        for name, a in arrays.items():
+            if name in half:
+                continue
+            if a.ndim == 0:           # a scalar of meta.json (ascontiguousarray would make
+                plain[name] = (a, None)   # it 1-d)
+                continue
+            a = np.ascontiguousarray(a)
+            plain[name] = (a, _checked_crc(name, a))
+        os.makedirs(folder, exist_ok=True)
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), folder)
+        encoded = {name: _encode_store_half(name, getattr(tables, name)) for name in half}
+    except _NotFinite:
+        return None
+    except (OSError, ValueError) as exc:   # ValueError: the cache folder is not writable
+        _write_failed(folder, exc)
+        return None
+
+    def write():
+        return _write_entry(folder, path, k, order, plain, encoded, half, limit)
+
+    if not background:
+        return write()
+    from skydome._io import _install_handler
+
+    _install_handler()     # the SIGTERM clean-up of the temporary folder (main thread only)
+    t = threading.Thread(target=write, name="skydome-cache-write", daemon=False)
+    with _PENDING_LOCK:
+        _PENDING.append(t)
+    t.start()
+    return path
+
+
+def _checked_crc(name: str, a: np.ndarray) -> int:
+    """The CRC-32 of C-contiguous ``a``; _NotFinite where a value is not finite."""
+    crc, finite = _check(a)
+    if not finite:
+        raise _NotFinite(name)
+    return crc
+
+
+def _write_entry(folder, path, k, order, plain, encoded, half, limit) -> str | None:
+    """:func:`store`'s files: the tables ``plain`` ({name: (array, CRC-32)}) as they are
+    and the ``encoded`` ones (:func:`_encode_store_half`), in the order of the names
+    ``order``, into a temporary folder renamed to ``path``, then the cache trimmed; the
+    path, or None (see :func:`store`)."""
+    from skydome._io import atomic_folder
+
     try:
         os.makedirs(folder, exist_ok=True)
         if os.path.isdir(path):
             _remove(path)
         with atomic_folder(path) as tmp:
             names, scalars, sums, quadratic = [], {}, {}, {}
-            for name, a in arrays.items():
+            for name in order:
+                if name in encoded:
+                    recs = _write_store_half(tmp, name, encoded[name])
+                    sums.update(recs)
+                    names += list(recs)
+                    quadratic.update(encoded[name][2])
+                    continue
+                a, crc = plain[name]
                 if a.ndim == 0:
                     scalars[name] = a.item()
                     continue
-                a = np.ascontiguousarray(a)
-                if name in half:
-                    # the tables' own array receives the decoded values, so that this model
-                    # serves what a later cache hit reads (a C-contiguous float32 array:
-                    # arrays() gives the table itself, not a copy)
-                    recs, extra = _store_half(tmp, name, getattr(tables, name))
-                    sums.update(recs)
-                    names += list(recs)
-                    quadratic.update(extra)
-                    continue
-                crc, finite = _check(a)
-                if not finite:    # never cache a table that is not finite
-                    raise _NotFinite(name)
                 write_npy(os.path.join(tmp, name + ".npy"), a)
                 names.append(name)
                 sums[name] = _record(a, crc)
@@ -715,8 +919,6 @@ def store(k: str, tables) -> str | None:
                            "scalars": scalars, "checksums": sums,
                            "encoded": {n: "half" for n in sorted(half)},
                            "quadratic": quadratic}, f)
-    except _NotFinite:
-        return None
     except (OSError, ValueError) as exc:   # ValueError: the cache folder is not writable
         _write_failed(folder, exc)
         return None
@@ -779,6 +981,7 @@ def _remove(path):
 def clear_cache() -> int:
     """Remove every cached table set (and temporary folders left by interrupted writes);
     returns the number of bytes freed."""
+    wait_for_writes()
     folder = cache_dir()
     freed = 0
     for _, size, p in _entries(folder):
