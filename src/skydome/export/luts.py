@@ -183,8 +183,13 @@ def _xyz_4d(tab: np.ndarray, K: np.ndarray) -> np.ndarray:
 
 
 def _zeros(shape) -> np.ndarray:
-    """A zeroed float32 texture in memory (the default ``alloc`` of the bakes below)."""
+    """A zeroed float32 texture in memory."""
     return np.zeros(shape, dtype=np.float32)
+
+
+def _in_memory(name: str, shape) -> np.ndarray:
+    """The default ``alloc(name, shape)`` of the bakes below: :func:`_zeros`."""
+    return _zeros(shape)
 
 
 def _xyz_bruneton_3d(tabs, K: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -211,7 +216,7 @@ SINGLE_SLAB_ROWS = 8
 
 
 def _single_xyz(t, K: np.ndarray, ray, mie, ground: bool, shape,
-                alloc=_zeros) -> dict[str, np.ndarray]:
+                alloc=_in_memory) -> dict[str, np.ndarray]:
     """The XYZ textures of single scattering (:func:`_bruneton_3d`'s packing): ``scattering``
     (the Rayleigh group), ``single_mie_scattering`` (the Mie group; zeros without one) and,
     with ``ground``, ``single_scattering_<k>`` per scatterer; reduced in one pass over the
@@ -320,7 +325,7 @@ def bake_precomputed(sky, ground: bool = False, density: bool = False,
     od[..., :cols.shape[0]] = cols.transpose(1, 2, 0) * 1e-3      # km: half floats hold it
     irr = np.asarray(t.irradiance, dtype=np.float64)           # (r, mu_s, l)
     if alloc is None:
-        alloc = lambda name, shape: _zeros(shape)           # noqa: E731
+        alloc = _in_memory
     single = _single_xyz(t, K, ray, mie, ground, (n_r, n_mu, n_ms, n_nu), alloc)
     n_sc = sum(1 for n in single if n.startswith("single_scattering_"))
     tex = {
