@@ -176,3 +176,74 @@ def test_cli_export_luts_precomputed(tmp_path):
                               "--out", str(tmp_path / "bad")])
     assert res.exit_code == 2 and "formats" in res.output
     assert not (tmp_path / "bad").exists()
+
+
+def test_density_texture_follows_the_described_layout():
+    """The packed scattering density against luts.json's layout, texel by texel: block b =
+    ((i_theta n_scatterers) + k) layers + layer holds wavelengths 4 layer .. 4 layer + 3 in
+    RGBA (zeros past the last) at x = (b mod cols) n_mu_s + i_mu_s, y = i_r, z = (b div
+    cols) n_phi + i_phi; with a last, partial layer (7 and 9 wavelengths) and without (8)."""
+    from skydome.export.luts import _density_texture
+
+    rng = np.random.default_rng(3)
+    for shape, cols in [((2, 3, 2, 3, 5, 7), 4), ((1, 4, 3, 2, 3, 8), 3),
+                        ((2, 2, 2, 2, 2, 9), 5)]:
+        J = rng.random(shape, dtype=np.float32)
+        tex = _density_texture(J, cols)
+        nsc, n_th, n_ph, n_r, n_ms, nl = shape
+        layers = -(-nl // 4)
+        want = np.zeros_like(tex)
+        for it in range(n_th):
+            for k in range(nsc):
+                for lay in range(layers):
+                    b = (it * nsc + k) * layers + lay
+                    for ip in range(n_ph):
+                        for ir in range(n_r):
+                            for im in range(n_ms):
+                                for c in range(4):
+                                    if 4 * lay + c < nl:
+                                        want[(b // cols) * n_ph + ip, ir,
+                                             (b % cols) * n_ms + im, c] = \
+                                            J[k, it, ip, ir, im, 4 * lay + c]
+        assert tex.dtype == np.float32 and tex.tobytes() == want.tobytes()
+
+
+def test_written_files_are_numpys_own_of_the_bake_in_memory(small_sky, tmp_path):
+    """write_luts builds the large textures in their .npy files' pages: every .npy file is
+    byte for byte numpy's np.save of the same bake built in memory, every .bin its raw
+    little-endian float32 bytes."""
+    import io
+
+    from skydome.export.luts import bake, write_luts
+
+    tex, _ = bake(small_sky)
+    write_luts(small_sky, tmp_path / "luts", ("npy", "bin"))
+    assert {p.stem for p in (tmp_path / "luts").glob("*.npy")} == set(tex)
+    for name, arr in tex.items():
+        buf = io.BytesIO()
+        np.save(buf, arr)
+        assert (tmp_path / "luts" / f"{name}.npy").read_bytes() == buf.getvalue(), name
+        assert (tmp_path / "luts" / f"{name}.bin").read_bytes() == \
+            np.ascontiguousarray(arr, dtype="<f4").tobytes(), name
+
+
+def test_a_full_disk_before_the_mapped_texture_is_enospc_naming_it(small_sky, tmp_path,
+                                                                    monkeypatch):
+    """The mapped .npy file's blocks are reserved before the bake fills it: no space is an
+    OSError ENOSPC naming the file in the output folder (not a SIGBUS on the mapping), and
+    nothing is left behind."""
+    import errno
+    import os
+
+    from skydome.export.luts import write_luts
+
+    def no_space(fd, offset, length):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "posix_fallocate", no_space, raising=False)
+    with pytest.raises(OSError) as info:
+        write_luts(small_sky, tmp_path / "luts", ("npy", "bin"))
+    assert info.value.errno == errno.ENOSPC
+    assert str(info.value.filename).startswith(str(tmp_path / "luts"))
+    assert str(info.value.filename).endswith(".npy")
+    assert list(tmp_path.iterdir()) == []

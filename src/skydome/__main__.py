@@ -4,7 +4,8 @@ A plain perez1993 ``skymatrix`` command line is run without the CLI framework
 (:func:`skydome.cli.skymatrix_fast.fast_skymatrix`: no typer, and with ``--backend
 numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run), and a plain
 ``render`` command line without typer's application and parser
-(:func:`skydome.cli.render_fast.fast_render`); every other command line, and any that a
+(:func:`skydome.cli.render_fast.fast_render`), and a plain ``export envmap`` command line
+likewise (:func:`skydome.cli.render_fast.fast_export_envmap`); every other command line, and any that a
 fast path does not take, goes to the typer application :mod:`skydome.cli`.
 """
 
@@ -65,6 +66,13 @@ def main() -> None:  # console-script entry point
         from skydome.cli.render_fast import fast_render
 
         code = _run_fast(fast_render, argv[1:], collector_off=True)
+        if code is not None:
+            sys.exit(code)
+    if argv[:2] == ["export", "envmap"]:
+        # the same for a plain `export envmap` command line (one map, then the process ends)
+        from skydome.cli.render_fast import fast_export_envmap
+
+        code = _run_fast(fast_export_envmap, argv[2:], collector_off=True)
         if code is not None:
             sys.exit(code)
     from skydome.cli import main as cli_main

@@ -109,13 +109,17 @@ def _envmap(extra, model, out, convention, layout, size, half, sun_in_map, groun
         check_int("wavelengths", wavelengths, 3, 401)
 
     _keep_freed_memory()
-    sky = _sky(model, extra, sun, check)
-    conv, layout, p = checked["conv"], checked["layout"], checked["p"]
-
-    # 2. work
-    progress = _Progress(f"exporting {model} ({conv.name}, {layout})")
-    t0 = _time.perf_counter()
+    # the model built as the render command builds it (_kit._build_model): numba's start
+    # on a second thread while the model is constructed (a cached precomputed model reads
+    # and decodes its tables meanwhile), its set-up's progress on the bar
+    progress = _Progress(f"exporting {model}")
     try:
+        sky = _sky(model, extra, sun, check, progress)
+        conv, layout, p = checked["conv"], checked["layout"], checked["p"]
+
+        # 2. work
+        progress.label = f"exporting {model} ({conv.name}, {layout})"
+        t0 = _time.perf_counter()
         env = render_envmap(sky, conv, size, layout, sun=sun_mode, ground=ground,
                             ground_albedo=ground_albedo,
                             wavelengths_nm=wavelength_grid(380.0, 780.0, n=wavelengths),

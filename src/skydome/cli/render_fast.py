@@ -1,4 +1,5 @@
-"""``skydome render`` for a plain command line, without building the typer application.
+"""``skydome render`` and ``skydome export envmap`` for a plain command line, without
+building the typer application.
 
 typer (0.29) builds the command line's whole application (27 commands) and, for each option
 of the command it runs, a pydantic ``TypeAdapter`` that converts its value: for ``skydome
@@ -19,6 +20,12 @@ output and its errors (one line on stderr naming the option, exit code 2) are th
 Anything else (help, ``--name=value``, a repeated option of the command, a value it does not
 read as plainly valid) goes to the typer command, untouched: the fast path prints nothing and
 does nothing before it has decided to take the command line.
+
+:func:`fast_export_envmap` does the same for ``skydome export envmap`` (its typer command
+:func:`skydome.cli.export.envmap`, its work :func:`skydome.cli.export._envmap`); a model's own
+options, which that command passes on to the model, are taken there as ``--name value`` (a
+value that does not start with ``-``) and handed on in their order as typer hands them on
+(``ctx.args``), to be checked by the same parser of model options.
 """
 
 from __future__ import annotations
@@ -57,15 +64,15 @@ def command_options(command) -> dict | None:
         if kind == "flag":
             if len(decls) != 1 or "/" in decls[0] or info.default is not False:
                 return None
-        elif decls:
+        elif decls and decls != ("--" + name.replace("_", "-"),):
             return None
         opt = decls[0] if decls else "--" + name.replace("_", "-")
         opts[opt] = (name, kind, info.default)
     return opts
 
 
-# a model option's name as the fast path takes it: --name (letters, digits, hyphens)
-_MODEL_OPTION = re.compile(r"--[a-z][a-z0-9-]*")
+#: a model's own option as the fast paths take it (``--name``, lower case)
+_MODEL_OPTION = re.compile(r"--[a-z][a-z0-9]*(-[a-z0-9]+)*")
 
 
 def parse(argv, opts: dict, extra: list | None = None) -> dict | None:
@@ -153,3 +160,42 @@ def fast_render(argv) -> int | None:
         _kit._FAST_COMMAND = None
     return 0
 
+
+
+#: the parameters of :func:`skydome.cli.export._envmap` after ``extra``, in its order
+_ENVMAP_ARGS = ("model", "out", "convention", "layout", "size", "half", "sun_in_map", "ground",
+                "ground_albedo", "sh", "mips", "sun", "wavelengths", "units")
+
+
+def fast_export_envmap(argv) -> int | None:
+    """Run a plain ``skydome export envmap`` command line (the words after ``export
+    envmap``) in this process without the typer application; the exit code (0, or 2 after a
+    one-line error), or None where the typer command should take the command line (nothing
+    has been done then)."""
+    from skydome.cli import _kit
+    from skydome.cli.export import envmap
+
+    opts = command_options(envmap)
+    if opts is None:
+        return None
+    extra: list = []
+    v = parse(argv, opts, extra)
+    if v is None:
+        return None
+    import typer
+
+    from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE, _run
+    from skydome.cli.export import _envmap
+
+    v["sun"] = {k: v.pop(k) for k in SUN_BY_ANGLES_OR_PLACE if k in v}
+    args = [v.pop(k) for k in _ENVMAP_ARGS]
+    if v:       # an option of the command that this call does not pass on: typer's
+        return None
+    _kit._FAST_COMMAND = (set(opts), True)
+    try:
+        _run(_envmap, extra, *args)
+    except typer.Exit as exc:
+        return int(exc.exit_code)
+    finally:
+        _kit._FAST_COMMAND = None
+    return 0
