@@ -52,14 +52,14 @@ LIST = ROOT / "tests" / "suite_kernels.jsonl"
 
 # -- record ----------------------------------------------------------------------------------
 
-def _function_of(index: Path) -> tuple[str, str] | None:
+def _function_of(index: Path, src: Path = SRC) -> tuple[str, str] | None:
     """(module, qualified name) of the function whose numba index file this is
     (``<folder>/__pycache__/<file stem>.<qualname>-<line>.py<version>.nbi``)."""
     head = index.name[: -len(".nbi")].rsplit("-", 1)[0]
     stem, _, qualname = head.partition(".")
-    if not qualname or "<" in qualname or ">" in qualname:
-        return None   # a function defined inside another one: not importable by name
-    package = index.parent.parent.relative_to(SRC).parts
+    if not qualname or "locals" in qualname.split("."):
+        return None   # defined inside a function (numba writes "<locals>" as "locals")
+    package = index.parent.parent.relative_to(src).parts
     module = ".".join(package if stem == "__init__" else package + (stem,))
     return module, qualname
 
@@ -71,12 +71,12 @@ def _read_index(index: Path) -> dict:
     return overloads
 
 
-def record(out: Path, replace: bool) -> int:
+def record(out: Path, replace: bool, src: Path = SRC) -> int:
     entries = {} if replace else {(e["module"], e["qualname"], e["signature"]): e
                                   for e in _load_list(out)}
     found = 0
-    for index in sorted(SRC.glob("skydome/**/__pycache__/*.nbi")):
-        function = _function_of(index)
+    for index in sorted(src.glob("skydome/**/__pycache__/*.nbi")):
+        function = _function_of(index, src)
         if function is None:
             continue
         try:
@@ -236,6 +236,8 @@ def main(argv: list[str] | None = None) -> int:
     r = sub.add_parser("record", help="write the list from the checkout's numba cache")
     r.add_argument("--out", type=Path, default=LIST)
     r.add_argument("--replace", action="store_true", help="drop the list's old entries")
+    r.add_argument("--src", type=Path, default=SRC,
+                   help="the source folder whose __pycache__ folders are read (this checkout's)")
     c = sub.add_parser("compile", help="compile the listed signatures in parallel processes")
     c.add_argument("--list", type=Path, default=LIST)
     c.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
@@ -246,7 +248,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("part")
     args = ap.parse_args(argv)
     if args.command == "record":
-        return record(args.out, args.replace)
+        return record(args.out, args.replace, args.src.resolve())
     if args.command == "compile":
         if args.jobs < 1:
             ap.error(f"--jobs must be >= 1, got {args.jobs}")
