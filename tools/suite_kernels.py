@@ -18,7 +18,7 @@ find them.
 
 ``compile``
     Compiles every listed signature with ``Dispatcher.compile`` in ``--jobs`` processes
-    (the number of CPUs by default), all signatures of one function in the same process
+    (the CPUs this process may use, at most 8, by default), all signatures of one function in the same process
     (each function has one cache index file, which two processes must not write at once),
     the functions split so that each process gets about the same compiled size. Anything
     that no longer applies (a function renamed or removed, a signature that no longer
@@ -230,6 +230,14 @@ def compile_all(path: Path, jobs: int, stamp: Path | None) -> int:
     return 0
 
 
+def _default_jobs() -> int:
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, 8))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -240,7 +248,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="the source folder whose __pycache__ folders are read (this checkout's)")
     c = sub.add_parser("compile", help="compile the listed signatures in parallel processes")
     c.add_argument("--list", type=Path, default=LIST)
-    c.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    c.add_argument("--jobs", type=int, default=_default_jobs(),
+                   help="compiling processes (default: the CPUs this process may use, at "
+                        "most 8; each holds about 1 GB at its peak)")
     c.add_argument("--stamp", type=Path, default=None,
                    help="skip when this file holds the hash of an unchanged checkout")
     p = sub.add_parser("_part")   # one compiling process (internal)
