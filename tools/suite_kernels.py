@@ -250,7 +250,7 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--list", type=Path, default=LIST)
     c.add_argument("--jobs", type=int, default=_default_jobs(),
                    help="compiling processes (default: the CPUs this process may use, at "
-                        "most 8; each holds about 1 GB at its peak)")
+                        "most 8; each held up to 0.8 GB here)")
     c.add_argument("--stamp", type=Path, default=None,
                    help="skip when this file holds the hash of an unchanged checkout")
     p = sub.add_parser("_part")   # one compiling process (internal)
