@@ -23,57 +23,56 @@ def _private_cache_dir(_session_cache_dir, tmp_path_factory, request, monkeypatc
 
 
 # -- the suite's compile share (issue 27, item 5) ------------------------------------------
-# numba announces each compilation as a "numba:compile" event (numba.core.event); the clock
-# below sums the outermost ones per thread (a kernel's nested compilations of its callees
-# are inside its own), so that the summary can say how much of the session's wall time went
-# into compiling in this process. Compilations in subprocesses (the CLI tests) are not seen.
-import threading  # noqa: E402
+# Every process that imports skydome with SKYDOME_COMPILE_LOG set appends one line per numba
+# compilation to that file (skydome._compile_log: the outermost "numba:compile" event per
+# thread, since a kernel's compilation contains its callees'). The test process sets it
+# before any test imports skydome, so that the subprocesses it starts (the command-line
+# tests) inherit it and their compilations are counted too; the summary at the end of a run
+# gives both and their share of the session's wall time. Subprocesses started with an
+# environment of their own (without the variable) are not counted.
+import os  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 
-
-class _CompileClock:
-    def __init__(self):
-        self.local = threading.local()
-        self.lock = threading.Lock()
-        self.seconds = 0.0
-        self.count = 0
-        self.session_start = time.perf_counter()
-
-    def on_start(self, event):
-        depth = getattr(self.local, "depth", 0)
-        if depth == 0:
-            self.local.t0 = time.perf_counter()
-        self.local.depth = depth + 1
-
-    def on_end(self, event):
-        self.local.depth -= 1
-        if self.local.depth == 0:
-            with self.lock:
-                self.seconds += time.perf_counter() - self.local.t0
-                self.count += 1
-
-
-_CLOCK = _CompileClock()
+_fd, _COMPILE_LOG = tempfile.mkstemp(prefix="skydome-compile-", suffix=".log")
+os.close(_fd)
+_OUTER_COMPILE_LOG = os.environ.get("SKYDOME_COMPILE_LOG")
+os.environ["SKYDOME_COMPILE_LOG"] = _COMPILE_LOG
+_SESSION_START = [time.perf_counter()]
 
 
 def pytest_sessionstart(session):
-    from numba.core import event
+    from skydome._compile_log import install
 
-    class _Listener(event.Listener):
-        def on_start(self, ev):
-            _CLOCK.on_start(ev)
-
-        def on_end(self, ev):
-            _CLOCK.on_end(ev)
-
-    event.register("numba:compile", _Listener())
-    _CLOCK.session_start = time.perf_counter()
+    install(_COMPILE_LOG)   # where skydome was imported before the variable was set
+    _SESSION_START[0] = time.perf_counter()
 
 
 def pytest_terminal_summary(terminalreporter):
-    wall = time.perf_counter() - _CLOCK.session_start
-    share = 100.0 * _CLOCK.seconds / wall if wall > 0 else 0.0
+    from skydome._compile_log import read
+
+    wall = time.perf_counter() - _SESSION_START[0]
+    per_process = read(_COMPILE_LOG)
+    own_n, own_s = per_process.pop(os.getpid(), (0, 0.0))
+    sub_n = sum(n for n, _ in per_process.values())
+    sub_s = sum(s for _, s in per_process.values())
+
+    def share(seconds):
+        return 100.0 * seconds / wall if wall > 0 else 0.0
+
     terminalreporter.write_line(
-        f"numba compilation in the test process: {_CLOCK.seconds:.1f} s in "
-        f"{_CLOCK.count} compilations, {share:.0f} % of the session's {wall:.1f} s wall "
-        "(compilations in subprocesses not counted)")
+        f"numba compilation: {own_s:.1f} s in the test process ({own_n} compilations, "
+        f"{share(own_s):.0f} % of the session's {wall:.1f} s wall), {sub_s:.1f} s in "
+        f"{len(per_process)} subprocesses ({sub_n} compilations); together "
+        f"{share(own_s + sub_s):.0f} %")
+
+
+def pytest_unconfigure(config):
+    try:
+        os.remove(_COMPILE_LOG)
+    except OSError:
+        pass
+    if _OUTER_COMPILE_LOG is None:
+        os.environ.pop("SKYDOME_COMPILE_LOG", None)
+    else:
+        os.environ["SKYDOME_COMPILE_LOG"] = _OUTER_COMPILE_LOG

@@ -18,8 +18,15 @@ Examples
 from __future__ import annotations
 
 import importlib
+import os
 
 __version__ = "0.1.0"
+
+if os.environ.get("SKYDOME_COMPILE_LOG"):
+    # numba's compilations timed into that file (the test suite's compile share)
+    from skydome._compile_log import install as _install_compile_log
+
+    _install_compile_log(os.environ["SKYDOME_COMPILE_LOG"])
 
 # public name -> module that defines it (imported on first access)
 _LAZY = {
