@@ -14,11 +14,11 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (6 AOD x 3 albedo = 18 atmospheres, 26 sun elevations
-  -12..90 deg, 7 altitudes 0..15 km);
-* ``heldout``: the held-out grid (5 atmospheres, their albedos off the nodes, 13 sun
-  elevations -11..70 deg off the nodes and 5 altitudes of which only 0 and 15 km are
-  fitting nodes), every view direction at the centre of a cell of the view grid (the
+* ``fit``: the fitting nodes (7 AOD x 3 albedo = 21 atmospheres, 28 sun elevations
+  -12..90 deg, 10 altitudes 0..15 km);
+* ``heldout``: the held-out grid (5 atmospheres, their AODs and albedos off the nodes, 13
+  sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
+  are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
 * ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
 """
