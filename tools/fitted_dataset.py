@@ -1,7 +1,7 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
     python tools/fitted_dataset.py OUT [--grid fit|heldout|small] [--scheduler ADDR]
-        [--workers N] [--twilight-reference] [--max-aod A]
+        [--workers N] [--twilight-reference] [--max-aod A] [--atmospheres A:B,...]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -61,6 +61,10 @@ def main(argv=None) -> int:
     ap.add_argument("--max-aod", type=float, default=None,
                     help="leave out the grid's atmospheres whose AOD exceeds this (a data set "
                          "for a model fitted to a subset of the AOD nodes)")
+    ap.add_argument("--atmospheres", default=None,
+                    help="compute only these atmospheres of the grid, in this order "
+                         "(AOD:albedo,...; the others are left for a later run, which "
+                         "resumes): the most telling chunks first")
     ap.add_argument("--workers", type=int, default=1,
                     help="local cluster processes (default 1: each precomputation already "
                          "uses every core through numba)")
@@ -82,6 +86,22 @@ def main(argv=None) -> int:
             print(f"error: --max-aod = {a.max_aod:g} is out of range [0, 1]", file=sys.stderr)
             return 2
         atms = [x for x in atms if x[0] <= a.max_aod + 1e-12]
+    grid_atms = list(atms)
+    if a.atmospheres is not None:
+        try:
+            want = [tuple(float(v) for v in x.split(":")) for x in a.atmospheres.split(",")]
+            if any(len(x) != 2 for x in want):
+                raise ValueError
+        except ValueError:
+            print(f"error: --atmospheres = {a.atmospheres!r} is not a list AOD:albedo,...",
+                  file=sys.stderr)
+            return 2
+        bad = [x for x in want if not any(np.allclose(x, y) for y in atms)]
+        if bad:
+            print(f"error: --atmospheres: {bad} not in the {a.grid} grid's atmospheres "
+                  f"{atms}", file=sys.stderr)
+            return 2
+        atms = [next(y for y in atms if np.allclose(x, y)) for x in want]
     mid = a.grid == "heldout"       # held out in direction too: the cells' centres
     chunks = [Chunk(_dataset.chunk_key(aod, alb), _dataset.compute_chunk,
                     (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference))
@@ -89,7 +109,7 @@ def main(argv=None) -> int:
     t0, c0 = time.perf_counter(), time.process_time()
     report = run_chunks(chunks, a.out, scheduler=a.scheduler, n_workers=a.workers,
                         progress=True)
-    _dataset.write_grid(a.out, el, alt, atms, mid, a.twilight_reference)
+    _dataset.write_grid(a.out, el, alt, grid_atms, mid, a.twilight_reference)
     wall = time.perf_counter() - t0
     n = len(report.computed)
     print(f"\n{n} chunk(s) computed, {len(report.verified)} already there; "
