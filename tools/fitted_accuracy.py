@@ -142,7 +142,7 @@ def main(argv=None) -> int:
                     sun_err.append((float(el), float(h), aod,
                                     float(np.max(np.abs(t_fit / t_ref - 1.0)[wl >= 400]))))
                 if (aod, alb) == atmospheres[0] and h in (0.0, 15000.0) and \
-                        el in (45.0, 4.0, -4.5, -9.5):
+                        el in (45.0, 4.0, -4.5, -9.0, -9.5):
                     examples.append((el, h, y_ref, rel_y))
     rows = []
     print(f"held-out grid: {len(atmospheres)} atmospheres "

@@ -1,7 +1,8 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|small] [--scheduler ADDR]
-        [--workers N] [--twilight-reference] [--max-aod A] [--atmospheres A:B,...]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-shipped|heldout-shipped|small]
+        [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
+        [--atmospheres A:B,...]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -20,6 +21,9 @@ Grids (skydome/models/fitted/_grid.py):
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
+* ``fit-shipped``, ``heldout-shipped``: the grids of the shipped coefficient file (6 AOD
+  nodes 0-1, 26 sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and
+  0.05), to reproduce it;
 * ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
 """
 
@@ -36,21 +40,14 @@ def grid(name: str):
     """(elevations [deg], altitudes [m], atmospheres [(aod, albedo)]) of a named grid."""
     from skydome.models.fitted import _grid as G
 
-    if name == "fit":
-        atm = [(float(a), float(b)) for a in G.AOD_NODES for b in G.ALBEDO_NODES]
-        return G.SUN_ELEVATION_NODES_DEG, G.ALTITUDE_NODES_M, atm
-    if name == "heldout":
-        atm = list(G.HELDOUT_ATMOSPHERES)
-        return G.HELDOUT_SUN_ELEVATION_DEG, G.HELDOUT_ALTITUDE_M, atm
-    if name == "small":
-        return G.SUN_ELEVATION_NODES_DEG, G.ALTITUDE_NODES_M, [(0.1, 0.0), (0.1, 0.5)]
-    raise ValueError(f"--grid = {name!r} is not one of fit, heldout, small")
+    return G.grid(name)[:3]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
-    ap.add_argument("--grid", default="fit", choices=("fit", "heldout", "small"))
+    ap.add_argument("--grid", default="fit",
+                    choices=("fit", "heldout", "fit-shipped", "heldout-shipped", "small"))
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",
@@ -102,7 +99,7 @@ def main(argv=None) -> int:
                   f"{atms}", file=sys.stderr)
             return 2
         atms = [next(y for y in atms if np.allclose(x, y)) for x in want]
-    mid = a.grid == "heldout"       # held out in direction too: the cells' centres
+    mid = a.grid.startswith("heldout")    # held out in direction too: the cells' centres
     chunks = [Chunk(_dataset.chunk_key(aod, alb), _dataset.compute_chunk,
                     (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference))
               for aod, alb in atms]
