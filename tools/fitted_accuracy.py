@@ -2,7 +2,7 @@
 
     python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
         [--json OUT.json] [--coefficients FILE]
-    python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--coefficients FILE]
+    python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--coefficients FILE]
 
 HELDOUT is a folder written by ``tools/fitted_dataset.py --grid heldout``: the reference's
 spectral skies (computed by ``precomputed`` itself, never by the fitted model) at parameter
@@ -65,6 +65,8 @@ def main(argv=None) -> int:
                     help="measure at the fitting nodes of a --grid fit data set")
     ap.add_argument("--albedo", type=float, default=None,
                     help="with --nodes: only the atmospheres of this albedo (default all)")
+    ap.add_argument("--aod", type=float, default=None,
+                    help="with --nodes: only the atmospheres of this AOD (default all)")
     a = ap.parse_args(argv)
     import skydome as sd
     from skydome.models.fitted import _coefficients, _grid
@@ -74,7 +76,7 @@ def main(argv=None) -> int:
             return 2
         _coefficients.COEFFICIENT_FILE = Path(a.coefficients)
     if a.nodes:
-        return _at_nodes(a.heldout, a.albedo)
+        return _at_nodes(a.heldout, a.albedo, a.aod)
     from skydome.models.fitted._dataset import DataSet
     from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
         solar_irradiance
@@ -178,7 +180,7 @@ def main(argv=None) -> int:
     return 0
 
 
-def _at_nodes(folder, albedo) -> int:
+def _at_nodes(folder, albedo, aod=None) -> int:
     """The luminance error on a ``--grid fit`` data set (module docstring, ``--nodes``),
     each point classed by which of its parameters are nodes of the measured coefficient
     file: all of them (the representation's own error), or the sun elevation, the altitude
@@ -194,10 +196,11 @@ def _at_nodes(folder, albedo) -> int:
     if ds.midpoints:
         print("error: with --nodes DATASET must be made with --grid fit", file=sys.stderr)
         return 2
-    atms = [x for x in ds.present if albedo is None or abs(x[1] - albedo) < 1e-9]
+    atms = [x for x in ds.present if (albedo is None or abs(x[1] - albedo) < 1e-9)
+            and (aod is None or abs(x[0] - aod) < 1e-9)]
     if not atms:
-        print(f"error: --albedo = {albedo}: no atmosphere of the data set has it "
-              f"(albedos {sorted({b for _, b in ds.atmospheres})})", file=sys.stderr)
+        print(f"error: --albedo = {albedo}, --aod = {aod}: no computed atmosphere of the "
+              f"data set has them (computed: {ds.present})", file=sys.stderr)
         return 2
     c = _coefficients.load()
 
