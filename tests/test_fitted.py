@@ -186,3 +186,26 @@ def test_twilight_luminance_at_a_held_out_point_against_live_precomputed():
     rel = y_fit / y_ref - 1.0
     rms, worst = float(np.sqrt(np.mean(rel ** 2))), float(np.max(np.abs(rel)))
     assert rms <= TWILIGHT_RMS_BOUND and worst <= TWILIGHT_MAX_BOUND, (rms, worst)
+
+
+def test_heldout_grid_is_off_the_fitting_nodes():
+    # the held-out grid measures interpolation: none of its sun elevations, AODs or albedos
+    # is a fitting node, its altitudes only at the ends of the range (0 and 15 km), and every
+    # value lies inside the nodes' span (no extrapolation)
+    el, alt, atm, mid = _grid.grid("heldout")
+    fe, fh, fatm, fmid = _grid.grid("fit")
+    assert mid and not fmid
+    assert not set(el.tolist()) & set(fe.tolist())
+    assert set(alt.tolist()) & set(fh.tolist()) == {0.0, 15000.0}
+    aods = {a for a, _ in atm}
+    assert not aods & set(_grid.AOD_NODES.tolist())
+    assert not {b for _, b in atm} & set(_grid.ALBEDO_NODES.tolist())
+    for values, nodes in ((el, fe), (alt, fh), (sorted(aods), _grid.AOD_NODES)):
+        assert nodes[0] <= min(values) and max(values) <= nodes[-1]
+    # the "fit-shipped" grid is the shipped file's (which records its nodes): a refit
+    # updates both
+    c = _coefficients.load()
+    se, sh, _, _ = _grid.grid("fit-shipped")
+    np.testing.assert_array_equal(c["elevation_nodes_deg"], se)
+    np.testing.assert_array_equal(c["altitude_nodes_m"], sh)
+    np.testing.assert_array_equal(c["aod_nodes"], _grid.SHIPPED_AOD_NODES)

@@ -1,7 +1,8 @@
 """Measure the ``fitted`` model on its held-out grid, against the ``precomputed`` reference.
 
     python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
-        [--json OUT.json]
+        [--json OUT.json] [--coefficients FILE]
+    python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--coefficients FILE]
 
 HELDOUT is a folder written by ``tools/fitted_dataset.py --grid heldout``: the reference's
 spectral skies (computed by ``precomputed`` itself, never by the fitted model) at parameter
@@ -13,6 +14,14 @@ ground, at 0.4-4.5 km, at 15 km) it prints the luminance RMS and largest relativ
 luminance figures for ``hosek_wilkie2012`` (observer on the ground, sun above the horizon;
 turbidity from the AOD by Preetham's beta = 0.04608 T - 0.04586 and Angstrom's law with
 alpha 1.3), the ground seen from above (below the horizon) and the sun's transmittance.
+
+``--nodes``: DATASET is a ``--grid fit`` data set; the luminance error at its nodes (every
+sun elevation and altitude, every view-grid node of the sky more than 5 deg from the sun),
+each point classed by whether its parameters are nodes of the measured file: the
+representation's own error (the truncated angular basis) at the file's nodes, and the
+interpolation's in sun elevation, altitude or AOD at a finer grid's nodes between them
+(the angular interpolation, which the held-out grid's cell centres add, is not in it). ``--coefficients``: measure that file instead of the package's
+(for instance the previous coefficients on the same held-out grid).
 """
 
 from __future__ import annotations
@@ -50,9 +59,24 @@ def main(argv=None) -> int:
     ap.add_argument("heldout")
     ap.add_argument("--figure", default=None)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--coefficients", default=None,
+                    help="coefficient file to measure (default: the package's)")
+    ap.add_argument("--nodes", action="store_true",
+                    help="measure at the fitting nodes of a --grid fit data set")
+    ap.add_argument("--albedo", type=float, default=None,
+                    help="with --nodes: only the atmospheres of this albedo (default all)")
+    ap.add_argument("--aod", type=float, default=None,
+                    help="with --nodes: only the atmospheres of this AOD (default all)")
     a = ap.parse_args(argv)
     import skydome as sd
-    from skydome.models.fitted import _grid
+    from skydome.models.fitted import _coefficients, _grid
+    if a.coefficients is not None:
+        if not Path(a.coefficients).is_file():
+            print(f"error: --coefficients = {a.coefficients} is not a file", file=sys.stderr)
+            return 2
+        _coefficients.COEFFICIENT_FILE = Path(a.coefficients)
+    if a.nodes:
+        return _at_nodes(a.heldout, a.albedo, a.aod)
     from skydome.models.fitted._dataset import DataSet
     from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
         solar_irradiance
@@ -120,7 +144,7 @@ def main(argv=None) -> int:
                     sun_err.append((float(el), float(h), aod,
                                     float(np.max(np.abs(t_fit / t_ref - 1.0)[wl >= 400]))))
                 if (aod, alb) == atmospheres[0] and h in (0.0, 15000.0) and \
-                        el in (45.0, 4.0, -4.5, -9.0):
+                        el in (45.0, 4.0, -4.5, -9.0, -9.5):
                     examples.append((el, h, y_ref, rel_y))
     rows = []
     print(f"held-out grid: {len(atmospheres)} atmospheres "
@@ -153,6 +177,93 @@ def main(argv=None) -> int:
         Path(a.json).write_text(json.dumps({"rows": rows, "sun": sun_err}, indent=1))
     if a.figure and examples:
         _figure(a.figure, examples, atmospheres[0])
+    return 0
+
+
+def _at_nodes(folder, albedo, aod=None) -> int:
+    """The luminance error on a ``--grid fit`` data set (module docstring, ``--nodes``),
+    each point classed by which of its parameters are nodes of the measured coefficient
+    file: all of them (the representation's own error), or the sun elevation, the altitude
+    or the AOD between the file's nodes (that interpolation's error on top of it; a data
+    set of a finer grid than the file's holds such points)."""
+    import skydome as sd
+    from skydome.models.fitted import _coefficients, _grid
+    from skydome.models.fitted._dataset import DataSet
+    from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
+        solar_irradiance
+
+    ds = DataSet(folder, require_all=False)
+    if ds.midpoints:
+        print("error: with --nodes DATASET must be made with --grid fit", file=sys.stderr)
+        return 2
+    atms = [x for x in ds.present if (albedo is None or abs(x[1] - albedo) < 1e-9)
+            and (aod is None or abs(x[0] - aod) < 1e-9)]
+    if not atms:
+        print(f"error: --albedo = {albedo}, --aod = {aod}: no computed atmosphere of the "
+              f"data set has them (computed: {ds.present})", file=sys.stderr)
+        return 2
+    c = _coefficients.load()
+
+    def is_node(nodes, x):
+        return bool(np.any(np.abs(np.asarray(nodes, dtype=np.float64) - x) < 1e-9))
+
+    wl = ds.wavelengths_nm
+    dwl = default_wavelengths()
+    to_default = interp_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
+    n_sky = _grid.N_SKY
+    acc: dict = {}
+    for aod, alb in atms:
+        L_all, _ = ds.sky(aod, alb)
+        cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
+        a_node = is_node(c["aod_nodes"], aod) and is_node(c["albedo_nodes"], alb)
+        for i, el in enumerate(ds.elevations_deg):
+            sun = sd.Sun(elevation_deg=float(el), azimuth_deg=180.0)
+            reg = next(r for r, lo, hi in REGIMES if lo <= el <= hi)
+            e_node = is_node(c["elevation_nodes_deg"], el)
+            for j, h in enumerate(ds.altitudes_m):
+                h_node = is_node(c["altitude_nodes_m"], h)
+                kind = ("at nodes" if a_node and e_node and h_node else
+                        "+".join(n for n, ok in (("AOD", a_node), ("sun", e_node),
+                                                 ("altitude", h_node)) if not ok)
+                        + " between nodes")
+                d = _grid.directions(float(h), 180.0)
+                keep = np.degrees(np.arccos(np.clip(d @ sun.direction, -1, 1))) > 5.0
+                keep[n_sky:] = False
+                y_ref = luminance_from_spectrum(L_all[i, j].astype(np.float64) @ to_default,
+                                                dwl)
+                keep &= y_ref > 0.0           # (no light: nothing to compare)
+                fit = _coefficients.radiance_grid(c, aod, alb, float(el), float(h))
+                y_fit = luminance_from_spectrum(fit @ to_default, dwl)
+                hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
+                rel = np.abs(y_fit / y_ref - 1.0)[keep]
+                acc.setdefault((cls, reg, hgt, kind), []).append(rel)
+                acc.setdefault((cls, reg, hgt, kind, aod), []).append(rel)
+    print(f"on the data set's nodes: atmospheres {atms}, sun {list(ds.elevations_deg)} "
+          f"deg, altitude {list(ds.altitudes_m)} m; coefficient file "
+          f"{_coefficients.COEFFICIENT_FILE.name} (AOD nodes "
+          f"{[float(x) for x in c['aod_nodes']]}, sun {len(c['elevation_nodes_deg'])} "
+          f"nodes, altitude {[float(x) for x in c['altitude_nodes_m']]} m); luminance, "
+          f"the sky more than 5 deg from the sun")
+    print("| class | sun | observer | points | luminance RMS | luminance max | "
+          "worst AOD (RMS) |")
+    print("|---|---|---|---|---|---|---|")
+    kinds = sorted({k[3] for k in acc}, key=lambda k: (k != "at nodes", k))
+    for cls, _, _ in CLASSES:
+        for reg, _, _ in REGIMES:
+            for hgt, _, _ in HEIGHTS:
+                for kind in kinds:
+                    v = acc.get((cls, reg, hgt, kind))
+                    if v is None:
+                        continue
+                    n = len(v)
+                    v = np.concatenate(v)
+                    per = {k[4]: float(np.sqrt(np.mean(np.concatenate(x) ** 2)))
+                           for k, x in acc.items()
+                           if len(k) == 5 and k[:4] == (cls, reg, hgt, kind)}
+                    worst = max(per, key=per.get)
+                    print(f"| {cls} | {reg[4:]} | {hgt} | {kind} ({n}) | "
+                          f"{100 * np.sqrt(np.mean(v ** 2)):.2f} % | {100 * v.max():.1f} % | "
+                          f"{worst:g} ({100 * per[worst]:.2f} %) |", flush=True)
     return 0
 
 

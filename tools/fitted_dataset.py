@@ -1,7 +1,8 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|small] [--scheduler ADDR]
-        [--workers N] [--twilight-reference] [--max-aod A]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-shipped|heldout-shipped|small]
+        [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
+        [--atmospheres A:B,...]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -14,12 +15,15 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (6 AOD x 3 albedo = 18 atmospheres, 26 sun elevations
-  -12..90 deg, 7 altitudes 0..15 km);
-* ``heldout``: the held-out grid (5 atmospheres, their albedos off the nodes, 13 sun
-  elevations -11..70 deg off the nodes and 5 altitudes of which only 0 and 15 km are
-  fitting nodes), every view direction at the centre of a cell of the view grid (the
+* ``fit``: the fitting nodes (7 AOD x 3 albedo = 21 atmospheres, 28 sun elevations
+  -12..90 deg, 10 altitudes 0..15 km);
+* ``heldout``: the held-out grid (5 atmospheres, their AODs and albedos off the nodes, 13
+  sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
+  are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
+* ``fit-shipped``, ``heldout-shipped``: the grids of the shipped coefficient file (6 AOD
+  nodes 0-1, 26 sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and
+  0.05), to reproduce it;
 * ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
 """
 
@@ -36,21 +40,14 @@ def grid(name: str):
     """(elevations [deg], altitudes [m], atmospheres [(aod, albedo)]) of a named grid."""
     from skydome.models.fitted import _grid as G
 
-    if name == "fit":
-        atm = [(float(a), float(b)) for a in G.AOD_NODES for b in G.ALBEDO_NODES]
-        return G.SUN_ELEVATION_NODES_DEG, G.ALTITUDE_NODES_M, atm
-    if name == "heldout":
-        atm = list(G.HELDOUT_ATMOSPHERES)
-        return G.HELDOUT_SUN_ELEVATION_DEG, G.HELDOUT_ALTITUDE_M, atm
-    if name == "small":
-        return G.SUN_ELEVATION_NODES_DEG, G.ALTITUDE_NODES_M, [(0.1, 0.0), (0.1, 0.5)]
-    raise ValueError(f"--grid = {name!r} is not one of fit, heldout, small")
+    return G.grid(name)[:3]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
-    ap.add_argument("--grid", default="fit", choices=("fit", "heldout", "small"))
+    ap.add_argument("--grid", default="fit",
+                    choices=("fit", "heldout", "fit-shipped", "heldout-shipped", "small"))
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",
@@ -61,6 +58,10 @@ def main(argv=None) -> int:
     ap.add_argument("--max-aod", type=float, default=None,
                     help="leave out the grid's atmospheres whose AOD exceeds this (a data set "
                          "for a model fitted to a subset of the AOD nodes)")
+    ap.add_argument("--atmospheres", default=None,
+                    help="compute only these atmospheres of the grid, in this order "
+                         "(AOD:albedo,...; the others are left for a later run, which "
+                         "resumes): the most telling chunks first")
     ap.add_argument("--workers", type=int, default=1,
                     help="local cluster processes (default 1: each precomputation already "
                          "uses every core through numba)")
@@ -82,14 +83,30 @@ def main(argv=None) -> int:
             print(f"error: --max-aod = {a.max_aod:g} is out of range [0, 1]", file=sys.stderr)
             return 2
         atms = [x for x in atms if x[0] <= a.max_aod + 1e-12]
-    mid = a.grid == "heldout"       # held out in direction too: the cells' centres
+    grid_atms = list(atms)
+    if a.atmospheres is not None:
+        try:
+            want = [tuple(float(v) for v in x.split(":")) for x in a.atmospheres.split(",")]
+            if any(len(x) != 2 for x in want):
+                raise ValueError
+        except ValueError:
+            print(f"error: --atmospheres = {a.atmospheres!r} is not a list AOD:albedo,...",
+                  file=sys.stderr)
+            return 2
+        bad = [x for x in want if not any(np.allclose(x, y) for y in atms)]
+        if bad:
+            print(f"error: --atmospheres: {bad} not in the {a.grid} grid's atmospheres "
+                  f"{atms}", file=sys.stderr)
+            return 2
+        atms = [next(y for y in atms if np.allclose(x, y)) for x in want]
+    mid = a.grid.startswith("heldout")    # held out in direction too: the cells' centres
     chunks = [Chunk(_dataset.chunk_key(aod, alb), _dataset.compute_chunk,
                     (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference))
               for aod, alb in atms]
     t0, c0 = time.perf_counter(), time.process_time()
     report = run_chunks(chunks, a.out, scheduler=a.scheduler, n_workers=a.workers,
                         progress=True)
-    _dataset.write_grid(a.out, el, alt, atms, mid, a.twilight_reference)
+    _dataset.write_grid(a.out, el, alt, grid_atms, mid, a.twilight_reference)
     wall = time.perf_counter() - t0
     n = len(report.computed)
     print(f"\n{n} chunk(s) computed, {len(report.verified)} already there; "

@@ -24,7 +24,7 @@ the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
   the sky's brightness, which falls by orders of magnitude per degree in twilight, is
   interpolated in its logarithm), L = s (exp(y) - DELTA);
 * in AOD (:func:`aod_stencil`), with the sun above the horizon: up to 0.1, L quadratic
-  over the nodes 0, 0.05, 0.1; above, ln L between the nodes from 0.1 up; with the sun
+  over the nodes up to 0.1 (0, 0.025, 0.05, 0.1); above, ln L between the nodes from 0.1 up; with the sun
   below -1 deg, L linear in sqrt(AOD); between -1 and 0 deg the two blended linearly;
 * between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
   ground under a scattering atmosphere,
@@ -144,18 +144,25 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     """(stencil, in ln L) over the AOD nodes (the choices measured on the held-out grid:
     docs/models.md, "fitted").
 
-    Sun above the horizon: up to the third node (0.1) L itself, quadratic over the nodes
-    0, 0.05, 0.1 (in a thin haze the aerosol's light grows nearly in proportion to its
-    optical depth, which ln L would turn into a geometric mean); above it ln L over the
-    nodes from 0.1 up (a thick haze attenuates the long paths near the horizon
+    Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, quadratic over
+    the nodes up to it (in a thin haze the aerosol's light grows nearly in proportion to
+    its optical depth, which ln L would turn into a geometric mean); above it ln L over
+    the nodes from 0.1 up (a thick haze attenuates the long paths near the horizon
     exponentially). Sun below the horizon (``twilight``): L linear in sqrt(AOD) between
     the two nodes around it (the twilight sky changes fastest with the first aerosol)."""
     nodes = np.asarray(aod_nodes, dtype=np.float64)
     if twilight:
         return stencil(np.sqrt(nodes), math.sqrt(max(aod, 0.0)), 1), False
-    if nodes.size < 4 or aod <= float(nodes[2]):
-        return stencil(nodes[:3], aod, ELEMENT_ORDER["aod"]), False
-    return [(i + 2, w) for i, w in stencil(nodes[2:], aod, ELEMENT_ORDER["aod"])], True
+    # the last node of the thin-haze part: the node at LINEAR_AOD_MAX (at least the third)
+    n_thin = max(3, int(np.searchsorted(nodes, LINEAR_AOD_MAX + 1e-12)))
+    if nodes.size <= n_thin or aod <= float(nodes[n_thin - 1]):
+        return stencil(nodes[:n_thin], aod, ELEMENT_ORDER["aod"]), False
+    k = n_thin - 1
+    return [(i + k, w) for i, w in stencil(nodes[k:], aod, ELEMENT_ORDER["aod"])], True
+
+
+#: Up to this AOD (a node) the day sky is interpolated in L, above it in ln L.
+LINEAR_AOD_MAX = 0.1
 
 
 #: Degrees of the interpolation between nodes (measured on the held-out grid:

@@ -83,8 +83,8 @@ class DataSet:
 
     def __init__(self, folder, require_all: bool = True, grid: str = "fit"):
         """``require_all=False``: a data set still being generated (its ``grid.json`` may
-        be missing: the grid is then the one named ``grid``, "fit" or "heldout", in
-        tools/fitted_dataset.py); :attr:`present` lists the atmospheres whose chunk is
+        be missing: the grid is then the one named ``grid``, one of
+        :data:`._grid.GRID_NAMES`); :attr:`present` lists the atmospheres whose chunk is
         there."""
         self.folder = Path(folder)
         gj = self.folder / "grid.json"
@@ -115,16 +115,10 @@ class DataSet:
 
 
 def _grid_meta(grid: str) -> dict:
-    """The grid.json of a ``--grid fit`` or ``--grid heldout`` data set (as write_grid
-    records it), for a data set whose generation has not finished."""
-    if grid == "fit":
-        atm = [[float(a), float(b)] for a in _grid.AOD_NODES for b in _grid.ALBEDO_NODES]
-        el, alt, mid = _grid.SUN_ELEVATION_NODES_DEG, _grid.ALTITUDE_NODES_M, False
-    elif grid == "heldout":
-        atm = [[float(a), float(b)] for a, b in _grid.HELDOUT_ATMOSPHERES]
-        el, alt, mid = _grid.HELDOUT_SUN_ELEVATION_DEG, _grid.HELDOUT_ALTITUDE_M, True
-    else:
-        raise ValueError(f"grid = {grid!r} is not one of fit, heldout")
+    """The grid.json of a data set of the named grid (as write_grid records it), for a
+    data set whose generation has not finished."""
+    el, alt, atm, mid = _grid.grid(grid)
+    atm = [[float(a), float(b)] for a, b in atm]
     return {"elevations_deg": [float(x) for x in el], "altitudes_m": [float(x) for x in alt],
             "atmospheres": atm, "wavelengths_nm": [float(x) for x in _grid.WAVELENGTHS_NM],
             "view_grid": {"n_sky": _grid.N_SKY, "n_ground": _grid.N_GROUND,

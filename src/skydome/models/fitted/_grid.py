@@ -51,25 +51,67 @@ ALTITUDE_RANGE_M = (0.0, 15000.0)
 AOD_RANGE = (0.0, 1.0)
 ALBEDO_RANGE = (0.0, 1.0)
 
-#: The fitting nodes (the data set's parameter grid).
-SUN_ELEVATION_NODES_DEG = np.array([-12.0, -10.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0, -2.0,
-                                    -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
+#: The fitting nodes (the data set's parameter grid) of the next refit: the shipped
+#: coefficient file was fitted on the grid ``SHIPPED_*`` below, which these refine (an AOD
+#: node at 0.025, altitude nodes at 0.35, 1.1 and 2 km, sun nodes at -11 and -9 deg: the
+#: errors measured on the new grid's first chunks, docs/models.md "fitted").
+SUN_ELEVATION_NODES_DEG = np.array([-12.0, -11.0, -10.0, -9.0, -8.0, -7.0, -6.0, -5.0, -4.0,
+                                    -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
                                     19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
 #: Altitude nodes: denser in the aerosol's first scale heights (1.2 km), where the
-#: radiance changes fastest with altitude.
-ALTITUDE_NODES_M = np.array([0.0, 700.0, 1500.0, 3000.0, 6000.0, 10000.0, 15000.0])
-AOD_NODES = np.array([0.0, 0.05, 0.1, 0.25, 0.5, 1.0])
+#: radiance changes fastest with altitude (0.35-0.5 km apart up to 2 km).
+ALTITUDE_NODES_M = np.array([0.0, 350.0, 700.0, 1100.0, 1500.0, 2000.0, 3000.0, 6000.0,
+                             10000.0, 15000.0])
+AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
 #: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
 #: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
 ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
 
-#: The held-out grid: none of its values is a fitting node.
-HELDOUT_SUN_ELEVATION_DEG = np.array([-11.0, -9.0, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
+#: The held-out grid: none of its values is a fitting node but the altitudes 0 and 15 km
+#: (the ends of the range); every value between two nodes, the twilight elevations midway.
+HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
                                       16.0, 28.0, 45.0, 70.0])
 HELDOUT_ALTITUDE_M = np.array([0.0, 400.0, 2200.0, 4500.0, 15000.0])
-HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
+HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.0125, 0.6), (0.18, 0.4),
                        (0.7, 0.2))                 # (AOD at 550 nm, albedo)
 
+
+#: The grid of the shipped coefficient file (``tools/fitted_dataset.py --grid
+#: fit-shipped`` / ``heldout-shipped``; the file records it too, meta "dataset_grid").
+SHIPPED_SUN_ELEVATION_NODES_DEG = np.array([-12.0, -10.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0,
+                                            -2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0,
+                                            14.0, 19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0,
+                                            90.0])
+SHIPPED_ALTITUDE_NODES_M = np.array([0.0, 700.0, 1500.0, 3000.0, 6000.0, 10000.0, 15000.0])
+SHIPPED_AOD_NODES = np.array([0.0, 0.05, 0.1, 0.25, 0.5, 1.0])
+SHIPPED_HELDOUT_SUN_ELEVATION_DEG = np.array([-11.0, -9.0, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0,
+                                              8.5, 16.0, 28.0, 45.0, 70.0])
+SHIPPED_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
+                               (0.7, 0.2))
+
+
+def grid(name: str):
+    """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
+    of a named data-set grid: "fit" and "heldout" (the next refit's), "fit-shipped" and
+    "heldout-shipped" (the shipped file's), "small" (two atmospheres of "fit")."""
+    if name in ("fit", "small"):
+        atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
+        if name == "small":
+            atm = [(0.1, 0.0), (0.1, 0.5)]
+        return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+    if name == "heldout":
+        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(HELDOUT_ATMOSPHERES),
+                True)
+    if name == "fit-shipped":
+        atm = [(float(a), float(b)) for a in SHIPPED_AOD_NODES for b in ALBEDO_NODES]
+        return SHIPPED_SUN_ELEVATION_NODES_DEG, SHIPPED_ALTITUDE_NODES_M, atm, False
+    if name == "heldout-shipped":
+        return (SHIPPED_HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M,
+                list(SHIPPED_HELDOUT_ATMOSPHERES), True)
+    raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
+
+
+GRID_NAMES = ("fit", "heldout", "fit-shipped", "heldout-shipped", "small")
 
 def horizon_zenith_rad(altitude_m: float) -> float:
     """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius
