@@ -21,7 +21,9 @@ primaries, W m^-2 with 683 lm/W), the normal illuminance [lx], and what each tar
   multiply them); the light points along its node's local -Z, turned to -direction.
 
 The irradiance is ``sky.sun_radiance(wl) x sun.solid_angle_sr x visible fraction`` (the
-part of the disc above the horizon, flat circular-segment geometry as skydome.imaging).
+part of the disc above the horizon, flat circular-segment geometry as skydome.imaging; a
+model whose ``sun_radiance`` already counts its horizon, ``sun_visible_fraction()``, has it
+divided out first: :func:`skydome.imaging.sun_disc.sun_disc_radiance`).
 
 Physical forms (``spectral_irradiance_W_m2_nm``, ``rgb_irradiance_W_m2`` on the photometric
 scale, ``illuminance_lx``) are always given; ``rgb_irradiance_map_units`` is the RGB in the
