@@ -29,6 +29,30 @@ __all__ = ["FittedSky"]
 WAVELENGTH_RANGE_NM = (300.0, 1100.0)
 
 
+def wavelength_weights(table_wl, wl) -> np.ndarray:
+    """(n_table, n): the model's interpolation from its table wavelengths ``table_wl`` to
+    ``wl`` [nm] of values relative to the extraterrestrial solar spectrum (radiance per unit
+    extraterrestrial irradiance): linear in wavelength between the two neighbouring table
+    wavelengths, held beyond the ends."""
+    tw = np.asarray(table_wl, dtype=np.float64)
+    wl = np.asarray(wl, dtype=np.float64)
+    x = np.clip(wl, tw[0], tw[-1])
+    j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
+    f = (x - tw[j]) / (tw[j + 1] - tw[j])
+    W = np.zeros((tw.size, wl.size))
+    W[j, np.arange(wl.size)] = 1.0 - f
+    W[j + 1, np.arange(wl.size)] += f
+    return W
+
+
+def interpolate_spectrum(values, table_wl, wl) -> np.ndarray:
+    """``values`` (..., n_table) relative to the solar spectrum at the table wavelengths
+    ``table_wl``, interpolated to ``wl`` [nm] as the model interpolates its tables:
+    (..., n) (tools/fitted_accuracy.py applies it to the reference's own values to measure
+    the interpolation alone)."""
+    return np.asarray(values, dtype=np.float64) @ wavelength_weights(table_wl, wl)
+
+
 @register
 class FittedSky(SkyModel):
     """skydome's fitted sky: the ``precomputed`` reference at analytic speed, spectral.
@@ -103,13 +127,7 @@ class FittedSky(SkyModel):
         included)."""
         from skydome.spectra import solar_irradiance
 
-        tw = self._table_wl
-        x = np.clip(wl, tw[0], tw[-1])
-        j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
-        f = (x - tw[j]) / (tw[j + 1] - tw[j])
-        W = np.zeros((tw.size, wl.size))
-        W[j, np.arange(wl.size)] = 1.0 - f
-        W[j + 1, np.arange(wl.size)] += f
+        W = wavelength_weights(self._table_wl, wl)
         return W * (solar_irradiance(wl) * self.sun.irradiance_scale)[None, :]
 
     def _derived_table(self, key, make):
