@@ -99,17 +99,23 @@ def spectral_table(values, table_wl) -> tuple[np.ndarray, np.ndarray]:
     plan = gas_plan(tuple(float(x) for x in tw))
     if not plan:
         return v, tw
-    extra = np.empty(v.shape[:-1] + (len(plan),))
+    n = len(plan)
+    w_ln = np.zeros((tw.size, n))        # the logarithms' weights
+    lin = np.zeros((tw.size, n))         # linear between the neighbours (the fallback)
     for k, (x, idx, w) in enumerate(plan):
-        used = v[..., list(idx)]
-        lo = used.min(axis=-1)
-        hi = used.max(axis=-1)
-        lnv = np.log(np.where(used > 0.0, used, 1.0))
-        e = np.exp(np.clip(lnv @ np.asarray(w), -700.0, 700.0))
+        w_ln[list(idx), k] = w
         j = int(np.searchsorted(tw, x)) - 1
         f = (x - tw[j]) / (tw[j + 1] - tw[j])
-        lin = (1.0 - f) * v[..., j] + f * v[..., j + 1]
-        extra[..., k] = np.where((lo > 0.0) & (e <= 4.0 * hi), e, lin)
+        lin[j, k], lin[j + 1, k] = 1.0 - f, f
+    pos = v > 0.0
+    e = np.exp(np.clip(np.log(np.where(pos, v, 1.0)) @ w_ln, -700.0, 700.0))
+    ok = ((~pos).astype(np.float64) @ (w_ln != 0.0)) == 0.0
+    for k, (x, idx, w) in enumerate(plan):
+        hi = v[..., idx[0]]
+        for i in idx[1:]:
+            hi = np.maximum(hi, v[..., i])
+        ok[..., k] &= e[..., k] <= 4.0 * hi
+    extra = np.where(ok, e, v @ lin)
     wl = np.concatenate([tw, [p[0] for p in plan]])
     order = np.argsort(wl, kind="stable")
     return np.concatenate([v, extra], axis=-1)[..., order], wl[order]
