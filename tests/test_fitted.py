@@ -239,11 +239,19 @@ def test_interpolated_values_positive_and_finite_for_any_table():
 #: 930 nm (water vapour: from the logarithms of three table wavelengths); an atmosphere off
 #: the nodes (AOD 0.15, albedo 0.4), the sun at 35 deg (between the nodes 32 and 40), the
 #: observer at 300 m. The reference: ``precomputed`` at these table wavelengths (each
-#: computed independently of the others: the same values as in the 10-nm held-out set).
+#: computed independently of the others: at a table wavelength the same values as with
+#: every 10-nm wavelength, docs/models.md "fitted", "Wavelengths"), in its default
+#: configuration (by day the data set's twilight configuration gives the same sky, at 4x
+#: the CPU).
 BETWEEN_CASE = dict(aod=0.15, albedo=0.4, el=35.0, h=300.0)
 #: Bounds (RMS, max) per wavelength: the model's errors measured there on the 10-nm
-#: held-out grid (docs/models.md, "fitted", "Wavelengths": sun above 20 deg), rounded up.
-BETWEEN_BOUNDS = {510.0: (0.02, 0.10), 730.0: (0.10, 0.30), 930.0: (0.12, 0.35)}
+#: held-out grid with the sun above 20 deg (docs/models.md, "fitted", "Wavelengths": 510 nm
+#: 0.97 % RMS, 7.7 % max; 730 nm 6.6 % / 24 %; 930 nm 8.0 % / 28 %; the clear
+#: atmospheres), rounded up for the hazier atmosphere here: the model's documented
+#: accuracy, not a tighter promise. Linear interpolation (the model before) measured 25 %
+#: and 46 % RMS at 730 and 930 nm there (AOD 0.05, albedo 0.3). Measured here: 1.41 % / 5.0 %,
+#: 2.91 % / 8.5 %, 3.40 % / 8.4 %.
+BETWEEN_BOUNDS = {510.0: (0.03, 0.12), 730.0: (0.10, 0.30), 930.0: (0.12, 0.35)}
 
 
 @pytest.mark.slow
@@ -254,8 +262,8 @@ def test_spectral_radiance_between_table_wavelengths_against_live_precomputed():
     ref = sd.model("precomputed", sun=sun,
                    atmosphere=sd.Atmosphere.earth(aerosol_optical_depth=t["aod"],
                                                   ground_albedo=t["albedo"]),
-                   table_wavelengths_nm=wl, cache=False,
-                   twilight_reference=True).with_sun(sun, observer_altitude_m=t["h"])
+                   table_wavelengths_nm=wl, cache=False).with_sun(
+                       sun, observer_altitude_m=t["h"])
     fit = sd.model("fitted", sun=sun, aerosol_optical_depth=t["aod"],
                    ground_albedo=t["albedo"], observer_altitude_m=t["h"])
     d = _dirs(300, seed=23, upper=True)[:300]
@@ -267,4 +275,5 @@ def test_spectral_radiance_between_table_wavelengths_against_live_precomputed():
     for k, w in enumerate(wl):
         rms, worst = float(np.sqrt(np.mean(rel[:, k] ** 2))), float(np.max(np.abs(rel[:, k])))
         rms_bound, max_bound = BETWEEN_BOUNDS[w]
+        print(f"{w:g} nm: RMS {100 * rms:.2f} %, max {100 * worst:.1f} %")
         assert rms <= rms_bound and worst <= max_bound, (w, rms, worst)
