@@ -277,3 +277,27 @@ def test_spectral_radiance_between_table_wavelengths_against_live_precomputed():
         rms_bound, max_bound = BETWEEN_BOUNDS[w]
         print(f"{w:g} nm: RMS {100 * rms:.2f} %, max {100 * worst:.1f} %")
         assert rms <= rms_bound and worst <= max_bound, (w, rms, worst)
+
+
+def test_dataset_wavelength_step_keeps_the_table_wavelengths_and_refuses_others(capsys):
+    """tools/fitted_dataset.py --wavelength-step: 10 nm gives 300, 310, ..., 1100 nm (81),
+    every other one a table wavelength (so a 10-nm held-out set holds the 20-nm one); a
+    step that is not a divisor of 20 nm is refused before any work, naming the option."""
+    import importlib.util
+    from pathlib import Path
+
+    from skydome.models.fitted import _dataset
+
+    wl = _dataset.wavelengths_nm(10)
+    assert wl.size == 81 and wl[0] == 300.0 and wl[-1] == 1100.0
+    np.testing.assert_array_equal(wl[::2], _grid.WAVELENGTHS_NM)
+    np.testing.assert_array_equal(_dataset.wavelengths_nm(20), _grid.WAVELENGTHS_NM)
+    with pytest.raises(ValueError, match="wavelength step = 7"):
+        _dataset.wavelengths_nm(7)
+    tool = Path(__file__).resolve().parents[1] / "tools" / "fitted_dataset.py"
+    spec = importlib.util.spec_from_file_location("fitted_dataset_tool", tool)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.main(["unused-folder", "--wavelength-step", "15"]) == 2
+    err = capsys.readouterr().err
+    assert "--wavelength-step = 15 nm is out of range" in err and "20, 10, 5, 4, 2, 1" in err
