@@ -30,9 +30,6 @@ __all__ = ["FittedSky"]
 WAVELENGTH_RANGE_NM = (300.0, 1100.0)
 
 
-#: Wavelength step [nm] of the model's spectral table: its table wavelengths (every 20 nm)
-#: and the wavelengths halfway between them where the gases' absorption changes.
-SPECTRAL_STEP_NM = 10.0
 #: An in-between wavelength gets its own value (:func:`gas_plan`) where the gases'
 #: vertical absorption optical depth changes across its interval by at least this much
 #: (|tau_1 - tau_0| + |tau - linear interpolation of tau|).
@@ -54,8 +51,10 @@ def gas_plan(table_wl: tuple) -> tuple:
     absorption optical depth of the model's atmosphere, M an effective air mass that the
     three nearest table wavelengths determine, per direction): the weights solve it at the
     two neighbours and the third table wavelength that gives the smallest weights; where
-    the three are ill-conditioned (a weight above 4) or the absorption's change is linear
-    across the interval, ln L is linear in wavelength between the two neighbours."""
+    the three are ill-conditioned (a weight above 4) or tau is linear across the interval
+    (within 0.003 of its linear interpolation), ln L is linear in wavelength between the
+    two neighbours. Elsewhere (no plan entry) the model stays linear relative to the solar
+    spectrum (docs/models.md, "fitted", "Wavelengths": the figures of both)."""
     from skydome.models.fitted._dataset import atmosphere
 
     tw = np.asarray(table_wl, dtype=np.float64)
@@ -171,10 +170,10 @@ class FittedSky(SkyModel):
     between two of them where the gases absorb (ozone's Huggins band, O2, water vapour) the
     value comes from the logarithms of the nearest three (:func:`spectral_table`); other
     wavelengths are interpolated linearly, relative to the solar spectrum, between these
-    10-nm values (docs/models.md, "fitted", "Wavelengths"). Below the horizon the model returns the reference's ground
-    (Lambertian, lit by the sun and the sky, seen through the air), for an observer on
-    the ground as above it. Errors against the reference on a held-out grid:
-    docs/models.md, "fitted".
+    10-nm values (docs/models.md, "fitted", "Wavelengths"). Below the horizon the model
+    returns the reference's ground (Lambertian, lit by the sun and the sky, seen through
+    the air), for an observer on the ground as above it. Errors against the reference on
+    a held-out grid: docs/models.md, "fitted".
     """
 
     name = "fitted"
