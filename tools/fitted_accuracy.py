@@ -22,6 +22,17 @@ representation's own error (the truncated angular basis) at the file's nodes, an
 interpolation's in sun elevation, altitude or AOD at a finer grid's nodes between them
 (the angular interpolation, which the held-out grid's cell centres add, is not in it). ``--coefficients``: measure that file instead of the package's
 (for instance the previous coefficients on the same held-out grid).
+
+A held-out set made with ``--wavelength-step 10`` also holds the reference at the
+wavelengths between the model's 20-nm table wavelengths (310, 330, ..., 1090 nm, computed
+by ``precomputed`` at those wavelengths, not interpolated). The spectral columns of the
+main table are then the table wavelengths only (as for a 20-nm set), and a second table
+gives per regime the spectral RMS and max at the in-between wavelengths, for the model and
+for its wavelength interpolation alone (the reference's own values at the table
+wavelengths interpolated as the model interpolates: the part of the error that no fit of
+the table wavelengths can remove), with the worst in-between wavelengths;
+``--spectral-figure`` draws the RMS per wavelength. The luminance reference is integrated
+from every wavelength of the set.
 """
 
 from __future__ import annotations
@@ -67,6 +78,9 @@ def main(argv=None) -> int:
                     help="with --nodes: only the atmospheres of this albedo (default all)")
     ap.add_argument("--aod", type=float, default=None,
                     help="with --nodes: only the atmospheres of this AOD (default all)")
+    ap.add_argument("--spectral-figure", default=None,
+                    help="figure of the spectral RMS per wavelength (a set with wavelengths "
+                         "between the table wavelengths)")
     a = ap.parse_args(argv)
     import skydome as sd
     from skydome.models.fitted import _coefficients, _grid
@@ -91,7 +105,28 @@ def main(argv=None) -> int:
     if not ds.midpoints:
         print("error: HELDOUT must be made with --grid heldout", file=sys.stderr)
         return 2
+    from skydome.models.fitted import interpolate_spectrum
+
     wl = ds.wavelengths_nm
+    # the model's table wavelengths among the set's, and the ones between them
+    node = np.isin(np.round(wl, 6), np.round(_grid.WAVELENGTHS_NM, 6))
+    between = ~node
+    if not node.all() and not np.isin(np.round(_grid.WAVELENGTHS_NM, 6),
+                                      np.round(wl, 6)).all():
+        print("error: HELDOUT's wavelengths do not include the model's table wavelengths "
+              "(300, 320, ..., 1100 nm)", file=sys.stderr)
+        return 2
+    # per regime, per wavelength: sum of squares, count and largest relative error of the
+    # sky more than 5 deg from the sun, for the model and for the interpolation alone
+    per_wl: dict = {}
+
+    def add_wl(key, rel, mask):
+        s = per_wl.setdefault(key, [np.zeros(wl.size), np.zeros(wl.size), np.zeros(wl.size)])
+        r = np.where(mask, rel, 0.0)
+        s[0] += np.sum(r * r, axis=0)
+        s[1] += np.sum(mask, axis=0)
+        s[2] = np.maximum(s[2], np.max(np.abs(r), axis=0))
+
     dwl = default_wavelengths()
     to_default = interp_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     e_table = solar_irradiance(wl)
@@ -128,7 +163,22 @@ def main(argv=None) -> int:
                 cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
                 hgt = (cls, hgt)
                 add((reg, hgt, "fitted", "Y"), rel_y[sky & keep])
-                add((reg, hgt, "fitted", "spectral"), rel_s[sky & keep][pos[sky & keep]])
+                sel = sky & keep
+                rs, ps = rel_s[sel], pos[sel]
+                add((reg, hgt, "fitted", "spectral"), rs[:, node][ps[:, node]])
+                if between.any():
+                    add((reg, hgt, "fitted", "spectral between"),
+                        rs[:, between][ps[:, between]])
+                    # the interpolation alone: the reference's own table-wavelength values
+                    # interpolated to every wavelength as the model does
+                    s_int = interpolate_spectrum(ref[..., node][sel], wl[node],
+                                                 wl) * e_table
+                    r_int = np.where(ps, (s_int - s_ref[sel]) / np.where(ps, s_ref[sel], 1.0),
+                                     0.0)
+                    add((reg, hgt, "interpolation", "spectral between"),
+                        r_int[:, between][ps[:, between]])
+                    add_wl((reg, "fitted"), rs, ps)
+                    add_wl((reg, "interpolation"), r_int, ps)
                 if h > 0:
                     add((reg, hgt, "fitted", "ground Y"), rel_y[~sky])
                 if h == 0 and el >= 0:
@@ -141,8 +191,11 @@ def main(argv=None) -> int:
                 t_ref = sunf[i, j]
                 t_fit = m.sun_radiance(wl) * sun.solid_angle_sr / e_table
                 if t_ref[wl == 560.0][0] > 1e-3:
+                    e_t = np.abs(t_fit / np.where(t_ref > 0, t_ref, 1.0) - 1.0)
+                    e_t = np.where(t_ref > 0, e_t, 0.0)
                     sun_err.append((float(el), float(h), aod,
-                                    float(np.max(np.abs(t_fit / t_ref - 1.0)[wl >= 400]))))
+                                    float(np.max(e_t[(wl >= 400) & node])),
+                                    float(np.max(e_t[(wl >= 400) & between], initial=0.0))))
                 if (aod, alb) == atmospheres[0] and h in (0.0, 15000.0) and \
                         el in (45.0, 4.0, -4.5, -9.0, -9.5):
                     examples.append((el, h, y_ref, rel_y))
@@ -172,9 +225,20 @@ def main(argv=None) -> int:
         se = np.array([x[3] for x in sun_err])
         print(f"sun transmittance (400-1100 nm, where it exceeds 1e-3 at 560 nm): largest "
               f"relative error {100 * se.max():.2f} %, median {100 * np.median(se):.2f} % "
-              f"over {se.size} held-out nodes")
+              f"over {se.size} held-out nodes (the table wavelengths)")
+        if between.any():
+            sb = np.array([x[4] for x in sun_err])
+            hi = np.array([x[0] for x in sun_err]) >= 4.0
+            print(f"  between the table wavelengths: largest {100 * sb.max():.2f} %, median "
+                  f"{100 * np.median(sb):.2f} %; with the sun at 4 deg or higher: largest "
+                  f"{100 * sb[hi].max(initial=0.0):.2f} %, median "
+                  f"{100 * np.median(sb[hi]) if hi.any() else 0.0:.2f} %")
+    spectral = _between_tables(acc, per_wl, wl, between) if between.any() else {}
     if a.json:
-        Path(a.json).write_text(json.dumps({"rows": rows, "sun": sun_err}, indent=1))
+        Path(a.json).write_text(json.dumps({"rows": rows, "sun": sun_err,
+                                            "between": spectral}, indent=1))
+    if a.spectral_figure and spectral:
+        _spectral_figure(a.spectral_figure, spectral, wl, node)
     if a.figure and examples:
         _figure(a.figure, examples, atmospheres[0])
     return 0
@@ -265,6 +329,87 @@ def _at_nodes(folder, albedo, aod=None) -> int:
                           f"{100 * np.sqrt(np.mean(v ** 2)):.2f} % | {100 * v.max():.1f} % | "
                           f"{worst:g} ({100 * per[worst]:.2f} %) |", flush=True)
     return 0
+
+
+def _between_tables(acc, per_wl, wl, between):
+    """Print the spectral errors at the wavelengths between the table wavelengths, per
+    regime (every atmosphere and observer together); returns them for the JSON file."""
+    out = {"wavelengths_nm": [float(x) for x in wl], "regimes": {}}
+    print(f"\nspectral, sky more than 5 deg from the sun, at the {int(between.sum())} "
+          f"wavelengths between the table wavelengths ({wl[between][0]:g}, "
+          f"{wl[between][1]:g}, ..., {wl[between][-1]:g} nm) against the reference computed "
+          "there; 'interpolation alone': the reference's own table-wavelength values "
+          "interpolated as the model does:\n")
+    print("| sun | table wavelengths: RMS / max | between: RMS / max | interpolation "
+          "alone, between: RMS / max | worst between (interpolation alone: RMS) |")
+    print("|---|---|---|---|---|")
+    for reg, _, _ in REGIMES:
+        cells = []
+        for model, name in (("fitted", "spectral"), ("fitted", "spectral between"),
+                            ("interpolation", "spectral between")):
+            v = [np.concatenate(x) for k, x in acc.items()
+                 if k[0] == reg and k[2] == model and k[3] == name]
+            if not v:
+                cells.append("-")
+                continue
+            v = np.concatenate(v)
+            cells.append(f"{100 * np.sqrt(np.mean(v ** 2)):.2f} / {100 * v.max():.1f} %")
+        curves = {}
+        for model in ("fitted", "interpolation"):
+            s = per_wl.get((reg, model))
+            if s is None:
+                continue
+            rms = np.sqrt(s[0] / np.maximum(s[1], 1))
+            curves[model] = {"rms": [float(x) for x in rms], "max": [float(x) for x in s[2]]}
+        if not curves:
+            continue
+        rms_i = np.array(curves["interpolation"]["rms"])
+        worst = np.argsort(np.where(between, rms_i, -1.0))[::-1][:4]
+        cells.append(", ".join(f"{wl[k]:g} nm {100 * rms_i[k]:.1f} %" for k in worst))
+        out["regimes"][reg] = curves
+        print(f"| {reg[4:]} | " + " | ".join(cells) + " |")
+    print("\nper wavelength, RMS [%] (model / interpolation alone), every regime:\n")
+    print("| nm | " + " | ".join(r[4:] for r in out["regimes"]) + " |")
+    print("|---|" + "---|" * len(out["regimes"]))
+    for k in np.flatnonzero(between):
+        print(f"| {wl[k]:g} | " + " | ".join(
+            f"{100 * c['fitted']['rms'][k]:.2f} / {100 * c['interpolation']['rms'][k]:.2f}"
+            for c in out["regimes"].values()) + " |")
+    return out
+
+
+def _spectral_figure(path, spectral, wl, node):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from skydome._io import atomic_file
+
+    regs = list(spectral["regimes"])
+    fig, ax = plt.subplots(1, len(regs), figsize=(4.2 * len(regs), 3.6), squeeze=False,
+                           sharey=True)
+    for k, reg in enumerate(regs):
+        c = spectral["regimes"][reg]
+        a = ax[0, k]
+        a.semilogy(wl, 100 * np.maximum(c["fitted"]["rms"], 1e-4), "-", color="0.6", lw=0.8)
+        a.semilogy(wl[~node], 100 * np.maximum(np.array(c["fitted"]["rms"])[~node], 1e-4),
+                   "o", ms=3.5, color="C0", label="fitted, between")
+        a.semilogy(wl[node], 100 * np.maximum(np.array(c["fitted"]["rms"])[node], 1e-4),
+                   "s", ms=3, color="C2", label="fitted, table wavelengths")
+        a.semilogy(wl[~node], 100 * np.maximum(np.array(c["interpolation"]["rms"])[~node],
+                                               1e-4),
+                   "x", ms=4, color="C3", label="interpolation alone")
+        a.set_title(reg, fontsize=9)
+        a.set_xlabel("wavelength [nm]")
+        a.grid(True, which="both", lw=0.3)
+    ax[0, 0].set_ylabel("spectral RMS, sky > 5 deg from sun [%]")
+    ax[0, 0].legend(fontsize=7)
+    fig.suptitle("fitted vs precomputed at 10-nm wavelengths (held-out grid)", fontsize=10)
+    fig.tight_layout()
+    with atomic_file(path) as tmp:
+        fig.savefig(tmp, dpi=90)
+    plt.close(fig)
 
 
 def _row(acc, reg, key, model):

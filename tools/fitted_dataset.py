@@ -2,7 +2,7 @@
 
     python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-shipped|heldout-shipped|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
-        [--atmospheres A:B,...]
+        [--atmospheres A:B,...] [--wavelength-step NM]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -25,6 +25,11 @@ Grids (skydome/models/fitted/_grid.py):
   nodes 0-1, 26 sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and
   0.05), to reproduce it;
 * ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
+
+``--wavelength-step`` sets the reference's table wavelengths: 300-1100 nm every 20 nm by
+default (the fitting wavelengths), 10 nm for a held-out set that measures the model between
+them too (81 wavelengths: the 20-nm ones are every other one, so the set's 20-nm subset is
+the default set; the chunk layout is the same, with 81 on the wavelength axis).
 """
 
 from __future__ import annotations
@@ -65,6 +70,10 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=1,
                     help="local cluster processes (default 1: each precomputation already "
                          "uses every core through numba)")
+    ap.add_argument("--wavelength-step", type=float, default=20.0,
+                    help="table wavelengths 300-1100 nm every this many nm (default 20: the "
+                         "fitting wavelengths; 10, 5, 4, 2 or 1 nm to measure the model "
+                         "between them)")
     a = ap.parse_args(argv)
     if not 1 <= a.workers <= 256:
         print(f"error: --workers = {a.workers} is out of range [1, 256]", file=sys.stderr)
@@ -76,6 +85,13 @@ def main(argv=None) -> int:
         check_scheduler(a.scheduler, "--scheduler")
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        wl = _dataset.wavelengths_nm(a.wavelength_step)
+    except ValueError:
+        print(f"error: --wavelength-step = {a.wavelength_step:g} nm is out of range: one of "
+              "20, 10, 5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)",
+              file=sys.stderr)
         return 2
     el, alt, atms = grid(a.grid)
     if a.max_aod is not None:
@@ -101,17 +117,17 @@ def main(argv=None) -> int:
         atms = [next(y for y in atms if np.allclose(x, y)) for x in want]
     mid = a.grid.startswith("heldout")    # held out in direction too: the cells' centres
     chunks = [Chunk(_dataset.chunk_key(aod, alb), _dataset.compute_chunk,
-                    (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference))
+                    (aod, alb, np.asarray(el), np.asarray(alt), mid, a.twilight_reference, wl))
               for aod, alb in atms]
     t0, c0 = time.perf_counter(), time.process_time()
     report = run_chunks(chunks, a.out, scheduler=a.scheduler, n_workers=a.workers,
                         progress=True)
-    _dataset.write_grid(a.out, el, alt, grid_atms, mid, a.twilight_reference)
+    _dataset.write_grid(a.out, el, alt, grid_atms, mid, a.twilight_reference, wl)
     wall = time.perf_counter() - t0
     n = len(report.computed)
     print(f"\n{n} chunk(s) computed, {len(report.verified)} already there; "
           f"{wall:.1f} s wall ({wall / max(n, 1):.1f} s per computed chunk of "
-          f"{len(el) * len(alt)} sun/altitude nodes); client CPU "
+          f"{len(el) * len(alt)} sun/altitude nodes x {wl.size} wavelengths); client CPU "
           f"{time.process_time() - c0:.1f} s")
     return 0
 

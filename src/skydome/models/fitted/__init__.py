@@ -15,6 +15,7 @@ then a bilinear lookup in a numba kernel (:mod:`._kernels`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -27,6 +28,120 @@ __all__ = ["FittedSky"]
 
 #: Wavelengths the model answers [nm] (its table wavelengths span them).
 WAVELENGTH_RANGE_NM = (300.0, 1100.0)
+
+
+#: An in-between wavelength gets its own value (:func:`gas_plan`) where the gases'
+#: vertical absorption optical depth changes across its interval by at least this much
+#: (|tau_1 - tau_0| + |tau - linear interpolation of tau|).
+GAS_DEPTH_CHANGE = 0.01
+
+
+@functools.lru_cache(maxsize=4)
+def gas_plan(table_wl: tuple) -> tuple:
+    """The in-between wavelengths [nm] (halfway between the table wavelengths ``table_wl``)
+    where the gases' absorption changes across the interval, each with the table
+    wavelengths (indices) and the weights of its value's logarithm:
+    ((wavelength, indices, weights), ...).
+
+    Where ozone (Huggins band), water vapour or O2 absorb, the radiance relative to the solar
+    spectrum is far from linear between two table wavelengths 20 nm apart (the absorption
+    is exponential in the gas's optical depth along the light's paths, which the 10-nm
+    spectrum of the gases does not follow linearly). Its logarithm is taken as
+    a + b lambda - M tau(lambda) (Beer's law on a smooth spectrum, tau the gases' vertical
+    absorption optical depth of the model's atmosphere, M an effective air mass that the
+    three nearest table wavelengths determine, per direction): the weights solve it at the
+    two neighbours and the third table wavelength that gives the smallest weights; where
+    the three are ill-conditioned (a weight above 4) or tau is linear across the interval
+    (within 0.003 of its linear interpolation), ln L is linear in wavelength between the
+    two neighbours. Elsewhere (no plan entry) the model stays linear relative to the solar
+    spectrum (docs/models.md, "fitted", "Wavelengths": the figures of both)."""
+    from skydome.models.fitted._dataset import atmosphere
+
+    tw = np.asarray(table_wl, dtype=np.float64)
+    mids = 0.5 * (tw[1:] + tw[:-1])
+    grid = np.concatenate([tw, mids])
+    t = atmosphere(0.1, 0.1).vertical_optical_depth(grid)   # gases: AOD- and albedo-free
+    tau_all = t["ozone"] + t["water_vapour"] + t["mixed_gases"]
+    tau_n, tau_m = tau_all[:tw.size], tau_all[tw.size:]
+    plan = []
+    for j, x in enumerate(mids):
+        t0, t1, tx = tau_n[j], tau_n[j + 1], tau_m[j]
+        d = tx - 0.5 * (t0 + t1)
+        if abs(t1 - t0) + abs(d) < GAS_DEPTH_CHANGE:
+            continue                                     # linear relative to the sun
+        best = None
+        if abs(d) >= 0.003:
+            for third in (j - 1, j + 2):
+                if not 0 <= third < tw.size:
+                    continue
+                idx = [j, j + 1, third]
+                m = np.array([[1.0, 1.0, 1.0], tw[idx], tau_n[idx]])
+                try:
+                    w = np.linalg.solve(m, [1.0, x, tx])
+                except np.linalg.LinAlgError:
+                    continue
+                if best is None or np.abs(w).max() < np.abs(best[1]).max():
+                    best = (idx, w)
+        if best is None or np.abs(best[1]).max() >= 4.0:
+            best = ([j, j + 1], np.array([0.5, 0.5]))    # ln L linear in wavelength
+        plan.append((float(x), tuple(best[0]), tuple(float(v) for v in best[1])))
+    return tuple(plan)
+
+
+def spectral_table(values, table_wl) -> tuple[np.ndarray, np.ndarray]:
+    """(values at the model's spectral wavelengths (..., n), those wavelengths [nm]): the
+    table wavelengths and the in-between ones of :func:`gas_plan`, whose values come from
+    the logarithms of the table's (where a value used is not positive, or the result
+    exceeds 4 times the largest value used: linear between the neighbours instead)."""
+    v = np.asarray(values, dtype=np.float64)
+    tw = np.asarray(table_wl, dtype=np.float64)
+    plan = gas_plan(tuple(float(x) for x in tw))
+    if not plan:
+        return v, tw
+    n = len(plan)
+    w_ln = np.zeros((tw.size, n))        # the logarithms' weights
+    lin = np.zeros((tw.size, n))         # linear between the neighbours (the fallback)
+    for k, (x, idx, w) in enumerate(plan):
+        w_ln[list(idx), k] = w
+        j = int(np.searchsorted(tw, x)) - 1
+        f = (x - tw[j]) / (tw[j + 1] - tw[j])
+        lin[j, k], lin[j + 1, k] = 1.0 - f, f
+    pos = v > 0.0
+    e = np.exp(np.clip(np.log(np.where(pos, v, 1.0)) @ w_ln, -700.0, 700.0))
+    ok = ((~pos).astype(np.float64) @ (w_ln != 0.0)) == 0.0
+    for k, (x, idx, w) in enumerate(plan):
+        hi = v[..., idx[0]]
+        for i in idx[1:]:
+            hi = np.maximum(hi, v[..., i])
+        ok[..., k] &= e[..., k] <= 4.0 * hi
+    extra = np.where(ok, e, v @ lin)
+    wl = np.concatenate([tw, [p[0] for p in plan]])
+    order = np.argsort(wl, kind="stable")
+    return np.concatenate([v, extra], axis=-1)[..., order], wl[order]
+
+
+def wavelength_weights(table_wl, wl) -> np.ndarray:
+    """(n_table, n): linear interpolation in wavelength from the wavelengths ``table_wl``
+    (the model's spectral wavelengths, :func:`spectral_table`) to ``wl`` [nm] of values
+    relative to the extraterrestrial solar spectrum, held beyond the ends."""
+    tw = np.asarray(table_wl, dtype=np.float64)
+    wl = np.asarray(wl, dtype=np.float64)
+    x = np.clip(wl, tw[0], tw[-1])
+    j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
+    f = (x - tw[j]) / (tw[j + 1] - tw[j])
+    W = np.zeros((tw.size, wl.size))
+    W[j, np.arange(wl.size)] = 1.0 - f
+    W[j + 1, np.arange(wl.size)] += f
+    return W
+
+
+def interpolate_spectrum(values, table_wl, wl) -> np.ndarray:
+    """``values`` (..., n_table) relative to the solar spectrum at the table wavelengths
+    ``table_wl``, interpolated to ``wl`` [nm] as the model interpolates its tables
+    (:func:`spectral_table`, then linear): (..., n) (tools/fitted_accuracy.py applies it
+    to the reference's own values to measure the interpolation alone)."""
+    v, sw = spectral_table(values, table_wl)
+    return v @ wavelength_weights(sw, wl)
 
 
 @register
@@ -51,12 +166,14 @@ class FittedSky(SkyModel):
     -----
     The atmosphere is ``Atmosphere.earth(aerosol_optical_depth=..., ground_albedo=...)``
     with its other constituents at their defaults (ozone 300 DU, water vapour 1.42 cm,
-    mixed gases). The reference's table wavelengths are 300-1100 nm every 20 nm; other
-    wavelengths are interpolated linearly between them relative to the solar spectrum (as
-    ``precomputed`` does). Below the horizon the model returns the reference's ground
-    (Lambertian, lit by the sun and the sky, seen through the air), for an observer on
-    the ground as above it. Errors against the reference on a held-out grid:
-    docs/models.md, "fitted".
+    mixed gases). The reference's table wavelengths are 300-1100 nm every 20 nm; halfway
+    between two of them where the gases absorb (ozone's Huggins band, O2, water vapour) the
+    value comes from the logarithms of the nearest three (:func:`spectral_table`); other
+    wavelengths are interpolated linearly, relative to the solar spectrum, between these
+    10-nm values (docs/models.md, "fitted", "Wavelengths"). Below the horizon the model
+    returns the reference's ground (Lambertian, lit by the sun and the sky, seen through
+    the air), for an observer on the ground as above it. Errors against the reference on
+    a held-out grid: docs/models.md, "fitted".
     """
 
     name = "fitted"
@@ -86,11 +203,13 @@ class FittedSky(SkyModel):
         from skydome.models.fitted import _coefficients
 
         self._c = _coefficients.load()
-        self._table_wl = self._c["wavelengths_nm"]
-        # [sr^-1] per unit extraterrestrial irradiance, (rows, phi, n_table_wavelengths)
-        self._table = _coefficients.radiance_grid(
+        # [sr^-1] per unit extraterrestrial irradiance, (rows, phi, n_spectral) at the
+        # spectral wavelengths: the table wavelengths and the in-between ones where the
+        # gases absorb (spectral_table)
+        self._table, self._table_wl = spectral_table(_coefficients.radiance_grid(
             self._c, self.aerosol_optical_depth, self.ground_albedo,
-            float(self.sun.elevation_deg), self.observer_altitude_m)
+            float(self.sun.elevation_deg), self.observer_altitude_m),
+            self._c["wavelengths_nm"])
         self._theta_h = _grid.horizon_zenith_rad(self.observer_altitude_m)
         az = math.radians(float(self.sun.azimuth_deg))
         self._sin_az, self._cos_az = math.sin(az), math.cos(az)
@@ -103,13 +222,7 @@ class FittedSky(SkyModel):
         included)."""
         from skydome.spectra import solar_irradiance
 
-        tw = self._table_wl
-        x = np.clip(wl, tw[0], tw[-1])
-        j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
-        f = (x - tw[j]) / (tw[j + 1] - tw[j])
-        W = np.zeros((tw.size, wl.size))
-        W[j, np.arange(wl.size)] = 1.0 - f
-        W[j + 1, np.arange(wl.size)] += f
+        W = wavelength_weights(self._table_wl, wl)
         return W * (solar_irradiance(wl) * self.sun.irradiance_scale)[None, :]
 
     def _derived_table(self, key, make):
@@ -165,8 +278,8 @@ class FittedSky(SkyModel):
         weights (skydome.imaging.render)."""
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
         B = self._weights(wl)
-        # only the table wavelengths that reach ``wavelengths_nm`` (380-780 nm: 21 of the
-        # 41): the other rows of B are zero, so the product is the same, at half the cost
+        # only the spectral wavelengths that reach ``wavelengths_nm`` (380-780 nm: 29 of
+        # the 63): the other rows of B are zero, so the product is the same, at less cost
         used = np.flatnonzero(np.any(B != 0.0, axis=1))
         j0, j1 = (int(used[0]), int(used[-1]) + 1) if used.size else (0, 1)
         table = self._derived_table(("rows", j0, j1), lambda: self._table[:, :, j0:j1])
@@ -189,14 +302,15 @@ class FittedSky(SkyModel):
 
     def sun_transmittance(self, wavelengths_nm) -> np.ndarray:
         """Transmittance of the air along the path to the sun's centre, (n,), in [0, 1]
-        (linear between the table wavelengths)."""
+        (between the table wavelengths as the sky: :func:`spectral_table`, then linear)."""
         from skydome.models.fitted import _coefficients
 
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
         t = _coefficients.sun_transmittance(self._c, self.aerosol_optical_depth,
                                             float(self.sun.elevation_deg),
                                             self.observer_altitude_m)
-        return np.interp(wl, self._table_wl, t)
+        t, sw = spectral_table(t, self._c["wavelengths_nm"])
+        return np.clip(np.interp(wl, sw, t), 0.0, 1.0)
 
     def sun_visible_fraction(self) -> float:
         """Fraction of the sun's disc (uniform) above the observer's horizon, which

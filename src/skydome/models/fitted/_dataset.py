@@ -14,7 +14,12 @@ A chunk (one atmosphere: aerosol optical depth at 550 nm and ground albedo) is t
 
 The reference runs with ``cache=False`` (a chunk is computed once; the table cache would
 hold a 1.3 GB entry per atmosphere) and its table wavelengths set to
-:data:`._grid.WAVELENGTHS_NM`.
+:data:`._grid.WAVELENGTHS_NM` (the fitting wavelengths, every 20 nm) or, for a held-out set
+that measures the model between them, to :func:`wavelengths_nm` of a finer step (10 nm:
+300, 310, ..., 1100 nm; the 20-nm wavelengths are every other one of them). The reference
+computes every order at every table wavelength, each independently of the others (its
+default ``high_order_wavelengths=None``), so its values at the shared wavelengths do not
+depend on the step.
 """
 
 from __future__ import annotations
@@ -41,21 +46,39 @@ def atmosphere(aod: float, albedo: float):
                             ground_albedo=float(albedo))
 
 
+def wavelengths_nm(step_nm: float = 20.0) -> np.ndarray:
+    """The table wavelengths of a data set [nm]: 300 to 1100 nm every ``step_nm`` (20, the
+    fitting wavelengths :data:`._grid.WAVELENGTHS_NM`, or a divisor of 20: 10, 5, 4, 2, 1,
+    which keeps every fitting wavelength among them)."""
+    step = float(step_nm)
+    n = 20.0 / step if step > 0 else 0.0
+    if step not in (20.0, 10.0, 5.0, 4.0, 2.0, 1.0) or abs(n - round(n)) > 1e-12:
+        raise ValueError(f"wavelength step = {step_nm!r} nm is out of range: one of 20, 10, "
+                         "5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)")
+    if step == 20.0:
+        return _grid.WAVELENGTHS_NM.copy()
+    k = int(round(800.0 / step))
+    return 300.0 + step * np.arange(k + 1, dtype=np.float64)
+
+
 def chunk_key(aod: float, albedo: float) -> str:
     return f"aod{aod:.3f}_albedo{albedo:.3f}"
 
 
 def compute_chunk(aod: float, albedo: float, elevations_deg, altitudes_m,
-                  midpoints: bool = False, twilight_reference: bool = False) -> np.ndarray:
+                  midpoints: bool = False, twilight_reference: bool = False,
+                  wavelengths=None) -> np.ndarray:
     """One atmosphere's chunk (module docstring), by the ``precomputed`` model; with
     ``midpoints`` on the centres of the view grid's cells (the held-out grid); with
     ``twilight_reference`` in ``precomputed``'s twilight reference configuration (its
-    ``twilight_reference=True``, validated to sun -12 deg; about 4x the CPU)."""
+    ``twilight_reference=True``, validated to sun -12 deg; about 4x the CPU);
+    ``wavelengths`` [nm]: the table wavelengths (default :data:`._grid.WAVELENGTHS_NM`)."""
     import skydome as sd
 
     el = np.asarray(elevations_deg, dtype=np.float64)
     alt = np.asarray(altitudes_m, dtype=np.float64)
-    wl = _grid.WAVELENGTHS_NM
+    wl = (_grid.WAVELENGTHS_NM if wavelengths is None
+          else np.asarray(wavelengths, dtype=np.float64))
     extra = {"twilight_reference": True} if twilight_reference else {}
     ref = sd.model("precomputed", sun=sd.Sun(elevation_deg=float(el[0]), azimuth_deg=180.0),
                    atmosphere=atmosphere(aod, albedo), table_wavelengths_nm=wl, cache=False,
@@ -100,6 +123,12 @@ class DataSet:
         self.midpoints = meta["view_grid"].get("directions") == "cell centres"
         self.present = [(a, b) for a, b in self.atmospheres
                         if (self.folder / (chunk_key(a, b) + ".npy.sha256")).is_file()]
+        if not gj.is_file() and self.present:
+            # still being generated: its wavelengths from a chunk's last axis (300-1100 nm,
+            # evenly spaced, as tools/fitted_dataset.py --wavelength-step writes them)
+            n = np.load(self.folder / (chunk_key(*self.present[0]) + ".npy"),
+                        mmap_mode="r").shape[-1]
+            self.wavelengths_nm = np.linspace(300.0, 1100.0, n)
 
     def chunk(self, aod: float, albedo: float) -> np.ndarray:
         """The chunk of one atmosphere (verified against its recorded hash)."""
@@ -128,14 +157,18 @@ def _grid_meta(grid: str) -> dict:
 
 
 def write_grid(folder, elevations_deg, altitudes_m, atmospheres,
-               midpoints: bool = False, twilight_reference: bool = False) -> None:
-    """Record the data set's nodes in ``folder/grid.json`` (atomically)."""
+               midpoints: bool = False, twilight_reference: bool = False,
+               wavelengths=None) -> None:
+    """Record the data set's nodes in ``folder/grid.json`` (atomically); ``wavelengths``
+    [nm]: its table wavelengths (default :data:`._grid.WAVELENGTHS_NM`)."""
     from skydome._io import atomic_file
+
+    wl = _grid.WAVELENGTHS_NM if wavelengths is None else np.asarray(wavelengths)
 
     meta = {"elevations_deg": [float(x) for x in elevations_deg],
             "altitudes_m": [float(x) for x in altitudes_m],
             "atmospheres": [[float(a), float(b)] for a, b in atmospheres],
-            "wavelengths_nm": [float(x) for x in _grid.WAVELENGTHS_NM],
+            "wavelengths_nm": [float(x) for x in wl],
             "view_grid": {"n_sky": _grid.N_SKY, "n_ground": _grid.N_GROUND,
                           "n_phi": _grid.N_PHI, "a_phi": _grid.A_PHI,
                           "directions": "cell centres" if midpoints else "nodes"},
