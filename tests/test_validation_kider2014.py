@@ -144,6 +144,26 @@ def test_aerosol_optics():
     assert atm.ground_albedo(np.array([440.0]))[0] == pytest.approx(r.surface_albedo[0])
 
 
+def test_aerosol_asymmetry_override():
+    """aerosol_atmosphere(asymmetry=g) (the phase fit's Henyey-Greenstein g) sets the
+    aerosol's g; without it the measured table's asymmetry at 674 nm (AERONET, 0.59 for the
+    14:19 UTC retrieval, read from the .pfn file) is used; bad values are refused, naming
+    the parameter, before any work."""
+    r = aeronet.egbert_20130527()[-1]
+
+    def g_of(atm):
+        return [c for c in atm.constituents if c.name == "aerosol"][0].g
+
+    hg = aeronet.aerosol_atmosphere(r, phase="henyey_greenstein", asymmetry=0.72)
+    assert g_of(hg) == pytest.approx(0.72)
+    meas = g_of(aeronet.aerosol_atmosphere(r, phase="henyey_greenstein"))
+    assert meas == pytest.approx(float(r.asymmetry()[1])) and 0.55 < meas < 0.65
+    with pytest.raises(ValueError, match="asymmetry.*1.2.*0.95"):
+        aeronet.aerosol_atmosphere(r, phase="henyey_greenstein", asymmetry=1.2)
+    with pytest.raises(ValueError, match="asymmetry.*tabulated"):
+        aeronet.aerosol_atmosphere(r, phase="tabulated", asymmetry=0.7)
+
+
 def test_pfn_bad_file(tmp_path):
     p = tmp_path / "x.pfn"
     p.write_text("not aeronet\n")
