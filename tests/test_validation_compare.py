@@ -112,9 +112,11 @@ def test_cli_table(tmp_path):
 
 # precomputed (skydome's physically based default) at the coarse test settings, with the
 # measured (tabulated AERONET) phase function and its zenith-angle mu_s mapping: the errors
-# against the measured sky, pinned so that a change of the model shows
-PRECOMPUTED = [("11:00:00", 0.2118, 0.1228, 0.1325, 0.2678, 0.0131),
-               ("12:45:00", 0.1550, 0.0938, 0.0806, 0.2558, 0.0133)]
+# against the measured sky, pinned so that a change of the model shows (at the loader's
+# -23 min clock of 2013-05-27; at -40 min they were 0.2118 / 0.1228 / 0.1325 / 0.2678 /
+# 0.0131 and 0.1550 / 0.0938 / 0.0806 / 0.2558 / 0.0133)
+PRECOMPUTED = [("11:00:00", 0.2945, 0.1848, 0.1457, 0.3200, 0.0123),
+               ("12:45:00", 0.1552, 0.0760, 0.0612, 0.2337, 0.0124)]
 
 
 @pytest.mark.slow
