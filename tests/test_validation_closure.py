@@ -31,9 +31,11 @@ def test_closure_ghi_pinned(caps):
 
 @pytest.mark.slow
 def test_pyranometer_clock_is_the_labels(caps):
-    """With the sun of the scanner's clock (-40 min) the model falls 11 % short at 10:30 and
-    the error trends with time (-3 % at 12:30): the pyranometer's record fits the labels."""
-    res = closure.closure(caps, "precomputed", fast=True, pyranometer_clock_offset_min=None)
+    """With the sun 40 min before the labels (the circumsolar peak's clock shift of the
+    scanner, kider2014.PEAK_CLOCK_OFFSET_MIN) the model falls 11 % short at 10:30 and the
+    error trends with time (-3 % at 12:30): the pyranometer's record fits the labels."""
+    res = closure.closure(caps, "precomputed", fast=True,
+                          pyranometer_clock_offset_min=kider2014.PEAK_CLOCK_OFFSET_MIN)
     e = np.array([r.error for r in res])
     assert e[0] < -0.08 and e[0] < e[1] - 0.05
 

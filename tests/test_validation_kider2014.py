@@ -53,14 +53,36 @@ def test_conventions_from_the_data():
 
 
 def test_clock_offset_from_the_data():
-    """One time shift brings the data's sun onto SPA in elevation and azimuth together."""
+    """One time shift brings the data's sun (the circumsolar peak's centre) onto SPA in
+    elevation and azimuth together: about -40 min by that estimator."""
     r = kider2014.fit_clock_offset()
     assert -50.0 <= r["median_best_min"] <= -30.0
-    assert r["median_best_min"] == pytest.approx(kider2014.CLOCK_OFFSET_MIN, abs=5.0)
+    assert r["median_best_min"] == pytest.approx(kider2014.PEAK_CLOCK_OFFSET_MIN, abs=5.0)
     offs = list(r["offsets_min"])
     at0 = r["angles_deg"][:, offs.index(0.0)]
-    atfit = r["angles_deg"][:, offs.index(kider2014.CLOCK_OFFSET_MIN)]
+    atfit = r["angles_deg"][:, offs.index(kider2014.PEAK_CLOCK_OFFSET_MIN)]
     assert np.median(at0) > 7.0 and np.median(atfit) < 3.0
+
+
+def test_loader_clock_is_what_the_shape_scan_measures():
+    """The loader's clock correction for 2013-05-27 is the whole-sky shape scan's
+    (compare.clock_scan: hillaire2020, AERONET aerosol, point sampling; the reference is the
+    measured scans): per capture, the shape RMS of ln(model / measured) at the loader's
+    offset and 10 min either side, and the vertex of the parabola through them. The median
+    vertex over the 15 captures must lie within 3 min of the loader's offset, and the
+    median shape RMS at the loader's offset must be below that at 10 min either side: a
+    loader offset that drifts from what the scan measures (the -40 min of the circumsolar
+    peak: median vertex about -30 min, at the grid's edge) fails."""
+    from skydome.validation.compare import clock_scan
+
+    off = kider2014.CLOCK_OFFSETS_MIN["2013-05-27"]
+    assert off == kider2014.CLOCK_OFFSET_MIN
+    r = clock_scan("2013-05-27", offsets_min=[off - 10.0, off, off + 10.0], motions=(None,))
+    rms = r["rms"][:, 0, :]
+    assert np.all(np.isfinite(rms)) and rms.shape == (15, 3)
+    assert float(np.median(r["best_min"][:, 0])) == pytest.approx(off, abs=3.0)
+    med = np.median(rms, axis=0)
+    assert med[1] < med[0] and med[1] < med[2]
 
 
 def test_sample0_misbehaves():
@@ -120,6 +142,26 @@ def test_aerosol_optics():
     aero = [c for c in atm.constituents if c.name == "aerosol"][0]
     assert aero.phase == "tabulated"
     assert atm.ground_albedo(np.array([440.0]))[0] == pytest.approx(r.surface_albedo[0])
+
+
+def test_aerosol_asymmetry_override():
+    """aerosol_atmosphere(asymmetry=g) (the phase fit's Henyey-Greenstein g) sets the
+    aerosol's g; without it the measured table's asymmetry at 674 nm (AERONET, 0.59 for the
+    14:19 UTC retrieval, read from the .pfn file) is used; bad values are refused, naming
+    the parameter, before any work."""
+    r = aeronet.egbert_20130527()[-1]
+
+    def g_of(atm):
+        return [c for c in atm.constituents if c.name == "aerosol"][0].g
+
+    hg = aeronet.aerosol_atmosphere(r, phase="henyey_greenstein", asymmetry=0.72)
+    assert g_of(hg) == pytest.approx(0.72)
+    meas = g_of(aeronet.aerosol_atmosphere(r, phase="henyey_greenstein"))
+    assert meas == pytest.approx(float(r.asymmetry()[1])) and 0.55 < meas < 0.65
+    with pytest.raises(ValueError, match="asymmetry.*1.2.*0.95"):
+        aeronet.aerosol_atmosphere(r, phase="henyey_greenstein", asymmetry=1.2)
+    with pytest.raises(ValueError, match="asymmetry.*tabulated"):
+        aeronet.aerosol_atmosphere(r, phase="tabulated", asymmetry=0.7)
 
 
 def test_pfn_bad_file(tmp_path):

@@ -4,11 +4,19 @@
         [--captures 10:00:00,11:00:00] [--models ...]
     python tools/validation_measured.py OUT_FOLDER --clock [--day 2013-09-24]
     python tools/validation_measured.py docs/validation_measured.md --update-doc [--models fitted]
+        [--day 2013-05-27] [--fit-cache FITS.pkl]
 
 ``--update-doc`` reruns every block of the page between ``<!-- begin: skydome validate
 measured OPTIONS -->`` and ``<!-- end -->`` with those options and puts what the command
 prints there; with ``--models`` only those models' rows are rerun and replaced (the other
-rows stay), e.g. after a change of the fitted model's coefficients.
+rows stay), e.g. after a change of the fitted model's coefficients; with ``--day`` only the
+blocks of that day are rerun. The page is written after each block, so a long rerun lands
+block by block; ``--fit-cache FILE`` keeps the aerosol fits (the costly part) between runs
+of groups of models.
+
+``--clock`` prints, per capture, the best clock offset of the point and move models and,
+last, the median over the captures of each: the median of the point model is what
+``kider2014.CLOCK_OFFSETS_MIN`` takes for 2013-05-27.
 
 Writes OUT_FOLDER/validation_measured_table.md (each day's table, then every capture,
 exactly as ``skydome validate measured`` prints them with the same options: both call
@@ -32,28 +40,43 @@ def main(argv=None) -> int:
     ap.add_argument("--captures", default=None)
     ap.add_argument("--models", default=None)
     ap.add_argument("--fast", action="store_true")
-    ap.add_argument("--day", default="2013-05-27", help="2013-05-27, 2013-09-24 or all")
+    ap.add_argument("--day", default=None,
+                    help="2013-05-27 (default), 2013-09-24 or all; with --update-doc: only "
+                         "that day's blocks")
     ap.add_argument("--phase", default="tabulated")
     ap.add_argument("--aerosol", default=None,
                     help="aeronet or fitted (default: aeronet where there is one)")
     ap.add_argument("--clock", action="store_true",
                     help="the clock scan (validation.compare.clock_scan), not the table")
+    ap.add_argument("--point-only", action="store_true",
+                    help="with --clock: the point model only (not the mean along the moves)")
     ap.add_argument("--shape", action="store_true",
                     help="the shape-error study: ring offsets of OUT's results.pkl and "
                          "hillaire2020 "
                          "refitted with other aerosol profiles, ground albedo, observer altitude")
+    ap.add_argument("--phase-fit", action="store_true",
+                    help="the phase-function test: hillaire2020 with tau440 and alpha fitted "
+                         "(measured phase) against tau440, alpha and a Henyey-Greenstein g "
+                         "fitted together, on --captures DAY/LABEL,... (default: every capture "
+                         "of both days)")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
     ap.add_argument("--update-doc", action="store_true",
                     help="OUT is a Markdown page: rerun its marked command blocks in place")
+    ap.add_argument("--fit-cache", default=None,
+                    help="with --update-doc: a pickle keeping the aerosol fits between runs")
     a = ap.parse_args(argv)
     if a.update_doc:
-        return update_doc(Path(a.out), a.models)
+        return update_doc(Path(a.out), a.models, None if a.day in (None, "all") else a.day,
+                          a.fit_cache)
+    a.day = a.day or "2013-05-27"
     if a.figures:
         return figures(Path(a.out), Path(a.figures))
     if a.clock:
-        return clock(Path(a.out), a.day)
+        return clock(Path(a.out), a.day, a.point_only)
     if a.shape:
         return shape(Path(a.out), a.captures)
+    if a.phase_fit:
+        return phase_fit(Path(a.out), a.captures)
     from skydome.validation import fitting
     from skydome.validation.compare import compare_measured, report_text
 
@@ -143,15 +166,28 @@ def _replace_rows(old: str, new: str, models) -> str:
     return "\n".join(out) + "\n"
 
 
-def update_doc(page: Path, models) -> int:
-    """Rerun each marked block of ``page`` (see the module docstring) and write it back."""
+def update_doc(page: Path, models, day=None, fit_cache=None) -> int:
+    """Rerun each marked block of ``page`` (see the module docstring; only the blocks of
+    ``day`` when given) and write the page back after each block."""
     from skydome._io import atomic_write
+    from skydome.validation import fitting
     from skydome.validation.compare import measured_report
     from skydome.validation.kider2014 import DAYS
 
     only = models.split(",") if models else None
+    if fit_cache and Path(fit_cache).exists():
+        with open(fit_cache, "rb") as f:
+            fitting._FIT_CACHE.update(pickle.load(f))
     lines = page.read_text(encoding="utf-8").splitlines(keepends=True)
     out, i = [], 0
+
+    def write(rest):
+        atomic_write(page, lambda tmp: Path(tmp).write_text("".join(out) + "".join(rest),
+                                                            encoding="utf-8"))
+        if fit_cache:
+            with open(fit_cache, "wb") as f:
+                pickle.dump(dict(fitting._FIT_CACHE), f)
+
     while i < len(lines):
         out.append(lines[i])
         if not lines[i].startswith(_BEGIN):
@@ -171,6 +207,8 @@ def update_doc(page: Path, models) -> int:
                  ["precomputed", "hillaire2020", "nishita1996", "single_scattering", "fitted",
                   "preetham1999", "hosek_wilkie2012", "perez1993", "cie2003"])
         run = [m for m in names if only is None or m in only]
+        if day is not None and o["day"] not in (day, "all"):
+            run = []
         if run:
             days = list(DAYS) if o["day"] == "all" else [o["day"]]
             caps = o["captures"].split(",") if o["captures"] else None
@@ -179,26 +217,38 @@ def update_doc(page: Path, models) -> int:
                                       aerosol=None if o["aerosol"] == "auto" else o["aerosol"])
             new = text if only is None else _replace_rows(old, text, set(run))
             out.append(new if new.endswith("\n") else new + "\n")
+            write(lines[j:])
         else:
             out.append(old)
         i = j
-    atomic_write(page, lambda tmp: Path(tmp).write_text("".join(out), encoding="utf-8"))
+    write([])
     return 0
 
 
-def clock(out: Path, day: str) -> int:
-    """Shape error against the clock offset, at the labelled directions and along the moves."""
+def clock(out: Path, day: str, point_only: bool = False) -> int:
+    """Shape error against the clock offset, at the labelled directions and (unless
+    ``point_only``) along the moves."""
     import numpy as np
 
     from skydome.validation.compare import clock_scan
 
     out.mkdir(parents=True, exist_ok=True)
-    r = clock_scan(day, offsets_min=np.arange(-70.0, 21.0, 10.0))
+    motions = (None,) if point_only else (None, "from_previous")
+    names = ("point", "move")[:len(motions)]
+    r = clock_scan(day, offsets_min=np.arange(-70.0, 21.0, 10.0), motions=motions)
     np.savez(out / f"clock_{day}.npz", labels=np.array(r["labels"]), offsets=r["offsets_min"],
              rms=r["rms"], best=r["best_min"])
     for lab, b, rr in zip(r["labels"], r["best_min"], r["rms"]):
-        print(f"{day} {lab} best offset [min]: point {b[0]:+.1f} move {b[1]:+.1f}; "
-              f"least shape RMS: point {rr[0].min():.3f} move {rr[1].min():.3f}")
+        print(f"{day} {lab} best offset [min]: " + " ".join(
+            f"{n} {b[i]:+.1f}" for i, n in enumerate(names)) + "; least shape RMS: " +
+            " ".join(f"{n} {rr[i].min():.3f}" for i, n in enumerate(names)))
+    med = np.median(r["rms"], axis=0)
+    for i, name in enumerate(names):
+        print(f"{day} median shape RMS, {name}: " + ", ".join(
+            f"{o:+.0f}: {v:.3f}" for o, v in zip(r["offsets_min"], med[i])))
+    best = np.median(r["best_min"], axis=0)
+    print(f"{day} median of the per-capture best offsets [min]: " + " ".join(
+        f"{n} {best[i]:+.1f}" for i, n in enumerate(names)))
     return 0
 
 
@@ -283,6 +333,79 @@ def shape(out: Path, captures) -> int:
             print(lines[-1], flush=True)
     (out / "shape_study.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines))
+    return 0
+
+
+def _errors(c, L):
+    """L RMS >= 10 deg, shape RMS (log), band medians and the profile by angle of ``L``."""
+    import numpy as np
+
+    from skydome.validation import compare
+
+    lum, _ = compare.measured_luminance(c)
+    keep = np.ones(lum.size, bool)
+    keep[list(compare.EXCLUDED_SAMPLES)] = False
+    outside = keep & (c.sun_angle_deg >= 10.0)
+    lrms = float(np.sqrt(np.mean((L[outside] / lum[outside] - 1.0) ** 2)))
+    e = np.log(L[keep] / lum[keep])
+    srms = float(np.sqrt(np.mean((e - e.mean()) ** 2)))
+    _, med, _ = compare.angle_profile([(c, L)])
+    return lrms, srms, med
+
+
+def phase_fit(out: Path, captures) -> int:
+    """Per capture: hillaire2020 with (a) tau440 and alpha fitted, measured (tabulated)
+    phase function, as the tables; (b) tau440, alpha and a Henyey-Greenstein g fitted
+    together (fitting.fit_aerosol_phase). Prints the fitted values, the luminance RMS
+    >= 10 deg from the sun, the log-shape RMS, the band medians 400-700 nm and the median
+    shape error by angle from the sun (compare.angle_profile) of each; saves
+    OUT/phase_fit.pkl."""
+    import numpy as np
+
+    import skydome as sd
+    from skydome.validation import compare, fitting
+    from skydome.validation.aeronet import aerosol_atmosphere
+    from skydome.validation.kider2014 import DAYS, capture_labels, load_captures
+
+    out.mkdir(parents=True, exist_ok=True)
+    labs = (captures.split(",") if captures else
+            [f"{d}/{lab}" for d in DAYS for lab in capture_labels(d)])
+    rows = []
+    wl = compare.LUMINANCE_WL
+    for lab in labs:
+        day, label = lab.split("/")
+        c = load_captures([label], day=day)[0]
+        t, cpu = time.time(), time.process_time()
+        res = {}
+        r0 = fitting.fit_aerosol(c)
+        r1, g = fitting.fit_aerosol_phase(c)
+        for name, atm, fit in (("measured phase", aerosol_atmosphere(r0), (r0.tau440, r0.alpha, float("nan"))),
+                               ("HG, g fitted", aerosol_atmosphere(r1, phase="henyey_greenstein", asymmetry=g),
+                                (r1.tau440, r1.alpha, g))):
+            m = sd.model("hillaire2020", sun=c.sun, atmosphere=atm)
+            S = m.radiance(c.directions, wl)
+            from skydome.spectra import spectrum_to_xyz
+
+            L = spectrum_to_xyz(S, wl)[:, 1]
+            lrms, srms, med = _errors(c, L)
+            keep = np.ones(L.size, bool)
+            keep[list(compare.EXCLUDED_SAMPLES)] = False
+            bands = []
+            for b in compare.BANDS_NM:
+                sm, mm = np.abs(wl - b) <= 10.0, np.abs(c.wavelengths_nm - b) <= 10.0
+                ratio = S[:, sm].mean(axis=1) / c.radiance[:, mm].mean(axis=1)
+                bands.append(float(np.median(ratio[keep]) - 1.0))
+            res[name] = {"fit": fit, "lrms": lrms, "srms": srms, "profile": med, "bands": bands}
+        rows.append((day, label, res))
+        for name, v in res.items():
+            print(f"{day} {label} {name:14s} tau440 {v['fit'][0]:.3f} alpha {v['fit'][1]:.2f} "
+                  f"g {v['fit'][2]:.3f}; L RMS >= 10 deg {100 * v['lrms']:.1f} %, log-shape RMS "
+                  f"{100 * v['srms']:.1f} %; bands " + " / ".join(f"{100 * x:+.1f}" for x in v["bands"])
+                  + "; by angle 10-20/20-40/40-60/60-80/80-100/100-120/120-180: "
+                  + " / ".join(f"{100 * x:+.1f}" for x in v["profile"]), flush=True)
+        print(f"    ({time.time() - t:.0f} s wall, {time.process_time() - cpu:.0f} s CPU)", flush=True)
+        with open(out / "phase_fit.pkl", "wb") as f:
+            pickle.dump(rows, f)
     return 0
 
 

@@ -158,7 +158,7 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
                        ozone_du: float = 300.0, ground_albedo=None,
                        aerosol_scale_height_m: float = 1200.0,
                        precipitable_water_cm: float = 1.42, mixed_gases: bool = True,
-                       gas_reference_airmass: float = 1.5):
+                       gas_reference_airmass: float = 1.5, asymmetry: float | None = None):
     """Earth's atmosphere with the retrieval's aerosol.
 
     Rayleigh: Ciddor 1996 refractive index of standard air (15 degC, 101325 Pa), number
@@ -167,7 +167,9 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
     alpha on an exponential profile of ``aerosol_scale_height_m`` (1200 m, survey sec. 4;
     AERONET gives no profile), single scattering albedo ``retrieval.ssa``, and ``phase``:
     "tabulated" (the measured phase function, default) or "henyey_greenstein" /
-    "cornette_shanks" with the measured asymmetry factor at 674 nm. Ozone ``ozone_du`` on
+    "cornette_shanks" with the measured asymmetry factor at 674 nm, or ``asymmetry`` in
+    [0, 0.95] when given (the phase fit of :func:`skydome.validation.fitting.fit_aerosol_phase`;
+    refused with "tabulated"). Ozone ``ozone_du`` on
     the 10-25-40 km tent (300 DU: not measured that day; a typical mid-latitude column).
     Ground albedo: ``ground_albedo`` or, by default, the inversion's surface albedo (at
     Egbert; the Ithaca roof's is unknown). Water vapour ``precipitable_water_cm`` (1.42 cm,
@@ -179,6 +181,13 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
     from skydome.atmosphere.rayleigh import rayleigh_scattering_coefficient
 
     check_choice("phase", phase, ("tabulated", "henyey_greenstein", "cornette_shanks"))
+    if asymmetry is not None:
+        from skydome._validate import check_number
+
+        if phase == "tabulated":
+            raise ValueError("asymmetry must be None with phase='tabulated' (the table sets "
+                             f"it), got {asymmetry!r}")
+        asymmetry = check_number("asymmetry", asymmetry, 0.0, 0.95)
     n_air = 101325.0 / (1.380649e-23 * 288.15)  # [m^-3] ideal gas at 15 degC
     rho = 0.0279  # depolarisation ratio (Young 1980, Appl. Opt. 19, 3427)
 
@@ -196,7 +205,7 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
     if phase == "tabulated":
         kw["phase_table"] = retrieval.phase_table()
     else:
-        kw["g"] = float(retrieval.asymmetry()[1])
+        kw["g"] = float(retrieval.asymmetry()[1]) if asymmetry is None else float(asymmetry)
     cons = (Constituent("rayleigh", scattering=ray, profile=ExponentialProfile(7994.0),
                         phase="rayleigh", depolarisation=rho),
             Constituent("aerosol", scattering=lambda wl: retrieval.single_scattering_albedo(wl) * ext(wl),
@@ -209,4 +218,5 @@ def aerosol_atmosphere(retrieval: AeronetRetrieval, *, phase: str = "tabulated",
         ground_albedo = retrieval.ground_albedo
     return Atmosphere(cons, ground_albedo=ground_albedo,
                       name=f"aeronet({retrieval.time:%H:%M} UTC, tau440={retrieval.tau440:.3f}, "
-                           f"alpha={retrieval.alpha:.3f}, {phase})")
+                           f"alpha={retrieval.alpha:.3f}, {phase}"
+                           + ("" if asymmetry is None else f", g={asymmetry:.3f}") + ")")

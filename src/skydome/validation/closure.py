@@ -138,7 +138,8 @@ def closure(captures, model: str = "precomputed", *, precipitable_water_cm: floa
         Offset [min] in [-120, 120] of the pyranometer's clock: the model's sun is at the
         middle of the labelled window plus this offset (default
         :data:`PYRANOMETER_CLOCK_OFFSET_MIN`, 0: the labels, which the pyranometer's record
-        fits). None: the capture's own sun (the scanner's clock correction, -40 min).
+        fits). None: the capture's own sun (the scanner's clock correction,
+        :data:`skydome.validation.kider2014.CLOCK_OFFSETS_MIN`).
     """
     from skydome.validation.aeronet import aerosol_atmosphere, egbert_20130527, nearest_retrieval
 

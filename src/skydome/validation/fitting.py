@@ -24,13 +24,15 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["FIT_WAVELENGTHS", "fit_aerosol", "base_retrieval"]
+__all__ = ["FIT_WAVELENGTHS", "fit_aerosol", "fit_aerosol_phase", "base_retrieval"]
 
 #: wavelengths of the aerosol fit [nm]
 FIT_WAVELENGTHS = np.arange(400.0, 701.0, 50.0)
 #: bounds of the fit: tau440 and the Angstrom exponent
 TAU440_RANGE = (0.01, 1.5)
 ALPHA_RANGE = (-0.5, 3.0)
+#: bounds of the Henyey-Greenstein asymmetry factor in :func:`fit_aerosol_phase`
+G_RANGE = (0.3, 0.9)
 
 _FIT_CACHE: dict = {}
 
@@ -99,5 +101,53 @@ def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated
     sol = least_squares(resid, p0, bounds=(lo, hi), diff_step=2e-3, x_scale=[0.3, 0.3],
                         xtol=1e-3, ftol=1e-4, max_nfev=40)
     out = dataclasses.replace(base, tau440=float(np.exp(sol.x[0])), alpha=float(sol.x[1]))
+    _FIT_CACHE[key] = out
+    return out
+
+
+def fit_aerosol_phase(capture, *, model: str = "hillaire2020"):
+    """The aerosol (tau440, alpha) and a Henyey-Greenstein asymmetry factor g fitted together
+    to the scan's 400-700 nm radiance (the same residual, directions and wavelengths as
+    :func:`fit_aerosol`; g in :data:`G_RANGE`, the same g at every wavelength).
+
+    The test of whether the aerosol's phase function explains the angular error left after
+    :func:`fit_aerosol` (docs/validation_measured.md, "The goal, per day"): if it did, a
+    fitted g would remove the pattern by angle from the sun. Returns ``(retrieval, g)``, the
+    base retrieval with tau440 and alpha replaced and the fitted g (use with
+    ``aerosol_atmosphere(retrieval, phase="henyey_greenstein", asymmetry=g)``); cached per
+    capture.
+    """
+    from scipy.optimize import least_squares
+
+    import skydome as sd
+    from skydome._validate import check_choice
+    from skydome.validation.aeronet import aerosol_atmosphere
+
+    check_choice("model", model, ("hillaire2020", "precomputed"))
+    key = (capture.day, capture.label, capture.mean_time, model, "henyey_greenstein", "g")
+    if key in _FIT_CACHE:
+        return _FIT_CACHE[key]
+    base = base_retrieval(capture)
+    keep = _fit_mask(capture)
+    wl = FIT_WAVELENGTHS
+    idx = [int(np.argmin(np.abs(capture.wavelengths_nm - w))) for w in wl]
+    meas = np.log(capture.radiance[keep][:, idx])
+    d = capture.directions[keep]
+
+    def resid(p):
+        r = dataclasses.replace(base, tau440=float(np.exp(p[0])), alpha=float(p[1]))
+        atm = aerosol_atmosphere(r, phase="henyey_greenstein", asymmetry=float(p[2]))
+        m = sd.model(model, sun=capture.sun, atmosphere=atm, n_wavelengths=wl.size)
+        S = np.maximum(m.radiance(d, wl), 1e-30)
+        return (np.log(S) - meas).ravel()
+
+    g0 = float(np.clip(base.asymmetry()[1], *G_RANGE))
+    lo = [np.log(TAU440_RANGE[0]), ALPHA_RANGE[0], G_RANGE[0]]
+    hi = [np.log(TAU440_RANGE[1]), ALPHA_RANGE[1], G_RANGE[1]]
+    p0 = [np.log(np.clip(base.tau440, *TAU440_RANGE)), float(np.clip(base.alpha, *ALPHA_RANGE)), g0]
+    sol = least_squares(resid, p0, bounds=(lo, hi), diff_step=2e-3, x_scale=[0.3, 0.3, 0.05],
+                        xtol=1e-3, ftol=1e-4, max_nfev=60)
+    out = (dataclasses.replace(base, tau440=float(np.exp(sol.x[0])), alpha=float(sol.x[1])),
+           float(sol.x[2]))
     _FIT_CACHE[key] = out
     return out

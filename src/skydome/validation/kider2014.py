@@ -21,20 +21,27 @@ tests/validation/test_kider2014.py):
   day. A scan lasts about 343 s (the pyranometer files of a capture run 09:30:00-09:35:43),
   so sample i is taken near ``start + (i + 0.5) * 343 s / 81``.
 
-* **Clock.** With the labels read as EDT, the sun seen in the data (the centre of the
-  circumsolar peak, :func:`sun_from_data`) lies 7-12 deg from the SPA sun at every capture,
-  always towards where the sun was earlier that morning: both its elevation and its azimuth
-  match the SPA sun of about 40 minutes before the label (:func:`fit_clock_offset`: the
-  residual drops to 0.3-3.6 deg for 12 of the 13 captures from 10:00 on). One time
-  shift fixing elevation and azimuth together points to the scanner's clock rather than to
-  its azimuth alignment (an azimuth offset would leave the elevation error). Bruneton's
-  reader notes the same mismatch and estimates the sun azimuth from the symmetry axis
-  instead. The loader applies :data:`CLOCK_OFFSET_MIN` to 2013-05-27 by default
-  (``load_captures(clock_offset_min=0)`` gives the labels as they are). Fitting the whole
-  sky's shape instead (:func:`skydome.validation.compare.clock_scan`) puts that day's shift
-  at about -23 min, and 2013-09-24 at its labels (:data:`CLOCK_OFFSETS_MIN`: 0 for that
-  day); modelling the scanner's motion does not remove the 2013-05-27 shift
-  (docs/validation_measured.md, "Scanner motion and clock").
+* **Clock.** With the labels read as EDT, the sun seen in the data of 2013-05-27 lies
+  7-12 deg from the SPA sun at every capture, always towards where the sun was earlier
+  that morning. Two estimators measure the shift. The centre of the circumsolar peak
+  (:func:`sun_from_data`, :func:`fit_clock_offset`) matches the SPA sun of about 40
+  minutes before the label (:data:`PEAK_CLOCK_OFFSET_MIN`), but the 20 deg gaps between
+  the scanner's rings leave that centre poorly determined. The whole sky's shape
+  (:func:`skydome.validation.compare.clock_scan`: hillaire2020 with the AERONET aerosol,
+  the RMS of ln(model / measured) about its mean, sun at the label plus -70 ... +20 min,
+  the best offset of each capture the vertex of a parabola through the best grid offset
+  and its neighbours) puts it at the label minus 19-40 min; the loader takes the median of
+  those per-capture best offsets of the point model over the 15 captures, as
+  ``tools/validation_measured.py OUT --clock --day 2013-05-27`` prints it, rounded to
+  the minute: :data:`CLOCK_OFFSET_MIN` (tests/test_validation_kider2014.py reruns a
+  cheaper scan and fails if the two drift apart). One shift fixing elevation and azimuth
+  together points to the scanner's clock rather than to its azimuth alignment (an
+  azimuth offset would leave the elevation error); modelling the scanner's motion (each
+  sample the mean along its move) does not remove it (docs/validation_measured.md,
+  "Scanner motion and clock"). Bruneton's reader notes the same mismatch and estimates
+  the sun azimuth from the symmetry axis instead. 2013-09-24's scans fit best at their
+  labels (:data:`CLOCK_OFFSETS_MIN`: 0 for that day). ``load_captures(clock_offset_min=0)``
+  gives the labels as they are.
 
 With the file azimuth read clockwise, or with UTC-5, the data do not fit at any shift near
 zero (see :func:`fit_conventions`).
@@ -50,6 +57,7 @@ from functools import lru_cache
 import numpy as np
 
 __all__ = ["DAYS", "DEFAULT_DAY", "CLOCK_OFFSETS_MIN", "CLOCK_OFFSET_MIN",
+           "PEAK_CLOCK_OFFSET_MIN",
            "fit_clock_offset", "SITE_LATITUDE_DEG", "SITE_LONGITUDE_DEG", "SITE_ALTITUDE_M",
            "SCAN_DURATION_S", "Capture", "load_captures", "capture_labels",
            "fit_conventions", "sun_from_data"]
@@ -65,14 +73,20 @@ SITE_ALTITUDE_M = 250.0
 SCAN_DURATION_S = 343.0
 #: Eastern Daylight Time, the time zone of the capture labels
 EDT = timezone(timedelta(hours=-4), "EDT")
-#: Correction added to the capture labels [min] so that the SPA sun matches the sun seen in
-#: the data (the median best shift over the captures, :func:`fit_clock_offset`)
-CLOCK_OFFSET_MIN = -40.0
+#: Correction added to 2013-05-27's capture labels [min]: the median over its 15 captures of
+#: the best clock offset of the whole sky's shape (point model;
+#: :func:`skydome.validation.compare.clock_scan`, printed by ``tools/validation_measured.py
+#: OUT --clock --day 2013-05-27`` as "median of the per-capture best offsets": -23.0 min)
+CLOCK_OFFSET_MIN = -23.0
+#: The shift the circumsolar peak alone gives (:func:`fit_clock_offset`, median over the
+#: captures; the loader's default before the whole-sky scan, kept for that comparison)
+PEAK_CLOCK_OFFSET_MIN = -40.0
 #: The days of the data set (its every day), the first the default
 DAYS = ("2013-05-27", "2013-09-24")
 DEFAULT_DAY = DAYS[0]
-#: Clock correction per day [min]: 2013-05-27 the circumsolar peak's -40 min, 2013-09-24 none
-#: (its scans fit best within 6 min of the labels; docs/validation_measured.md)
+#: Clock correction per day [min]: 2013-05-27 the whole-sky scan's :data:`CLOCK_OFFSET_MIN`,
+#: 2013-09-24 none (its scans fit best within 6 min of the labels;
+#: docs/validation_measured.md)
 CLOCK_OFFSETS_MIN = {"2013-05-27": CLOCK_OFFSET_MIN, "2013-09-24": 0.0}
 DATE = (2013, 5, 27)
 
