@@ -129,7 +129,6 @@ def fast_render(argv) -> int | None:
     """Run a plain ``skydome render`` command line in this process without the typer
     application; the exit code (0, or 2 after a one-line error), or None where the typer
     command should take the command line (nothing has been done then)."""
-    from skydome.cli import _kit
     from skydome.cli.render import render
 
     opts = command_options(render)
@@ -139,9 +138,7 @@ def fast_render(argv) -> int | None:
     v = parse(argv, opts, extra)
     if v is None:
         return None
-    import typer
-
-    from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE, _run
+    from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE
     from skydome.cli.render import _render
 
     sun = {k: v.pop(k) for k in SUN_BY_ANGLES_OR_PLACE if k in v}
@@ -150,16 +147,25 @@ def fast_render(argv) -> int | None:
     args += [not v.pop("no_sun"), v.pop("ev100"), v.pop("sun_light"), not v.pop("no_hunt")]
     if v:       # an option of the command that this call does not pass on: typer's
         return None
-    # the errors of _run name the command's options as in the typer command
+    return _run_fast(opts, _render, extra, args)
+
+
+def _run_fast(opts: dict, work, extra: list, args: list) -> int:
+    """Run a command's work through :func:`skydome.cli._kit._run` as its typer command
+    would (the errors of ``_run`` naming the command's options as typer spells them);
+    the exit code."""
+    import typer
+
+    from skydome.cli import _kit
+
     _kit._FAST_COMMAND = (set(opts), True)
     try:
-        _run(_render, extra, *args)
+        _kit._run(work, extra, *args)
     except typer.Exit as exc:
         return int(exc.exit_code)
     finally:
         _kit._FAST_COMMAND = None
     return 0
-
 
 
 #: the parameters of :func:`skydome.cli.export._envmap` after ``extra``, in its order
@@ -172,7 +178,6 @@ def fast_export_envmap(argv) -> int | None:
     envmap``) in this process without the typer application; the exit code (0, or 2 after a
     one-line error), or None where the typer command should take the command line (nothing
     has been done then)."""
-    from skydome.cli import _kit
     from skydome.cli.export import envmap
 
     opts = command_options(envmap)
@@ -182,20 +187,11 @@ def fast_export_envmap(argv) -> int | None:
     v = parse(argv, opts, extra)
     if v is None:
         return None
-    import typer
-
-    from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE, _run
+    from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE
     from skydome.cli.export import _envmap
 
     v["sun"] = {k: v.pop(k) for k in SUN_BY_ANGLES_OR_PLACE if k in v}
     args = [v.pop(k) for k in _ENVMAP_ARGS]
     if v:       # an option of the command that this call does not pass on: typer's
         return None
-    _kit._FAST_COMMAND = (set(opts), True)
-    try:
-        _run(_envmap, extra, *args)
-    except typer.Exit as exc:
-        return int(exc.exit_code)
-    finally:
-        _kit._FAST_COMMAND = None
-    return 0
+    return _run_fast(opts, _envmap, extra, args)
