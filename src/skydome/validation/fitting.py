@@ -80,12 +80,7 @@ def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated
            repr(sorted(atmosphere_kw.items())), repr(sorted(model_kw.items())))
     if key in _FIT_CACHE:
         return _FIT_CACHE[key]
-    base = base_retrieval(capture)
-    keep = _fit_mask(capture)
-    wl = FIT_WAVELENGTHS
-    idx = [int(np.argmin(np.abs(capture.wavelengths_nm - w))) for w in wl]
-    meas = np.log(capture.radiance[keep][:, idx])
-    d = capture.directions[keep]
+    base, wl, d, meas = _fit_data(capture)
 
     def resid(p):
         r = dataclasses.replace(base, tau440=float(np.exp(p[0])), alpha=float(p[1]))
@@ -103,6 +98,17 @@ def fit_aerosol(capture, *, model: str = "hillaire2020", phase: str = "tabulated
     out = dataclasses.replace(base, tau440=float(np.exp(sol.x[0])), alpha=float(sol.x[1]))
     _FIT_CACHE[key] = out
     return out
+
+
+def _fit_data(capture):
+    """(the base retrieval, the fit's wavelengths, the kept directions, ln of the measured
+    radiance there at those wavelengths): what :func:`fit_aerosol` and
+    :func:`fit_aerosol_phase` fit to."""
+    keep = _fit_mask(capture)
+    wl = FIT_WAVELENGTHS
+    idx = [int(np.argmin(np.abs(capture.wavelengths_nm - w))) for w in wl]
+    return (base_retrieval(capture), wl, capture.directions[keep],
+            np.log(capture.radiance[keep][:, idx]))
 
 
 def fit_aerosol_phase(capture, *, model: str = "hillaire2020"):
@@ -127,12 +133,7 @@ def fit_aerosol_phase(capture, *, model: str = "hillaire2020"):
     key = (capture.day, capture.label, capture.mean_time, model, "henyey_greenstein", "g")
     if key in _FIT_CACHE:
         return _FIT_CACHE[key]
-    base = base_retrieval(capture)
-    keep = _fit_mask(capture)
-    wl = FIT_WAVELENGTHS
-    idx = [int(np.argmin(np.abs(capture.wavelengths_nm - w))) for w in wl]
-    meas = np.log(capture.radiance[keep][:, idx])
-    d = capture.directions[keep]
+    base, wl, d, meas = _fit_data(capture)
 
     def resid(p):
         r = dataclasses.replace(base, tau440=float(np.exp(p[0])), alpha=float(p[1]))
