@@ -125,19 +125,27 @@ def parse(argv, opts: dict, extra: list | None = None) -> dict | None:
     return values
 
 
+def _plain(command, argv):
+    """(options, values, a model's own options) of a plain command line of the typer
+    ``command`` (:func:`command_options`, :func:`parse`), or None where it is not plain."""
+    opts = command_options(command)
+    if opts is None:
+        return None
+    extra: list = []
+    v = parse(argv, opts, extra)
+    return None if v is None else (opts, v, extra)
+
+
 def fast_render(argv) -> int | None:
     """Run a plain ``skydome render`` command line in this process without the typer
     application; the exit code (0, or 2 after a one-line error), or None where the typer
     command should take the command line (nothing has been done then)."""
     from skydome.cli.render import render
 
-    opts = command_options(render)
-    if opts is None:
+    plain = _plain(render, argv)
+    if plain is None:
         return None
-    extra: list = []
-    v = parse(argv, opts, extra)
-    if v is None:
-        return None
+    opts, v, extra = plain
     from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE
     from skydome.cli.render import _render
 
@@ -180,13 +188,10 @@ def fast_export_envmap(argv) -> int | None:
     has been done then)."""
     from skydome.cli.export import envmap
 
-    opts = command_options(envmap)
-    if opts is None:
+    plain = _plain(envmap, argv)
+    if plain is None:
         return None
-    extra: list = []
-    v = parse(argv, opts, extra)
-    if v is None:
-        return None
+    opts, v, extra = plain
     from skydome.cli._kit import SUN_BY_ANGLES_OR_PLACE
     from skydome.cli.export import _envmap
 
