@@ -59,6 +59,11 @@ def main(argv=None) -> int:
                          "(measured phase) against tau440, alpha and a Henyey-Greenstein g "
                          "fitted together, on --captures DAY/LABEL,... (default: every capture "
                          "of both days)")
+    ap.add_argument("--colour", action="store_true",
+                    help="the colour study: per capture (--captures DAY/LABEL,..., default all), "
+                         "hillaire2020's band medians with the AERONET aerosol (2013-05-27), "
+                         "with the Angstrom exponent held at 1.3 and tau440 fitted, and with "
+                         "both fitted; the precipitable water from the scan's 940 nm band")
     ap.add_argument("--figures", default=None, help="only make the figures from OUT's results into this folder")
     ap.add_argument("--update-doc", action="store_true",
                     help="OUT is a Markdown page: rerun its marked command blocks in place")
@@ -77,6 +82,8 @@ def main(argv=None) -> int:
         return shape(Path(a.out), a.captures)
     if a.phase_fit:
         return phase_fit(Path(a.out), a.captures)
+    if a.colour:
+        return colour(Path(a.out), a.captures, a.fit_cache)
     from skydome.validation import fitting
     from skydome.validation.compare import compare_measured, report_text
 
@@ -215,7 +222,9 @@ def update_doc(page: Path, models, day=None, fit_cache=None) -> int:
             print(f"rerunning {o} for {', '.join(run)}", file=sys.stderr)
             text, _ = measured_report(run, days, caps, phase=o["phase"],
                                       aerosol=None if o["aerosol"] == "auto" else o["aerosol"])
-            new = text if only is None else _replace_rows(old, text, set(run))
+            # a block of only the models rerun is replaced whole (also a new, empty one)
+            new = text if only is None or set(names) <= set(only) else \
+                _replace_rows(old, text, set(run))
             out.append(new if new.endswith("\n") else new + "\n")
             write(lines[j:])
         else:
@@ -409,11 +418,146 @@ def phase_fit(out: Path, captures) -> int:
     return 0
 
 
+#: the Angstrom exponent held fixed in the colour study (the issue's run and skydome's
+#: fitted model take 1.3)
+FIXED_ALPHA = 1.3
+#: precipitable water of the colour study's water-band estimate [cm]
+PW_GRID_CM = (0.5, 1.42, 3.0)
+
+
+def _fit_tau_fixed_alpha(c, alpha):
+    """tau440 fitted to the scan as fitting.fit_aerosol does (same residual, directions and
+    wavelengths), the Angstrom exponent held at ``alpha``."""
+    import dataclasses
+
+    import numpy as np
+    from scipy.optimize import least_squares
+
+    import skydome as sd
+    from skydome.validation import fitting
+    from skydome.validation.aeronet import aerosol_atmosphere
+
+    base, wl, d, meas = fitting._fit_data(c)
+
+    def resid(p):
+        r = dataclasses.replace(base, tau440=float(np.exp(p[0])), alpha=float(alpha))
+        m = sd.model("hillaire2020", sun=c.sun, atmosphere=aerosol_atmosphere(r),
+                     n_wavelengths=wl.size)
+        return (np.log(np.maximum(m.radiance(d, wl), 1e-30)) - meas).ravel()
+
+    lo, hi = np.log(fitting.TAU440_RANGE[0]), np.log(fitting.TAU440_RANGE[1])
+    sol = least_squares(resid, [float(np.clip(np.log(base.tau440), lo, hi))], bounds=([lo], [hi]),
+                        diff_step=2e-3, x_scale=[0.3], xtol=1e-3, ftol=1e-4, max_nfev=20)
+    return dataclasses.replace(base, tau440=float(np.exp(sol.x[0])), alpha=float(alpha))
+
+
+def _band_medians(c, r, **atm_kw):
+    """hillaire2020's band medians (model / measured - 1 of the +-10 nm means, median over
+    the kept directions) at compare.BANDS_NM, and its luminance RMS >= 10 deg from the sun
+    (from the same spectra, 400-700 nm only: not the tables' 380-780 nm luminance)."""
+    import numpy as np
+
+    import skydome as sd
+    from skydome.validation import compare
+    from skydome.validation.aeronet import aerosol_atmosphere
+
+    wl = np.unique(np.concatenate([np.arange(b - 10.0, b + 10.1, 5.0) for b in compare.BANDS_NM]))
+    m = sd.model("hillaire2020", sun=c.sun, atmosphere=aerosol_atmosphere(r, **atm_kw),
+                 n_wavelengths=wl.size)
+    S = m.radiance(c.directions, wl)
+    keep = np.ones(S.shape[0], bool)
+    keep[list(compare.EXCLUDED_SAMPLES)] = False
+    out = []
+    for b in compare.BANDS_NM:
+        sm, mm = np.abs(wl - b) <= 10.0, np.abs(c.wavelengths_nm - b) <= 10.0
+        ratio = S[:, sm].mean(axis=1) / c.radiance[:, mm].mean(axis=1)
+        out.append(float(np.median(ratio[keep]) - 1.0))
+    return out
+
+
+def _water_from_band(c, r):
+    """The precipitable water [cm] at which hillaire2020 (aerosol ``r``) reproduces the
+    scan's 940 nm band depth: the median over the kept directions of (model / measured) of
+    the 930-950 nm mean over the 865-885 nm mean, at PW_GRID_CM, interpolated in ln PW to 1
+    (None outside the grid); also that ratio at the models' 1.42 cm."""
+    import numpy as np
+
+    import skydome as sd
+    from skydome.validation import compare
+    from skydome.validation.aeronet import aerosol_atmosphere
+
+    band, cont = np.arange(930.0, 950.1, 5.0), np.arange(865.0, 885.1, 5.0)
+    wl = np.concatenate([cont, band])
+    keep = np.ones(c.directions.shape[0], bool)
+    keep[list(compare.EXCLUDED_SAMPLES)] = False
+    mw = c.wavelengths_nm
+    meas = (c.radiance[:, (mw >= 929.0) & (mw <= 951.0)].mean(axis=1)
+            / c.radiance[:, (mw >= 864.0) & (mw <= 886.0)].mean(axis=1))
+    q = []
+    for pw in PW_GRID_CM:
+        m = sd.model("hillaire2020", sun=c.sun,
+                     atmosphere=aerosol_atmosphere(r, precipitable_water_cm=pw),
+                     n_wavelengths=wl.size)
+        S = m.radiance(c.directions, wl)
+        mod = S[:, cont.size:].mean(axis=1) / S[:, :cont.size].mean(axis=1)
+        q.append(float(np.median((mod / meas)[keep])))
+    q = np.array(q)
+    x = np.log(PW_GRID_CM)
+    pw = None
+    if q.min() <= 1.0 <= q.max():  # q falls as the water rises
+        pw = float(np.exp(np.interp(0.0, np.log(q[::-1]), x[::-1])))
+    return pw, float(q[1])
+
+
+def colour(out: Path, captures, fit_cache=None) -> int:
+    """The colour study (docs/validation_measured.md, "Why the colour error changes sign"):
+    per capture, hillaire2020's band medians 400-700 nm with (a) the AERONET aerosol
+    (2013-05-27 only), (b) the Angstrom exponent held at FIXED_ALPHA and tau440 fitted to
+    the scan, (c) tau440 and alpha fitted (fitting.fit_aerosol); and the precipitable water
+    that the scan's 940 nm band asks for (:func:`_water_from_band`). Prints one line per
+    capture; saves OUT/colour.pkl."""
+    from skydome.validation import fitting
+    from skydome.validation.kider2014 import DAYS, capture_labels, load_captures
+
+    out.mkdir(parents=True, exist_ok=True)
+    if fit_cache and Path(fit_cache).exists():
+        with open(fit_cache, "rb") as f:
+            fitting._FIT_CACHE.update(pickle.load(f))
+    labs = (captures.split(",") if captures else
+            [f"{d}/{lab}" for d in DAYS for lab in capture_labels(d)])
+    rows = []
+    for lab in labs:
+        day, label = lab.split("/")
+        c = load_captures([label], day=day)[0]
+        t, cpu = time.time(), time.process_time()
+        runs = []
+        if day == "2013-05-27":
+            runs.append(("AERONET", fitting.base_retrieval(c)))
+        runs.append((f"alpha {FIXED_ALPHA} fixed", _fit_tau_fixed_alpha(c, FIXED_ALPHA)))
+        runs.append(("fitted", fitting.fit_aerosol(c)))
+        res = [(name, r.tau440, r.alpha, _band_medians(c, r)) for name, r in runs]
+        pw, q142 = _water_from_band(c, runs[-1][1])
+        rows.append((day, label, res, pw, q142))
+        for name, tau, alpha, b in res:
+            print(f"{day} {label} {name:16s} tau440 {tau:.3f} alpha {alpha:.2f}; bands 400..700 "
+                  + " / ".join(f"{100 * x:+.1f}" for x in b), flush=True)
+        print(f"{day} {label} 940 nm band: precipitable water "
+              + ("outside 0.5-3 cm" if pw is None else f"{pw:.2f} cm")
+              + f"; model / measured band depth at 1.42 cm {q142:.3f}"
+              f"  ({time.time() - t:.0f} s wall, {time.process_time() - cpu:.0f} s CPU)", flush=True)
+        with open(out / "colour.pkl", "wb") as f:
+            pickle.dump(rows, f)
+        if fit_cache:
+            with open(fit_cache, "wb") as f:
+                pickle.dump(dict(fitting._FIT_CACHE), f)
+    return 0
+
+
 def figures(results_dir: Path, fig_dir: Path) -> int:
     """The figures of docs/validation_measured.md from RESULTS_DIR/results*.pkl (one run of
     both days): luminance against the angle from the sun (six captures of both days), the
     spectra and the shape error maps of 2013-05-27 12:00 and 2013-09-24 13:20, the scan
-    order of 2013-05-27 12:00."""
+    order of 2013-05-27 12:00 (hillaire2020 point and move, computed here)."""
     from skydome.imaging import plots_validation as pv
     from skydome.validation.compare import LUMINANCE_WL, SPECTRAL_BAND, measured_luminance
     from skydome.validation.kider2014 import load_captures
@@ -462,6 +606,21 @@ def figures(results_dir: Path, fig_dir: Path) -> int:
                            fig_dir / f"validation_measured_error_maps{suffix}.png",
                            title=f"{k[0]} {k[1]}, aerosol {'/'.join(aer)}: luminance shape error "
                                  "(sun: star)")
+    # the scanner's motion: hillaire2020 at the labelled directions and as the mean along
+    # each move (compare.arc_directions), 2013-05-27 12:00, the results' aerosol
+    k = ("2013-05-27", "12:00:00")
+    if k in caps:
+        from skydome.validation.compare import compare_one
+
+        a = "fitted" if aer == ["fitted"] else "aeronet"
+        lum, _ = measured_luminance(caps[k])
+        point = compare_one("hillaire2020", caps[k], aerosol=a)
+        arc = compare_one("hillaire2020", caps[k], aerosol=a, motion="from_previous")
+        pv.plot_scan_order(caps[k], lum, {"hillaire2020 at the labelled directions": point.model_luminance,
+                                          "hillaire2020, mean along each move": arc.model_luminance},
+                           fig_dir / "validation_measured_scan_order.png",
+                           title=f"{k[0]} {k[1]}, aerosol {a}: point sampling and the mean along "
+                                 "the scanner's move")
     return 0
 
 
