@@ -453,17 +453,16 @@ def _fit_tau_fixed_alpha(c, alpha):
 
 def _band_medians(c, r, **atm_kw):
     """hillaire2020's band medians (model / measured - 1 of the +-10 nm means, median over
-    the kept directions) at compare.BANDS_NM, and its luminance RMS >= 10 deg from the sun
-    (from the same spectra, 400-700 nm only: not the tables' 380-780 nm luminance)."""
+    the kept directions) at compare.BANDS_NM, computed as the tables do."""
     import numpy as np
 
     import skydome as sd
     from skydome.validation import compare
     from skydome.validation.aeronet import aerosol_atmosphere
 
-    wl = np.unique(np.concatenate([np.arange(b - 10.0, b + 10.1, 5.0) for b in compare.BANDS_NM]))
-    m = sd.model("hillaire2020", sun=c.sun, atmosphere=aerosol_atmosphere(r, **atm_kw),
-                 n_wavelengths=wl.size)
+    # as the tables (compare.compare_one): the comparison's wavelengths, default settings
+    wl = compare.LUMINANCE_WL
+    m = sd.model("hillaire2020", sun=c.sun, atmosphere=aerosol_atmosphere(r, **atm_kw))
     S = m.radiance(c.directions, wl)
     keep = np.ones(S.shape[0], bool)
     keep[list(compare.EXCLUDED_SAMPLES)] = False
@@ -547,10 +546,34 @@ def colour(out: Path, captures, fit_cache=None) -> int:
               f"  ({time.time() - t:.0f} s wall, {time.process_time() - cpu:.0f} s CPU)", flush=True)
         with open(out / "colour.pkl", "wb") as f:
             pickle.dump(rows, f)
+        (out / "colour_table.md").write_text(colour_table(rows), encoding="utf-8")
         if fit_cache:
             with open(fit_cache, "wb") as f:
                 pickle.dump(dict(fitting._FIT_CACHE), f)
     return 0
+
+
+def colour_table(rows) -> str:
+    """The colour study's rows (:func:`colour`) as one Markdown table per day: per capture
+    and aerosol, tau440, alpha, hillaire2020's band medians [%], their 700 - 400 nm
+    difference and, on the fitted row, the precipitable water of the 940 nm band."""
+    out = []
+    for day in dict.fromkeys(r[0] for r in rows):
+        out.append(f"{day}:\n")
+        out.append("| capture | aerosol | tau440 | alpha | 400 | 450 | 500 | 550 | 600 | 650 | "
+                   "700 | 700 - 400 | water, 940 nm band [cm] |")
+        out.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for d, label, res, pw, _ in rows:
+            if d != day:
+                continue
+            for name, tau, alpha, b in res:
+                w = ("" if name != "fitted" else
+                     "outside 0.5-3" if pw is None else f"{pw:.2f}")
+                out.append(f"| {label[:5]} | {name} | {tau:.3f} | {alpha:.2f} | "
+                           + " | ".join(f"{100 * x:+.1f}" for x in b)
+                           + f" | {100 * (b[-1] - b[0]):+.1f} | {w} |")
+        out.append("")
+    return "\n".join(out)
 
 
 def figures(results_dir: Path, fig_dir: Path) -> int:
