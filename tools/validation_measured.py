@@ -3,6 +3,9 @@
     python tools/validation_measured.py OUT_FOLDER [--day 2013-09-24|all] [--aerosol fitted]
         [--captures 10:00:00,11:00:00] [--models ...]
     python tools/validation_measured.py OUT_FOLDER --clock [--day 2013-09-24]
+    python tools/validation_measured.py OUT_FOLDER --colour [--captures DAY/LABEL,...]
+        [--fit-cache FITS.pkl]
+    python tools/validation_measured.py OUT_FOLDER --figures FIG_FOLDER
     python tools/validation_measured.py docs/validation_measured.md --update-doc [--models fitted]
         [--day 2013-05-27] [--fit-cache FITS.pkl]
 
