@@ -534,6 +534,10 @@ ORDER_BATCH_BYTES = 400_000_000
 # ray integral of 20 wavelengths costs little more than one of 5 (nearly all its time is the
 # geometry and the latency of J's gathers), so fewer batches take less time
 HIGH_ORDER_BATCH_BYTES = 600_000_000
+# the most memory the stored geometry of the orders >= 3's incident rays may take [bytes]
+# (higher_orders_summed, _incident.incident_rays: 0.60 GB at the default grids; on larger
+# grids the geometry of a share of the rays is stored and the rest computed in each order)
+INCIDENT_GEOMETRY_BYTES = 700_000_000
 
 
 def _batches(per_wl, nl, budget):
@@ -689,9 +693,15 @@ def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, 
     nl = J_sum.shape[-1]
     n_r, n_ms = J_sum.shape[3], J_sum.shape[4]
     ts = QUADRATURE_SCALE_M
-    from skydome.models.simulated.precomputed import _density
+    from skydome.models.simulated.precomputed import _incident
 
     w_col = _column_weights(beta_s, n_r, n_ms, nl)
+    # the incident rays' geometry (nodes, weights of J, cells of J, the ground's
+    # transmittance), the same for every order: computed once (_incident; 0.60 GB at the
+    # defaults, at most INCIDENT_GEOMETRY_BYTES) instead of in each order's ray integrals
+    rays = _incident.incident_rays(J_sum.shape, m, sc_idx, col, mu_s_min, *rule, ts, n_r, n_ms,
+                                   q.th_in, q.ph_in, INCIDENT_GEOMETRY_BYTES) \
+        if p["orders"] >= 3 else None
     X = np.empty((q.n_in, n_r, n_ms, nl), dtype=np.float32)
     X_prev = np.zeros_like(X)
     ground = _ground_row(dE1[0])                # G_1 at the ground
@@ -700,8 +710,10 @@ def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, 
     for order in range(3, p["orders"] + 1):
         # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
         # ground's reflection of orders 1..o-2
-        _density.incident_radiance_rays(J_sum, ground, m, sc_idx, col, mu_s_min, *rule, ts, n_r,
-                                        n_ms, q.th_in, q.ph_in, X)
+        _incident.incident_radiance(J_sum, ground, m, sc_idx, col, mu_s_min, *rule, ts, n_r, n_ms,
+                                    q.th_in, q.ph_in, rays, X)
+        if order == p["orders"]:
+            rays = None                         # (freed before the last products)
         # 3c. the ground irradiance of orders 2..o-1 at the ground's row: G_(o-1)
         G = irradiance_of_density(J_sum, m, sc_idx, col, mu_s_min, rule, dE1.shape, rows=1)
         ground = _ground_row(dE1[0] + G[0])
