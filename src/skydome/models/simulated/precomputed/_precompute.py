@@ -675,9 +675,11 @@ def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, 
 
     Every step is linear in the density, so each order's incident radiance is a difference
     of two ray integrals of the running sum: with S_k = J_2 + ... + J_k and G_k the ground
-    irradiance of orders 1..k, X_o = rays(S_(o-1)) + ground(G_(o-2)) (the kernel of
-    :func:`higher_orders`), order o's incident radiance is X_o - X_(o-1) (X_2 = 0; for
-    order 3 it is X_3 itself, the same bits as :func:`higher_orders`), and its density is
+    irradiance of orders 1..k, X_o = rays(S_(o-1)) + ground(G_(o-2)) (the ray integrals of
+    :func:`higher_orders` on the rays' geometry stored once for all the orders,
+    :mod:`._incident`: the same bits but at the density's sun-at-zenith node, float32
+    rounding there), order o's incident radiance is X_o - X_(o-1) (X_2 = 0; for order 3 it
+    is X_3 itself), and its density is
     added into ``J_sum`` by the products (``add``). G_(o-1) = G_1 + the irradiance of
     S_(o-1) at the ground's row. The differences lose float32 digits in proportion to an
     order's share of the sum (about 1e-5 relative for order 6 at the defaults); negative
