@@ -46,7 +46,7 @@ import numpy as np
 STAGES = ("build_column_table", "single_scattering_table", "incident_radiance",
           "incident_radiance_rays", "indirect_irradiance", "indirect_irradiance_rays",
           "multiple_scattering_table", "table_from_coarse", "density_products",
-          "add_density", "source_total")
+          "add_density", "source_total", "incident_rays", "incident_radiance_stored")
 
 
 def _parse(text):
@@ -72,12 +72,12 @@ def _instrument(rec, order_totals):
     and CPU time per call, and each order's source strength (``_precompute.source_total`` or
     ``_SourceFunctional``, summed over the wavelengths; the calls come batch by batch of wavelengths, orders 2..N
     within each)."""
-    from skydome.models.simulated.precomputed import (_density, _irradiance, _multiple,
-                                                      _precompute, _single)
+    from skydome.models.simulated.precomputed import (_density, _incident, _irradiance,
+                                                      _multiple, _precompute, _single)
     from skydome.transport import _kernels as K
 
     saved = []
-    for mod in (_single, _density, _irradiance, _multiple, _precompute, K):
+    for mod in (_single, _density, _incident, _irradiance, _multiple, _precompute, K):
         for name in STAGES:
             if not hasattr(mod, name) or not callable(getattr(mod, name)):
                 continue

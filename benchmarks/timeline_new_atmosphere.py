@@ -42,6 +42,8 @@ STAGES = [
     ("skydome.models.simulated.precomputed._precompute", "source_total"),
     ("skydome.models.simulated.precomputed._precompute", "higher_orders_summed"),
     ("skydome.models.simulated.precomputed._density", "incident_radiance_rays"),
+    ("skydome.models.simulated.precomputed._incident", "incident_rays"),
+    ("skydome.models.simulated.precomputed._incident", "incident_radiance_stored"),
     ("skydome.models.simulated.precomputed._precompute", "irradiance_of_density"),
     ("skydome.models.simulated.precomputed._precompute", "_SourceFunctional.__init__"),
     ("skydome.models.simulated.precomputed._precompute", "_SourceFunctional.__call__"),

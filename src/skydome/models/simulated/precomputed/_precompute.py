@@ -534,6 +534,10 @@ ORDER_BATCH_BYTES = 400_000_000
 # ray integral of 20 wavelengths costs little more than one of 5 (nearly all its time is the
 # geometry and the latency of J's gathers), so fewer batches take less time
 HIGH_ORDER_BATCH_BYTES = 600_000_000
+# the most memory the stored geometry of the orders >= 3's incident rays may take [bytes]
+# (higher_orders_summed, _incident.incident_rays: 0.60 GB at the default grids; on larger
+# grids the geometry of a share of the rays is stored and the rest computed in each order)
+INCIDENT_GEOMETRY_BYTES = 700_000_000
 
 
 def _batches(per_wl, nl, budget):
@@ -671,9 +675,11 @@ def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, 
 
     Every step is linear in the density, so each order's incident radiance is a difference
     of two ray integrals of the running sum: with S_k = J_2 + ... + J_k and G_k the ground
-    irradiance of orders 1..k, X_o = rays(S_(o-1)) + ground(G_(o-2)) (the kernel of
-    :func:`higher_orders`), order o's incident radiance is X_o - X_(o-1) (X_2 = 0; for
-    order 3 it is X_3 itself, the same bits as :func:`higher_orders`), and its density is
+    irradiance of orders 1..k, X_o = rays(S_(o-1)) + ground(G_(o-2)) (the ray integrals of
+    :func:`higher_orders` on the rays' geometry stored once for all the orders,
+    :mod:`._incident`: the same bits but at the density's sun-at-zenith node, float32
+    rounding there), order o's incident radiance is X_o - X_(o-1) (X_2 = 0; for order 3 it
+    is X_3 itself), and its density is
     added into ``J_sum`` by the products (``add``). G_(o-1) = G_1 + the irradiance of
     S_(o-1) at the ground's row. The differences lose float32 digits in proportion to an
     order's share of the sum (about 1e-5 relative for order 6 at the defaults); negative
@@ -689,9 +695,15 @@ def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, 
     nl = J_sum.shape[-1]
     n_r, n_ms = J_sum.shape[3], J_sum.shape[4]
     ts = QUADRATURE_SCALE_M
-    from skydome.models.simulated.precomputed import _density
+    from skydome.models.simulated.precomputed import _incident
 
     w_col = _column_weights(beta_s, n_r, n_ms, nl)
+    # the incident rays' geometry (nodes, weights of J, cells of J, the ground's
+    # transmittance), the same for every order: computed once (_incident; 0.60 GB at the
+    # defaults, at most INCIDENT_GEOMETRY_BYTES) instead of in each order's ray integrals
+    rays = _incident.incident_rays(J_sum.shape, m, sc_idx, col, mu_s_min, *rule, ts, n_r, n_ms,
+                                   q.th_in, q.ph_in, INCIDENT_GEOMETRY_BYTES) \
+        if p["orders"] >= 3 else None
     X = np.empty((q.n_in, n_r, n_ms, nl), dtype=np.float32)
     X_prev = np.zeros_like(X)
     ground = _ground_row(dE1[0])                # G_1 at the ground
@@ -700,8 +712,10 @@ def higher_orders_summed(J_sum, dE1, tot2, col, m, sc_idx, beta_s, mu_s_min, q, 
     for order in range(3, p["orders"] + 1):
         # 3a. X_o: the radiance of orders 2..o-1 arriving at each node from J_sum, + the
         # ground's reflection of orders 1..o-2
-        _density.incident_radiance_rays(J_sum, ground, m, sc_idx, col, mu_s_min, *rule, ts, n_r,
-                                        n_ms, q.th_in, q.ph_in, X)
+        _incident.incident_radiance(J_sum, ground, m, sc_idx, col, mu_s_min, *rule, ts, n_r, n_ms,
+                                    q.th_in, q.ph_in, rays, X)
+        if order == p["orders"]:
+            rays = None                         # (freed before the last products)
         # 3c. the ground irradiance of orders 2..o-1 at the ground's row: G_(o-1)
         G = irradiance_of_density(J_sum, m, sc_idx, col, mu_s_min, rule, dE1.shape, rows=1)
         ground = _ground_row(dE1[0] + G[0])
