@@ -74,6 +74,10 @@ def main(argv=None) -> int:
                     help="table wavelengths 300-1100 nm every this many nm (default 20: the "
                          "fitting wavelengths; 10, 5, 4, 2 or 1 nm to measure the model "
                          "between them)")
+    ap.add_argument("--gas-bands", action="store_true",
+                    help="table wavelengths: the gas bands' own (310, 330, 690, 710, 730, "
+                         "770, 890, 930 nm) only: the supplement that tools/fit_fitted.py "
+                         "--gas-bands adds to a 20-nm data set of the same grid")
     a = ap.parse_args(argv)
     if not 1 <= a.workers <= 256:
         print(f"error: --workers = {a.workers} is out of range [1, 256]", file=sys.stderr)
@@ -88,6 +92,12 @@ def main(argv=None) -> int:
         return 2
     try:
         wl = _dataset.wavelengths_nm(a.wavelength_step)
+        if a.gas_bands:
+            if a.wavelength_step != 20.0:
+                print("error: --gas-bands takes no --wavelength-step (its wavelengths are "
+                      "fixed: 310, 330, 690, 710, 730, 770, 890, 930 nm)", file=sys.stderr)
+                return 2
+            wl = _dataset.gas_band_wavelengths_nm()
     except ValueError:
         print(f"error: --wavelength-step = {a.wavelength_step:g} nm is out of range: one of "
               "20, 10, 5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)",
