@@ -1,7 +1,7 @@
 """Fit the ``fitted`` sky model's coefficients to its data set.
 
     python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
-        [--float16]
+        [--float16] [--gas-bands SUPPLEMENT]
 
 DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
 representation is described in skydome/models/fitted/_coefficients.py):
@@ -21,6 +21,11 @@ With ``--float16`` the coefficients and the bases are stored in float16, each ro
 coefficients (one node and wavelength) and each basis vector divided by its largest
 magnitude (the scales in float32): half the file, for the rounding error measured in
 docs/models.md ("fitted").
+
+``--gas-bands SUPPLEMENT``: a data set of the same grid made with ``tools/fitted_dataset.py
+--gas-bands`` (the reference at the gas bands' own wavelengths, 310, 330, 690, 710, 730,
+770, 890 and 930 nm); its wavelengths join DATASET's as table wavelengths of their own (49
+in all), fitted with the others (the same bases, per elevation node).
 
 DATASET may lack some atmospheres (a data set still being generated): the fit then uses
 the AOD nodes whose every albedo node is there, and says which it left out.
@@ -65,6 +70,8 @@ def main(argv=None) -> int:
     ap.add_argument("--k-ground", type=int, default=12)
     ap.add_argument("--float16", action="store_true",
                     help="store coefficients and bases in float16 with a scale per row")
+    ap.add_argument("--gas-bands", default=None, metavar="SUPPLEMENT",
+                    help="a --gas-bands data set of the same grid: its wavelengths added")
     a = ap.parse_args(argv)
     for name, v in (("--k-sky", a.k_sky), ("--k-ground", a.k_ground)):
         if not 1 <= v <= 256:
@@ -90,6 +97,31 @@ def main(argv=None) -> int:
         print("error: fewer than two complete AOD nodes in the data set", file=sys.stderr)
         return 2
     el, alt, wl = ds.elevations_deg, ds.altitudes_m, ds.wavelengths_nm
+    gas = None
+    if a.gas_bands is not None:
+        gas = DataSet(a.gas_bands, require_all=False)
+        same = (np.array_equal(gas.elevations_deg, el) and np.array_equal(gas.altitudes_m, alt)
+                and all(x in gas.present for x in ds.present if x[0] in set(aods.tolist())))
+        if not same or gas.midpoints != ds.midpoints:
+            print(f"error: --gas-bands = {a.gas_bands}: not the same grid as DATASET, or an "
+                  "atmosphere missing", file=sys.stderr)
+            return 2
+        if np.isin(gas.wavelengths_nm, wl).any():
+            print(f"error: --gas-bands = {a.gas_bands}: its wavelengths overlap DATASET's",
+                  file=sys.stderr)
+            return 2
+        order = np.argsort(np.concatenate([wl, gas.wavelengths_nm]), kind="stable")
+        wl = np.concatenate([wl, gas.wavelengths_nm])[order]
+        print(f"gas bands: {gas.wavelengths_nm.tolist()} nm added ({wl.size} table "
+              "wavelengths)", flush=True)
+
+    def sky(aod, alb):
+        L, sun = ds.sky(aod, alb)
+        if gas is None:
+            return L, sun
+        Lg, sung = gas.sky(aod, alb)
+        return (np.concatenate([L, Lg], axis=-1)[..., order],
+                np.concatenate([sun, sung], axis=-1)[..., order])
     n_sky = _grid.N_SKY * _grid.N_PHI
     n_dir = (_grid.N_SKY + _grid.N_GROUND) * _grid.N_PHI
     shape = (aods.size, albs.size, el.size, alt.size, wl.size)
@@ -98,7 +130,7 @@ def main(argv=None) -> int:
     sun_f = np.empty((aods.size, el.size, alt.size, wl.size))
     for i, aod in enumerate(aods):
         for j, alb in enumerate(albs):
-            L, sun = ds.sky(aod, alb)                    # (e, h, rows, phi, wl), (e, h, wl)
+            L, sun = sky(aod, alb)                       # (e, h, rows, phi, wl), (e, h, wl)
             L = np.moveaxis(L.astype(np.float64), -1, 2).reshape(el.size, alt.size, wl.size,
                                                                    n_dir)
             s = L[..., :n_sky].mean(axis=-1)
@@ -146,10 +178,12 @@ def main(argv=None) -> int:
             lt[:, e_i, h_i] = np.log(np.clip(sun_f[:, src, h_i] / v, 1e-30, 1.0)) * (
                 air_mass(el[e_i]) / air_mass(el[src]))
     out["log_sun_transmittance"] = lt.astype(np.float32)
-    meta = {"dataset_grid": ds.meta, "k_sky": a.k_sky, "k_ground": a.k_ground,
+    dgrid = dict(ds.meta, wavelengths_nm=[float(x) for x in wl])
+    meta = {"dataset_grid": dgrid, "k_sky": a.k_sky, "k_ground": a.k_ground,
             "delta": DELTA, "fit_residual_rms_y": resid,
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
-                       f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else ""),
+                       f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else "")
+                       + (" --gas-bands SUPPLEMENT" if gas is not None else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     if a.float16:
         for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis"):

@@ -109,12 +109,12 @@ def main(argv=None) -> int:
 
     wl = ds.wavelengths_nm
     # the model's table wavelengths among the set's, and the ones between them
-    node = np.isin(np.round(wl, 6), np.round(_grid.WAVELENGTHS_NM, 6))
+    table_wl = _coefficients.load()["wavelengths_nm"]      # the measured file's
+    node = np.isin(np.round(wl, 6), np.round(table_wl, 6))
     between = ~node
-    if not node.all() and not np.isin(np.round(_grid.WAVELENGTHS_NM, 6),
-                                      np.round(wl, 6)).all():
+    if not node.all() and not np.isin(np.round(table_wl, 6), np.round(wl, 6)).all():
         print("error: HELDOUT's wavelengths do not include the model's table wavelengths "
-              "(300, 320, ..., 1100 nm)", file=sys.stderr)
+              f"({', '.join(f'{x:g}' for x in table_wl)} nm)", file=sys.stderr)
         return 2
     # per regime, per wavelength: sum of squares, count and largest relative error of the
     # sky more than 5 deg from the sun, for the model and for the interpolation alone

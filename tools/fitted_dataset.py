@@ -1,8 +1,8 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-shipped|heldout-shipped|small]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v1|heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
-        [--atmospheres A:B,...] [--wavelength-step NM]
+        [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -21,15 +21,18 @@ Grids (skydome/models/fitted/_grid.py):
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
-* ``fit-shipped``, ``heldout-shipped``: the grids of the shipped coefficient file (6 AOD
-  nodes 0-1, 26 sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and
-  0.05), to reproduce it;
+* ``fit-v1``, ``heldout-v1``: the grids of the first coefficient file (6 AOD nodes 0-1, 26
+  sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and 0.05), to
+  reproduce it and its figures;
 * ``small``: 2 atmospheres of the fit grid, for a quick check of the pipeline.
 
 ``--wavelength-step`` sets the reference's table wavelengths: 300-1100 nm every 20 nm by
 default (the fitting wavelengths), 10 nm for a held-out set that measures the model between
 them too (81 wavelengths: the 20-nm ones are every other one, so the set's 20-nm subset is
 the default set; the chunk layout is the same, with 81 on the wavelength axis).
+``--gas-bands``: the reference at the gas bands' own table wavelengths only (310, 330, 690,
+710, 730, 770, 890, 930 nm; skydome/models/fitted/_grid.py), a supplement to the 20-nm set
+of the same grid in a folder of its own, which ``tools/fit_fitted.py --gas-bands`` joins to it.
 """
 
 from __future__ import annotations
@@ -52,7 +55,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
-                    choices=("fit", "heldout", "fit-shipped", "heldout-shipped", "small"))
+                    choices=("fit", "heldout", "fit-v1", "heldout-v1", "small"))
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",
@@ -74,6 +77,10 @@ def main(argv=None) -> int:
                     help="table wavelengths 300-1100 nm every this many nm (default 20: the "
                          "fitting wavelengths; 10, 5, 4, 2 or 1 nm to measure the model "
                          "between them)")
+    ap.add_argument("--gas-bands", action="store_true",
+                    help="table wavelengths: the gas bands' own (310, 330, 690, 710, 730, "
+                         "770, 890, 930 nm) only: the supplement that tools/fit_fitted.py "
+                         "--gas-bands adds to a 20-nm data set of the same grid")
     a = ap.parse_args(argv)
     if not 1 <= a.workers <= 256:
         print(f"error: --workers = {a.workers} is out of range [1, 256]", file=sys.stderr)
@@ -88,6 +95,12 @@ def main(argv=None) -> int:
         return 2
     try:
         wl = _dataset.wavelengths_nm(a.wavelength_step)
+        if a.gas_bands:
+            if a.wavelength_step != 20.0:
+                print("error: --gas-bands takes no --wavelength-step (its wavelengths are "
+                      "fixed: 310, 330, 690, 710, 730, 770, 890, 930 nm)", file=sys.stderr)
+                return 2
+            wl = _dataset.gas_band_wavelengths_nm()
     except ValueError:
         print(f"error: --wavelength-step = {a.wavelength_step:g} nm is out of range: one of "
               "20, 10, 5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)",

@@ -61,6 +61,14 @@ def wavelengths_nm(step_nm: float = 20.0) -> np.ndarray:
     return 300.0 + step * np.arange(k + 1, dtype=np.float64)
 
 
+def gas_band_wavelengths_nm() -> np.ndarray:
+    """The table wavelengths of a gas-band supplement [nm]
+    (:data:`._grid.GAS_BAND_WAVELENGTHS_NM`: between the 20-nm ones where the gases absorb);
+    ``precomputed`` computes each table wavelength independently of the others, so a
+    supplement's values are those a 10-nm set would hold there."""
+    return _grid.GAS_BAND_WAVELENGTHS_NM.copy()
+
+
 def chunk_key(aod: float, albedo: float) -> str:
     return f"aod{aod:.3f}_albedo{albedo:.3f}"
 
@@ -128,7 +136,9 @@ class DataSet:
             # evenly spaced, as tools/fitted_dataset.py --wavelength-step writes them)
             n = np.load(self.folder / (chunk_key(*self.present[0]) + ".npy"),
                         mmap_mode="r").shape[-1]
-            self.wavelengths_nm = np.linspace(300.0, 1100.0, n)
+            self.wavelengths_nm = (_grid.GAS_BAND_WAVELENGTHS_NM.copy()
+                                   if n == _grid.GAS_BAND_WAVELENGTHS_NM.size
+                                   else np.linspace(300.0, 1100.0, n))
 
     def chunk(self, aod: float, albedo: float) -> np.ndarray:
         """The chunk of one atmosphere (verified against its recorded hash)."""

@@ -44,6 +44,15 @@ EPS = math.radians(0.005)
 #: Table wavelengths of the data set [nm]: 300-1100 nm every 20 nm (the reference's table
 #: grid; values between them are interpolated linearly, relative to the solar spectrum).
 WAVELENGTHS_NM = np.arange(300.0, 1100.0 + 1e-9, 20.0)
+#: Table wavelengths of their own between the 20-nm ones, where the gases absorb so that no
+#: interpolation from the 20-nm values holds the spectrum: the 10-nm wavelengths whose
+#: in-between error, measured against the reference computed there (the held-out grid at
+#: 10 nm, docs/models.md "fitted", "Wavelengths"), was 5-8 % RMS by day or more: ozone's
+#: Huggins band (310, 330 nm), water vapour (690, 710, 730, 890, 930 nm) and the O2 A band's
+#: edge (770 nm). A supplement data set holds them (``tools/fitted_dataset.py --gas-bands``).
+GAS_BAND_WAVELENGTHS_NM = np.array([310.0, 330.0, 690.0, 710.0, 730.0, 770.0, 890.0, 930.0])
+#: The table wavelengths of a file fitted with that supplement (49 wavelengths).
+TABLE_WAVELENGTHS_NM = np.union1d(WAVELENGTHS_NM, GAS_BAND_WAVELENGTHS_NM)
 
 #: The model's parameter range (inclusive).
 SUN_ELEVATION_RANGE_DEG = (-12.0, 90.0)
@@ -51,10 +60,10 @@ ALTITUDE_RANGE_M = (0.0, 15000.0)
 AOD_RANGE = (0.0, 1.0)
 ALBEDO_RANGE = (0.0, 1.0)
 
-#: The fitting nodes (the data set's parameter grid) of the next refit: the shipped
-#: coefficient file was fitted on the grid ``SHIPPED_*`` below, which these refine (an AOD
-#: node at 0.025, altitude nodes at 0.35, 1.1 and 2 km, sun nodes at -11 and -9 deg: the
-#: errors measured on the new grid's first chunks, docs/models.md "fitted").
+#: The fitting nodes (the data set's parameter grid) of the shipped coefficient file. They
+#: refine the grid of the first file (``V1_*`` below): an AOD node at 0.025, altitude nodes
+#: at 0.35, 1.1 and 2 km, sun nodes at -11 and -9 deg, where the first file's errors between
+#: its nodes were largest (docs/models.md "fitted", "The refit").
 SUN_ELEVATION_NODES_DEG = np.array([-12.0, -11.0, -10.0, -9.0, -8.0, -7.0, -6.0, -5.0, -4.0,
                                     -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
                                     19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
@@ -76,24 +85,24 @@ HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.0125, 0.6), (0.18, 0.4),
                        (0.7, 0.2))                 # (AOD at 550 nm, albedo)
 
 
-#: The grid of the shipped coefficient file (``tools/fitted_dataset.py --grid
-#: fit-shipped`` / ``heldout-shipped``; the file records it too, meta "dataset_grid").
-SHIPPED_SUN_ELEVATION_NODES_DEG = np.array([-12.0, -10.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0,
+#: The grid of the first coefficient file (``tools/fitted_dataset.py --grid fit-v1`` /
+#: ``heldout-v1``), to reproduce it and its published figures.
+V1_SUN_ELEVATION_NODES_DEG = np.array([-12.0, -10.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0,
                                             -2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0,
                                             14.0, 19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0,
                                             90.0])
-SHIPPED_ALTITUDE_NODES_M = np.array([0.0, 700.0, 1500.0, 3000.0, 6000.0, 10000.0, 15000.0])
-SHIPPED_AOD_NODES = np.array([0.0, 0.05, 0.1, 0.25, 0.5, 1.0])
-SHIPPED_HELDOUT_SUN_ELEVATION_DEG = np.array([-11.0, -9.0, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0,
+V1_ALTITUDE_NODES_M = np.array([0.0, 700.0, 1500.0, 3000.0, 6000.0, 10000.0, 15000.0])
+V1_AOD_NODES = np.array([0.0, 0.05, 0.1, 0.25, 0.5, 1.0])
+V1_HELDOUT_SUN_ELEVATION_DEG = np.array([-11.0, -9.0, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0,
                                               8.5, 16.0, 28.0, 45.0, 70.0])
-SHIPPED_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
+V1_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
                                (0.7, 0.2))
 
 
 def grid(name: str):
     """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
-    of a named data-set grid: "fit" and "heldout" (the next refit's), "fit-shipped" and
-    "heldout-shipped" (the shipped file's), "small" (two atmospheres of "fit")."""
+    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v1" and
+    "heldout-v1" (the first file's), "small" (two atmospheres of "fit")."""
     if name in ("fit", "small"):
         atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
         if name == "small":
@@ -102,16 +111,16 @@ def grid(name: str):
     if name == "heldout":
         return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(HELDOUT_ATMOSPHERES),
                 True)
-    if name == "fit-shipped":
-        atm = [(float(a), float(b)) for a in SHIPPED_AOD_NODES for b in ALBEDO_NODES]
-        return SHIPPED_SUN_ELEVATION_NODES_DEG, SHIPPED_ALTITUDE_NODES_M, atm, False
-    if name == "heldout-shipped":
-        return (SHIPPED_HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M,
-                list(SHIPPED_HELDOUT_ATMOSPHERES), True)
+    if name == "fit-v1":
+        atm = [(float(a), float(b)) for a in V1_AOD_NODES for b in ALBEDO_NODES]
+        return V1_SUN_ELEVATION_NODES_DEG, V1_ALTITUDE_NODES_M, atm, False
+    if name == "heldout-v1":
+        return (V1_HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M,
+                list(V1_HELDOUT_ATMOSPHERES), True)
     raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
 
 
-GRID_NAMES = ("fit", "heldout", "fit-shipped", "heldout-shipped", "small")
+GRID_NAMES = ("fit", "heldout", "fit-v1", "heldout-v1", "small")
 
 def horizon_zenith_rad(altitude_m: float) -> float:
     """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius
