@@ -1,4 +1,5 @@
-"""Stage timeline of a new atmosphere as a command (issue 27, item 2).
+"""Stage timeline of a new atmosphere, or of any warm command, as a command (issue 27,
+item 2).
 
 Runs ``skydome render --turbidity 4 --sun-elevation 30 --out DIR/x.png`` (or the command
 line given after ``--``) in this process, through ``skydome.__main__.main``, with
@@ -10,8 +11,11 @@ and ended (wall, from the process's start), its wall time, the process's CPU tim
 functions listed in ``STAGES`` (wrapped for the run); nested stages are indented; the time
 between two outermost stages is printed as "(between)".
 
-Run: ``python benchmarks/timeline_new_atmosphere.py [--keep] [-- ARGS...]``
-(``--keep``: leave the table cache folder and print its path).
+Run: ``python benchmarks/timeline_new_atmosphere.py [--keep | --warm] [-- ARGS...]``
+(``--keep``: leave the table cache folder and print its path; ``--warm``: use the table
+cache as the environment has it, for the timeline of a warm command, e.g.
+``--warm -- export envmap --model hosek_wilkie2012 --turbidity 3 --size 4096x2048 --half
+--out DIR/x.exr``).
 """
 
 from __future__ import annotations
@@ -59,6 +63,18 @@ STAGES = [
     ("skydome.models.simulated.precomputed._tables", "Tables.single_scattering_rows"),
     ("skydome.models.simulated.precomputed._multiple", "multiple_scattering_slice"),
     ("skydome.models.simulated.precomputed._render", "render_observer"),
+    ("skydome.cli._kit", "_sky"),
+    ("skydome.export.envmap", "render_envmap"),
+    ("skydome.export.envmap", "MapProjection._latlong_rows"),
+    ("skydome.models.analytic._kernels_analytic", "flat_directions"),
+    ("skydome.models.analytic._kernels_analytic", "hosek_wilkie"),
+    ("skydome.models.analytic._kernels_analytic", "preetham"),
+    ("skydome.export.envmap", "_xyz_to_map_rgb"),
+    ("skydome.export.sun", "sun_light_from"),
+    ("skydome.export.envmap", "EnvironmentMap.write"),
+    ("skydome.export.envmap", "_channel_planes"),
+    ("skydome._io", "write_exr"),
+    ("skydome.export.sun", "sun_json_writer"),
     ("skydome.imaging.image", "SkyImage.save"),
     ("skydome.imaging.image", "SkyImage._write_png"),
 ]
@@ -131,7 +147,8 @@ def _print():
 def main():
     argv = sys.argv[1:]
     keep = "--keep" in argv
-    argv = [a for a in argv if a != "--keep"]
+    warm = "--warm" in argv
+    argv = [a for a in argv if a not in ("--keep", "--warm")]
     if "--" in argv:
         cmd = argv[argv.index("--") + 1:]
         out = None
@@ -139,8 +156,9 @@ def main():
         out = tempfile.mkdtemp(prefix="skydome-timeline-out-")
         cmd = ["render", "--turbidity", "4", "--sun-elevation", "30", "--out",
                os.path.join(out, "x.png")]
-    cache = tempfile.mkdtemp(prefix="skydome-timeline-cache-")
-    os.environ["SKYDOME_CACHE_DIR"] = cache
+    cache = None if warm else tempfile.mkdtemp(prefix="skydome-timeline-cache-")
+    if cache is not None:
+        os.environ["SKYDOME_CACHE_DIR"] = cache
     os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")   # as skydome.__main__ sets it
     print(f"load average {os.getloadavg()}; command: skydome {' '.join(cmd)}", flush=True)
     t_imp = time.perf_counter()
@@ -157,7 +175,9 @@ def main():
         code = e.code or 0
     finally:
         _print()
-        if keep:
+        if cache is None:
+            pass
+        elif keep:
             print(f"table cache: {cache}")
         else:
             shutil.rmtree(cache, ignore_errors=True)

@@ -201,3 +201,23 @@ def test_asrc_cie_sun_from_dni_matches_perez():
     asrc = skydome.model("asrc_cie", sun=sun, dni=600.0, dhi=120.0)
     perez = skydome.model("perez1993", sun=sun, dni=600.0, dhi=120.0)
     assert asrc.direct_normal_illuminance() == pytest.approx(perez.direct_illuminance, rel=1e-2)
+
+
+@pytest.mark.parametrize("n", [7, 64, 256, 512])
+def test_gauss_rule_on_one_blas_thread(n):
+    """The quadrature's Gauss-Legendre rule is computed on one BLAS thread: the same bits as
+    numpy's leggauss run with the process's threads, exact for polynomials of degree 2n - 1
+    (int_0^1 x^k dx = 1 / (k + 1)), and the caller's BLAS thread count left as it was."""
+    from threadpoolctl import threadpool_info
+
+    from skydome.illuminance import _gauss_01
+
+    _gauss_01.cache_clear()
+    before = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    x, w = _gauss_01(n)
+    after = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    assert after == before
+    xr, wr = np.polynomial.legendre.leggauss(n)
+    assert np.array_equal(x, 0.5 * (xr + 1.0)) and np.array_equal(w, 0.5 * wr)
+    for k in (0, 1, 2 * n - 1):
+        assert np.sum(w * x ** k) == pytest.approx(1.0 / (k + 1), rel=1e-12)

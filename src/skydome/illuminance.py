@@ -113,8 +113,16 @@ def plane_normal(tilt_deg: float = 0.0, azimuth_deg: float = 180.0) -> np.ndarra
 
 @lru_cache(maxsize=16)
 def _gauss_01(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre nodes and weights on [0, 1]."""
-    x, w = np.polynomial.legendre.leggauss(n)
+    """Gauss-Legendre nodes and weights on [0, 1].
+
+    numpy's ``leggauss`` finds the nodes as the eigenvalues of an n x n matrix (LAPACK,
+    through the BLAS library's threads): run with one BLAS thread, for the same bits (tested)
+    without the threads' start and hand-offs, which took 2.6-2.8 s of CPU for n = 512 on a
+    2-core machine with other jobs against 0.02 s on one thread (docs/performance.md)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
 
 
