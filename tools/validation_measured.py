@@ -402,11 +402,7 @@ def phase_fit(out: Path, captures) -> int:
             lrms, srms, med = _errors(c, L)
             keep = np.ones(L.size, bool)
             keep[list(compare.EXCLUDED_SAMPLES)] = False
-            bands = []
-            for b in compare.BANDS_NM:
-                sm, mm = np.abs(wl - b) <= 10.0, np.abs(c.wavelengths_nm - b) <= 10.0
-                ratio = S[:, sm].mean(axis=1) / c.radiance[:, mm].mean(axis=1)
-                bands.append(float(np.median(ratio[keep]) - 1.0))
+            bands = compare.band_medians(S, wl, c, keep)
             res[name] = {"fit": fit, "lrms": lrms, "srms": srms, "profile": med, "bands": bands}
         rows.append((day, label, res))
         for name, v in res.items():
@@ -469,12 +465,7 @@ def _band_medians(c, r, **atm_kw):
     S = m.radiance(c.directions, wl)
     keep = np.ones(S.shape[0], bool)
     keep[list(compare.EXCLUDED_SAMPLES)] = False
-    out = []
-    for b in compare.BANDS_NM:
-        sm, mm = np.abs(wl - b) <= 10.0, np.abs(c.wavelengths_nm - b) <= 10.0
-        ratio = S[:, sm].mean(axis=1) / c.radiance[:, mm].mean(axis=1)
-        out.append(float(np.median(ratio[keep]) - 1.0))
-    return out
+    return compare.band_medians(S, wl, c, keep)
 
 
 def _water_from_band(c, r):

@@ -34,7 +34,7 @@ import numpy as np
 
 from skydome.validation.kider2014 import EXCLUDED_SAMPLES  # samples left out of statistics
 
-__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "capture_table",
+__all__ = ["arc_directions", "MODELS", "AEROSOLS", "BANDS_NM", "band_medians", "capture_table",
            "EXCLUDED_SAMPLES", "clock_scan", "compare_measured", "ModelResult", "model_settings",
            "measured_luminance", "measured_report", "report_text"]
 
@@ -258,6 +258,18 @@ def arc_directions(capture, n_sub: int = 8, move: str = "from_previous") -> np.n
     return _enu(a, e)
 
 
+def band_medians(S, wl, capture, keep) -> list[float]:
+    """Per band of :data:`BANDS_NM`: the median over the kept directions (``keep``) of the
+    model's mean radiance within 10 nm of the band (``S`` (n, wl) at ``wl`` [nm]) over the
+    capture's mean radiance there, minus 1."""
+    out = []
+    for b in BANDS_NM:
+        sm, mm = np.abs(wl - b) <= 10.0, np.abs(capture.wavelengths_nm - b) <= 10.0
+        ratio = S[:, sm].mean(axis=1) / capture.radiance[:, mm].mean(axis=1)
+        out.append(float(np.median(ratio[keep]) - 1.0))
+    return out
+
+
 def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulated",
                 motion: str | None = None, n_sub: int = 8, aerosol: str = "aeronet") -> ModelResult:
     """Errors of model ``name`` on one capture (see the module docstring); ``motion``:
@@ -287,11 +299,7 @@ def compare_one(name: str, capture, *, fast: bool = False, phase: str = "tabulat
         S = model.radiance(d, wl)
         if motion:
             S = S.mean(axis=1)
-        mw = capture.wavelengths_nm
-        for b in BANDS_NM:
-            sm, mm = np.abs(wl - b) <= 10.0, np.abs(mw - b) <= 10.0
-            ratio = S[:, sm].mean(axis=1) / capture.radiance[:, mm].mean(axis=1)
-            bands[b] = float(np.median(ratio[keep]) - 1.0)
+        bands = dict(zip(BANDS_NM, band_medians(S, wl, capture, keep)))
         xyz = spectrum_to_xyz(S, wl)
         band = (wl >= SPECTRAL_BAND[0]) & (wl <= SPECTRAL_BAND[1])
         spectra = S[:, band]
