@@ -209,7 +209,7 @@ class Tables:
         sink = self.__dict__.get("_sink")
         reader = self.__dict__.pop("_reader", None)
         if reader is not None:
-            ms = reader()           # the table from a file (None: unreadable, built again)
+            ms = reader(self)       # the table from a file (None: unreadable, built again)
             if ms is not None:
                 self.multiple_scattering = ms
                 return self.__dict__["_" + _LAZY]
@@ -227,8 +227,11 @@ class Tables:
         self.__dict__["_builder"] = (whole, slabs)
 
     def set_multiple_scattering_reader(self, reader) -> None:
-        """``reader() -> array or None``: where the stored table is on disk (the cache), how
-        it is read on first use (before any builder); None: it could not be, build it."""
+        """``reader(tables) -> array or None``: where the stored table is on disk (the
+        cache), how it is read on first use (before any builder); None: it could not be,
+        build it. The tables are passed in, not held by the reader: a closure over them
+        would make a reference cycle, which keeps the tables' arrays (hundreds of MB) alive
+        until Python's cyclic collector runs, which large arrays do not set off."""
         self.__dict__["_reader"] = reader
 
     def set_multiple_scattering_sink(self, sink) -> None:
