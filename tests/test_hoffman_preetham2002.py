@@ -146,3 +146,52 @@ def test_no_nan_or_negative(T, el, az, vel, vaz, g, s):
     f, li = sky.aerial_perspective(d, s, WL)
     assert np.all(np.isfinite(f)) and np.all((f >= 0.0) & (f <= 1.0))
     assert np.all(np.isfinite(li)) and np.all(li >= 0.0)
+
+
+@pytest.mark.parametrize("el, T, g, phase, H_m", [
+    (30.0, 2.5, 0.76, "hoffman_preetham", 1.0 / P.ALPHA_MOLECULES),
+    (2.0, 10.0, 0.9, "henyey_greenstein", 8000.0),
+    (89.0, 2.0, 0.0, "hoffman_preetham", 100.0),
+    (15.0, 6.0, 0.5, "henyey_greenstein", 100000.0)])
+def test_sky_kernel_is_the_equations(el, T, g, phase, H_m):
+    """The sky's parallel kernel against [HP02]'s equations written out here in NumPy (the
+    shell path, F_ex, beta_R(theta), beta_M(theta), L_in; Preetham's coefficients, tested
+    above against published values) and against the module's NumPy functions, on random
+    directions of the whole sphere (zero below the horizon), unnormalised as given."""
+    rng = np.random.default_rng(7)
+    d = rng.normal(size=(3000, 3)) * rng.uniform(0.1, 10.0, size=(3000, 1))
+    sun = _sun(el, 40.0)
+    m = model("hoffman_preetham2002", sun=sun, turbidity=T, g=g, phase=phase,
+              sky_distance_m=H_m)
+    got = m.radiance(d, WL)
+    v = d / np.linalg.norm(d, axis=1, keepdims=True)
+    u = np.maximum(v[:, 2], 0.0)[:, None]
+    R = 6371.0e3
+    s = -R * u + np.sqrt(R * R * u * u + 2.0 * R * H_m + H_m * H_m)
+    beta_r = P.rayleigh_coefficient(WL)
+    beta_m = P.mie_coefficient(WL, T) * (P.ALPHA_MOLECULES / P.ALPHA_HAZE)
+    c = np.clip(v @ sun.direction, -1.0, 1.0)[:, None]
+    num = (1.0 - g) ** 2 if phase == "hoffman_preetham" else 1.0 - g * g
+    ang = (beta_r * 3.0 / (16.0 * math.pi) * (1.0 + c * c)
+           + beta_m * num / (4.0 * math.pi * (1.0 + g * g - 2.0 * g * c) ** 1.5))
+    e_sun = P.sun_radiance(WL, sun, T) * sun.solid_angle_sr
+    want = ang / (beta_r + beta_m) * e_sun * (1.0 - np.exp(-(beta_r + beta_m) * s))
+    want = np.where(v[:, 2:] >= 0.0, want, 0.0)
+    assert np.all(got[v[:, 2] < 0.0] == 0.0)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(got, m._radiance_numpy(d, WL), rtol=1e-12, atol=0.0)
+    assert got.shape == (3000, WL.size)
+    assert m.radiance(d[5], WL).shape == (WL.size,)
+    assert m.radiance(d.reshape(30, 100, 3), WL[::7]).shape == (30, 100, WL[::7].size)
+
+
+def test_sky_kernel_refuses_bad_directions():
+    m = model("hoffman_preetham2002", sun=_sun(30.0))
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        m.radiance([[0.0, np.nan, 1.0]], WL)
+    with pytest.raises(ValueError, match="zero-length"):
+        m.radiance([[0.0, 0.0, 0.0]], WL)
+    with pytest.raises(ValueError, match=r"shape \(\.\.\., 3\)"):
+        m.radiance([[0.0, 1.0]], WL)
+    with pytest.raises(ValueError, match="wavelength"):
+        m.radiance([[0.0, 0.0, 1.0]], [300.0])

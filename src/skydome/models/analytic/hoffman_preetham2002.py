@@ -214,6 +214,26 @@ class HoffmanPreetham2002(SkyModel):
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
         """Sky spectral radiance [W m^-2 sr^-1 nm^-1], shape (..., n); wavelengths in
         [380, 780] nm; zero below the horizon."""
+        from skydome.models.analytic._kernels_analytic import flat_directions
+        from skydome.models.analytic._kernels_hoffman_preetham import hoffman_preetham_sky
+
+        w = as_wavelengths(wavelengths_nm, *_WL_RANGE)
+        flat, lead = flat_directions(directions)
+        # the equations of aerial_perspective along shell_path_length, in one parallel
+        # pass (the same order of operations; its exponentials by the kernel core's
+        # vectorised exp: tests/test_hoffman_preetham.py compares the two)
+        beta_r, beta_m = _coefficients(w, self.turbidity, 1.0, _HAZE_COLUMN_FACTOR)
+        g = float(self.g)
+        num = (1.0 - g) ** 2 if self.phase == "hoffman_preetham" else 1.0 - g * g
+        out = np.empty((flat.shape[0], w.size))
+        hoffman_preetham_sky(flat, np.ascontiguousarray(self.sun.direction, dtype=np.float64),
+                             EARTH_RADIUS_M, float(self.sky_distance_m), beta_r, beta_m,
+                             beta_r + beta_m, _sun_irradiance(w, self.sun, self.turbidity),
+                             g, num, out)
+        return out.reshape(lead + (w.size,))
+
+    def _radiance_numpy(self, directions, wavelengths_nm) -> np.ndarray:
+        """:meth:`radiance` by the module's NumPy functions (the kernel's check)."""
         d = as_directions(directions)
         u = d[..., 2]
         s = shell_path_length(np.maximum(u, 0.0), self.sky_distance_m)
