@@ -627,7 +627,7 @@ def _sky(model, extra, sun: dict, check=None, progress=None):
     and its ``--name value`` parameters, then ``check()`` (the command's own options), then
     the sun (the options of :func:`sun_options`); returns the constructed sky (its set-up's
     progress shown on ``progress`` when given)."""
-    from skydome._numba_start import start_numba_without_blas
+    from skydome._numba_start import start_numba_in_background
     from skydome.models import get_model_class
 
     cls = get_model_class(model)
@@ -635,7 +635,14 @@ def _sky(model, extra, sun: dict, check=None, progress=None):
     if check is not None:
         check()
     position = _sun_from(sun)
-    start_numba_without_blas()  # before the model's kernels load (see _build_model)
     if progress is None:
-        return cls(sun=position, **params)
+        # numba's start on a second thread while the model is constructed, as in
+        # _build_model: a fitted model reads its coefficient file meanwhile (zlib and file
+        # reads release the interpreter lock)
+        start = start_numba_in_background()
+        try:
+            return cls(sun=position, **params)
+        finally:
+            if start is not None:
+                start.join()
     return _build_model(cls, progress, sun=position, **params)
