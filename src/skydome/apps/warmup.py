@@ -24,7 +24,8 @@ def warm_kernels(verbose: bool = True) -> float:
     """Compile the kernels of the default render path into numba's on-disk cache without
     touching the table cache: a small precomputation of the default atmosphere and
     wavelengths (:data:`PRECOMPUTE_WARM_SIZES`: the default tables' kernel specialisations,
-    table sizes aside), a tiny fisheye from it and its display transform. Run by the
+    table sizes aside), a tiny fisheye from it and its display transform, and the fitted
+    model's lookup (a tiny fisheye, luminance, spectral radiance). Run by the
     package build (``setup.py``) and by :func:`warm`; returns the seconds it took."""
     import skydome as sd
     from skydome.imaging import make_projection
@@ -33,6 +34,12 @@ def warm_kernels(verbose: bool = True) -> float:
     sun = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
     model = sd.model("precomputed", sun=sun, cache=False, **PRECOMPUTE_WARM_SIZES)
     sd.render(model, make_projection("fisheye", "16"), output="xyz").to_srgb()
+    # the fitted model: its lookup kernel (issue 29: no multi-second compilation on first
+    # use; 4.6-5.1 s of CPU otherwise), in its luminance, XYZ and spectral forms
+    fitted = sd.model("fitted", sun=sun)
+    sd.render(fitted, make_projection("fisheye", "16"), output="xyz")
+    fitted.luminance([[0.0, 0.6, 0.8]])
+    fitted.radiance([[0.0, 0.6, 0.8]], [450.0, 550.0])
     if verbose:
         print(f"warm: default render path compiled ({time.perf_counter() - t0:.1f} s)",
               flush=True)
@@ -49,7 +56,8 @@ def warm(verbose: bool = True) -> float:
     t0 = time.perf_counter()
     sun = sd.Sun(elevation_deg=30.0, azimuth_deg=180.0)
     proj = make_projection("fisheye", "16")
-    for name, params in (("precomputed", {}), ("single_scattering", {}), ("preetham1999", {}),
+    for name, params in (("precomputed", {}), ("fitted", {}), ("single_scattering", {}),
+                         ("preetham1999", {}),
                          ("perez1993", {"dni": 650.0, "dhi": 120.0}), ("cie2003", {"sky_type": 12})):
         t = time.perf_counter()
         model = sd.model(name, sun=sun, **params)
