@@ -15,10 +15,11 @@ with y = ln(measured / model) in the kept directions at least 10 deg from the su
 (a) correlation of y (less its capture mean) with P cos 2 chi and P sin 2 chi (each less
     its capture mean);
 (b) the fit y = c_capture + m P cos 2 chi + n P sin 2 chi, per day and jointly, its
-    diattenuation sqrt(m^2 + n^2) and axis; the cross-validation (fit on one day, applied
+    diattenuation sqrt(m^2 + n^2) and axis; (m, n) fitted to each capture alone; the
+    cross-validation (fit on one day, applied
     to the other, only the capture constants refitted); the same fit with a constant per
     10 deg bin of the angle from the sun added (whether (m, n) survive once the pattern
-    by angle is taken out);
+    by angle is taken out), and with a constant per ring of the scan as well;
 (c) the median shape error by angle from the sun (``compare.angle_profile``) and the mean
     luminance RMS >= 10 deg, before and after the model is multiplied by
     1 + m P cos 2 chi + n P sin 2 chi (what the instrument would read);
@@ -141,18 +142,27 @@ def _apply(groups, m, n):
     return float(np.sqrt(np.mean(b ** 2))), float(np.sqrt(np.mean(a ** 2)))
 
 
-def _fit_with_bins(caps, keys, groups):
+def _fit_with_bins(caps, keys, groups, rings=False):
     """(m, n) fitted together with a constant per capture and per 10 deg bin of the angle
-    from the sun (10-180 deg)."""
+    from the sun (10-180 deg); with ``rings`` also a constant per ring of the scan
+    (compare.RING_ELEVATIONS_DEG, as compare.ring_offsets)."""
+    from skydome.validation.compare import RING_ELEVATIONS_DEG
+
     edges = np.arange(10.0, 181.0, 10.0)
     nb, nk = edges.size - 1, len(groups)
+    nr = len(RING_ELEVATIONS_DEG) if rings else 0
     ys, A_rows = [], []
     for k, ((day, label), (y, X, Y)) in enumerate(zip(keys, groups)):
-        g = caps[(day, label)].sun_angle_deg[_keep(caps[(day, label)])]
+        c = caps[(day, label)]
+        g = c.sun_angle_deg[_keep(c)]
         b = np.clip(np.digitize(g, edges) - 1, 0, nb - 1)
-        A = np.zeros((y.size, nk + nb + 2))
+        A = np.zeros((y.size, nk + nb + nr + 2))
         A[:, k] = 1.0
         A[np.arange(y.size), nk + b] = 1.0
+        if rings:
+            el = c.elevation_deg[_keep(c)]
+            ring = np.argmin(np.abs(el[:, None] - np.asarray(RING_ELEVATIONS_DEG)[None, :]), axis=1)
+            A[np.arange(y.size), nk + nb + ring] = 1.0
         A[:, -2], A[:, -1] = X, Y
         ys.append(y)
         A_rows.append(A)
@@ -255,6 +265,13 @@ def main(argv=None) -> int:
                   f"diattenuation {f.diattenuation:.3f}, axis {f.axis_deg:+.0f} deg from the "
                   f"vertical; RMS of ln about the capture means {100 * f.rms_before:.1f} -> "
                   f"{100 * f.rms_after:.1f} %")
+        print("  per capture alone (m / n):")
+        for d in days:
+            parts = []
+            for key, g in zip(keys_of[d], _groups(caps, store, model, keys_of[d], S)):
+                f = sp.fit_response([g])
+                parts.append(f"{key[1][:5]} {f.m:+.2f}/{f.n:+.2f}")
+            print(f"    {d}: " + ", ".join(parts))
         if len(days) == 2:
             print("  cross-validation (fit on one day, applied to the other; capture constants refitted):")
             for src, dst in ((days[0], days[1]), (days[1], days[0])):
@@ -264,6 +281,12 @@ def main(argv=None) -> int:
         for d in keys_of:
             gr = _groups(caps, store, model, keys_of[d], S)
             m, n, sm, sn = _fit_with_bins(caps, keys_of[d], gr)
+            print(f"    {d:10s}: m {m:+.3f} +- {sm:.3f}, n {n:+.3f} +- {sn:.3f} "
+                  f"(diattenuation {np.hypot(m, n):.3f})")
+        print("  with a constant per 10 deg bin of the angle from the sun and per ring as well:")
+        for d in keys_of:
+            gr = _groups(caps, store, model, keys_of[d], S)
+            m, n, sm, sn = _fit_with_bins(caps, keys_of[d], gr, rings=True)
             print(f"    {d:10s}: m {m:+.3f} +- {sm:.3f}, n {n:+.3f} +- {sn:.3f} "
                   f"(diattenuation {np.hypot(m, n):.3f})")
 
