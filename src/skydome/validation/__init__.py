@@ -3,6 +3,8 @@
 * :mod:`.kider2014`: the Kider et al. 2014 spectral sky scans of 2013-05-27 (Cornell).
 * :mod:`.aeronet`: AERONET almucantar inversions and the aerosol optics they give.
 * :mod:`.compare`: :func:`compare_measured`, the errors of each model against the scans.
+* :mod:`.scanner_polarisation`: the test of whether the scanner's response to polarised
+  light explains the angular error (docs/validation_measured.md).
 
 Imports are lazy: ``import skydome.validation`` loads nothing heavy.
 """
