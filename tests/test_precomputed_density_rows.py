@@ -167,6 +167,23 @@ def test_a_load_in_part_serves_the_sky_of_the_whole_table():
     assert np.array_equal(m._t.scattering_density, first._t.scattering_density)
 
 
+def test_a_night_sky_from_the_cache_decodes_no_row(capfd):
+    """The sun below the tables' lowest (night: the sky reads no density): the load
+    decodes no row of it (every file still checked) and the sky is 0; another sun of the
+    same tables then reads the whole table."""
+    ref = small()
+    with _cache._LOADED_LOCK:
+        _cache._LOADED.clear()
+    night = small(-30.0)
+    assert night.from_cache
+    part, _ = night._t.__dict__["_density_part"]
+    assert part.shape[4] == 0
+    assert not night.radiance(DIRS, WL).any()
+    day = night.with_sun(ref.sun)
+    assert np.array_equal(day.radiance(DIRS, WL), ref.radiance(DIRS, WL))
+    assert capfd.readouterr().err == ""
+
+
 def test_a_shared_entry_serves_a_sun_outside_the_first_models_rows(capfd):
     """A second model of the same entry, while the first's tables are held (the same
     tables), whose sun needs rows outside the part the first decoded: its sky is that of

@@ -528,7 +528,10 @@ class _HalfTable:
         if out is None:
             out = np.empty(want, dtype=np.float32)
         e_flat = self.exps.reshape(-1)
-        flat = out.reshape(-1, nl) if rows is None else out.reshape(-1, hi - lo, nl)
+        if rows is None:
+            flat = out.reshape(-1, nl)
+        elif hi > lo:
+            flat = out.reshape(-1, hi - lo, nl)
         e_blocks = None if rows is None else self.exps.reshape(-1, n_ms)
         buf = np.empty(min(step, max(n_rows, 1)) * nl, dtype=np.float16)
         fd = self._f.fileno()
