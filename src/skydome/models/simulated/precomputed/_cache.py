@@ -30,6 +30,17 @@ of docs/performance.md; BLAKE2b at 0.74 GB/s would triple it); docs/performance.
 load times measured. A half-precision table's finiteness is found on its float16 bits as they
 are decoded (:func:`_decode_half_checked`), in the same pass.
 
+**The scattering density read in part.** A model that renders the observer's sky reads the
+scattering density only at the sun cosines its own rays reach (:mod:`._reach`: about a
+fifth of the default table's mu_s rows with the sun at 30 deg), so :func:`load` decodes
+only those rows where the caller names them (``density_rows``) and the whole table on its
+first read (:class:`_HalfTable`, :meth:`._tables.Tables.set_scattering_density_part`:
+aerial perspective, the stored table's build, the exports, another sun's rows). The checks
+do not change with it: the load still computes the CRC-32 of every byte of every file and
+checks every value of the float16 file for finiteness (on its bits, where its rows are not
+decoded), so a damaged byte outside the rows decoded rebuilds the entry before anything is
+served; the whole table's later decoding checks its files again.
+
 The stored 4-D table of orders 2..N is built after the precomputation, on its first read
 (:meth:`._tables.Tables.build_multiple_scattering`); it is then added to the same entry as
 its own file, ``multiple_scattering.npy`` (:func:`add_stored_table`: built slab by slab of

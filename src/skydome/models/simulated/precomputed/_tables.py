@@ -13,6 +13,11 @@ the summed scattering density and the column table by the builder the precomputa
 the record (:meth:`Tables.build_multiple_scattering`; the record imports no kernel):
 the sky's ``radiance()`` integrates orders 2..N at the observer and never reads it; aerial
 perspective, the texture/LUT export and the viewer do.
+
+The scattering density may be held in part (the on-disk cache decodes at its load only the
+mu_s rows the observer's rays reach, :meth:`Tables.set_scattering_density_part`): the
+observer's sky reads those rows (:meth:`Tables.scattering_density_rows`); the first read of
+``scattering_density`` itself decodes the whole table.
 """
 
 from __future__ import annotations
