@@ -391,12 +391,22 @@ def _read_half(path: str, name: str, sums: dict, out=None) -> np.ndarray:
         return t.decode(out=out)
 
 
+def _read_at(f, view, pos: int) -> int:
+    """Read into ``view`` from offset ``pos`` of the open file ``f``; the bytes read.
+    ``os.preadv`` where there is one (no file position: a process forked meanwhile shares
+    the file's), else a seek and a read."""
+    if hasattr(os, "preadv"):
+        return os.preadv(f.fileno(), [view], pos)
+    f.seek(pos)                                   # pragma: no cover - no preadv
+    return f.readinto(view)                       # pragma: no cover
+
+
 class _HalfTable:
     """A half-precision table of an entry (``<name>.npy``, float16, and its row exponents
     ``<name>.exp.npy``; for the scattering density, with ``quad``, its "quadratic" record,
     also the constituents stored as a quadratic form, ``<name>.quadratic.npy``), its files
-    held: the float16 file open and read at offsets (``os.preadv``: no file position shared
-    with anything), the small files memory-mapped. Held, they stay readable when the entry
+    held: the float16 file open and read at offsets (:func:`_read_at`), the small files
+    memory-mapped. Held, they stay readable when the entry
     is removed meanwhile (the cache's eviction and ``clear_cache`` unlink files; its writers
     replace files by renaming), so that what was checked at the load is what is decoded
     later. Opening checks the exponents' and the coefficients' CRC-32 and the float16
@@ -545,14 +555,13 @@ class _HalfTable:
             flat = out.reshape(-1, hi - lo, nl)
         e_blocks = None if rows is None else self.exps.reshape(-1, n_ms)
         buf = np.empty(min(step, max(n_rows, 1)) * nl, dtype=np.float16)
-        fd = self._f.fileno()
         pos = self.offset
         crc, finite = 0, True
         for i in range(0, n_rows, step):
             k = min(step, n_rows - i)
             b = buf[:k * nl]
             view = memoryview(b).cast("B")
-            if os.preadv(fd, [view], pos) != b.nbytes:
+            if _read_at(self._f, view, pos) != b.nbytes:
                 raise DamagedEntry(f"{name}.npy is truncated")
             pos += b.nbytes
             crc = zlib.crc32(view, crc)
@@ -565,7 +574,7 @@ class _HalfTable:
                 j, nb = i // n_ms, k // n_ms
                 _decode_half_checked(b.reshape(nb, n_ms, nl)[:, lo:hi],
                                      e_blocks[j:j + nb, lo:hi], flat[j:j + nb])
-        if os.fstat(fd).st_size != pos:
+        if os.fstat(self._f.fileno()).st_size != pos:
             raise DamagedEntry(f"{name}.npy is longer than its shape")
         if crc != self.rec.get("crc32"):
             raise DamagedEntry(f"the checksum of {name}.npy does not match")
