@@ -295,3 +295,20 @@ def test_the_whole_table_is_read_after_the_entry_is_removed_and_checked_again():
         f.write(b"\x00\x7c" * 4)
     with pytest.raises(_cache.DamagedEntry):
         m._t.scattering_density
+
+
+def test_rows_that_cannot_be_said_decode_the_whole_table(monkeypatch, capfd):
+    """An error in the caller's ``density_rows`` is not damage: the entry is kept and its
+    whole density decoded at the load, as without rows."""
+    ref = small()
+    with _cache._LOADED_LOCK:
+        _cache._LOADED.clear()
+
+    def fails(self, scalars, shape):
+        raise KeyError("planet_radius_m")
+
+    monkeypatch.setattr(P.PrecomputedSky, "_density_rows", fails)
+    m = small()
+    assert m.from_cache and m._t.__dict__["_scattering_density"] is not None
+    assert np.array_equal(m.radiance(DIRS, WL), ref.radiance(DIRS, WL))
+    assert capfd.readouterr().err == ""

@@ -835,9 +835,7 @@ def load(k: str, density_rows=None):
             if name in half:
                 rows = None
                 if name == _DENSITY and density_rows is not None:
-                    shape = (quad[name]["shape"] if name in quad
-                             else sums.get(name, {}).get("shape"))
-                    rows = density_rows(dict(meta["scalars"]), tuple(int(n) for n in shape))
+                    rows = _rows_asked(density_rows, meta, name)
                 if rows is None:
                     arrays[name] = _read_table(path, name, sums, quad.get(name))
                 else:
@@ -863,6 +861,22 @@ def load(k: str, density_rows=None):
         with _LOADED_LOCK:
             _LOADED[sig] = tables
     return tables
+
+
+def _rows_asked(density_rows, meta, name):
+    """``density_rows(scalars, shape)`` for the entry's table ``name`` (its shape from its
+    records), or None (the whole table) where it cannot say: an error there is the caller's,
+    not the entry's, and must not remove the entry."""
+    try:
+        quad = meta.get("quadratic", {}).get(name)
+        shape = quad["shape"] if quad is not None else meta["checksums"][name]["shape"]
+        shape = tuple(int(n) for n in shape)
+        first, end = (int(x) for x in density_rows(dict(meta["scalars"]), shape))
+    except Exception:
+        return None
+    if not 0 <= first <= end <= shape[-2]:
+        return None
+    return first, end
 
 
 def _map(file):
