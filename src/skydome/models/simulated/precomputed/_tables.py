@@ -336,8 +336,7 @@ def _get_scattering_density(self):
 
 
 def _set_scattering_density(self, value):
-    self.__dict__["_" + _LAZY_J] = (None if value is None
-                                    else np.ascontiguousarray(value, dtype=np.float32))
+    self.__dict__["_" + _LAZY_J] = value          # as given (as the plain field held it)
     self.__dict__.pop("_density_part", None)
     self.__dict__.pop("_density_whole", None)
 
