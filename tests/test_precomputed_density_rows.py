@@ -312,3 +312,16 @@ def test_rows_that_cannot_be_said_decode_the_whole_table(monkeypatch, capfd):
     assert m.from_cache and m._t.__dict__["_scattering_density"] is not None
     assert np.array_equal(m.radiance(DIRS, WL), ref.radiance(DIRS, WL))
     assert capfd.readouterr().err == ""
+
+
+def test_the_bounds_mapping_is_the_kernels():
+    """_reach's plain-Python mu_s mapping (read before numba is imported) is
+    _mapping.mu_s_unit: the same constants, the same unit coordinate to rounding over sun
+    zenith angles 0..180 deg and three lowest suns."""
+    from skydome.models.simulated.precomputed import _mapping
+
+    assert _reach._CENTRE == _mapping.MU_S_CENTRE and _reach._WIDTH == _mapping.MU_S_WIDTH
+    for mu_s_min in (np.cos(np.radians(96.0)), np.cos(np.radians(108.0)), -0.5):
+        for theta in np.linspace(0.0, np.pi, 721):
+            x = _mapping.mu_s_unit(float(np.cos(theta)), float(mu_s_min))
+            assert abs(_reach._unit(float(theta), float(mu_s_min)) - x) <= 1e-12
