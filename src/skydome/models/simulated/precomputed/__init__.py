@@ -234,13 +234,31 @@ class PrecomputedSky(SkyModel):
         self.cache = bool(p["cache"])
         self.table_wavelengths_nm = wl
         self.n_wavelengths = wl.size
-        self._t, self.from_cache = self._tables(atm, wl, p, self.cache)
+        self._t, self.from_cache = self._tables(atm, wl, p, self.cache, self._density_rows)
         self.precompute_seconds = self._t.precompute_seconds
 
+    def _density_rows(self, scalars, shape):
+        """(first, end): the mu_s rows of the scattering density (of ``shape``) that this
+        observer's sky reads (:func:`._reach.density_mu_s_rows`; none where the sun is
+        below ``mu_s_min``: the sky is then night or the tables', which read no density),
+        for the cache's load (:func:`._cache.load`'s ``density_rows``; ``scalars``: the
+        entry's)."""
+        from skydome.models.simulated.precomputed import _reach
+
+        R, Rt = float(scalars["planet_radius_m"]), float(scalars["top_radius_m"])
+        mu_s_min = float(scalars["mu_s_min"])
+        mu_s = float(self.sun.direction[2])
+        if mu_s < mu_s_min:
+            return 0, 0
+        return _reach.density_mu_s_rows(R + self.observer_altitude_m, mu_s, R, Rt, mu_s_min,
+                                        shape[4])
+
     @staticmethod
-    def _tables(atm, wl, p, use_cache):
+    def _tables(atm, wl, p, use_cache, density_rows=None):
         """(tables, from_cache): from the on-disk cache when it holds this atmosphere and
-        these settings, else precomputed (and stored there)."""
+        these settings, else precomputed (and stored there). ``density_rows``: the
+        scattering density's rows to decode at a load from the cache (:func:`._cache.load`:
+        the rest is decoded on its first read)."""
         from skydome.models.simulated.precomputed import _cache
         from skydome.models.simulated.precomputed._precompute import (
             attach_stored_table_builder, precompute)
@@ -251,7 +269,7 @@ class PrecomputedSky(SkyModel):
             return precompute(props, wl, p), False
         settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}
         k = _cache.key(props, settings)
-        tables = _cache.load(k)
+        tables = _cache.load(k, density_rows)
         hit = tables is not None
         if not hit:
             tables = precompute(props, wl, p)
@@ -313,7 +331,7 @@ class PrecomputedSky(SkyModel):
 
     def _observer_slices(self, table_only=False):
         """The 4-D tables interpolated at the observer's r and the sun's mu_s."""
-        from skydome.models.simulated.precomputed import _mapping, _multiple
+        from skydome.models.simulated.precomputed import _mapping, _multiple, _reach
 
         R, Rt = self._R, self._Rt
         n_r, _, n_ms, _, nl = self._t.table_shape   # single scattering's and the stored table's
@@ -347,11 +365,26 @@ class PrecomputedSky(SkyModel):
             ground = np.arange(n_g + n_s) < n_g
             cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
             out = np.empty((n_g + n_s, _SLICE_PHI, nl))
-            _multiple.multiple_scattering_slice(t.scattering_density, tables_medium(t),
-                                                t.scattering_index, t.columns, self._mu_s_min,
-                                                self._r0, mu_s, int(self.integration_samples),
-                                                QUADRATURE_SCALE_M, np.cos(th), ground, cphi,
-                                                out)
+            # the density's mu_s rows that these rays reach (what the cache decoded at the
+            # load, where it holds them; else the whole table), and the rows they read
+            n_msj = t.density_shape[4]
+            first, end = _reach.density_mu_s_rows(self._r0, mu_s, R, Rt, self._mu_s_min,
+                                                  n_msj)
+            reach = np.empty((n_g + n_s, 2), dtype=np.int64)
+            for _ in range(2):
+                J, j0 = t.scattering_density_rows(first, end)
+                _multiple.multiple_scattering_slice(J, j0, n_msj, tables_medium(t),
+                                                    t.scattering_index, t.columns,
+                                                    self._mu_s_min, self._r0, mu_s,
+                                                    int(self.integration_samples),
+                                                    QUADRATURE_SCALE_M, np.cos(th), ground,
+                                                    cphi, reach, out)
+                if reach[:, 0].min() >= j0 and reach[:, 1].max() <= j0 + J.shape[4]:
+                    break
+                # a row outside the bound (which _reach proves cannot be): said, and the
+                # slice integrated again from the whole table
+                _reach_note(first, end, reach)
+                first, end = 0, n_msj
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out
@@ -659,6 +692,15 @@ _TABLE_SETTINGS = ("orders", "remaining_orders", "transmittance_mu_size", "trans
                    "density_mu_s_size", "high_order_r_size", "high_order_mu_s_size",
                    "high_order_wavelengths", "stored_table", "order_table_divisor",
                    "max_sun_zenith_deg")
+
+
+def _reach_note(first, end, reach) -> None:
+    """One line on stderr: the observer's rays read density rows outside ``first..end-1``."""
+    import sys
+
+    print(f"skydome: the observer's rays read the scattering density's mu_s rows "
+          f"{int(reach[:, 0].min())}..{int(reach[:, 1].max()) - 1}, outside the bound "
+          f"{first}..{end - 1}; integrated again from the whole table", file=sys.stderr)
 
 
 def clear_cache() -> int:

@@ -30,6 +30,17 @@ of docs/performance.md; BLAKE2b at 0.74 GB/s would triple it); docs/performance.
 load times measured. A half-precision table's finiteness is found on its float16 bits as they
 are decoded (:func:`_decode_half_checked`), in the same pass.
 
+**The scattering density read in part.** A model that renders the observer's sky reads the
+scattering density only at the sun cosines its own rays reach (:mod:`._reach`: about a
+fifth of the default table's mu_s rows with the sun at 30 deg), so :func:`load` decodes
+only those rows where the caller names them (``density_rows``) and the whole table on its
+first read (:class:`_HalfTable`, :meth:`._tables.Tables.set_scattering_density_part`:
+aerial perspective, the stored table's build, the exports, another sun's rows). The checks
+do not change with it: the load still computes the CRC-32 of every byte of every file and
+checks every value of the float16 file for finiteness (on its bits, where its rows are not
+decoded), so a damaged byte outside the rows decoded rebuilds the entry before anything is
+served; the whole table's later decoding checks its files again.
+
 The stored 4-D table of orders 2..N is built after the precomputation, on its first read
 (:meth:`._tables.Tables.build_multiple_scattering`); it is then added to the same entry as
 its own file, ``multiple_scattering.npy`` (:func:`add_stored_table`: built slab by slab of
@@ -180,7 +191,7 @@ def _half_exponents(rows: np.ndarray) -> np.ndarray:
 
 def _pow2(e: np.ndarray) -> np.ndarray:
     """2^e as float32 (exact: a power of two, |e| <= 127), for broadcasting over a row."""
-    return np.ldexp(np.float32(1.0), e.astype(np.int32))[:, None]
+    return np.ldexp(np.float32(1.0), e.astype(np.int32))[..., None]
 
 
 def _encode_half(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -207,7 +218,9 @@ _BITS = np.int32(-0x70002000)   # 0x8FFFE000: the sign bit and the moved exponen
 
 def _decode_half_checked(h: np.ndarray, e: np.ndarray, out: np.ndarray) -> bool:
     """``out`` (n, n_wavelengths) float32 = h 2^e, bit for bit what :func:`_decode_half`
-    gives, and whether every value of ``h`` is finite, in fewer passes.
+    gives, and whether every value of ``h`` is finite, in fewer passes. (Any leading axes:
+    ``h`` (..., n_wavelengths), ``e`` (...), ``out`` C-contiguous, as the rows of a part
+    of a table are.)
 
     NumPy's float16 -> float32 cast runs at about 2.3 ns per value on the 2-core EPYC of
     docs/performance.md (no F16C): the scattering density's 66 M values took 0.25 s. Here
@@ -225,9 +238,23 @@ def _decode_half_checked(h: np.ndarray, e: np.ndarray, out: np.ndarray) -> bool:
     np.left_shift(w, 13, out=w)
     np.bitwise_and(w, _BITS, out=w)
     finite = bool(out.max() < _NOT_FINITE_MOVED) and bool(out.min() > -_NOT_FINITE_MOVED)
-    np.multiply(out, np.ldexp(np.float32(1.0), e.astype(np.int32) + _BIAS_SHIFT)[:, None],
+    np.multiply(out, np.ldexp(np.float32(1.0), e.astype(np.int32) + _BIAS_SHIFT)[..., None],
                 out=out)
     return finite
+
+
+# a float16 is inf or NaN where its five exponent bits are all ones
+_HALF_EXP_BITS = 0x7C00
+
+
+def _finite_bits(h: np.ndarray, scratch: np.ndarray) -> bool:
+    """Whether every value of the float16 array ``h`` is finite, found on its bits (its
+    exponent field not all ones; ``scratch``: an int16 array of h's size, overwritten): two
+    passes over 2-byte values, 0.8-11 ms for the 66 M values of the default scattering
+    density on the 2-core machine of docs/performance.md, where decoding them whole took
+    0.03-0.42 s."""
+    np.bitwise_and(h.reshape(-1).view(np.int16), _HALF_EXP_BITS, out=scratch)
+    return bool(scratch.max() < _HALF_EXP_BITS) if scratch.size else True
 
 
 def _npy_header(f, dtype, shape) -> None:
@@ -361,46 +388,200 @@ def _read_half(path: str, name: str, sums: dict, out=None) -> np.ndarray:
     :data:`_CHECK_BYTES`, through file reads (no mapping: only the decoded table is
     resident); DamagedEntry where a check fails. ``out``: a C-contiguous float32 array of
     the table's shape to decode into (else a new one)."""
-    exps = _map(os.path.join(path, name + _EXP + ".npy"))
-    _verify(name + _EXP, exps, sums.get(name + _EXP))
-    rec = sums.get(name)
-    if not isinstance(rec, dict):
-        raise DamagedEntry(f"{name}.npy has no checksum")
-    with open(os.path.join(path, name + ".npy"), "rb") as f:
-        version = np.lib.format.read_magic(f)
-        read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
-                else np.lib.format.read_array_header_2_0)
-        shape, fortran, dtype = read(f)
-        if (dtype != np.float16 or fortran or list(shape) != rec.get("shape")
-                or rec.get("dtype") != np.dtype(np.float16).str
-                or tuple(shape[:-1]) != exps.shape):
-            raise DamagedEntry(f"{name}.npy has shape {shape} {dtype}, recorded "
-                               f"{rec.get('shape')} {rec.get('dtype')}")
-        nl = int(shape[-1])
+    with _HalfTable(path, name, sums) as t:
+        return t.decode(out=out)
+
+
+def _read_at(f, view, pos: int) -> int:
+    """Read into ``view`` from offset ``pos`` of the open file ``f``; the bytes read.
+    ``os.preadv`` where there is one (no file position: a process forked meanwhile shares
+    the file's), else a seek and a read."""
+    if hasattr(os, "preadv"):
+        return os.preadv(f.fileno(), [view], pos)
+    f.seek(pos)                                   # pragma: no cover - no preadv
+    return f.readinto(view)                       # pragma: no cover
+
+
+class _HalfTable:
+    """A half-precision table of an entry (``<name>.npy``, float16, and its row exponents
+    ``<name>.exp.npy``; for the scattering density, with ``quad``, its "quadratic" record,
+    also the constituents stored as a quadratic form, ``<name>.quadratic.npy``), its files
+    held: the float16 file open and read at offsets (:func:`_read_at`), the small files
+    memory-mapped. Held, they stay readable when the entry
+    is removed meanwhile (the cache's eviction and ``clear_cache`` unlink files; its writers
+    replace files by renaming), so that what was checked at the load is what is decoded
+    later. Opening checks the exponents' and the coefficients' CRC-32 and the float16
+    file's header; every :meth:`decode` checks the CRC-32 of the whole float16 file and the
+    finiteness of every value again (a file changed in place since: DamagedEntry).
+
+    :meth:`decode` with ``rows`` decodes only the mu_s rows (the axis before the
+    wavelengths) first..end-1, in the same single pass over the file as the checks; without,
+    the whole table, as :func:`_read_half` and the reading of whole tables always did. The
+    values decoded are the same bits either way (each value is decoded alone: a float16
+    times the power of two of its row, :func:`_decode_half_checked`; a quadratic form's
+    value is its own column's product, :func:`_quadratic_eval`). :meth:`read` (the whole
+    table, once; thread-safe) is what :meth:`._tables.Tables.set_scattering_density_part`
+    calls on the first read of the whole table."""
+
+    def __init__(self, path: str, name: str, sums: dict, quad=None):
+        self.path, self.name, self.sums = path, name, sums
+        self._lock = threading.Lock()
+        self._whole = None
+        self._f = None
+        if quad is None:
+            self.ks = []
+        else:
+            self.ks = [int(k) for k in quad["constituents"]]
+        self.exps = _map(os.path.join(path, name + _EXP + ".npy"))
+        _verify(name + _EXP, self.exps, sums.get(name + _EXP))
+        rec = sums.get(name)
+        if not isinstance(rec, dict):
+            raise DamagedEntry(f"{name}.npy has no checksum")
+        self.rec = rec
+        self.coef = None
+        f = open(os.path.join(path, name + ".npy"), "rb")
+        try:
+            version = np.lib.format.read_magic(f)
+            read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                    else np.lib.format.read_array_header_2_0)
+            shape, fortran, dtype = read(f)
+            if (dtype != np.float16 or fortran or list(shape) != rec.get("shape")
+                    or rec.get("dtype") != np.dtype(np.float16).str
+                    or tuple(shape[:-1]) != self.exps.shape):
+                raise DamagedEntry(f"{name}.npy has shape {shape} {dtype}, recorded "
+                                   f"{rec.get('shape')} {rec.get('dtype')}")
+            self.offset = f.tell()
+            self.half_shape = tuple(int(n) for n in shape)
+            if quad is None:
+                self.shape = self.half_shape
+            else:
+                self.shape = tuple(int(n) for n in quad["shape"])
+                coef = _map(os.path.join(path, name + _QUAD + ".npy"))
+                _verify(name + _QUAD, coef, sums.get(name + _QUAD))
+                if coef.shape != (len(self.ks), 6) + self.shape[3:]:
+                    raise DamagedEntry(f"{name}{_QUAD}.npy has shape {coef.shape}")
+                self.coef = coef
+            self.rest = [k for k in range(self.shape[0]) if k not in self.ks]
+            if self.shape[1:] != self.half_shape[1:] or len(self.rest) != self.half_shape[0]:
+                raise DamagedEntry(f"{name}.npy has shape {self.half_shape}, the table "
+                                   f"{self.shape}")
+        except BaseException:
+            f.close()
+            raise
+        self._f = f
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self) -> None:
+        f, self._f = self._f, None
+        if f is not None:
+            f.close()
+
+    def __del__(self):
+        self.close()
+
+    def read(self) -> np.ndarray:
+        """The whole table, decoded and checked on the first call (DamagedEntry where the
+        files no longer match their records: changed in place since the load), then the
+        same array; the files are let go once it is decoded."""
+        with self._lock:
+            if self._whole is None:
+                if self._f is None:
+                    raise DamagedEntry(f"{self.name}.npy of {self.path} is closed")
+                # the small files again, as they are mapped now
+                _verify(self.name + _EXP, self.exps, self.sums.get(self.name + _EXP))
+                if self.coef is not None:
+                    _verify(self.name + _QUAD, self.coef, self.sums.get(self.name + _QUAD))
+                self._whole = self.decode()
+                self.close()
+            return self._whole
+
+    def decode(self, rows=None, out=None) -> np.ndarray:
+        """The table decoded (float32), or with ``rows`` = (first, end) only its mu_s rows
+        first..end-1 (the table's shape with that axis end - first long); every value of
+        the float16 file checked either way (CRC-32, finite). ``out``: a C-contiguous
+        float32 array of that shape to decode into (else a new one)."""
+        shape = self.shape
+        if rows is not None:
+            lo, hi = int(rows[0]), int(rows[1])
+            if not 0 <= lo <= hi <= shape[-2]:
+                raise ValueError(f"rows {rows} of an axis of {shape[-2]}")
+            shape = shape[:-2] + (hi - lo, shape[-1])
         if out is None:
             out = np.empty(shape, dtype=np.float32)
-        elif out.shape != tuple(shape) or out.dtype != np.float32 or not out.flags.c_contiguous:
-            raise DamagedEntry(f"{name}.npy has shape {shape}, expected {out.shape}")
-        flat, e_flat = out.reshape(-1, nl), exps.reshape(-1)
-        step = max(1, _CHECK_BYTES // (2 * nl))
-        buf = np.empty(step * nl, dtype=np.float16)
+        elif out.shape != shape or out.dtype != np.float32 or not out.flags.c_contiguous:
+            raise DamagedEntry(f"{self.name}.npy has shape {shape}, expected {out.shape}")
+        rest = self.rest
+        if not rest:
+            self._pass(None, rows)          # the checks of the (empty) float16 file
+        elif rest == list(range(rest[0], rest[-1] + 1)):
+            self._pass(out[rest[0]:rest[0] + len(rest)], rows)
+        else:
+            out[rest] = self._pass(None, rows)
+        if self.ks:
+            for j, k in enumerate(self.ks):
+                coef = self.coef[j]
+                if rows is not None:
+                    coef = np.ascontiguousarray(coef[..., lo:hi, :])
+                _quadratic_eval(coef, out[k])
+        return out
+
+    def _pass(self, out, rows):
+        """One pass over the float16 file in steps of :data:`_CHECK_BYTES` (whole blocks of
+        the mu_s axis where ``rows`` is given): its CRC-32, the finiteness of every value,
+        and the values decoded into ``out`` (a new array where None), all of them or the
+        mu_s rows ``rows`` only. Returns ``out``."""
+        name, shape = self.name, self.half_shape
+        nl = shape[-1]
+        n_ms = shape[-2] if len(shape) >= 2 else 1
+        n_rows = int(np.prod(shape[:-1]))
+        if rows is None:
+            want = shape
+            step = max(1, _CHECK_BYTES // (2 * nl))
+        else:
+            lo, hi = int(rows[0]), int(rows[1])
+            want = shape[:-2] + (hi - lo, nl)
+            step = max(1, _CHECK_BYTES // (2 * nl * n_ms)) * n_ms
+            bits = np.empty(min(step, max(n_rows, 1)) * nl, dtype=np.int16)
+        if out is None:
+            out = np.empty(want, dtype=np.float32)
+        e_flat = self.exps.reshape(-1)
+        if rows is None:
+            flat = out.reshape(-1, nl)
+        elif hi > lo:
+            flat = out.reshape(-1, hi - lo, nl)
+        e_blocks = None if rows is None else self.exps.reshape(-1, n_ms)
+        buf = np.empty(min(step, max(n_rows, 1)) * nl, dtype=np.float16)
+        pos = self.offset
         crc, finite = 0, True
-        for i in range(0, flat.shape[0], step):
-            k = min(step, flat.shape[0] - i)
+        for i in range(0, n_rows, step):
+            k = min(step, n_rows - i)
             b = buf[:k * nl]
             view = memoryview(b).cast("B")
-            if f.readinto(view) != b.nbytes:
+            if _read_at(self._f, view, pos) != b.nbytes:
                 raise DamagedEntry(f"{name}.npy is truncated")
+            pos += b.nbytes
             crc = zlib.crc32(view, crc)
-            finite = _decode_half_checked(b.reshape(k, nl), e_flat[i:i + k],
-                                          flat[i:i + k]) and finite
-        if f.read(1):
+            if rows is None:
+                finite = _decode_half_checked(b.reshape(k, nl), e_flat[i:i + k],
+                                              flat[i:i + k]) and finite
+                continue
+            finite = _finite_bits(b, bits[:k * nl]) and finite
+            if hi > lo:
+                j, nb = i // n_ms, k // n_ms
+                _decode_half_checked(b.reshape(nb, n_ms, nl)[:, lo:hi],
+                                     e_blocks[j:j + nb, lo:hi], flat[j:j + nb])
+        if os.fstat(self._f.fileno()).st_size != pos:
             raise DamagedEntry(f"{name}.npy is longer than its shape")
-    if crc != rec.get("crc32"):
-        raise DamagedEntry(f"the checksum of {name}.npy does not match")
-    if not finite:
-        raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
-    return out
+        if crc != self.rec.get("crc32"):
+            raise DamagedEntry(f"the checksum of {name}.npy does not match")
+        if not finite:
+            raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
+        return out
 
 
 def _quadratic_basis(n_th: int, n_ph: int) -> np.ndarray:
@@ -506,28 +687,21 @@ def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
     return _write_store_half(folder, name, encoded), encoded[2]
 
 
-def _read_table(path: str, name: str, sums: dict, quad) -> np.ndarray:
+def _read_table(path: str, name: str, sums: dict, quad, rows=None):
     """The half-precision table ``name`` of the entry ``path``, decoded (:func:`_read_half`)
     and, where ``quad`` (its "quadratic" record) says so, its quadratic-form constituents
-    evaluated from their coefficients."""
-    if quad is None:
-        return _read_half(path, name, sums)
-    shape = tuple(int(n) for n in quad["shape"])
-    ks = [int(k) for k in quad["constituents"]]
-    out = np.empty(shape, dtype=np.float32)
-    rest = [k for k in range(shape[0]) if k not in ks]
-    if rest == list(range(rest[0], rest[-1] + 1)) if rest else True:
-        lo = rest[0] if rest else 0
-        _read_half(path, name, sums, out=out[lo:lo + len(rest)])
-    else:
-        out[rest] = _read_half(path, name, sums)
-    coef = _map(os.path.join(path, name + _QUAD + ".npy"))
-    _verify(name + _QUAD, coef, sums.get(name + _QUAD))
-    if coef.shape != (len(ks), 6) + shape[3:]:
-        raise DamagedEntry(f"{name}{_QUAD}.npy has shape {coef.shape}")
-    for j, k in enumerate(ks):
-        _quadratic_eval(coef[j], out[k])
-    return out
+    evaluated from their coefficients. With ``rows`` (first, end): (the table's mu_s rows
+    first..end-1 decoded, its :class:`_HalfTable`, files held, for the whole table later),
+    every value of the files checked as for the whole table."""
+    t = _HalfTable(path, name, sums, quad)
+    if rows is None:
+        with t:
+            return t.decode()
+    try:
+        return t.decode(rows), t
+    except BaseException:
+        t.close()
+        raise
 
 
 def cache_dir() -> str:
@@ -608,12 +782,29 @@ def _touch(path: str) -> None:
         pass
 
 
-def load(k: str):
+def load(k: str, density_rows=None):
     """The cached :class:`._tables.Tables` under key ``k``, or None (absent or unreadable;
     an unreadable entry is removed). The arrays are memory-mapped copy-on-write, so the
     start-up reads only the header of each file and pages come in as the tables are used.
     Where tables of the same entry, unchanged on disk, are still held in this process, they
-    are returned (the same object)."""
+    are returned (the same object).
+
+    ``density_rows(scalars, shape) -> (first, end)`` (optional): the mu_s rows of the
+    scattering density (of ``shape``; ``scalars``: the entry's scalars, its radii and
+    ``mu_s_min``) that the caller reads first, e.g. those an observer's rays reach
+    (:func:`._reach.density_mu_s_rows`). Where the entry holds the density in half
+    precision, only those rows are decoded at the load (the default entry's 527 MB in
+    float32: the rows a ground observer's sky needs are about a fifth of them), and the
+    whole table on its first read (:meth:`._tables.Tables.set_scattering_density_part`).
+
+    What is checked when: at the load, every file of the entry, whole, as before: the
+    CRC-32 of every byte of every file and the finiteness of every value (of a float16 file,
+    on its bits, in the pass that computes its CRC-32 and decodes the rows asked for), so
+    that a damaged byte anywhere, in the rows decoded or not, rebuilds the entry before the
+    model serves anything from it. The files of the density stay held (open or mapped) by
+    the tables until the whole table is decoded; that decoding checks the CRC-32 and
+    finiteness of the float16 file and the CRC-32 of the exponents and coefficients again
+    (a file changed in place since the load: DamagedEntry, the entry removed)."""
     from skydome.models.simulated.precomputed._tables import Tables
 
     wait_for_writes()
@@ -627,6 +818,7 @@ def load(k: str):
         if held is not None:
             _touch(path)
             return held
+    part = None
     try:
         with open(os.path.join(path, _META)) as f:
             meta = json.load(f)
@@ -642,12 +834,24 @@ def load(k: str):
             if name.rsplit(".", 1)[0] in half and "." in name:
                 continue                 # read with its table (exponents, coefficients)
             if name in half:
-                arrays[name] = _read_table(path, name, sums, quad.get(name))
+                rows = None
+                if name == _DENSITY and density_rows is not None:
+                    rows = _rows_asked(density_rows, meta, name)
+                if rows is None:
+                    arrays[name] = _read_table(path, name, sums, quad.get(name))
+                else:
+                    part = (int(rows[0]),) + _read_table(path, name, sums, quad.get(name),
+                                                         rows=rows)
                 continue
             arrays[name] = _map(os.path.join(path, name + ".npy"))
             _verify(name, arrays[name], sums.get(name))
         tables = Tables.from_arrays(arrays)
+        if part is not None:
+            first, rows_part, whole = part
+            tables.set_scattering_density_part(rows_part, first, whole)
     except Exception as exc:
+        if part is not None:
+            part[2].close()
         _remove(path)
         _note(f"table cache entry {path} is damaged ({_reason(exc)}); rebuilding it")
         return None
@@ -658,6 +862,22 @@ def load(k: str):
         with _LOADED_LOCK:
             _LOADED[sig] = tables
     return tables
+
+
+def _rows_asked(density_rows, meta, name):
+    """``density_rows(scalars, shape)`` for the entry's table ``name`` (its shape from its
+    records), or None (the whole table) where it cannot say: an error there is the caller's,
+    not the entry's, and must not remove the entry."""
+    try:
+        quad = meta.get("quadratic", {}).get(name)
+        shape = quad["shape"] if quad is not None else meta["checksums"][name]["shape"]
+        shape = tuple(int(n) for n in shape)
+        first, end = (int(x) for x in density_rows(dict(meta["scalars"]), shape))
+    except Exception:
+        return None
+    if not 0 <= first <= end <= shape[-2]:
+        return None
+    return first, end
 
 
 def _map(file):

@@ -291,8 +291,8 @@ def table_from_coarse(coarse, mu_nodes, mu_cell, mu_frac, mu_s_nodes_sel, ms_cel
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def multiple_scattering_slice(J, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts, mu_nodes,
-                              ground_nodes, cphi_nodes, out):
+def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts,
+                              mu_nodes, ground_nodes, cphi_nodes, reach, out):
     """Orders 2..N seen by an observer at radius r with the sun at mu_s, on a sky map of view
     directions: view zenith cosines ``mu_nodes`` (with ``ground_nodes``: does the ray end on
     the ground) x azimuths from the sun's with cosines ``cphi_nodes``:
@@ -304,10 +304,18 @@ def multiple_scattering_slice(J, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts, mu_
     Integrating at the observer's own r and mu_s (instead of interpolating the 4-D table)
     keeps the multiply scattered aerosol aureole, which is sharp in the angle from the sun,
     out of the coarse mu_s interpolation: at AOD 0.5 that interpolation overestimated the
-    zenith sky by 16 % with the sun at 60 deg."""
+    zenith sky by 16 % with the sun at 60 deg.
+
+    ``J`` may hold a part of the scattering density's mu_s axis: its rows ``ms0`` ..
+    ``ms0 + J.shape[4] - 1`` of the ``n_msj`` of the whole table (all of them: 0 and
+    J.shape[4]), e.g. the rows the observer's rays reach (:func:`._reach.density_mu_s_rows`;
+    the values are those of the whole table, bit for bit). ``reach[mu]`` receives the
+    first and one past the last mu_s row (of the whole table) that the rays of view zenith
+    node mu read; a node whose rows J does not hold is not read (its ray's value is then
+    wrong, and ``reach`` says so: the caller checks it)."""
     n_mu, n_nu, nl = out.shape
     nc = col.shape[0]
-    nsc, n_tj, n_pj, n_rj, n_msj, _ = J.shape
+    nsc, n_tj, n_pj, n_rj, n_held, _ = J.shape
     R = m.R
     Rt = m.Rt
     frame = mu_s_frame(mu_s_min)
@@ -317,6 +325,8 @@ def multiple_scattering_slice(J, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts, mu_
         tw = w.tw
         rts = w.rts
         acc = np.zeros((n_nu, nl))
+        lo_read = n_msj
+        hi_read = 0
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]
         s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
@@ -332,9 +342,15 @@ def multiple_scattering_slice(J, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts, mu_
                 nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
                 ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
+                lo_read = min(lo_read, ims_j)
+                hi_read = max(hi_read, ims_j + 2)
+                if ims_j < ms0 or ims_j + 2 > ms0 + n_held:
+                    continue                    # rows not held: reported in reach
                 jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
                 ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
-                density_acc(J, tw[q], jt, jb, ip, e, jr, ja, ims_j, c, acc[inu])
+                density_acc(J, tw[q], jt, jb, ip, e, jr, ja, ims_j - ms0, c, acc[inu])
+        reach[imu, 0] = lo_read
+        reach[imu, 1] = hi_read
         for inu in range(n_nu):
             for l in range(nl):
                 out[imu, inu, l] = acc[inu, l]

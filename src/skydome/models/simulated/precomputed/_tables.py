@@ -13,6 +13,11 @@ the summed scattering density and the column table by the builder the precomputa
 the record (:meth:`Tables.build_multiple_scattering`; the record imports no kernel):
 the sky's ``radiance()`` integrates orders 2..N at the observer and never reads it; aerial
 perspective, the texture/LUT export and the viewer do.
+
+The scattering density may be held in part (the on-disk cache decodes at its load only the
+mu_s rows the observer's rays reach, :meth:`Tables.set_scattering_density_part`): the
+observer's sky reads those rows (:meth:`Tables.scattering_density_rows`); the first read of
+``scattering_density`` itself decodes the whole table.
 """
 
 from __future__ import annotations
@@ -32,9 +37,11 @@ def _scalar(kind, default):
     return field(default=default, metadata={"scalar": kind})
 
 
-# the lazily built fields (see Tables.multiple_scattering, Tables.single_scattering)
+# the lazily built fields (see Tables.multiple_scattering, Tables.single_scattering,
+# Tables.scattering_density)
 _LAZY = "multiple_scattering"
 _LAZY_SS = "single_scattering"
+_LAZY_J = "scattering_density"
 
 
 @dataclass
@@ -95,7 +102,48 @@ class Tables:
 
     @property
     def has_density(self) -> bool:
-        return self.scattering_density is not None
+        """Whether the tables hold the scattering density (decoded or still to decode: this
+        does not decode it)."""
+        return (self.__dict__.get("_" + _LAZY_J) is not None
+                or self.__dict__.get("_density_whole") is not None)
+
+    @property
+    def density_shape(self) -> tuple:
+        """The scattering density's shape (scattering, theta, phi, r, mu_s, wavelength),
+        without decoding it; () where the tables have none."""
+        J = self.__dict__.get("_" + _LAZY_J)
+        if J is not None:
+            return tuple(int(n) for n in J.shape)
+        return tuple(self.__dict__.get("_density_shape", ()))
+
+    def set_scattering_density_part(self, part, first: int, whole) -> None:
+        """The scattering density held in part until it is read whole (the on-disk cache,
+        :func:`._cache.load`): ``part`` its mu_s rows ``first`` .. ``first +
+        part.shape[4] - 1`` (C-contiguous float32, the values of the whole table; none
+        where ``part.shape[4]`` is 0), and ``whole`` an object whose ``shape`` is the
+        table's and whose ``read()`` returns the whole table, decoded and checked then, on
+        the first read of :attr:`scattering_density` (it must not hold these tables: a
+        reference cycle would keep them alive until the cyclic collector runs)."""
+        self.__dict__["_" + _LAZY_J] = None
+        self.__dict__["_density_part"] = (part, int(first))
+        self.__dict__["_density_whole"] = whole
+        self.__dict__["_density_shape"] = tuple(int(n) for n in whole.shape)
+
+    def scattering_density_rows(self, first: int, end: int):
+        """(J, j0): an array J that holds the scattering density's mu_s rows first..end-1
+        (at least) as its rows ``first - j0`` .., in the whole table's values, for a kernel
+        that reads only those rows (:func:`._multiple.multiple_scattering_slice`'s ``ms0``):
+        the part the cache decoded (:meth:`set_scattering_density_part`) where it holds
+        them, else the whole table (j0 = 0), decoded now on its first read."""
+        J = self.__dict__.get("_" + _LAZY_J)
+        if J is None:
+            held = self.__dict__.get("_density_part")
+            if held is not None:
+                part, j0 = held
+                if j0 <= first and end <= j0 + part.shape[4] and end > first:
+                    return part, j0
+            J = self.scattering_density
+        return J, 0
 
     @property
     def table_shape(self) -> tuple:
@@ -275,6 +323,24 @@ class Tables:
         return cls(**kw)
 
 
+def _get_scattering_density(self):
+    J = self.__dict__.get("_" + _LAZY_J)
+    if J is None:
+        whole = self.__dict__.get("_density_whole")
+        if whole is not None:
+            J = whole.read()      # decoded once (the reader keeps it; it is thread-safe)
+            self.__dict__["_" + _LAZY_J] = J
+            self.__dict__.pop("_density_part", None)
+            self.__dict__.pop("_density_whole", None)
+    return J
+
+
+def _set_scattering_density(self, value):
+    self.__dict__["_" + _LAZY_J] = value          # as given (as the plain field held it)
+    self.__dict__.pop("_density_part", None)
+    self.__dict__.pop("_density_whole", None)
+
+
 def _get_multiple_scattering(self):
     ms = self.__dict__.get("_" + _LAZY)
     return ms if ms is not None else self.build_multiple_scattering()
@@ -301,6 +367,15 @@ Tables.multiple_scattering = property(
     _get_multiple_scattering, _set_multiple_scattering,
     doc="orders 2..N (+ the geometric remainder), full radiance per unit solar irradiance "
         "[sr^-1], axes (r, mu, mu_s, nu, wavelength); built on first read")
+
+
+# the scattering density: where the on-disk cache decoded a part of it (the rows the
+# observer's rays reach), the whole table is decoded on its first read
+Tables.scattering_density = property(
+    _get_scattering_density, _set_scattering_density,
+    doc="the scattering density of orders 2..N per unit number density, axes (scattering, "
+        "theta, phi, r, mu_s, wavelength), or None; where the on-disk cache read only a "
+        "part of it (set_scattering_density_part), decoded whole on first read")
 
 
 # the same for single scattering: computed on first read where the tables do not hold it
