@@ -321,3 +321,45 @@ def test_registered_temporary_removed_on_sigterm(tmp_path):
             proc.kill()
     assert rc == -signal.SIGTERM
     assert list(tmp_path.iterdir()) == []
+
+
+_NESTED_CHILD = textwrap.dedent("""
+    import os, sys, time
+    from skydome._io import temporary
+    folder = os.path.join(sys.argv[1], ".held-across-a-call.part")
+    with temporary(folder, is_dir=True):          # the caller's block
+        with temporary(folder, is_dir=True):      # a library call's own block, same path
+            os.mkdir(folder)
+            open(os.path.join(folder, "chunk"), "w").write("x")
+        print("ready", flush=True)                # between the library's block and the rename
+        time.sleep(60)
+""")
+
+
+def test_nested_registrations_hold_until_the_outermost_block_ends(tmp_path):
+    """A caller holding a temporary across a library call that registers the same path for
+    its own block (the Zarr sky matrix): when the inner block ends the path stays registered,
+    so a SIGTERM before the caller's rename still removes it (it was left, under load, when
+    the caller's registration started only after the library's had ended)."""
+    from skydome import _io
+
+    p = str(tmp_path / "x.part")
+    with _io.temporary(p):
+        with _io.temporary(p):
+            assert p in _io._LIVE
+        assert p in _io._LIVE
+    assert p not in _io._LIVE
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1] / "src")
+    proc = subprocess.Popen([sys.executable, "-c", _NESTED_CHILD, str(tmp_path)],
+                            stdout=subprocess.PIPE, env=env, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "ready"
+        assert ".held-across-a-call.part" in _leftovers(tmp_path)
+        proc.send_signal(signal.SIGTERM)
+        rc = proc.wait(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert rc == -signal.SIGTERM
+    assert list(tmp_path.iterdir()) == []

@@ -38,14 +38,15 @@ import signal
 import stat
 import tempfile
 import threading
+import time
 from pathlib import Path
 from typing import Callable, Iterator
 
 __all__ = ["atomic_file", "atomic_write", "atomic_folder", "atomic_files", "check_output_file",
            "check_output_folder", "current_umask", "temporary", "write_exr", "write_npy"]
 
-# live temporaries: path -> True for a folder, False for a file
-_LIVE: dict[str, bool] = {}
+# live temporaries: path -> [True for a folder, False for a file; open registrations]
+_LIVE: dict[str, list] = {}
 _LOCK = threading.Lock()
 _PREVIOUS_HANDLER = None
 _INSTALLED = False
@@ -76,9 +77,26 @@ def _remove(path: str, is_dir: bool) -> None:
         pass
 
 
+#: pauses [s] after removing the live temporaries on SIGTERM where other threads run, each
+#: followed by the removal of any that came back: a write already under way on another thread (Zarr's I/O runs on its own
+#: event-loop thread while the main thread, here, handles the signal) can recreate a removed
+#: folder's chunk path after the removal; it was seen, under load, as a left
+#: `.a.zarr.part/c/8/0/0`. The main thread issues no new writes meanwhile.
+_SIGTERM_SETTLE_S = (0.02, 0.1, 0.3)
+
+
 def _on_sigterm(signum, frame):  # pragma: no cover - exercised in a child process by the tests
-    for path, is_dir in list(_LIVE.items()):
+    live = [(path, is_dir) for path, (is_dir, _) in list(_LIVE.items())]
+    for path, is_dir in live:
         _remove(path, is_dir)
+    # with no other thread nothing can write meanwhile; else every pause, removing what came
+    # back after each (0.42 s in all)
+    others = threading.active_count() > 1
+    for pause in _SIGTERM_SETTLE_S if live and others else ():
+        time.sleep(pause)
+        for path, is_dir in live:
+            if os.path.lexists(path):
+                _remove(path, is_dir)
     _LIVE.clear()
     prev = _PREVIOUS_HANDLER
     if callable(prev):
@@ -108,12 +126,21 @@ def _install_handler() -> None:
 def _register(path: str, is_dir: bool) -> None:
     _install_handler()
     with _LOCK:
-        _LIVE[path] = is_dir
+        entry = _LIVE.setdefault(path, [is_dir, 0])
+        entry[0] = entry[0] or is_dir
+        entry[1] += 1
 
 
 def _unregister(path: str) -> None:
+    # registrations of one path nest (a caller that holds a temporary across a library call
+    # that registers the same path for its own block): the path stays registered until the
+    # outermost block ends, so that no SIGTERM between the two blocks finds it unregistered
     with _LOCK:
-        _LIVE.pop(path, None)
+        entry = _LIVE.get(path)
+        if entry is not None:
+            entry[1] -= 1
+            if entry[1] <= 0:
+                del _LIVE[path]
 
 
 @contextlib.contextmanager
@@ -121,7 +148,7 @@ def temporary(path, is_dir: bool = False) -> Iterator[str]:
     """Register ``path`` (a temporary file, or folder with ``is_dir``, that the caller made)
     for the block: a SIGTERM in the block removes it before the process ends. The caller
     still removes it on an exception and renames it on success; the registration ends with
-    the block."""
+    the block (with the outermost block where blocks of the same path nest)."""
     path = os.fspath(path)
     _register(path, is_dir)
     try:

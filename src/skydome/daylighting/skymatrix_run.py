@@ -253,15 +253,15 @@ def write_model_sky_matrix(weather, out, ps, model, components, *, sun=None, aod
     tmp = out_p.parent / f".{out_p.name}.part"
     shutil.rmtree(tmp, ignore_errors=True)
     try:
-        # the library registers tmp for the SIGTERM clean-up while it writes the chunks
-        # (skydome._io.temporary; a registration ends with its block, so this call's own
-        # starts when that one has ended) ...
-        arr = weather_model_sky_matrix(w, model, aod_from=aod_from, params=dict(params or {}),
-                                       patches=ps, order=order, components=components,
-                                       sun_position=sun_position, zarr_path=tmp,
-                                       chunk_hours=chunk_hours)
-        # ... and this call until the rename
+        # tmp is registered for the SIGTERM clean-up (skydome._io.temporary) from before the
+        # library creates it until the rename; the library's own registration of it for the
+        # chunks' writing nests inside this one (a SIGTERM between the two blocks found it
+        # unregistered: the folder was left, under load)
         with temporary(tmp, is_dir=True):
+            arr = weather_model_sky_matrix(w, model, aod_from=aod_from,
+                                           params=dict(params or {}), patches=ps, order=order,
+                                           components=components, sun_position=sun_position,
+                                           zarr_path=tmp, chunk_hours=chunk_hours)
             arr.attrs.update({"model": model, "components": components, "patches": ps.name,
                               "order": order, "aod_from": str(aod_from), "weather":
                               Path(weather).name, "axes": ["hour", "patch", "component"],
