@@ -306,21 +306,27 @@ _TEMPORARY_CHILD = textwrap.dedent("""
 """)
 
 
-def test_registered_temporary_removed_on_sigterm(tmp_path):
+def _sigterm_child(script, folder, temporary_name):
+    """Run ``script`` (it prints "ready" once ``temporary_name`` exists in ``folder``), send
+    it SIGTERM then, and check that it died of it leaving ``folder`` empty."""
     env = dict(os.environ)
     env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1] / "src")
-    proc = subprocess.Popen([sys.executable, "-c", _TEMPORARY_CHILD, str(tmp_path)],
+    proc = subprocess.Popen([sys.executable, "-c", script, str(folder)],
                             stdout=subprocess.PIPE, env=env, text=True)
     try:
         assert proc.stdout.readline().strip() == "ready"
-        assert _leftovers(tmp_path) == [".made-by-a-writer.part"]
+        assert _leftovers(folder) == [temporary_name]
         proc.send_signal(signal.SIGTERM)
         rc = proc.wait(timeout=20)
     finally:
         if proc.poll() is None:
             proc.kill()
     assert rc == -signal.SIGTERM
-    assert list(tmp_path.iterdir()) == []
+    assert list(folder.iterdir()) == []
+
+
+def test_registered_temporary_removed_on_sigterm(tmp_path):
+    _sigterm_child(_TEMPORARY_CHILD, tmp_path, ".made-by-a-writer.part")
 
 
 _NESTED_CHILD = textwrap.dedent("""
@@ -349,17 +355,4 @@ def test_nested_registrations_hold_until_the_outermost_block_ends(tmp_path):
             assert p in _io._LIVE
         assert p in _io._LIVE
     assert p not in _io._LIVE
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1] / "src")
-    proc = subprocess.Popen([sys.executable, "-c", _NESTED_CHILD, str(tmp_path)],
-                            stdout=subprocess.PIPE, env=env, text=True)
-    try:
-        assert proc.stdout.readline().strip() == "ready"
-        assert ".held-across-a-call.part" in _leftovers(tmp_path)
-        proc.send_signal(signal.SIGTERM)
-        rc = proc.wait(timeout=20)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert rc == -signal.SIGTERM
-    assert list(tmp_path.iterdir()) == []
+    _sigterm_child(_NESTED_CHILD, tmp_path, ".held-across-a-call.part")
