@@ -59,18 +59,13 @@ def _slice(m, J, j0, n=None):
                                                                    tables_medium)
 
     t = m._t
-    geom = m._slice_geometry()
-    n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
-    th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
-                         th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
-    ground = np.arange(n_g + n_s) < n_g
-    cphi = np.cos(np.pi * np.arange(P._SLICE_PHI) / (P._SLICE_PHI - 1.0))
-    out = np.empty((n_g + n_s, P._SLICE_PHI, J.shape[-1]))
-    reach = np.empty((n_g + n_s, 2), dtype=np.int64)
+    cos_th, ground, cphi = m._slice_grid()
+    out = np.empty((ground.size, P._SLICE_PHI, J.shape[-1]))
+    reach = np.empty((ground.size, 2), dtype=np.int64)
     _multiple.multiple_scattering_slice(
         J, j0, n or t.density_shape[4], tables_medium(t), t.scattering_index, t.columns,
         t.mu_s_min, m._r0, float(m.sun.direction[2]), int(m.integration_samples),
-        QUADRATURE_SCALE_M, np.cos(th), ground, cphi, reach, out)
+        QUADRATURE_SCALE_M, cos_th, ground, cphi, reach, out)
     return out, reach
 
 

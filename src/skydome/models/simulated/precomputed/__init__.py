@@ -358,26 +358,22 @@ class PrecomputedSky(SkyModel):
         key = (self._r0, mu_s)
         if key not in cache:
             t = self._t
-            geom = self._slice_geometry()
-            n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
-            th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
-                                 th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
-            ground = np.arange(n_g + n_s) < n_g
-            cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
-            out = np.empty((n_g + n_s, _SLICE_PHI, nl))
+            cos_th, ground, cphi = self._slice_grid()
+            n_g_s = ground.size
+            out = np.empty((n_g_s, _SLICE_PHI, nl))
             # the density's mu_s rows that these rays reach (what the cache decoded at the
             # load, where it holds them; else the whole table), and the rows they read
             n_msj = t.density_shape[4]
             first, end = _reach.density_mu_s_rows(self._r0, mu_s, R, Rt, self._mu_s_min,
                                                   n_msj)
-            reach = np.empty((n_g + n_s, 2), dtype=np.int64)
+            reach = np.empty((n_g_s, 2), dtype=np.int64)
             for _ in range(2):
                 J, j0 = t.scattering_density_rows(first, end)
                 _multiple.multiple_scattering_slice(J, j0, n_msj, tables_medium(t),
                                                     t.scattering_index, t.columns,
                                                     self._mu_s_min, self._r0, mu_s,
                                                     int(self.integration_samples),
-                                                    QUADRATURE_SCALE_M, np.cos(th), ground,
+                                                    QUADRATURE_SCALE_M, cos_th, ground,
                                                     cphi, reach, out)
                 if reach[:, 0].min() >= j0 and reach[:, 1].max() <= j0 + J.shape[4]:
                     break
@@ -389,6 +385,19 @@ class PrecomputedSky(SkyModel):
                 cache.clear()
             cache[key] = out
         return sl(ss, 0), cache[key]
+
+    def _slice_grid(self):
+        """(cos of the view zenith angles, which of them look at the ground, cos of the
+        azimuths) of the observer's sky map that :meth:`_observer_slices` integrates
+        (:meth:`_slice_geometry`: the ground's nodes from the nadir to the horizon, then the
+        sky's from the horizon to the zenith)."""
+        geom = self._slice_geometry()
+        n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
+        th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
+                             th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
+        ground = np.arange(n_g + n_s) < n_g
+        cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
+        return np.cos(th), ground, cphi
 
     def _slice_geometry(self, table=False):
         """``geom`` of :func:`._render.render_observer`: (n_ground, n_sky,
@@ -469,17 +478,14 @@ class PrecomputedSky(SkyModel):
         key = (self._r0, mu_s)
         if key not in cache:
             t = self._t
-            n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
-            th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
-                                 th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
-            ground = np.arange(n_g + n_s) < n_g
-            cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
+            cos_th, ground, cphi = self._slice_grid()
             rx, rw = gauss_legendre_unit(_twilight.TWILIGHT_SS_NODES)
-            out = np.empty((t.scattering_index.size, n_g + n_s, _SLICE_PHI, self.n_wavelengths))
+            out = np.empty((t.scattering_index.size, ground.size, _SLICE_PHI,
+                            self.n_wavelengths))
             _twilight.single_scattering_slice(
                 t.columns, tables_medium(t), t.scattering_index,
                 np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64), self._alpha,
-                self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw, np.cos(th), ground, cphi, out)
+                self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw, cos_th, ground, cphi, out)
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out
