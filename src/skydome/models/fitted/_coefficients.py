@@ -192,15 +192,31 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
     st_h = stencil(c["altitude_nodes_m"], altitude_m, ELEMENT_ORDER["altitude"])
     ks = [k for k, _ in st_e]
     we = np.array([w for _, w in st_e])
+    # near the sun each elevation node's sky is read where it stands to its own sun as the
+    # grid's directions stand to this one (:func:`turned_reads`); elsewhere at the grid's
+    # own directions
+    turns = [turned_reads(elevation_deg, float(c["elevation_nodes_deg"][k]), altitude_m)
+             for k in ks]
+    turned = any(t is not None for t in turns)
     # the bases of the stencil's elevation nodes stacked: one product per AOD node (the
-    # last stack kept for the next configuration, most often at the same nodes)
+    # last stack kept for the next configuration, most often at the same nodes and, away
+    # from the turned range, at any sun between them)
+    key = (tuple(ks), (round(float(elevation_deg), 12), round(float(altitude_m), 9))
+           if turned else None)
     last = c.get("_stacked")
-    if last is None or last[0] != tuple(ks):
-        last = c["_stacked"] = (tuple(ks), tuple(
-            np.concatenate([c[f"{part}_basis"][k] for k in ks]).astype(np.float32)
-            for part in ("sky", "ground")))
+    if last is None or last[0] != key:
+        sky_b = [c["sky_basis"][k] for k in ks]
+        sky_m = [c["sky_mean"][k].astype(np.float64) for k in ks]
+        for n, t in enumerate(turns):
+            if t is not None:
+                sky_b[n] = _read_turned(sky_b[n].T, *t).T
+                sky_m[n] = _read_turned(sky_m[n], *t)
+        last = c["_stacked"] = (key, (
+            np.concatenate(sky_b).astype(np.float32),
+            np.concatenate([c["ground_basis"][k] for k in ks]).astype(np.float32)),
+            np.stack(sky_m))
     basis_sky, basis_ground = last[1]
-    mean_sky = np.einsum("k,kd->d", we, c["sky_mean"][ks].astype(np.float64))
+    mean_sky = np.einsum("k,kd->d", we, last[2])
     mean_ground = np.einsum("k,kd->d", we, c["ground_mean"][ks].astype(np.float64))
     cache: dict = {}
 
@@ -232,8 +248,86 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
         per_albedo.append(total)
     L = albedo_form(c["albedo_nodes"], per_albedo, albedo)
     n_wl = c["wavelengths_nm"].size
-    return np.ascontiguousarray(
-        L.T.reshape(_grid.N_SKY + _grid.N_GROUND, _grid.N_PHI, n_wl))
+    out = np.ascontiguousarray(L.T.reshape(_grid.N_SKY + _grid.N_GROUND, _grid.N_PHI, n_wl))
+    # the zenith (the sky's last row) and the nadir (the ground's) are one direction each:
+    # their azimuth columns, equal but for the float32 rounding of the basis products
+    # (about 1e-8 relative), are made one value, so that any azimuth reads the same there
+    for row in (_grid.N_SKY - 1, _grid.N_SKY + _grid.N_GROUND - 1):
+        out[row] = out[row].mean(axis=0)
+    return out
+
+
+#: The sun-relative reading of the elevation nodes (:func:`turned_reads`): fully turned
+#: within ``gamma_deg[0]`` of the sun, not at all beyond ``gamma_deg[1]``; only where the
+#: direction and its turned image both stand more than ``above_horizon_deg[1]`` above the
+#: observer's horizon (none below ``above_horizon_deg[0]``); for suns above ``sun_deg[1]``
+#: (none below ``sun_deg[0]``; the nodes 19 and 25 deg and above them are 6-15 deg apart), where the
+#: aureole of one node lies next to the 5-deg circle of a sun between them. Linear ramps
+#: between the ends; chosen on the held-out grid (docs/models.md, "fitted", "The aureole
+#: between the elevation nodes").
+TURN = {"gamma_deg": (8.0, 20.0), "above_horizon_deg": (2.0, 8.0), "sun_deg": (19.0, 25.0)}
+
+
+def turned_reads(elevation_deg: float, node_deg: float, altitude_m: float):
+    """Where the sky of the elevation node ``node_deg`` is read for a sun at
+    ``elevation_deg``: None (at the grid's own nodes), or (index (n, 4), weight (n, 4),
+    keep (n,)) over the N_SKY x N_PHI sky nodes: value = keep x own + sum weight x node
+    values at index.
+
+    The aureole moves with the sun, so between elevation nodes it is interpolated where it
+    stands relative to each node's sun: each grid direction is turned about the horizontal
+    axis normal to the sun's vertical plane by node_deg - elevation_deg (which takes this
+    sun onto the node's and keeps the scattering angle), and the node's sky is read there
+    (bilinear, the lookup's inverse mappings of :mod:`._grid`). Away from the sun and near
+    the horizon the sky is shaped by the view's zenith angle rather than by the scattering
+    angle: there the nodes are read in place (weights :data:`TURN`)."""
+    s_lo, s_hi = TURN["sun_deg"]
+    strength = min(max((elevation_deg - s_lo) / (s_hi - s_lo), 0.0), 1.0)
+    delta = math.radians(node_deg - elevation_deg)
+    if strength == 0.0 or delta == 0.0:
+        return None
+    theta_h = _grid.horizon_zenith_rad(altitude_m)
+    sky, _ = _grid.theta_nodes_rad(altitude_m)
+    phi = _grid.phi_nodes_rad()
+    th = np.repeat(sky, phi.size)
+    ph = np.tile(phi, sky.size)
+    x = np.sin(th) * np.cos(ph)          # the sun's vertical plane is x-z, the sun at +x
+    y = np.sin(th) * np.sin(ph)
+    z = np.cos(th)
+    e = math.radians(elevation_deg)
+    gamma = np.degrees(np.arccos(np.clip(x * math.cos(e) + z * math.sin(e), -1.0, 1.0)))
+    x2 = x * math.cos(delta) - z * math.sin(delta)
+    z2 = x * math.sin(delta) + z * math.cos(delta)
+    th2 = np.arctan2(np.hypot(x2, y), z2)
+    ph2 = np.arctan2(np.abs(y), x2)
+    above = np.degrees(theta_h - np.maximum(th, th2))     # both above the horizon by
+    g0, g1 = TURN["gamma_deg"]
+    a0, a1 = TURN["above_horizon_deg"]
+    w = (strength * np.clip((g1 - gamma) / (g1 - g0), 0.0, 1.0)
+         * np.clip((above - a0) / (a1 - a0), 0.0, 1.0))
+    # the turned directions in the sky grid (the kernel's inverse mappings)
+    q = 1.0 - np.minimum(th2, theta_h - _grid.EPS) / (theta_h - _grid.EPS)
+    u = np.sqrt(np.maximum(q, 0.0)) * (_grid.N_SKY - 1)
+    iu = np.minimum(u.astype(np.int64), _grid.N_SKY - 2)
+    a, b = _grid.A_PHI, 1.0 - _grid.A_PHI
+    t = (-a + np.sqrt(a * a + 4.0 * b * ph2 / math.pi)) / (2.0 * b) * (_grid.N_PHI - 1)
+    it = np.minimum(t.astype(np.int64), _grid.N_PHI - 2)
+    fu = np.minimum(u - iu, 1.0)
+    ft = np.clip(t - it, 0.0, 1.0)
+    k0 = iu * _grid.N_PHI + it
+    idx = np.stack([k0, k0 + 1, k0 + _grid.N_PHI, k0 + _grid.N_PHI + 1], axis=1)
+    wt = np.stack([(1 - fu) * (1 - ft), (1 - fu) * ft, fu * (1 - ft), fu * ft], axis=1)
+    return idx, wt * w[:, None], 1.0 - w
+
+
+def _read_turned(values: np.ndarray, idx, wt, keep) -> np.ndarray:
+    """values (n, ...) over the sky nodes read as :func:`turned_reads` says."""
+    v = np.asarray(values, dtype=np.float64)
+    ext = (slice(None),) + (None,) * (v.ndim - 1)
+    out = keep[ext] * v
+    for j in range(4):
+        out = out + wt[:, j][ext] * v[idx[:, j]]
+    return out
 
 
 def albedo_form(nodes, values, albedo: float) -> np.ndarray:
