@@ -181,13 +181,15 @@ def test_between_the_slices_against_the_cpu_model(baked):
 
 def test_sun_between_the_steps_against_the_cpu_model(baked):
     """The sun's mean disc radiance (visible fraction included) halfway between the sun
-    texture's steps, densely near the horizon where the air mass bends most, against the
+    texture's steps, densely near the horizon where the transmittance bends most, against the
     CPU model's sun_radiance in XYZ: within 0.5 % in X, Y and Z where Y is above 1e-4 of
     its value at 45 deg (below, the disc is all but set: within 1e-4 of that value)."""
     desc, sky, sun = baked
     f = glsl.struct_from_desc(desc)
     se = desc["sun_elevation_axis"]
-    ks = list(range(0, 60, 3)) + [100, 200, 400, se["count"] - 2]
+    # ... and every fourth step from -2 to +3 deg: the disc through the horizon (at -1.0
+    # deg) and the transmittance's steepest part above it
+    ks = list(range(0, 60, 3)) + [100] + list(range(200, 300, 4)) + [400, se["count"] - 2]
     y45 = _cpu_sun_xyz(_cpu(45.0))[1]
     worst = (0.0, None)
     for k in ks:

@@ -308,12 +308,17 @@ class FittedSky(SkyModel):
         return self._c
 
     def _sun_table(self) -> np.ndarray:
-        """The transmittance to the sun's centre at the table wavelengths (:mod:`._sun`)."""
+        """(2, n): the transmittance to the sun's centre (:mod:`._sun`) at the model's
+        spectral wavelengths (:func:`spectral_table`), and those wavelengths [nm]."""
         from skydome.models.fitted import _sun
 
+        def make():
+            t = _sun.transmittance(self._sun_arrays(), self.aerosol_optical_depth, key[1],
+                                   self.observer_altitude_m)
+            return np.stack(spectral_table(t, self._c["wavelengths_nm"]))
+
         key = ("sun", float(self.sun.direction[2]))
-        return self._derived_table(key, lambda: _sun.transmittance(
-            self._sun_arrays(), self.aerosol_optical_depth, key[1], self.observer_altitude_m))
+        return self._derived_table(key, make)
 
     def sun_transmittance(self, wavelengths_nm) -> np.ndarray:
         """Transmittance of the air along the path to the sun's centre, (n,), in [0, 1]:
@@ -322,7 +327,7 @@ class FittedSky(SkyModel):
         reference reads them), exact at the table wavelengths; between them as the sky
         (:func:`spectral_table`, then linear)."""
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
-        t, sw = spectral_table(self._sun_table(), self._c["wavelengths_nm"])
+        t, sw = self._sun_table()
         return np.clip(np.interp(wl, sw, t), 0.0, 1.0)
 
     def sun_visible_fraction(self) -> float:
