@@ -307,28 +307,20 @@ class FittedSky(SkyModel):
                                     "(add them with tools/fit_fitted.py --add-sun)")
         return self._c
 
-    def _sun_table(self) -> np.ndarray:
-        """(2, n): the transmittance to the sun's centre (:mod:`._sun`) at the model's
-        spectral wavelengths (:func:`spectral_table`), and those wavelengths [nm]."""
-        from skydome.models.fitted import _sun
-
-        def make():
-            t = _sun.transmittance(self._sun_arrays(), self.aerosol_optical_depth, key[1],
-                                   self.observer_altitude_m)
-            return np.stack(spectral_table(t, self._c["wavelengths_nm"]))
-
-        key = ("sun", float(self.sun.direction[2]))
-        return self._derived_table(key, make)
-
     def sun_transmittance(self, wavelengths_nm) -> np.ndarray:
         """Transmittance of the air along the path to the sun's centre, (n,), in [0, 1]:
         Beer's law over the constituents' columns along the ray (the reference's column
         table and its look-up; below the observer's horizon the horizon's columns, as the
-        reference reads them), exact at the table wavelengths; between them as the sky
-        (:func:`spectral_table`, then linear)."""
+        reference reads them) and their extinction at each wavelength (:mod:`._sun`)."""
+        from skydome.models.fitted import _sun
+
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
-        t, sw = self._sun_table()
-        return np.clip(np.interp(wl, sw, t), 0.0, 1.0)
+        c = self._sun_arrays()
+        # the spectra per wavelength set (the sun's elevation does not enter them)
+        beta = self._derived_table(("sun_beta", wl.tobytes()), lambda: _sun.extinction(
+            c, self.aerosol_optical_depth, wl))
+        return np.clip(_sun.transmittance(c, float(self.sun.direction[2]),
+                                          self.observer_altitude_m, beta), 0.0, 1.0)
 
     def sun_visible_fraction(self) -> float:
         """Fraction of the sun's disc above the observer's horizon, which

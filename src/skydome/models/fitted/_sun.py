@@ -19,13 +19,17 @@ aerosol's beta depends on the AOD, in proportion to it. So the model ships
   ``precomputed._precompute.transmittance_columns``, the same mapping and sizes: 64 x 256),
   computed from the profiles by :func:`derive` (tools/fit_fitted.py), never from the
   reference's sun radiance;
-* ``sun_extinction`` (2, n_c, n_wl): beta at the table wavelengths at AOD 0 and per unit
-  AOD (the aerosol's row);
+* ``sun_profiles`` (3, n_c): the rows' density profiles (kernel code and its two
+  parameters), which the model checks against the atmosphere's;
 * ``sun_geometry``: the planet's and the top's radii [m];
 
 and looks the columns up as the reference does (bilinear in the transmittance mapping; a
 ray below the observer's horizon reads the horizon's columns: the mapping clamps there, as
-in the reference).
+in the reference). The extinction spectra beta_c come from the atmosphere itself at the
+wavelengths asked for (:func:`extinction`: ``Atmosphere.optical_properties``, 4-9 ms per
+wavelength set, cached per model): Beer's law at every wavelength, where interpolating T
+between table wavelengths 10-20 nm apart would miss the steep spectrum of a long path (at
+the horizon 30-68 % off the reference computed at the 10-nm wavelengths themselves).
 """
 
 from __future__ import annotations
@@ -35,12 +39,12 @@ import math
 import numpy as np
 
 #: The arrays this module adds to the coefficient file.
-SUN_KEYS = ("sun_columns", "sun_extinction", "sun_geometry")
+SUN_KEYS = ("sun_columns", "sun_profiles", "sun_geometry")
 
 
 def derive(wavelengths_nm) -> dict:
-    """The sun's arrays (module docstring) for the table wavelengths ``wavelengths_nm``,
-    from ``Atmosphere.earth``'s profiles and spectra (:func:`._dataset.atmosphere`) with the
+    """The sun's arrays (module docstring), from ``Atmosphere.earth``'s profiles (its
+    spectra at ``wavelengths_nm`` for the checks) (:func:`._dataset.atmosphere`) with the
     reference's column kernel and table sizes. Checks that the profiles do not depend on
     the AOD and that beta is linear in it (ValueError otherwise)."""
     from skydome.models.fitted._dataset import atmosphere
@@ -68,19 +72,37 @@ def derive(wavelengths_nm) -> dict:
              if p.name in ("transmittance_r_size", "transmittance_mu_size")}
     cols = transmittance_columns(medium_from_properties(p0), sizes)
     return {"sun_columns": np.ascontiguousarray(cols, dtype=np.float64),
-            "sun_extinction": np.stack([e0, e1]),
+            "sun_profiles": np.stack([np.asarray(p0.profile_code, dtype=np.float64),
+                                      np.asarray(p0.profile_p0, dtype=np.float64),
+                                      np.asarray(p0.profile_p1, dtype=np.float64)]),
             "sun_geometry": np.array([float(p0.planet_radius_m), float(p0.top_radius_m)])}
 
 
-def transmittance(c: dict, aod: float, mu_s: float, altitude_m: float) -> np.ndarray:
+def extinction(c: dict, aod: float, wavelengths_nm) -> np.ndarray:
+    """beta_c [per unit column] of the rows of ``sun_columns`` at ``wavelengths_nm``: (n_c,
+    n), from the model's atmosphere at ``aod`` (:func:`._dataset.atmosphere`, absorbers
+    folded as in the reference); ValueError if its profiles are not the file's."""
+    from skydome.models.fitted._dataset import atmosphere
+
+    p = atmosphere(aod, 0.0).optical_properties(wavelengths_nm, fold=True)
+    prof = np.stack([np.asarray(p.profile_code, dtype=np.float64),
+                     np.asarray(p.profile_p0, dtype=np.float64),
+                     np.asarray(p.profile_p1, dtype=np.float64)])
+    if prof.shape != c["sun_profiles"].shape or not np.array_equal(prof, c["sun_profiles"]):
+        raise ValueError("the atmosphere's density profiles are not those of the coefficient "
+                         "file's sun columns (rerun tools/fit_fitted.py --add-sun)")
+    return np.asarray(p.extinction, dtype=np.float64)
+
+
+def transmittance(c: dict, mu_s: float, altitude_m: float, beta) -> np.ndarray:
     """Transmittance along the ray from the observer (``altitude_m`` above the ground) to
-    the top, zenith cosine ``mu_s``, at the table wavelengths: (n_wl,), in (0, 1]."""
+    the top, zenith cosine ``mu_s``, for the extinction spectra ``beta`` (n_c, n) of
+    :func:`extinction`: (n,), in [0, 1]."""
     from skydome.transport._tables import lookup_columns
 
     R, Rt = (float(x) for x in c["sun_geometry"])
     col = np.empty(c["sun_columns"].shape[0])
     lookup_columns(c["sun_columns"], R + float(altitude_m), float(mu_s), R, Rt, col)
-    beta = c["sun_extinction"][0] + float(aod) * c["sun_extinction"][1]
     return np.exp(-(np.maximum(col, 0.0) @ beta))
 
 
