@@ -15,10 +15,12 @@ representation is described in skydome/models/fitted/_coefficients.py):
    rerun gives the same file), the sky and the ground apart;
 3. the coefficients: y minus the mean, projected on the basis;
 4. the sun (:func:`add_sun`, no data set needed): the columns of every constituent along
-   the ray to the top over (observer radius, sun zenith cosine) and the constituents'
-   extinction spectra at AOD 0 and per unit AOD, computed from the atmosphere's profiles
-   by the reference's own column kernel (skydome/models/fitted/_sun.py); the data set's
-   sun factor is not used (it is the check: tests/test_fitted_sun.py).
+   the ray to the top over (observer radius, sun zenith cosine), computed from the
+   atmosphere's profiles by the reference's own column kernel and table sizes, with the
+   rows' profiles and the radii (skydome/models/fitted/_sun.py; the model takes the
+   extinction spectra from its atmosphere); the data set's sun factor is not used (the
+   reference's sun_radiance is the check: tests/test_fitted_sun.py). The shipped file
+   still holds the former ``log_sun_transmittance`` (read by no code).
 
 With ``--float16`` the coefficients and the bases are stored in float16, each row of
 coefficients (one node and wavelength) and each basis vector divided by its largest
