@@ -90,13 +90,9 @@ def fitted_sky(sky, f, d, sun_dir):
 
 
 def sun_visible_fraction(f, elevation_rad):
-    dip = f["thetaH"] - 0.5 * PI
-    u = (elevation_rad + dip) / f["sunAngularRadius"]
-    if u >= 1.0:
-        return 1.0
-    if u <= -1.0:
-        return 0.0
-    return 1.0 - (np.arccos(u) - u * np.sqrt(1.0 - u * u)) / PI
+    e = np.sin(f["thetaH"]) * f["sunAngularRadius"]
+    x = min(max((np.sin(elevation_rad) - np.cos(f["thetaH"]) + e) / (2.0 * e), 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
 
 
 def sun_radiance(sun, f, sun_dir):

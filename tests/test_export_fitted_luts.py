@@ -181,13 +181,15 @@ def test_between_the_slices_against_the_cpu_model(baked):
 
 def test_sun_between_the_steps_against_the_cpu_model(baked):
     """The sun's mean disc radiance (visible fraction included) halfway between the sun
-    texture's steps, densely near the horizon where the air mass bends most, against the
+    texture's steps, densely near the horizon where the transmittance bends most, against the
     CPU model's sun_radiance in XYZ: within 0.5 % in X, Y and Z where Y is above 1e-4 of
     its value at 45 deg (below, the disc is all but set: within 1e-4 of that value)."""
     desc, sky, sun = baked
     f = glsl.struct_from_desc(desc)
     se = desc["sun_elevation_axis"]
-    ks = list(range(0, 60, 3)) + [100, 200, 400, se["count"] - 2]
+    # ... and every fourth step from -2 to +3 deg: the disc through the horizon (at -1.0
+    # deg) and the transmittance's steepest part above it
+    ks = list(range(0, 60, 3)) + [100] + list(range(200, 300, 4)) + [400, se["count"] - 2]
     y45 = _cpu_sun_xyz(_cpu(45.0))[1]
     worst = (0.0, None)
     for k in ks:
@@ -255,13 +257,16 @@ def test_sun_disc_at_the_horizon(baked):
     level), its centre 0.6 radii below it, on it and 0.5 radii above it:
     skydomeFittedSunDisc is the limb-darkened radiance of the transmitted sun above the
     horizon alone (skydomeFittedSkyWithSun the sky below it). Its integral equals that of
-    [Nec05]'s law (skydome.imaging.sun_disc) over the visible part, scaled to the model's
-    transmitted sun (sun_radiance / its visible fraction), within 1 %; against the model's
-    own sun_radiance x the disc's solid angle, which counts the visible area as uniform, the
-    same within 1 % with the horizon through the centre (by symmetry), and otherwise the
-    difference the limb darkening makes (the rim that stays up is darker), printed."""
+    [Nec05]'s law (skydome.imaging.sun_disc) over the visible part, scaled to the bake's
+    transmitted sun at the disc's centre, within 1 %; against that sun x the visible
+    fraction x the disc's solid angle (the model's sun_radiance counts the visible area as
+    uniform), the same within 1 % with the horizon through the centre (by symmetry), and
+    otherwise the difference the limb darkening makes (the rim that stays up is darker),
+    printed. The bake's transmitted sun itself against the model's (the 0.05-deg layers
+    across the transmittance's kink at the horizon, where it is below 1e-13 of the
+    extraterrestrial sun here) is printed; tested where it matters in
+    test_sun_between_the_steps_against_the_cpu_model."""
     from skydome.imaging import sun_disc as sd
-    from skydome.models.fitted import _coefficients
 
     desc, sky, sun = baked
     f = glsl.struct_from_desc(desc)
@@ -281,22 +286,25 @@ def test_sun_disc_at_the_horizon(baked):
         assert np.all(got[below] == 0.0)                          # nothing below
         drawn = glsl.sky_with_sun(sky, sun, f, d, s)
         assert np.array_equal(drawn[below], glsl.fitted_sky(sky, f, d, s)[below])
-        vis = _coefficients.sun_visible_fraction(el, PARAMS["observer_altitude_m"],
-                                                 cpu.sun.angular_radius_deg)
+        vis = cpu.sun_visible_fraction()
+        # the bake's transmitted sun at the disc's centre (XYZ radiance, no visible fraction)
+        trans = glsl.sun_radiance(sun, f, s) * cpu.sun.irradiance_scale
+        cpu_trans = _cpu_sun_xyz(cpu) / vis
         r = np.radians(cpu.sun.angular_radius_deg)
         ang = np.arccos(np.clip(d @ s, -1.0, 1.0))
         up = (ang < r) & ~below
         mu = np.sqrt(np.clip(1.0 - (np.sin(ang[up]) / np.sin(r)) ** 2, 0.0, 1.0))
         law = np.sum(sd.limb_darkening(mu, ch) / sd.limb_darkening_mean(ch)
                      * omega[up][:, None], axis=0)
-        ref = _cpu_sun_xyz(cpu) / vis * law
-        model = _cpu_sun_xyz(cpu) * cpu.sun.solid_angle_sr
+        ref = trans * law
+        model = trans * vis * cpu.sun.solid_angle_sr
         np.testing.assert_allclose(flux, ref, rtol=0.01)
         if u == 0.0:
             np.testing.assert_allclose(flux, model, rtol=0.01)
         lines.append(f"centre {u:+.1f} radii from the horizon: visible area {vis:.3f}, "
                      f"flux / law - 1 = {flux[1] / ref[1] - 1:+.1e}, flux / (sun_radiance "
-                     f"Omega) - 1 = {flux[1] / model[1] - 1:+.3f} (Y)")
+                     f"Omega) - 1 = {flux[1] / model[1] - 1:+.3f} (Y); bake's / model's "
+                     f"transmitted sun {trans[1] / cpu_trans[1]:.3f} (Y)")
     print("fitted.glsl disc at the horizon:\n  " + "\n  ".join(lines))
 
 

@@ -104,9 +104,11 @@ def test_disc_of_a_model_whose_sun_radiance_counts_the_horizon(elev):
     # fitted (as precomputed) gives sun_radiance = its disc's flux / Omega_sun, the part
     # below its horizon left out (sun_visible_fraction()); the drawn disc and the sun light
     # must carry that flux once, not cut the hidden part away a second time. Oracle: the
-    # model's flux sun_radiance x Omega_sun; the drawn disc is limb-darkened where the
-    # model's fraction is a uniform disc's, which moves the flux by +0.3 % with the horizon
-    # through the centre (flat circular segment, Neckel 2005 law; docs/models.md, "fitted").
+    # model's flux sun_radiance x Omega_sun; the drawn disc is the limb-darkened part above
+    # the horizon where the model's fraction is the reference's smoothstep in the sun's
+    # zenith cosine ([Bru17] GetTransmittanceToSun), which moves the flux by +0.2 % with the
+    # horizon through the centre and -3.1 to -3.5 % (the three wavelengths) with the centre
+    # 0.1 deg above it (docs/models.md, "fitted", "The sun's disc"): bound 4 %.
     sun = Sun(elevation_deg=elev, azimuth_deg=180.0)
     sky = sd.model("fitted", sun=sun)
     assert 0.4 < sky.sun_visible_fraction() < 0.8
@@ -117,8 +119,8 @@ def test_disc_of_a_model_whose_sun_radiance_counts_the_horizon(elev):
     with_sun, without = render(sky, p, wl), render(sky, p, wl, draw_sun=False)
     gain = np.einsum("hwc,hw->c", with_sun.data - without.data, p.solid_angles())
     E = sky.sun_radiance(wl) * sun.solid_angle_sr
-    assert gain == pytest.approx(E, rel=0.03)
-    assert np.asarray(without.sun_light.irradiance) == pytest.approx(E, rel=0.03)
+    assert gain == pytest.approx(E, rel=0.04)
+    assert np.asarray(without.sun_light.irradiance) == pytest.approx(E, rel=0.04)
 
 
 def test_luminance_and_xyz_models_get_their_sun():

@@ -2,6 +2,7 @@
 
     python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
         [--float16] [--gas-bands SUPPLEMENT]
+    python tools/fit_fitted.py --add-sun [--out FILE]
 
 DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
 representation is described in skydome/models/fitted/_coefficients.py):
@@ -13,9 +14,13 @@ representation is described in skydome/models/fitted/_coefficients.py):
    Tropp 2011, alg. 4.4 with 2 power iterations, in float32, with a fixed seed so that a
    rerun gives the same file), the sky and the ground apart;
 3. the coefficients: y minus the mean, projected on the basis;
-4. the sun: ln T, T = the sun factor of the data set over the visible fraction of the disc
-   (nodes where the disc is hidden take the value per unit air mass of the nearest
-   elevation node above).
+4. the sun (:func:`add_sun`, no data set needed): the columns of every constituent along
+   the ray to the top over (observer radius, sun zenith cosine), computed from the
+   atmosphere's profiles by the reference's own column kernel and table sizes, with the
+   rows' profiles and the radii (skydome/models/fitted/_sun.py; the model takes the
+   extinction spectra from its atmosphere); the data set's sun factor is not used (the
+   reference's sun_radiance is the check: tests/test_fitted_sun.py). The shipped file
+   still holds the former ``log_sun_transmittance`` (read by no code).
 
 With ``--float16`` the coefficients and the bases are stored in float16, each row of
 coefficients (one node and wavelength) and each basis vector divided by its largest
@@ -29,6 +34,9 @@ in all), fitted with the others (the same bases, per elevation node).
 
 DATASET may lack some atmospheres (a data set still being generated): the fit then uses
 the AOD nodes whose every albedo node is there, and says which it left out.
+
+``--add-sun``: only step 4, into an existing FILE: its other arrays are written back
+unchanged (same dtypes, same compression), the sun's arrays added or replaced.
 
 Writes FILE (default: the package's skydome/models/fitted/data/fitted_coefficients.npz)
 atomically and prints the fit residual on the fitting nodes (RMS of y; the accuracy of the
@@ -62,9 +70,34 @@ def randomized_basis(X: np.ndarray, k: int, seed: int = 29) -> np.ndarray:
     return vt[:k]
 
 
+def add_sun(arrays: dict) -> dict:
+    """``arrays`` (a coefficient file's arrays, ``wavelengths_nm`` among them) with the
+    sun's arrays of :func:`skydome.models.fitted._sun.derive` added or replaced."""
+    from skydome.models.fitted import _sun
+
+    out = {k: v for k, v in arrays.items() if k not in _sun.SUN_KEYS}
+    out.update(_sun.derive(arrays["wavelengths_nm"]))
+    return out
+
+
+def add_sun_to_file(target: Path) -> None:
+    """Add (replace) the sun's arrays in the coefficient file ``target``, every other array
+    written back as it was (np.savez_compressed: deterministic, no time stamps)."""
+    from skydome._io import atomic_file
+
+    with np.load(target, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    out = add_sun(arrays)
+    with atomic_file(target) as tmp:
+        np.savez_compressed(tmp, **out)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("dataset")
+    ap.add_argument("dataset", nargs="?")
+    ap.add_argument("--add-sun", action="store_true",
+                    help="only add (replace) the sun's arrays in FILE (--out, default the "
+                         "shipped file); no data set")
     ap.add_argument("--out", default=None)
     ap.add_argument("--k-sky", type=int, default=32)
     ap.add_argument("--k-ground", type=int, default=12)
@@ -73,16 +106,25 @@ def main(argv=None) -> int:
     ap.add_argument("--gas-bands", default=None, metavar="SUPPLEMENT",
                     help="a --gas-bands data set of the same grid: its wavelengths added")
     a = ap.parse_args(argv)
+    if a.add_sun:
+        from skydome.models.fitted._coefficients import COEFFICIENT_FILE
+
+        target = Path(a.out) if a.out else COEFFICIENT_FILE
+        t0 = time.perf_counter()
+        add_sun_to_file(target)
+        print(f"added the sun's arrays to {target} ({target.stat().st_size / 1e6:.2f} MB) "
+              f"in {time.perf_counter() - t0:.1f} s")
+        return 0
+    if a.dataset is None:
+        ap.error("DATASET is required (unless --add-sun)")
     for name, v in (("--k-sky", a.k_sky), ("--k-ground", a.k_ground)):
         if not 1 <= v <= 256:
             print(f"error: {name} = {v} is out of range [1, 256]", file=sys.stderr)
             return 2
     from skydome._io import atomic_file
     from skydome.models.fitted import _grid
-    from skydome.models.fitted._coefficients import (COEFFICIENT_FILE, DELTA, air_mass,
-                                                     sun_visible_fraction)
+    from skydome.models.fitted._coefficients import COEFFICIENT_FILE, DELTA
     from skydome.models.fitted._dataset import DataSet
-    from skydome.sun import Sun
 
     t0 = time.perf_counter()
     ds = DataSet(a.dataset, require_all=False)
@@ -127,17 +169,14 @@ def main(argv=None) -> int:
     shape = (aods.size, albs.size, el.size, alt.size, wl.size)
     Y = np.empty(shape + (n_dir,), dtype=np.float32)
     log_s = np.empty(shape, dtype=np.float32)
-    sun_f = np.empty((aods.size, el.size, alt.size, wl.size))
     for i, aod in enumerate(aods):
         for j, alb in enumerate(albs):
-            L, sun = sky(aod, alb)                       # (e, h, rows, phi, wl), (e, h, wl)
+            L, _ = sky(aod, alb)                         # (e, h, rows, phi, wl)
             L = np.moveaxis(L.astype(np.float64), -1, 2).reshape(el.size, alt.size, wl.size,
                                                                    n_dir)
             s = L[..., :n_sky].mean(axis=-1)
             log_s[i, j] = np.log(s)
             Y[i, j] = np.log(np.maximum(L, 0.0) / s[..., None] + DELTA)
-            if j == 0:
-                sun_f[i] = sun
             print(f"read AOD {aod:g} albedo {alb:g}", flush=True)
     out = {"aod_nodes": aods, "albedo_nodes": albs, "elevation_nodes_deg": el,
            "altitude_nodes_m": alt, "wavelengths_nm": wl}
@@ -165,19 +204,7 @@ def main(argv=None) -> int:
         print(f"{part}: {k} terms, RMS residual of y on the fitting nodes {resid[part]:.4f}",
               flush=True)
     out["log_scale"] = log_s
-    # the sun: ln T at the nodes where the disc shows, the nearest elevation above elsewhere
-    alpha = Sun(elevation_deg=45.0, azimuth_deg=0.0).angular_radius_deg
-    lt = np.empty_like(sun_f)
-    for h_i, h in enumerate(alt):
-        vis = np.array([sun_visible_fraction(e, h, alpha) for e in el])
-        ok = vis > 0.05
-        for e_i in range(el.size):
-            src = e_i if ok[e_i] else int(np.argmax(ok & (np.arange(el.size) > e_i)))
-            v = sun_visible_fraction(el[src], h, alpha)
-            # a hidden node: the nearest visible one's ln T per unit air mass
-            lt[:, e_i, h_i] = np.log(np.clip(sun_f[:, src, h_i] / v, 1e-30, 1.0)) * (
-                air_mass(el[e_i]) / air_mass(el[src]))
-    out["log_sun_transmittance"] = lt.astype(np.float32)
+    out = add_sun(out)
     dgrid = dict(ds.meta, wavelengths_nm=[float(x) for x in wl])
     meta = {"dataset_grid": dgrid, "k_sky": a.k_sky, "k_ground": a.k_ground,
             "delta": DELTA, "fit_residual_rms_y": resid,

@@ -120,15 +120,13 @@ vec3 skydomeFittedSky(sampler2DArray sky, SkydomeFitted f, vec3 dir, vec3 sunDir
 }
 
 // Fraction of the sun's disc above the observer's horizon
-// (skydome.models.fitted._coefficients.sun_visible_fraction): the area of a disc of radius
-// alpha above a straight horizon at u radii below its centre,
-// 1 - (acos(u) - u sqrt(1 - u^2)) / pi, u = (elevation + dip) / alpha.
+// (skydome.models.fitted.FittedSky.sun_visible_fraction).
 float skydomeFittedSunVisibleFraction(SkydomeFitted f, float elevationRad) {
-    float dip = f.thetaH - 0.5 * SKYDOME_FITTED_PI;
-    float u = (elevationRad + dip) / f.sunAngularRadius;
-    if (u >= 1.0) return 1.0;
-    if (u <= -1.0) return 0.0;
-    return 1.0 - (acos(u) - u * sqrt(1.0 - u * u)) / SKYDOME_FITTED_PI;
+    // the reference's rule ([Bru17] GetTransmittanceToSun; FittedSky.sun_visible_fraction):
+    // a smoothstep over the disc's radius in the sun's zenith cosine around the horizon's,
+    // cos(thetaH) = -sqrt(1 - (R / r)^2), the radius there sin(thetaH) alpha
+    float e = sin(f.thetaH) * f.sunAngularRadius;
+    return smoothstep(0.0, 1.0, (sin(elevationRad) - cos(f.thetaH) + e) / (2.0 * e));
 }
 
 // The mean radiance of the sun's disc seen through the air: XYZ, Y in cd m^-2 (texture

@@ -301,26 +301,37 @@ class FittedSky(SkyModel):
         return self._lookup(directions, self._derived_table(
             "y", lambda: self._table @ self._xyz_matrix()[:, 1:2]))[..., 0]
 
+    def _sun_arrays(self) -> dict:
+        if "sun_columns" not in self._c:
+            raise FileNotFoundError("the fitted model's coefficient file has no sun arrays "
+                                    "(add them with tools/fit_fitted.py --add-sun)")
+        return self._c
+
     def sun_transmittance(self, wavelengths_nm) -> np.ndarray:
-        """Transmittance of the air along the path to the sun's centre, (n,), in [0, 1]
-        (between the table wavelengths as the sky: :func:`spectral_table`, then linear)."""
-        from skydome.models.fitted import _coefficients
+        """Transmittance of the air along the path to the sun's centre, (n,), in [0, 1]:
+        Beer's law over the constituents' columns along the ray (the reference's column
+        table and its look-up; below the observer's horizon the horizon's columns, as the
+        reference reads them) and their extinction at each wavelength (:mod:`._sun`)."""
+        from skydome.models.fitted import _sun
 
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
-        t = _coefficients.sun_transmittance(self._c, self.aerosol_optical_depth,
-                                            float(self.sun.elevation_deg),
-                                            self.observer_altitude_m)
-        t, sw = spectral_table(t, self._c["wavelengths_nm"])
-        return np.clip(np.interp(wl, sw, t), 0.0, 1.0)
+        c = self._sun_arrays()
+        # the spectra per wavelength set (the sun's elevation does not enter them)
+        beta = self._derived_table(("sun_beta", wl.tobytes()), lambda: _sun.extinction(
+            c, self.aerosol_optical_depth, wl))
+        return np.clip(_sun.transmittance(c, float(self.sun.direction[2]),
+                                          self.observer_altitude_m, beta), 0.0, 1.0)
 
     def sun_visible_fraction(self) -> float:
-        """Fraction of the sun's disc (uniform) above the observer's horizon, which
-        :meth:`sun_radiance` includes."""
-        from skydome.models.fitted import _coefficients
+        """Fraction of the sun's disc above the observer's horizon, which
+        :meth:`sun_radiance` includes: the reference's rule ([Bru17]
+        GetTransmittanceToSun, a smoothstep over the disc's radius in the sun's zenith
+        cosine around the horizon's, :func:`._sun.visible_fraction`)."""
+        from skydome.models.fitted import _sun
 
-        return float(_coefficients.sun_visible_fraction(float(self.sun.elevation_deg),
-                                                        self.observer_altitude_m,
-                                                        float(self.sun.angular_radius_deg)))
+        return _sun.visible_fraction(self._sun_arrays(), float(self.sun.direction[2]),
+                                     self.observer_altitude_m,
+                                     float(self.sun.angular_radius_deg))
 
     def sun_radiance(self, wavelengths_nm) -> np.ndarray:
         """Radiance of the sun's disc [W m^-2 sr^-1 nm^-1], shape (n,): E_sun / Omega_sun

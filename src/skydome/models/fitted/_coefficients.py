@@ -35,12 +35,8 @@ the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
 the ground's light that the atmosphere sends back down, the atmosphere's spherical albedo
 seen from below), whose G and S the three nodes determine (S clamped to [0, 0.95]).
 
-The sun: the transmittance T along the path to the sun's centre, ln T per (AOD, elevation,
-altitude, wavelength); between the nodes ln T / m (m the relative air mass of Kasten &
-Young 1989 at the sun's elevation) interpolated linearly in elevation and in the vertical
-optical depth at 550 nm above the observer (air and aerosol, each exponential in
-altitude), times m; then times the fraction of the disc above the horizon
-(:func:`sun_visible_fraction`).
+The sun's disc is not part of this fit: Beer's law over the columns along the ray to the
+sun, as the reference computes it (:mod:`._sun`; its arrays are in the same file).
 """
 
 from __future__ import annotations
@@ -61,11 +57,6 @@ COEFFICIENT_FILE = Path(__file__).parent / "data" / "fitted_coefficients.npz"
 DELTA = 1e-3
 #: Floor of L [sr^-1] where ln L is interpolated (in AOD).
 TINY = 1e-30
-#: Scale heights of ``Atmosphere.earth``'s aerosol and air [m] (survey section 4, eq. 7)
-#: and the air's vertical optical depth at 550 nm (Atmosphere.earth().vertical_optical_depth).
-AEROSOL_SCALE_HEIGHT_M = 1200.0
-RAYLEIGH_SCALE_HEIGHT_M = 7994.0
-RAYLEIGH_DEPTH_550 = 0.0878
 
 
 @functools.lru_cache(maxsize=2)
@@ -95,21 +86,6 @@ def bracket(nodes: np.ndarray, x: float) -> tuple[int, float]:
     x = min(max(float(x), float(nodes[0])), float(nodes[-1]))
     i = int(np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, n - 2))
     return i, (x - float(nodes[i])) / (float(nodes[i + 1]) - float(nodes[i]))
-
-
-def sun_visible_fraction(elevation_deg: float, altitude_m: float,
-                         angular_radius_deg: float) -> float:
-    """Fraction of the sun's disc above the horizon of an observer at ``altitude_m``: the
-    area of the disc (radius alpha) above a straight horizon at distance u from its
-    centre, 1 - (acos(u/alpha) - (u/alpha) sqrt(1 - (u/alpha)^2)) / pi, with u the
-    elevation of the centre above the horizon (which lies at -acos(R / (R + h)))."""
-    dip = _grid.horizon_zenith_rad(altitude_m) - 0.5 * math.pi
-    u = (math.radians(elevation_deg) + dip) / math.radians(angular_radius_deg)
-    if u >= 1.0:
-        return 1.0
-    if u <= -1.0:
-        return 0.0
-    return 1.0 - (math.acos(u) - u * math.sqrt(1.0 - u * u)) / math.pi
 
 
 def stencil(nodes: np.ndarray, x: float, order: int = 1) -> list[tuple[int, float]]:
@@ -345,44 +321,3 @@ def albedo_form(nodes, values, albedo: float) -> np.ndarray:
     G = d2 * (1.0 - S)
     b = float(albedo)
     return np.maximum(L0 + b * G / (1.0 - b * S), 0.0)
-
-
-def sun_transmittance(c: dict, aod: float, elevation_deg: float,
-                      altitude_m: float) -> np.ndarray:
-    """Transmittance along the path to the sun's centre at the table wavelengths, (n_wl,),
-    in [0, 1] (the visible fraction of the disc not included)."""
-    ia, fa = bracket(c["aod_nodes"], aod)
-    ie, fe = bracket(c["elevation_nodes_deg"], elevation_deg)
-    # in altitude, linear in the optical depth at 550 nm above the observer: air (0.088,
-    # scale height 8 km) and aerosol (AOD, 1.2 km), each exponential in altitude
-    def depth(h):
-        return (RAYLEIGH_DEPTH_550 * np.exp(-h / RAYLEIGH_SCALE_HEIGHT_M)
-                + max(aod, 0.005) * np.exp(-h / AEROSOL_SCALE_HEIGHT_M))
-
-    g = depth(np.asarray(c["altitude_nodes_m"], dtype=np.float64))
-    ih, fh = bracket(-g, -float(depth(min(max(altitude_m, 0.0), 15000.0))))
-    e_nodes = c["elevation_nodes_deg"]
-    lt = np.zeros(c["wavelengths_nm"].size)
-    for i, wi in ((ia, 1.0 - fa), (ia + 1, fa)):
-        for k, wk in ((ie, 1.0 - fe), (ie + 1, fe)):
-            for h, wh in ((ih, 1.0 - fh), (ih + 1, fh)):
-                if wi * wk * wh != 0.0:
-                    # ln T per unit air mass: nearly constant in elevation, where ln T
-                    # itself grows steeply towards the horizon
-                    lt += wi * wk * wh * c["log_sun_transmittance"][i, k, h] / air_mass(
-                        float(e_nodes[k]))
-    return np.clip(np.exp(lt * air_mass(elevation_deg)), 0.0, 1.0)
-
-
-#: Below this elevation [deg] :func:`air_mass` keeps its value there: Kasten & Young's
-#: formula is monotonic down to it (m = 63 at -2 deg) and turns back below (m = 35 at -3
-#: deg, and undefined beyond z = 96.08 deg); deeper, ln T is interpolated linearly.
-AIR_MASS_FLOOR_DEG = -2.0
-
-
-def air_mass(elevation_deg: float) -> float:
-    """Relative optical air mass of Kasten & Young 1989 (eq. 3: m = 1 / (cos z + 0.50572
-    (96.07995 deg - z)^-1.6364), z the zenith angle), the scale of ln T in elevation;
-    elevations below :data:`AIR_MASS_FLOOR_DEG` take its value there."""
-    z = 90.0 - max(float(elevation_deg), AIR_MASS_FLOOR_DEG)
-    return 1.0 / (math.cos(math.radians(z)) + 0.50572 * (96.07995 - z) ** -1.6364)
