@@ -19,13 +19,13 @@ elevation node (every atmosphere, altitude and wavelength), the sky and the grou
 (``K_SKY`` and ``K_GROUND`` terms). A configuration between the nodes (:func:`stencil`,
 the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
 
-* at each AOD and albedo node, c and ln s quadratic in altitude (three nodes) at the four
+* at each AOD and albedo node, c and ln s cubic in altitude (four nodes) at the four
   elevation nodes around the sun's elevation, then y and ln s cubic in elevation (ln s:
   the sky's brightness, which falls by orders of magnitude per degree in twilight, is
   interpolated in its logarithm), L = s (exp(y) - DELTA);
-* in AOD (:func:`aod_stencil`), with the sun above the horizon: up to 0.1, L quadratic
-  over the nodes up to 0.1 (0, 0.025, 0.05, 0.1); above, ln L between the nodes from 0.1 up; with the sun
-  below -1 deg, L linear in sqrt(AOD); between -1 and 0 deg the two blended linearly;
+* in AOD (:func:`aod_stencil`), quadratic in sqrt(AOD): with the sun above the horizon up
+  to 0.1 L over the nodes up to 0.1 (0, 0.025, 0.05, 0.1), above ln L over the nodes from
+  0.1 up; with the sun below -1 deg ln L; between -1 and 0 deg the two blended linearly;
 * between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
   ground under a scattering atmosphere,
 
@@ -122,24 +122,29 @@ def stencil(nodes: np.ndarray, x: float, order: int = 1) -> list[tuple[int, floa
 
 def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
                 ) -> tuple[list[tuple[int, float]], bool]:
-    """(stencil, in ln L) over the AOD nodes (the choices measured on the held-out grid:
-    docs/models.md, "fitted").
+    """(stencil, in ln L) over the AOD nodes, quadratic in sqrt(AOD) throughout (the
+    choices measured on the held-out grid: docs/models.md, "fitted", "The AOD between its
+    nodes").
 
-    Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, quadratic over
-    the nodes up to it (in a thin haze the aerosol's light grows nearly in proportion to
-    its optical depth, which ln L would turn into a geometric mean); above it ln L over
-    the nodes from 0.1 up (a thick haze attenuates the long paths near the horizon
-    exponentially). Sun below the horizon (``twilight``): L linear in sqrt(AOD) between
-    the two nodes around it (the twilight sky changes fastest with the first aerosol)."""
+    Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, over the nodes up
+    to it (in a thin haze the aerosol's light grows nearly in proportion to its optical
+    depth, which ln L would turn into a geometric mean); above it ln L over the nodes from
+    0.1 up (a thick haze attenuates the long paths near the horizon exponentially). Sun
+    below the horizon (``twilight``): ln L (the twilight sky is light attenuated along
+    long grazing paths, and falls by orders of magnitude between the AOD nodes). sqrt(AOD)
+    as the coordinate: the sky changes fastest with the first aerosol, and the AOD nodes
+    (0, 0.025, 0.05, 0.1, 0.25, 0.5, 1) are nearly evenly spaced in it."""
     nodes = np.asarray(aod_nodes, dtype=np.float64)
+    order = ELEMENT_ORDER["aod"]
+    x = math.sqrt(max(aod, 0.0))
     if twilight:
-        return stencil(np.sqrt(nodes), math.sqrt(max(aod, 0.0)), 1), False
+        return stencil(np.sqrt(nodes), x, order), True
     # the last node of the thin-haze part: the node at LINEAR_AOD_MAX (at least the third)
     n_thin = max(3, int(np.searchsorted(nodes, LINEAR_AOD_MAX + 1e-12)))
     if nodes.size <= n_thin or aod <= float(nodes[n_thin - 1]):
-        return stencil(nodes[:n_thin], aod, ELEMENT_ORDER["aod"]), False
+        return stencil(np.sqrt(nodes[:n_thin]), x, order), False
     k = n_thin - 1
-    return [(i + k, w) for i, w in stencil(nodes[k:], aod, ELEMENT_ORDER["aod"])], True
+    return [(i + k, w) for i, w in stencil(np.sqrt(nodes[k:]), x, order)], True
 
 
 #: Up to this AOD (a node) the day sky is interpolated in L, above it in ln L.
@@ -148,8 +153,8 @@ LINEAR_AOD_MAX = 0.1
 
 #: Degrees of the interpolation between nodes (measured on the held-out grid:
 #: docs/models.md, "fitted"): y and ln s cubic in sun elevation, coefficients and ln s
-#: quadratic in altitude, L (or ln L) quadratic in AOD with the sun above the horizon.
-ELEMENT_ORDER = {"elevation": 3, "altitude": 2, "aod": 2}
+#: cubic in altitude, L or ln L quadratic in sqrt(AOD).
+ELEMENT_ORDER = {"elevation": 3, "altitude": 3, "aod": 2}
 #: Between these sun elevations [deg] the day and twilight AOD interpolations are blended
 #: linearly (no step at sunset).
 AOD_BLEND_DEG = (-1.0, 0.0)
