@@ -143,9 +143,10 @@ def test_visible_fraction_is_the_references_rule():
 
 def test_shipped_sun_arrays_are_the_derivations():
     # the coefficient file's sun arrays are what tools/fit_fitted.py --add-sun derives from
-    # the atmosphere (a rerun gives the same arrays)
+    # the atmosphere (a rerun gives the same arrays, to the last bits: the compiled column
+    # integrals round by the CPU's vector width, measured 9.5e-13 relative apart)
     c = _coefficients.load()
     d = _sun.derive(c["wavelengths_nm"])
     for k in _sun.SUN_KEYS:
-        np.testing.assert_array_equal(c[k], d[k])
+        np.testing.assert_allclose(c[k], d[k], rtol=1e-11, atol=0.0)
     assert c["sun_columns"].shape[1:] == (64, 256)
