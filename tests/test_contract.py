@@ -313,3 +313,33 @@ def test_atmosphere_parameters_placeholder_needs_the_declarations():
 
     with pytest.raises(ValueError, match="no_atmosphere_doc_test.*atmosphere, turbidity"):
         register(NoAtmosphere)
+
+
+def test_a_model_found_by_name_without_the_whole_discovery():
+    # get_model_class imports the model's own module where one bears its name: in a fresh
+    # interpreter, each name gives the class the whole discovery (available()) registers,
+    # and for a model with its own module no other model's module is imported
+    import json
+    import subprocess
+    import sys
+
+    code = r"""
+import json, sys
+from skydome import models
+names = sys.argv[1:]
+out = {}
+for n in names:
+    out[n] = models.get_model_class(n).__module__ + "." + models.get_model_class(n).__qualname__
+print(json.dumps({"classes": out, "registered": sorted(models._REGISTRY)}))
+"""
+    expected = {n: c.__module__ + "." + c.__qualname__ for n, c in MODELS.items()}
+    for names in (["precomputed"], ["hosek_wilkie2012"], ["fitted"], ["cie2003"],
+                  ["single_scattering", "perez1993"]):
+        res = subprocess.run([sys.executable, "-c", code, *names], capture_output=True,
+                             text=True, check=True)
+        got = json.loads(res.stdout)
+        assert got["classes"] == {n: expected[n] for n in names}
+        if names != ["cie2003"]:        # cie.py declares four models, none named after it
+            assert set(got["registered"]) == set(names)
+    with pytest.raises(ValueError, match="'nope' is not one of .*precomputed"):
+        sd.models.get_model_class("nope")

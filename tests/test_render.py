@@ -451,6 +451,29 @@ def test_png_8_and_16_bit(tmp_path, sky_image):
     assert np.all(a[~sky_image.mask] == 0)
 
 
+def test_png8_writer_read_back_by_pillow(tmp_path):
+    # skydome's own 8-bit PNG encoder (rows filtered "Up") decoded by Pillow, an independent
+    # PNG reader: the same pixels, the sRGB chunk, the text chunks; random values and a
+    # gradient (wrap-around of the filter's byte differences modulo 256 on both)
+    from PIL import Image
+
+    rng = np.random.default_rng(3)
+    for a in (rng.integers(0, 256, size=(37, 53, 3), dtype=np.uint8),
+              (np.add.outer(np.arange(64), np.arange(80))[..., None] * [1, 3, 7] % 256
+               ).astype(np.uint8)):
+        p = tmp_path / "a.png"
+        img.write_png8(p, a, {"Description": '{"units": "x"}', "Software": "skydome test"})
+        im = Image.open(p)
+        im.load()
+        assert im.mode == "RGB" and im.size == (a.shape[1], a.shape[0])
+        assert np.array_equal(np.asarray(im), a)
+        assert im.info["Description"] == '{"units": "x"}' and im.info["Software"] == "skydome test"
+        assert im.info.get("srgb") == 0
+        assert np.array_equal(img.read_png16(p), a.astype(np.uint16) * 257)
+    with pytest.raises(ValueError, match="rgb8"):
+        img.write_png8(tmp_path / "b.png", np.zeros((4, 4, 3), dtype=np.uint16))
+
+
 def test_bad_paths_raise_and_leave_nothing(tmp_path, sky_image):
     for bad in (tmp_path / "sky.jpg", tmp_path / "sky"):
         with pytest.raises(ValueError, match=bad.name):
