@@ -230,3 +230,55 @@ def test_cli_render_transform_and_no_hunt(tmp_path):
     assert r.exit_code == 0 and float(Image.open(tmp_path / "b.png").info["chroma_gain"]) > 1.3
     r = runner.invoke(app, args + ["--tonemap", "agx9", "--out", str(tmp_path / "c.png")])
     assert r.exit_code == 2 and not (tmp_path / "c.png").exists()
+
+
+def test_default_display_in_one_kernel_matches_the_equations_and_the_numpy_path():
+    # The default (hue-preserving) display of a picture runs as one numba kernel
+    # (SkyImage._display); against (1) values worked by hand from [Nar15]'s curve and
+    # [IEC 61966-2-1]'s encoding, (2) the NumPy expression (display_transform, srgb_encode)
+    # over colours in and out of gamut, dark, exposed beyond the path to white, masked, NaN.
+    import math
+
+    from skydome.imaging.image import SkyImage
+    from skydome.spectra import srgb_encode
+
+    def aces(x):
+        return min(max(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0), 1.0)
+
+    def enc(v):
+        return 12.92 * v if v <= 0.0031308 else 1.055 * v ** (1.0 / 2.4) - 0.055
+
+    def image_of(rgb, mask):
+        im = SkyImage.__new__(SkyImage)
+        im.mask = mask
+        im.linear_srgb = lambda: rgb
+        return im
+
+    rng = np.random.default_rng(5)
+    rgb = np.concatenate([rng.lognormal(-1.0, 2.0, size=(4000, 3)),
+                          rng.normal(0.2, 0.3, size=(2000, 3)),
+                          [[0.5, 0.5, 0.5], [10.0, 5.0, 1.0], [200.0, 100.0, 50.0],
+                           [0.0, 0.0, 0.0], [-0.1, 0.3, 0.2], [1e-9, 2e-9, 0.0]]])
+    rgb = rgb.reshape(-1, 1, 3)
+    mask = np.ones(rgb.shape[:2], dtype=bool)
+    mask[::7] = False
+    got = image_of(rgb, mask)._display(1.0, "hue-preserving", 1.0)
+    ref = np.clip(srgb_encode(display_transform(rgb, "hue-preserving")), 0.0, 1.0)
+    ref[~mask] = 0.0
+    assert np.max(np.abs(got - ref)) < 1e-12
+    # by hand: a grey of 0.5 (no path to white below 4), an over-exposed orange halfway
+    # along the path (m = 16: w = log2(16 / 4) / log2(64 / 4) = 1/2), and one past it (white)
+    g = enc(aces(0.5))
+    assert np.allclose(got[-6, 0], [g, g, g], rtol=0, atol=1e-14)
+    m, fm = 16.0, aces(16.0)
+    w = 0.5
+    orange = [enc(min(max(c * fm / m * (1 - w) + fm * w, 0.0), 1.0)) for c in (16.0, 8.0, 2.0)]
+    got2 = image_of(np.array([[[16.0, 8.0, 2.0], [200.0, 100.0, 50.0]]]),
+                    np.ones((1, 2), dtype=bool))._display(1.0, "hue-preserving", 1.0)
+    assert np.allclose(got2[0, 0], orange, rtol=0, atol=1e-14)
+    assert np.allclose(got2[0, 1], enc(aces(200.0)), rtol=0, atol=1e-14)
+    assert math.isclose(got[-1, 0, 2], enc(aces(2e-9) * 0.0), abs_tol=1e-15)
+    bad = rgb.copy()
+    bad[3, 0, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        image_of(bad, mask)._display(1.0, "hue-preserving", 1.0)

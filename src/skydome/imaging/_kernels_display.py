@@ -11,6 +11,8 @@ as they are). Imported only where a picture is made (numba is not loaded by
 
 from __future__ import annotations
 
+import math
+
 from numba import njit, prange
 
 _D = 6.0 / 29.0
@@ -68,3 +70,65 @@ def scale_chroma_kernel(rgb, gain, to_xyz, to_rgb, white, out):
             t = min(max(t, 0.0), 1.0)
         for k in range(3):
             out[i, k] = src[k] + t * (c[k] - src[k])
+
+
+@njit(inline="always")
+def _aces_fit(x):
+    """[Nar15] x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14) of x >= 0, clipped to [0, 1]
+    (:func:`skydome.imaging.display.aces_fit`)."""
+    v = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)
+    return min(max(v, 0.0), 1.0)
+
+
+@njit(inline="always")
+def _srgb_encode(v):
+    """[IEC 61966-2-1] 5.2: 12.92 L for L <= 0.0031308, else 1.055 L^(1/2.4) - 0.055, of L
+    clipped to [0, 1] (:func:`skydome.spectra.srgb_encode`)."""
+    v = min(max(v, 0.0), 1.0)
+    if v <= 0.0031308:
+        return 12.92 * v
+    return min(max(1.055 * v ** (1.0 / 2.4) - 0.055, 0.0), 1.0)
+
+
+@njit(parallel=True, cache=True)
+def hue_preserving_srgb_kernel(rgb, luma, white_start, log2_span, mask, out):
+    """out[i] = the sRGB-encoded display value in [0, 1] of exposed linear sRGB rgb[i] under
+    the hue-preserving transform (:func:`skydome.imaging.display.display_transform`, its
+    default), 0 where ``mask[i]`` is False; the number of pixels holding NaN (which the
+    NumPy path refuses). Per pixel, the same steps as the NumPy path: into the gamut towards
+    the grey of equal luminance (``_into_gamut``), the largest component m through [Nar15]'s
+    curve and every component scaled by f(m) / m, a path to white logarithmic in m from
+    ``white_start`` over ``log2_span`` octaves, clipped to [0, 1], then [IEC]'s encoding
+    (clipped to [0, 1] as the NumPy path clips it). Equal to that path to a few units in
+    the last place (libm's pow and log2 against NumPy's own)."""
+    n_nan = 0
+    for i in prange(rgb.shape[0]):
+        r = rgb[i, 0]
+        g = rgb[i, 1]
+        b = rgb[i, 2]
+        if r != r or g != g or b != b:
+            n_nan += 1
+            out[i, 0] = 0.0
+            out[i, 1] = 0.0
+            out[i, 2] = 0.0
+            continue
+        if not mask[i]:
+            out[i, 0] = 0.0
+            out[i, 1] = 0.0
+            out[i, 2] = 0.0
+            continue
+        lo = min(r, g, b)
+        if lo < 0.0:
+            Y = max(r * luma[0] + g * luma[1] + b * luma[2], 0.0)
+            t = Y / (Y - lo) if Y > 0.0 else 0.0
+            r = max(Y + t * (r - Y), 0.0)
+            g = max(Y + t * (g - Y), 0.0)
+            b = max(Y + t * (b - Y), 0.0)
+        m = max(r, g, b)
+        fm = _aces_fit(max(m, 0.0))
+        s = fm / m if m > 0.0 else 0.0
+        w = min(max(math.log2(max(m, 1e-300) / white_start) / log2_span, 0.0), 1.0)
+        out[i, 0] = _srgb_encode(min(max(r * s * (1.0 - w) + fm * w, 0.0), 1.0))
+        out[i, 1] = _srgb_encode(min(max(g * s * (1.0 - w) + fm * w, 0.0), 1.0))
+        out[i, 2] = _srgb_encode(min(max(b * s * (1.0 - w) + fm * w, 0.0), 1.0))
+    return n_nan

@@ -322,6 +322,21 @@ class SkyImage:
         from skydome.spectra import srgb_encode
 
         rgb = scale_chroma(self.linear_srgb() * k, gain)
+        if tonemap == "hue-preserving":
+            # the default in one pass per pixel (a numba kernel, as the chroma gain's): the
+            # NumPy expression below made about ten full-size temporaries, 0.03-0.05 s of
+            # a warm 512 px `skydome render` (docs/performance.md)
+            from skydome.imaging._kernels_display import hue_preserving_srgb_kernel
+            from skydome.imaging.display import _LUMA, _WHITE_FULL, _WHITE_START
+
+            flat = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float64)
+            out = np.empty_like(flat)
+            mask = np.ascontiguousarray(np.broadcast_to(self.mask, rgb.shape[:-1]).reshape(-1))
+            if hue_preserving_srgb_kernel(flat, _LUMA, _WHITE_START,
+                                          float(np.log2(_WHITE_FULL / _WHITE_START)), mask,
+                                          out):
+                raise ValueError("linear contains NaN values")
+            return out.reshape(rgb.shape)
         if tonemap in TONEMAPS[:3]:   # per-channel curves: out-of-gamut negatives to 0
             rgb = np.maximum(rgb, 0.0)
         out = np.clip(srgb_encode(display_transform(rgb, tonemap)), 0.0, 1.0)
