@@ -184,7 +184,10 @@ def test_stored_table_in_half_precision_joins_the_entry_and_is_read_on_use(monke
     first = tiny()
     ap1 = first.aerial_perspective(DIRS, 5e3, WL)
     path = entry()
-    assert np.load(os.path.join(path, "multiple_scattering.npy")).dtype == np.float16
+    # packed: its float16 values' two byte planes compressed (_cache._write_packed)
+    assert not os.path.exists(os.path.join(path, "multiple_scattering.npy"))
+    with open(os.path.join(path, "multiple_scattering.packed"), "rb") as f:
+        assert f.read(len(_cache._PACK_MAGIC)) == _cache._PACK_MAGIC
     # the table is a positively weighted integral of the stored density (within float16's
     # rounding, or QUADRATIC_TOL, of the exact one), then rounded to float16 itself
     ms_e = exact._t.multiple_scattering.astype(np.float64)
@@ -229,14 +232,17 @@ def test_flipped_bytes_in_a_half_table_rebuild_the_entry(file, capfd):
 def test_damaged_half_stored_table_is_built_again_on_use(capfd):
     first = tiny()
     ap = first.aerial_perspective(DIRS, 5e3, WL)
-    file = os.path.join(entry(), "multiple_scattering.npy")
-    _flip(file)
+    file = os.path.join(entry(), "multiple_scattering.packed")
+    data = bytearray(open(file, "rb").read())
+    a = len(data) // 2
+    data[a:a + 64] = bytes(255 - b for b in data[a:a + 64])
+    open(file, "wb").write(bytes(data))
     capfd.readouterr()
     again = tiny()
     assert again.from_cache
     ap2 = again.aerial_perspective(DIRS, 5e3, WL)      # read, found damaged, built again
     note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
-    assert len(note) == 1 and "multiple_scattering.npy" in note[0], note
+    assert len(note) == 1 and "multiple_scattering.packed" in note[0], note
     assert np.array_equal(ap[1], ap2[1])
     assert os.path.exists(file)                         # and stored again
     assert tiny().aerial_perspective(DIRS, 5e3, WL)[1].tolist() == ap[1].tolist()
@@ -363,3 +369,49 @@ def test_table_encoded_on_threads_is_numpys_float16_of_each_row(monkeypatch, tmp
         assert np.array_equal(a, back)
         written.append(open(f, "rb").read() + open(fe, "rb").read())
     assert written[0] == written[1]
+
+
+def test_packed_half_table_round_trip_and_damage(tmp_path):
+    """The packed file of a half table (_cache._write_packed / _read_packed): every float16
+    bit pattern of a finite value, in rows scaled by powers of two, read back bit for bit
+    (the same float32 values the plain half file's decoding gives, _read_half); a smooth
+    table packs to less than half of its float16 bytes; a truncated file, one with bytes
+    changed or appended, a wrong record and a NaN are each refused (DamagedEntry)."""
+    from skydome.models.simulated.precomputed._cache import (DamagedEntry, _read_half,
+                                                             _read_packed, _write_half,
+                                                             _write_packed)
+
+    bits = np.arange(65536, dtype=np.uint32).astype(np.uint16).view(np.float16)
+    bits = bits[np.isfinite(bits)].astype(np.float32)
+    rows = np.resize(bits, (3, 4, 1000, 8))                 # (a, b, c, wavelength)
+    rows *= np.float32(2.0) ** np.arange(-20, 20, 10)[None, :, None, None].astype(np.float32)
+    smooth = np.exp(-np.linspace(0, 4, 2 * 64 * 48 * 20)).reshape(2, 64, 48, 20).astype(
+        np.float32) * (1 + 0.3 * np.sin(np.arange(20) / 3.0)).astype(np.float32)
+    for name, table in (("t", rows), ("s", smooth)):
+        a, b = table.copy(), table.copy()
+        sums = _write_half(str(tmp_path / f"{name}.npy"), str(tmp_path / f"{name}.exp.npy"),
+                           name, [a[:1], a[1:]], table.shape)
+        plain = _read_half(str(tmp_path), name, sums)
+        recs = _write_packed(str(tmp_path / f"{name}.packed"), str(tmp_path / f"p{name}.exp.npy"),
+                             f"p{name}", [b[:2], b[2:]], table.shape)
+        os.replace(tmp_path / f"{name}.packed", tmp_path / f"p{name}.packed")
+        packed = _read_packed(str(tmp_path), f"p{name}", recs)
+        assert packed.dtype == np.float32 and packed.shape == table.shape
+        assert np.array_equal(packed.view(np.uint32), plain.view(np.uint32))
+        assert np.array_equal(a.view(np.uint32), b.view(np.uint32))    # decoded in place alike
+    assert os.path.getsize(tmp_path / "ps.packed") < 0.5 * smooth.size * 2
+    file = tmp_path / "ps.packed"
+    good = file.read_bytes()
+    for bad in (good[:len(good) // 2], good + b"x",
+                good[:len(good) // 2] + bytes([good[len(good) // 2] ^ 0xFF]) + good[len(good) // 2 + 1:]):
+        file.write_bytes(bad)
+        with pytest.raises(DamagedEntry):
+            _read_packed(str(tmp_path), "ps", recs)
+    file.write_bytes(good)
+    with pytest.raises(DamagedEntry):
+        _read_packed(str(tmp_path), "ps", {**recs, "ps": {**recs["ps"], "crc32": 1}})
+    nan = smooth.copy()
+    nan[1, 2, 3, 4] = np.nan
+    with pytest.raises(_cache._NotFinite):
+        _write_packed(str(tmp_path / "n.packed"), str(tmp_path / "n.exp.npy"), "n", [nan],
+                      nan.shape)

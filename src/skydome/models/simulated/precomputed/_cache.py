@@ -43,9 +43,14 @@ served; the whole table's later decoding checks its files again.
 
 The stored 4-D table of orders 2..N is built after the precomputation, on its first read
 (:meth:`._tables.Tables.build_multiple_scattering`); it is then added to the same entry as
-its own file, ``multiple_scattering.npy`` (:func:`add_stored_table`: built slab by slab of
-r nodes straight into a temporary file in the entry, renamed when complete), and a later
-cache hit memory-maps it. An entry
+its own file (:func:`add_stored_table`: built slab by slab of r nodes straight into a
+temporary file in the entry, renamed when complete): a table of at least
+:data:`HALF_MIN_BYTES`, as the default one, in half precision with its float16 values'
+two byte planes compressed losslessly (``multiple_scattering.packed``, :func:`_write_packed`:
+126 MB of float16 in 66 MB; read, checked and decoded whole on its first use,
+:func:`_read_packed`), a smaller one as it is (``multiple_scattering.npy``, memory-mapped
+by a later cache hit). An entry holding the half table uncompressed
+(``multiple_scattering.npy`` in float16, as this format first wrote it) is still read. An entry
 without that file (not built yet, or an unreadable file, which is removed) is still a hit:
 the table is built again on first use.
 
@@ -68,6 +73,7 @@ import hashlib
 import json
 import os
 import shutil
+import struct
 import sys
 import threading
 import weakref
@@ -92,8 +98,8 @@ from skydome._io import write_npy
 # the single-scattering table not stored where it can be computed again from the entry (it
 # is, on use: the observer's two r nodes, or the whole table), but for its first two r nodes
 CACHE_FORMAT = "skydome.precomputed-cache/12"
-# five table sets at the default settings: 0.30 GB each with the stored table of orders
-# 2..N, 0.17 GB without it (1.28 GB each in format 11)
+# five table sets at the default settings: 0.24 GB each with the stored table of orders
+# 2..N (packed; 0.30 GB before), 0.17 GB without it (1.28 GB each in format 11)
 DEFAULT_LIMIT_BYTES = 1_500_000_000
 # tables of at least this many bytes are stored in half precision (_HALF) or left out
 # where the entry can compute them again (_RECOMPUTED); smaller ones exactly as they are
@@ -261,6 +267,125 @@ def _npy_header(f, dtype, shape) -> None:
     np.lib.format.write_array_header_1_0(
         f, {"descr": np.lib.format.dtype_to_descr(np.dtype(dtype)), "fortran_order": False,
             "shape": tuple(int(n) for n in shape)})
+
+
+# A half table "packed" (the stored table of orders 2..N, ``<name>.packed``): its float16
+# values split into their two byte planes, each compressed losslessly with zlib. The high
+# byte (sign, exponent, two mantissa bits) of a smooth table is mostly repetition: the
+# default stored table's 63 MB of high bytes take 14.9 MB at level 1; its low bytes (eight
+# mantissa bits, near noise) 51 MB of 63 (docs/performance.md). The file: _PACK_MAGIC, then
+# chunks, each a header (_PACK_HEAD: values, compressed high bytes, compressed low bytes)
+# and its two planes; every value decoded is the float16 written (bit for bit).
+_PACK = ".packed"
+_PACK_MAGIC = b"skydome-half-packed-1\n"
+_PACK_HEAD = struct.Struct("<QQQ")
+_PACK_LEVEL = 1                       # zlib level: the table's build takes 7 s; level 1 adds
+                                      # about 1 s of compression to it, level 6 about 4 s
+
+
+def _pack_chunk(h: np.ndarray) -> list:
+    """The packed bytes of the float16 values ``h`` (C-contiguous): [header, high, low]."""
+    b = h.reshape(-1).view(np.uint8).reshape(-1, 2)       # little-endian: [low, high]
+    hi = zlib.compress(np.ascontiguousarray(b[:, 1]), _PACK_LEVEL)
+    lo = zlib.compress(np.ascontiguousarray(b[:, 0]), _PACK_LEVEL)
+    return [_PACK_HEAD.pack(b.shape[0], len(hi), len(lo)), hi, lo]
+
+
+def _unpack_chunk(f, n_max: int, crc: int, label: str):
+    """(float16 values, crc) of the next chunk of the open packed file ``f`` (named
+    ``label`` in the errors), the CRC-32 of
+    its bytes as stored continued from ``crc``; DamagedEntry where it cannot be read back
+    (truncated, a wrong length, more than ``n_max`` values, a zlib stream that fails)."""
+    head = f.read(_PACK_HEAD.size)
+    if len(head) != _PACK_HEAD.size:
+        raise DamagedEntry(f"{label} is truncated")
+    n, n_hi, n_lo = _PACK_HEAD.unpack(head)
+    if not 0 < n <= n_max or n_hi > 2 * n + 1024 or n_lo > 2 * n + 1024:
+        raise DamagedEntry(f"{label} has a chunk of a wrong size")
+    hi, lo = f.read(n_hi), f.read(n_lo)
+    if len(hi) != n_hi or len(lo) != n_lo:
+        raise DamagedEntry(f"{label} is truncated")
+    crc = zlib.crc32(lo, zlib.crc32(hi, zlib.crc32(head, crc)))
+    b = np.empty((n, 2), dtype=np.uint8)
+    try:
+        for plane, data in ((1, hi), (0, lo)):
+            raw = zlib.decompress(data)
+            if len(raw) != n:
+                raise DamagedEntry(f"{label} has a chunk of a wrong length")
+            b[:, plane] = np.frombuffer(raw, dtype=np.uint8)
+    except zlib.error as exc:
+        raise DamagedEntry(f"{label} cannot be decompressed ({exc})") from None
+    return b.view(np.float16).reshape(-1), crc
+
+
+def _write_packed(file: str, exp_file: str, name: str, slabs, shape) -> dict:
+    """:func:`_write_half`, the float16 values packed (:func:`_pack_chunk`) into ``file``
+    (``<name>.packed``) in chunks of :data:`_CHECK_BYTES` of float32 rows; returns the
+    checksum records (the CRC-32 of the packed file's bytes after its magic line, as
+    stored). Each slab receives the decoded values in place, as there."""
+    nl = int(shape[-1])
+    exps = np.empty(int(np.prod(shape[:-1])), dtype=np.int8)
+    done, crc, size = 0, 0, 0
+    with open(file, "wb") as f:
+        f.write(_PACK_MAGIC)
+        for slab in slabs:
+            if slab.dtype != np.float32 or not slab.flags.c_contiguous:
+                raise ValueError(f"a slab of {name} is not C-contiguous float32")
+            flat = slab.reshape(-1, nl)
+            step = max(1, _CHECK_BYTES // (4 * nl))
+            for i in range(0, flat.shape[0], step):
+                h, e = _encode_rows(flat[i:i + step], name)
+                for part in _pack_chunk(h):
+                    crc = zlib.crc32(part, crc)
+                    size += len(part)
+                    f.write(part)
+                exps[done:done + e.size] = e
+                done += e.size
+    if done != exps.size:
+        raise ValueError(f"{done} rows written for a table {tuple(shape)}")
+    exps = exps.reshape(tuple(shape[:-1]))
+    write_npy(exp_file, exps)
+    rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
+           "shape": [int(n) for n in shape], "packed_bytes": int(size)}
+    return {name: rec, name + _EXP: _record(exps, zlib.crc32(memoryview(exps.reshape(-1))))}
+
+
+def _read_packed(path: str, name: str, sums: dict) -> np.ndarray:
+    """The float32 table ``name`` of the entry ``path`` from its packed file
+    (:func:`_write_packed`) and row exponents: every chunk read, its CRC-32 continued, its
+    planes decompressed and decoded (:func:`_decode_half_checked`) into the table; the file's
+    CRC-32, length and every value's finiteness checked. DamagedEntry where a check fails."""
+    rec = sums.get(name)
+    if not isinstance(rec, dict) or "packed_bytes" not in rec:
+        raise DamagedEntry(f"{name}{_PACK} has no checksum")
+    exps = _map(os.path.join(path, name + _EXP + ".npy"))
+    _verify(name + _EXP, exps, sums.get(name + _EXP))
+    shape = tuple(int(n) for n in rec.get("shape", ()))
+    if rec.get("dtype") != np.dtype(np.float16).str or tuple(exps.shape) != shape[:-1]:
+        raise DamagedEntry(f"{name}{_PACK} has shape {shape}, its exponents {exps.shape}")
+    nl = shape[-1]
+    out = np.empty(shape, dtype=np.float32)
+    flat, e_flat = out.reshape(-1, nl), exps.reshape(-1)
+    n_rows = flat.shape[0]
+    crc, row, finite = 0, 0, True
+    with open(os.path.join(path, name + _PACK), "rb") as f:
+        if f.read(len(_PACK_MAGIC)) != _PACK_MAGIC:
+            raise DamagedEntry(f"{name}{_PACK} is not a packed table")
+        while row < n_rows:
+            h, crc = _unpack_chunk(f, (n_rows - row) * nl, crc, name + _PACK)
+            if h.size % nl:
+                raise DamagedEntry(f"{name}{_PACK} has a chunk of a wrong length")
+            k = h.size // nl
+            finite = _decode_half_checked(h.reshape(k, nl), e_flat[row:row + k],
+                                          flat[row:row + k]) and finite
+            row += k
+        if f.tell() - len(_PACK_MAGIC) != rec["packed_bytes"] or f.read(1):
+            raise DamagedEntry(f"{name}{_PACK} is longer than its record")
+    if crc != rec.get("crc32"):
+        raise DamagedEntry(f"the checksum of {name}{_PACK} does not match")
+    if not finite:
+        raise DamagedEntry(f"{name}{_PACK} holds NaN or infinite values")
+    return out
 
 
 def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
@@ -901,7 +1026,8 @@ def _load_stored_table(path, tables, meta):
     table in half precision is read and checked on its first use instead
     (:meth:`._tables.Tables.set_multiple_scattering_reader`): the sky's radiance does not
     read it."""
-    file = os.path.join(path, _STORED + ".npy")
+    packed = meta.get("encoded", {}).get(_STORED) == "half-packed"
+    file = os.path.join(path, _STORED + (_PACK if packed else ".npy"))
     if not os.path.exists(file):
         return
 
@@ -914,7 +1040,8 @@ def _load_stored_table(path, tables, meta):
     if _STORED in meta.get("encoded", {}):
         def reader(t):
             try:
-                ms = _read_half(path, _STORED, meta["checksums"])
+                ms = (_read_packed if packed else _read_half)(path, _STORED,
+                                                               meta["checksums"])
                 if ms.shape != t.table_shape:
                     raise DamagedEntry(f"{_STORED}.npy has shape {ms.shape}")
             except Exception as exc:
@@ -996,7 +1123,7 @@ def _add_half_table(path, meta, shape, slabs):
     returns the decoded table (what a later read gives)."""
     from skydome._io import atomic_file
 
-    file = os.path.join(path, _STORED + ".npy")
+    file = os.path.join(path, _STORED + _PACK)
     exp_file = os.path.join(path, _STORED + _EXP + ".npy")
     out = np.empty(shape, dtype=np.float32)
 
@@ -1009,11 +1136,11 @@ def _add_half_table(path, meta, shape, slabs):
             yield part
 
     try:
-        with atomic_file(file, suffix=".npy") as tmp, \
+        with atomic_file(file, suffix=_PACK) as tmp, \
                 atomic_file(exp_file, suffix=".npy") as etmp:
-            recs = _write_half(tmp, etmp, _STORED, into_out(), shape)
+            recs = _write_packed(tmp, etmp, _STORED, into_out(), shape)
             meta.setdefault("checksums", {}).update(recs)
-            meta.setdefault("encoded", {})[_STORED] = "half"
+            meta.setdefault("encoded", {})[_STORED] = "half-packed"
             with atomic_file(os.path.join(path, _META)) as mtmp, open(mtmp, "w") as f:
                 json.dump(meta, f)
     except OSError as exc:
