@@ -653,7 +653,8 @@ class _HalfTable:
     def _pass(self, out, rows=None):
         """One pass over the float16 file of a table stored whole, in steps of
         :data:`_CHECK_BYTES`: its CRC-32, the finiteness of every value and the values
-        decoded into ``out`` (a new array where None). Returns ``out``."""
+        decoded into ``out`` (a new array where None). Returns ``out``. (``rows``: None
+        always; :meth:`decode` refuses rows of a table stored whole.)"""
         name, shape = self.name, self.half_shape
         nl = shape[-1]
         n_rows = int(np.prod(shape[:-1]))
