@@ -1,7 +1,7 @@
-"""Cache format 12 of the ``precomputed`` model: the large tables in half precision (float16
-and a power-of-two scale per row of wavelengths), the scattering density's Rayleigh
-constituent as its quadratic form in the outgoing direction, and the single-scattering
-table computed again from the entry instead of stored.
+"""Cache format 13 of the ``precomputed`` model: the large tables in half precision (float16
+and a power-of-two scale per row of wavelengths; the scattering density's in bands of mu_s
+rows), the scattering density's Rayleigh constituent as its quadratic form in the outgoing
+direction, and the single-scattering table computed again from the entry instead of stored.
 
 The tiny tables of these tests are below ``_cache.HALF_MIN_BYTES`` (stored exactly, as in
 test_precomputed_cache.py); here that threshold is set to 0 so that they take the path of
@@ -49,6 +49,14 @@ def half_for_every_size(monkeypatch, tmp_path):
     monkeypatch.setenv("SKYDOME_CACHE_DIR", str(tmp_path / "cache"))
 
 
+def _part_rows(m):
+    """(first, end): the density's mu_s rows a load of model ``m`` decodes."""
+    t = m._t
+    return m._density_rows({"planet_radius_m": t.planet_radius_m,
+                            "top_radius_m": t.top_radius_m, "mu_s_min": t.mu_s_min},
+                           t.density_shape)
+
+
 def entry():
     d = _cache.cache_dir()
     (name,) = [n for n in os.listdir(d) if not n.startswith(".")]
@@ -86,15 +94,24 @@ def test_entry_layout_and_sizes():
     names = sorted(os.listdir(path))
     assert "single_scattering.npy" not in names         # computed again from the entry
     meta = json.load(open(os.path.join(path, "meta.json")))
-    assert meta["cache_format"] == "skydome.precomputed-cache/12"
-    assert meta["encoded"] == {"scattering_density": "half"}
+    assert meta["cache_format"] == "skydome.precomputed-cache/13"
+    assert meta["encoded"] == {"scattering_density": "half-bands"}
     # the Rayleigh constituent (phase code 0) as a quadratic form, the aerosol's in float16
     rayleigh = [int(k) for k in np.nonzero(m._t.phase_code == 0)[0]]
     assert meta["quadratic"]["scattering_density"]["constituents"] == rayleigh
     half = np.load(os.path.join(path, "scattering_density.npy"))
     J = m._t.scattering_density
-    assert half.dtype == np.float16 and half.shape == (J.shape[0] - 1,) + J.shape[1:]
-    assert np.load(os.path.join(path, "scattering_density.exp.npy")).shape == half.shape[:-1]
+    # in bands of mu_s rows: the mu_s axis first on disk
+    assert half.dtype == np.float16
+    assert half.shape == (J.shape[4], J.shape[0] - 1) + J.shape[1:4] + (J.shape[5],)
+    exp = np.load(os.path.join(path, "scattering_density.exp.npy"))
+    assert exp.shape == half.shape[:-1]
+    assert len(meta["checksums"]["scattering_density"]["band_crc32"]) == J.shape[4]
+    # band b holds the rows J[k, ..., b, :] of the constituent stored in float16 (not the
+    # quadratic form's): NumPy's float16 cast times 2^e gives the values the model serves
+    k = [i for i in range(J.shape[0]) if i not in rayleigh]
+    values = half.astype(np.float32) * np.ldexp(np.float32(1), exp.astype(np.int32))[..., None]
+    assert np.array_equal(np.moveaxis(values, 0, -2), J[k])
     coef = np.load(os.path.join(path, "scattering_density.quadratic.npy"))
     assert coef.shape == (1, 6) + J.shape[3:]
 
@@ -205,10 +222,17 @@ def test_stored_table_in_half_precision_joins_the_entry_and_is_read_on_use(monke
     assert np.array_equal(ap1[0], ap2[0]) and np.array_equal(ap1[1], ap2[1])
 
 
-def _flip(path, n=64):
+def _flip(path, n=64, row=None):
+    """Flip ``n`` bytes in the middle of the .npy file ``path``, or, with ``row``, in the
+    middle of that row of its first axis (a band of a banded file)."""
     data = bytearray(open(path, "rb").read())
-    header = len(data) - np.load(path, mmap_mode="r").nbytes
-    a = header + (len(data) - header - n) // 2
+    a_ = np.load(path, mmap_mode="r")
+    header = len(data) - a_.nbytes
+    if row is None:
+        a = header + (len(data) - header - n) // 2
+    else:
+        band = a_.nbytes // a_.shape[0]
+        a = header + row * band + (band - n) // 2
     data[a:a + n] = bytes(255 - b for b in data[a:a + n])
     open(path, "wb").write(bytes(data))
 
@@ -216,9 +240,12 @@ def _flip(path, n=64):
 @pytest.mark.parametrize("file", ["scattering_density", "scattering_density.exp",
                                   "scattering_density.quadratic"])
 def test_flipped_bytes_in_a_half_table_rebuild_the_entry(file, capfd):
+    """Damage the load reads (the coefficients, or a band of the density's rows the
+    model's sky reads): the entry rebuilt before anything is served."""
     fresh = tiny(cache=False)
     first = tiny()
-    _flip(os.path.join(entry(), file + ".npy"))
+    row = None if file.endswith("quadratic") else sum(_part_rows(first)) // 2
+    _flip(os.path.join(entry(), file + ".npy"), row=row)
     capfd.readouterr()
     again = tiny()
     assert not again.from_cache
@@ -288,10 +315,11 @@ def test_not_finite_in_a_half_table_with_its_checksum_updated_rebuilds_the_entry
     file = os.path.join(path, "scattering_density.npy")
     a = np.load(file)
     assert a.dtype == np.float16
-    a.reshape(-1)[a.size // 2] = value
+    band = sum(_part_rows(first)) // 2               # a band the load reads
+    a[band].reshape(-1)[a[band].size // 2] = value
     np.save(file, a)
     meta = json.load(open(os.path.join(path, "meta.json")))
-    meta["checksums"]["scattering_density"]["crc32"] = zlib.crc32(a.tobytes())
+    meta["checksums"]["scattering_density"]["band_crc32"][band] = zlib.crc32(a[band].tobytes())
     json.dump(meta, open(os.path.join(path, "meta.json"), "w"))
     capfd.readouterr()
     again = tiny()

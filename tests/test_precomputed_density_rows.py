@@ -1,8 +1,9 @@
 """The scattering density read in part: a load from the cache decodes only the mu_s rows of
 J that the observer's rays reach (``_reach.density_mu_s_rows``), the whole table on its
 first read. The bound is checked against a brute-force geometry and against the rows the
-kernel itself reads; the sky is the same, bit for bit, as from the whole table; every byte
-of the entry is still checked at the load."""
+kernel itself reads; the sky is the same, bit for bit, as from the whole table; the bands
+of the density the load reads are checked there, the others on the first whole read (damage
+there noted, the entry removed and the table of a fresh build served)."""
 
 import json
 import os
@@ -221,55 +222,116 @@ def test_a_bound_too_narrow_is_found_and_the_whole_table_used(monkeypatch, capfd
     assert np.array_equal(got, ref.radiance(DIRS, WL))
 
 
-def _row_outside(path, rows):
-    """The flat float16 index of a value of the density's float16 file in an mu_s row
-    outside ``rows`` (first, end)."""
-    meta = json.load(open(os.path.join(path, "meta.json")))
-    shape = meta["checksums"]["scattering_density"]["shape"]
-    first, end = rows
-    ms = 0 if first > 0 else shape[-2] - 1
-    assert not first <= ms < end
-    index = [s // 2 for s in shape[:-2]] + [ms, shape[-1] // 2]
-    return int(np.ravel_multi_index(index, shape)), shape
+def _damage_band(path, band, damage):
+    """Damage the value in the middle of mu_s row ``band`` of the density's float16 file
+    (banded: the mu_s axis first on disk): its bytes flipped, or NaN written with the
+    band's CRC-32 recorded again (so that only the finiteness check can find it)."""
+    file = os.path.join(path, "scattering_density.npy")
+    a = np.load(file)
+    assert a.dtype == np.float16 and a.ndim == 6
+    row = a[band].reshape(-1)
+    i = row.size // 2
+    if damage == "flipped":
+        row.view(np.uint16)[i] ^= 0x0155           # mantissa bits: still finite
+    else:
+        row[i] = np.nan
+    np.save(file, a)
+    if damage != "flipped":
+        meta_file = os.path.join(path, "meta.json")
+        meta = json.load(open(meta_file))
+        meta["checksums"]["scattering_density"]["band_crc32"][band] = \
+            zlib.crc32(a[band].tobytes())
+        json.dump(meta, open(meta_file, "w"))
+
+
+def _notes(capfd):
+    return [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
 
 
 @pytest.mark.parametrize("damage", ["flipped", "nan with its checksum"])
-def test_damage_outside_the_rows_decoded_is_found_at_the_load(damage, capfd):
-    """A damaged value in a row the load does not decode: found at the load (the CRC-32 of
-    the whole file; NaN with the checksum updated: the finiteness of every float16, on its
-    bits), the entry rebuilt before anything is served."""
+def test_damage_outside_the_rows_decoded_is_found_at_the_first_whole_read(damage, capfd):
+    """A damaged value in an mu_s band the load does not read: the load serves the sky (of
+    the rows it reads, undamaged: the first build's, bit for bit) without a note; the first
+    read of the whole table finds the damage (the band's CRC-32; NaN with its checksum
+    recorded again: the finiteness of the values decoded), says so in one line naming the
+    entry, removes it and serves the whole table of a fresh build (the precomputation's
+    again, stored: the first build's values); the entry is then written again."""
+    first = small()
+    sky = first.radiance(DIRS, WL)
+    J = first._t.scattering_density.copy()
+    path = entry()
+    rows = _rows(first)
+    n = first._t.density_shape[4]
+    assert rows != (0, n)
+    band = 0 if rows[0] > 0 else n - 1
+    _damage_band(path, band, damage)
+    with _cache._LOADED_LOCK:
+        _cache._LOADED.clear()
+    capfd.readouterr()
+    again = small()
+    assert again.from_cache and _notes(capfd) == []
+    assert np.array_equal(again.radiance(DIRS, WL), sky)
+    assert again._t.__dict__["_scattering_density"] is None
+    whole = again._t.scattering_density                # read whole: the damage found
+    note = _notes(capfd)
+    assert len(note) == 1 and path in note[0] and "scattering_density.npy" in note[0], note
+    assert ("NaN or infinite" in note[0]) == (damage != "flipped")
+    assert np.array_equal(whole, J)
+    # the entry written again, undamaged: a load and its whole read say nothing
+    with _cache._LOADED_LOCK:
+        _cache._LOADED.clear()
+    later = small()
+    assert later.from_cache
+    assert np.array_equal(later._t.scattering_density, J) and _notes(capfd) == []
+
+
+@pytest.mark.parametrize("damage", ["flipped", "nan with its checksum"])
+def test_damage_inside_the_rows_decoded_is_found_at_the_load(damage, capfd):
+    """A damaged value in an mu_s band the load reads: found at the load, one line on
+    stderr, the entry rebuilt before anything is served (the sky of the first build)."""
     first = small()
     sky = first.radiance(DIRS, WL)
     path = entry()
-    file = os.path.join(path, "scattering_density.npy")
-    rows = _rows(first)
-    assert rows != (0, first._t.density_shape[4])
-    i, shape = _row_outside(path, rows)
-    a = np.load(file)
-    flat = a.reshape(-1)
-    if damage == "flipped":
-        flat[i] = np.float16(-flat[i] * 3.0 - 1.0)
-    else:
-        flat[i] = np.nan
-        meta = json.load(open(os.path.join(path, "meta.json")))
-        meta["checksums"]["scattering_density"]["crc32"] = zlib.crc32(a.tobytes())
-        json.dump(meta, open(os.path.join(path, "meta.json"), "w"))
-    np.save(file, a)
+    lo, hi = _rows(first)
+    _damage_band(path, (lo + hi) // 2, damage)
     with _cache._LOADED_LOCK:
         _cache._LOADED.clear()
     capfd.readouterr()
     again = small()
     assert not again.from_cache
-    note = [ln for ln in capfd.readouterr().err.splitlines() if ln.strip()]
-    assert len(note) == 1 and "scattering_density.npy" in note[0], note
+    note = _notes(capfd)
+    assert len(note) == 1 and path in note[0] and "scattering_density.npy" in note[0], note
     assert ("NaN or infinite" in note[0]) == (damage != "flipped")
     assert np.array_equal(again.radiance(DIRS, WL), sky)
 
 
-def test_the_whole_table_is_read_after_the_entry_is_removed_and_checked_again():
+def test_damaged_exponents_outside_the_rows_decoded_are_found_at_the_first_whole_read(capfd):
+    """The exponents' bands are checked as the float16 file's: a flipped exponent outside
+    the rows the load reads is found on the first whole read, noted and repaired."""
+    first = small()
+    J = first._t.scattering_density.copy()
+    path = entry()
+    rows = _rows(first)
+    band = 0 if rows[0] > 0 else first._t.density_shape[4] - 1
+    file = os.path.join(path, "scattering_density.exp.npy")
+    e = np.load(file)
+    e[band].reshape(-1)[e[band].size // 2] ^= 0x55
+    np.save(file, e)
+    with _cache._LOADED_LOCK:
+        _cache._LOADED.clear()
+    capfd.readouterr()
+    again = small()
+    assert again.from_cache and _notes(capfd) == []
+    assert np.array_equal(again._t.scattering_density, J)
+    note = _notes(capfd)
+    assert len(note) == 1 and "scattering_density.exp.npy" in note[0], note
+
+
+def test_the_whole_table_is_read_after_the_entry_is_removed_and_checked_again(capfd):
     """The tables hold the density's files: the whole table decodes after the entry was
-    removed (the cache cleared); a file changed in place after the load is refused
-    (DamagedEntry) on that read instead of decoded."""
+    removed (the cache cleared); a file changed in place after the load is found on that
+    read: one line on stderr, the entry removed and the whole table of a fresh build
+    served."""
     ref = small()
     with _cache._LOADED_LOCK:
         _cache._LOADED.clear()
@@ -284,12 +346,59 @@ def test_the_whole_table_is_read_after_the_entry_is_removed_and_checked_again():
         _cache._LOADED.clear()
     m = small()
     assert m.from_cache and m._t.__dict__["_scattering_density"] is None
-    file = os.path.join(entry(), "scattering_density.npy")
+    path = entry()
+    file = os.path.join(path, "scattering_density.npy")
     with open(file, "r+b") as f:                       # the same file, changed in place
         f.seek(-8, os.SEEK_END)
         f.write(b"\x00\x7c" * 4)
+    capfd.readouterr()
+    assert np.array_equal(m._t.scattering_density, ref._t.scattering_density)
+    note = _notes(capfd)
+    assert len(note) == 1 and path in note[0], note
+
+
+def test_without_a_rebuild_damage_at_the_whole_read_is_an_error(capfd):
+    """_cache.load without ``rebuild_density``: damage found on the whole read is
+    DamagedEntry (after its note, the entry removed)."""
+    first = small()
+    path = entry()
+    rows = _rows(first)
+    band = 0 if rows[0] > 0 else first._t.density_shape[4] - 1
+    _damage_band(path, band, "flipped")
+    with _cache._LOADED_LOCK:
+        _cache._LOADED.clear()
+    k = os.path.basename(path)
+    t = _cache.load(k, lambda scalars, shape: rows)
+    assert t is not None
     with pytest.raises(_cache.DamagedEntry):
-        m._t.scattering_density
+        t.scattering_density
+    assert not os.path.exists(path)
+
+
+def test_bands_read_in_part_are_the_rows_of_the_whole_table(tmp_path):
+    """A table written in mu_s bands (_write_bands) and read back by bands: every range of
+    rows decodes to NumPy's float16 cast of the rows times their power of two, the same
+    bits as the whole table's rows; the bands on disk are the table's rows [..., b, :]."""
+    rng = np.random.default_rng(3)
+    shape = (1, 3, 4, 2, 6, 5)
+    table = (rng.uniform(-1.0, 1.0, shape) * 2.0 ** rng.integers(-30, 5, shape[:-1] + (1,)))
+    table = table.astype(np.float32)
+    scale = 2.0 ** (np.floor(np.log2(np.abs(table).max(axis=-1, keepdims=True))) - 14)
+    expected = ((table / scale).astype(np.float16).astype(np.float64) * scale).astype(np.float32)
+    a = table.copy()
+    enc = _cache._encode_table("d", [a], shape, block=shape[-2])
+    sums = _cache._write_encoded(str(tmp_path / "d.npy"), str(tmp_path / "d.exp.npy"), "d",
+                                 enc, banded=True)
+    on_disk = np.load(tmp_path / "d.npy")
+    assert on_disk.shape == (6, 1, 3, 4, 2, 5)
+    for b in range(6):
+        assert np.array_equal(on_disk[b].astype(np.float32) * scale[..., b, :].astype(np.float32),
+                              expected[..., b, :])
+    with _cache._HalfTable(str(tmp_path), "d", sums, banded=True) as t:
+        assert np.array_equal(t.decode(), expected)
+        for lo in range(7):
+            for hi in range(lo, 7):
+                assert np.array_equal(t.decode((lo, hi)), expected[..., lo:hi, :]), (lo, hi)
 
 
 def test_rows_that_cannot_be_said_decode_the_whole_table(monkeypatch, capfd):

@@ -269,7 +269,16 @@ class PrecomputedSky(SkyModel):
             return precompute(props, wl, p), False
         settings = {k: v for k, v in p.items() if k in _TABLE_SETTINGS}
         k = _cache.key(props, settings)
-        tables = _cache.load(k, density_rows)
+
+        def rebuild_density():
+            # a damaged band of the entry's density found on its first whole read (see
+            # _cache.load): the precomputation again, stored as a new entry; its table
+            # holds the decoded values, what a fresh model serves
+            fresh = precompute(props, wl, p)
+            _cache.store(k, fresh)
+            return fresh.scattering_density
+
+        tables = _cache.load(k, density_rows, rebuild_density)
         hit = tables is not None
         if not hit:
             tables = precompute(props, wl, p)

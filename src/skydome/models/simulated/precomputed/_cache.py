@@ -28,18 +28,27 @@ it fails, removed and built again on first use. Cost: the whole entry is read on
 (CRC-32 runs at 2.2 GB/s, the finiteness check at about 10 GB/s on one core of the 2-core EPYC
 of docs/performance.md; BLAKE2b at 0.74 GB/s would triple it); docs/performance.md gives the
 load times measured. A half-precision table's finiteness is found on its float16 bits as they
-are decoded (:func:`_decode_half_checked`), in the same pass.
+are decoded (:func:`_decode_half_checked`), in the same pass. The scattering density is
+checked in bands instead (below).
 
 **The scattering density read in part.** A model that renders the observer's sky reads the
 scattering density only at the sun cosines its own rays reach (:mod:`._reach`: about a
 fifth of the default table's mu_s rows with the sun at 30 deg), so :func:`load` decodes
 only those rows where the caller names them (``density_rows``) and the whole table on its
 first read (:class:`_HalfTable`, :meth:`._tables.Tables.set_scattering_density_part`:
-aerial perspective, the stored table's build, the exports, another sun's rows). The checks
-do not change with it: the load still computes the CRC-32 of every byte of every file and
-checks every value of the float16 file for finiteness (on its bits, where its rows are not
-decoded), so a damaged byte outside the rows decoded rebuilds the entry before anything is
-served; the whole table's later decoding checks its files again.
+aerial perspective, the stored table's build, the exports, another sun's rows). Its float16
+file and exponents are stored in bands of mu_s rows (format 13, "half-bands" in
+``meta.json``'s "encoded"; :func:`_write_bands`): the mu_s axis first on disk, one row per
+band, each band's bytes contiguous and with its own CRC-32 (the records' ``band_crc32``),
+so that the load reads, checks and decodes only the bands of its rows (7 of 48 at the
+defaults with the sun at 30 deg: 19 of 132 MB), not the whole file. The in-memory table is
+as before (the kernels index J[c, theta, phi, r, mu_s, wavelength]); the values decoded are
+the same bits. A damaged band the load reads rebuilds the entry before anything is served,
+as any other file; the other bands are checked (CRC-32, finiteness) when the whole table is
+first decoded, and damage found there is said in one line on stderr naming the entry, the
+entry removed and the whole table served from the precomputation again (the caller's
+``rebuild_density`` of :func:`load`: what a fresh model serves), so that it does not reach
+the caller as an error.
 
 The stored 4-D table of orders 2..N is built after the precomputation, on its first read
 (:meth:`._tables.Tables.build_multiple_scattering`); it is then added to the same entry as
@@ -97,7 +106,10 @@ from skydome._io import write_npy
 # wavelengths, "encoded"; the scattering density's Rayleigh constituent as a quadratic form);
 # the single-scattering table not stored where it can be computed again from the entry (it
 # is, on use: the observer's two r nodes, or the whole table), but for its first two r nodes
-CACHE_FORMAT = "skydome.precomputed-cache/12"
+# 13: the scattering density's float16 file and its exponents in bands of mu_s rows (the
+# mu_s axis first on disk, "half-bands"), a CRC-32 per band, so that a part of its rows is
+# read and checked alone
+CACHE_FORMAT = "skydome.precomputed-cache/13"
 # five table sets at the default settings: 0.24 GB each with the stored table of orders
 # 2..N (packed; 0.30 GB before), 0.17 GB without it (1.28 GB each in format 11)
 DEFAULT_LIMIT_BYTES = 1_500_000_000
@@ -109,6 +121,7 @@ _RECOMPUTED = ("single_scattering",)
 _GROUND = "single_scattering_ground"    # its first two r nodes, stored as they are
 _EXP = ".exp"                          # the file of a half table's row exponents
 _DENSITY = "scattering_density"
+_BANDS = "half-bands"                  # "encoded" of a half table stored in bands of mu_s rows
 _QUAD = ".quadratic"                   # its constituents stored as a quadratic form
 # largest residual of that form, relative to the largest value of each (r, mu_s, wavelength)
 # column, for a constituent to be stored as one (float32 rounding: about 1e-6)
@@ -247,20 +260,6 @@ def _decode_half_checked(h: np.ndarray, e: np.ndarray, out: np.ndarray) -> bool:
     np.multiply(out, np.ldexp(np.float32(1.0), e.astype(np.int32) + _BIAS_SHIFT)[..., None],
                 out=out)
     return finite
-
-
-# a float16 is inf or NaN where its five exponent bits are all ones
-_HALF_EXP_BITS = 0x7C00
-
-
-def _finite_bits(h: np.ndarray, scratch: np.ndarray) -> bool:
-    """Whether every value of the float16 array ``h`` is finite, found on its bits (its
-    exponent field not all ones; ``scratch``: an int16 array of h's size, overwritten): two
-    passes over 2-byte values, 0.8-11 ms for the 66 M values of the default scattering
-    density on the 2-core machine of docs/performance.md, where decoding them whole took
-    0.03-0.42 s."""
-    np.bitwise_and(h.reshape(-1).view(np.int16), _HALF_EXP_BITS, out=scratch)
-    return bool(scratch.max() < _HALF_EXP_BITS) if scratch.size else True
 
 
 def _npy_header(f, dtype, shape) -> None:
@@ -452,7 +451,7 @@ class _Encoded:
         self.shape, self.chunks, self.exps = tuple(int(n) for n in shape), chunks, exps
 
 
-def _encode_table(name: str, slabs, shape) -> _Encoded:
+def _encode_table(name: str, slabs, shape, block: int = 1) -> _Encoded:
     """Encode the float32 table ``name`` of ``shape`` given as consecutive C-contiguous
     ``slabs`` along its first axis, each receiving the decoded values in place
     (:func:`_encode_rows`), in steps of :data:`_CHECK_BYTES` shared out between
@@ -460,14 +459,19 @@ def _encode_table(name: str, slabs, shape) -> _Encoded:
     lock: the scattering density's aerosol constituent took 0.9-1.2 s on one thread of the
     2-core EPYC of docs/performance.md). The same chunks, values and exponents as
     :func:`_write_half` writes; held in memory (half the table's float32 size) until
-    :func:`_write_encoded` writes them. _NotFinite as there."""
+    :func:`_write_encoded` writes them. _NotFinite as there. ``block``: each chunk holds a
+    whole number of blocks of that many rows (the mu_s axis, for a table written in bands:
+    :func:`_write_encoded`)."""
     nl = int(shape[-1])
+    block = max(1, int(block))
     parts = []
     for slab in slabs:
         if slab.dtype != np.float32 or not slab.flags.c_contiguous:
             raise ValueError(f"a slab of {name} is not C-contiguous float32")
         flat = slab.reshape(-1, nl)
-        step = max(1, _CHECK_BYTES // (4 * nl))
+        if flat.shape[0] % block:
+            raise ValueError(f"a slab of {name} is not whole blocks of {block} rows")
+        step = max(1, _CHECK_BYTES // (4 * nl * block)) * block
         parts += [flat[i:i + step] for i in range(0, flat.shape[0], step)]
     n = min(_encode_threads(), len(parts))
     if n <= 1:
@@ -484,11 +488,15 @@ def _encode_table(name: str, slabs, shape) -> _Encoded:
     return _Encoded(shape, [h for h, _ in out], exps.reshape(tuple(shape[:-1])))
 
 
-def _write_encoded(file: str, exp_file: str, name: str, enc: _Encoded) -> dict:
+def _write_encoded(file: str, exp_file: str, name: str, enc: _Encoded,
+                   banded: bool = False) -> dict:
     """Write the encoded table ``enc`` (:func:`_encode_table`) to ``file`` and ``exp_file``
     as :func:`_write_half` does (the same bytes); returns their checksum records. Each chunk
     is let go once written (``enc.chunks`` is empty after), so that the memory they hold
-    shrinks as the write goes on."""
+    shrinks as the write goes on. ``banded``: in bands of mu_s rows instead
+    (:func:`_write_bands`)."""
+    if banded:
+        return _write_bands(file, exp_file, name, enc)
     crc = 0
     with open(file, "wb") as f:
         _npy_header(f, np.float16, enc.shape)
@@ -505,6 +513,50 @@ def _write_encoded(file: str, exp_file: str, name: str, enc: _Encoded) -> dict:
            "shape": [int(n) for n in enc.shape]}
     return {name: rec,
             name + _EXP: _record(enc.exps, zlib.crc32(memoryview(enc.exps.reshape(-1))))}
+
+
+def _band_shape(shape) -> tuple:
+    """The on-disk shape of a table of ``shape`` (..., mu_s, wavelength) stored in bands of
+    mu_s rows: (mu_s, ..., wavelength), the mu_s axis first, so that each mu_s row (a
+    band) is contiguous in the file. One row per band (2.7 MB of the default density's
+    float16 file): the rows a render reads are consecutive, so their bands are consecutive
+    in the file whatever the band's width, and a wider band would only add rows to read,
+    check and decode (docs/performance.md, "The scattering density stored in mu_s
+    bands")."""
+    shape = tuple(int(n) for n in shape)
+    return (shape[-2],) + shape[:-2] + (shape[-1],)
+
+
+def _write_bands(file: str, exp_file: str, name: str, enc: _Encoded) -> dict:
+    """Write the encoded table ``enc`` (logical shape (..., mu_s, wavelength); its chunks
+    whole blocks of mu_s rows, :func:`_encode_table` with ``block``) in bands of mu_s rows:
+    ``file`` float16 of shape :func:`_band_shape` and ``exp_file`` its int8 exponents
+    (mu_s, ...), the bytes of band b those of the table's rows [..., b, :] in the table's
+    order. Returns their records: dtype, on-disk shape and a CRC-32 per band
+    (``band_crc32``). The same values as :func:`_write_encoded`'s, moved."""
+    shape = enc.shape
+    n_ms, nl = shape[-2], shape[-1]
+    disk = _band_shape(shape)
+    chunks, enc.chunks = enc.chunks, []
+    blocks = [h.reshape(-1, n_ms, nl) for h in chunks]
+    exps = np.ascontiguousarray(np.moveaxis(enc.exps, -1, 0))      # (mu_s, ...)
+    crcs = []
+    with open(file, "wb") as f:
+        _npy_header(f, np.float16, disk)
+        for b in range(n_ms):
+            crc = 0
+            for h in blocks:
+                data = memoryview(np.ascontiguousarray(h[:, b, :]).reshape(-1)).cast("B")
+                crc = zlib.crc32(data, crc)
+                f.write(data)
+            crcs.append(int(crc))
+    del blocks, chunks
+    write_npy(exp_file, exps)
+    exp_crcs = [int(zlib.crc32(memoryview(exps[b].reshape(-1)))) for b in range(n_ms)]
+    return {name: {"dtype": np.dtype(np.float16).str, "shape": [int(n) for n in disk],
+                   "band_crc32": crcs},
+            name + _EXP: {"dtype": exps.dtype.str, "shape": [int(n) for n in exps.shape],
+                          "band_crc32": exp_crcs}}
 
 
 def _read_half(path: str, name: str, sums: dict, out=None) -> np.ndarray:
@@ -535,21 +587,33 @@ class _HalfTable:
     memory-mapped. Held, they stay readable when the entry
     is removed meanwhile (the cache's eviction and ``clear_cache`` unlink files; its writers
     replace files by renaming), so that what was checked at the load is what is decoded
-    later. Opening checks the exponents' and the coefficients' CRC-32 and the float16
-    file's header; every :meth:`decode` checks the CRC-32 of the whole float16 file and the
-    finiteness of every value again (a file changed in place since: DamagedEntry).
+    later. Opening checks the float16 file's header, the coefficients' CRC-32 and, for a
+    table stored whole, the exponents'.
 
-    :meth:`decode` with ``rows`` decodes only the mu_s rows (the axis before the
-    wavelengths) first..end-1, in the same single pass over the file as the checks; without,
-    the whole table, as :func:`_read_half` and the reading of whole tables always did. The
+    ``banded`` (the scattering density, "half-bands"): the float16 file and the exponents
+    are stored in bands of mu_s rows (:func:`_write_bands`: the mu_s axis first on disk),
+    each with its own CRC-32, so that :meth:`decode` with ``rows`` reads, checks (CRC-32 of
+    the band's float16 bytes and exponents, finiteness of its values as they are decoded)
+    and decodes only the bands of the mu_s rows first..end-1; without ``rows``, every band.
+    A table stored whole (the stored table of orders 2..N) is decoded whole, the CRC-32 of
+    the whole float16 file and the finiteness of every value checked in the same pass. The
     values decoded are the same bits either way (each value is decoded alone: a float16
     times the power of two of its row, :func:`_decode_half_checked`; a quadratic form's
-    value is its own column's product, :func:`_quadratic_eval`). :meth:`read` (the whole
-    table, once; thread-safe) is what :meth:`._tables.Tables.set_scattering_density_part`
-    calls on the first read of the whole table."""
+    value is its own column's product, :func:`_quadratic_eval`).
 
-    def __init__(self, path: str, name: str, sums: dict, quad=None):
+    :meth:`read` (the whole table, once; thread-safe) is what
+    :meth:`._tables.Tables.set_scattering_density_part` calls on the first read of the whole
+    table: it checks every band again, so that a band outside the rows decoded at the load
+    is checked there. Where a check fails there (a damaged band not read at the load, or a
+    file changed in place since), :meth:`read` says so on stderr in one line naming the
+    entry, removes the entry (where it is still the one whose files are held) and returns
+    the table ``rebuild()`` gives (the precomputation's, for the model's atmosphere and
+    settings: what a fresh model serves); without ``rebuild``, DamagedEntry."""
+
+    def __init__(self, path: str, name: str, sums: dict, quad=None, banded: bool = False,
+                 rebuild=None):
         self.path, self.name, self.sums = path, name, sums
+        self.banded, self.rebuild = bool(banded), rebuild
         self._lock = threading.Lock()
         self._whole = None
         self._f = None
@@ -558,10 +622,23 @@ class _HalfTable:
         else:
             self.ks = [int(k) for k in quad["constituents"]]
         self.exps = _map(os.path.join(path, name + _EXP + ".npy"))
-        _verify(name + _EXP, self.exps, sums.get(name + _EXP))
         rec = sums.get(name)
         if not isinstance(rec, dict):
             raise DamagedEntry(f"{name}.npy has no checksum")
+        erec = sums.get(name + _EXP)
+        if self.banded:
+            # the exponents are checked band by band, as their bands are decoded
+            for r, file, a in ((rec, name, None), (erec, name + _EXP, self.exps)):
+                crcs = r.get("band_crc32") if isinstance(r, dict) else None
+                if not isinstance(crcs, list) or not crcs:
+                    raise DamagedEntry(f"{file}.npy has no checksum")
+                if a is not None and (a.dtype.str != r.get("dtype") or not a.flags.c_contiguous
+                                      or list(a.shape) != r.get("shape")
+                                      or len(crcs) != a.shape[0]):
+                    raise DamagedEntry(f"{file}.npy has shape {a.shape} {a.dtype}, recorded "
+                                       f"{r.get('shape')} {r.get('dtype')}")
+        else:
+            _verify(name + _EXP, self.exps, erec)
         self.rec = rec
         self.coef = None
         f = open(os.path.join(path, name + ".npy"), "rb")
@@ -572,11 +649,15 @@ class _HalfTable:
             shape, fortran, dtype = read(f)
             if (dtype != np.float16 or fortran or list(shape) != rec.get("shape")
                     or rec.get("dtype") != np.dtype(np.float16).str
-                    or tuple(shape[:-1]) != self.exps.shape):
+                    or tuple(shape[:-1]) != self.exps.shape
+                    or (self.banded and (len(shape) < 2
+                                         or len(rec["band_crc32"]) != shape[0]))):
                 raise DamagedEntry(f"{name}.npy has shape {shape} {dtype}, recorded "
                                    f"{rec.get('shape')} {rec.get('dtype')}")
             self.offset = f.tell()
-            self.half_shape = tuple(int(n) for n in shape)
+            shape = tuple(int(n) for n in shape)
+            # the table's own shape (..., mu_s, wavelength): a banded file's first axis is mu_s
+            self.half_shape = (shape[1:-1] + (shape[0], shape[-1]) if self.banded else shape)
             if quad is None:
                 self.shape = self.half_shape
             else:
@@ -610,28 +691,59 @@ class _HalfTable:
         self.close()
 
     def read(self) -> np.ndarray:
-        """The whole table, decoded and checked on the first call (DamagedEntry where the
-        files no longer match their records: changed in place since the load), then the
-        same array; the files are let go once it is decoded."""
+        """The whole table, decoded and checked on the first call, then the same array; the
+        files are let go once it is decoded. A check that fails: see the class's text."""
         with self._lock:
             if self._whole is None:
-                if self._f is None:
-                    raise DamagedEntry(f"{self.name}.npy of {self.path} is closed")
-                # the small files again, as they are mapped now
-                _verify(self.name + _EXP, self.exps, self.sums.get(self.name + _EXP))
-                if self.coef is not None:
-                    _verify(self.name + _QUAD, self.coef, self.sums.get(self.name + _QUAD))
-                self._whole = self.decode()
+                try:
+                    if self._f is None:
+                        raise DamagedEntry(f"{self.name}.npy of {self.path} is closed")
+                    # the small files again, as they are mapped now
+                    if not self.banded:
+                        _verify(self.name + _EXP, self.exps, self.sums.get(self.name + _EXP))
+                    if self.coef is not None:
+                        _verify(self.name + _QUAD, self.coef,
+                                self.sums.get(self.name + _QUAD))
+                    self._whole = self.decode()
+                except DamagedEntry as exc:
+                    self._whole = self._repair(exc)
                 self.close()
             return self._whole
 
+    def _repair(self, exc: DamagedEntry) -> np.ndarray:
+        """:meth:`read`'s way out of a failed check: the note, the entry removed (where its
+        file is still the one held: not where the entry was written again since), the
+        table from ``rebuild`` (DamagedEntry ``exc`` without it)."""
+        same = False
+        if self._f is not None:
+            try:
+                held = os.fstat(self._f.fileno())
+                now = os.stat(os.path.join(self.path, self.name + ".npy"))
+                same = (held.st_ino, held.st_dev) == (now.st_ino, now.st_dev)
+            except OSError:
+                pass
+        self.close()
+        if same:
+            _remove(self.path)
+        _note(f"table cache entry {self.path} is damaged ({_reason(exc)}); "
+              + ("rebuilding it" if self.rebuild is not None else "it is removed"))
+        if self.rebuild is None:
+            raise exc
+        J = self.rebuild()
+        if J is None or tuple(J.shape) != self.shape:
+            raise exc
+        return J
+
     def decode(self, rows=None, out=None) -> np.ndarray:
         """The table decoded (float32), or with ``rows`` = (first, end) only its mu_s rows
-        first..end-1 (the table's shape with that axis end - first long); every value of
-        the float16 file checked either way (CRC-32, finite). ``out``: a C-contiguous
-        float32 array of that shape to decode into (else a new one)."""
+        first..end-1 (the table's shape with that axis end - first long; a banded table
+        only); every value of the float16 file that is decoded checked (CRC-32, finite).
+        ``out``: a C-contiguous float32 array of that shape to decode into (else a new
+        one)."""
         shape = self.shape
         if rows is not None:
+            if not self.banded:
+                raise ValueError(f"{self.name}.npy is not stored in bands of rows")
             lo, hi = int(rows[0]), int(rows[1])
             if not 0 <= lo <= hi <= shape[-2]:
                 raise ValueError(f"rows {rows} of an axis of {shape[-2]}")
@@ -641,12 +753,13 @@ class _HalfTable:
         elif out.shape != shape or out.dtype != np.float32 or not out.flags.c_contiguous:
             raise DamagedEntry(f"{self.name}.npy has shape {shape}, expected {out.shape}")
         rest = self.rest
+        run = self._bands if self.banded else self._pass
         if not rest:
-            self._pass(None, rows)          # the checks of the (empty) float16 file
+            run(None, rows)          # the checks of the (empty) float16 file
         elif rest == list(range(rest[0], rest[-1] + 1)):
-            self._pass(out[rest[0]:rest[0] + len(rest)], rows)
+            run(out[rest[0]:rest[0] + len(rest)], rows)
         else:
-            out[rest] = self._pass(None, rows)
+            out[rest] = run(None, rows)
         if self.ks:
             for j, k in enumerate(self.ks):
                 coef = self.coef[j]
@@ -655,32 +768,28 @@ class _HalfTable:
                 _quadratic_eval(coef, out[k])
         return out
 
-    def _pass(self, out, rows):
-        """One pass over the float16 file in steps of :data:`_CHECK_BYTES` (whole blocks of
-        the mu_s axis where ``rows`` is given): its CRC-32, the finiteness of every value,
-        and the values decoded into ``out`` (a new array where None), all of them or the
-        mu_s rows ``rows`` only. Returns ``out``."""
+    def _length(self, pos: int) -> None:
+        size = os.fstat(self._f.fileno()).st_size
+        if size < pos:
+            raise DamagedEntry(f"{self.name}.npy is truncated")
+        if size > pos:
+            raise DamagedEntry(f"{self.name}.npy is longer than its shape")
+
+    def _pass(self, out, rows=None):
+        """One pass over the float16 file of a table stored whole, in steps of
+        :data:`_CHECK_BYTES`: its CRC-32, the finiteness of every value and the values
+        decoded into ``out`` (a new array where None). Returns ``out``. (``rows``: None
+        always; :meth:`decode` refuses rows of a table stored whole.)"""
         name, shape = self.name, self.half_shape
         nl = shape[-1]
-        n_ms = shape[-2] if len(shape) >= 2 else 1
         n_rows = int(np.prod(shape[:-1]))
-        if rows is None:
-            want = shape
-            step = max(1, _CHECK_BYTES // (2 * nl))
-        else:
-            lo, hi = int(rows[0]), int(rows[1])
-            want = shape[:-2] + (hi - lo, nl)
-            step = max(1, _CHECK_BYTES // (2 * nl * n_ms)) * n_ms
-            bits = np.empty(min(step, max(n_rows, 1)) * nl, dtype=np.int16)
+        step = max(1, _CHECK_BYTES // (2 * nl))
         if out is None:
-            out = np.empty(want, dtype=np.float32)
+            out = np.empty(shape, dtype=np.float32)
         e_flat = self.exps.reshape(-1)
-        if rows is None:
-            flat = out.reshape(-1, nl)
-        elif hi > lo:
-            flat = out.reshape(-1, hi - lo, nl)
-        e_blocks = None if rows is None else self.exps.reshape(-1, n_ms)
+        flat = out.reshape(-1, nl)
         buf = np.empty(min(step, max(n_rows, 1)) * nl, dtype=np.float16)
+        self._length(self.offset + 2 * n_rows * nl)
         pos = self.offset
         crc, finite = 0, True
         for i in range(0, n_rows, step):
@@ -691,19 +800,58 @@ class _HalfTable:
                 raise DamagedEntry(f"{name}.npy is truncated")
             pos += b.nbytes
             crc = zlib.crc32(view, crc)
-            if rows is None:
-                finite = _decode_half_checked(b.reshape(k, nl), e_flat[i:i + k],
-                                              flat[i:i + k]) and finite
-                continue
-            finite = _finite_bits(b, bits[:k * nl]) and finite
-            if hi > lo:
-                j, nb = i // n_ms, k // n_ms
-                _decode_half_checked(b.reshape(nb, n_ms, nl)[:, lo:hi],
-                                     e_blocks[j:j + nb, lo:hi], flat[j:j + nb])
-        if os.fstat(self._f.fileno()).st_size != pos:
-            raise DamagedEntry(f"{name}.npy is longer than its shape")
+            finite = _decode_half_checked(b.reshape(k, nl), e_flat[i:i + k],
+                                          flat[i:i + k]) and finite
         if crc != self.rec.get("crc32"):
             raise DamagedEntry(f"the checksum of {name}.npy does not match")
+        if not finite:
+            raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
+        return out
+
+    def _bands(self, out, rows):
+        """The bands of mu_s rows ``rows`` (first, end; None: every band) of a banded
+        table: read in one pass (consecutive bands are consecutive in the file), each
+        band's CRC-32 and its exponents' checked, the values decoded into ``out`` (the
+        table's shape with the mu_s axis end - first long; a new array where None), their
+        finiteness checked as they are decoded. Returns ``out``."""
+        name, shape = self.name, self.half_shape
+        n_ms, nl = shape[-2], shape[-1]
+        lo, hi = (0, n_ms) if rows is None else (int(rows[0]), int(rows[1]))
+        n = hi - lo
+        if out is None:
+            out = np.empty(shape[:-2] + (n, nl), dtype=np.float32)
+        outer = int(np.prod(shape[:-2]))
+        band = outer * nl                                  # values per band
+        self._length(self.offset + 2 * n_ms * band)
+        buf = np.empty((n, outer, nl), dtype=np.float16)
+        if n == 0 or outer == 0:
+            return out
+        raw = memoryview(buf.reshape(-1)).cast("B")
+        got, pos = 0, self.offset + 2 * lo * band
+        while got < raw.nbytes:                            # one read, in steps of 1 GiB
+            k = _read_at(self._f, raw[got:got + (1 << 30)], pos + got)
+            if k <= 0:
+                raise DamagedEntry(f"{name}.npy is truncated")
+            got += k
+        crcs, e_crcs = self.rec["band_crc32"], self.sums[name + _EXP]["band_crc32"]
+        for j in range(n):
+            if zlib.crc32(memoryview(buf[j].reshape(-1)).cast("B")) != crcs[lo + j]:
+                raise DamagedEntry(f"the checksum of {name}.npy does not match "
+                                   f"(mu_s row {lo + j})")
+            if zlib.crc32(memoryview(self.exps[lo + j].reshape(-1)).cast("B")) != \
+                    e_crcs[lo + j]:
+                raise DamagedEntry(f"the checksum of {name}{_EXP}.npy does not match "
+                                   f"(mu_s row {lo + j})")
+        # decoded into ``out`` in its own order (contiguous), reading the bands across:
+        # (outer, n, nl) views of the band-major buffer and exponents
+        h = buf.transpose(1, 0, 2)
+        e = self.exps[lo:hi].reshape(n, outer).T
+        flat = out.reshape(outer, n, nl)
+        step = max(1, _CHECK_BYTES // (4 * nl * n))
+        finite = True
+        for i in range(0, outer, step):
+            finite = _decode_half_checked(h[i:i + step], e[i:i + step],
+                                          flat[i:i + step]) and finite
         if not finite:
             raise DamagedEntry(f"{name}.npy holds NaN or infinite values")
         return out
@@ -785,7 +933,10 @@ def _encode_store_half(name: str, a: np.ndarray):
         for j, k in enumerate(ks):
             _quadratic_eval(coef[j], a[k])
     rest = [k for k in range(a.shape[0]) if k not in ks]
-    enc = _encode_table(name, [a[k:k + 1] for k in rest], (len(rest),) + a.shape[1:])
+    # the density in bands of mu_s rows (_write_bands): chunks of whole mu_s blocks
+    block = a.shape[-2] if name == _DENSITY and a.ndim >= 2 else 1
+    enc = _encode_table(name, [a[k:k + 1] for k in rest], (len(rest),) + a.shape[1:],
+                        block=block)
     return quad, enc, extra
 
 
@@ -799,8 +950,15 @@ def _write_store_half(folder: str, name: str, encoded) -> dict:
         write_npy(os.path.join(folder, name + _QUAD + ".npy"), coef)
         recs[name + _QUAD] = _record(coef, crc)
     recs.update(_write_encoded(os.path.join(folder, name + ".npy"),
-                               os.path.join(folder, name + _EXP + ".npy"), name, enc))
+                               os.path.join(folder, name + _EXP + ".npy"), name, enc,
+                               banded=_encoding(name) == _BANDS))
     return recs
+
+
+def _encoding(name: str) -> str:
+    """The "encoded" record of a table stored in half precision by :func:`store`: the
+    scattering density in bands of mu_s rows, every other table whole."""
+    return _BANDS if name == _DENSITY else "half"
 
 
 def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
@@ -812,13 +970,15 @@ def _store_half(folder: str, name: str, a: np.ndarray) -> tuple[dict, dict]:
     return _write_store_half(folder, name, encoded), encoded[2]
 
 
-def _read_table(path: str, name: str, sums: dict, quad, rows=None):
+def _read_table(path: str, name: str, sums: dict, quad, rows=None, banded=False,
+                rebuild=None):
     """The half-precision table ``name`` of the entry ``path``, decoded (:func:`_read_half`)
     and, where ``quad`` (its "quadratic" record) says so, its quadratic-form constituents
-    evaluated from their coefficients. With ``rows`` (first, end): (the table's mu_s rows
-    first..end-1 decoded, its :class:`_HalfTable`, files held, for the whole table later),
-    every value of the files checked as for the whole table."""
-    t = _HalfTable(path, name, sums, quad)
+    evaluated from their coefficients. With ``rows`` (first, end; a ``banded`` table): (the
+    table's mu_s rows first..end-1 decoded, its :class:`_HalfTable`, files held, for the
+    whole table later, ``rebuild`` its way out of damage found then), the bands of those
+    rows checked (and the coefficients and the float16 file's header)."""
+    t = _HalfTable(path, name, sums, quad, banded=banded, rebuild=rebuild)
     if rows is None:
         with t:
             return t.decode()
@@ -907,7 +1067,7 @@ def _touch(path: str) -> None:
         pass
 
 
-def load(k: str, density_rows=None):
+def load(k: str, density_rows=None, rebuild_density=None):
     """The cached :class:`._tables.Tables` under key ``k``, or None (absent or unreadable;
     an unreadable entry is removed). The arrays are memory-mapped copy-on-write, so the
     start-up reads only the header of each file and pages come in as the tables are used.
@@ -922,14 +1082,18 @@ def load(k: str, density_rows=None):
     float32: the rows a ground observer's sky needs are about a fifth of them), and the
     whole table on its first read (:meth:`._tables.Tables.set_scattering_density_part`).
 
-    What is checked when: at the load, every file of the entry, whole, as before: the
-    CRC-32 of every byte of every file and the finiteness of every value (of a float16 file,
-    on its bits, in the pass that computes its CRC-32 and decodes the rows asked for), so
-    that a damaged byte anywhere, in the rows decoded or not, rebuilds the entry before the
-    model serves anything from it. The files of the density stay held (open or mapped) by
-    the tables until the whole table is decoded; that decoding checks the CRC-32 and
-    finiteness of the float16 file and the CRC-32 of the exponents and coefficients again
-    (a file changed in place since the load: DamagedEntry, the entry removed)."""
+    What is checked when: at the load, every file of the entry but the density's float16
+    file and exponents whole (the CRC-32 of every byte, the finiteness of every value),
+    and of those two the bands of the rows decoded (the density is stored in bands of
+    mu_s rows, each with its CRC-32, :func:`_write_bands`; the finiteness of their values
+    as they are decoded): damage there rebuilds the entry before the model serves anything
+    from it. The other bands are read and checked when the whole table is first decoded
+    (:meth:`_HalfTable.read`); the files of the density stay held (open or mapped) by the
+    tables until then. Damage found there (a band not read at the load, or a file changed
+    in place since) is said in one line on stderr, the entry removed and the whole table
+    served from ``rebuild_density()`` (the caller's: the precomputation's table for the
+    same atmosphere and settings, the values a fresh model serves); without it,
+    DamagedEntry."""
     from skydome.models.simulated.precomputed._tables import Tables
 
     wait_for_writes()
@@ -962,11 +1126,14 @@ def load(k: str, density_rows=None):
                 rows = None
                 if name == _DENSITY and density_rows is not None:
                     rows = _rows_asked(density_rows, meta, name)
-                if rows is None:
-                    arrays[name] = _read_table(path, name, sums, quad.get(name))
+                banded = half[name] == _BANDS
+                if rows is None or not banded:
+                    arrays[name] = _read_table(path, name, sums, quad.get(name),
+                                               banded=banded)
                 else:
                     part = (int(rows[0]),) + _read_table(path, name, sums, quad.get(name),
-                                                         rows=rows)
+                                                         rows=rows, banded=banded,
+                                                         rebuild=rebuild_density)
                 continue
             arrays[name] = _map(os.path.join(path, name + ".npy"))
             _verify(name, arrays[name], sums.get(name))
@@ -1305,7 +1472,7 @@ def _write_entry(folder, path, k, order, plain, encoded, half, limit) -> str | N
             with open(os.path.join(tmp, _META), "w") as f:
                 json.dump({"cache_key": k, "cache_format": CACHE_FORMAT, "arrays": names,
                            "scalars": scalars, "checksums": sums,
-                           "encoded": {n: "half" for n in sorted(half)},
+                           "encoded": {n: _encoding(n) for n in sorted(half)},
                            "quadratic": quadratic}, f)
     except (OSError, ValueError) as exc:   # ValueError: the cache folder is not writable
         _write_failed(folder, exc)
