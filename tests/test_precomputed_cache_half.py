@@ -204,7 +204,7 @@ def test_stored_table_in_half_precision_joins_the_entry_and_is_read_on_use(monke
     first = tiny()
     ap1 = first.aerial_perspective(DIRS, 5e3, WL)
     path = entry()
-    # packed: its float16 values' two byte planes compressed (_cache._write_packed)
+    # packed: its float16 values' two byte planes compressed (_cache._write_half with packed=True)
     assert not os.path.exists(os.path.join(path, "multiple_scattering.npy"))
     with open(os.path.join(path, "multiple_scattering.packed"), "rb") as f:
         assert f.read(len(_cache._PACK_MAGIC)) == _cache._PACK_MAGIC
@@ -406,14 +406,13 @@ def test_table_encoded_on_threads_is_numpys_float16_of_each_row(monkeypatch, tmp
 
 
 def test_packed_half_table_round_trip_and_damage(tmp_path):
-    """The packed file of a half table (_cache._write_packed / _read_packed): every float16
+    """The packed file of a half table (_cache._write_half with packed=True, _read_packed): every float16
     bit pattern of a finite value, in rows scaled by powers of two, read back bit for bit
     (the same float32 values the plain half file's decoding gives, _read_half); a smooth
     table packs to less than half of its float16 bytes; a truncated file, one with bytes
     changed or appended, a wrong record and a NaN are each refused (DamagedEntry)."""
     from skydome.models.simulated.precomputed._cache import (DamagedEntry, _read_half,
-                                                             _read_packed, _write_half,
-                                                             _write_packed)
+                                                             _read_packed, _write_half)
 
     bits = np.arange(65536, dtype=np.uint32).astype(np.uint16).view(np.float16)
     bits = bits[np.isfinite(bits)].astype(np.float32)
@@ -426,8 +425,8 @@ def test_packed_half_table_round_trip_and_damage(tmp_path):
         sums = _write_half(str(tmp_path / f"{name}.npy"), str(tmp_path / f"{name}.exp.npy"),
                            name, [a[:1], a[1:]], table.shape)
         plain = _read_half(str(tmp_path), name, sums)
-        recs = _write_packed(str(tmp_path / f"{name}.packed"), str(tmp_path / f"p{name}.exp.npy"),
-                             f"p{name}", [b[:2], b[2:]], table.shape)
+        recs = _write_half(str(tmp_path / f"{name}.packed"), str(tmp_path / f"p{name}.exp.npy"),
+                           f"p{name}", [b[:2], b[2:]], table.shape, packed=True)
         os.replace(tmp_path / f"{name}.packed", tmp_path / f"p{name}.packed")
         packed = _read_packed(str(tmp_path), f"p{name}", recs)
         assert packed.dtype == np.float32 and packed.shape == table.shape
@@ -447,5 +446,5 @@ def test_packed_half_table_round_trip_and_damage(tmp_path):
     nan = smooth.copy()
     nan[1, 2, 3, 4] = np.nan
     with pytest.raises(_cache._NotFinite):
-        _write_packed(str(tmp_path / "n.packed"), str(tmp_path / "n.exp.npy"), "n", [nan],
-                      nan.shape)
+        _write_half(str(tmp_path / "n.packed"), str(tmp_path / "n.exp.npy"), "n", [nan],
+                    nan.shape, packed=True)

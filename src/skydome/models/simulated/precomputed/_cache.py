@@ -60,7 +60,7 @@ The stored 4-D table of orders 2..N is built after the precomputation, on its fi
 its own file (:func:`add_stored_table`: built slab by slab of r nodes straight into a
 temporary file in the entry, renamed when complete): a table of at least
 :data:`HALF_MIN_BYTES`, as the default one, in half precision with its float16 values'
-two byte planes compressed losslessly (``multiple_scattering.packed``, :func:`_write_packed`:
+two byte planes compressed losslessly (``multiple_scattering.packed``, :func:`_write_half` with ``packed``:
 126 MB of float16 in 66 MB; read, checked and decoded whole on its first use,
 :func:`_read_packed`), a smaller one as it is (``multiple_scattering.npy``, memory-mapped
 by a later cache hit). An entry holding the half table uncompressed
@@ -322,41 +322,9 @@ def _unpack_chunk(f, n_max: int, crc: int, label: str):
     return b.view(np.float16).reshape(-1), crc
 
 
-def _write_packed(file: str, exp_file: str, name: str, slabs, shape) -> dict:
-    """:func:`_write_half`, the float16 values packed (:func:`_pack_chunk`) into ``file``
-    (``<name>.packed``) in chunks of :data:`_CHECK_BYTES` of float32 rows; returns the
-    checksum records (the CRC-32 of the packed file's bytes after its magic line, as
-    stored). Each slab receives the decoded values in place, as there."""
-    nl = int(shape[-1])
-    exps = np.empty(int(np.prod(shape[:-1])), dtype=np.int8)
-    done, crc, size = 0, 0, 0
-    with open(file, "wb") as f:
-        f.write(_PACK_MAGIC)
-        for slab in slabs:
-            if slab.dtype != np.float32 or not slab.flags.c_contiguous:
-                raise ValueError(f"a slab of {name} is not C-contiguous float32")
-            flat = slab.reshape(-1, nl)
-            step = max(1, _CHECK_BYTES // (4 * nl))
-            for i in range(0, flat.shape[0], step):
-                h, e = _encode_rows(flat[i:i + step], name)
-                for part in _pack_chunk(h):
-                    crc = zlib.crc32(part, crc)
-                    size += len(part)
-                    f.write(part)
-                exps[done:done + e.size] = e
-                done += e.size
-    if done != exps.size:
-        raise ValueError(f"{done} rows written for a table {tuple(shape)}")
-    exps = exps.reshape(tuple(shape[:-1]))
-    write_npy(exp_file, exps)
-    rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
-           "shape": [int(n) for n in shape], "packed_bytes": int(size)}
-    return {name: rec, name + _EXP: _record(exps, zlib.crc32(memoryview(exps.reshape(-1))))}
-
-
 def _read_packed(path: str, name: str, sums: dict) -> np.ndarray:
     """The float32 table ``name`` of the entry ``path`` from its packed file
-    (:func:`_write_packed`) and row exponents: every chunk read, its CRC-32 continued, its
+    (:func:`_write_half` with ``packed``) and row exponents: every chunk read, its CRC-32 continued, its
     planes decompressed and decoded (:func:`_decode_half_checked`) into the table; the file's
     CRC-32, length and every value's finiteness checked. DamagedEntry where a check fails."""
     rec = sums.get(name)
@@ -392,18 +360,25 @@ def _read_packed(path: str, name: str, sums: dict) -> np.ndarray:
     return out
 
 
-def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
+def _write_half(file: str, exp_file: str, name: str, slabs, shape,
+                packed: bool = False) -> dict:
     """Write the float32 table ``name`` of ``shape`` given as consecutive ``slabs`` along its
     first axis to ``file`` (float16: ``<name>.npy``) and ``exp_file`` (int8 row exponents:
     ``<name>.exp.npy``); returns their checksum records. Each slab (C-contiguous float32)
     receives the decoded values in place (what a later read gives): a slab that is a view of
     the table makes the table serve them. _NotFinite where a value is not finite (or too
-    large for the format)."""
+    large for the format). ``packed``: the float16 values packed instead
+    (:func:`_pack_chunk`, a ``<name>.packed`` file, read by :func:`_read_packed`) in chunks
+    of :data:`_CHECK_BYTES` of float32 rows, the record's CRC-32 that of the packed file's
+    bytes after its magic line, as stored, and its ``packed_bytes`` their count."""
     nl = int(shape[-1])
     exps = np.empty(int(np.prod(shape[:-1])), dtype=np.int8)
-    done, crc = 0, 0
+    done, crc, size = 0, 0, 0
     with open(file, "wb") as f:
-        _npy_header(f, np.float16, shape)
+        if packed:
+            f.write(_PACK_MAGIC)
+        else:
+            _npy_header(f, np.float16, shape)
         for slab in slabs:
             if slab.dtype != np.float32 or not slab.flags.c_contiguous:
                 raise ValueError(f"a slab of {name} is not C-contiguous float32")
@@ -411,9 +386,11 @@ def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
             step = max(1, _CHECK_BYTES // (4 * nl))
             for i in range(0, flat.shape[0], step):
                 h, e = _encode_rows(flat[i:i + step], name)
-                data = memoryview(h.reshape(-1)).cast("B")
-                crc = zlib.crc32(data, crc)
-                f.write(data)
+                for part in (_pack_chunk(h) if packed
+                             else [memoryview(h.reshape(-1)).cast("B")]):
+                    crc = zlib.crc32(part, crc)
+                    size += len(part)
+                    f.write(part)
                 exps[done:done + e.size] = e
                 done += e.size
     if done != exps.size:
@@ -422,6 +399,8 @@ def _write_half(file: str, exp_file: str, name: str, slabs, shape) -> dict:
     write_npy(exp_file, exps)
     rec = {"crc32": int(crc), "dtype": np.dtype(np.float16).str,
            "shape": [int(n) for n in shape]}
+    if packed:
+        rec["packed_bytes"] = int(size)
     return {name: rec, name + _EXP: _record(exps, zlib.crc32(memoryview(exps.reshape(-1))))}
 
 
@@ -1374,7 +1353,7 @@ def _add_half_table(path, meta, shape, slabs):
     try:
         with atomic_file(file, suffix=_PACK) as tmp, \
                 atomic_file(exp_file, suffix=".npy") as etmp:
-            recs = _write_packed(tmp, etmp, _STORED, into_out(), shape)
+            recs = _write_half(tmp, etmp, _STORED, into_out(), shape, packed=True)
             meta.setdefault("checksums", {}).update(recs)
             meta.setdefault("encoded", {})[_STORED] = "half-packed"
             with atomic_file(os.path.join(path, _META)) as mtmp, open(mtmp, "w") as f:
