@@ -36,14 +36,18 @@ def _one_error_line(res):
 
 @pytest.fixture
 def full_disk(monkeypatch):
-    """Every PNG written through Pillow writes a few bytes and then finds the disk full."""
+    """Every PNG written (through Pillow, or skydome's own encoder of sky pictures) writes a
+    few bytes and then finds the disk full."""
     from PIL import Image
+
+    from skydome.imaging import image
 
     def save(self, fp, format=None, **kw):
         with open(fp, "wb") as fh:
             fh.write(b"\x89PNG partial")
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(fp))
     monkeypatch.setattr(Image.Image, "save", save)
+    monkeypatch.setattr(image, "_write_png_chunks", lambda path, *a, **k: save(None, path))
 
 
 def test_full_disk_render_one_line_nothing_left(tmp_path, full_disk):
