@@ -339,6 +339,41 @@ def test_dataset_wavelength_step_keeps_the_table_wavelengths_and_refuses_others(
     assert "--wavelength-step = 15 nm is out of range" in err and "20, 10, 5, 4, 2, 1" in err
 
 
+def test_dataset_refuses_more_workers_than_the_memory_holds(tmp_path, capsys, monkeypatch):
+    """tools/fitted_dataset.py: a local cluster whose workers would need more than the
+    machine's available memory (0.14 GB per table wavelength and worker: the largest
+    measured, 11.2 GB at 81 wavelengths, docs/models.md "fitted", "Cost") is refused before
+    any work, naming --workers, the need and what fits; nothing is written. A cluster
+    (--scheduler) and --ignore-memory-check are not checked."""
+    import importlib.util
+    from pathlib import Path
+
+    tool = Path(__file__).resolve().parents[1] / "tools" / "fitted_dataset.py"
+    spec = importlib.util.spec_from_file_location("fitted_dataset_tool", tool)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.worker_memory_gb(81) == pytest.approx(11.34)
+    assert mod.worker_memory_gb(41) >= 5.5          # the largest measured at 41 wavelengths
+    monkeypatch.setattr(mod, "available_memory_gb", lambda: 24.0)
+    out = tmp_path / "set"
+    assert mod.main([str(out), "--grid", "small", "--wavelength-step", "10",
+                     "--workers", "3"]) == 2
+    err = capsys.readouterr().err
+    assert "--workers = 3" in err and "11.3 GB per worker" in err and "--workers 2 or fewer" in err
+    assert not out.exists()
+    monkeypatch.setattr(mod, "available_memory_gb", lambda: 4.0)
+    assert mod.main([str(out), "--grid", "small", "--workers", "1"]) == 2
+    assert "1 on a larger machine" in capsys.readouterr().err
+    assert not out.exists()
+    # no work is started where the check passes but the run is refused later for another
+    # reason: the memory check itself writes nothing either way
+    assert mod.main([str(out), "--grid", "small", "--workers", "1", "--ignore-memory-check",
+                     "--max-aod", "2"]) == 2
+    assert not out.exists()
+    real = mod.available_memory_gb()
+    assert real is None or real > 0
+
+
 # -- the aureole between the elevation nodes (the sun-relative reading, _coefficients.TURN) --
 def _ring_directions(sun, gammas_deg, n_az=24):
     """Directions at the scattering angles ``gammas_deg`` around ``sun`` (n_az each)."""

@@ -38,6 +38,7 @@ of the same grid in a folder of its own, which ``tools/fit_fitted.py --gas-bands
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
@@ -49,6 +50,35 @@ def grid(name: str):
     from skydome.models.fitted import _grid as G
 
     return G.grid(name)[:3]
+
+
+#: Resident memory of one worker per table wavelength [GB], the largest measured
+#: (docs/models.md, "fitted", "Cost"): the twilight reference's table build held 4.5-5.5 GB
+#: at 41 wavelengths (0.134 GB each) and 8.6-11.2 GB at 81 (10-nm steps: 0.138 GB each);
+#: two such workers at 10 nm filled a 24 GB machine.
+WORKER_GB_PER_WAVELENGTH = 0.14
+
+
+def worker_memory_gb(n_wavelengths: int) -> float:
+    """The resident memory one worker is expected to need [GB] for a data set of
+    ``n_wavelengths`` table wavelengths (:data:`WORKER_GB_PER_WAVELENGTH`)."""
+    return WORKER_GB_PER_WAVELENGTH * int(n_wavelengths)
+
+
+def available_memory_gb() -> float | None:
+    """This machine's available memory [GB] (``MemAvailable`` of /proc/meminfo; else the
+    physical memory), None where neither can be read."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024 / 1e9
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 1e9
+    except (AttributeError, OSError, ValueError):
+        return None
 
 
 def main(argv=None) -> int:
@@ -81,6 +111,11 @@ def main(argv=None) -> int:
                     help="table wavelengths: the gas bands' own (310, 330, 690, 710, 730, "
                          "770, 890, 930 nm) only: the supplement that tools/fit_fitted.py "
                          "--gas-bands adds to a 20-nm data set of the same grid")
+    ap.add_argument("--ignore-memory-check", action="store_true",
+                    help="start the local cluster even where --workers times the memory a "
+                         "worker is expected to need (about 0.14 GB per table wavelength: "
+                         "5.7 GB at 20 nm, 11.3 GB at 10 nm) exceeds the machine's available "
+                         "memory (by default refused before any work)")
     a = ap.parse_args(argv)
     if not 1 <= a.workers <= 256:
         print(f"error: --workers = {a.workers} is out of range [1, 256]", file=sys.stderr)
@@ -106,6 +141,18 @@ def main(argv=None) -> int:
               "20, 10, 5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)",
               file=sys.stderr)
         return 2
+    if a.scheduler is None and not a.ignore_memory_check:
+        # a local cluster: its workers share this machine's memory (a cluster's workers
+        # are elsewhere and not checked)
+        need, have = worker_memory_gb(wl.size), available_memory_gb()
+        if have is not None and a.workers * need > have:
+            fit = int(have // need)
+            print(f"error: --workers = {a.workers} needs about {a.workers * need:.1f} GB "
+                  f"({need:.1f} GB per worker at {wl.size} table wavelengths) and this "
+                  f"machine has {have:.1f} GB available: use --workers "
+                  + (f"{fit} or fewer" if fit >= 1 else "1 on a larger machine")
+                  + " (or --ignore-memory-check)", file=sys.stderr)
+            return 2
     el, alt, atms = grid(a.grid)
     if a.max_aod is not None:
         if not 0.0 <= a.max_aod <= 1.0:
