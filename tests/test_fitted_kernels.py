@@ -207,3 +207,37 @@ def test_threads_give_identical_values():
         numba.set_num_threads(n)
     for _ in range(3):
         np.testing.assert_array_equal(sky.xyz(d), one)
+
+
+def test_sky_cell_inverts_the_grid_mappings():
+    """_grid.sky_cell against the forward mappings (theta_nodes_rad, phi_nodes_rad): at the
+    nodes, the node's own index with no fraction (the last node as the last cell's end);
+    between them, fractions in [0, 1] whose forward mapping gives the angles back."""
+    from skydome.models.fitted import _grid as G
+
+    rng = np.random.default_rng(11)
+    phi = G.phi_nodes_rad()
+    for alt in (0.0, 2200.0, 15000.0):
+        th_h = G.horizon_zenith_rad(alt)
+        sky, _ = G.theta_nodes_rad(alt)
+        th_n, ph_n = np.meshgrid(sky, phi, indexing="ij")
+        iu, it, fu, ft = G.sky_cell(th_n, ph_n, th_h)
+        ju = np.arange(G.N_SKY)[:, None] * np.ones(G.N_PHI, dtype=int)
+        jt = np.ones(G.N_SKY, dtype=int)[:, None] * np.arange(G.N_PHI)
+        assert np.array_equal(iu + np.rint(fu).astype(int), ju)
+        assert np.array_equal(it + np.rint(ft).astype(int), jt)
+        assert np.allclose(np.where(fu > 0.5, fu - 1, fu), 0, atol=1e-9)
+        assert np.allclose(np.where(ft > 0.5, ft - 1, ft), 0, atol=1e-9)
+        # random directions of the sky: the forward mapping of the cell coordinates
+        u = rng.uniform(0, G.N_SKY - 1, 4000)
+        v = rng.uniform(0, G.N_PHI - 1, 4000)
+        xs, t = u / (G.N_SKY - 1), v / (G.N_PHI - 1)
+        th = (th_h - G.EPS) * (1 - xs * xs)
+        ph = np.pi * (G.A_PHI * t + (1 - G.A_PHI) * t * t)
+        iu, it, fu, ft = G.sky_cell(th, ph, th_h)
+        assert np.all((fu >= 0) & (fu <= 1) & (ft >= 0) & (ft <= 1))
+        assert np.all((iu >= 0) & (iu <= G.N_SKY - 2) & (it >= 0) & (it <= G.N_PHI - 2))
+        xb, tb = (iu + fu) / (G.N_SKY - 1), (it + ft) / (G.N_PHI - 1)
+        assert np.allclose((th_h - G.EPS) * (1 - xb * xb), th, rtol=0, atol=1e-9)
+        assert np.allclose(np.pi * (G.A_PHI * tb + (1 - G.A_PHI) * tb * tb), ph, rtol=0,
+                           atol=1e-9)

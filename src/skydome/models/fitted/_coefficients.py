@@ -267,16 +267,7 @@ def turned_reads(elevation_deg: float, node_deg: float, altitude_m: float):
     delta = math.radians(node_deg - elevation_deg)
     if strength == 0.0 or delta == 0.0:
         return None
-    theta_h = _grid.horizon_zenith_rad(altitude_m)
-    sky, _ = _grid.theta_nodes_rad(altitude_m)
-    phi = _grid.phi_nodes_rad()
-    th = np.repeat(sky, phi.size)
-    ph = np.tile(phi, sky.size)
-    x = np.sin(th) * np.cos(ph)          # the sun's vertical plane is x-z, the sun at +x
-    y = np.sin(th) * np.sin(ph)
-    z = np.cos(th)
-    e = math.radians(elevation_deg)
-    gamma = np.degrees(np.arccos(np.clip(x * math.cos(e) + z * math.sin(e), -1.0, 1.0)))
+    theta_h, th, x, y, z, gamma = _sky_geometry(float(elevation_deg), float(altitude_m))
     x2 = x * math.cos(delta) - z * math.sin(delta)
     z2 = x * math.sin(delta) + z * math.cos(delta)
     th2 = np.arctan2(np.hypot(x2, y), z2)
@@ -287,18 +278,33 @@ def turned_reads(elevation_deg: float, node_deg: float, altitude_m: float):
     w = (strength * np.clip((g1 - gamma) / (g1 - g0), 0.0, 1.0)
          * np.clip((above - a0) / (a1 - a0), 0.0, 1.0))
     # the turned directions in the sky grid (the kernel's inverse mappings)
-    q = 1.0 - np.minimum(th2, theta_h - _grid.EPS) / (theta_h - _grid.EPS)
-    u = np.sqrt(np.maximum(q, 0.0)) * (_grid.N_SKY - 1)
-    iu = np.minimum(u.astype(np.int64), _grid.N_SKY - 2)
-    a, b = _grid.A_PHI, 1.0 - _grid.A_PHI
-    t = (-a + np.sqrt(a * a + 4.0 * b * ph2 / math.pi)) / (2.0 * b) * (_grid.N_PHI - 1)
-    it = np.minimum(t.astype(np.int64), _grid.N_PHI - 2)
-    fu = np.minimum(u - iu, 1.0)
-    ft = np.clip(t - it, 0.0, 1.0)
+    iu, it, fu, ft = _grid.sky_cell(th2, ph2, theta_h)
     k0 = iu * _grid.N_PHI + it
     idx = np.stack([k0, k0 + 1, k0 + _grid.N_PHI, k0 + _grid.N_PHI + 1], axis=1)
     wt = np.stack([(1 - fu) * (1 - ft), (1 - fu) * ft, fu * (1 - ft), fu * ft], axis=1)
     return idx, wt * w[:, None], 1.0 - w
+
+
+@functools.lru_cache(maxsize=4)
+def _sky_geometry(elevation_deg: float, altitude_m: float):
+    """(theta_h, th, x, y, z, gamma): the horizon's zenith angle, the sky grid's nodes'
+    zenith angles and unit vectors (the sun's vertical plane x-z, the sun at +x) and their
+    angles from a sun at ``elevation_deg`` [deg], for :func:`turned_reads`, which reads the
+    four elevation nodes of a configuration at the same (sun, altitude): computed once for
+    them (read-only arrays)."""
+    theta_h = _grid.horizon_zenith_rad(altitude_m)
+    sky, _ = _grid.theta_nodes_rad(altitude_m)
+    phi = _grid.phi_nodes_rad()
+    th = np.repeat(sky, phi.size)
+    ph = np.tile(phi, sky.size)
+    x = np.sin(th) * np.cos(ph)
+    y = np.sin(th) * np.sin(ph)
+    z = np.cos(th)
+    e = math.radians(elevation_deg)
+    gamma = np.degrees(np.arccos(np.clip(x * math.cos(e) + z * math.sin(e), -1.0, 1.0)))
+    for a in (th, x, y, z, gamma):
+        a.flags.writeable = False
+    return theta_h, th, x, y, z, gamma
 
 
 def _read_turned(values: np.ndarray, idx, wt, keep) -> np.ndarray:

@@ -156,6 +156,26 @@ def theta_nodes_rad(altitude_m: float, midpoints: bool = False
     return sky, ground
 
 
+def sky_cell(theta, phi, theta_h: float):
+    """The sky grid's cell of directions at zenith angles ``theta`` (< ``theta_h``, the
+    horizon's) and azimuths from the sun's vertical plane ``phi`` in [0, pi] [rad]: (iu, it,
+    fu, ft), the cell's lower node indices along the rows (from the horizon up) and the
+    azimuths, and the fractions of the way to the next nodes, in the mapped coordinates.
+    The inverses of :func:`theta_nodes_rad` (theta = (theta_h - EPS)(1 - x^2), x = u /
+    (N_SKY - 1)) and :func:`phi_nodes_rad` (phi = pi (A_PHI t + (1 - A_PHI) t^2), t = v /
+    (N_PHI - 1)), clamped to the last cell as the lookup kernel clamps
+    (:func:`._kernels.lookup`)."""
+    theta = np.asarray(theta, dtype=np.float64)
+    phi = np.asarray(phi, dtype=np.float64)
+    q = 1.0 - np.minimum(theta, theta_h - EPS) / (theta_h - EPS)
+    u = np.sqrt(np.maximum(q, 0.0)) * (N_SKY - 1)
+    iu = np.minimum(u.astype(np.int64), N_SKY - 2)
+    a, b = A_PHI, 1.0 - A_PHI
+    t = (-a + np.sqrt(a * a + 4.0 * b * phi / math.pi)) / (2.0 * b) * (N_PHI - 1)
+    it = np.minimum(t.astype(np.int64), N_PHI - 2)
+    return iu, it, np.minimum(u - iu, 1.0), np.clip(t - it, 0.0, 1.0)
+
+
 def directions(altitude_m: float, sun_azimuth_deg: float = 180.0,
                midpoints: bool = False) -> np.ndarray:
     """The view grid's unit directions (East-North-Up) for an observer at ``altitude_m``
