@@ -631,7 +631,7 @@ def _import_named(name: str) -> None:
 
 def get_model_class(name: str) -> type[SkyModel]:
     """The model class registered under ``name``; ValueError listing the names otherwise."""
-    if name not in _REGISTRY and isinstance(name, str):
+    if isinstance(name, str) and name not in _REGISTRY:
         _import_named(name)
     if name in _REGISTRY:
         return _REGISTRY[name]

@@ -287,12 +287,20 @@ _PACK_LEVEL = 1                       # zlib level: the table's build takes 7 s;
                                       # about 1 s of compression to it, level 6 about 4 s
 
 
+def _byte_planes(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(high bytes, low bytes) of the float16 values ``h`` (C-contiguous), each a
+    contiguous uint8 array: the planes the packed files store (the bytes of a
+    little-endian float16, the order of the entry's "<f2" records)."""
+    b = h.reshape(-1).view(np.uint8).reshape(-1, 2)       # little-endian: [low, high]
+    return np.ascontiguousarray(b[:, 1]), np.ascontiguousarray(b[:, 0])
+
+
 def _pack_chunk(h: np.ndarray) -> list:
     """The packed bytes of the float16 values ``h`` (C-contiguous): [header, high, low]."""
-    b = h.reshape(-1).view(np.uint8).reshape(-1, 2)       # little-endian: [low, high]
-    hi = zlib.compress(np.ascontiguousarray(b[:, 1]), _PACK_LEVEL)
-    lo = zlib.compress(np.ascontiguousarray(b[:, 0]), _PACK_LEVEL)
-    return [_PACK_HEAD.pack(b.shape[0], len(hi), len(lo)), hi, lo]
+    high, low = _byte_planes(h)
+    hi = zlib.compress(high, _PACK_LEVEL)
+    lo = zlib.compress(low, _PACK_LEVEL)
+    return [_PACK_HEAD.pack(high.size, len(hi), len(lo)), hi, lo]
 
 
 def _unpack_chunk(f, n_max: int, crc: int, label: str):
@@ -530,9 +538,8 @@ def _write_bands(file: str, exp_file: str, name: str, enc: _Encoded) -> dict:
         bytes as they are (:data:`_PACK` in the module's text)."""
         v = np.concatenate([h[:, b, :].reshape(-1) for h in blocks]) if blocks else \
             np.empty(0, np.float16)
-        planes = v.view(np.uint8).reshape(-1, 2)          # little-endian: [low, high]
-        return (zlib.compress(np.ascontiguousarray(planes[:, 1]), _PACK_LEVEL),
-                np.ascontiguousarray(planes[:, 0]).tobytes())
+        high, low = _byte_planes(v)
+        return zlib.compress(high, _PACK_LEVEL), low.tobytes()
 
     # zlib releases the interpreter lock: the bands are compressed on the encoding's threads
     n = min(_encode_threads(), n_ms)
