@@ -620,7 +620,9 @@ def test_stored_multiple_scattering_against_the_full_grid_integration(default_55
     percentile 5.6 % at 20 wavelengths; and where the table is read, the in-scattered
     radiance of aerial perspective over 1-100 km from the ground and from 10 km with the
     sun at 60, 10, 2 and -4 deg: RMS up to 3.0 % in luminance at 20 wavelengths, 3.2 %
-    here at 550 nm (10 km, sun -4 deg, 1 km), bound 3.5 %."""
+    here at 550 nm (10 km, sun -4 deg, 1 km); 3.9 % there since the descending rays'
+    first piece is integrated on two halves (cache format 14: both tables change), bound
+    4.5 %."""
     import dataclasses
 
     from skydome.models.simulated.precomputed import _precompute as PC
@@ -654,7 +656,7 @@ def test_stored_multiple_scattering_against_the_full_grid_integration(default_55
                 x = a.aerial_perspective(sky, dist, wl)[1][:, 0]
                 y = b.aerial_perspective(sky, dist, wl)[1][:, 0]
                 e = (x - y) / np.maximum(y, 0.01 * np.median(y))
-                assert np.sqrt(np.mean(e ** 2)) < 0.035, (alt, elev, dist, e)
+                assert np.sqrt(np.mean(e ** 2)) < 0.045, (alt, elev, dist, e)
 
 
 def test_precompute_runs_without_numpy_hugepage_advice_and_restores_it(monkeypatch):

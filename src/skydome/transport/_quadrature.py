@@ -124,6 +124,22 @@ def ray_nodes(r, mu, d, n, ts, t_out, w_out):
         a, b, dense_at_b = piece_bounds(piece, 0.0, t_low, d)
         if b - a <= 0.0:
             continue
+        if dense_at_b and n >= 4:
+            # a descending ray: its integrands are large at both ends of this piece, at
+            # the start (the transmittance from the start, near 1 only within the first
+            # optical depths: an observer inside haze) and at the lowest point (the
+            # density). Nodes dense at one end only leave the start's first kilometres
+            # of a 100 km horizon piece without a node: single scattering 0.005 deg above
+            # the horizon from 350-1100 m in AOD 1 haze came out 94-98 % low. Half the
+            # nodes on each half, each half dense at its own end (docs/models.md,
+            # "Descending rays").
+            h = a + 0.5 * (b - a)
+            n0 = n // 2
+            m = piece_nodes(a, h, False, n0, ts, False, t_out, w_out, m, False, no_bits,
+                            no_bits.view(np.float64))
+            m = piece_nodes(h, b, True, n - n0, ts, False, t_out, w_out, m, False, no_bits,
+                            no_bits.view(np.float64))
+            continue
         m = piece_nodes(a, b, dense_at_b, n, ts, False, t_out, w_out, m, False, no_bits,
                         no_bits.view(np.float64))
     return m

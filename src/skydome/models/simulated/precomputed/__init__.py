@@ -128,8 +128,17 @@ class PrecomputedSky(SkyModel):
         ``twilight_single_scattering=True`` and the finer tables that bring the twilight sky
         within 3 % RMS of ``montecarlo`` to sun -6 deg and within 10 % to -12 deg
         (tests/test_precomputed_twilight.py; docs/models.md, "Twilight: the reference
-        configuration"; its cost in docs/performance.md). By day it is the finer tables'
-        sky (as accurate as the default).
+        configuration"; its cost in docs/performance.md), and by day
+        ``observer_single_scattering=True``.
+    twilight_single_scattering, observer_single_scattering : bool
+        Single scattering integrated at the observer's own altitude and sun on the
+        observer's sky map (192 view zenith angles above the horizon, 48 below, 96
+        azimuths), not read from the 4-D table: with the sun below the horizon
+        (``twilight_single_scattering``: each ray split at the earth's shadow), or for every
+        sun (``observer_single_scattering``: the table's linear interpolation between its
+        r nodes is up to 50 % off for an observer inside thick haze, AOD 1 at 0.1-1 km;
+        docs/models.md, "Descending rays and observers inside haze"). Both opt-in: the
+        viewer's shader reads the table.
     cache : bool
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
@@ -194,6 +203,13 @@ class PrecomputedSky(SkyModel):
                   doc="sun below the horizon: single scattering integrated at the observer, "
                       "each ray split at the earth's shadow (closer to Monte Carlo), not read "
                       "from the 4-D table; opt-in until the viewer's shader does the same",
+                  kind="bool"),
+        Parameter("observer_single_scattering", "", False,
+                  doc="single scattering integrated at the observer's own altitude for "
+                      "every sun (on the observer's sky map, as twilight_single_scattering "
+                      "does below the horizon), not read from the 4-D table, whose linear "
+                      "interpolation between its r nodes is up to 50 % off for observers "
+                      "inside thick haze; opt-in (the viewer's shader reads the table)",
                   kind="bool"),
         Parameter("twilight_reference", "", False,
                   doc="the twilight reference configuration: twilight_single_scattering on "
@@ -478,7 +494,8 @@ class PrecomputedSky(SkyModel):
         from skydome.transport._quadrature import gauss_legendre_unit
 
         mu_s = float(self.sun.direction[2])
-        if not getattr(self, "twilight_single_scattering", False) or mu_s >= 0.0:
+        below = getattr(self, "twilight_single_scattering", False) and mu_s < 0.0
+        if not (below or getattr(self, "observer_single_scattering", False)):
             return None
         geom = self._slice_geometry()
         if geom[0] <= 0.0:
@@ -694,6 +711,7 @@ Precomputed = PrecomputedSky
 #: ``montecarlo`` to sun -6 deg and 10 % to -12 deg.
 TWILIGHT_REFERENCE_SETTINGS = {
     "twilight_single_scattering": True,
+    "observer_single_scattering": True,
     "scattering_mu_s_size": 96,
     "high_order_sphere_samples": 32,
 }

@@ -78,28 +78,40 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
                 b = brk[q + 1]
                 if b - a <= 0.0:
                     continue
-                piece_nodes_rule(a, b, b <= tmin, rx, rw, ts, tq, tw, 0)
-                for k in range(n_x):
-                    t = tq[k]
-                    wq = tw[k]
-                    rt = point_along(r, mu, t, R, Rt)
-                    mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
-                    vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
-                    if vis <= 0.0:
-                        continue
-                    columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cv)
-                    columns_at(col, rt, mu_s_t, R, Rt, csun)
-                    for kk in range(nsc):
-                        c = sc_idx[kk]
-                        dens[kk] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
-                                                   rt - R)
-                    for l in range(nl):
-                        tau = 0.0
-                        for c in range(nc):
-                            tau += m.extinction[c, l] * (cv[c] + csun[c])
-                        e = wq * vis * math.exp(-tau)
+                # the piece from the observer to the lowest point: dense at both ends
+                # (the transmittance from the start, the density at the lowest point),
+                # the rule on each half (transport._quadrature.ray_nodes)
+                split = b <= tmin and a == 0.0
+                for half in range(2 if split else 1):
+                    if split:
+                        hm = 0.5 * (a + b)
+                        if half == 0:
+                            piece_nodes_rule(a, hm, False, rx, rw, ts, tq, tw, 0)
+                        else:
+                            piece_nodes_rule(hm, b, True, rx, rw, ts, tq, tw, 0)
+                    else:
+                        piece_nodes_rule(a, b, b <= tmin, rx, rw, ts, tq, tw, 0)
+                    for k in range(n_x):
+                        t = tq[k]
+                        wq = tw[k]
+                        rt = point_along(r, mu, t, R, Rt)
+                        mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
+                        vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
+                        if vis <= 0.0:
+                            continue
+                        columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cv)
+                        columns_at(col, rt, mu_s_t, R, Rt, csun)
                         for kk in range(nsc):
-                            acc[kk, l] += dens[kk] * e
+                            c = sc_idx[kk]
+                            dens[kk] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
+                                                       rt - R)
+                        for l in range(nl):
+                            tau = 0.0
+                            for c in range(nc):
+                                tau += m.extinction[c, l] * (cv[c] + csun[c])
+                            e = wq * vis * math.exp(-tau)
+                            for kk in range(nsc):
+                                acc[kk, l] += dens[kk] * e
             for kk in range(nsc):
                 for l in range(nl):
                     out[kk, imu, iphi, l] = beta_s[kk, l] * acc[kk, l]
