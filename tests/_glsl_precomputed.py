@@ -421,12 +421,16 @@ def multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground):
     jb = (f_theta - it)[..., None]
     c0 = columns(od, atm, r, np.where(ground, -mu, mu))
     acc = [np.zeros(mu.shape + (4,)) for _ in range(layers)]
-    for piece in range(2):
-        a = np.zeros_like(t_low) if piece == 0 else t_low
-        b = t_low if piece == 0 else d
+    n0 = dens["samples"] if dens["samples"] >= 4 else 0
+    hm = 0.5 * t_low
+    for piece in range(3):
+        a = (np.zeros_like(t_low) if piece == 0
+             else (hm if n0 > 0 else np.zeros_like(t_low)) if piece == 1 else t_low)
+        b = hm if piece == 0 else t_low if piece == 1 else d
+        n = n0 if piece == 0 else dens["samples"]
         live = (b - a > 0.0)[..., None]
-        for q in range(min(dens["samples"], MAX_SAMPLES)):
-            t, w = piece_node(a, b, piece == 0, q, dens["samples"], dens["scale"])
+        for q in range(min(n, MAX_SAMPLES)):
+            t, w = piece_node(a, b, piece == 1, q, n, dens["scale"])
             rt = radius_along(r, mu, t, R, Rt)
             mt = np.clip((r * mu + t) / rt, -1.0, 1.0)
             mu_st = np.clip((r * mu_s + t * nu) / rt, -1.0, 1.0)

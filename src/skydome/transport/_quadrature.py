@@ -116,7 +116,9 @@ def gauss_legendre_unit(n):
 def ray_nodes(r, mu, d, n, ts, t_out, w_out):
     """The geometric midpoint rule on the ray [0, d] from radius r, zenith cosine mu, split
     at its lowest point: n nodes per piece (:func:`piece_nodes`, each piece from its dense
-    end), distances t_out and weights w_out [m]; returns the node count."""
+    end), the piece from the start to the lowest point as two (for n >= 4): start to its
+    midpoint dense at the start, midpoint to the lowest point dense there, n nodes each;
+    distances t_out and weights w_out [m] (room for 3 n); returns the node count."""
     t_low = lowest_point(r, mu, 0.0, d)
     no_bits = np.empty(0, dtype=np.int64)     # the scalar form's unused scratch
     m = 0
@@ -130,14 +132,14 @@ def ray_nodes(r, mu, d, n, ts, t_out, w_out):
             # optical depths: an observer inside haze) and at the lowest point (the
             # density). Nodes dense at one end only leave the start's first kilometres
             # of a 100 km horizon piece without a node: single scattering 0.005 deg above
-            # the horizon from 350-1100 m in AOD 1 haze came out 94-98 % low. Half the
-            # nodes on each half, each half dense at its own end (docs/models.md,
-            # "Descending rays").
+            # the horizon from 350-1100 m in AOD 1 haze came out 94-98 % low. Each half
+            # gets n nodes, dense at its own end (at most 3 n nodes a ray; n // 2 on the
+            # first half left the midpoint rule's low bias, (ln(1 + L / ts) / n)^2 / 24,
+            # at 0.7 % there; docs/models.md, "Descending rays and observers inside haze").
             h = a + 0.5 * (b - a)
-            n0 = n // 2
-            m = piece_nodes(a, h, False, n0, ts, False, t_out, w_out, m, False, no_bits,
+            m = piece_nodes(a, h, False, n, ts, False, t_out, w_out, m, False, no_bits,
                             no_bits.view(np.float64))
-            m = piece_nodes(h, b, True, n - n0, ts, False, t_out, w_out, m, False, no_bits,
+            m = piece_nodes(h, b, True, n, ts, False, t_out, w_out, m, False, no_bits,
                             no_bits.view(np.float64))
             continue
         m = piece_nodes(a, b, dense_at_b, n, ts, False, t_out, w_out, m, False, no_bits,

@@ -536,13 +536,20 @@ vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
     vec4 c0 = skydomeColumns(opticalDepth, atm, r, ground ? -mu : mu);
     vec4 acc[SKYDOME_PC_MAX_WAVELENGTHS / 4];
     for (int l = 0; l < SKYDOME_PC_MAX_WAVELENGTHS / 4; ++l) acc[l] = vec4(0.0);
-    for (int piece = 0; piece < 2; ++piece) {
-        float a = piece == 0 ? 0.0 : tLow;
-        float b = piece == 0 ? tLow : d;
-        if (b - a <= 0.0) continue;
+    // the ray's pieces as the model's (transport/_quadrature.py, ray_nodes): from the start
+    // to the lowest point on two halves, the first dense at the start (none below 4
+    // samples), the second at the lowest point, then from the lowest point to the end,
+    // dense at its start; samples nodes each
+    int n0 = dens.samples >= 4 ? dens.samples : 0;
+    float hm = 0.5 * tLow;
+    for (int piece = 0; piece < 3; ++piece) {
+        float a = piece == 0 ? 0.0 : (piece == 1 ? (n0 > 0 ? hm : 0.0) : tLow);
+        float b = piece == 0 ? hm : (piece == 1 ? tLow : d);
+        int n = piece == 0 ? n0 : dens.samples;
+        if (b - a <= 0.0 || n <= 0) continue;
         for (int q = 0; q < SKYDOME_PC_MAX_SAMPLES; ++q) {
-            if (q >= dens.samples) break;
-            vec2 node = skydomePcPieceNode(a, b, piece == 0, q, dens.samples, dens.scale);
+            if (q >= n) break;
+            vec2 node = skydomePcPieceNode(a, b, piece == 1, q, n, dens.scale);
             float t = node.x;
             float rt = skydomePcRadiusAlong(r, mu, t, R, Rt);
             float mt = clamp((r * mu + t) / rt, -1.0, 1.0);

@@ -58,7 +58,8 @@ def density_acc(J, tw, jt, jb, ip, e, jr, ja, ims_j, c, out):
 
 
 class RayWork(NamedTuple):
-    """Scratch arrays of one work item's ray integrals (at most m = 2 n_q quadrature nodes,
+    """Scratch arrays of one work item's ray integrals (room for m = 3 n_q quadrature nodes:
+    :func:`ray_nodes` lays up to 3 n_q, ``ray_nodes_rule`` 2 n_q,
     :func:`ray_scratch`)."""
 
     tq: np.ndarray     # (m,) distances of the nodes [m]
@@ -76,10 +77,11 @@ class RayWork(NamedTuple):
 
 @njit(cache=True)
 def ray_scratch(n_q, nc, nsc, nl, tw):
-    """The :class:`RayWork` of one work item's ray integrals (at most 2 n_q quadrature
+    """The :class:`RayWork` of one work item's ray integrals (room for 3 n_q quadrature
     nodes, nc constituents, nsc scattering ones, nl wavelengths), with ``tw`` the array
-    of J's weights, (2 n_q, nsc, nl) in the precision of the sums."""
-    m = 2 * n_q
+    of J's weights, (3 n_q, nsc, nl) in the precision of the sums (2 n_q for the rule's
+    2 n_q nodes at most)."""
+    m = 3 * n_q                 # ray_nodes: up to 3 n_q
     return RayWork(np.empty(m), np.empty(m), np.empty(nc), np.empty(nc), np.empty(m),
                    np.empty((m, nc)), np.empty(m * nl), np.empty(m * nl),
                    np.empty(m * max(nl, 1), dtype=np.int64), np.empty((nsc, m)), tw)
@@ -169,7 +171,7 @@ def multiple_scattering_table(J, m, sc_idx, col, mu_s_min, n_q, ts, mu_nodes, n_
     for k in range(n_ms):
         mus[k] = mu_s_from_unit(mu_s_nodes_sel[k] / (n_ms_full - 1.0), mu_s_min)
     for idx in prange(n_r * n_mu):
-        w = ray_scratch(n_q, nc, nsc, nl, np.empty((2 * n_q, nsc, nl), dtype=np.float32))
+        w = ray_scratch(n_q, nc, nsc, nl, np.empty((3 * n_q, nsc, nl), dtype=np.float32))
         tq = w.tq
         tw = w.tw
         rts = w.rts
@@ -320,7 +322,7 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
     Rt = m.Rt
     frame = mu_s_frame(mu_s_min)
     for imu in prange(n_mu):
-        w = ray_scratch(n_q, nc, nsc, nl, np.empty((2 * n_q, nsc, nl)))
+        w = ray_scratch(n_q, nc, nsc, nl, np.empty((3 * n_q, nsc, nl)))
         tq = w.tq
         tw = w.tw
         rts = w.rts

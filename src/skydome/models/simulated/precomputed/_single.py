@@ -74,8 +74,8 @@ def single_scattering_rows(col, trans, m, sc_idx, beta_s_sc, mu_s_min, alpha, n_
         order[j] = (j % n_grp) * s_grp + j // n_grp
     for jdx in prange(n_rays):
         idx = r0 * n_mu + order[jdx]
-        tq = np.empty(2 * n_q)
-        wq = np.empty(2 * n_q)
+        tq = np.empty(3 * n_q)                # ray_nodes: up to 3 n_q
+        wq = np.empty(3 * n_q)
         w1 = np.empty(nc)
         w2 = np.empty(nc)
         cs = np.empty(nc)
