@@ -103,7 +103,7 @@ def test_day_sky_reads_the_table(sky, elevation):
     no observer map of single scattering is made, and the radiance equals (bit for bit) the
     radiance with that map switched off."""
     m = sky.with_sun(sd.Sun(elevation_deg=elevation, azimuth_deg=135.0))
-    assert m._twilight_single_scattering() is None
+    assert m._single_scattering_map() is None
     rng = np.random.default_rng(3)
     d = rng.normal(size=(300, 3))
     d /= np.linalg.norm(d, axis=1)[:, None]
@@ -125,8 +125,8 @@ def test_sky_step_where_the_sun_crosses_the_horizon(sky):
     d = np.stack([np.cos(E) * np.sin(A), np.cos(E) * np.cos(A), np.sin(E)], -1).reshape(-1, 3)
     up = sky.with_sun(sd.Sun(elevation_deg=1e-4, azimuth_deg=180.0))
     down = sky.with_sun(sd.Sun(elevation_deg=-1e-4, azimuth_deg=180.0))
-    assert up._twilight_single_scattering() is None
-    assert down._twilight_single_scattering() is not None
+    assert up._single_scattering_map() is None
+    assert down._single_scattering_map() is not None
     r = down.radiance(d, [550.0])[:, 0] / up.radiance(d, [550.0])[:, 0] - 1.0
     assert np.sqrt(np.mean(r ** 2)) < 0.005, r
     assert np.abs(r).max() < 0.01, r
@@ -158,7 +158,7 @@ def test_observer_single_scattering_is_opt_in(sky):
     m = sky.with_sun(sd.Sun(elevation_deg=-6.0, azimuth_deg=180.0))
     default = copy.copy(m)
     default.twilight_single_scattering = False
-    assert default._twilight_single_scattering() is None
+    assert default._single_scattering_map() is None
     d = sd.direction_from_angles([10.0, 30.0], [0.0, 180.0])
     a, b = default.radiance(d, [550.0]), m.radiance(d, [550.0])
     assert np.all(np.isfinite(a)) and np.all(a > 0) and not np.allclose(a, b, rtol=1e-3)

@@ -126,25 +126,35 @@ def ray_nodes(r, mu, d, n, ts, t_out, w_out):
         a, b, dense_at_b = piece_bounds(piece, 0.0, t_low, d)
         if b - a <= 0.0:
             continue
-        if dense_at_b and n >= 4:
-            # a descending ray: its integrands are large at both ends of this piece, at
-            # the start (the transmittance from the start, near 1 only within the first
-            # optical depths: an observer inside haze) and at the lowest point (the
-            # density). Nodes dense at one end only leave the start's first kilometres
-            # of a 100 km horizon piece without a node: single scattering 0.005 deg above
-            # the horizon from 350-1100 m in AOD 1 haze came out 94-98 % low. Each half
-            # gets n nodes, dense at its own end (at most 3 n nodes a ray; n // 2 on the
-            # first half left the midpoint rule's low bias, (ln(1 + L / ts) / n)^2 / 24,
-            # at 0.7 % there; docs/models.md, "Descending rays and observers inside haze").
-            h = a + 0.5 * (b - a)
-            m = piece_nodes(a, h, False, n, ts, False, t_out, w_out, m, False, no_bits,
+        # n nodes on each half of a descending piece (at most 3 n nodes a ray; n // 2 on
+        # the first half left the midpoint rule's low bias, (ln(1 + L / ts) / n)^2 / 24,
+        # at 0.7 % there)
+        split = dense_at_b and n >= 4
+        for half in range(2 if split else 1):
+            ha, hb, hd = piece_half(a, b, dense_at_b, split, half)
+            m = piece_nodes(ha, hb, hd, n, ts, False, t_out, w_out, m, False, no_bits,
                             no_bits.view(np.float64))
-            m = piece_nodes(h, b, True, n, ts, False, t_out, w_out, m, False, no_bits,
-                            no_bits.view(np.float64))
-            continue
-        m = piece_nodes(a, b, dense_at_b, n, ts, False, t_out, w_out, m, False, no_bits,
-                        no_bits.view(np.float64))
     return m
+
+
+@njit(cache=True, inline="always")
+def piece_half(a, b, dense_at_b, split, half):
+    """(a, b, dense_at_b) of part ``half`` of the piece [a, b] of a ray: the piece itself
+    unless ``split``; split (a piece from the ray's start down to its lowest point, dense
+    at b): half 0 is [a, midpoint] dense at a, half 1 [midpoint, b] dense at b.
+
+    A descending ray's integrands are large at both ends of that piece: at the start (the
+    transmittance from the start, near 1 only within the first optical depths: an
+    observer inside haze) and at the lowest point (the density). Nodes dense at the lowest
+    point alone left the first kilometres of a 100 km horizon piece without a node: single
+    scattering 0.005 deg above the horizon from 350-1100 m in AOD 1 haze came out 94-98 %
+    low (docs/models.md, "Descending rays and observers inside haze")."""
+    if not split:
+        return a, b, dense_at_b
+    h = a + 0.5 * (b - a)
+    if half == 0:
+        return a, h, False
+    return h, b, True
 
 
 @njit(cache=True)

@@ -473,7 +473,7 @@ class PrecomputedSky(SkyModel):
             return out
         ss_s, ms_s = self._observer_slices()
         geom = self._slice_geometry()
-        ss_map = self._twilight_single_scattering()
+        ss_map = self._single_scattering_map()
         if ss_map is not None:
             ss_s, geom = ss_map, np.append(geom, 1.0)
         t = self._t
@@ -483,13 +483,12 @@ class PrecomputedSky(SkyModel):
                            self._alpha, geom, out)
         return out
 
-    def _twilight_single_scattering(self):
-        """With ``twilight_single_scattering`` and the sun below the horizon (and the
-        observer's sky map of orders 2..N in use):
-        single scattering on that sky map, integrated for the observer's own r and mu_s with
-        every ray split at the earth's shadow (:func:`._twilight.single_scattering_slice`),
-        instead of the 4-D table interpolated at them; None otherwise (the sun above the
-        horizon: the table, as before)."""
+    def _single_scattering_map(self):
+        """With ``observer_single_scattering``, or ``twilight_single_scattering`` and the
+        sun below the horizon (and the observer's sky map of orders 2..N in use): single
+        scattering on that sky map, integrated for the observer's own r and mu_s with every
+        ray split at the earth's shadow (:func:`._twilight.single_scattering_slice`),
+        instead of the 4-D table interpolated at them; None otherwise (the table)."""
         from skydome.models.simulated.precomputed import _twilight
         from skydome.transport._quadrature import gauss_legendre_unit
 
@@ -616,7 +615,7 @@ class PrecomputedSky(SkyModel):
             a_sl, a_tab = np.empty_like(ins), np.empty_like(ins)
             cases = ((zero, ms_s, a_sl, self._slice_geometry()),
                      (zero, ms_tab, a_tab, self._slice_geometry(table=True)))
-            ss_map = self._twilight_single_scattering()
+            ss_map = self._single_scattering_map()
             if ss_map is not None:
                 # the sun below the horizon: single scattering at the observer too (as in
                 # radiance()), in place of the table's

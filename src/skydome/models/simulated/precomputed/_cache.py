@@ -114,8 +114,9 @@ from skydome._io import write_npy
 # 13: the scattering density's float16 file and its exponents in bands of mu_s rows (the
 # mu_s axis first on disk, "half-bands"), a CRC-32 per band, so that a part of its rows is
 # read and checked alone; each band's high bytes compressed (zlib), its low bytes as they are
-# 14 (never released) and 15: the view rays' piece from their start to their lowest point integrated on two halves,
-# each dense at its own end (transport._quadrature.ray_nodes): the tables' values change
+# 14 (never released) and 15: the view rays' piece from their start to their lowest point
+# integrated on two halves, each dense at its own end (transport._quadrature.ray_nodes): the
+# tables' values change
 CACHE_FORMAT = "skydome.precomputed-cache/15"
 # five table sets at the default settings: 0.24 GB each with the stored table of orders
 # 2..N (packed; 0.30 GB before), 0.17 GB without it (1.28 GB each in format 11)

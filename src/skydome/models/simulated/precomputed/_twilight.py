@@ -26,7 +26,7 @@ from skydome.models.simulated.precomputed._lookup import (columns_at, columns_se
 from skydome.transport._geometry import lowest_point
 from skydome.transport._kernels import view_break_points
 from skydome.transport._medium import profile_density
-from skydome.transport._quadrature import piece_nodes_rule
+from skydome.transport._quadrature import piece_half, piece_nodes_rule
 
 # Gauss-Legendre nodes per piece of a ray (ends, lowest point, shadow crossings) in
 # v = ln(1 + u / ts), dense at the piece's end nearer the lowest point or the shadow
@@ -78,19 +78,12 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
                 b = brk[q + 1]
                 if b - a <= 0.0:
                     continue
-                # the piece from the observer to the lowest point: dense at both ends
-                # (the transmittance from the start, the density at the lowest point),
-                # the rule on each half (transport._quadrature.ray_nodes)
+                # the piece from the observer down to the lowest point on two halves,
+                # each dense at its own end (transport._quadrature.piece_half)
                 split = b <= tmin and a == 0.0
                 for half in range(2 if split else 1):
-                    if split:
-                        hm = 0.5 * (a + b)
-                        if half == 0:
-                            piece_nodes_rule(a, hm, False, rx, rw, ts, tq, tw, 0)
-                        else:
-                            piece_nodes_rule(hm, b, True, rx, rw, ts, tq, tw, 0)
-                    else:
-                        piece_nodes_rule(a, b, b <= tmin, rx, rw, ts, tq, tw, 0)
+                    ha, hb, hd = piece_half(a, b, b <= tmin, split, half)
+                    piece_nodes_rule(ha, hb, hd, rx, rw, ts, tq, tw, 0)
                     for k in range(n_x):
                         t = tq[k]
                         wq = tw[k]
