@@ -467,3 +467,162 @@ def test_aureole_between_elevation_nodes_against_live_precomputed(reference):
     d = _ring_directions(sun, [5.5, 7.0, 10.0, 14.0])
     rel = fit.luminance(d) / ref.luminance(d) - 1.0
     assert float(np.max(np.abs(rel))) <= 0.035, float(np.max(np.abs(rel)))
+
+
+def _load_tool(name):
+    import importlib.util
+    from pathlib import Path
+
+    tool = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"{name}_tool", tool)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _write_dataset(folder, el, alt, atms, wl, chunks):
+    """A data-set folder as tools/fitted_dataset.py writes it: grid.json and one chunk per
+    atmosphere with its SHA-256 (skydome.distributed's layout)."""
+    import hashlib
+    import io
+
+    from skydome.models.fitted import _dataset
+
+    folder.mkdir(parents=True)
+    for (aod, alb), arr in zip(atms, chunks):
+        buf = io.BytesIO()
+        np.save(buf, np.ascontiguousarray(arr))
+        key = _dataset.chunk_key(aod, alb)
+        (folder / f"{key}.npy").write_bytes(buf.getvalue())
+        (folder / f"{key}.npy.sha256").write_text(hashlib.sha256(buf.getvalue()).hexdigest())
+    _dataset.write_grid(folder, el, alt, atms, False, True, wl)
+
+
+def test_altitude_supplement_joins_as_the_whole_grid(tmp_path, capsys):
+    """tools/fit_fitted.py --altitude-supplement: a data set split by altitude (the
+    supplement of tools/fitted_dataset.py --altitudes) gives the same coefficient arrays as
+    the whole data set; a supplement whose altitudes overlap, or whose wavelengths differ,
+    is refused naming the option, and no file is written."""
+    fit = _load_tool("fit_fitted")
+    rng = np.random.default_rng(3)
+    el = np.array([-1.0, 10.0])
+    alt = np.array([0.0, 2000.0, 5000.0, 15000.0])
+    atms = [(a, b) for a in (0.0, 0.5) for b in (0.0, 0.5, 1.0)]
+    wl = np.array([500.0, 600.0])
+    n_rows = _grid.N_SKY + _grid.N_GROUND + 1
+    chunks = [rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
+              .astype(np.float32) for _ in atms]
+    part = [0, 1, 3]                               # the data set; 5 km is the supplement
+    _write_dataset(tmp_path / "whole", el, alt, atms, wl, chunks)
+    _write_dataset(tmp_path / "part", el, alt[part], atms, wl, [c[:, part] for c in chunks])
+    _write_dataset(tmp_path / "sup", el, alt[[2]], atms, wl, [c[:, [2]] for c in chunks])
+    args = ["--k-sky", "3", "--k-ground", "2"]
+    assert fit.main([str(tmp_path / "whole"), "--out", str(tmp_path / "a.npz")] + args) == 0
+    assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "sup"),
+                     "--out", str(tmp_path / "b.npz")] + args) == 0
+    a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
+    np.testing.assert_array_equal(b["altitude_nodes_m"], alt)
+    for key in a.files:
+        if key != "meta":
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+    capsys.readouterr()
+    # a supplement at an altitude the data set has, or at other wavelengths: refused
+    _write_dataset(tmp_path / "dup", el, alt[[1]], atms, wl, [c[:, [1]] for c in chunks])
+    assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "dup"),
+                     "--out", str(tmp_path / "c.npz")] + args) == 2
+    assert "--altitude-supplement" in capsys.readouterr().err
+    _write_dataset(tmp_path / "wl", el, alt[[2]], atms, wl + 10.0, [c[:, [2]] for c in chunks])
+    assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "wl"),
+                     "--out", str(tmp_path / "c.npz")] + args) == 2
+    assert "--altitude-supplement" in capsys.readouterr().err
+    assert not (tmp_path / "c.npz").exists()
+
+
+def test_dataset_altitudes_option_refuses_altitudes_off_the_grid(tmp_path, capsys):
+    """tools/fitted_dataset.py --altitudes: only the grid's altitude nodes (a supplement's
+    values must be the grid's); any other is refused before any work, naming the option and
+    the grid's altitudes. --with-gas-bands gives the 20-nm and the gas bands' wavelengths
+    together and refuses --gas-bands beside it."""
+    mod = _load_tool("fitted_dataset")
+    out = tmp_path / "set"
+    assert mod.main([str(out), "--altitudes", "4000,4500", "--ignore-memory-check"]) == 2
+    err = capsys.readouterr().err
+    assert "--altitudes = '4000,4500'" in err and "12000.0" in err
+    assert mod.main([str(out), "--altitudes", "4 km", "--ignore-memory-check"]) == 2
+    assert "--altitudes" in capsys.readouterr().err
+    assert mod.main([str(out), "--with-gas-bands", "--gas-bands",
+                     "--ignore-memory-check"]) == 2
+    assert "--with-gas-bands" in capsys.readouterr().err
+    assert not out.exists()
+    np.testing.assert_array_equal(
+        np.union1d(_grid.WAVELENGTHS_NM, _grid.GAS_BAND_WAVELENGTHS_NM),
+        _grid.TABLE_WAVELENGTHS_NM)
+
+
+def test_thin_haze_form_passes_its_nodes_and_reproduces_its_family():
+    """_coefficients.thin_haze_form: through L(0), L(h), L(2h) it gives (a + b tau)
+    exp(-c tau) exactly where L is of that form (values worked from the closed form, c of
+    either sign), a straight line where L is linear, and the node values at t = 0, 1, 2 for
+    any positive values (ln L convex in tau included); zeros (the model's clamp) give L
+    quadratic in tau; never negative."""
+    f = _coefficients.thin_haze_form
+    h = 0.025
+    for a, b, c in ((0.05, 20.0, 30.0), (0.3, 2.0, -4.0), (0.0, 5.0, 60.0), (1.0, 0.0, 12.0)):
+        L = lambda tau: (a + b * tau) * np.exp(-c * tau)     # noqa: E731
+        for t in (0.0, 0.2, 0.5, 1.0, 1.5, 2.0):
+            assert f(np.array(L(0.0)), np.array(L(h)), np.array(L(2 * h)), t) == \
+                pytest.approx(L(t * h), rel=1e-12, abs=1e-15)
+    assert f(np.array(1.0), np.array(2.0), np.array(3.0), 0.5) == pytest.approx(1.5)
+    rng = np.random.default_rng(11)
+    v = rng.uniform(0.01, 1.0, (3, 1000))
+    for t, k in ((0.0, 0), (1.0, 1), (2.0, 2)):
+        np.testing.assert_allclose(f(*v, t), v[k], rtol=1e-12)
+    assert np.all(f(*v, 0.5) > 0.0) and np.all(np.isfinite(f(*v, 0.5)))
+    assert f(np.array(0.0), np.array(1.0), np.array(0.0), 0.5) == pytest.approx(0.75)
+    assert f(np.array(1.0), np.array(0.0), np.array(1.0), 0.5) >= 0.0
+
+
+def _live_reference(aod, albedo, el, h, wl):
+    """``precomputed`` in the data set's configuration (twilight_reference=True, no cache)
+    at the table wavelengths ``wl`` alone (each computed independently by the reference)."""
+    sun = sd.Sun(elevation_deg=el, azimuth_deg=200.0)
+    ref = sd.model("precomputed", sun=sun,
+                   atmosphere=sd.Atmosphere.earth(aerosol_optical_depth=aod, ground_albedo=albedo),
+                   table_wavelengths_nm=np.asarray(wl, float), cache=False,
+                   twilight_reference=True).with_sun(sun, observer_altitude_m=h)
+    fit = sd.model("fitted", sun=sun, aerosol_optical_depth=aod, ground_albedo=albedo,
+                   observer_altitude_m=h)
+    return sun, ref, fit
+
+
+def _sky_near_horizon(sun, h, n=400, seed=23, top_deg=15.0):
+    """Directions 0.1-``top_deg`` deg above the observer's horizon, more than 5 deg from
+    the sun."""
+    rng = np.random.default_rng(seed)
+    dip = np.degrees(np.arccos(6371e3 / (6371e3 + h)))
+    alt = np.radians(-dip + rng.uniform(0.1, top_deg, n))
+    az = np.radians(rng.uniform(0.0, 360.0, n))
+    d = np.stack([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)], -1)
+    return d[np.degrees(np.arccos(np.clip(d @ sun.direction, -1, 1))) > 5.0]
+
+
+#: The issue's day targets (RMS 2 %, max 6 %) for the two cases below, which the model
+#: before this file and its AOD form missed: the thinnest haze near the horizon (AOD 0.01
+#: on the ground; the quadratic in sqrt(AOD) was 2-4 % RMS and 10-16 % max there) and the
+#: haze seen from between the altitude nodes 3 and 6 km (up to 29 % off in altitude alone).
+DAY_TARGET_RMS, DAY_TARGET_MAX = 0.02, 0.06
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("aod, albedo, el, h", [(0.01, 0.3, 6.0, 0.0),
+                                                 (0.6, 0.2, 2.5, 4500.0)])
+def test_thin_haze_and_between_altitude_nodes_against_live_precomputed(aod, albedo, el, h):
+    wl = [500.0, 560.0, 620.0]
+    sun, ref, fit = _live_reference(aod, albedo, el, h, wl)
+    d = _sky_near_horizon(sun, h)
+    r_ref, r_fit = ref.radiance(d, np.array(wl)), fit.radiance(d, np.array(wl))
+    assert np.all(r_ref > 0.0)
+    rel = r_fit / r_ref - 1.0
+    rms, worst = float(np.sqrt(np.mean(rel ** 2))), float(np.max(np.abs(rel)))
+    print(f"AOD {aod:g}, sun {el:g} deg, {h:g} m: RMS {100 * rms:.2f} %, max {100 * worst:.1f} %")
+    assert rms <= DAY_TARGET_RMS and worst <= DAY_TARGET_MAX, (rms, worst)

@@ -1,7 +1,7 @@
 """Fit the ``fitted`` sky model's coefficients to its data set.
 
     python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
-        [--float16] [--gas-bands SUPPLEMENT]
+        [--float16] [--gas-bands SUPPLEMENT] [--altitude-supplement SUPPLEMENT]
     python tools/fit_fitted.py --add-sun [--out FILE]
 
 DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
@@ -31,6 +31,12 @@ docs/models.md ("fitted").
 --gas-bands`` (the reference at the gas bands' own wavelengths, 310, 330, 690, 710, 730,
 770, 890 and 930 nm); its wavelengths join DATASET's as table wavelengths of their own (49
 in all), fitted with the others (the same bases, per elevation node).
+
+``--altitude-supplement SUPPLEMENT``: a data set of the same sun elevations and atmospheres
+at altitudes DATASET lacks, made with ``tools/fitted_dataset.py --altitudes`` at DATASET's
+table wavelengths (with ``--gas-bands``: ``--with-gas-bands``, the 20-nm and the gas bands'
+together); its altitudes join DATASET's (the shipped file: the second file's 10 altitudes
+and the 4, 5, 8 and 12 km supplement).
 
 DATASET may lack some atmospheres (a data set still being generated): the fit then uses
 the AOD nodes whose every albedo node is there, and says which it left out.
@@ -92,6 +98,32 @@ def add_sun_to_file(target: Path) -> None:
         np.savez_compressed(tmp, **out)
 
 
+def _supplement(option: str, folder: str, ds, aods, same: dict, axis: str,
+                values: np.ndarray, what: str):
+    """(data set, order, joined values) of a supplement to ``ds`` along ``axis``
+    ("wavelengths_nm" or "altitudes_m"): the same sun elevations, view grid and the
+    attributes in ``same``, every atmosphere of the fitted AOD nodes, and no value of
+    ``axis`` in common with ``values``; ``order`` sorts the concatenation ``values`` + the
+    supplement's. None after printing the refusal, naming ``option``."""
+    from skydome.models.fitted._dataset import DataSet
+
+    sup = DataSet(folder, require_all=False)
+    ok = (np.array_equal(sup.elevations_deg, ds.elevations_deg)
+          and all(np.array_equal(getattr(sup, k), v) for k, v in same.items())
+          and all(x in sup.present for x in ds.present if x[0] in set(aods.tolist())))
+    if not ok or sup.midpoints != ds.midpoints:
+        print(f"error: {option} = {folder}: not {what}, or an atmosphere missing",
+              file=sys.stderr)
+        return None
+    new = getattr(sup, axis)
+    if np.isin(new, values).any():
+        print(f"error: {option} = {folder}: its {axis.split('_')[0]} overlap DATASET's",
+              file=sys.stderr)
+        return None
+    order = np.argsort(np.concatenate([values, new]), kind="stable")
+    return sup, order, np.concatenate([values, new])[order]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dataset", nargs="?")
@@ -105,6 +137,10 @@ def main(argv=None) -> int:
                     help="store coefficients and bases in float16 with a scale per row")
     ap.add_argument("--gas-bands", default=None, metavar="SUPPLEMENT",
                     help="a --gas-bands data set of the same grid: its wavelengths added")
+    ap.add_argument("--altitude-supplement", default=None, metavar="SUPPLEMENT",
+                    help="a data set of the same sun elevations and atmospheres at other "
+                         "altitudes (tools/fitted_dataset.py --altitudes): its altitudes "
+                         "added")
     a = ap.parse_args(argv)
     if a.add_sun:
         from skydome.models.fitted._coefficients import COEFFICIENT_FILE
@@ -141,29 +177,40 @@ def main(argv=None) -> int:
     el, alt, wl = ds.elevations_deg, ds.altitudes_m, ds.wavelengths_nm
     gas = None
     if a.gas_bands is not None:
-        gas = DataSet(a.gas_bands, require_all=False)
-        same = (np.array_equal(gas.elevations_deg, el) and np.array_equal(gas.altitudes_m, alt)
-                and all(x in gas.present for x in ds.present if x[0] in set(aods.tolist())))
-        if not same or gas.midpoints != ds.midpoints:
-            print(f"error: --gas-bands = {a.gas_bands}: not the same grid as DATASET, or an "
-                  "atmosphere missing", file=sys.stderr)
+        joined = _supplement("--gas-bands", a.gas_bands, ds, aods, {"altitudes_m": alt},
+                             "wavelengths_nm", wl, "the same grid as DATASET")
+        if joined is None:
             return 2
-        if np.isin(gas.wavelengths_nm, wl).any():
-            print(f"error: --gas-bands = {a.gas_bands}: its wavelengths overlap DATASET's",
-                  file=sys.stderr)
-            return 2
-        order = np.argsort(np.concatenate([wl, gas.wavelengths_nm]), kind="stable")
-        wl = np.concatenate([wl, gas.wavelengths_nm])[order]
+        gas, order, wl = joined
         print(f"gas bands: {gas.wavelengths_nm.tolist()} nm added ({wl.size} table "
               "wavelengths)", flush=True)
+    sup = None
+    if a.altitude_supplement is not None:
+        joined = _supplement("--altitude-supplement", a.altitude_supplement, ds, aods,
+                             {"wavelengths_nm": wl}, "altitudes_m", alt,
+                             "the same sun elevations and table wavelengths as DATASET "
+                             "(with --gas-bands: its wavelengths too)")
+        if joined is None:
+            return 2
+        sup, alt_order, alt = joined
+        print(f"altitudes: {sup.altitudes_m.tolist()} m added ({alt.size} altitude nodes)",
+              flush=True)
 
-    def sky(aod, alb):
+    def sky_wavelengths(aod, alb):
         L, sun = ds.sky(aod, alb)
         if gas is None:
             return L, sun
         Lg, sung = gas.sky(aod, alb)
         return (np.concatenate([L, Lg], axis=-1)[..., order],
                 np.concatenate([sun, sung], axis=-1)[..., order])
+
+    def sky(aod, alb):
+        L, sun = sky_wavelengths(aod, alb)
+        if sup is None:
+            return L, sun
+        La, suna = sup.sky(aod, alb)
+        return (np.concatenate([L, La], axis=1)[:, alt_order],
+                np.concatenate([sun, suna], axis=1)[:, alt_order])
     n_sky = _grid.N_SKY * _grid.N_PHI
     n_dir = (_grid.N_SKY + _grid.N_GROUND) * _grid.N_PHI
     shape = (aods.size, albs.size, el.size, alt.size, wl.size)
@@ -205,12 +252,14 @@ def main(argv=None) -> int:
               flush=True)
     out["log_scale"] = log_s
     out = add_sun(out)
-    dgrid = dict(ds.meta, wavelengths_nm=[float(x) for x in wl])
+    dgrid = dict(ds.meta, wavelengths_nm=[float(x) for x in wl],
+                 altitudes_m=[float(x) for x in alt])
     meta = {"dataset_grid": dgrid, "k_sky": a.k_sky, "k_ground": a.k_ground,
             "delta": DELTA, "fit_residual_rms_y": resid,
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
                        f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else "")
-                       + (" --gas-bands SUPPLEMENT" if gas is not None else ""),
+                       + (" --gas-bands SUPPLEMENT" if gas is not None else "")
+                       + (" --altitude-supplement SUPPLEMENT" if sup is not None else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     if a.float16:
         for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis"):

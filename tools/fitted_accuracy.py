@@ -272,6 +272,13 @@ def _at_nodes(folder, albedo, aod=None) -> int:
         return bool(np.any(np.abs(np.asarray(nodes, dtype=np.float64) - x) < 1e-9))
 
     wl = ds.wavelengths_nm
+    # the file's table wavelengths that are the data set's (a file fitted with the gas
+    # bands' supplement has 49, a 20-nm data set 41)
+    sel = np.isin(np.round(c["wavelengths_nm"], 6), np.round(wl, 6))
+    if int(sel.sum()) != wl.size:
+        print("error: DATASET's wavelengths are not all table wavelengths of the file",
+              file=sys.stderr)
+        return 2
     dwl = default_wavelengths()
     to_default = interp_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     n_sky = _grid.N_SKY
@@ -296,7 +303,7 @@ def _at_nodes(folder, albedo, aod=None) -> int:
                 y_ref = luminance_from_spectrum(L_all[i, j].astype(np.float64) @ to_default,
                                                 dwl)
                 keep &= y_ref > 0.0           # (no light: nothing to compare)
-                fit = _coefficients.radiance_grid(c, aod, alb, float(el), float(h))
+                fit = _coefficients.radiance_grid(c, aod, alb, float(el), float(h))[..., sel]
                 y_fit = luminance_from_spectrum(fit @ to_default, dwl)
                 hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
                 rel = np.abs(y_fit / y_ref - 1.0)[keep]

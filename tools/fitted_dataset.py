@@ -1,8 +1,9 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v1|heldout-v1|small]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v2|fit-v1|heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
-        [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands]
+        [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands | --with-gas-bands]
+        [--altitudes M,...]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -16,11 +17,13 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 Grids (skydome/models/fitted/_grid.py):
 
 * ``fit``: the fitting nodes (7 AOD x 3 albedo = 21 atmospheres, 28 sun elevations
-  -12..90 deg, 10 altitudes 0..15 km);
+  -12..90 deg, 14 altitudes 0..15 km);
 * ``heldout``: the held-out grid (5 atmospheres, their AODs and albedos off the nodes, 13
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
+* ``fit-v2``: the second file's grid (``fit`` without the altitudes 4, 5, 8 and 12 km),
+  which a supplement in ``--altitudes 4000,5000,8000,12000`` completes;
 * ``fit-v1``, ``heldout-v1``: the grids of the first coefficient file (6 AOD nodes 0-1, 26
   sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and 0.05), to
   reproduce it and its figures;
@@ -32,7 +35,14 @@ them too (81 wavelengths: the 20-nm ones are every other one, so the set's 20-nm
 the default set; the chunk layout is the same, with 81 on the wavelength axis).
 ``--gas-bands``: the reference at the gas bands' own table wavelengths only (310, 330, 690,
 710, 730, 770, 890, 930 nm; skydome/models/fitted/_grid.py), a supplement to the 20-nm set
-of the same grid in a folder of its own, which ``tools/fit_fitted.py --gas-bands`` joins to it.
+of the same grid in a folder of its own, which ``tools/fit_fitted.py --gas-bands`` joins to it;
+``--with-gas-bands``: the 20-nm wavelengths and the gas bands' together (49).
+
+``--altitudes``: only these of the grid's altitudes (a supplement: the nodes a data set of an
+earlier grid lacks, which ``tools/fit_fitted.py --altitude-supplement`` joins to it). Every
+(sun elevation, altitude) node is computed from the same tables on its own, and every table
+wavelength independently of the others, so a supplement's values are those a run of the
+whole grid gives at its nodes.
 """
 
 from __future__ import annotations
@@ -85,7 +95,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
-                    choices=("fit", "heldout", "fit-v1", "heldout-v1", "small"))
+                    choices=("fit", "heldout", "fit-v2", "fit-v1", "heldout-v1", "small"))
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",
@@ -111,6 +121,14 @@ def main(argv=None) -> int:
                     help="table wavelengths: the gas bands' own (310, 330, 690, 710, 730, "
                          "770, 890, 930 nm) only: the supplement that tools/fit_fitted.py "
                          "--gas-bands adds to a 20-nm data set of the same grid")
+    ap.add_argument("--with-gas-bands", action="store_true",
+                    help="table wavelengths: the 20-nm ones and the gas bands' (49), for a "
+                         "supplement in --altitudes to a data set joined with its --gas-bands "
+                         "supplement")
+    ap.add_argument("--altitudes", default=None, metavar="M,...",
+                    help="compute only these of the grid's altitudes [m] (a supplement that "
+                         "tools/fit_fitted.py --altitude-supplement joins to a data set of "
+                         "the other altitudes)")
     ap.add_argument("--ignore-memory-check", action="store_true",
                     help="start the local cluster even where --workers times the memory a "
                          "worker is expected to need (about 0.14 GB per table wavelength: "
@@ -136,6 +154,13 @@ def main(argv=None) -> int:
                       "fixed: 310, 330, 690, 710, 730, 770, 890, 930 nm)", file=sys.stderr)
                 return 2
             wl = _dataset.gas_band_wavelengths_nm()
+        if a.with_gas_bands:
+            if a.gas_bands or a.wavelength_step != 20.0:
+                print("error: --with-gas-bands takes neither --gas-bands nor "
+                      "--wavelength-step (its wavelengths are fixed: 300-1100 nm every 20 nm "
+                      "and 310, 330, 690, 710, 730, 770, 890, 930 nm)", file=sys.stderr)
+                return 2
+            wl = np.union1d(wl, _dataset.gas_band_wavelengths_nm())
     except ValueError:
         print(f"error: --wavelength-step = {a.wavelength_step:g} nm is out of range: one of "
               "20, 10, 5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)",
@@ -154,6 +179,19 @@ def main(argv=None) -> int:
                   + " (or --ignore-memory-check)", file=sys.stderr)
             return 2
     el, alt, atms = grid(a.grid)
+    if a.altitudes is not None:
+        try:
+            want_h = [float(x) for x in a.altitudes.split(",")]
+        except ValueError:
+            print(f"error: --altitudes = {a.altitudes!r} is not a list of altitudes in m",
+                  file=sys.stderr)
+            return 2
+        bad = [h for h in want_h if not np.any(np.isclose(alt, h))]
+        if bad or not want_h:
+            print(f"error: --altitudes = {a.altitudes!r}: not among the {a.grid} grid's "
+                  f"altitudes {[float(h) for h in alt]} m", file=sys.stderr)
+            return 2
+        alt = np.array(sorted(set(float(alt[np.isclose(alt, h)][0]) for h in want_h)))
     if a.max_aod is not None:
         if not 0.0 <= a.max_aod <= 1.0:
             print(f"error: --max-aod = {a.max_aod:g} is out of range [0, 1]", file=sys.stderr)

@@ -26,6 +26,9 @@ the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
 * in AOD (:func:`aod_stencil`), quadratic in sqrt(AOD): with the sun above the horizon up
   to 0.1 L over the nodes up to 0.1 (0, 0.025, 0.05, 0.1), above ln L over the nodes from
   0.1 up; with the sun below -1 deg ln L; between -1 and 0 deg the two blended linearly;
+  with the sun above the horizon and the AOD below the first node above 0 (0.025), the
+  thin-haze form L = (a + b tau) exp(-c tau) through the nodes 0, 0.025, 0.05
+  (:func:`thin_haze_form`);
 * between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
   ground under a scattering atmosphere,
 
@@ -71,11 +74,22 @@ def load(path: str | None = None) -> dict:
     out["meta"] = json.loads(str(out["meta"]))
     # a file written with --float16: each row of coefficients and each basis vector over
     # its largest magnitude, the scales beside them
-    for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis"):
+    # its largest magnitude, the scales beside them. The bases are scaled here; the
+    # coefficients (17.7 M) stay in float16 and are scaled where a configuration reads its
+    # few nodes (:func:`_coefficients_at`), which halves the first model's load
+    for key in ("sky_basis", "ground_basis"):
         scale = out.pop(key + "_scale", None)
         if scale is not None:
             out[key] = out[key].astype(np.float32) * scale[..., None]
     return out
+
+
+def _coefficients_at(c: dict, key: str, i: int, j: int, ks: list, h: int) -> np.ndarray:
+    """``c[key][i, j, ks, h]`` (``coef_sky`` or ``coef_ground``) in float32, scaled where the
+    file stores them in float16 with a scale per row."""
+    v = c[key][i, j, ks, h]
+    scale = c.get(key + "_scale")
+    return v if scale is None else v.astype(np.float32) * scale[i, j, ks, h][..., None]
 
 
 def bracket(nodes: np.ndarray, x: float) -> tuple[int, float]:
@@ -121,10 +135,19 @@ def stencil(nodes: np.ndarray, x: float, order: int = 1) -> list[tuple[int, floa
 
 
 def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
-                ) -> tuple[list[tuple[int, float]], bool]:
-    """(stencil, in ln L) over the AOD nodes, quadratic in sqrt(AOD) throughout (the
-    choices measured on the held-out grid: docs/models.md, "fitted", "The AOD between its
-    nodes").
+                ) -> tuple[list[tuple[int, float]], str]:
+    """(stencil, how) over the AOD nodes: ``how`` "L" or "lnL", quadratic in sqrt(AOD) in L or
+    ln L (the choices measured on the held-out grid: docs/models.md, "fitted", "The AOD
+    between its nodes"), or "form": :func:`thin_haze_form` through the three nodes of the
+    stencil, whose last weight is then tau / h (the AOD over the first node's).
+
+    Sun above the horizon, AOD below the first node above 0 (0.025), where the nodes 0, h,
+    2 h are evenly spaced: the thin-haze form. Near the horizon the radiance is far from
+    linear in the first 0.025 of AOD: along a grazing path of 30-100 air masses that much
+    aerosol already makes the path's aerosol optical depth 1-2, so that its light rises and
+    then saturates (on the ground, sun at 4 deg, 1.45 deg above the horizon under the sun,
+    560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1 at AOD 0, 0.0125, 0.025, 0.05); a quadratic in sqrt(AOD) through the nodes was 10-16 % off at
+    AOD 0.0125 and 30-50 % at 0.005 there (docs/models.md, "fitted", "The thinnest haze").
 
     Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, over the nodes up
     to it (in a thin haze the aerosol's light grows nearly in proportion to its optical
@@ -138,13 +161,49 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     order = ELEMENT_ORDER["aod"]
     x = math.sqrt(max(aod, 0.0))
     if twilight:
-        return stencil(np.sqrt(nodes), x, order), True
+        return stencil(np.sqrt(nodes), x, order), "lnL"
+    if (nodes.size >= 3 and nodes[0] == 0.0 and 0.0 < aod < nodes[1]
+            and abs(nodes[2] - 2.0 * nodes[1]) <= 1e-12):
+        return [(0, 0.0), (1, 0.0), (2, max(aod, 0.0) / float(nodes[1]))], "form"
     # the last node of the thin-haze part: the node at LINEAR_AOD_MAX (at least the third)
     n_thin = max(3, int(np.searchsorted(nodes, LINEAR_AOD_MAX + 1e-12)))
     if nodes.size <= n_thin or aod <= float(nodes[n_thin - 1]):
-        return stencil(np.sqrt(nodes[:n_thin]), x, order), False
+        return stencil(np.sqrt(nodes[:n_thin]), x, order), "L"
     k = n_thin - 1
-    return [(i + k, w) for i, w in stencil(np.sqrt(nodes[k:]), x, order)], True
+    return [(i + k, w) for i, w in stencil(np.sqrt(nodes[k:]), x, order)], "lnL"
+
+
+def thin_haze_form(L0: np.ndarray, L1: np.ndarray, L2: np.ndarray, t: float) -> np.ndarray:
+    """L at tau = t h (0 <= t <= 2) from its values L0, L1, L2 >= 0 at tau = 0, h, 2 h.
+
+    The light scattered by a thin haze along a path grows in proportion to its optical
+    depth tau and is attenuated as exp(-m tau) along the path (m its air mass): L = (a +
+    b tau) exp(-c tau), c of either sign. Through the three values (q = exp(-c h)): a = L0,
+    and q the root of L0 q^2 - 2 L1 q + L2 = 0 nearer 1, q = L2 / (L1 + sqrt(D)), D = L1^2 -
+    L0 L2, which gives L(t h) = L0 (1 - t) q^t + L1 t q^(t - 1) (exact for L linear in tau:
+    q = 1; and for L exponential in tau: D = 0). Where D < 0 (ln L convex in tau) no such
+    form passes through the three: ln L quadratic in tau there, which meets it at D = 0
+    (both then exponential), so the result is continuous in the values. Where L1 or L2 is
+    not positive (the clamp's zeros), L quadratic in tau. Each form passes through the three
+    values at t = 0, 1, 2."""
+    shape = np.broadcast(L0, L1, L2).shape
+    L0, L1, L2 = (np.broadcast_to(np.asarray(v, dtype=np.float64), shape).ravel()
+                  for v in (L0, L1, L2))
+    lag = ((t - 1.0) * (t - 2.0) / 2.0, -t * (t - 2.0), t * (t - 1.0) / 2.0)
+    out = lag[0] * L0 + lag[1] * L1 + lag[2] * L2          # L quadratic in tau
+    D = L1 * L1 - L0 * L2
+    pos = (L0 >= 0.0) & (L1 > 0.0) & (L2 > 0.0)     # D < 0 implies L0 > 0 too
+    m = pos & (D >= 0.0)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        a, b, c = L0[m], L1[m], L2[m]
+        q = c / (b + np.sqrt(D[m]))                  # > 0: L2 > 0, L1 + sqrt(D) > 0
+        # L0 (1 - t) q^t + L1 t q^(t - 1), one logarithm and one exponential
+        v = (a * (1.0 - t) * q + b * t) * np.exp((t - 1.0) * np.log(q))
+        out[m] = np.where(np.isfinite(v), v, out[m])
+        m = pos & (D < 0.0)
+        v = np.exp(lag[0] * np.log(L0[m]) + lag[1] * np.log(L1[m]) + lag[2] * np.log(L2[m]))
+        out[m] = np.where(np.isfinite(v), v, out[m])
+    return np.maximum(out, 0.0).reshape(shape)
 
 
 #: Up to this AOD (a node) the day sky is interpolated in L, above it in ln L.
@@ -222,8 +281,9 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
         """L at AOD node i, albedo node j, interpolated in elevation and altitude."""
         if (i, j) not in cache:
             # coefficients and ln s of each elevation node, interpolated in altitude
-            cs = sum(wh * c["coef_sky"][i, j, ks, h] for h, wh in st_h)       # (k, wl, n)
-            cg = sum(wh * c["coef_ground"][i, j, ks, h] for h, wh in st_hg)
+            cs = sum(wh * _coefficients_at(c, "coef_sky", i, j, ks, h)
+                     for h, wh in st_h)                                      # (k, wl, n)
+            cg = sum(wh * _coefficients_at(c, "coef_ground", i, j, ks, h) for h, wh in st_hg)
             log_s = we @ sum(wh * c["log_scale"][i, j, ks, h] for h, wh in st_h)
             # (wl, k n) in float32: y to 1e-7, far below the fit's residual
             cs = np.concatenate(list(we[:, None, None] * cs), axis=-1).astype(np.float32)
@@ -236,7 +296,13 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
     per_albedo = []
     for j in range(c["albedo_nodes"].size):
         total = 0.0
-        for wp, (st_a, in_log) in parts:
+        for wp, (st_a, how) in parts:
+            if how == "form":
+                (i0, _), (i1, _), (i2, t) = st_a
+                total = total + wp * thin_haze_form(at_node(i0, j), at_node(i1, j),
+                                                    at_node(i2, j), t)
+                continue
+            in_log = how == "lnL"
             acc = 0.0
             for i, wi in st_a:
                 if wi != 0.0:

@@ -68,9 +68,17 @@ SUN_ELEVATION_NODES_DEG = np.array([-12.0, -11.0, -10.0, -9.0, -8.0, -7.0, -6.0,
                                     -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
                                     19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
 #: Altitude nodes: denser in the aerosol's first scale heights (1.2 km), where the
-#: radiance changes fastest with altitude (0.35-0.5 km apart up to 2 km).
-ALTITUDE_NODES_M = np.array([0.0, 350.0, 700.0, 1100.0, 1500.0, 2000.0, 3000.0, 6000.0,
-                             10000.0, 15000.0])
+#: radiance changes fastest with altitude (0.35-0.5 km apart up to 2 km), then 1-3 km
+#: apart. The nodes at 4, 5, 8 and 12 km were added to the second file's (3-6 km and 6-10-15
+#: km apart there): the reference computed every 500 m showed that gap's interpolation in
+#: altitude alone to be up to 29 % off in haze with a low sun (docs/models.md, "fitted",
+#: "The altitude nodes from 3 to 15 km").
+ALTITUDE_NODES_M = np.array([0.0, 350.0, 700.0, 1100.0, 1500.0, 2000.0, 3000.0, 4000.0,
+                             5000.0, 6000.0, 8000.0, 10000.0, 12000.0, 15000.0])
+#: The altitude nodes of the second file (the data set of the refit on the corrected
+#: reference), which the new ones supplement (``tools/fitted_dataset.py --altitudes``).
+V2_ALTITUDE_NODES_M = np.array([0.0, 350.0, 700.0, 1100.0, 1500.0, 2000.0, 3000.0, 6000.0,
+                                10000.0, 15000.0])
 AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
 #: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
 #: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
@@ -101,13 +109,17 @@ V1_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
 
 def grid(name: str):
     """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
-    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v1" and
+    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v2" (the
+    second file's: "fit" without the altitudes 4, 5, 8 and 12 km), "fit-v1" and
     "heldout-v1" (the first file's), "small" (two atmospheres of "fit")."""
     if name in ("fit", "small"):
         atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
         if name == "small":
             atm = [(0.1, 0.0), (0.1, 0.5)]
         return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+    if name == "fit-v2":
+        atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
+        return SUN_ELEVATION_NODES_DEG, V2_ALTITUDE_NODES_M, atm, False
     if name == "heldout":
         return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(HELDOUT_ATMOSPHERES),
                 True)
@@ -120,7 +132,7 @@ def grid(name: str):
     raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
 
 
-GRID_NAMES = ("fit", "heldout", "fit-v1", "heldout-v1", "small")
+GRID_NAMES = ("fit", "heldout", "fit-v2", "fit-v1", "heldout-v1", "small")
 
 def horizon_zenith_rad(altitude_m: float) -> float:
     """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius

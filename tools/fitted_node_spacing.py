@@ -1,0 +1,153 @@
+"""How far apart the ``fitted`` model's nodes may be: the interpolation of one parameter
+alone, measured on the ``precomputed`` reference itself.
+
+    python tools/fitted_node_spacing.py altitude [--aod 0.7 --albedo 0.2] [--out FILE.npz]
+    python tools/fitted_node_spacing.py aod [--albedo 0.6] [--out FILE.npz]
+
+The reference runs as in the data set (``twilight_reference=True``, no cache) at three
+table wavelengths (500, 560, 620 nm; each computed independently of the others), on the
+data set's view grid (skydome/models/fitted/_grid.py). Nothing of the fitted model is used
+but its interpolation rules (skydome/models/fitted/_coefficients.py): the figures are the
+error of interpolating the reference's own values between nodes, before any fit.
+
+``altitude``: one atmosphere at the held-out sun elevations (-6.5 to 45 deg), observer
+altitudes 0-15 km every 500 m; per sun elevation and node set, the RMS / max relative error
+(560 nm, sky part of the grid) of ln L cubic in altitude (the model's rule) at altitudes off
+the nodes. The node sets: the second file's above 2 km (3, 6, 10, 15 km) and refinements.
+The nodes below 2 km are taken at 0.5, 1, 1.5 km here (the sweep's 500 m step).
+
+``aod``: one albedo, AODs 0-0.25 including values between the nodes 0, 0.025, 0.05, 0.1,
+sun 0.5, 4, 8.5 and 16 deg, observer on the ground and at 2.2 km; per AOD off the nodes, the
+RMS / max relative error (560 nm, sky part; the ground view from 2.2 km apart) of the day
+rule before this file (L quadratic in sqrt(AOD) over the nodes up to 0.1) and of the
+thin-haze form (``_coefficients.thin_haze_form``) below 0.025.
+
+Cost on a 2-core machine: about 1 min (altitude) and 6 min (aod).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+import numpy as np
+
+WAVELENGTHS_NM = np.array([500.0, 560.0, 620.0])
+ALTITUDE_SUN_DEG = np.array([-6.5, -2.5, 0.5, 4.0, 8.5, 16.0, 28.0, 45.0])
+ALTITUDE_SETS = {
+    "3, 6, 10, 15 km (second file)": [3000, 6000, 10000, 15000],
+    "+ 4.5 km": [3000, 4500, 6000, 10000, 15000],
+    "+ 4, 5 km": [3000, 4000, 5000, 6000, 10000, 15000],
+    "+ 4, 5, 8 km": [3000, 4000, 5000, 6000, 8000, 10000, 15000],
+    "+ 4, 5, 8, 12 km (this file)": [3000, 4000, 5000, 6000, 8000, 10000, 12000, 15000],
+    "+ 4, 8, 12 km": [3000, 4000, 6000, 8000, 10000, 12000, 15000],
+}
+ALTITUDE_TESTS_M = [2500.0, 3500.0, 4500.0, 5500.0, 7000.0, 9000.0, 12500.0]
+AOD_VALUES = (0.0, 0.005, 0.0125, 0.025, 0.0375, 0.05, 0.07, 0.1)
+AOD_SUN_DEG = (0.5, 4.0, 8.5, 16.0)
+AOD_ALTITUDES_M = (0.0, 2200.0)
+
+
+def _stats(e):
+    return 100.0 * float(np.sqrt(np.mean(e ** 2))), 100.0 * float(np.max(np.abs(e)))
+
+
+def altitude(aod: float, albedo: float, out: str | None) -> None:
+    from skydome.models.fitted import _coefficients as C
+    from skydome.models.fitted import _dataset, _grid
+
+    alts = np.arange(0.0, 15001.0, 500.0)
+    t0 = time.perf_counter()
+    c = _dataset.compute_chunk(aod, albedo, ALTITUDE_SUN_DEG, alts, twilight_reference=True,
+                               wavelengths=WAVELENGTHS_NM)
+    print(f"reference: AOD {aod:g}, albedo {albedo:g}, {alts.size} altitudes x "
+          f"{ALTITUDE_SUN_DEG.size} suns in {time.perf_counter() - t0:.0f} s")
+    if out:
+        np.savez(out, chunk=c, elevations_deg=ALTITUDE_SUN_DEG, altitudes_m=alts)
+    y = np.log(np.maximum(c[:, :, :_grid.N_SKY, :, 1].astype(np.float64), 1e-30))
+    at = {float(h): k for k, h in enumerate(alts)}
+    print("\nln L cubic in altitude, RMS / max [%] at "
+          + ", ".join(f"{h / 1000:g}" for h in ALTITUDE_TESTS_M) + " km:")
+    for i, el in enumerate(ALTITUDE_SUN_DEG):
+        for name, upper in ALTITUDE_SETS.items():
+            nodes = np.array([0.0, 500.0, 1000.0, 1500.0, 2000.0] + upper, dtype=float)
+            cells = []
+            for x in ALTITUDE_TESTS_M:
+                if x in nodes:
+                    cells.append("   node   ")
+                    continue
+                yi = sum(w * y[i, at[float(nodes[p])]] for p, w in C.stencil(nodes, x, 3))
+                r, m = _stats(np.exp(yi - y[i, at[x]]) - 1.0)
+                cells.append(f"{r:4.1f}/{m:5.1f}")
+            print(f"sun {el:5.1f} deg  {name:30s} " + " ".join(cells))
+
+
+def aod(albedo: float, out: str | None) -> None:
+    from skydome.models.fitted import _coefficients as C
+    from skydome.models.fitted import _dataset, _grid
+
+    t0 = time.perf_counter()
+    L = {}
+    for a in AOD_VALUES:
+        L[a] = _dataset.compute_chunk(a, albedo, AOD_SUN_DEG, AOD_ALTITUDES_M,
+                                      twilight_reference=True,
+                                      wavelengths=WAVELENGTHS_NM)[:, :, :-1, :, 1]
+        L[a] = L[a].astype(np.float64)
+    print(f"reference: albedo {albedo:g}, AOD {list(AOD_VALUES)} in "
+          f"{time.perf_counter() - t0:.0f} s")
+    if out:
+        np.savez(out, **{f"aod{a:g}": v for a, v in L.items()})
+
+    def quad_sqrt(x):
+        nodes = [0.0, 0.025, 0.05] if x <= 0.05 else [0.025, 0.05, 0.1]
+        st = C.stencil(np.sqrt(nodes), math.sqrt(x), 2)
+        return sum(w * L[nodes[p]] for p, w in st)
+
+    def form(x):
+        return C.thin_haze_form(L[0.0], L[0.025], L[0.05], x / 0.025)
+
+    n = _grid.N_SKY
+    print("\nRMS / max [%], sky part, per sun (0.5, 4, 8.5, 16 deg) x observer (ground, "
+          "2.2 km); then the ground view from 2.2 km:")
+    for x in (0.005, 0.0125):
+        for name, f in (("L quadratic in sqrt(AOD)", quad_sqrt), ("thin-haze form", form)):
+            e = f(x) / L[x] - 1.0
+            cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
+                     for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
+            r, m = _stats(e[:, 1, n:])
+            print(f"AOD {x:<7g} {name:25s} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
+    for x in (0.0375, 0.07):
+        e = quad_sqrt(x) / L[x] - 1.0
+        cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
+                 for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
+        r, m = _stats(e[:, 1, n:])
+        print(f"AOD {x:<7g} {'L quadratic in sqrt(AOD)':25s} " + " ".join(cells)
+              + f"   ground {r:.1f}/{m:.1f}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("what", choices=("altitude", "aod"))
+    ap.add_argument("--aod", type=float, default=0.7)
+    ap.add_argument("--albedo", type=float, default=None,
+                    help="ground albedo (default 0.2 for altitude, 0.6 for aod)")
+    ap.add_argument("--out", default=None, help="keep the reference's values (.npz)")
+    a = ap.parse_args(argv)
+    albedo = a.albedo if a.albedo is not None else (0.2 if a.what == "altitude" else 0.6)
+    if not 0.0 <= albedo <= 1.0:
+        print(f"error: --albedo = {albedo:g} is out of range [0, 1]", file=sys.stderr)
+        return 2
+    if not 0.0 <= a.aod <= 1.0:
+        print(f"error: --aod = {a.aod:g} is out of range [0, 1]", file=sys.stderr)
+        return 2
+    if a.what == "altitude":
+        altitude(a.aod, albedo, a.out)
+    else:
+        aod(albedo, a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
