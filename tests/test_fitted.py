@@ -626,3 +626,15 @@ def test_thin_haze_and_between_altitude_nodes_against_live_precomputed(aod, albe
     rms, worst = float(np.sqrt(np.mean(rel ** 2))), float(np.max(np.abs(rel)))
     print(f"AOD {aod:g}, sun {el:g} deg, {h:g} m: RMS {100 * rms:.2f} %, max {100 * worst:.1f} %")
     assert rms <= DAY_TARGET_RMS and worst <= DAY_TARGET_MAX, (rms, worst)
+
+
+def test_node_spacing_tool_refuses_bad_input_before_any_work(capsys):
+    """tools/fitted_node_spacing.py: an albedo or AOD outside [0, 1] is refused with exit 2,
+    naming the option, its value and the range, before any reference is computed."""
+    mod = _load_tool("fitted_node_spacing")
+    assert mod.main(["altitude", "--albedo", "1.5"]) == 2
+    assert "--albedo = 1.5 is out of range [0, 1]" in capsys.readouterr().err
+    assert mod.main(["altitude", "--aod", "-0.1"]) == 2
+    assert "--aod = -0.1 is out of range [0, 1]" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        mod.main(["neither"])
