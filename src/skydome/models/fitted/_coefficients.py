@@ -73,10 +73,10 @@ def load(path: str | None = None) -> dict:
         out = {k: z[k] for k in z.files}
     out["meta"] = json.loads(str(out["meta"]))
     # a file written with --float16: each row of coefficients and each basis vector over
-    # its largest magnitude, the scales beside them
     # its largest magnitude, the scales beside them. The bases are scaled here; the
     # coefficients (17.7 M) stay in float16 and are scaled where a configuration reads its
-    # few nodes (:func:`_coefficients_at`), which halves the first model's load
+    # few nodes (:func:`_coefficients_at`): the first model 276-361 ms instead of 442-452
+    # (docs/performance.md, "The fitted model with 14 altitude nodes")
     for key in ("sky_basis", "ground_basis"):
         scale = out.pop(key + "_scale", None)
         if scale is not None:
@@ -146,8 +146,10 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     linear in the first 0.025 of AOD: along a grazing path of 30-100 air masses that much
     aerosol already makes the path's aerosol optical depth 1-2, so that its light rises and
     then saturates (on the ground, sun at 4 deg, 1.45 deg above the horizon under the sun,
-    560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1 at AOD 0, 0.0125, 0.025, 0.05); a quadratic in sqrt(AOD) through the nodes was 10-16 % off at
-    AOD 0.0125 and 30-50 % at 0.005 there (docs/models.md, "fitted", "The thinnest haze").
+    560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1 at AOD 0, 0.0125, 0.025, 0.05); a quadratic in
+    sqrt(AOD) through the nodes was 10-16 % off at AOD 0.0125 and 30-50 % at 0.005 there
+    (docs/models.md, "fitted", "The altitude nodes from 3 to 15 km and the thinnest
+    haze").
 
     Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, over the nodes up
     to it (in a thin haze the aerosol's light grows nearly in proportion to its optical
