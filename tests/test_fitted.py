@@ -347,9 +347,6 @@ def test_dataset_wavelength_step_keeps_the_table_wavelengths_and_refuses_others(
     """tools/fitted_dataset.py --wavelength-step: 10 nm gives 300, 310, ..., 1100 nm (81),
     every other one a table wavelength (so a 10-nm held-out set holds the 20-nm one); a
     step that is not a divisor of 20 nm is refused before any work, naming the option."""
-    import importlib.util
-    from pathlib import Path
-
     from skydome.models.fitted import _dataset
 
     wl = _dataset.wavelengths_nm(10)
@@ -358,10 +355,7 @@ def test_dataset_wavelength_step_keeps_the_table_wavelengths_and_refuses_others(
     np.testing.assert_array_equal(_dataset.wavelengths_nm(20), _grid.WAVELENGTHS_NM)
     with pytest.raises(ValueError, match="wavelength step = 7"):
         _dataset.wavelengths_nm(7)
-    tool = Path(__file__).resolve().parents[1] / "tools" / "fitted_dataset.py"
-    spec = importlib.util.spec_from_file_location("fitted_dataset_tool", tool)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = _load_tool("fitted_dataset")
     assert mod.main(["unused-folder", "--wavelength-step", "15"]) == 2
     err = capsys.readouterr().err
     assert "--wavelength-step = 15 nm is out of range" in err and "20, 10, 5, 4, 2, 1" in err
@@ -373,13 +367,7 @@ def test_dataset_refuses_more_workers_than_the_memory_holds(tmp_path, capsys, mo
     measured, 11.2 GB at 81 wavelengths, docs/models.md "fitted", "Cost") is refused before
     any work, naming --workers, the need and what fits; nothing is written. A cluster
     (--scheduler) and --ignore-memory-check are not checked."""
-    import importlib.util
-    from pathlib import Path
-
-    tool = Path(__file__).resolve().parents[1] / "tools" / "fitted_dataset.py"
-    spec = importlib.util.spec_from_file_location("fitted_dataset_tool", tool)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = _load_tool("fitted_dataset")
     assert mod.worker_memory_gb(81) == pytest.approx(11.34)
     assert mod.worker_memory_gb(41) >= 5.5          # the largest measured at 41 wavelengths
     monkeypatch.setattr(mod, "available_memory_gb", lambda: 24.0)

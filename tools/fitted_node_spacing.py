@@ -16,7 +16,7 @@ altitudes 0-15 km every 500 m; per sun elevation and node set, the RMS / max rel
 the nodes. The node sets: the second file's above 2 km (3, 6, 10, 15 km) and refinements.
 The nodes below 2 km are taken at 0.5, 1, 1.5 km here (the sweep's 500 m step).
 
-``aod``: one albedo, AODs 0-0.25 including values between the nodes 0, 0.025, 0.05, 0.1,
+``aod``: one albedo, AODs 0-0.1 including values between the nodes 0, 0.025, 0.05, 0.1,
 sun 0.5, 4, 8.5 and 16 deg, observer on the ground and at 2.2 km; per AOD off the nodes, the
 RMS / max relative error (560 nm, sky part; the ground view from 2.2 km apart) of the day
 rule before this file (L quadratic in sqrt(AOD) over the nodes up to 0.1) and of the
@@ -112,20 +112,14 @@ def aod(albedo: float, out: str | None) -> None:
     n = _grid.N_SKY
     print("\nRMS / max [%], sky part, per sun (0.5, 4, 8.5, 16 deg) x observer (ground, "
           "2.2 km); then the ground view from 2.2 km:")
-    for x in (0.005, 0.0125):
-        for name, f in (("L quadratic in sqrt(AOD)", quad_sqrt), ("thin-haze form", form)):
+    rules = (("L quadratic in sqrt(AOD)", quad_sqrt), ("thin-haze form", form))
+    for x in (0.005, 0.0125, 0.0375, 0.07):
+        for name, f in rules if x < 0.025 else rules[:1]:
             e = f(x) / L[x] - 1.0
             cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
                      for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
             r, m = _stats(e[:, 1, n:])
             print(f"AOD {x:<7g} {name:25s} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
-    for x in (0.0375, 0.07):
-        e = quad_sqrt(x) / L[x] - 1.0
-        cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
-                 for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
-        r, m = _stats(e[:, 1, n:])
-        print(f"AOD {x:<7g} {'L quadratic in sqrt(AOD)':25s} " + " ".join(cells)
-              + f"   ground {r:.1f}/{m:.1f}")
 
 
 def main(argv=None) -> int:

@@ -138,8 +138,9 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
                 ) -> tuple[list[tuple[int, float]], str]:
     """(stencil, how) over the AOD nodes: ``how`` "L" or "lnL", quadratic in sqrt(AOD) in L or
     ln L (the choices measured on the held-out grid: docs/models.md, "fitted", "The AOD
-    between its nodes"), or "form": :func:`thin_haze_form` through the three nodes of the
-    stencil, whose last weight is then tau / h (the AOD over the first node's).
+    between its nodes"), or "form": :func:`thin_haze_form` through the stencil's three
+    nodes 0, h, 2 h at t = AOD / h (its weights: L quadratic in AOD, the form's own
+    fallback where a node value is 0).
 
     Sun above the horizon, AOD below the first node above 0 (0.025), where the nodes 0, h,
     2 h are evenly spaced: the thin-haze form. Near the horizon the radiance is far from
@@ -166,7 +167,7 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
         return stencil(np.sqrt(nodes), x, order), "lnL"
     if (nodes.size >= 3 and nodes[0] == 0.0 and 0.0 < aod < nodes[1]
             and abs(nodes[2] - 2.0 * nodes[1]) <= 1e-12):
-        return [(0, 0.0), (1, 0.0), (2, max(aod, 0.0) / float(nodes[1]))], "form"
+        return stencil(nodes[:3], aod, 2), "form"
     # the last node of the thin-haze part: the node at LINEAR_AOD_MAX (at least the third)
     n_thin = max(3, int(np.searchsorted(nodes, LINEAR_AOD_MAX + 1e-12)))
     if nodes.size <= n_thin or aod <= float(nodes[n_thin - 1]):
@@ -300,9 +301,8 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
         total = 0.0
         for wp, (st_a, how) in parts:
             if how == "form":
-                (i0, _), (i1, _), (i2, t) = st_a
-                total = total + wp * thin_haze_form(at_node(i0, j), at_node(i1, j),
-                                                    at_node(i2, j), t)
+                t = aod / float(c["aod_nodes"][1])
+                total = total + wp * thin_haze_form(*(at_node(i, j) for i, _ in st_a), t)
                 continue
             in_log = how == "lnL"
             acc = 0.0

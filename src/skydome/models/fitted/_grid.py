@@ -75,10 +75,11 @@ SUN_ELEVATION_NODES_DEG = np.array([-12.0, -11.0, -10.0, -9.0, -8.0, -7.0, -6.0,
 #: "The altitude nodes from 3 to 15 km").
 ALTITUDE_NODES_M = np.array([0.0, 350.0, 700.0, 1100.0, 1500.0, 2000.0, 3000.0, 4000.0,
                              5000.0, 6000.0, 8000.0, 10000.0, 12000.0, 15000.0])
+#: The altitude nodes added to the second file's (``tools/fitted_dataset.py --altitudes``).
+SUPPLEMENT_ALTITUDES_M = np.array([4000.0, 5000.0, 8000.0, 12000.0])
 #: The altitude nodes of the second file (the data set of the refit on the corrected
-#: reference), which the new ones supplement (``tools/fitted_dataset.py --altitudes``).
-V2_ALTITUDE_NODES_M = np.array([0.0, 350.0, 700.0, 1100.0, 1500.0, 2000.0, 3000.0, 6000.0,
-                                10000.0, 15000.0])
+#: reference): the present ones without the supplement's.
+V2_ALTITUDE_NODES_M = np.setdiff1d(ALTITUDE_NODES_M, SUPPLEMENT_ALTITUDES_M)
 AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
 #: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
 #: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
