@@ -132,11 +132,6 @@ def transmittance_uv(r, mu, R, Rt, size):
                                         unit_to_texel(rho / H, size[1])), -1)
 
 
-def irradiance_uv(r, mu_s, R, Rt, size):
-    return np.stack(np.broadcast_arrays(unit_to_texel(0.5 * (mu_s + 1.0), size[0]),
-                                        unit_to_texel((r - R) / (Rt - R), size[1])), -1)
-
-
 def mu_s_unit(mu_s, mu_s_min):
     th_max = np.arccos(np.clip(mu_s_min, -1.0, 1.0))
     th = np.minimum(np.arccos(np.clip(mu_s, -1.0, 1.0)), th_max)
@@ -144,6 +139,23 @@ def mu_s_unit(mu_s, mu_s_min):
     zen = np.arcsinh((0.0 - MU_S_CENTRE) / MU_S_WIDTH)
     u = np.arcsinh((th - MU_S_CENTRE) / MU_S_WIDTH)
     return np.clip((top - u) / (top - zen), 0.0, 1.0)
+
+
+def irradiance_uv(r, mu_s, R, Rt, mu_s_min, size):
+    """skydomeIrradianceUv: the two mu_s nodes' texel centres (uv0, uv1) and the fraction."""
+    x = mu_s_unit(mu_s, mu_s_min) * (size[0] - 1.0)
+    i = np.minimum(np.floor(x), size[0] - 2.0)
+    f = x - i
+    v = unit_to_texel((r - R) / (Rt - R), size[1])
+    uv0 = np.stack(np.broadcast_arrays((i + 0.5) / size[0], v), -1)
+    uv1 = np.stack(np.broadcast_arrays((i + 1.5) / size[0], v), -1)
+    return uv0, uv1, np.asarray(f)[..., None]
+
+
+def geometric_mix(lo, hi, f):
+    """skydomeGeometricMix."""
+    geo = lo * np.exp(f * np.log(np.maximum(hi, 1e-37) / np.maximum(lo, 1e-37)))
+    return np.where(np.minimum(lo, hi) > 0.0, geo, lo + f * (hi - lo))
 
 
 def mu_unit(r, mu, ground, R):
@@ -260,8 +272,9 @@ def sky_radiance(scat, mie, mult, trans, atm, camera, view, sun):
 def sun_and_sky_irradiance(trans, irr, atm, point, normal, sun):
     r = np.linalg.norm(point)
     mu_s = np.clip(np.dot(point, sun) / r, -1.0, 1.0)
-    sky = (texture2d(irr, irradiance_uv(r, mu_s, atm["bottomRadius"], atm["topRadius"],
-                                        textureSize(irr)))[..., :3]
+    uv0, uv1, fe = irradiance_uv(r, mu_s, atm["bottomRadius"], atm["topRadius"], atm["muSMin"],
+                                 textureSize(irr))
+    sky = (geometric_mix(texture2d(irr, uv0), texture2d(irr, uv1), fe)[..., :3]
            * (1.0 + np.dot(normal, point) / r) * 0.5)
     t = texture2d(trans, transmittance_uv(r, mu_s, atm["bottomRadius"], atm["topRadius"],
                                           textureSize(trans)))[..., :3]
@@ -287,12 +300,13 @@ def ground_radiance(od, irr_spec, atm, camera, view, sun):
     c_view = np.maximum(columns(od, atm, rd, -mud) - columns(od, atm, np.full_like(mu, r), -mu),
                         0.0)
     isize = textureSize(irr_spec)
-    uv = irradiance_uv(R, mu_g, R, Rt, isize[:2])
+    uv0, uv1, fe = irradiance_uv(R, mu_g, R, Rt, atm["muSMin"], isize[:2])
     xyz = np.zeros(mu.shape + (3,))
     for k in range(8):
         if 4 * k >= atm["nWavelengths"]:
             break
-        e = texture2darray(irr_spec, uv, float(k))
+        e = geometric_mix(texture2darray(irr_spec, uv0, float(k)),
+                          texture2darray(irr_spec, uv1, float(k)), fe)
         for c in range(4):
             j = 4 * k + c
             if j >= atm["nWavelengths"]:

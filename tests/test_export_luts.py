@@ -95,7 +95,7 @@ def test_write_precomputed_luts(small_sky, tmp_path):
     assert desc["sizes"] == {"r": 4, "mu": 8, "mu_s": 4, "nu": 2}
     # the mu_s axis is the model's zenith-angle mapping (table format 2), not [Bru17]'s, and
     # the mu axis its horizon-angle mapping (table format 3)
-    assert desc["table_format"] == "skydome.precomputed/3"
+    assert desc["table_format"] == "skydome.precomputed/4"
     assert "asinh((theta - 92 deg)/6 deg)" in desc["mappings"]["mu_s"]
     assert "asinh(e/w)/asinh(e_max/w), w = 2 deg" in desc["mappings"]["mu"]
     # [Bru17]'s texture set: Rayleigh and single Mie apart, orders 2..N, transmittance,
@@ -152,7 +152,7 @@ def test_cli_export_luts_precomputed(tmp_path):
                                   "exr,npy", "--out", str(out), *small])
         assert res.exit_code == 0, res.output
     desc = json.loads((out / "luts.json").read_text())
-    assert desc["format"] == "skydome.luts.bruneton-xyz/5"
+    assert desc["format"] == "skydome.luts.bruneton-xyz/6"
     ms = np.load(out / "multiple_scattering.npy")
     assert ms.shape == (4, 8, 2 * 4, 4)
     ch = read_exr(out / "multiple_scattering.exr")

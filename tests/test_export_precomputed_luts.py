@@ -164,7 +164,7 @@ def test_shader_equals_the_models_lookup_of_its_tables(baked, altitude_m):
         K.render_observer(np.ascontiguousarray(d), sky._r0, np.ascontiguousarray(sun), ss,
                           t.phase_code, t.phase_param, t.kernel_phase_table, ms, t.columns,
                           t.beta_e, t.ground_albedo, t.irradiance, np.ones(out.shape[1]),
-                          sky._R, sky._Rt, sky._alpha, sky._slice_geometry(table=True), out)
+                          sky._R, sky._Rt, sky._mu_s_min, sky._alpha, sky._slice_geometry(table=True), out)
         cpu = out @ Kx
         assert cpu[:, 1].min() > 0.0
         np.testing.assert_allclose(gpu, cpu, rtol=1e-5, atol=1e-6 * cpu[:, 1].max())

@@ -471,7 +471,7 @@ def test_irradiance_rays_share_geometry_exactly():
     ``_multiple.ray_integral`` per ray (computed here in Python, ray by ray) on a small
     random density."""
     from skydome.models.simulated.precomputed import _irradiance, _multiple, _precompute as PC
-    from skydome.models.simulated.precomputed._mapping import mu_s_frame
+    from skydome.models.simulated.precomputed._mapping import mu_s_frame, mu_s_from_unit
 
     props = Atmosphere.earth(aerosol_optical_depth=0.3).optical_properties(np.array(WL3), fold=True)
     R, Rt = float(props.planet_radius_m), float(props.top_radius_m)
@@ -497,7 +497,7 @@ def test_irradiance_rays_share_geometry_exactly():
     for ir in range(3):
         r = R + (Rt - R) * ir / 2.0
         for im in range(5):
-            mu_s = -1.0 + 2.0 * im / 4.0
+            mu_s = mu_s_from_unit(im / 4.0, mu_s_min)    # the table's node (the sun mapping)
             for a in range(th.size):
                 for b in range(ph.size):
                     nu = np.clip(np.sqrt(1 - mu_s ** 2) * np.sin(th[a]) * np.cos(ph[b])
@@ -507,8 +507,9 @@ def test_irradiance_rays_share_geometry_exactly():
                     _multiple.ray_integral(J, *args, frame, r, np.cos(th[a]), mu_s, nu, False,
                                            *rule, 500.0, sc_, one)
                     ref[ir, im] += 2 * np.cos(th[a]) * dom[a] * one
-    # equal to rounding: 1e-15 relative in general, up to 2.5e-6 with the sun at the zenith
-    # or the nadir (the azimuth about the sun is singular there), and at the top (r = Rt)
+    # equal to rounding: 1e-12 relative at the inner mu_s nodes, within 1e-5 at the end
+    # nodes (the sun at mu_s_min, and at the zenith, where the azimuth about the sun is
+    # singular), and at the top (r = Rt)
     # the rays have no length (values of 1e-15)
     np.testing.assert_allclose(out, ref, rtol=1e-5, atol=1e-12 * ref.max())
     np.testing.assert_allclose(out[:, 1:-1], ref[:, 1:-1], rtol=1e-12, atol=1e-12 * ref.max())

@@ -94,7 +94,7 @@ def test_entry_layout_and_sizes():
     names = sorted(os.listdir(path))
     assert "single_scattering.npy" not in names         # computed again from the entry
     meta = json.load(open(os.path.join(path, "meta.json")))
-    assert meta["cache_format"] == "skydome.precomputed-cache/15"
+    assert meta["cache_format"] == "skydome.precomputed-cache/16"
     assert meta["encoded"] == {"scattering_density": "half-bands"}
     # the Rayleigh constituent (phase code 0) as a quadratic form, the aerosol's in float16
     rayleigh = [int(k) for k in np.nonzero(m._t.phase_code == 0)[0]]

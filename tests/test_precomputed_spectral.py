@@ -130,10 +130,13 @@ def _exact_and_fast(elev, **kw):
 
 def _assert_computed_match(a, b, lines, nodes):
     """The subset's radiance ``b`` against every wavelength's ``a`` at the computed
-    wavelengths: float32 rounding at the line-absorbed ones; at the nodes the ratio
+    wavelengths: float32 rounding at the line-absorbed ones (the irradiance table's nodes in
+    twilight, 1e-9 to 1e-5 of its day values, differ between the two paths by up to 2.7e-5
+    relative, and the sky at sun -4 deg next to the horizon takes it on through the
+    ground's reflection: measured 2.9e-5; 7e-7 at sun 10 deg); at the nodes the ratio
     (orders >= 3) / (order 2) is kept in float16, so the orders >= 3 are rounded to within
     2^-11 of their value (per order; well within 2^-11 of the radiance in practice)."""
-    np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=2e-5)
+    np.testing.assert_allclose(b[:, lines], a[:, lines], rtol=5e-5)
     np.testing.assert_allclose(b[:, nodes], a[:, nodes], rtol=2.0 ** -11)
 
 

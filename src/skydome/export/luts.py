@@ -44,7 +44,9 @@ the zenith, node i at x = i / (n_mu_s - 1); it does not depend on the planet rad
 Bake format 5 (``LUT_FORMAT``) adds the scattering density of orders 2..N, which the
 shader integrates along the view ray as the model does; format 4 had the reference's
 texture set and the constants; format 3 had these axes and per-constituent single
-scattering only, format 2 [Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes.
+scattering only, format 2 [Bru17]'s mu axis, format 1 [Bru17]'s mu and mu_s axes. Format 6
+puts the irradiance textures' mu_s axis on the same mapping (no longer [Bru17]'s
+(mu_s + 1) / 2), read geometrically between its two nodes.
 
 References
 ----------
@@ -76,8 +78,10 @@ __all__ = ["xyz_weights_for_table", "bake_precomputed", "bake_hillaire2020", "ba
 #: reference's texture set (Rayleigh and single Mie scattering, orders 2..N apart,
 #: transmittance, optical depths, irradiance) and the atmosphere's constants; version 5:
 #: the scattering density of orders 2..N (texture scattering_density, luts.json
-#: scattering_density) for the observer's sky as the model renders it
-LUT_FORMAT = "skydome.luts.bruneton-xyz/5"
+#: scattering_density) for the observer's sky as the model renders it; version 6: the
+#: irradiance textures' mu_s axis on the model's mapping too, geometric between two nodes
+#: (table format skydome.precomputed/4)
+LUT_FORMAT = "skydome.luts.bruneton-xyz/6"
 #: the hillaire2020 bake (Hillaire's layout, XYZ); version 2: the atmosphere's parameters,
 #: the sun's disc and EXR channels named X, Y, Z (A)
 HILLAIRE_FORMAT = "skydome.luts.hillaire-xyz/2"
@@ -87,7 +91,7 @@ LUT_LAYOUTS = ("bruneton", "hillaire", "fitted")
 #: file formats of :func:`write_luts`
 LUT_FILE_FORMATS = ("exr", "npy", "bin")
 #: the model's table format whose axes this bake describes
-TABLE_FORMAT = "skydome.precomputed/3"
+TABLE_FORMAT = "skydome.precomputed/4"
 
 
 def xyz_weights_for_table(table_wavelengths_nm, wavelengths_nm=None) -> np.ndarray:
@@ -402,8 +406,12 @@ def bake_precomputed(sky, ground: bool = False, density: bool = False,
             "transmittance": "x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), d the "
                              "distance to the top along mu, d_min = Rt - r, d_max = rho + H "
                              "([Bru17] GetTransmittanceTextureUvFromRMu); rows r, columns mu",
-            "irradiance": "x_r = (r - R) / (Rt - R), x_mu_s = (mu_s + 1) / 2 ([Bru17] "
-                          "GetIrradianceTextureUvFromRMuS); rows r, columns mu_s",
+            "irradiance": "x_r = (r - R) / (Rt - R) ([Bru17] GetIrradianceTextureUvFromRMuS), "
+                          "x_mu_s on the mu_s mapping above (not [Bru17]'s (mu_s + 1) / 2); "
+                          "rows r, columns mu_s; LINEAR in r, and between the two mu_s "
+                          "nodes (read at their texel centres) geometric, E0 (E1 / E0)^f, "
+                          "where both are positive, linear otherwise (skydomeIrradianceUv, "
+                          "skydomeGeometricMix)",
         },
         "sun": {"angular_radius_rad": t.sun_angular_radius_rad, "solid_angle_sr": omega,
                 "disc_angular_radius_deg": float(sky.sun.angular_radius_deg),

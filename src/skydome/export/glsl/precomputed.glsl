@@ -113,12 +113,6 @@ vec2 skydomeTransmittanceUv(float r, float mu, float R, float Rt, vec2 size) {
     return vec2(skydomePcUnitToTexel(xMu, size.x), skydomePcUnitToTexel(rho / H, size.y));
 }
 
-// [Bru17] GetIrradianceTextureUvFromRMuS: linear in r and mu_s (rows r, columns mu_s)
-vec2 skydomeIrradianceUv(float r, float muS, float R, float Rt, vec2 size) {
-    return vec2(skydomePcUnitToTexel(0.5 * (muS + 1.0), size.x),
-                skydomePcUnitToTexel((r - R) / (Rt - R), size.y));
-}
-
 // the mu_s axis: x = (u(theta_max) - u(theta_s)) / (u(theta_max) - u(0)),
 // u(theta) = asinh((theta - 92 deg) / 6 deg), theta_max = acos(mu_s_min)
 float skydomePcMuSUnit(float muS, float muSMin) {
@@ -128,6 +122,28 @@ float skydomePcMuSUnit(float muS, float muSMin) {
     float zen = asinh((0.0 - SKYDOME_PC_MU_S_CENTRE) / SKYDOME_PC_MU_S_WIDTH);
     float u = asinh((th - SKYDOME_PC_MU_S_CENTRE) / SKYDOME_PC_MU_S_WIDTH);
     return clamp((top - u) / (top - zen), 0.0, 1.0);
+}
+
+// the irradiance table at (r, mu_s): rows r, linear in r ([Bru17]
+// GetIrradianceTextureUvFromRMuS); columns mu_s on the sun mapping above (skydomePcMuSUnit,
+// not [Bru17]'s (mu_s + 1) / 2). The twilight irradiance falls exponentially with the sun's
+// depression, so the two mu_s nodes are read at their texel centres (filtered in r alone)
+// and mixed geometrically by skydomeGeometricMix: uv0, uv1 the nodes, f the fraction
+void skydomeIrradianceUv(float r, float muS, float R, float Rt, float muSMin, vec2 size,
+                         out vec2 uv0, out vec2 uv1, out float f) {
+    float x = skydomePcMuSUnit(muS, muSMin) * (size.x - 1.0);
+    float i = min(floor(x), size.x - 2.0);
+    f = x - i;
+    float v = skydomePcUnitToTexel((r - R) / (Rt - R), size.y);
+    uv0 = vec2((i + 0.5) / size.x, v);
+    uv1 = vec2((i + 1.5) / size.x, v);
+}
+
+// lo (hi / lo)^f where both are positive (exact for a value exponential in mu_s), else
+// linear
+vec4 skydomeGeometricMix(vec4 lo, vec4 hi, float f) {
+    vec4 geo = lo * exp(f * log(max(hi, vec4(1e-37)) / max(lo, vec4(1e-37))));
+    return mix(mix(lo, hi, f), geo, vec4(greaterThan(min(lo, hi), vec4(0.0))));
 }
 
 // the mu axis: x = asinh(e / w) / asinh(e_max / w) on the ray's half, e the angle from the
@@ -303,8 +319,11 @@ vec3 skydomeSunAndSkyIrradiance(sampler2D transmittance, sampler2D irradiance,
     float r = length(point);
     float muS = clamp(dot(point, sunDir) / r, -1.0, 1.0);
     vec2 size = vec2(textureSize(irradiance, 0));
-    skyIrradiance = texture(irradiance, skydomeIrradianceUv(r, muS, atm.bottomRadius,
-                                                            atm.topRadius, size)).rgb
+    vec2 uv0, uv1;
+    float fe;
+    skydomeIrradianceUv(r, muS, atm.bottomRadius, atm.topRadius, atm.muSMin, size, uv0, uv1, fe);
+    skyIrradiance = skydomeGeometricMix(texture(irradiance, uv0), texture(irradiance, uv1),
+                                        fe).rgb
         * (1.0 + dot(normal, point) / r) * 0.5;
     vec2 tsize = vec2(textureSize(transmittance, 0));
     vec3 t = texture(transmittance, skydomeTransmittanceUv(r, muS, atm.bottomRadius,
@@ -338,11 +357,14 @@ vec3 skydomeGroundRadiance(sampler2D opticalDepth, sampler2DArray irradianceSpec
     vec4 cView = max(skydomeColumns(opticalDepth, atm, rd, -mud)
                      - skydomeColumns(opticalDepth, atm, r, -mu), vec4(0.0));
     vec3 isize = vec3(textureSize(irradianceSpectral, 0));
-    vec2 uv = skydomeIrradianceUv(R, muG, R, Rt, isize.xy);
+    vec2 uv0, uv1;
+    float fe;
+    skydomeIrradianceUv(R, muG, R, Rt, atm.muSMin, isize.xy, uv0, uv1, fe);
     vec3 xyz = vec3(0.0);
     for (int k = 0; k < SKYDOME_PC_MAX_WAVELENGTHS / 4; ++k) {
         if (4 * k >= atm.nWavelengths) break;
-        vec4 e = texture(irradianceSpectral, vec3(uv, float(k)));
+        vec4 e = skydomeGeometricMix(texture(irradianceSpectral, vec3(uv0, float(k))),
+                                     texture(irradianceSpectral, vec3(uv1, float(k))), fe);
         for (int c = 0; c < 4; ++c) {
             int j = 4 * k + c;
             if (j >= atm.nWavelengths) break;

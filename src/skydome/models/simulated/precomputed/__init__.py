@@ -480,7 +480,7 @@ class PrecomputedSky(SkyModel):
         _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
                            t.phase_code, t.phase_param, t.kernel_phase_table, ms_s, t.columns,
                            t.beta_e, t.ground_albedo, t.irradiance, scale, self._R, self._Rt,
-                           self._alpha, geom, out)
+                           self._mu_s_min, self._alpha, geom, out)
         return out
 
     def _single_scattering_map(self):
@@ -555,8 +555,8 @@ class PrecomputedSky(SkyModel):
             cs = np.empty(self._t.columns.shape[0])
             _irradiance.direct_irradiance_acc(self._t.columns, self._t.beta_e, self._r0, mu_s, self._R,
                                      self._Rt, self._alpha, 1.0, cs, direct)
-            _lookup.irradiance_lookup_acc(self._t.irradiance, self._r0, mu_s, self._R, self._Rt, 1.0,
-                                     diffuse)
+            _lookup.irradiance_lookup_acc(self._t.irradiance, self._r0, mu_s, self._R, self._Rt,
+                                          self._mu_s_min, 1.0, diffuse)
         return (np.maximum(self._to_wavelengths(direct[None], wl)[0], 0.0),
                 np.maximum(self._to_wavelengths(diffuse[None], wl)[0], 0.0))
 
@@ -624,8 +624,8 @@ class PrecomputedSky(SkyModel):
             for ss_x, ms_x, o, geom in cases:
                 _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_x,
                                    t.phase_code, t.phase_param, t.kernel_phase_table, ms_x,
-                                   t.columns, t.beta_e, no_ground, t.irradiance, one, self._R, self._Rt, self._alpha,
-                                   geom, o)
+                                   t.columns, t.beta_e, no_ground, t.irradiance, one, self._R, self._Rt,
+                                   self._mu_s_min, self._alpha, geom, o)
             # applied in proportion to the path's share of the whole ray's extinction,
             # 1 - T(d) over 1 - T(end): 0 at distance 0, all of it at the end of the ray
             tr_end, ins_end = np.empty_like(tr), np.zeros_like(ins)

@@ -117,7 +117,9 @@ from skydome._io import write_npy
 # 14 (never released) and 15: the view rays' piece from their start to their lowest point
 # integrated on two halves, each dense at its own end (transport._quadrature.ray_nodes): the
 # tables' values change
-CACHE_FORMAT = "skydome.precomputed-cache/15"
+# 16: the irradiance table's mu_s axis on the 4-D tables' sun mapping (_mapping.mu_s_unit),
+# read geometrically between its nodes (_lookup.irradiance_lookup_acc): its nodes move
+CACHE_FORMAT = "skydome.precomputed-cache/16"
 # five table sets at the default settings: 0.24 GB each with the stored table of orders
 # 2..N (packed; 0.30 GB before), 0.17 GB without it (1.28 GB each in format 11)
 DEFAULT_LIMIT_BYTES = 1_500_000_000

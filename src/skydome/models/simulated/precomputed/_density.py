@@ -60,8 +60,8 @@ def incident_direction(th, ph, r, mu_s, sin_s, R):
 
 
 @njit(cache=True, fastmath=True)
-def ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, alpha, r, ct, mu_s, nu, w1, w2, cs,
-                         tg, eg, out):
+def ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, mu_s_min, alpha, r, ct, mu_s, nu, w1,
+                         w2, cs, tg, eg, out):
     """out[l] += radiance reflected by the (Lambertian) ground towards r along the ray of
     zenith cosine ct (which hits the ground) and sun cosine nu, the sun at mu_s: transmittance
     to the ground x albedo / pi x the ground irradiance of the previous order (``first``: the
@@ -80,7 +80,7 @@ def ground_reflected_acc(first, dE, col, beta_e, albedo, R, Rt, alpha, r, ct, mu
     if first:
         direct_irradiance_acc(col, beta_e, R, mu_g, R, Rt, alpha, 1.0, cs, eg)
     else:
-        irradiance_lookup_acc(dE, R, mu_g, R, Rt, 1.0, eg)
+        irradiance_lookup_acc(dE, R, mu_g, R, Rt, mu_s_min, 1.0, eg)
     for l in range(nl):
         out[l] += tg[l] * eg[l]
 
@@ -154,7 +154,7 @@ def incident_radiance(ss, pc, pp, pt, col, beta_e, albedo, R, Rt, mu_s_min, alph
                 if ground:
                     # the direct sun's irradiance (eg is its unused irradiance table)
                     ground_reflected_acc(True, eg.reshape(1, 1, -1), col, beta_e, albedo, R, Rt,
-                                         alpha, r, ct, mu_s, nu, w1, w2, cs, tg, eg, o)
+                                         mu_s_min, alpha, r, ct, mu_s, nu, w1, w2, cs, tg, eg, o)
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -209,8 +209,8 @@ def incident_radiance_rays(J, dE, m, sc_idx, col, mu_s_min, rx, rw, ts, n_r, n_m
             acc[:] = 0.0
             ray_integral(J, m, sc_idx, col, frame, r, ct, mu_s, nu, ground, rx, rw, ts, w, acc)
             if ground:
-                ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
-                                     nu, w.w1, w.w2, w.cs[0], tg, eg, acc)
+                ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, mu_s_min, 0.0, r, ct,
+                                     mu_s, nu, w.w1, w.w2, w.cs[0], tg, eg, acc)
             o = out[a * n_ph + b, ir, ims]
             for l in range(nl):
                 o[l] = acc[l]

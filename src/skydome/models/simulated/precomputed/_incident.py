@@ -196,7 +196,7 @@ def incident_radiance_stored(J, dE, m, sc_idx, col, mu_s_min, rx, rw, ts, n_r, n
                 g = gidx[i]
                 if g >= 0:
                     eg[:] = 0.0
-                    irradiance_lookup_acc(dE, R, mu_g[g], R, Rt, 1.0, eg)
+                    irradiance_lookup_acc(dE, R, mu_g[g], R, Rt, mu_s_min, 1.0, eg)
                     for l in range(nl):
                         acc[l] += tg[g, l] * eg[l]
                 o = out[a * n_ph + b, ir, ims]
@@ -214,8 +214,8 @@ def incident_radiance_stored(J, dE, m, sc_idx, col, mu_s_min, rx, rw, ts, n_r, n
                 ray_integral(J, m, sc_idx, col, frame, r, ct, mu_s, nu, ground, rx, rw, ts, w,
                              acc)
                 if ground:
-                    ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, 0.0, r, ct, mu_s,
-                                         nu, w.w1, w.w2, w.cs[0], tgr, eg, acc)
+                    ground_reflected_acc(False, dE, col, beta_e, albedo, R, Rt, mu_s_min, 0.0, r,
+                                         ct, mu_s, nu, w.w1, w.w2, w.cs[0], tgr, eg, acc)
                 o = out[a * n_ph + b, ir, ims]
                 for l in range(nl):
                     o[l] = acc[l]

@@ -10,8 +10,10 @@ import os
 import numpy as np
 
 # version 2: the mu_s axis of [Bru17] replaced by the zenith-angle mapping of _mapping.mu_s_unit;
-# version 3: the mu axis of [Bru17] replaced by the horizon-angle mapping of _mapping.mu_unit
-FORMAT = "skydome.precomputed/3"
+# version 3: the mu axis of [Bru17] replaced by the horizon-angle mapping of _mapping.mu_unit;
+# version 4: the irradiance table's mu_s axis on _mapping.mu_s_unit too (read geometrically
+# between its nodes), no longer [Bru17]'s (mu_s + 1) / 2
+FORMAT = "skydome.precomputed/4"
 
 
 def meta(model) -> dict:
@@ -110,7 +112,9 @@ def export_textures(model, folder) -> list:
         "irradiance": (t.irradiance.astype(np.float32), ["r", "mu_s", "wavelength"],
                        "sky irradiance on a horizontal surface (orders 1..N and the "
                        "remainder) per unit solar irradiance (dimensionless); x_r = (r - R)/(Rt - R), "
-                       "x_mu_s = (mu_s + 1)/2, node i at x = i/(n-1)"),
+                       "x_mu_s on the mu_s mapping (mappings.mu_s), node i at x = i/(n-1); "
+                       "linear in r, geometric in mu_s between two nodes, E0 (E1/E0)^f "
+                       "where both are positive (linear otherwise)"),
     }
     if t.phase_table is not None:
         tex["phase_table"] = (t.phase_table.astype(np.float32),

@@ -14,7 +14,8 @@ from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_t
 from skydome.models.simulated.precomputed._lookup import (columns_at, ray_weights,
                                                            sky_lookup_acc)
 from skydome.models.simulated.precomputed._mapping import (_split, density_mu_s_index,
-                                                            density_phi_index, mu_s_frame, r_index)
+                                                            density_phi_index, mu_s_frame,
+                                                            mu_s_from_unit, r_index)
 from skydome.models.simulated.precomputed._multiple import density_acc, ray_scratch
 from skydome.transport._quadrature import ray_nodes_rule
 
@@ -49,7 +50,7 @@ def indirect_irradiance(ss, pc, pp, pt, R, Rt, mu_s_min, th, ph, d_omega, out):
         ir = idx // n_m
         im = idx % n_m
         r = R + (Rt - R) * ir / (n_r - 1.0)
-        mu_s = -1.0 + 2.0 * im / (n_m - 1.0)
+        mu_s = mu_s_from_unit(im / (n_m - 1.0), mu_s_min)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         o = out[ir, im]
         o[:] = 0.0
@@ -111,7 +112,7 @@ def indirect_irradiance_rays(J, m, sc_idx, col, mu_s_min, rx, rw, ts, th, ph, d_
             jrs[q], jas[q] = r_index(rts[q], n_rj, R, Rt)
         acc = part[idx]
         for im in range(n_m):
-            mu_s = -1.0 + 2.0 * im / (n_m - 1.0)
+            mu_s = mu_s_from_unit(im / (n_m - 1.0), mu_s_min)
             sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
             for b in range(n_ph):
                 nu = clamp_cos(sin_s * st * math.cos(ph[b]) + mu_s * ct)

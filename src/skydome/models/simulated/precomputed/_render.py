@@ -26,7 +26,7 @@ INV_PI = 1.0 / math.pi
 # -- rendering --------------------------------------------------------------------------------------
 @njit(parallel=True, cache=True, fastmath=True)
 def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, albedo, E, scale, R,
-                    Rt, alpha, geom, out):
+                    Rt, mu_s_min, alpha, geom, out):
     """Radiance [scale units] from each direction for an observer at radius r on the +z axis.
 
     ``ss_slice`` (nsc, n_mu, n_nu, nl) is multiplied by each constituent's phase function
@@ -128,7 +128,7 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
                 exp_neg_many(xb, 2 * nl, eb, ibuf, ibuf.view(np.float64))
                 for l in range(nl):
                     eg[l] = f * eb[l]
-                irradiance_lookup_acc(E, R, mu_g, R, Rt, 1.0, eg)
+                irradiance_lookup_acc(E, R, mu_g, R, Rt, mu_s_min, 1.0, eg)
                 for l in range(nl):
                     acc[l] += eb[nl + l] * albedo[l] * INV_PI * eg[l]
             for l in range(nl):

@@ -115,6 +115,12 @@ vec4 bilerp4(highp sampler3D t, int k, int i, int j, float a, float b) {
          + a * ((1.0 - b) * texelFetch(t, ivec3(j, i + 1, k), 0) + b * texelFetch(t, ivec3(j + 1, i + 1, k), 0));
 }
 
+// geometric_lerp: lo (hi / lo)^f where both are positive, else linear
+vec4 geometric_mix(vec4 lo, vec4 hi, float f) {
+    vec4 geo = lo * exp(f * log(max(hi, vec4(1e-37)) / max(lo, vec4(1e-37))));
+    return mix(mix(lo, hi, f), geo, vec4(greaterThan(min(lo, hi), vec4(0.0))));
+}
+
 // the ground point's radiance seen from the observer (render_observer's ground branch):
 // T_obs(l) rho(l) / pi (f(mu_g) T_sun(l) + E(l)), reduced to XYZ with K_j. T_obs is
 // [Bru17] GetTransmittance for a ray that hits the ground (both rays reversed):
@@ -126,20 +132,21 @@ vec3 ground_xyz(float r, float h, float mu, float nu, float mu_s, float dg) {
     float al = u_sun_alpha;
     float f = mu_g < -al ? 0.0 : mu_g > al ? mu_g : (mu_g + al) * (mu_g + al) / (4.0 * al);
     float mu_d = clamp1((r * mu + dg) / u_R);            // the ray's cosine at the ground point
-    int i0, j0, i1, j1, i2, j2, ie, je;
-    float a0, b0, a1, b1, a2, b2, ae, be;
+    int i0, j0, i1, j1, i2, j2, je;
+    float a0, b0, a1, b1, a2, b2, be;
     transmittance_cell(0.0, -mu_d, i0, j0, a0, b0);      // ground point, reversed ray
     transmittance_cell(h, -mu, i1, j1, a1, b1);          // observer, reversed ray
     transmittance_cell(0.0, mu_g, i2, j2, a2, b2);       // ground point towards the sun
-    // irradiance_lookup_acc at r = R: x_r = 0, x_mu_s = (mu_g + 1) / 2
-    ie = 0; ae = 0.0;
-    split_((mu_g + 1.0) * 0.5 * float(u_ground_sizes.z - 1), u_ground_sizes.z, je, be);
+    // irradiance_lookup_acc at r = R: x_r = 0; mu_s on the sun mapping (mu_s_unit),
+    // geometric between its two nodes (geometric_lerp)
+    split_(mu_s_unit(mu_g, u_mu_s_min) * float(u_ground_sizes.z - 1), u_ground_sizes.z, je, be);
     vec3 acc = vec3(0.0);
     for (int k = 0; k < 4; ++k) {
         if (4 * k >= u_nl) break;
         vec4 t_obs = min(bilerp4(u_tr, k, i0, j0, a0, b0) / max(bilerp4(u_tr, k, i1, j1, a1, b1), vec4(1e-30)), vec4(1.0));
         vec4 t_sun = bilerp4(u_tr, k, i2, j2, a2, b2);
-        vec4 e = bilerp4(u_irr, k, ie, je, ae, be);
+        vec4 e = geometric_mix(texelFetch(u_irr, ivec3(je, 0, k), 0),
+                               texelFetch(u_irr, ivec3(je + 1, 0, k), 0), be);
         vec4 l4 = t_obs * (f * t_sun + e) / PI;
         for (int c = 0; c < 4; ++c) {
             int l = 4 * k + c;
