@@ -45,8 +45,7 @@ def sky():
     ref = np.load(CIVIL)
     return sd.model("precomputed", sun=sd.Sun(elevation_deg=-4.0, azimuth_deg=180.0),
                     table_wavelengths_nm=list(ref["wavelengths_nm"]),
-                    atmosphere=Atmosphere.earth(aerosol_optical_depth=0.2),
-                    twilight_single_scattering=True)
+                    atmosphere=Atmosphere.earth(aerosol_optical_depth=0.2))
 
 
 def _errors(sky, path, elevation, table_single_scattering=False):
@@ -149,21 +148,24 @@ def test_aerial_perspective_beyond_the_top_is_the_twilight_sky(sky, elevation):
     np.testing.assert_allclose(s0, 0.0, atol=1e-12)
 
 
-def test_observer_single_scattering_is_opt_in(sky):
-    """The default reads single scattering from the 4-D table in twilight too (as the
-    viewer's shader and the LUT bakes do); ``twilight_single_scattering=True`` turns the
-    observer's integral on. Same tables, so the default's sky differs from the opt-in one."""
+def test_observer_single_scattering_is_the_default(sky):
+    """The default integrates single scattering at the observer in twilight;
+    ``twilight_single_scattering=False`` reads it from the 4-D table (as the viewer's shader
+    and the LUT bakes do). Same tables, so the two skies differ."""
     import copy
 
     m = sky.with_sun(sd.Sun(elevation_deg=-6.0, azimuth_deg=180.0))
-    default = copy.copy(m)
-    default.twilight_single_scattering = False
-    assert default._single_scattering_map() is None
+    table = copy.copy(m)
+    table.twilight_single_scattering = False
+    assert table._single_scattering_map() is None
+    assert m._single_scattering_map() is not None
     d = sd.direction_from_angles([10.0, 30.0], [0.0, 180.0])
-    a, b = default.radiance(d, [550.0]), m.radiance(d, [550.0])
+    a, b = table.radiance(d, [550.0]), m.radiance(d, [550.0])
     assert np.all(np.isfinite(a)) and np.all(a > 0) and not np.allclose(a, b, rtol=1e-3)
     p = next(q for q in type(sky).parameters if q.name == "twilight_single_scattering")
-    assert p.default is False and p.kind == "bool"
+    assert p.default is True and p.kind == "bool"
+    assert sky.twilight_single_scattering is True      # the fixture leaves it unset
+
 
 
 # -- the reference configuration (twilight_reference=True) -----------------------------------

@@ -64,14 +64,26 @@ def test_illuminance_order_of_magnitude_at_end_of_civil_twilight(skies):
     assert 1.0 < e6 < 20.0
 
 
+@pytest.fixture(scope="module")
+def default_skies():
+    """The default tables (10 wavelengths) at sun -2 and -4 deg. On the small tables, with
+    single scattering integrated at the observer (the default), the multiply scattered
+    horizon at sun -4 deg is the reddest part of the anti-solar profile (R/B 0.444 at 2 deg),
+    so ``belt_of_venus`` finds no belt there: the belt's test needs the default tables'
+    orders >= 2."""
+    return [2.0, 4.0], twilight_models("precomputed", [2.0, 4.0], n_wavelengths=10)
+
+
 @pytest.mark.parametrize("depression", [2.0, 4.0])
-def test_belt_of_venus_above_earth_shadow(skies, depression):
+def test_belt_of_venus_above_earth_shadow(default_skies, depression):
     """Sun 2 and 4 deg below the horizon: opposite the sun, a redder band (the Belt of Venus,
     maximum R/B) lies above a bluer, darker band on the horizon (the earth's shadow), as
     measured by hyperspectral imaging of clear civil twilights (R. L. Lee, "Measuring and
     modeling twilight's Belt of Venus", Appl. Opt. 54(4), B194-B203, 2015: a reddish band
-    above the antisolar horizon over the bluish-grey, darker earth's shadow)."""
-    deps, sk = skies
+    above the antisolar horizon over the bluish-grey, darker earth's shadow). Measured
+    with the default tables: belt 8.5 and 18.5 deg, R/B contrast 0.29 and 0.12, shadow top
+    5.5 and 11.5 deg."""
+    deps, sk = default_skies
     el = np.arange(0.5, 30.0, 0.5)
     lum, rb = anti_solar_profile(sk[deps.index(depression)], el, np.linspace(400, 700, 10))
     b = belt_of_venus(el, rb, lum)

@@ -220,7 +220,11 @@ def _precomputed_model(sun, params: dict):
     if key not in _PRECOMPUTED_MODELS:
         if len(_PRECOMPUTED_MODELS) >= 2:
             _PRECOMPUTED_MODELS.clear()
+        # the shader reads single scattering from the 4-D table in twilight too: its CPU
+        # twin does the same (the CPU default integrates it at the observer; the shader
+        # against that default: docs/viewer.md)
         _PRECOMPUTED_MODELS[key] = skydome.model("precomputed", sun=sun, turbidity=T,
+                                                 twilight_single_scattering=False,
                                                  **PRECOMPUTED_VIEWER_SIZES)
     return _PRECOMPUTED_MODELS[key].with_sun(sun, observer_altitude_m=h)
 

@@ -137,8 +137,11 @@ class PrecomputedSky(SkyModel):
         (``twilight_single_scattering``: each ray split at the earth's shadow), or for every
         sun (``observer_single_scattering``: the table's linear interpolation between its
         r nodes is up to 50 % off for an observer inside thick haze, AOD 1 at 0.1-1 km;
-        docs/models.md, "Descending rays and observers inside haze"). Both opt-in: the
-        viewer's shader reads the table.
+        docs/models.md, "Descending rays and observers inside haze").
+        ``twilight_single_scattering`` is on by default (the table's single scattering in
+        twilight is 7.6 against 4.9 % RMS off ``montecarlo`` at sun -4 deg, and between
+        its mu_s nodes it draws the earth's shadow twice); ``observer_single_scattering``
+        is opt-in. The viewer's shader and the LUT bakes read the table.
     cache : bool
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
@@ -199,10 +202,13 @@ class PrecomputedSky(SkyModel):
                   "each order's source table this many times coarser in mu, mu_s, nu", kind="int"),
         Parameter("max_sun_zenith_deg", "deg", 108.0, 90.0, 120.0, "largest sun zenith in the tables"),
         Parameter("cache", "", True, doc="read and write the on-disk table cache", kind="bool"),
-        Parameter("twilight_single_scattering", "", False,
+        Parameter("twilight_single_scattering", "", True,
                   doc="sun below the horizon: single scattering integrated at the observer, "
                       "each ray split at the earth's shadow (closer to Monte Carlo), not read "
-                      "from the 4-D table; opt-in until the viewer's shader does the same",
+                      "from the 4-D table (False: the table, as the viewer's shader and the "
+                      "LUT bakes read it; about 0.1-0.2 s faster a sun, 7.6 against 4.9 % RMS "
+                      "off Monte Carlo at sun -4 deg, and the earth's shadow drawn twice "
+                      "between the table's mu_s nodes)",
                   kind="bool"),
         Parameter("observer_single_scattering", "", False,
                   doc="single scattering integrated at the observer's own altitude for "
