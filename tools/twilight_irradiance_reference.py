@@ -63,6 +63,7 @@ def main(argv=None) -> int:
         if not -18.0 <= e < 0.0:
             raise SystemExit(f"--elevations: {e:g} is out of range: [-18, 0) deg")
     import skydome as sd
+    from skydome._io import atomic_write
     from skydome.atmosphere import Atmosphere
 
     d, w = hemisphere()
@@ -93,9 +94,7 @@ def main(argv=None) -> int:
                    "radiance), '<elev>_E_err' its standard error"),
                command=np.str_(" ".join(["python tools/twilight_irradiance_reference.py",
                                          *(argv if argv is not None else sys.argv[1:])])))
-    tmp = a.out + ".tmp.npz"
-    np.savez(tmp, **out)
-    os.replace(tmp, a.out)
+    atomic_write(a.out, lambda tmp: np.savez(tmp, **out))
     return 0
 
 
