@@ -179,3 +179,29 @@ def test_cli_unanswered_scheduler_one_line_after_the_connect_timeout(tmp_path, c
                            "answered within 1 s"), line
     assert time.perf_counter() - t0 < 120.0
     assert list(tmp_path.iterdir()) == []       # no output, no OUT.chunks/
+
+
+def test_local_cluster_beside_another_cluster_warns_nothing(tmp_path):
+    """The local cluster binds no fixed port: with port 8787 (Dask's default for its
+    scheduler's HTTP routes, where another cluster's scheduler listens) taken on every
+    interface, a run gives no "already in use" warning (one line on stderr for a command
+    that fails, as issue 30 asks), and its routes listen on the loopback interface only."""
+    import socket
+    import warnings
+
+    holder = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        holder.bind(("", 8787))
+        holder.listen(1)
+    except OSError:
+        pass  # held by another program already: the same situation
+    try:
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            run_chunks([Chunk("a", _chunk, (1,))], tmp_path / "a.chunks", n_workers=1)
+    finally:
+        holder.close()
+    assert not [w for w in seen if "already in use" in str(w.message)], \
+        [str(w.message) for w in seen]
+    assert sorted(p.name for p in (tmp_path / "a.chunks").iterdir()) == ["a.npy",
+                                                                          "a.npy.sha256"]

@@ -7,13 +7,19 @@ numpy`` and a fixed order no numba, the start-up of a gendaymtx-like run), and a
 (:func:`skydome.cli.render_fast.fast_render`), and a plain ``export envmap`` command line
 likewise (:func:`skydome.cli.render_fast.fast_export_envmap`); every other command line, and any that a
 fast path does not take, goes to the typer application :mod:`skydome.cli`.
+
+The console script (and ``python -m skydome``) is :func:`console`: :func:`main`, then the
+process ends without the interpreter's teardown, once the threads, atexit handlers and
+output streams a command's results depend on are done (:func:`_end_process`).
 """
 
 from __future__ import annotations
 
+import atexit
 import gc
 import os
 import sys
+import threading
 
 
 def _run_fast(fast, args, collector_off: bool):
@@ -29,7 +35,7 @@ def _run_fast(fast, args, collector_off: bool):
         gc.enable()
 
 
-def main() -> None:  # console-script entry point
+def main() -> None:  # the command line, in this process (console() ends the process after)
     argv = sys.argv[1:]
     # Before numpy is imported: no transparent huge pages for its large arrays (a matrix
     # held whole for a .npy or ascii output, the Perez work arrays, an environment map's
@@ -80,5 +86,53 @@ def main() -> None:  # console-script entry point
     cli_main()
 
 
+def _exit_status(code) -> int:
+    """The process's exit status for ``sys.exit(code)`` as Python gives it: None 0, an int
+    itself, anything else printed to stderr and 1."""
+    if code is None:
+        return 0
+    if isinstance(code, int):
+        return code & 0xFF
+    print(code, file=sys.stderr)
+    return 1
+
+
+def _end_process(status: int) -> None:
+    """End the process now with ``status``, after everything Python's own exit does that a
+    command's results depend on: non-daemon threads joined (a table cache entry being
+    written), the atexit handlers run (logging, temporary folders, Dask's clusters), stdout
+    and stderr flushed; a failed flush of stdout gives status 120 as Python's exit does.
+
+    What is left out is the interpreter's teardown of its modules, whose garbage
+    collections over the object graph numba builds (its types, registries and compiled
+    libraries) took 0.23-0.29 s of a warm shortest render's 0.8-1.0 s (perf, 2-core EPYC,
+    docs/performance.md); the operating system frees the memory."""
+    main_thread = threading.main_thread()
+    for t in threading.enumerate():
+        if t is not main_thread and not t.daemon:
+            t.join()
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            if stream is not None:
+                stream.flush()
+        except (OSError, ValueError):
+            if stream is sys.stdout and status == 0:
+                status = 120
+    os._exit(status)
+
+
+def console() -> None:  # console-script entry point (and ``python -m skydome``)
+    """:func:`main`, then the process ends without the interpreter's teardown
+    (:func:`_end_process`). An exception other than ``SystemExit`` propagates as usual
+    (its traceback, Python's own exit)."""
+    try:
+        main()
+        status = 0
+    except SystemExit as exc:
+        status = _exit_status(exc.code)
+    _end_process(status)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    main()
+    console()

@@ -216,9 +216,13 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
                 own = client = _connect(scheduler, connect_timeout_s)   # before any write
             else:
                 # the workers' own logging off: a failed chunk (a full disk) reaches the
-                # caller as the chunk's exception, not as a log record on stderr as well
+                # caller as the chunk's exception, not as a log record on stderr as well.
+                # No dashboard; the scheduler's HTTP routes (which Dask starts even so, by
+                # default on port 8787 of every interface, with a warning where another
+                # cluster holds that port) on a free loopback port
                 cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1,
                                        processes=True, dashboard_address=None,
+                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                                        silence_logs=logging.CRITICAL)
                 own = client = Client(cluster)
         futures, failed = [], False
