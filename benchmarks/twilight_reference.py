@@ -164,9 +164,20 @@ def run_reference(args):
                        "'<elev>_samples' paths per direction and wavelength, '<elev>_seeds'"),
                    command=np.str_(" ".join(["python benchmarks/twilight_reference.py",
                                              *sys.argv[1:]])))
-        tmp = args.out + ".tmp.npz"
-        np.savez(tmp, **out)
-        os.replace(tmp, args.out)
+        save_npz(args.out, out)
+
+
+def save_npz(path, arrays: dict) -> None:
+    """``arrays`` written to the .npz ``path`` whole or not at all (skydome._io.atomic_write:
+    a temporary beside it, renamed; written through a file object, so that numpy adds no
+    suffix to the temporary's name)."""
+    from skydome._io import atomic_write
+
+    def write(tmp):
+        with open(tmp, "wb") as f:
+            np.savez(f, **arrays)
+
+    atomic_write(path, write)
 
 
 def pool(a, b, k):
@@ -196,9 +207,7 @@ def run_merge(args):
         else:
             out.update({kk: other[kk] for kk in other if kk == k or kk.startswith(k + "_")})
         print(f"sun {k}: {float(out[k + '_samples']):.0f} paths, seeds {out[k + '_seeds']}")
-    tmp = args.out + ".tmp.npz"
-    np.savez(tmp, **out)
-    os.replace(tmp, args.out)
+    save_npz(args.out, out)
 
 
 def _commit(path):
@@ -240,7 +249,7 @@ def run_compare(args):
                 sd.Sun(elevation_deg=elev, azimuth_deg=SUN_AZIMUTH_DEG)).radiance(dirs, wl)
         del m
         if args.save:
-            np.savez(args.save, **{f"{n}|{k}": v for (n, k), v in got.items()})
+            save_npz(args.save, {f"{n}|{k}": v for (n, k), v in got.items()})
     for name in names:
         print(f"{name} {SETTINGS[name]}")
         for elev in elevs:
