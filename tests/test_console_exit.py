@@ -18,9 +18,9 @@ from skydome.__main__ import _exit_status
 ENV = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
 
 
-def run(code: str, **kw) -> subprocess.CompletedProcess:
+def run(code: str, timeout: float = 300, **kw) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
-                          text=True, timeout=300, env=kw.pop("env", ENV), **kw)
+                          text=True, timeout=timeout, env=kw.pop("env", ENV), **kw)
 
 
 @pytest.mark.parametrize("code", [None, 0, 3, 255, 256 + 5, -1, True, "a message"])
@@ -66,6 +66,24 @@ def test_console_finishes_what_pythons_exit_finishes(tmp_path, code):
         assert (tmp_path / f"got-{part}").read_text() == (tmp_path / f"ref-{part}").read_text()
     assert (tmp_path / "got-atexit").read_text() == "21"
     assert len((tmp_path / "got-thread").read_text()) == 100000
+
+
+def test_console_ends_with_an_idle_thread_pool_alive():
+    """A ThreadPoolExecutor left open (as Dask's threaded scheduler keeps its pool): its idle
+    workers are non-daemon threads that stop only when the threading module's exit hooks
+    tell them to; Python's exit runs those hooks before joining, and so does console()
+    (a join alone would wait for ever)."""
+    script = textwrap.dedent("""
+        import concurrent.futures, sys
+        import skydome.__main__ as entry
+        pool = concurrent.futures.ThreadPoolExecutor(2)
+        def main():
+            print(pool.submit(lambda: 42).result())
+            sys.exit(0)
+        """)
+    ref = run(script + "main()\n", timeout=60)
+    got = run(script + "entry.main = main\nentry.console()\n", timeout=60)
+    assert (got.returncode, got.stdout) == (ref.returncode, ref.stdout) == (0, "42\n")
 
 
 def test_console_leaves_an_exception_to_python(tmp_path):
