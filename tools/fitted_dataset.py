@@ -36,7 +36,10 @@ the default set; the chunk layout is the same, with 81 on the wavelength axis).
 ``--gas-bands``: the reference at the gas bands' own table wavelengths only (310, 330, 690,
 710, 730, 770, 890, 930 nm; skydome/models/fitted/_grid.py), a supplement to the 20-nm set
 of the same grid in a folder of its own, which ``tools/fit_fitted.py --gas-bands`` joins to it;
-``--with-gas-bands``: the 20-nm wavelengths and the gas bands' together (49).
+``--with-gas-bands``: the 20-nm wavelengths and the gas bands' together (49): a whole data
+set in one run (the twilight reference's geometry costs the same whatever the number of
+wavelengths, so this is cheaper than a 20-nm set and its gas-band supplement), which
+``tools/fit_fitted.py`` fits as it is.
 
 ``--altitudes``: only these of the grid's altitudes (a supplement: the nodes a data set of an
 earlier grid lacks, which ``tools/fit_fitted.py --altitude-supplement`` joins to it). Every
@@ -122,9 +125,10 @@ def main(argv=None) -> int:
                          "770, 890, 930 nm) only: the supplement that tools/fit_fitted.py "
                          "--gas-bands adds to a 20-nm data set of the same grid")
     ap.add_argument("--with-gas-bands", action="store_true",
-                    help="table wavelengths: the 20-nm ones and the gas bands' (49), for a "
-                         "supplement in --altitudes to a data set joined with its --gas-bands "
-                         "supplement")
+                    help="table wavelengths: the 20-nm ones and the gas bands' (49): the "
+                         "whole data set in one run (what tools/fit_fitted.py fits without "
+                         "--gas-bands), or a supplement in --altitudes to a data set joined "
+                         "with its --gas-bands supplement")
     ap.add_argument("--altitudes", default=None, metavar="M,...",
                     help="compute only these of the grid's altitudes [m] (a supplement that "
                          "tools/fit_fitted.py --altitude-supplement joins to a data set of "
