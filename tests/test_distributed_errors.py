@@ -5,6 +5,7 @@ Loopback only: tcp://127.0.0.1:1, where nothing listens."""
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -205,3 +206,37 @@ def test_local_cluster_beside_another_cluster_warns_nothing(tmp_path):
         [str(w.message) for w in seen]
     assert sorted(p.name for p in (tmp_path / "a.chunks").iterdir()) == ["a.npy",
                                                                           "a.npy.sha256"]
+
+
+def test_orphans_of_a_killed_writer_are_removed_live_ones_kept(tmp_path):
+    """A worker killed while writing a chunk's file (SIGKILL: no handler runs) leaves its
+    temporary; the run removes it once every chunk is in place, where the writer named in
+    it (pid@host) is a process of this host that is gone. A live writer's temporary (another
+    run over the same folder), another host's, and files not of this run's chunks are kept."""
+    import socket
+    import subprocess
+    import sys
+
+    from skydome.distributed import _remove_orphans
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    dead_pid = int(dead.stdout)
+    host = socket.gethostname()
+    out = tmp_path / "run.chunks"
+    out.mkdir()
+    names = {
+        "orphan": f".a.npy.sha256.{dead_pid}@{host}.k2j3h4.part",
+        "orphan_npy": f".a.npy.{dead_pid}@{host}.x9y8z7.part",
+        "live": f".a.npy.{os.getpid()}@{host}.q1w2e3.part",
+        "other_host": f".a.npy.{dead_pid}@elsewhere.example.r4t5y6.part",
+        "other_chunk": f".zz.npy.{dead_pid}@{host}.u7i8o9.part",
+    }
+    for n in names.values():
+        (out / n).write_bytes(b"partial")
+    rep = run_chunks([Chunk("a", _chunk, (1,))], out, n_workers=1)
+    assert rep.computed == ["a"]
+    left = sorted(p.name for p in out.iterdir())
+    assert left == sorted(["a.npy", "a.npy.sha256", names["live"], names["other_host"],
+                           names["other_chunk"]])
+    assert _remove_orphans(out, ["a", "zz"]) == [names["other_chunk"]]

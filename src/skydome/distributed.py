@@ -30,6 +30,7 @@ import logging
 import os
 import re
 import shutil
+import socket
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -137,7 +138,10 @@ def _compute_and_store(folder: str, key: str, func, args) -> tuple[str, str]:
     data = buf.getvalue()
     digest = hashlib.sha256(data).hexdigest()
     for name, payload in ((f"{key}.npy", data), (f"{key}.npy.sha256", digest.encode())):
-        fd, tmp = tempfile.mkstemp(dir=folder_p, prefix=f".{name}.", suffix=".part")
+        # the writer named in the temporary (pid@host), so that a run can tell an orphan
+        # of a worker killed while writing from a live writer's (_remove_orphans)
+        fd, tmp = tempfile.mkstemp(dir=folder_p, suffix=".part",
+                                   prefix=f".{name}.{os.getpid()}@{socket.gethostname()}.")
         try:
             with os.fdopen(fd, "wb") as f:
                 f.write(payload)
@@ -154,6 +158,42 @@ def _compute_and_store(folder: str, key: str, func, args) -> tuple[str, str]:
                 os.unlink(tmp)
             raise
     return key, digest
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
+
+
+def _remove_orphans(folder: Path, keys) -> list[str]:
+    """Remove the temporaries of the chunk files of ``keys`` (``.KEY.npy.PID@HOST.*.part``,
+    :func:`_compute_and_store`) whose writer was a process of this host that is no longer
+    alive: what a worker killed while writing (SIGKILL, the out-of-memory killer) leaves.
+    A temporary of a live process, or of another host's, is kept. The names removed."""
+    host = socket.gethostname()
+    names = {f".{k}.npy.": k for k in keys}
+    names.update({f".{k}.npy.sha256.": k for k in keys})
+    removed = []
+    for p in folder.glob(".*.part"):
+        found = [n for n in names if p.name.startswith(n)]
+        if not found:
+            continue
+        prefix = max(found, key=len)          # ".K.npy.sha256." before ".K.npy."
+        writer = p.name[len(prefix):].rsplit(".", 2)[0]          # PID@HOST
+        pid, _, whose = writer.partition("@")
+        if whose != host or not pid.isdigit() or _pid_alive(int(pid)):
+            continue
+        try:
+            p.unlink()
+            removed.append(p.name)
+        except FileNotFoundError:
+            pass
+    return removed
 
 
 def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
@@ -251,6 +291,10 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
                     cl.close()
             if failed and created:   # leave the folder as it was found: not there
                 shutil.rmtree(folder, ignore_errors=True)
+    if todo:
+        # a worker killed while writing a chunk (the chunk was computed again elsewhere)
+        # leaves its temporary: removed once every chunk is in place
+        _remove_orphans(folder, [c.key for c in todo])
     computed = [c.key for c in todo]
     return JobReport(computed, verified, repaired, hashes)
 
