@@ -168,16 +168,11 @@ def run_reference(args):
 
 
 def save_npz(path, arrays: dict) -> None:
-    """``arrays`` written to the .npz ``path`` whole or not at all (skydome._io.atomic_write:
-    a temporary beside it, renamed; written through a file object, so that numpy adds no
-    suffix to the temporary's name)."""
+    """``arrays`` written to the .npz ``path`` whole or not at all (skydome._io.atomic_write;
+    the temporary ends in .npz, so numpy adds no suffix to it)."""
     from skydome._io import atomic_write
 
-    def write(tmp):
-        with open(tmp, "wb") as f:
-            np.savez(f, **arrays)
-
-    atomic_write(path, write)
+    atomic_write(path, lambda tmp: np.savez(tmp, **arrays), suffix=".npz")
 
 
 def pool(a, b, k):

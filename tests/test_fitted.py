@@ -135,6 +135,16 @@ def reference():
 GROUND_CASES = [(30.0, 500.0, 0.015, 0.10), (10.0, 600.0, 0.03, 0.35)]
 
 
+def _ground_dirs(h, n=300, seed=5):
+    """``n`` directions at the ground seen from altitude ``h`` [m]: 0.2-60 deg below the
+    horizon's dip over a sphere of 6371 km, azimuths uniform."""
+    rng = np.random.default_rng(seed)
+    dip = np.degrees(np.arccos(6371e3 / (6371e3 + h)))
+    alt = np.radians(-dip - rng.uniform(0.2, 60.0, n))
+    az = np.radians(rng.uniform(0.0, 360.0, n))
+    return np.stack([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)], -1)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("el, h, rms_bound, max_bound", GROUND_CASES)
 def test_ground_from_above_between_altitude_nodes_against_live_precomputed(
@@ -143,12 +153,7 @@ def test_ground_from_above_between_altitude_nodes_against_live_precomputed(
     ref = reference.with_sun(sun, observer_altitude_m=h)
     fit = sd.model("fitted", sun=sun, aerosol_optical_depth=HELD_AOD,
                    ground_albedo=HELD_ALBEDO, observer_altitude_m=h)
-    rng = np.random.default_rng(5)
-    # the horizon's dip over a sphere of 6371 km; directions 0.2-60 deg below it
-    dip = np.degrees(np.arccos(6371e3 / (6371e3 + h)))
-    alt = np.radians(-dip - rng.uniform(0.2, 60.0, 300))
-    az = np.radians(rng.uniform(0.0, 360.0, 300))
-    d = np.stack([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)], -1)
+    d = _ground_dirs(h)
     rel = fit.luminance(d) / ref.luminance(d) - 1.0
     rms, worst = float(np.sqrt(np.mean(rel ** 2))), float(np.max(np.abs(rel)))
     assert rms <= rms_bound and worst <= max_bound, (el, h, rms, worst)
@@ -247,12 +252,7 @@ TWILIGHT_GROUND_RMS_BOUND, TWILIGHT_GROUND_MAX_BOUND = 0.03, 0.30
 def test_twilight_ground_from_above_at_a_held_out_point_against_live_precomputed(
         twilight_pair):
     ref, fit, _ = twilight_pair
-    h = TWILIGHT_CASE["h"]
-    rng = np.random.default_rng(5)
-    dip = np.degrees(np.arccos(6371e3 / (6371e3 + h)))
-    alt = np.radians(-dip - rng.uniform(0.2, 60.0, 300))
-    az = np.radians(rng.uniform(0.0, 360.0, 300))
-    d = np.stack([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)], -1)
+    d = _ground_dirs(TWILIGHT_CASE["h"])
     y_ref = ref.luminance(d)
     assert np.all(y_ref > 0.0)
     rel = fit.luminance(d) / y_ref - 1.0

@@ -94,11 +94,7 @@ def main(argv=None) -> int:
                    "radiance), '<elev>_E_err' its standard error"),
                command=np.str_(" ".join(["python tools/twilight_irradiance_reference.py",
                                          *(argv if argv is not None else sys.argv[1:])])))
-    def write(tmp):      # through a file object: numpy adds no suffix to the temporary
-        with open(tmp, "wb") as f:
-            np.savez(f, **out)
-
-    atomic_write(a.out, write)
+    atomic_write(a.out, lambda tmp: np.savez(tmp, **out), suffix=".npz")
     return 0
 
 

@@ -100,24 +100,18 @@ def _exit_status(code) -> int:
 def _end_process(status: int) -> None:
     """End the process now with ``status``, after everything Python's own exit does that a
     command's results depend on: the threading module's exit hooks run and non-daemon
-    threads joined (a table cache entry being written), the atexit handlers run (logging, temporary folders, Dask's clusters), stdout
-    and stderr flushed; a failed flush of stdout gives status 120 as Python's exit does.
+    threads joined (a table cache entry being written), the atexit handlers run (logging,
+    temporary folders, Dask's clusters), stdout and stderr flushed; a failed flush of
+    stdout gives status 120 as Python's exit does.
 
     What is left out is the interpreter's teardown of its modules, whose garbage
     collections over the object graph numba builds (its types, registries and compiled
     libraries) took 0.23-0.29 s of a warm shortest render's 0.8-1.0 s (perf, 2-core EPYC,
     docs/performance.md); the operating system frees the memory."""
-    shutdown = getattr(threading, "_shutdown", None)
-    if shutdown is not None:
-        # what the interpreter's exit calls first: the threading module's exit hooks (an
-        # idle ThreadPoolExecutor's workers, Dask's threaded scheduler's pool, told to
-        # stop), then every non-daemon thread joined
-        shutdown()
-    else:  # pragma: no cover - every CPython 3.x has threading._shutdown
-        main_thread = threading.main_thread()
-        for t in threading.enumerate():
-            if t is not main_thread and not t.daemon:
-                t.join()
+    # what the interpreter's exit calls first: the threading module's exit hooks (an idle
+    # ThreadPoolExecutor's workers, Dask's threaded scheduler's pool, told to stop), then
+    # every non-daemon thread joined
+    threading._shutdown()
     atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
         try:

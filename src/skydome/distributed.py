@@ -161,12 +161,13 @@ def _compute_and_store(folder: str, key: str, func, args) -> tuple[str, str]:
 
 
 def _pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this host exists (one of another user's counts)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except (PermissionError, OSError):
-        return True
+    except OSError:
+        pass
     return True
 
 
@@ -176,11 +177,10 @@ def _remove_orphans(folder: Path, keys) -> list[str]:
     alive: what a worker killed while writing (SIGKILL, the out-of-memory killer) leaves.
     A temporary of a live process, or of another host's, is kept. The names removed."""
     host = socket.gethostname()
-    names = {f".{k}.npy.": k for k in keys}
-    names.update({f".{k}.npy.sha256.": k for k in keys})
+    prefixes = [f".{k}.npy{x}." for k in keys for x in ("", ".sha256")]
     removed = []
     for p in folder.glob(".*.part"):
-        found = [n for n in names if p.name.startswith(n)]
+        found = [n for n in prefixes if p.name.startswith(n)]
         if not found:
             continue
         prefix = max(found, key=len)          # ".K.npy.sha256." before ".K.npy."
