@@ -53,6 +53,23 @@ def texel(sky, row, col, i0, i1, w):
     return blend(sky[i0, row, col, :3], sky[i1, row, col, :3], w)
 
 
+def row_weights(iu, nu, fu):
+    """skydomeFittedRowWeights: (r0, (..., 4) weights)."""
+    f2 = fu * fu
+    f3 = f2 * fu
+    wm = -0.5 * f3 + f2 - 0.5 * fu
+    w0 = 1.5 * f3 - 2.5 * f2 + 1.0
+    w1 = -1.5 * f3 + 2.0 * f2 + 0.5 * fu
+    w2 = 0.5 * f3 - 0.5 * f2
+    lo = (iu == 0)[..., None]
+    hi = (iu == nu - 2)[..., None]
+    wr = np.where(lo, np.stack([w0 + 2.0 * wm, w1 - wm, w2, 0.0 * fu], -1),
+                  np.where(hi, np.stack([0.0 * fu, wm, w0 - w2, w1 + 2.0 * w2], -1),
+                           np.stack([wm, w0, w1, w2], -1)))
+    r0 = np.where(iu == 0, 0, np.where(iu == nu - 2, iu - 2, iu - 1))
+    return r0, wr
+
+
 def fitted_sky(sky, f, d, sun_dir):
     """skydomeFittedSky for directions d (..., 3)."""
     i0, i1, w = axis(f["elevationFirstDeg"], f["elevationStepDeg"], f["elevationCount"],
@@ -70,7 +87,7 @@ def fitted_sky(sky, f, d, sun_dir):
     base = np.where(is_sky, 0, f["nSky"])
     nu = np.where(is_sky, f["nSky"], f["nGround"])
     iu = np.minimum(u.astype(int), nu - 2)                     # int(): truncation, u >= 0
-    fu = (u - iu)[..., None]
+    fu = u - iu
     cp = x * sin_az + y * cos_az
     sp = np.abs(x * cos_az - y * sin_az)
     zero = (sp == 0.0) & (cp == 0.0)
@@ -80,13 +97,13 @@ def fitted_sky(sky, f, d, sun_dir):
     t = (-a + np.sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * (f["nPhi"] - 1)
     it = np.minimum(t.astype(int), f["nPhi"] - 2)
     ft = np.maximum(t - it, 0.0)[..., None]
-    r0 = base + iu
-    v00 = texel(sky, r0, it, i0, i1, w)
-    v01 = texel(sky, r0, it + 1, i0, i1, w)
-    v10 = texel(sky, r0 + 1, it, i0, i1, w)
-    v11 = texel(sky, r0 + 1, it + 1, i0, i1, w)
-    xyz = (1.0 - fu) * ((1.0 - ft) * v00 + ft * v01) + fu * ((1.0 - ft) * v10 + ft * v11)
-    return xyz * f["irradianceScale"]
+    r0, wr = row_weights(iu, nu, fu)
+    xyz = 0.0
+    for k in range(4):
+        row = base + r0 + k
+        xyz = xyz + wr[..., k:k + 1] * ((1.0 - ft) * texel(sky, row, it, i0, i1, w)
+                                        + ft * texel(sky, row, it + 1, i0, i1, w))
+    return np.maximum(xyz, 0.0) * f["irradianceScale"]
 
 
 def sun_visible_fraction(f, elevation_rad):

@@ -38,11 +38,13 @@ def test_measure_refuses_bad_rows(tmp_path, capsys):
     assert "--rows = 0 is out of range [1, 63]" in capsys.readouterr().err
 
 
-def test_angular_share_matches_bilinear_error_of_a_quadratic():
+def test_angular_share_matches_the_spline_error_of_a_quadratic():
     """A reference quadratic in the sky grid's row index u, L = (u + 1)^2 on the nodes and
-    (u + 1.5)^2 at the cells' centres: the lookup's bilinear value at a centre is the mean
-    of its corners, (u + 1.5)^2 + 1/4, so its relative error is 1 / (4 (u + 1.5)^2), largest
-    in the first row above the horizon (u = 0): 1/9."""
+    (u + 1.5)^2 at the cells' centres. The lookup's Catmull-Rom spline reproduces a
+    quadratic inside the grid: no error from the second row on. In the first row the row
+    below the horizon is the straight line through rows 0 and 1 (-2 instead of 0): the
+    centre's value (7 L0 + 10 L1 - L2) / 16 = 38/16 against 2.25, relative error 1/18.
+    (The former bilinear lookup: 1/9 there, and 1 / (4 (u + 1.5)^2) in every row.)"""
     from skydome.models.fitted import _grid
 
     tool = _tool()
@@ -59,9 +61,13 @@ def test_angular_share_matches_bilinear_error_of_a_quadratic():
            "centres": np.broadcast_to(((u_c + 1.0) ** 2)[None, None, :, None, None],
                                       shape_c).astype(np.float32)}
     (r,) = tool.compare(ref, rows=2)
-    assert r["angular"][1] == pytest.approx(1.0 / 9.0, rel=1e-5)
-    assert r["angular low"][1] == pytest.approx(1.0 / 9.0, rel=1e-5)
-    # the second row alone: 1 / (4 x 2.5^2) = 0.04 is the RMS of rows 0-1's errors with
-    # row 0's (1/9): both rows keep every azimuth (the sun at 45 deg is far from them)
-    assert r["angular low"][0] == pytest.approx(np.sqrt(((1 / 9) ** 2 + 0.04 ** 2) / 2),
-                                                rel=1e-5)
+    assert r["angular"][1] == pytest.approx(1.0 / 18.0, rel=1e-5)
+    assert r["angular low"][1] == pytest.approx(1.0 / 18.0, rel=1e-5)
+    # rows 0-1: row 0's 1/18 and row 1's 0 (both rows keep every azimuth: the sun at 45
+    # deg is far from them)
+    assert r["angular low"][0] == pytest.approx(np.sqrt((1 / 18) ** 2 / 2), rel=1e-5)
+    # from the second row to the last but one the spline is exact, so the whole sky's RMS
+    # is row 0's share (within 2 %: the centres within 5 deg of the sun are left out of
+    # the count); the bilinear lookup's errors in every row would make it 0.015
+    assert r["angular"][0] == pytest.approx(np.sqrt((1 / 18) ** 2 / (_grid.N_SKY - 1)),
+                                            rel=0.02)

@@ -31,12 +31,24 @@ def test_atan2_pos_matches_the_library_atan2():
 
 
 def _reference_lookup(sky, d):
-    """The bilinear lookup with numpy's arccos / arctan2 (the mappings of _grid.py)."""
+    """The lookup with numpy's arccos / arctan2 (the mappings of _grid.py): the Catmull-Rom
+    spline along the rows, linear in azimuth, clamped at 0."""
     return _reference_lookup_table(sky, sky._table, d)
 
 
+def _catmull_rom(p0, p1, p2, p3, f):
+    """The Catmull-Rom spline between p1 (f = 0) and p2 (f = 1) in its textbook form
+    (Catmull & Rom 1974): p1 + f (p2 - p0) / 2 + f^2 (2 p0 - 5 p1 + 4 p2 - p3) / 2
+    + f^3 (3 p1 - 3 p2 + p3 - p0) / 2."""
+    f = f[:, None]
+    return p1 + 0.5 * f * ((p2 - p0) + f * ((2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3)
+                                            + f * (3.0 * (p1 - p2) + p3 - p0)))
+
+
 def _reference_lookup_table(sky, table, d):
-    """The same in the angular table ``table`` (N_SKY + N_GROUND, N_PHI, C)."""
+    """The same in the angular table ``table`` (N_SKY + N_GROUND, N_PHI, C); beyond a
+    part's (the sky's or the ground's) first and last rows, the rows on the straight line
+    through its two end rows."""
     u = d / np.linalg.norm(d, axis=1)[:, None]
     th = np.arccos(np.clip(u[:, 2], -1.0, 1.0))
     th_h = _grid.horizon_zenith_rad(sky.observer_altitude_m)
@@ -48,7 +60,7 @@ def _reference_lookup_table(sky, table, d):
     uu = x * (n_u - 1)
     iu = np.minimum(uu.astype(int), n_u - 2)
     fu = uu - iu
-    r0 = np.where(sky_side, 0, _grid.N_SKY) + iu
+    base = np.where(sky_side, 0, _grid.N_SKY)
     az = math.radians(float(sky.sun.azimuth_deg))
     cp = u[:, 0] * math.sin(az) + u[:, 1] * math.cos(az)
     sp = np.abs(u[:, 0] * math.cos(az) - u[:, 1] * math.sin(az))
@@ -56,10 +68,19 @@ def _reference_lookup_table(sky, table, d):
     a, b = _grid.A_PHI, 1.0 - _grid.A_PHI
     t = (-a + np.sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * (_grid.N_PHI - 1)
     it = np.minimum(t.astype(int), _grid.N_PHI - 2)
-    ft = np.maximum(t - it, 0.0)
-    w = [((1 - fu) * (1 - ft), 0, 0), ((1 - fu) * ft, 0, 1), (fu * (1 - ft), 1, 0),
-         (fu * ft, 1, 1)]
-    return sum(wi[:, None] * table[r0 + du, it + dt] for wi, du, dt in w)
+    ft = np.maximum(t - it, 0.0)[:, None]
+
+    def row(k):        # row k of the part, linear in azimuth; k = -1 and n_u: extrapolated
+        inside = np.clip(k, 0, n_u - 1)
+        v = table[base + inside, it] * (1.0 - ft) + table[base + inside, it + 1] * ft
+        below = (k < 0)[:, None]
+        above = (k > n_u - 1)[:, None]
+        v = np.where(below, 2.0 * row(np.zeros_like(k)) - row(np.ones_like(k)), v) \
+            if below.any() else v
+        v = np.where(above, 2.0 * row(n_u - 1) - row(n_u - 2), v) if above.any() else v
+        return v
+
+    return np.maximum(_catmull_rom(row(iu - 1), row(iu), row(iu + 1), row(iu + 2), fu), 0.0)
 
 
 @pytest.mark.parametrize("elevation, azimuth, altitude", [
@@ -241,3 +262,24 @@ def test_sky_cell_inverts_the_grid_mappings():
         assert np.allclose((th_h - G.EPS) * (1 - xb * xb), th, rtol=0, atol=1e-9)
         assert np.allclose(np.pi * (G.A_PHI * tb + (1 - G.A_PHI) * tb * tb), ph, rtol=0,
                            atol=1e-9)
+
+
+@pytest.mark.parametrize("elevation, altitude, aod", [(12.0, 3000.0, 0.3), (-7.0, 0.0, 0.05)])
+def test_render_reads_the_spectral_lookup_integrated(elevation, altitude, aod):
+    """skydome.imaging.render reads fitted's XYZ in one lookup of the table times the
+    spectrum's map to XYZ (FittedSky._fused_xyz, three channels instead of the table
+    wavelengths): the model's radiance at the render's wavelengths integrated with the
+    render's weights (the lookup is linear in the table's values), over the whole sphere."""
+    from skydome.imaging import _fused_sampler, _xyz_weights
+    from skydome.spectra import default_wavelengths
+
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=elevation, azimuth_deg=200.0),
+                   observer_altitude_m=altitude, aerosol_optical_depth=aod)
+    wl = default_wavelengths()
+    sample, to_xyz = _fused_sampler(sky, wl)
+    assert to_xyz is None
+    d = np.random.default_rng(5).normal(size=(20000, 3))
+    got = sample(d)
+    ref = sky.radiance(d, wl) @ _xyz_weights(wl)
+    assert got.shape == ref.shape == (20000, 3)
+    np.testing.assert_allclose(got, ref, rtol=1e-11, atol=1e-12 * ref.max())

@@ -29,6 +29,12 @@ from _viewer import browser_page, psnr_db, viewer_url  # noqa: F401 - fixtures
 
 W, H = 128, 64
 PSNR_FLOOR_DB = 40.0
+#: The shader mirrors the kernel's lookup, weights and all: what may differ is float32 on
+#: the GPU against float64 on the CPU (97-114 dB on the hemisphere and the sphere in
+#: headless Chromium, 2026-12). The kernel's earlier bilinear weights in the shader, with
+#: the CPU's Catmull-Rom rows, gave 69-87 dB: this floor checks that the shader
+#: interpolates as the kernel does, beyond the floor of a faithful picture above.
+MIRROR_FLOOR_DB = 92.0
 SUN_AZIMUTH_DEG = 135.0
 
 
@@ -101,6 +107,7 @@ def test_fitted_shader_matches_cpu(browser_page, elevation, params, tmp_path):  
         view = "hemisphere" if hemisphere else "sphere"
         print(f"PSNR fitted {view}, sun {elevation:g} deg {params}: {value:.1f} dB")
         assert value >= PSNR_FLOOR_DB, (view, elevation, params, value)
+        assert value >= MIRROR_FLOOR_DB, (view, elevation, params, value)
         if not hemisphere:
             below = d[..., 2] < 0.0
             assert np.max(ref[below]) > 0.0                      # the ground is lit

@@ -24,9 +24,11 @@ tools/fitted_accuracy.py integrates it) and per configuration prints, RMS / max:
   interpolation between the parameter nodes where one of them is not;
 * ``centres``: the model at the cells' centres (what the held-out grid measures);
 * ``angular alone``: the reference's own node values interpolated to the centres as the
-  lookup does (bilinear in the grid's mapped coordinates: at a centre the mean of the four
-  corners) against the reference computed there: the view grid's share, which no
-  interpolation between parameter nodes can remove;
+  lookup does (in the grid's mapped coordinates the Catmull-Rom spline along the rows, at a
+  centre (-p[k-1] + 9 p[k] + 9 p[k+1] - p[k+2]) / 16, the row beyond the sky's first and
+  last on the line through its two end rows; the mean of the two azimuth columns) against
+  the reference computed there: the view grid's share, which no interpolation between
+  parameter nodes can remove;
 
 each also for the first ``--rows`` rows above the horizon, and where the largest centre
 error sits (the row counted from the horizon, 0 the first; azimuth from the sun; angle
@@ -126,9 +128,12 @@ def compare(ref: dict, aod=None, albedo=None, rows: int = 3) -> list[dict]:
             yc_ref = ref_luminance(ref["centres"][i, j], wl)[:n_sky_c]
             yn_fit = m.xyz_table()[:n_sky_n, :, 1]
             yc_fit = m.luminance(dc[:n_sky_c])
-            # the lookup at a cell's centre: the mean of its four corners
-            yc_ang = 0.25 * (yn_ref[:-1, :-1] + yn_ref[1:, :-1] + yn_ref[:-1, 1:]
-                             + yn_ref[1:, 1:])
+            # the lookup at a cell's centre: the spline at f = 1/2 along the rows (the
+            # straight-line rows beyond the ends), then the mean of the two columns
+            ext = np.vstack([2.0 * yn_ref[:1] - yn_ref[1:2], yn_ref,
+                             2.0 * yn_ref[-1:] - yn_ref[-2:-1]])
+            col = (-ext[:-3] + 9.0 * ext[1:-2] + 9.0 * ext[2:-1] - ext[3:]) / 16.0
+            yc_ang = np.maximum(0.5 * (col[:, :-1] + col[:, 1:]), 0.0)
             gn = np.degrees(np.arccos(np.clip(dn[:n_sky_n] @ sun.direction, -1, 1)))
             gc = np.degrees(np.arccos(np.clip(dc[:n_sky_c] @ sun.direction, -1, 1)))
             kn, kc = (gn > 5.0) & (yn_ref > 0), (gc > 5.0) & (yc_ref > 0)

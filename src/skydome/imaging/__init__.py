@@ -176,7 +176,9 @@ def render(sky, projection: Projection, wavelengths_nm=None, *,
                 else idx[start:start + chunk])
         d = flat_dirs[rows]
         direct = False
-        if fused:
+        if fused and to_xyz is None:
+            v = np.asarray(sample(d), dtype=np.float64)
+        elif fused:
             s = np.asarray(sample(d), dtype=np.float64)
             direct = idx is None and s.shape == (d.shape[0], to_xyz.shape[0])
             if direct:
@@ -265,7 +267,11 @@ def _xyz_weights(wl) -> np.ndarray:
 
 
 def _fused_sampler(sky, wl):
-    """(sample(d) -> (n, n_model), M (n_model x 3)) with XYZ = sample(d) @ M.
+    """(sample(d) -> (n, n_model), M (n_model x 3)) with XYZ = sample(d) @ M; M None where
+    sample(d) is XYZ itself.
+
+    Models with ``_fused_xyz(wl, M)`` (a lookup linear in its table's values) return the
+    XYZ sampler of their table times M.
 
     Models with a wavelength table (``radiance_table`` per unit solar irradiance on the
     table wavelengths and the linear ``_to_wavelengths`` resampling) are sampled on their
@@ -274,6 +280,11 @@ def _fused_sampler(sky, wl):
     are sampled on their basis and B folded into M. Other spectral models are sampled at
     ``wl``."""
     M = _xyz_weights(wl)
+    # models whose value is a linear lookup in a table of their own (fitted): the table
+    # times the spectrum's map to XYZ, looked up once per direction in three channels
+    fused = getattr(sky, "_fused_xyz", None)
+    if callable(fused):
+        return fused(wl, M), None
     table = getattr(sky, "radiance_table", None)
     resample = getattr(sky, "_to_wavelengths", None)
     n_t = getattr(sky, "n_wavelengths", None)

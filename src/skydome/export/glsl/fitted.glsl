@@ -7,7 +7,8 @@
 // vertical plane) and N_SKY + N_GROUND high (the zenith angle: the sky's rows from the
 // horizon up, then the ground's from the horizon down). skydomeFittedSky mirrors the CPU
 // kernel skydome.models.fitted._kernels.lookup line for line (the inverse mappings of
-// fitted._grid, then bilinear weights between four texels, read with texelFetch: no
+// fitted._grid, then the Catmull-Rom spline through four rows along the zenith angle and
+// linear weights between two columns in azimuth: eight texels, read with texelFetch, no
 // hardware filtering) in the two layers around the sun's elevation, and interpolates
 // between the layers geometrically (linearly in ln XYZ; linearly where a value is 0).
 // Sampler state: any (texelFetch).
@@ -77,6 +78,24 @@ vec3 skydomeFittedTexel(sampler2DArray sky, int row, int col, int i0, int i1, fl
                               texelFetch(sky, ivec3(col, row, i1), 0).rgb, w);
 }
 
+// The Catmull-Rom spline's weights (Catmull & Rom 1974) of the four consecutive rows r0 ..
+// r0 + 3 of a part of the grid (nu rows) for the cell iu at the fraction f: inside, the rows
+// iu - 1 .. iu + 2; in the part's first and last cells the row beyond its end is the
+// straight line through its two end rows, folded into the weights ([_kernels.lookup]).
+void skydomeFittedRowWeights(int iu, int nu, float f, out int r0, out vec4 wr) {
+    float f2 = f * f;
+    float f3 = f2 * f;
+    float wm = -0.5 * f3 + f2 - 0.5 * f;
+    float w0 = 1.5 * f3 - 2.5 * f2 + 1.0;
+    float w1 = -1.5 * f3 + 2.0 * f2 + 0.5 * f;
+    float w2 = 0.5 * f3 - 0.5 * f2;
+    bool lo = iu == 0;
+    bool hi = iu == nu - 2;
+    wr = lo ? vec4(w0 + 2.0 * wm, w1 - wm, w2, 0.0)
+            : (hi ? vec4(0.0, wm, w0 - w2, w1 + 2.0 * w2) : vec4(wm, w0, w1, w2));
+    r0 = lo ? 0 : (hi ? iu - 2 : iu - 1);
+}
+
 // The sky (and the ground below the horizon) seen from direction dir with the sun at
 // sunDir: XYZ, Y in cd m^-2 ([_kernels.lookup]).
 vec3 skydomeFittedSky(sampler2DArray sky, SkydomeFitted f, vec3 dir, vec3 sunDir) {
@@ -110,13 +129,16 @@ vec3 skydomeFittedSky(sampler2DArray sky, SkydomeFitted f, vec3 dir, vec3 sunDir
     float t = (-a + sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * float(f.nPhi - 1);
     int it = min(int(t), f.nPhi - 2);
     float ft = max(t - float(it), 0.0);
-    int r0 = base + iu;
-    vec3 v00 = skydomeFittedTexel(sky, r0, it, i0, i1, w);
-    vec3 v01 = skydomeFittedTexel(sky, r0, it + 1, i0, i1, w);
-    vec3 v10 = skydomeFittedTexel(sky, r0 + 1, it, i0, i1, w);
-    vec3 v11 = skydomeFittedTexel(sky, r0 + 1, it + 1, i0, i1, w);
-    vec3 xyz = (1.0 - fu) * ((1.0 - ft) * v00 + ft * v01) + fu * ((1.0 - ft) * v10 + ft * v11);
-    return xyz * f.irradianceScale;
+    int r0;
+    vec4 wr;
+    skydomeFittedRowWeights(iu, nu, fu, r0, wr);
+    vec3 xyz = vec3(0.0);
+    for (int k = 0; k < 4; ++k) {
+        int row = base + r0 + k;
+        xyz += wr[k] * ((1.0 - ft) * skydomeFittedTexel(sky, row, it, i0, i1, w)
+                        + ft * skydomeFittedTexel(sky, row, it + 1, i0, i1, w));
+    }
+    return max(xyz, vec3(0.0)) * f.irradianceScale;
 }
 
 // Fraction of the sun's disc above the observer's horizon

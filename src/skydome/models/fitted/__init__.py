@@ -10,7 +10,8 @@ nodes and the view grid, docs/models.md ("fitted") the range and the measured er
 
 Per model (one configuration) the angular table is built once (a few milliseconds: one
 small matrix product per albedo node and neighbouring elevation node); every direction is
-then a bilinear lookup in a numba kernel (:mod:`._kernels`).
+then a lookup in a numba kernel (:mod:`._kernels`: cubic along the zenith angle, linear in
+azimuth).
 """
 
 from __future__ import annotations
@@ -285,6 +286,20 @@ class FittedSky(SkyModel):
         j0, j1 = (int(used[0]), int(used[-1]) + 1) if used.size else (0, 1)
         table = self._derived_table(("rows", j0, j1), lambda: self._table[:, :, j0:j1])
         return (lambda d: self._lookup(d, table)), B[j0:j1]
+
+    def _fused_xyz(self, wavelengths_nm, M):
+        """sample(d) -> (n, 3): the renderer's XYZ (skydome.imaging.render: radiance at
+        ``wavelengths_nm`` times its weights ``M`` (n, 3)) in one lookup of the table times
+        the wavelength interpolation, the solar spectrum and ``M``. The lookup is linear in
+        the table's values, so this is the product of the spectral lookup and ``M`` but for
+        the clamp at 0 (here on the three channels, there on each wavelength: they differ
+        only where the rows' spline overshoots below 0), as :meth:`xyz` is; it reads three
+        channels per direction instead of the 29 table wavelengths that 380-780 nm reach."""
+        wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
+        M = np.asarray(M, dtype=np.float64)
+        key = ("fused", wl.tobytes(), M.tobytes())
+        table = self._derived_table(key, lambda: self._table @ (self._weights(wl) @ M))
+        return lambda d: self._lookup(d, table)
 
     def xyz(self, directions) -> np.ndarray:
         """CIE 1931 XYZ, Y = luminance [cd m^-2], shape (..., 3)."""

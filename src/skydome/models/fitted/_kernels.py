@@ -2,9 +2,18 @@
 one configuration.
 
 The table (N_SKY + N_GROUND, N_PHI, C) holds C channels (wavelengths, XYZ or luminance) on
-the view grid of :mod:`._grid`; a direction's value is the bilinear interpolation between
-its four nodes. One specialisation (float64, C-contiguous) serves every channel count, so
-the first use compiles once (and numba's cache keeps it).
+the view grid of :mod:`._grid`; a direction's value is cubic along the zenith angle and
+linear along the azimuth: the Catmull-Rom spline (Catmull & Rom 1974; Keys 1981 with a =
+-1/2) through the four rows of nodes around it, in the mapped coordinate u of its part of
+the grid (the sky or the ground: the horizon is never interpolated across), each row read
+linearly between its two azimuth nodes. At a part's first and last cell the row beyond
+the end is the straight line through the end's two rows (p[-1] = 2 p[0] - p[1]), folded
+into the weights. The spline goes through the nodes and reproduces a quadratic in u; the
+bilinear lookup of the earlier kernel missed the curvature of a sky that bends within a
+few rows (next to the horizon of an observer aloft in twilight: docs/models.md,
+"fitted", "The lookup between the view grid's rows"). Where it overshoots below zero the
+value is clamped at 0. One specialisation (float64, C-contiguous) serves every channel
+count, so the first use compiles once (and numba's cache keeps it).
 
 The two angles of a direction (its zenith angle and its azimuth from the sun's vertical)
 are computed by :func:`_atan2_pos`, an arctangent of our own made of arithmetic alone
@@ -122,7 +131,10 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
         i0 = blk * BLOCK
         m = min(BLOCK, n - i0)
         idx = np.empty(BLOCK, np.int64)
-        fu_ = np.empty(BLOCK)
+        wa_ = np.empty(BLOCK)
+        wb_ = np.empty(BLOCK)
+        wc_ = np.empty(BLOCK)
+        wd_ = np.empty(BLOCK)
         ft_ = np.empty(BLOCK)
         bad_b = 0
         zero_b = 0
@@ -147,7 +159,26 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
             sky = th < theta_h
             q = (1.0 - th * inv_sky) if sky else (th - th_g) * inv_ground
             u = math.sqrt(max(q, 0.0)) * ((N_SKY - 1) if sky else (N_GROUND - 1))
-            iu = min(int(u), (N_SKY - 2) if sky else (N_GROUND - 2))
+            last = (N_SKY - 2) if sky else (N_GROUND - 2)
+            iu = min(int(u), last)
+            # Catmull-Rom weights of the rows iu - 1, iu, iu + 1, iu + 2 at f = u - iu
+            f = min(u - iu, 1.0)
+            f2 = f * f
+            f3 = f2 * f
+            wm = -0.5 * f3 + f2 - 0.5 * f
+            w0 = 1.5 * f3 - 2.5 * f2 + 1.0
+            w1 = -1.5 * f3 + 2.0 * f2 + 0.5 * f
+            w2 = 0.5 * f3 - 0.5 * f2
+            # four consecutive rows r0 .. r0 + 3 of the part: inside, r0 = iu - 1; in the
+            # first cell r0 = 0 with p[-1] = 2 p[0] - p[1] folded in; in the last r0 = iu - 2
+            # with p[iu + 2] = 2 p[iu + 1] - p[iu]
+            lo = iu == 0
+            hi = iu == last
+            a0 = (w0 + 2.0 * wm) if lo else (0.0 if hi else wm)
+            a1 = (w1 - wm) if lo else (wm if hi else w0)
+            a2 = w2 if lo else ((w0 - w2) if hi else w1)
+            a3 = 0.0 if lo else ((w1 + 2.0 * w2) if hi else w2)
+            r0 = 0 if lo else ((iu - 2) if hi else (iu - 1))
             # azimuth from the sun's vertical plane, folded into [0, pi]
             cp = x * sin_az + y * cos_az
             sp = abs(x * cos_az - y * sin_az)
@@ -156,41 +187,49 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
             phi = _atan2_pos(sp, cp) * (1.0 / math.pi)
             t = (-a + math.sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * (N_PHI - 1)
             it = min(int(t), N_PHI - 2)
-            idx[j] = ((iu if sky else iu + N_SKY) * N_PHI + it) * c
-            fu_[j] = min(u - iu, 1.0)
+            idx[j] = ((r0 if sky else r0 + N_SKY) * N_PHI + it) * c
+            wa_[j] = a0
+            wb_[j] = a1
+            wc_[j] = a2
+            wd_[j] = a3
             ft_[j] = min(max(t - it, 0.0), 1.0)
         n_bad += bad_b
         n_zero += zero_b
-        # pass 2: the bilinear interpolation, v = lerp(lerp(t00, t01), lerp(t10, t11))
+        # pass 2: per row r0 .. r0 + 3 the linear interpolation in azimuth, the rows weighted
+        # by the spline's weights: v = sum_r a_r (T[r, it] + ft (T[r, it + 1] - T[r, it]))
         if c == 1:
             for j in range(m):
                 k = idx[j]
-                fu, ft = fu_[j], ft_[j]
-                p0 = table[k] + ft * (table[k + 1] - table[k])
-                p1 = table[k + N_PHI] + ft * (table[k + N_PHI + 1] - table[k + N_PHI])
-                out[i0 + j, 0] = p0 + fu * (p1 - p0)
+                ft = ft_[j]
+                p0 = (wa_[j] * table[k] + wb_[j] * table[k + N_PHI]
+                      + wc_[j] * table[k + 2 * N_PHI] + wd_[j] * table[k + 3 * N_PHI])
+                p1 = (wa_[j] * table[k + 1] + wb_[j] * table[k + N_PHI + 1]
+                      + wc_[j] * table[k + 2 * N_PHI + 1] + wd_[j] * table[k + 3 * N_PHI + 1])
+                out[i0 + j, 0] = max(p0 + ft * (p1 - p0), 0.0)
         elif c == 3:
             for j in range(m):
                 k = idx[j]
-                fu, ft = fu_[j], ft_[j]
+                ft = ft_[j]
+                wa, wb, wc, wd = wa_[j], wb_[j], wc_[j], wd_[j]
                 for ch in range(3):
-                    t0 = table[k + ch]
-                    t1 = table[k + 3 + ch]
-                    t2 = table[k + row_c + ch]
-                    t3 = table[k + row_c + 3 + ch]
-                    p0 = t0 + ft * (t1 - t0)
-                    p1 = t2 + ft * (t3 - t2)
-                    out[i0 + j, ch] = p0 + fu * (p1 - p0)
+                    kk = k + ch
+                    p0 = (wa * table[kk] + wb * table[kk + row_c]
+                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
+                    kk += 3
+                    p1 = (wa * table[kk] + wb * table[kk + row_c]
+                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
+                    out[i0 + j, ch] = max(p0 + ft * (p1 - p0), 0.0)
         else:
             for j in range(m):
                 k = idx[j]
-                fu, ft = fu_[j], ft_[j]
+                ft = ft_[j]
+                wa, wb, wc, wd = wa_[j], wb_[j], wc_[j], wd_[j]
                 for ch in range(c):
-                    t0 = table[k + ch]
-                    t1 = table[k + c + ch]
-                    t2 = table[k + row_c + ch]
-                    t3 = table[k + row_c + c + ch]
-                    p0 = t0 + ft * (t1 - t0)
-                    p1 = t2 + ft * (t3 - t2)
-                    out[i0 + j, ch] = p0 + fu * (p1 - p0)
+                    kk = k + ch
+                    p0 = (wa * table[kk] + wb * table[kk + row_c]
+                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
+                    kk += c
+                    p1 = (wa * table[kk] + wb * table[kk + row_c]
+                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
+                    out[i0 + j, ch] = max(p0 + ft * (p1 - p0), 0.0)
     return n_bad, n_zero

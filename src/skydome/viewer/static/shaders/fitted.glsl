@@ -4,8 +4,9 @@
 // grid's zenith-angle nodes (N_SKY sky rows from the horizon up, then N_GROUND ground rows
 // from the horizon down), columns = its N_PHI azimuth nodes. sky_xyz mirrors the numba
 // kernel skydome.models.fitted._kernels.lookup line for line: the inverse mappings of
-// fitted._grid, then the bilinear interpolation between four texels (texelFetch: the
-// kernel's own weights, no hardware filtering).
+// fitted._grid, then the Catmull-Rom spline through four rows along the zenith angle, each
+// row linear between two columns in azimuth (eight texels, texelFetch: the kernel's own
+// weights, no hardware filtering).
 precision highp sampler2D;
 uniform highp sampler2D u_fitted;  // (N_SKY + N_GROUND) rows x N_PHI columns, XYZ
 uniform ivec3 u_fitted_n;          // N_SKY, N_GROUND, N_PHI
@@ -41,7 +42,22 @@ vec3 sky_xyz(vec3 d) {
     float t = (-a + sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * float(u_fitted_n.z - 1);
     int it = min(int(t), u_fitted_n.z - 2);
     float ft = max(t - float(it), 0.0);
-    int r0 = base + iu;
-    return (1.0 - fu) * ((1.0 - ft) * fitted_texel(r0, it) + ft * fitted_texel(r0, it + 1))
-         + fu * ((1.0 - ft) * fitted_texel(r0 + 1, it) + ft * fitted_texel(r0 + 1, it + 1));
+    // Catmull-Rom weights of the rows r0 .. r0 + 3 (inside the part: iu - 1 .. iu + 2; in
+    // its first and last cells the row beyond the end on the line through the two end rows)
+    float f2 = fu * fu;
+    float f3 = f2 * fu;
+    float wm = -0.5 * f3 + f2 - 0.5 * fu;
+    float w0 = 1.5 * f3 - 2.5 * f2 + 1.0;
+    float w1 = -1.5 * f3 + 2.0 * f2 + 0.5 * fu;
+    float w2 = 0.5 * f3 - 0.5 * f2;
+    bool lo = iu == 0;
+    bool hi = iu == nu - 2;
+    vec4 wr = lo ? vec4(w0 + 2.0 * wm, w1 - wm, w2, 0.0)
+                 : (hi ? vec4(0.0, wm, w0 - w2, w1 + 2.0 * w2) : vec4(wm, w0, w1, w2));
+    int r0 = base + (lo ? 0 : (hi ? iu - 2 : iu - 1));
+    vec3 v = vec3(0.0);
+    for (int k = 0; k < 4; ++k) {
+        v += wr[k] * ((1.0 - ft) * fitted_texel(r0 + k, it) + ft * fitted_texel(r0 + k, it + 1));
+    }
+    return max(v, vec3(0.0));
 }
