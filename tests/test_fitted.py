@@ -494,14 +494,9 @@ def test_aureole_between_elevation_nodes_against_live_precomputed(reference):
 
 
 def _load_tool(name):
-    import importlib.util
-    from pathlib import Path
+    from _tools import load_script
 
-    tool = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"{name}_tool", tool)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(f"tools/{name}.py")
 
 
 def _write_dataset(folder, el, alt, atms, wl, chunks):

@@ -1,20 +1,13 @@
 """tools/fitted_horizon_diagnosis.py: its argument checks and its view-grid share
 ("angular alone") against the analytic error of bilinear interpolation."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
-
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "fitted_horizon_diagnosis.py"
+from _tools import load_script
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("fitted_horizon_diagnosis_tool", TOOL)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("tools/fitted_horizon_diagnosis.py")
 
 
 @pytest.mark.parametrize("args, needle", [

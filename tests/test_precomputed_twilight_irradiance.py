@@ -87,12 +87,10 @@ def test_the_reference_quadrature_integrates_the_cosine():
     horizon, weights summing to the integral of cos(theta) over the hemisphere, pi sr
     (Gauss-Legendre in mu is exact for it), and a uniform sky of radiance L giving pi L;
     a sun elevation outside [-18, 0) deg is refused before any work."""
-    import importlib.util
+    from _tools import load_script
 
-    path = Path(__file__).parents[1] / "tools" / "twilight_irradiance_reference.py"
-    spec = importlib.util.spec_from_file_location("twilight_irradiance_reference", path)
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+    tool = load_script("tools/twilight_irradiance_reference.py",
+                       "twilight_irradiance_reference")
     d, w = tool.hemisphere()
     np.testing.assert_allclose(np.linalg.norm(d, axis=1), 1.0, rtol=1e-12)
     assert np.all(d[:, 2] > 0.0)

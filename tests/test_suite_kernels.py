@@ -3,7 +3,6 @@ skipped entry by entry and never fails the set-up; the split keeps each function
 process and balances the compiled sizes."""
 
 import base64
-import importlib.util
 import json
 import os
 import pickle
@@ -11,15 +10,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from _tools import load_script
+
 ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "suite_kernels.py"
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("suite_kernels", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("tools/suite_kernels.py", "suite_kernels")
 
 
 def _entry(module, qualname, sig, size=1):
