@@ -124,6 +124,31 @@ def _supplement(option: str, folder: str, ds, aods, same: dict, axis: str,
     return sup, order, np.concatenate([values, new])[order]
 
 
+def spectral_factors(coef: np.ndarray, rank: int):
+    """The coefficients ``coef`` (A, B, E, H, W, T: AOD, albedo, sun node, altitude,
+    wavelength, term) as ``rank`` spectral terms per sun node E: (amplitudes (A, B, E, H,
+    rank, T), spectral vectors (E, rank, W), mean spectra (E, W), relative RMS of the
+    truncation), with coef[a, b, e, h, :, t] ~ mean[e] + sum_k amp[a, b, e, h, k, t]
+    spec[e, k] (the singular value decomposition along the wavelength of the rows (a, b,
+    h, t) of each sun node, their mean removed first, truncated to its first ``rank``
+    terms; docs/models.md, "fitted", "The spectral terms")."""
+    A, B, E, H, W, T = coef.shape
+    amp = np.empty((A, B, E, H, rank, T), dtype=np.float32)
+    spec = np.empty((E, rank, W), dtype=np.float32)
+    mean = np.empty((E, W), dtype=np.float32)
+    sq = tot = 0.0
+    for e in range(E):
+        X = np.moveaxis(coef[:, :, e], 3, -1).reshape(-1, W).astype(np.float64)
+        m = X.mean(axis=0)
+        U, S, Vt = np.linalg.svd(X - m, full_matrices=False)
+        P = U[:, :rank] * S[:rank]                                  # rows x rank
+        amp[:, :, e] = np.moveaxis(P.reshape(A, B, H, T, rank), -1, 3)
+        spec[e], mean[e] = Vt[:rank], m
+        sq += float(np.sum((X - m - P @ Vt[:rank]) ** 2))
+        tot += float(np.sum(X ** 2))
+    return amp, spec, mean, float(np.sqrt(sq / max(tot, 1e-300)))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dataset", nargs="?")
@@ -135,6 +160,9 @@ def main(argv=None) -> int:
     ap.add_argument("--k-ground", type=int, default=12)
     ap.add_argument("--float16", action="store_true",
                     help="store coefficients and bases in float16 with a scale per row")
+    ap.add_argument("--spectral-rank", type=int, default=0, metavar="K",
+                    help="store the coefficients as K spectral terms per sun node (the "
+                         "truncated SVD along the wavelength); 0: every wavelength's own")
     ap.add_argument("--gas-bands", default=None, metavar="SUPPLEMENT",
                     help="a --gas-bands data set of the same grid: its wavelengths added")
     ap.add_argument("--altitude-supplement", default=None, metavar="SUPPLEMENT",
@@ -157,6 +185,10 @@ def main(argv=None) -> int:
         if not 1 <= v <= 256:
             print(f"error: {name} = {v} is out of range [1, 256]", file=sys.stderr)
             return 2
+    if not 0 <= a.spectral_rank <= 256:
+        print(f"error: --spectral-rank = {a.spectral_rank} is out of range [0, 256] (0: "
+              "off)", file=sys.stderr)
+        return 2
     from skydome._io import atomic_file
     from skydome.models.fitted import _grid
     from skydome.models.fitted._coefficients import COEFFICIENT_FILE, DELTA
@@ -251,6 +283,18 @@ def main(argv=None) -> int:
         print(f"{part}: {k} terms, RMS residual of y on the fitting nodes {resid[part]:.4f}",
               flush=True)
     out["log_scale"] = log_s
+    if a.spectral_rank:
+        if a.spectral_rank > wl.size:
+            print(f"error: --spectral-rank = {a.spectral_rank} is out of range [0, "
+                  f"{wl.size}] (the data set's table wavelengths)", file=sys.stderr)
+            return 2
+        for part in ("sky", "ground"):
+            amp, spec, mean, rel = spectral_factors(out.pop(f"coef_{part}"), a.spectral_rank)
+            out[f"coef_{part}_amp"] = amp
+            out[f"coef_{part}_spec"] = spec
+            out[f"coef_{part}_spec_mean"] = mean
+            print(f"{part}: coefficients as {a.spectral_rank} spectral terms per sun node, "
+                  f"relative RMS of the truncation {rel:.2e}", flush=True)
     out = add_sun(out)
     dgrid = dict(ds.meta, wavelengths_nm=[float(x) for x in wl],
                  altitudes_m=[float(x) for x in alt])
@@ -259,16 +303,21 @@ def main(argv=None) -> int:
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
                        f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else "")
                        + (" --gas-bands SUPPLEMENT" if gas is not None else "")
-                       + (" --altitude-supplement SUPPLEMENT" if sup is not None else ""),
+                       + (" --altitude-supplement SUPPLEMENT" if sup is not None else "")
+                       + (f" --spectral-rank {a.spectral_rank}" if a.spectral_rank else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     if a.float16:
-        for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis"):
+        for key in ("coef_sky", "coef_ground", "sky_basis", "ground_basis", "coef_sky_amp",
+                    "coef_ground_amp"):
+            if key not in out:
+                continue
             v = out[key]
             scale = np.max(np.abs(v), axis=-1).astype(np.float32)
             scale = np.where(scale > 0.0, scale, 1.0)
             out[key] = (v / scale[..., None]).astype(np.float16)
             out[key + "_scale"] = scale
     meta["float16"] = bool(a.float16)
+    meta["spectral_rank"] = int(a.spectral_rank)
     meta["aod_nodes_fitted"] = [float(x) for x in aods]
     out["meta"] = np.array(json.dumps(meta))
     target = Path(a.out) if a.out else COEFFICIENT_FILE

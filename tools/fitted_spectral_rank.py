@@ -3,10 +3,12 @@
     python tools/fitted_spectral_rank.py OUT --rank K [--coefficients FILE]
     python tools/fitted_accuracy.py HELDOUT --coefficients OUT
 
-The coefficient file holds, per atmosphere, sun-elevation node, altitude and table
-wavelength, the 32 (sky) and 12 (ground) coefficients of the angular basis of its sun
-node (skydome/models/fitted/_coefficients.py): 49 table wavelengths, most of the file.
-Along the wavelength they vary smoothly but for the gas bands. This tool writes a file
+The coefficients are, per atmosphere, sun-elevation node, altitude and table wavelength,
+the 32 (sky) and 12 (ground) coefficients of the angular basis of its sun node
+(skydome/models/fitted/_coefficients.py): 49 table wavelengths. Along the wavelength they
+vary smoothly but for the gas bands. A file stores them per wavelength, or as spectral
+terms (``tools/fit_fitted.py --spectral-rank K``, the shipped file: K = 24); either is
+read here, expanded to the 49 wavelengths. This tool writes a file
 whose coefficients are the truncated singular value decomposition along the wavelength
 (per sun node, over every atmosphere, altitude and coefficient: the rows; the mean row
 removed first) kept to its first K terms: what a file holding K coefficients per node
@@ -18,7 +20,7 @@ written is for measuring (its coefficients are stored in float32, already expand
 It prints the relative RMS of the truncation per array and the size the coefficients
 would take stored as K amplitudes in float16 (a float32 scale per row, as ``fit_fitted.py
 --float16`` stores them) with the spectral vectors and means in float32. The measured
-ranks: docs/models.md, "fitted", "Not done in this version".
+ranks: docs/models.md, "fitted", "The spectral terms".
 """
 
 from __future__ import annotations
@@ -47,6 +49,25 @@ def truncate(C: np.ndarray, rank: int) -> tuple[np.ndarray, float]:
     return R, rel
 
 
+def expanded(arrays: dict, key: str) -> np.ndarray:
+    """The coefficients ``key`` (A, B, E, H, W, T) in float32 from a file's arrays (popped
+    from ``arrays``): stored per wavelength (float32, or float16 with a scale per row), or
+    as spectral terms (``tools/fit_fitted.py --spectral-rank``: mean[e] + sum_k amp[k]
+    spec[e, k])."""
+    amp = arrays.pop(key + "_amp", None)
+    if amp is None:
+        C = arrays.pop(key).astype(np.float32)
+        scale = arrays.pop(key + "_scale", None)
+        return C if scale is None else C * scale[..., None]
+    amp = amp.astype(np.float32)
+    scale = arrays.pop(key + "_amp_scale", None)
+    if scale is not None:
+        amp = amp * scale[..., None]
+    spec, mean = arrays.pop(key + "_spec"), arrays.pop(key + "_spec_mean")
+    return (np.einsum("abehkt,ekw->abehwt", amp, spec)
+            + mean[None, None, :, None, :, None]).astype(np.float32)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out")
@@ -70,10 +91,7 @@ def main(argv=None) -> int:
         return 2
     n_bytes = 0
     for key in KEYS:
-        C = arrays[key].astype(np.float32)
-        scale = arrays.pop(key + "_scale", None)
-        if scale is not None:
-            C = C * scale[..., None]
+        C = expanded(arrays, key)
         R, rel = truncate(C, a.rank)
         arrays[key] = R
         A, B, E, H, W, T = C.shape
@@ -81,8 +99,8 @@ def main(argv=None) -> int:
         vec = E * (a.rank + 1) * W * 4
         n_bytes += amp + vec
         print(f"{key}: rank {a.rank} of {W}: relative RMS of the truncation {rel:.2e}; "
-              f"stored so {(amp + vec) / 1e6:.2f} MB (now {C.size * 2 / 1e6:.2f} MB in "
-              "float16)")
+              f"stored so {(amp + vec) / 1e6:.2f} MB (per wavelength in float16: "
+              f"{C.size * 2 / 1e6:.2f} MB)")
     print(f"coefficients at rank {a.rank}: {n_bytes / 1e6:.2f} MB")
     atomic_write(a.out, lambda tmp: np.savez(tmp, **arrays), suffix=".npz")
     print(f"wrote {a.out} (for measuring: tools/fitted_accuracy.py HELDOUT --coefficients "

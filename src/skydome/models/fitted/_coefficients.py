@@ -16,7 +16,15 @@ sun-elevation node,
 
 the basis B_k and mean_k from a truncated singular value decomposition of every y of that
 elevation node (every atmosphere, altitude and wavelength), the sky and the ground apart
-(``K_SKY`` and ``K_GROUND`` terms). A configuration between the nodes (:func:`stencil`,
+(``K_SKY`` and ``K_GROUND`` terms). The coefficients c themselves are stored, per sun
+node, as spectral terms (``tools/fit_fitted.py --spectral-rank``, the shipped file 24):
+
+    c_n(a_i, b_j, e_k, h_l, w_m) = M_k(w_m) + sum_q A_q,n(a_i, b_j, e_k, h_l) V_kq(w_m),
+
+M_k and V_k from a truncated singular value decomposition along the wavelength of every
+(atmosphere, altitude, term) row of that node (:func:`_coefficients_at` expands the few
+nodes a configuration reads; a file may also hold c per wavelength). A configuration
+between the nodes (:func:`stencil`,
 the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
 
 * at each AOD and albedo node, c and ln s cubic in altitude (four nodes) at the four
@@ -85,11 +93,23 @@ def load(path: str | None = None) -> dict:
 
 
 def _coefficients_at(c: dict, key: str, i: int, j: int, ks: list, h: int) -> np.ndarray:
-    """``c[key][i, j, ks, h]`` (``coef_sky`` or ``coef_ground``) in float32, scaled where the
-    file stores them in float16 with a scale per row."""
-    v = c[key][i, j, ks, h]
-    scale = c.get(key + "_scale")
-    return v if scale is None else v.astype(np.float32) * scale[i, j, ks, h][..., None]
+    """``c[key][i, j, ks, h]`` (``coef_sky`` or ``coef_ground``: (len(ks), wavelengths,
+    terms)) in float32, scaled where the file stores them in float16 with a scale per row.
+    A file fitted with ``--spectral-rank K`` holds them as K spectral terms per sun node
+    (``key + "_amp"``, ``_spec``, ``_spec_mean``: tools/fit_fitted.py
+    ``spectral_factors``): mean[e] + sum_k amp[k] spec[e, k], expanded here for the few
+    nodes a configuration reads."""
+    amp = c.get(key + "_amp")
+    if amp is None:
+        v = c[key][i, j, ks, h]
+        scale = c.get(key + "_scale")
+        return v if scale is None else v.astype(np.float32) * scale[i, j, ks, h][..., None]
+    a = amp[i, j, ks, h]                                           # (len(ks), K, T)
+    scale = c.get(key + "_amp_scale")
+    if scale is not None:
+        a = a.astype(np.float32) * scale[i, j, ks, h][..., None]
+    return (np.einsum("skt,skw->swt", a, c[key + "_spec"][ks])
+            + c[key + "_spec_mean"][ks][:, :, None])
 
 
 def bracket(nodes: np.ndarray, x: float) -> tuple[int, float]:
