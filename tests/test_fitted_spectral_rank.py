@@ -64,15 +64,15 @@ def test_truncation_keeps_an_array_of_that_rank_and_drops_the_rest():
 
 
 def test_fit_stores_spectral_terms_the_model_reads_back():
-    """tools/fit_fitted.py --spectral-rank: the factors of coefficients of rank 2 along the
-    wavelength, read by the model's loader (_coefficients._coefficients_at, float32 and
-    float16 with a scale per row as --float16 writes them) give the coefficients back;
-    the measuring tool expands them the same way."""
+    """tools/fit_fitted.py --spectral-rank (_coefficients.spectral_factors): the factors of
+    coefficients of rank 2 along the wavelength, read by the model's loader
+    (_coefficients._coefficients_mixed, float32 and float16 with a scale per row as
+    --float16 writes them; one altitude and a mix of two) give the coefficients back; the
+    measuring tool expands them the same way."""
     from skydome.models.fitted import _coefficients
 
-    fit = load_script("tools/fit_fitted.py")
     C = _known_rank_two(np.random.default_rng(8))[0].astype(np.float32)
-    amp, spec, mean, rel = fit.spectral_factors(C, 2)
+    amp, spec, mean, rel = _coefficients.spectral_factors(C, 2)
     assert amp.shape == (2, 3, 4, 5, 2, 6) and spec.shape == (4, 2, 11)
     assert mean.shape == (4, 11) and rel < 1e-6
     full = {"coef_sky": C}
@@ -81,13 +81,17 @@ def test_fit_stores_spectral_terms_the_model_reads_back():
     half = {"coef_sky_amp": (amp / scale[..., None]).astype(np.float16),
             "coef_sky_amp_scale": scale, "coef_sky_spec": spec, "coef_sky_spec_mean": mean}
     peak = float(np.abs(C).max())
-    for i, j, ks, h in ((0, 0, [0, 1, 2], 0), (1, 2, [3], 4), (1, 1, [1, 3], 2)):
-        want = _coefficients._coefficients_at(full, "coef_sky", i, j, ks, h)
-        got = _coefficients._coefficients_at(factors, "coef_sky", i, j, ks, h)
+    for i, j, ks, st in ((0, 0, [0, 1, 2], [(0, 1.0)]), (1, 2, [3], [(4, 1.0)]),
+                         (1, 1, [1, 3], [(2, 0.3), (3, 0.7)])):
+        want = sum(w * C[i, j, ks, h] for h, w in st)
+        got = _coefficients._coefficients_mixed(factors, "coef_sky", i, j, ks, st)
         assert got.shape == want.shape == (len(ks), 11, 6)
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-5 * peak)
+        np.testing.assert_allclose(_coefficients._coefficients_mixed(full, "coef_sky", i, j,
+                                                                     ks, st),
+                                   want, rtol=0, atol=1e-6 * peak)
         # float16 amplitudes: 2^-11 of each row's largest, times the spectra
-        got16 = _coefficients._coefficients_at(half, "coef_sky", i, j, ks, h)
+        got16 = _coefficients._coefficients_mixed(half, "coef_sky", i, j, ks, st)
         np.testing.assert_allclose(got16, want, rtol=0, atol=2e-3 * peak)
     np.testing.assert_allclose(_tool().expanded(dict(factors), "coef_sky"), C, rtol=0,
                                atol=1e-5 * peak)

@@ -124,31 +124,6 @@ def _supplement(option: str, folder: str, ds, aods, same: dict, axis: str,
     return sup, order, np.concatenate([values, new])[order]
 
 
-def spectral_factors(coef: np.ndarray, rank: int):
-    """The coefficients ``coef`` (A, B, E, H, W, T: AOD, albedo, sun node, altitude,
-    wavelength, term) as ``rank`` spectral terms per sun node E: (amplitudes (A, B, E, H,
-    rank, T), spectral vectors (E, rank, W), mean spectra (E, W), relative RMS of the
-    truncation), with coef[a, b, e, h, :, t] ~ mean[e] + sum_k amp[a, b, e, h, k, t]
-    spec[e, k] (the singular value decomposition along the wavelength of the rows (a, b,
-    h, t) of each sun node, their mean removed first, truncated to its first ``rank``
-    terms; docs/models.md, "fitted", "The spectral terms")."""
-    A, B, E, H, W, T = coef.shape
-    amp = np.empty((A, B, E, H, rank, T), dtype=np.float32)
-    spec = np.empty((E, rank, W), dtype=np.float32)
-    mean = np.empty((E, W), dtype=np.float32)
-    sq = tot = 0.0
-    for e in range(E):
-        X = np.moveaxis(coef[:, :, e], 3, -1).reshape(-1, W).astype(np.float64)
-        m = X.mean(axis=0)
-        U, S, Vt = np.linalg.svd(X - m, full_matrices=False)
-        P = U[:, :rank] * S[:rank]                                  # rows x rank
-        amp[:, :, e] = np.moveaxis(P.reshape(A, B, H, T, rank), -1, 3)
-        spec[e], mean[e] = Vt[:rank], m
-        sq += float(np.sum((X - m - P @ Vt[:rank]) ** 2))
-        tot += float(np.sum(X ** 2))
-    return amp, spec, mean, float(np.sqrt(sq / max(tot, 1e-300)))
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dataset", nargs="?")
@@ -191,7 +166,8 @@ def main(argv=None) -> int:
         return 2
     from skydome._io import atomic_file
     from skydome.models.fitted import _grid
-    from skydome.models.fitted._coefficients import COEFFICIENT_FILE, DELTA
+    from skydome.models.fitted._coefficients import COEFFICIENT_FILE, DELTA, \
+        spectral_factors
     from skydome.models.fitted._dataset import DataSet
 
     t0 = time.perf_counter()
@@ -289,7 +265,8 @@ def main(argv=None) -> int:
                   f"{wl.size}] (the data set's table wavelengths)", file=sys.stderr)
             return 2
         for part in ("sky", "ground"):
-            amp, spec, mean, rel = spectral_factors(out.pop(f"coef_{part}"), a.spectral_rank)
+            amp, spec, mean, rel = spectral_factors(out.pop(f"coef_{part}"),
+                                                    a.spectral_rank)
             out[f"coef_{part}_amp"] = amp
             out[f"coef_{part}_spec"] = spec
             out[f"coef_{part}_spec_mean"] = mean

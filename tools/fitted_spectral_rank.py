@@ -36,17 +36,20 @@ KEYS = ("coef_sky", "coef_ground")
 
 def truncate(C: np.ndarray, rank: int) -> tuple[np.ndarray, float]:
     """(the coefficients C (A, B, E, H, W, T) with their wavelength axis W truncated to
-    ``rank`` singular terms per sun node E, relative RMS of the change)."""
-    A, B, E, H, W, T = C.shape
-    R = np.empty_like(C)
-    for e in range(E):
-        X = np.moveaxis(C[:, :, e], 3, -1).reshape(-1, W)      # rows (A, B, H, T) x W
-        mean = X.mean(axis=0)
-        U, S, Vt = np.linalg.svd(X - mean, full_matrices=False)
-        Xk = (U[:, :rank] * S[:rank]) @ Vt[:rank] + mean
-        R[:, :, e] = np.moveaxis(Xk.reshape(A, B, H, T, W), -1, 3)
-    rel = float(np.sqrt(np.mean((R - C) ** 2)) / max(np.sqrt(np.mean(C ** 2)), 1e-30))
-    return R, rel
+    ``rank`` spectral terms per sun node E (the model's own factorisation,
+    ``_coefficients.spectral_factors``, expanded back), relative RMS of the change)."""
+    from skydome.models.fitted._coefficients import spectral_factors
+
+    amp, spec, mean, rel = spectral_factors(C, rank)
+    return _expand(amp, spec, mean).astype(C.dtype), rel
+
+
+def _expand(amp, spec, mean) -> np.ndarray:
+    """(A, B, E, H, W, T) from amplitudes (A, B, E, H, K, T) and per sun node E spectral
+    vectors (E, K, W) and means (E, W)."""
+    from skydome.models.fitted._coefficients import expand_spectral
+
+    return expand_spectral(amp, spec[None, None, :, None], mean[None, None, :, None])
 
 
 def expanded(arrays: dict, key: str) -> np.ndarray:
@@ -64,8 +67,7 @@ def expanded(arrays: dict, key: str) -> np.ndarray:
     if scale is not None:
         amp = amp * scale[..., None]
     spec, mean = arrays.pop(key + "_spec"), arrays.pop(key + "_spec_mean")
-    return (np.einsum("abehkt,ekw->abehwt", amp, spec)
-            + mean[None, None, :, None, :, None]).astype(np.float32)
+    return _expand(amp, spec, mean).astype(np.float32)
 
 
 def main(argv=None) -> int:

@@ -22,8 +22,9 @@ node, as spectral terms (``tools/fit_fitted.py --spectral-rank``, the shipped fi
     c_n(a_i, b_j, e_k, h_l, w_m) = M_k(w_m) + sum_q A_q,n(a_i, b_j, e_k, h_l) V_kq(w_m),
 
 M_k and V_k from a truncated singular value decomposition along the wavelength of every
-(atmosphere, altitude, term) row of that node (:func:`_coefficients_at` expands the few
-nodes a configuration reads; a file may also hold c per wavelength). A configuration
+(atmosphere, altitude, term) row of that node (:func:`_coefficients_mixed` expands the
+few nodes a configuration reads; a file may also hold c per
+wavelength). A configuration
 between the nodes (:func:`stencil`,
 the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
 
@@ -83,7 +84,7 @@ def load(path: str | None = None) -> dict:
     # a file written with --float16: each row of coefficients and each basis vector over
     # its largest magnitude, the scales beside them. The bases are scaled here; the
     # coefficients (17.7 M) stay in float16 and are scaled where a configuration reads its
-    # few nodes (:func:`_coefficients_at`): the first model 276-361 ms instead of 442-452
+    # few nodes (:func:`_coefficients_mixed`): the first model 276-361 ms instead of 442-452
     # (docs/performance.md, "The fitted model with 14 altitude nodes")
     for key in ("sky_basis", "ground_basis"):
         scale = out.pop(key + "_scale", None)
@@ -92,24 +93,57 @@ def load(path: str | None = None) -> dict:
     return out
 
 
-def _coefficients_at(c: dict, key: str, i: int, j: int, ks: list, h: int) -> np.ndarray:
-    """``c[key][i, j, ks, h]`` (``coef_sky`` or ``coef_ground``: (len(ks), wavelengths,
-    terms)) in float32, scaled where the file stores them in float16 with a scale per row.
-    A file fitted with ``--spectral-rank K`` holds them as K spectral terms per sun node
-    (``key + "_amp"``, ``_spec``, ``_spec_mean``: tools/fit_fitted.py
-    ``spectral_factors``): mean[e] + sum_k amp[k] spec[e, k], expanded here for the few
-    nodes a configuration reads."""
-    amp = c.get(key + "_amp")
-    if amp is None:
-        v = c[key][i, j, ks, h]
-        scale = c.get(key + "_scale")
-        return v if scale is None else v.astype(np.float32) * scale[i, j, ks, h][..., None]
-    a = amp[i, j, ks, h]                                           # (len(ks), K, T)
-    scale = c.get(key + "_amp_scale")
-    if scale is not None:
-        a = a.astype(np.float32) * scale[i, j, ks, h][..., None]
-    return (np.einsum("skt,skw->swt", a, c[key + "_spec"][ks])
-            + c[key + "_spec_mean"][ks][:, :, None])
+def _rows(c: dict, name: str, i: int, j: int, ks: list, h: int) -> np.ndarray:
+    """``c[name][i, j, ks, h]`` in float32, scaled where the file stores it in float16 with a
+    scale per row (``name + "_scale"``)."""
+    v = c[name][i, j, ks, h]
+    scale = c.get(name + "_scale")
+    return v if scale is None else v.astype(np.float32) * scale[i, j, ks, h][..., None]
+
+
+def _coefficients_mixed(c: dict, key: str, i: int, j: int, ks: list, stencil) -> np.ndarray:
+    """sum of w c[key][i, j, ks, h] over the altitude stencil [(h, w)] (``coef_sky`` or
+    ``coef_ground``: (len(ks), wavelengths, terms)). A file fitted with ``--spectral-rank
+    K`` holds them as K spectral terms per sun node (``key + "_amp"``, ``_spec``,
+    ``_spec_mean``: :func:`spectral_factors`); the amplitudes are mixed first and expanded
+    once (the expansion is linear)."""
+    if key + "_amp" not in c:
+        return sum(w * _rows(c, key, i, j, ks, h) for h, w in stencil)
+    a = sum(w * _rows(c, key + "_amp", i, j, ks, h) for h, w in stencil)   # (len(ks), K, T)
+    w_sum = sum(w for _, w in stencil)
+    return expand_spectral(a, c[key + "_spec"][ks], w_sum * c[key + "_spec_mean"][ks])
+
+
+def spectral_factors(coef: np.ndarray, rank: int):
+    """The coefficients ``coef`` (A, B, E, H, W, T: AOD, albedo, sun node, altitude,
+    wavelength, term) as ``rank`` spectral terms per sun node E: (amplitudes (A, B, E, H,
+    rank, T), spectral vectors (E, rank, W), mean spectra (E, W), relative RMS of the
+    truncation), coef ~ :func:`expand_spectral` of them: the singular value decomposition
+    along the wavelength of the rows (a, b, h, t) of each sun node, their mean removed
+    first, truncated to its first ``rank`` terms (tools/fit_fitted.py --spectral-rank;
+    docs/models.md, "fitted", "The spectral terms")."""
+    A, B, E, H, W, T = coef.shape
+    dt = np.result_type(coef.dtype, np.float32)        # float32 from the fit's float32
+    amp = np.empty((A, B, E, H, rank, T), dtype=dt)
+    spec = np.empty((E, rank, W), dtype=dt)
+    mean = np.empty((E, W), dtype=dt)
+    sq = tot = 0.0
+    for e in range(E):
+        X = np.moveaxis(coef[:, :, e], 3, -1).reshape(-1, W).astype(np.float64)
+        m = X.mean(axis=0)
+        U, S, Vt = np.linalg.svd(X - m, full_matrices=False)
+        P = U[:, :rank] * S[:rank]                                  # rows x rank
+        amp[:, :, e] = np.moveaxis(P.reshape(A, B, H, T, rank), -1, 3)
+        spec[e], mean[e] = Vt[:rank], m
+        sq += float(np.sum((X - m - P @ Vt[:rank]) ** 2))
+        tot += float(np.sum(X ** 2))
+    return amp, spec, mean, float(np.sqrt(sq / max(tot, 1e-300)))
+
+
+def expand_spectral(amp: np.ndarray, spec: np.ndarray, mean: np.ndarray) -> np.ndarray:
+    """mean + sum_k amp[..., k, t] spec[..., k, w]: (..., W, T) from amplitudes (..., K, T),
+    spectral vectors (..., K, W) and mean spectra (..., W) (leading axes broadcast)."""
+    return np.einsum("...kt,...kw->...wt", amp, spec) + mean[..., :, None]
 
 
 def bracket(nodes: np.ndarray, x: float) -> tuple[int, float]:
@@ -304,9 +338,8 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
         """L at AOD node i, albedo node j, interpolated in elevation and altitude."""
         if (i, j) not in cache:
             # coefficients and ln s of each elevation node, interpolated in altitude
-            cs = sum(wh * _coefficients_at(c, "coef_sky", i, j, ks, h)
-                     for h, wh in st_h)                                      # (k, wl, n)
-            cg = sum(wh * _coefficients_at(c, "coef_ground", i, j, ks, h) for h, wh in st_hg)
+            cs = _coefficients_mixed(c, "coef_sky", i, j, ks, st_h)          # (k, wl, n)
+            cg = _coefficients_mixed(c, "coef_ground", i, j, ks, st_hg)
             log_s = we @ sum(wh * c["log_scale"][i, j, ks, h] for h, wh in st_h)
             # (wl, k n) in float32: y to 1e-7, far below the fit's residual
             cs = np.concatenate(list(we[:, None, None] * cs), axis=-1).astype(np.float32)
