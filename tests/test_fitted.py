@@ -601,6 +601,34 @@ def test_thin_haze_form_passes_its_nodes_and_reproduces_its_family():
     assert f(np.array(1.0), np.array(0.0), np.array(1.0), 0.5) >= 0.0
 
 
+def test_aod_rule_thin_haze_form_below_0p025_over_either_node_set():
+    """_coefficients.aod_stencil, sun above the horizon: the thin-haze form through the
+    nodes 0, h, 2 h for every AOD strictly between 0 and 0.025 (t = AOD / h), with the node
+    at 0.0125 (h = 0.0125, t up to 2) as without it (h = 0.025, t up to 1); from 0.025 up
+    L quadratic in sqrt(AOD) over three nodes around it, above 0.1 ln L; at the nodes
+    themselves the node alone."""
+    stn = _coefficients.aod_stencil
+    new = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5, 1.0])
+    old = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
+    for nodes, h in ((new, 0.0125), (old, 0.025)):
+        for aod in (0.001, 0.006, 0.0124, 0.018, 0.0249):
+            st, how = stn(nodes, aod)
+            assert how == "form" and [i for i, _ in st] == [0, 1, 2], (aod, st)
+            assert nodes[1] == h
+        for aod in (0.03, 0.045, 0.07, 0.09):
+            st, how = stn(nodes, aod)
+            assert how == "L" and len(st) == 3
+            assert min(nodes[i] for i, _ in st) <= aod <= max(nodes[i] for i, _ in st)
+            assert sum(w for _, w in st) == pytest.approx(1.0)
+        assert stn(nodes, 0.18)[1] == "lnL"
+        for k, a in enumerate(nodes[1:], start=1):
+            st, how = stn(nodes, float(a))
+            assert dict(st).get(k) == pytest.approx(1.0)
+            assert all(abs(w) < 1e-12 for i, w in st if i != k)
+    # the stencil between 0.05 and 0.1 reads the node at 0.075 where there is one
+    assert {i for i, _ in stn(new, 0.07)[0]} == {3, 4, 5}
+
+
 def _live_reference(aod, albedo, el, h, wl):
     """``precomputed`` in the data set's configuration (twilight_reference=True, no cache)
     at the table wavelengths ``wl`` alone (each computed independently by the reference)."""
@@ -645,6 +673,27 @@ def test_thin_haze_and_between_altitude_nodes_against_live_precomputed(aod, albe
     rms, worst = float(np.sqrt(np.mean(rel ** 2))), float(np.max(np.abs(rel)))
     print(f"AOD {aod:g}, sun {el:g} deg, {h:g} m: RMS {100 * rms:.2f} %, max {100 * worst:.1f} %")
     assert rms <= DAY_TARGET_RMS and worst <= DAY_TARGET_MAX, (rms, worst)
+
+
+def test_node_spacing_tool_applies_the_models_aod_rule():
+    """tools/fitted_node_spacing.py's apply_aod_rule: over values of the thin-haze family
+    (a + b tau) exp(-c tau) it reproduces the family below 0.025 (the form's own case), and
+    over values quadratic in sqrt(AOD) it reproduces them between 0.025 and 0.1 (the rule
+    there), for the node set with 0.0125 and 0.075; closed forms, not the model."""
+    mod = _load_tool("fitted_node_spacing")
+    nodes = (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1)
+    rng = np.random.default_rng(5)
+    a, b, c = rng.uniform(0.05, 1.0, 50), rng.uniform(1.0, 30.0, 50), rng.uniform(-5, 60, 50)
+    form = lambda tau: (a + b * tau) * np.exp(-c * tau)      # noqa: E731
+    L = {x: form(x) for x in nodes}
+    L[0.0] = L[0.0].copy()
+    for x in (0.003, 0.009, 0.018, 0.024):
+        np.testing.assert_allclose(mod.apply_aod_rule(L, nodes, x), form(x), rtol=1e-10)
+    p0, p1, p2 = rng.uniform(0.1, 1.0, (3, 50))
+    quad = lambda tau: p0 + p1 * np.sqrt(tau) + p2 * tau       # noqa: E731
+    L = {x: quad(x) for x in nodes}
+    for x in (0.03, 0.06, 0.09):
+        np.testing.assert_allclose(mod.apply_aod_rule(L, nodes, x), quad(x), rtol=1e-10)
 
 
 def test_node_spacing_tool_refuses_bad_input_before_any_work(capsys):

@@ -1,6 +1,7 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v2|fit-v1|heldout-v1|small]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v3|heldout-v3|fit-v2|fit-v1|
+                                        heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
         [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands | --with-gas-bands]
         [--altitudes M,...]
@@ -16,13 +17,16 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (7 AOD x 3 albedo = 21 atmospheres, 28 sun elevations
+* ``fit``: the fitting nodes (9 AOD x 3 albedo = 27 atmospheres, 28 sun elevations
   -12..90 deg, 14 altitudes 0..15 km);
-* ``heldout``: the held-out grid (5 atmospheres, their AODs and albedos off the nodes, 13
+* ``heldout``: the held-out grid (7 atmospheres, their AODs and albedos off the nodes, 13
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
-* ``fit-v2``: the second file's grid (``fit`` without the altitudes 4, 5, 8 and 12 km),
+* ``fit-v3``, ``heldout-v3``: the third file's grids (``fit`` without the AOD nodes 0.0125
+  and 0.075; its five held-out atmospheres, AOD 0.0125 among them), whose chunks are the
+  present grids' chunks of the same atmospheres;
+* ``fit-v2``: the second file's grid (``fit-v3`` without the altitudes 4, 5, 8 and 12 km),
   which a supplement in ``--altitudes 4000,5000,8000,12000`` completes;
 * ``fit-v1``, ``heldout-v1``: the grids of the first coefficient file (6 AOD nodes 0-1, 26
   sun elevations, 7 altitudes; held out: sun -11 and -9 deg, AOD 0.025 and 0.05), to
@@ -98,7 +102,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
-                    choices=("fit", "heldout", "fit-v2", "fit-v1", "heldout-v1", "small"))
+                    choices=("fit", "heldout", "fit-v3", "heldout-v3", "fit-v2", "fit-v1",
+                             "heldout-v1", "small"))
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",

@@ -16,20 +16,25 @@ altitudes 0-15 km every 500 m; per sun elevation and node set, the RMS / max rel
 the nodes. The node sets: the second file's above 2 km (3, 6, 10, 15 km) and refinements.
 The nodes below 2 km are taken at 0.5, 1, 1.5 km here (the sweep's 500 m step).
 
-``aod``: one albedo, AODs 0-0.1 including values between the nodes 0, 0.025, 0.05, 0.1,
-sun 0.5, 4, 8.5 and 16 deg, observer on the ground and at 2.2 km; per AOD off the nodes, the
-RMS / max relative error (560 nm, sky part; the ground view from 2.2 km apart) of the day
-rule before this file (L quadratic in sqrt(AOD) over the nodes up to 0.1) and of the
-thin-haze form (``_coefficients.thin_haze_form``) below 0.025.
+``aod``: one albedo, AODs 0-0.1 off and on the nodes (``AOD_VALUES``), sun 0.5, 4, 8.5 and
+16 deg, observer on the ground and at 2.2 km; per node set (``AOD_NODE_SETS``: the file
+before the nodes at 0.0125 and 0.075, with 0.0125 alone, with both) and AOD off its nodes,
+the RMS / max relative error (560 nm, sky part; the ground view from 2.2 km apart) of the
+model's own day rule over those nodes (``_coefficients.aod_stencil``: the thin-haze form
+below 0.025, L quadratic in sqrt(AOD) up to 0.1); then the rules tried between 0.0125 and
+0.025. ``--out`` keeps the reference's values; a rerun with the same ``--out`` and albedo
+computes only the AODs the file lacks.
 
 Cost on the 2-core machine of docs/performance.md, with the data set running beside it: 107 s
-(altitude, per atmosphere) and 316 s (aod).
+(altitude, per atmosphere) and 410 s (aod, 11 AODs; 210 s for five more over the same
+``--out``).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 
@@ -46,7 +51,15 @@ ALTITUDE_SETS = {
     "+ 4, 8, 12 km": [3000, 4000, 6000, 8000, 10000, 12000, 15000],
 }
 ALTITUDE_TESTS_M = [2500.0, 3500.0, 4500.0, 5500.0, 7000.0, 9000.0, 12500.0]
-AOD_VALUES = (0.0, 0.005, 0.0125, 0.025, 0.0375, 0.05, 0.07, 0.1)
+#: The AOD node sets compared (the model's day rule applied over each: "aod" below).
+AOD_NODE_SETS = {
+    "0, 0.025, 0.05, 0.1 (the file before the node at 0.0125)": (0.0, 0.025, 0.05, 0.1),
+    "0, 0.0125, 0.025, 0.05, 0.1": (0.0, 0.0125, 0.025, 0.05, 0.1),
+    "0, 0.0125, 0.025, 0.05, 0.075, 0.1 (this file)": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1),
+}
+#: The AODs off the nodes where each set is measured.
+AOD_TESTS = (0.003, 0.006, 0.009, 0.0125, 0.018, 0.03, 0.0375, 0.045, 0.06, 0.07, 0.09)
+AOD_VALUES = tuple(sorted(set(AOD_TESTS) | {0.0, 0.0125, 0.025, 0.05, 0.075, 0.1}))
 AOD_SUN_DEG = (0.5, 4.0, 8.5, 16.0)
 AOD_ALTITUDES_M = (0.0, 2200.0)
 
@@ -85,13 +98,37 @@ def altitude(aod: float, albedo: float, out: str | None) -> None:
             print(f"sun {el:5.1f} deg  {name:30s} " + " ".join(cells))
 
 
-def aod(albedo: float, out: str | None) -> None:
+def apply_aod_rule(L: dict, nodes, x: float) -> np.ndarray:
+    """The model's day rule in AOD (``_coefficients.aod_stencil`` and ``thin_haze_form``)
+    applied to the reference's own values ``L[node]`` over the AOD ``nodes``, at ``x``."""
     from skydome.models.fitted import _coefficients as C
+
+    nodes = np.asarray(nodes, dtype=float)
+    st, how = C.aod_stencil(nodes, x)
+    if how == "form":
+        (i0, _), (i1, _), (i2, _) = st
+        return C.thin_haze_form(L[float(nodes[i0])], L[float(nodes[i1])],
+                                L[float(nodes[i2])], x / float(nodes[i1] - nodes[i0]),
+                                ).reshape(L[0.0].shape)
+    if how == "lnL":
+        return np.exp(sum(w * np.log(np.maximum(L[float(nodes[i])], 1e-30)) for i, w in st))
+    return np.maximum(sum(w * L[float(nodes[i])] for i, w in st), 0.0)
+
+
+def aod(albedo: float, out: str | None) -> None:
     from skydome.models.fitted import _dataset, _grid
 
     t0 = time.perf_counter()
     L = {}
+    if out and os.path.exists(out):
+        # a rerun reads the AODs that the file already holds (same albedo, suns, altitudes,
+        # wavelengths: the file records them) and computes the others
+        z = np.load(out)
+        if float(z["albedo"]) == albedo:
+            L = {float(k[3:]): z[k].astype(np.float64) for k in z.files if k.startswith("aod")}
     for a in AOD_VALUES:
+        if a in L:
+            continue
         L[a] = _dataset.compute_chunk(a, albedo, AOD_SUN_DEG, AOD_ALTITUDES_M,
                                       twilight_reference=True,
                                       wavelengths=WAVELENGTHS_NM)[:, :, :-1, :, 1]
@@ -99,27 +136,37 @@ def aod(albedo: float, out: str | None) -> None:
     print(f"reference: albedo {albedo:g}, AOD {list(AOD_VALUES)} in "
           f"{time.perf_counter() - t0:.0f} s")
     if out:
-        np.savez(out, **{f"aod{a:g}": v for a, v in L.items()})
-
-    def quad_sqrt(x):
-        nodes = [0.0, 0.025, 0.05] if x <= 0.05 else [0.025, 0.05, 0.1]
-        st = C.stencil(np.sqrt(nodes), math.sqrt(x), 2)
-        return sum(w * L[nodes[p]] for p, w in st)
-
-    def form(x):
-        return C.thin_haze_form(L[0.0], L[0.025], L[0.05], x / 0.025)
+        np.savez(out, albedo=albedo, **{f"aod{a:g}": v for a, v in L.items()})
 
     n = _grid.N_SKY
-    print("\nRMS / max [%], sky part, per sun (0.5, 4, 8.5, 16 deg) x observer (ground, "
-          "2.2 km); then the ground view from 2.2 km:")
-    rules = (("L quadratic in sqrt(AOD)", quad_sqrt), ("thin-haze form", form))
-    for x in (0.005, 0.0125, 0.0375, 0.07):
-        for name, f in rules if x < 0.025 else rules[:1]:
+    print("\nRMS / max [%], sky part, per sun (" + ", ".join(f"{e:g}" for e in AOD_SUN_DEG)
+          + " deg) x observer (ground, 2.2 km); then the ground view from 2.2 km:")
+    for name, nodes in AOD_NODE_SETS.items():
+        print(f"nodes {name}:")
+        for x in AOD_TESTS:
+            if np.any(np.isclose(nodes, x)):
+                continue
+            e = apply_aod_rule(L, nodes, x) / L[x] - 1.0
+            cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
+                     for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
+            r, m = _stats(e[:, 1, n:])
+            print(f"  AOD {x:<7g} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
+    # the candidates between the second and third node of the set with 0.0125 (rows
+    # "form t in [1, 2]": the thin-haze form through 0, 0.0125, 0.025 read beyond its middle
+    # node; "form 0, 0.025, 0.05": the file before's form)
+    from skydome.models.fitted import _coefficients as C
+    print("between 0.0125 and 0.025, other rules:")
+    for name, f in (("form t in [1, 2]", lambda x: C.thin_haze_form(
+                        L[0.0], L[0.0125], L[0.025], x / 0.0125).reshape(L[0.0].shape)),
+                    ("form 0, 0.025, 0.05", lambda x: C.thin_haze_form(
+                        L[0.0], L[0.025], L[0.05], x / 0.025).reshape(L[0.0].shape))):
+        for x in [v for v in AOD_TESTS if 0.0125 < v < 0.025]:
             e = f(x) / L[x] - 1.0
             cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
                      for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
             r, m = _stats(e[:, 1, n:])
-            print(f"AOD {x:<7g} {name:25s} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
+            print(f"  {name:20s} AOD {x:<7g} " + " ".join(cells)
+                  + f"   ground {r:.1f}/{m:.1f}")
 
 
 def main(argv=None) -> int:

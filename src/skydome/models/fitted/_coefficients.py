@@ -33,11 +33,11 @@ the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
   the sky's brightness, which falls by orders of magnitude per degree in twilight, is
   interpolated in its logarithm), L = s (exp(y) - DELTA);
 * in AOD (:func:`aod_stencil`), quadratic in sqrt(AOD): with the sun above the horizon up
-  to 0.1 L over the nodes up to 0.1 (0, 0.025, 0.05, 0.1), above ln L over the nodes from
-  0.1 up; with the sun below -1 deg ln L; between -1 and 0 deg the two blended linearly;
-  with the sun above the horizon and the AOD below the first node above 0 (0.025), the
-  thin-haze form L = (a + b tau) exp(-c tau) through the nodes 0, 0.025, 0.05
-  (:func:`thin_haze_form`);
+  to 0.1 L over the nodes up to 0.1 (0, 0.0125, 0.025, 0.05, 0.075, 0.1), above ln L over
+  the nodes from 0.1 up; with the sun below -1 deg ln L; between -1 and 0 deg the two
+  blended linearly; with the sun above the horizon and the AOD below the second node above
+  0 (0.025), the thin-haze form L = (a + b tau) exp(-c tau) through the nodes 0, 0.0125,
+  0.025 (:func:`thin_haze_form`);
 * between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
   ground under a scattering atmosphere,
 
@@ -196,15 +196,18 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     nodes 0, h, 2 h at t = AOD / h (its weights: L quadratic in AOD, the form's own
     fallback where a node value is 0).
 
-    Sun above the horizon, AOD below the first node above 0 (0.025), where the nodes 0, h,
-    2 h are evenly spaced: the thin-haze form. Near the horizon the radiance is far from
-    linear in the first 0.025 of AOD: along a grazing path of 30-100 air masses that much
-    aerosol already makes the path's aerosol optical depth 1-2, so that its light rises and
-    then saturates (on the ground, sun at 4 deg, 1.45 deg above the horizon under the sun,
-    560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1 at AOD 0, 0.0125, 0.025, 0.05); a quadratic in
-    sqrt(AOD) through the nodes was 10-16 % off at AOD 0.0125 and 30-50 % at 0.005 there
-    (docs/models.md, "fitted", "The altitude nodes from 3 to 15 km and the thinnest
-    haze").
+    Sun above the horizon, AOD between 0 and the second node above 0 (0.025), where the
+    nodes 0, h, 2 h are evenly spaced: the thin-haze form through them (t = AOD / h in (0,
+    2)). Near the horizon the radiance is far from linear in the first 0.025 of AOD: along
+    a grazing path of 30-100 air masses that much aerosol already makes the path's aerosol
+    optical depth 1-2, so that its light rises and then saturates (on the ground, sun at 4
+    deg, 1.45 deg above the horizon under the sun, 560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1
+    at AOD 0, 0.0125, 0.025, 0.05); a quadratic in sqrt(AOD) through the nodes 0, 0.025,
+    0.05 was 10-16 % off at AOD 0.0125 and 30-50 % at 0.005 there, the form through them
+    still 6-25 % at 0.003-0.0125 seen from 2.2 km; with the node at 0.0125 the form through
+    0, 0.0125, 0.025 is 1.3-9.4 % at most at 0.003-0.009 and 2.1 % at 0.018, where L
+    quadratic in sqrt(AOD) through 0.0125, 0.025, 0.05 was 2.3 % (docs/models.md,
+    "fitted", "The AOD nodes at 0.0125 and 0.075").
 
     Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, over the nodes up
     to it (in a thin haze the aerosol's light grows nearly in proportion to its optical
@@ -213,13 +216,13 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     below the horizon (``twilight``): ln L (the twilight sky is light attenuated along
     long grazing paths, and falls by orders of magnitude between the AOD nodes). sqrt(AOD)
     as the coordinate: the sky changes fastest with the first aerosol, and the AOD nodes
-    (0, 0.025, 0.05, 0.1, 0.25, 0.5, 1) are nearly evenly spaced in it."""
+    (0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5, 1) are 0.04-0.29 apart in it."""
     nodes = np.asarray(aod_nodes, dtype=np.float64)
     order = ELEMENT_ORDER["aod"]
     x = math.sqrt(max(aod, 0.0))
     if twilight:
         return stencil(np.sqrt(nodes), x, order), "lnL"
-    if (nodes.size >= 3 and nodes[0] == 0.0 and 0.0 < aod < nodes[1]
+    if (nodes.size >= 3 and nodes[0] == 0.0 and 0.0 < aod < min(nodes[2], THIN_HAZE_MAX)
             and abs(nodes[2] - 2.0 * nodes[1]) <= 1e-12):
         return stencil(nodes[:3], aod, 2), "form"
     # the last node of the thin-haze part: the node at LINEAR_AOD_MAX (at least the third)
@@ -263,6 +266,12 @@ def thin_haze_form(L0: np.ndarray, L1: np.ndarray, L2: np.ndarray, t: float) -> 
     return np.maximum(out, 0.0).reshape(shape)
 
 
+#: Below this AOD (and below the third AOD node) the day sky follows the thin-haze form
+#: (:func:`aod_stencil`); above it, between 0.025 and 0.05, the form through 0, 0.025,
+#: 0.05 was measured no better than L quadratic in sqrt(AOD) (0.0375: 4.5 against 4.1 % at
+#: most on the reference itself; docs/models.md, "fitted", "The AOD nodes at 0.0125 and
+#: 0.075"). A file without the node at 0.0125 keeps its rule: the form below 0.025 only.
+THIN_HAZE_MAX = 0.025
 #: Up to this AOD (a node) the day sky is interpolated in L, above it in ln L.
 LINEAR_AOD_MAX = 0.1
 

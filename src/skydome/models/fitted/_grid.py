@@ -80,18 +80,31 @@ SUPPLEMENT_ALTITUDES_M = np.array([4000.0, 5000.0, 8000.0, 12000.0])
 #: The altitude nodes of the second file (the data set of the refit on the corrected
 #: reference): the present ones without the supplement's.
 V2_ALTITUDE_NODES_M = np.setdiff1d(ALTITUDE_NODES_M, SUPPLEMENT_ALTITUDES_M)
-AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
+#: AOD nodes: the nodes at 0.0125 and 0.075 were added to the third file's, where the
+#: reference's own values interpolated between its nodes (``tools/fitted_node_spacing.py
+#: aod``) were 6-25 % off near the horizon at AOD 0.003-0.0125 and 9.4 % at 0.07 with a
+#: low sun (docs/models.md, "fitted", "The AOD nodes at 0.0125 and 0.075").
+AOD_NODES = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5, 1.0])
+#: The AOD nodes of the third file (``--grid fit-v3``): the present ones without 0.0125
+#: and 0.075.
+V3_AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
 #: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
 #: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
 ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
 
 #: The held-out grid: none of its values is a fitting node but the altitudes 0 and 15 km
 #: (the ends of the range); every value between two nodes, the twilight elevations midway.
+#: Its atmospheres: the third file's five with AOD 0.006 for its 0.0125 (now a node), and
+#: AOD 0.018 and 0.06 in two intervals between the AOD nodes that had none.
 HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
                                       16.0, 28.0, 45.0, 70.0])
 HELDOUT_ALTITUDE_M = np.array([0.0, 400.0, 2200.0, 4500.0, 15000.0])
-HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.0125, 0.6), (0.18, 0.4),
-                       (0.7, 0.2))                 # (AOD at 550 nm, albedo)
+HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.006, 0.6), (0.018, 0.9),
+                       (0.06, 0.15), (0.18, 0.4), (0.7, 0.2))   # (AOD at 550 nm, albedo)
+
+
+#: The held-out atmospheres of the third file (``--grid heldout-v3``).
+V3_HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.0125, 0.6), (0.18, 0.4), (0.7, 0.2))
 
 
 #: The grid of the first coefficient file (``tools/fitted_dataset.py --grid fit-v1`` /
@@ -110,16 +123,24 @@ V1_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
 
 def grid(name: str):
     """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
-    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v2" (the
-    second file's: "fit" without the altitudes 4, 5, 8 and 12 km), "fit-v1" and
+    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v3" and
+    "heldout-v3" (the third file's: "fit" without the AODs 0.0125 and 0.075, its five
+    held-out atmospheres), "fit-v2" (the second file's: "fit-v3" without the altitudes 4,
+    5, 8 and 12 km), "fit-v1" and
     "heldout-v1" (the first file's), "small" (two atmospheres of "fit")."""
     if name in ("fit", "small"):
         atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
         if name == "small":
             atm = [(0.1, 0.0), (0.1, 0.5)]
         return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+    if name == "fit-v3":
+        atm = [(float(a), float(b)) for a in V3_AOD_NODES for b in ALBEDO_NODES]
+        return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+    if name == "heldout-v3":
+        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V3_HELDOUT_ATMOSPHERES),
+                True)
     if name == "fit-v2":
-        atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
+        atm = [(float(a), float(b)) for a in V3_AOD_NODES for b in ALBEDO_NODES]
         return SUN_ELEVATION_NODES_DEG, V2_ALTITUDE_NODES_M, atm, False
     if name == "heldout":
         return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(HELDOUT_ATMOSPHERES),
@@ -133,7 +154,8 @@ def grid(name: str):
     raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
 
 
-GRID_NAMES = ("fit", "heldout", "fit-v2", "fit-v1", "heldout-v1", "small")
+GRID_NAMES = ("fit", "heldout", "fit-v3", "heldout-v3", "fit-v2", "fit-v1", "heldout-v1",
+              "small")
 
 def horizon_zenith_rad(altitude_m: float) -> float:
     """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius
