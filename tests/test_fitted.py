@@ -608,7 +608,7 @@ def test_aod_rule_thin_haze_form_below_0p025_over_either_node_set():
     L quadratic in sqrt(AOD) over three nodes around it, above 0.1 ln L; at the nodes
     themselves the node alone."""
     stn = _coefficients.aod_stencil
-    new = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5, 1.0])
+    new = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 1.0])
     old = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
     for nodes, h in ((new, 0.0125), (old, 0.025)):
         for aod in (0.001, 0.006, 0.0124, 0.018, 0.0249):
@@ -625,8 +625,11 @@ def test_aod_rule_thin_haze_form_below_0p025_over_either_node_set():
             st, how = stn(nodes, float(a))
             assert dict(st).get(k) == pytest.approx(1.0)
             assert all(abs(w) < 1e-12 for i, w in st if i != k)
-    # the stencil between 0.05 and 0.1 reads the node at 0.075 where there is one
+    # the stencil between 0.05 and 0.1 reads the node at 0.075, and at 0.18 (ln L) the node
+    # at 0.15, where there are such nodes
     assert {i for i, _ in stn(new, 0.07)[0]} == {3, 4, 5}
+    assert {i for i, _ in stn(new, 0.18)[0]} == {5, 6, 7}
+    assert {i for i, _ in stn(old, 0.18)[0]} == {3, 4, 5}
 
 
 def _live_reference(aod, albedo, el, h, wl):

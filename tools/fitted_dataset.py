@@ -17,14 +17,14 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (9 AOD x 3 albedo = 27 atmospheres, 28 sun elevations
+* ``fit``: the fitting nodes (10 AOD x 3 albedo = 30 atmospheres, 28 sun elevations
   -12..90 deg, 14 altitudes 0..15 km);
-* ``heldout``: the held-out grid (7 atmospheres, their AODs and albedos off the nodes, 13
+* ``heldout``: the held-out grid (8 atmospheres, their AODs and albedos off the nodes, 13
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
-* ``fit-v3``, ``heldout-v3``: the third file's grids (``fit`` without the AOD nodes 0.0125
-  and 0.075; its five held-out atmospheres, AOD 0.0125 among them), whose chunks are the
+* ``fit-v3``, ``heldout-v3``: the third file's grids (``fit`` without the AOD nodes 0.0125,
+  0.075 and 0.15; its five held-out atmospheres, AOD 0.0125 among them), whose chunks are the
   present grids' chunks of the same atmospheres;
 * ``fit-v2``: the second file's grid (``fit-v3`` without the altitudes 4, 5, 8 and 12 km),
   which a supplement in ``--altitudes 4000,5000,8000,12000`` completes;

@@ -60,6 +60,15 @@ AOD_NODE_SETS = {
 #: The AODs off the nodes where each set is measured.
 AOD_TESTS = (0.003, 0.006, 0.009, 0.0125, 0.018, 0.03, 0.0375, 0.045, 0.06, 0.07, 0.09)
 AOD_VALUES = tuple(sorted(set(AOD_TESTS) | {0.0, 0.0125, 0.025, 0.05, 0.075, 0.1}))
+#: ``aod --hazy``: the node sets and AODs above 0.1 (ln L quadratic in sqrt(AOD) over the
+#: nodes from 0.1 up; the sets' nodes below 0.1 are not read there).
+AOD_NODE_SETS_HAZY = {
+    "0.1, 0.25, 0.5, 1 (the file before)": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5,
+                                            1.0),
+    "+ 0.15": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 1.0),
+}
+AOD_TESTS_HAZY = (0.12, 0.135, 0.165, 0.18, 0.2, 0.22)
+AOD_VALUES_HAZY = tuple(sorted(set(AOD_TESTS_HAZY) | {0.1, 0.15, 0.25, 0.5}))
 AOD_SUN_DEG = (0.5, 4.0, 8.5, 16.0)
 AOD_ALTITUDES_M = (0.0, 2200.0)
 
@@ -115,7 +124,7 @@ def apply_aod_rule(L: dict, nodes, x: float) -> np.ndarray:
     return np.maximum(sum(w * L[float(nodes[i])] for i, w in st), 0.0)
 
 
-def aod(albedo: float, out: str | None) -> None:
+def aod(albedo: float, out: str | None, hazy: bool = False) -> None:
     from skydome.models.fitted import _dataset, _grid
 
     t0 = time.perf_counter()
@@ -126,14 +135,16 @@ def aod(albedo: float, out: str | None) -> None:
         z = np.load(out)
         if float(z["albedo"]) == albedo:
             L = {float(k[3:]): z[k].astype(np.float64) for k in z.files if k.startswith("aod")}
-    for a in AOD_VALUES:
+    values, tests, sets = ((AOD_VALUES_HAZY, AOD_TESTS_HAZY, AOD_NODE_SETS_HAZY) if hazy
+                           else (AOD_VALUES, AOD_TESTS, AOD_NODE_SETS))
+    for a in values:
         if a in L:
             continue
         L[a] = _dataset.compute_chunk(a, albedo, AOD_SUN_DEG, AOD_ALTITUDES_M,
                                       twilight_reference=True,
                                       wavelengths=WAVELENGTHS_NM)[:, :, :-1, :, 1]
         L[a] = L[a].astype(np.float64)
-    print(f"reference: albedo {albedo:g}, AOD {list(AOD_VALUES)} in "
+    print(f"reference: albedo {albedo:g}, AOD {list(values)} in "
           f"{time.perf_counter() - t0:.0f} s")
     if out:
         np.savez(out, albedo=albedo, **{f"aod{a:g}": v for a, v in L.items()})
@@ -141,9 +152,9 @@ def aod(albedo: float, out: str | None) -> None:
     n = _grid.N_SKY
     print("\nRMS / max [%], sky part, per sun (" + ", ".join(f"{e:g}" for e in AOD_SUN_DEG)
           + " deg) x observer (ground, 2.2 km); then the ground view from 2.2 km:")
-    for name, nodes in AOD_NODE_SETS.items():
+    for name, nodes in sets.items():
         print(f"nodes {name}:")
-        for x in AOD_TESTS:
+        for x in tests:
             if np.any(np.isclose(nodes, x)):
                 continue
             e = apply_aod_rule(L, nodes, x) / L[x] - 1.0
@@ -151,6 +162,8 @@ def aod(albedo: float, out: str | None) -> None:
                      for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
             r, m = _stats(e[:, 1, n:])
             print(f"  AOD {x:<7g} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
+    if hazy:
+        return
     # the candidates between the second and third node of the set with 0.0125 (rows
     # "form t in [1, 2]": the thin-haze form through 0, 0.0125, 0.025 read beyond its middle
     # node; "form 0, 0.025, 0.05": the file before's form)
@@ -176,6 +189,8 @@ def main(argv=None) -> int:
     ap.add_argument("--albedo", type=float, default=None,
                     help="ground albedo (default 0.2 for altitude, 0.6 for aod)")
     ap.add_argument("--out", default=None, help="keep the reference's values (.npz)")
+    ap.add_argument("--hazy", action="store_true",
+                    help="aod: the AODs above 0.1 (AOD_NODE_SETS_HAZY) instead of below")
     a = ap.parse_args(argv)
     albedo = a.albedo if a.albedo is not None else (0.2 if a.what == "altitude" else 0.6)
     if not 0.0 <= albedo <= 1.0:
@@ -187,7 +202,7 @@ def main(argv=None) -> int:
     if a.what == "altitude":
         altitude(a.aod, albedo, a.out)
     else:
-        aod(albedo, a.out)
+        aod(albedo, a.out, a.hazy)
     return 0
 
 

@@ -80,13 +80,14 @@ SUPPLEMENT_ALTITUDES_M = np.array([4000.0, 5000.0, 8000.0, 12000.0])
 #: The altitude nodes of the second file (the data set of the refit on the corrected
 #: reference): the present ones without the supplement's.
 V2_ALTITUDE_NODES_M = np.setdiff1d(ALTITUDE_NODES_M, SUPPLEMENT_ALTITUDES_M)
-#: AOD nodes: the nodes at 0.0125 and 0.075 were added to the third file's, where the
-#: reference's own values interpolated between its nodes (``tools/fitted_node_spacing.py
-#: aod``) were 6-25 % off near the horizon at AOD 0.003-0.0125 and 9.4 % at 0.07 with a
-#: low sun (docs/models.md, "fitted", "The AOD nodes at 0.0125 and 0.075").
-AOD_NODES = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5, 1.0])
-#: The AOD nodes of the third file (``--grid fit-v3``): the present ones without 0.0125
-#: and 0.075.
+#: AOD nodes: the nodes at 0.0125, 0.075 and 0.15 were added to the third file's, where
+#: the reference's own values interpolated between its nodes (``tools/fitted_node_spacing.py
+#: aod``, ``aod --hazy``) were 6-25 % off near the horizon at AOD 0.003-0.0125, 9.4 % at 0.07
+#: and 15.0 % at 0.165 with a low sun (docs/models.md, "fitted", "The AOD nodes at 0.0125
+#: and 0.075" and "The AOD node at 0.15").
+AOD_NODES = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 1.0])
+#: The AOD nodes of the third file (``--grid fit-v3``): the present ones without 0.0125,
+#: 0.075 and 0.15.
 V3_AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
 #: Three albedo nodes: between them the radiance follows the form of a Lambertian ground
 #: under a scattering atmosphere, L(a) = L_0 + a G / (1 - a S) (see _coefficients.py).
@@ -95,12 +96,13 @@ ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
 #: The held-out grid: none of its values is a fitting node but the altitudes 0 and 15 km
 #: (the ends of the range); every value between two nodes, the twilight elevations midway.
 #: Its atmospheres: the third file's five with AOD 0.006 for its 0.0125 (now a node), and
-#: AOD 0.018 and 0.06 in two intervals between the AOD nodes that had none.
+#: AOD 0.018, 0.06 and 0.12 in three intervals between the AOD nodes that had none.
 HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
                                       16.0, 28.0, 45.0, 70.0])
 HELDOUT_ALTITUDE_M = np.array([0.0, 400.0, 2200.0, 4500.0, 15000.0])
 HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.006, 0.6), (0.018, 0.9),
-                       (0.06, 0.15), (0.18, 0.4), (0.7, 0.2))   # (AOD at 550 nm, albedo)
+                       (0.06, 0.15), (0.12, 0.55), (0.18, 0.4),
+                       (0.7, 0.2))                 # (AOD at 550 nm, albedo)
 
 
 #: The held-out atmospheres of the third file (``--grid heldout-v3``).
@@ -124,7 +126,7 @@ V1_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
 def grid(name: str):
     """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
     of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v3" and
-    "heldout-v3" (the third file's: "fit" without the AODs 0.0125 and 0.075, its five
+    "heldout-v3" (the third file's: "fit" without the AODs 0.0125, 0.075 and 0.15, its five
     held-out atmospheres), "fit-v2" (the second file's: "fit-v3" without the altitudes 4,
     5, 8 and 12 km), "fit-v1" and
     "heldout-v1" (the first file's), "small" (two atmospheres of "fit")."""
