@@ -33,7 +33,6 @@ Cost on the 2-core machine of docs/performance.md, with the data set running bes
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import time
@@ -107,6 +106,18 @@ def altitude(aod: float, albedo: float, out: str | None) -> None:
             print(f"sun {el:5.1f} deg  {name:30s} " + " ".join(cells))
 
 
+def _print_row(label: str, e: np.ndarray) -> None:
+    """One row of relative errors ``e`` (sun, observer, direction): RMS / max of the sky part
+    per sun and observer, then the ground view from 2.2 km."""
+    from skydome.models.fitted import _grid
+
+    n = _grid.N_SKY
+    cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
+             for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
+    r, m = _stats(e[:, 1, n:])
+    print(f"  {label} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
+
+
 def apply_aod_rule(L: dict, nodes, x: float) -> np.ndarray:
     """The model's day rule in AOD (``_coefficients.aod_stencil`` and ``thin_haze_form``)
     applied to the reference's own values ``L[node]`` over the AOD ``nodes``, at ``x``."""
@@ -114,18 +125,11 @@ def apply_aod_rule(L: dict, nodes, x: float) -> np.ndarray:
 
     nodes = np.asarray(nodes, dtype=float)
     st, how = C.aod_stencil(nodes, x)
-    if how == "form":
-        (i0, _), (i1, _), (i2, _) = st
-        return C.thin_haze_form(L[float(nodes[i0])], L[float(nodes[i1])],
-                                L[float(nodes[i2])], x / float(nodes[i1] - nodes[i0]),
-                                ).reshape(L[0.0].shape)
-    if how == "lnL":
-        return np.exp(sum(w * np.log(np.maximum(L[float(nodes[i])], 1e-30)) for i, w in st))
-    return np.maximum(sum(w * L[float(nodes[i])] for i, w in st), 0.0)
+    return C.apply_aod_stencil(nodes, x, st, how, lambda i: L[float(nodes[i])])
 
 
 def aod(albedo: float, out: str | None, hazy: bool = False) -> None:
-    from skydome.models.fitted import _dataset, _grid
+    from skydome.models.fitted import _dataset
 
     t0 = time.perf_counter()
     L = {}
@@ -149,7 +153,6 @@ def aod(albedo: float, out: str | None, hazy: bool = False) -> None:
     if out:
         np.savez(out, albedo=albedo, **{f"aod{a:g}": v for a, v in L.items()})
 
-    n = _grid.N_SKY
     print("\nRMS / max [%], sky part, per sun (" + ", ".join(f"{e:g}" for e in AOD_SUN_DEG)
           + " deg) x observer (ground, 2.2 km); then the ground view from 2.2 km:")
     for name, nodes in sets.items():
@@ -157,11 +160,7 @@ def aod(albedo: float, out: str | None, hazy: bool = False) -> None:
         for x in tests:
             if np.any(np.isclose(nodes, x)):
                 continue
-            e = apply_aod_rule(L, nodes, x) / L[x] - 1.0
-            cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
-                     for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
-            r, m = _stats(e[:, 1, n:])
-            print(f"  AOD {x:<7g} " + " ".join(cells) + f"   ground {r:.1f}/{m:.1f}")
+            _print_row(f"AOD {x:<7g}", apply_aod_rule(L, nodes, x) / L[x] - 1.0)
     if hazy:
         return
     # the candidates between the second and third node of the set with 0.0125 (rows
@@ -174,12 +173,7 @@ def aod(albedo: float, out: str | None, hazy: bool = False) -> None:
                     ("form 0, 0.025, 0.05", lambda x: C.thin_haze_form(
                         L[0.0], L[0.025], L[0.05], x / 0.025).reshape(L[0.0].shape))):
         for x in [v for v in AOD_TESTS if 0.0125 < v < 0.025]:
-            e = f(x) / L[x] - 1.0
-            cells = [f"{r:4.1f}/{m:4.1f}" for i in range(len(AOD_SUN_DEG))
-                     for r, m in [_stats(e[i, j, :n]) for j in range(len(AOD_ALTITUDES_M))]]
-            r, m = _stats(e[:, 1, n:])
-            print(f"  {name:20s} AOD {x:<7g} " + " ".join(cells)
-                  + f"   ground {r:.1f}/{m:.1f}")
+            _print_row(f"{name:20s} AOD {x:<7g}", f(x) / L[x] - 1.0)
 
 
 def main(argv=None) -> int:

@@ -266,6 +266,21 @@ def thin_haze_form(L0: np.ndarray, L1: np.ndarray, L2: np.ndarray, t: float) -> 
     return np.maximum(out, 0.0).reshape(shape)
 
 
+def apply_aod_stencil(aod_nodes, aod: float, st, how: str, value_at) -> np.ndarray:
+    """L at ``aod`` from the values ``value_at(i)`` at the AOD nodes of the stencil ``st``
+    (:func:`aod_stencil`'s ``(st, how)``): the thin-haze form, ln L or L combined with the
+    stencil's weights (L clamped at 0)."""
+    if how == "form":
+        return thin_haze_form(*(value_at(i) for i, _ in st), aod / float(aod_nodes[1]))
+    in_log = how == "lnL"
+    acc = 0.0
+    for i, wi in st:
+        if wi != 0.0:
+            v = value_at(i)
+            acc = acc + wi * (np.log(np.maximum(v, TINY)) if in_log else v)
+    return np.exp(acc) if in_log else np.maximum(acc, 0.0)
+
+
 #: Below this AOD (and below the third AOD node) the day sky follows the thin-haze form
 #: (:func:`aod_stencil`); above it, between 0.025 and 0.05, the form through 0, 0.025,
 #: 0.05 was measured no better than L quadratic in sqrt(AOD) (0.0375: 4.5 against 4.1 % at
@@ -362,17 +377,8 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
     for j in range(c["albedo_nodes"].size):
         total = 0.0
         for wp, (st_a, how) in parts:
-            if how == "form":
-                t = aod / float(c["aod_nodes"][1])
-                total = total + wp * thin_haze_form(*(at_node(i, j) for i, _ in st_a), t)
-                continue
-            in_log = how == "lnL"
-            acc = 0.0
-            for i, wi in st_a:
-                if wi != 0.0:
-                    L = at_node(i, j)
-                    acc = acc + wi * (np.log(np.maximum(L, TINY)) if in_log else L)
-            total = total + wp * (np.exp(acc) if in_log else np.maximum(acc, 0.0))
+            total = total + wp * apply_aod_stencil(c["aod_nodes"], aod, st_a, how,
+                                                   lambda i: at_node(i, j))
         per_albedo.append(total)
     L = albedo_form(c["albedo_nodes"], per_albedo, albedo)
     n_wl = c["wavelengths_nm"].size

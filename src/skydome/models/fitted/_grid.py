@@ -135,15 +135,13 @@ def grid(name: str):
         if name == "small":
             atm = [(0.1, 0.0), (0.1, 0.5)]
         return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
-    if name == "fit-v3":
+    if name in ("fit-v3", "fit-v2"):
         atm = [(float(a), float(b)) for a in V3_AOD_NODES for b in ALBEDO_NODES]
-        return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+        alt = ALTITUDE_NODES_M if name == "fit-v3" else V2_ALTITUDE_NODES_M
+        return SUN_ELEVATION_NODES_DEG, alt, atm, False
     if name == "heldout-v3":
         return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V3_HELDOUT_ATMOSPHERES),
                 True)
-    if name == "fit-v2":
-        atm = [(float(a), float(b)) for a in V3_AOD_NODES for b in ALBEDO_NODES]
-        return SUN_ELEVATION_NODES_DEG, V2_ALTITUDE_NODES_M, atm, False
     if name == "heldout":
         return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(HELDOUT_ATMOSPHERES),
                 True)
