@@ -5,6 +5,7 @@ its accuracy at held-out parameters and directions against a live ``precomputed`
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -280,6 +281,15 @@ def test_heldout_grid_is_off_the_fitting_nodes():
     np.testing.assert_array_equal(c["elevation_nodes_deg"], fe)
     np.testing.assert_array_equal(c["altitude_nodes_m"], fh)
     np.testing.assert_array_equal(c["aod_nodes"], _grid.AOD_NODES)
+    # the fourth file's held-out AODs are off its own nodes (the held-out AOD 0.7 lies
+    # between 0.5 and 1 there); the present nodes it lacks, 0.35 and 0.75, each have a
+    # held-out AOD on either side of them
+    _, _, atm4, _ = _grid.grid("heldout-v4")
+    assert not {a for a, _ in atm4} & set(_grid.V4_AOD_NODES.tolist())
+    for node in sorted(set(_grid.AOD_NODES.tolist()) - set(_grid.V4_AOD_NODES.tolist())):
+        i = int(np.searchsorted(_grid.AOD_NODES, node))
+        lo, hi = _grid.AOD_NODES[i - 1], _grid.AOD_NODES[i + 1]
+        assert any(lo < a < node for a in aods) and any(node < a < hi for a in aods)
     # the first file's grids stay, to reproduce its figures: its held-out sun elevations are
     # off its own nodes too
     ve, _, _, vmid = _grid.grid("heldout-v1")
@@ -554,6 +564,79 @@ def test_altitude_supplement_joins_as_the_whole_grid(tmp_path, capsys):
     assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "wl"),
                      "--out", str(tmp_path / "c.npz")] + args) == 2
     assert "--altitude-supplement" in capsys.readouterr().err
+    assert not (tmp_path / "c.npz").exists()
+
+
+def test_dataset_being_generated_reads_its_wavelengths_from_a_chunk(tmp_path):
+    """A data set whose run has not ended (no grid.json yet) takes its table wavelengths
+    from a chunk's last axis: the gas bands' 8 (--gas-bands), the 20-nm ones and the gas
+    bands' together, 49 (--with-gas-bands: not evenly spaced), or 300-1100 nm evenly
+    spaced (--wavelength-step 10: 81)."""
+    from skydome.models.fitted._dataset import DataSet
+
+    el, alt = np.array([10.0]), np.array([0.0])
+    n_rows = _grid.N_SKY + _grid.N_GROUND + 1
+    for name, wl in (("gas", _grid.GAS_BAND_WAVELENGTHS_NM),
+                     ("with", _grid.TABLE_WAVELENGTHS_NM),
+                     ("ten", np.arange(300.0, 1100.0 + 1e-9, 10.0))):
+        folder = tmp_path / name
+        _write_dataset(folder, el, alt, [(0.1, 0.0)], wl,
+                       [np.ones((1, 1, n_rows, _grid.N_PHI, wl.size), np.float32)])
+        (folder / "grid.json").unlink()
+        ds = DataSet(folder, require_all=False)
+        assert ds.present == [(0.1, 0.0)]
+        np.testing.assert_array_equal(ds.wavelengths_nm, wl)
+
+
+def test_extend_adds_an_aod_node_on_the_file_bases(tmp_path, capsys):
+    """tools/fit_fitted.py --extend: a node added to a fitted file keeps every node the file
+    had bit for bit and inserts the new one in AOD order. Its coefficients are the
+    projection of its y on the file's bases and spectral vectors: for an atmosphere whose
+    radiance is that of a fitted node (the chunk of AOD 1 given as AOD 0.75), they are the
+    fit's own at that node (the fit's coefficients are the same projection). A data set
+    with no AOD node the file lacks is refused naming the option, and nothing written."""
+    fit = _load_tool("fit_fitted")
+    rng = np.random.default_rng(5)
+    el = np.array([-1.0, 10.0])
+    alt = np.array([0.0, 15000.0])
+    wl = np.array([500.0, 600.0, 700.0])
+    n_rows = _grid.N_SKY + _grid.N_GROUND + 1
+    albs = (0.0, 0.5, 1.0)
+    atms = [(a, b) for a in (0.0, 0.5, 1.0) for b in albs]
+    chunks = {x: rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
+              .astype(np.float32) for x in atms}
+    _write_dataset(tmp_path / "base", el, alt, atms, wl, [chunks[x] for x in atms])
+    new = [(0.75, b) for b in albs]
+    _write_dataset(tmp_path / "new", el, alt, new, wl, [chunks[(1.0, b)] for b in albs])
+    for opts, tol in (([], 1e-5), (["--float16"], 4e-3)):
+        base, ext = tmp_path / f"base{len(opts)}.npz", tmp_path / f"ext{len(opts)}.npz"
+        args = ["--k-sky", "3", "--k-ground", "2", "--spectral-rank", "2"] + opts
+        assert fit.main([str(tmp_path / "base"), "--out", str(base)] + args) == 0
+        assert fit.main([str(tmp_path / "new"), "--extend", str(base), "--out",
+                         str(ext)]) == 0
+        a, b = np.load(base), np.load(ext)
+        np.testing.assert_array_equal(b["aod_nodes"], [0.0, 0.5, 0.75, 1.0])
+        for key in a.files:
+            if key == "meta" or key == "aod_nodes":
+                continue
+            if a[key].shape[:1] == (3,) and b[key].shape[:1] == (4,):   # per AOD node
+                np.testing.assert_array_equal(b[key][[0, 1, 3]], a[key], err_msg=key)
+                x, y = b[key][2].astype(np.float64), a[key][2].astype(np.float64)
+                if key + "_scale" in a.files:
+                    x = x * b[key + "_scale"][2][..., None]
+                    y = y * a[key + "_scale"][2][..., None]
+                if not key.endswith("_scale"):
+                    np.testing.assert_allclose(x, y, rtol=0, atol=tol * np.abs(y).max(),
+                                               err_msg=key)
+            else:
+                np.testing.assert_array_equal(b[key], a[key], err_msg=key)
+        meta = json.loads(str(b["meta"]))
+        assert meta["aod_nodes_projected"] == [0.75]
+    capsys.readouterr()
+    # nothing to add: refused before any work
+    assert fit.main([str(tmp_path / "base"), "--extend", str(base), "--out",
+                     str(tmp_path / "c.npz")]) == 2
+    assert "--extend" in capsys.readouterr().err
     assert not (tmp_path / "c.npz").exists()
 
 

@@ -3,6 +3,7 @@
     python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
         [--float16] [--gas-bands SUPPLEMENT] [--altitude-supplement SUPPLEMENT]
     python tools/fit_fitted.py --add-sun [--out FILE]
+    python tools/fit_fitted.py DATASET --extend FILE [--out FILE2]
 
 DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
 representation is described in skydome/models/fitted/_coefficients.py):
@@ -41,6 +42,16 @@ and the 4, 5, 8 and 12 km supplement).
 DATASET may lack some atmospheres (a data set still being generated): the fit then uses
 the AOD nodes whose every albedo node is there, and says which it left out.
 
+``--extend FILE``: add the AOD nodes of DATASET (every albedo node of FILE there) that FILE
+lacks, on FILE's own means, bases and spectral vectors: steps 1 and 3 only, the
+coefficients of the new nodes the least-squares projection of their y on FILE's bases (as
+stored: float16 bases as the model reads them), then on its spectral vectors; every node of
+FILE keeps its arrays bit for bit (DATASET must hold FILE's sun elevations, altitudes, table
+wavelengths and view grid). It prints the projection's RMS residual of y at the new nodes
+beside FILE's fit residual. The shipped file is the full fit of the ``fit-v4`` grid (30
+atmospheres) extended with the AOD nodes 0.35 and 0.75 (their six chunks made with
+``tools/fitted_dataset.py --atmospheres``).
+
 ``--add-sun``: only step 4, into an existing FILE: its other arrays are written back
 unchanged (same dtypes, same compression), the sun's arrays added or replaced.
 
@@ -74,6 +85,142 @@ def randomized_basis(X: np.ndarray, k: int, seed: int = 29) -> np.ndarray:
     Q, _ = np.linalg.qr(Y)
     _, _, vt = np.linalg.svd(Q.T @ X, full_matrices=False)
     return vt[:k]
+
+
+def log_ratio(L: np.ndarray, n_sky: int, delta: float):
+    """(ln s, y) of one atmosphere's radiance ``L`` (e, h, rows, phi, wl) as the fit takes
+    it (step 1): s (e, h, wl) the mean over the sky part, y (e, h, wl, rows x phi) = ln(L / s
+    + delta)."""
+    e, h, rows, phi, w = L.shape
+    L = np.moveaxis(L.astype(np.float64), -1, 2).reshape(e, h, w, rows * phi)
+    s = L[..., :n_sky].mean(axis=-1)
+    return np.log(s), np.log(np.maximum(L, 0.0) / s[..., None] + delta)
+
+
+def _float16_rows(v: np.ndarray):
+    """(v / scale in float16, scale in float32): one scale per row (the last axis), its
+    largest magnitude (1 for a row of zeros)."""
+    scale = np.max(np.abs(v), axis=-1).astype(np.float32)
+    scale = np.where(scale > 0.0, scale, 1.0)
+    return (v / scale[..., None]).astype(np.float16), scale
+
+
+def write_file(target: Path, arrays: dict, meta: dict) -> None:
+    """Write a coefficient file: ``arrays`` and ``meta`` (as JSON), atomically
+    (np.savez_compressed: deterministic, no time stamps)."""
+    from skydome._io import atomic_file
+
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_file(target) as tmp:
+        np.savez_compressed(tmp, **dict(arrays, meta=np.array(json.dumps(meta))))
+
+
+def extend(file: Path, dataset: str, out: Path) -> int:
+    """``--extend``: FILE with DATASET's AOD nodes that it lacks added (module docstring)."""
+    from skydome.models.fitted import _grid
+    from skydome.models.fitted._dataset import DataSet
+
+    t0 = time.perf_counter()
+    with np.load(file, allow_pickle=False) as z:
+        arr = {k: z[k] for k in z.files}
+    meta = json.loads(str(arr["meta"]))
+    ds = DataSet(dataset, require_all=False)
+    albs = arr["albedo_nodes"]
+    present = set(ds.present)
+    new = sorted({a for a, _ in ds.atmospheres
+                  if not np.any(np.isclose(arr["aod_nodes"], a))
+                  and all((a, float(b)) in present for b in albs)})
+    same = (np.array_equal(ds.elevations_deg, arr["elevation_nodes_deg"])
+            and np.array_equal(ds.altitudes_m, arr["altitude_nodes_m"])
+            and np.array_equal(ds.wavelengths_nm, arr["wavelengths_nm"])
+            and not ds.midpoints)
+    if not same or not new:
+        print(f"error: --extend = {file}: DATASET = {dataset} "
+              + ("holds no AOD node that the file lacks with every albedo node "
+                 f"{albs.tolist()}" if same else
+                 "is not of the file's grid (sun elevations, altitudes, table wavelengths, "
+                 "view-grid nodes)"), file=sys.stderr)
+        return 2
+    n_sky = _grid.N_SKY * _grid.N_PHI
+    delta = float(meta["delta"])
+    spectral = "coef_sky_amp" in arr
+    ne, nh, nw = (arr[k].size for k in ("elevation_nodes_deg", "altitude_nodes_m",
+                                         "wavelengths_nm"))
+    parts = (("sky", slice(0, n_sky)), ("ground", slice(n_sky, None)))
+    bases = {}
+    for part, _ in parts:
+        # the bases as the model reads them (_coefficients.load: float16 times its scale)
+        B = arr[f"{part}_basis"].astype(np.float32)
+        if f"{part}_basis_scale" in arr:
+            B = B * arr[f"{part}_basis_scale"][..., None]
+        bases[part] = B.astype(np.float64)
+    added = {"sky": [], "ground": [], "log_scale": []}
+    sq = {"sky": 0.0, "ground": 0.0}
+    cnt = {"sky": 0, "ground": 0}
+    trunc = {"sky": [0.0, 0.0], "ground": [0.0, 0.0]}     # spectral: residual^2, total^2
+    for aod in new:
+        per_alb = {"sky": [], "ground": [], "log_scale": []}
+        for alb in albs:
+            L, _ = ds.sky(aod, float(alb))
+            log_s, Y = log_ratio(L, n_sky, delta)
+            per_alb["log_scale"].append(log_s.astype(np.float32))
+            for part, cols in parts:
+                B = bases[part]
+                coef = np.empty((ne, nh, nw, B.shape[1]))
+                for e in range(ne):
+                    X = Y[e, :, :, cols].reshape(nh * nw, -1) - arr[f"{part}_mean"][e]
+                    # least squares on the stored basis (orthonormal before its rounding)
+                    C = np.linalg.solve(B[e] @ B[e].T, B[e] @ X.T).T
+                    R = X - C @ B[e]
+                    sq[part] += float(np.sum(R ** 2))
+                    cnt[part] += R.size
+                    coef[e] = C.reshape(nh, nw, -1)
+                if spectral:
+                    spec = arr[f"coef_{part}_spec"].astype(np.float64)      # (e, K, W)
+                    m = arr[f"coef_{part}_spec_mean"].astype(np.float64)    # (e, W)
+                    # rows (h, t) along the wavelength, on the file's spectral vectors
+                    Xw = np.moveaxis(coef, 2, -1) - m[:, None, None, :]     # (e, h, T, W)
+                    amp = np.einsum("ehtw,ekw->ehkt", Xw, spec)             # (e, h, K, T)
+                    back = np.einsum("ehkt,ekw->ehtw", amp, spec)
+                    trunc[part][0] += float(np.sum((Xw - back) ** 2))
+                    trunc[part][1] += float(np.sum(coef ** 2))
+                    per_alb[part].append(amp)
+                else:
+                    per_alb[part].append(coef)
+            print(f"projected AOD {aod:g} albedo {float(alb):g}", flush=True)
+        for k in per_alb:
+            added[k].append(np.stack(per_alb[k]))
+    resid = {p: float(np.sqrt(sq[p] / cnt[p])) for p in sq}
+    for p in ("sky", "ground"):
+        print(f"{p}: RMS residual of y at the new nodes {resid[p]:.4f} (the file's fit on "
+              f"its nodes: {meta['fit_residual_rms_y'][p]:.4f})"
+              + (f"; relative RMS of the spectral terms' truncation there "
+                 f"{np.sqrt(trunc[p][0] / max(trunc[p][1], 1e-300)):.2e}" if spectral
+                 else ""), flush=True)
+    aods = np.concatenate([arr["aod_nodes"], np.array(new)])
+    order = np.argsort(aods, kind="stable")
+    out_arr = dict(arr)
+    out_arr["aod_nodes"] = aods[order]
+
+    def join(key, values):
+        old = arr[key]
+        out_arr[key] = np.concatenate([old, values.astype(old.dtype)])[order]
+
+    join("log_scale", np.stack(added["log_scale"]))
+    for part in ("sky", "ground"):
+        key = f"coef_{part}_amp" if spectral else f"coef_{part}"
+        v = np.stack(added[part])
+        if key + "_scale" in arr:
+            v, scale = _float16_rows(v)
+            join(key + "_scale", scale)
+        join(key, v)
+    meta["aod_nodes_projected"] = [float(x) for x in new]
+    meta["projection_residual_rms_y"] = resid
+    meta["command_extend"] = "python tools/fit_fitted.py DATASET --extend FILE"
+    write_file(out, out_arr, meta)
+    print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB; AOD nodes "
+          f"{out_arr['aod_nodes'].tolist()}) in {time.perf_counter() - t0:.0f} s")
+    return 0
 
 
 def add_sun(arrays: dict) -> dict:
@@ -131,6 +278,9 @@ def main(argv=None) -> int:
                     help="only add (replace) the sun's arrays in FILE (--out, default the "
                          "shipped file); no data set")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--extend", default=None, metavar="FILE",
+                    help="add DATASET's AOD nodes that FILE lacks on FILE's own bases "
+                         "(written to --out, default FILE)")
     ap.add_argument("--k-sky", type=int, default=32)
     ap.add_argument("--k-ground", type=int, default=12)
     ap.add_argument("--float16", action="store_true",
@@ -156,6 +306,11 @@ def main(argv=None) -> int:
         return 0
     if a.dataset is None:
         ap.error("DATASET is required (unless --add-sun)")
+    if a.extend is not None:
+        if not Path(a.extend).is_file():
+            print(f"error: --extend = {a.extend}: no such coefficient file", file=sys.stderr)
+            return 2
+        return extend(Path(a.extend), a.dataset, Path(a.out) if a.out else Path(a.extend))
     for name, v in (("--k-sky", a.k_sky), ("--k-ground", a.k_ground)):
         if not 1 <= v <= 256:
             print(f"error: {name} = {v} is out of range [1, 256]", file=sys.stderr)
@@ -164,7 +319,6 @@ def main(argv=None) -> int:
         print(f"error: --spectral-rank = {a.spectral_rank} is out of range [0, 256] (0: "
               "off)", file=sys.stderr)
         return 2
-    from skydome._io import atomic_file
     from skydome.models.fitted import _grid
     from skydome.models.fitted._coefficients import COEFFICIENT_FILE, DELTA, \
         spectral_factors
@@ -227,11 +381,7 @@ def main(argv=None) -> int:
     for i, aod in enumerate(aods):
         for j, alb in enumerate(albs):
             L, _ = sky(aod, alb)                         # (e, h, rows, phi, wl)
-            L = np.moveaxis(L.astype(np.float64), -1, 2).reshape(el.size, alt.size, wl.size,
-                                                                   n_dir)
-            s = L[..., :n_sky].mean(axis=-1)
-            log_s[i, j] = np.log(s)
-            Y[i, j] = np.log(np.maximum(L, 0.0) / s[..., None] + DELTA)
+            log_s[i, j], Y[i, j] = log_ratio(L, n_sky, DELTA)
             print(f"read AOD {aod:g} albedo {alb:g}", flush=True)
     out = {"aod_nodes": aods, "albedo_nodes": albs, "elevation_nodes_deg": el,
            "altitude_nodes_m": alt, "wavelengths_nm": wl}
@@ -288,19 +438,12 @@ def main(argv=None) -> int:
                     "coef_ground_amp"):
             if key not in out:
                 continue
-            v = out[key]
-            scale = np.max(np.abs(v), axis=-1).astype(np.float32)
-            scale = np.where(scale > 0.0, scale, 1.0)
-            out[key] = (v / scale[..., None]).astype(np.float16)
-            out[key + "_scale"] = scale
+            out[key], out[key + "_scale"] = _float16_rows(out[key])
     meta["float16"] = bool(a.float16)
     meta["spectral_rank"] = int(a.spectral_rank)
     meta["aod_nodes_fitted"] = [float(x) for x in aods]
-    out["meta"] = np.array(json.dumps(meta))
     target = Path(a.out) if a.out else COEFFICIENT_FILE
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_file(target) as tmp:
-        np.savez_compressed(tmp, **out)
+    write_file(target, out, meta)
     print(f"wrote {target} ({target.stat().st_size / 1e6:.1f} MB) in "
           f"{time.perf_counter() - t0:.0f} s")
     return 0

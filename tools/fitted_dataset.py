@@ -1,7 +1,7 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v3|heldout-v3|fit-v2|fit-v1|
-                                        heldout-v1|small]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v4|heldout-v4|fit-v3|
+                                        heldout-v3|fit-v2|fit-v1|heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
         [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands | --with-gas-bands]
         [--altitudes M,...]
@@ -17,15 +17,19 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (10 AOD x 3 albedo = 30 atmospheres, 28 sun elevations
+* ``fit``: the fitting nodes (12 AOD x 3 albedo = 36 atmospheres, 28 sun elevations
   -12..90 deg, 14 altitudes 0..15 km);
-* ``heldout``: the held-out grid (8 atmospheres, their AODs and albedos off the nodes, 13
+* ``heldout``: the held-out grid (11 atmospheres, their AODs and albedos off the nodes, 13
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
-* ``fit-v3``, ``heldout-v3``: the third file's grids (``fit`` without the AOD nodes 0.0125,
-  0.075 and 0.15; its five held-out atmospheres, AOD 0.0125 among them), whose chunks are the
-  present grids' chunks of the same atmospheres;
+* ``fit-v4``, ``heldout-v4``: the fourth file's grids (``fit`` without the AOD nodes 0.35
+  and 0.75; its held-out AOD 0.7 for the present 0.3, 0.42, 0.6 and 0.87): the shipped file
+  is the full fit of ``fit-v4`` extended with the chunks of AOD 0.35 and 0.75
+  (tools/fit_fitted.py --extend);
+* ``fit-v3``, ``heldout-v3``: the third file's grids (``fit-v4`` without the AOD nodes
+  0.0125, 0.075 and 0.15; its five held-out atmospheres, AOD 0.0125 among them), whose
+  chunks are the present grids' chunks of the same atmospheres;
 * ``fit-v2``: the second file's grid (``fit-v3`` without the altitudes 4, 5, 8 and 12 km),
   which a supplement in ``--altitudes 4000,5000,8000,12000`` completes;
 * ``fit-v1``, ``heldout-v1``: the grids of the first coefficient file (6 AOD nodes 0-1, 26
@@ -102,8 +106,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
-                    choices=("fit", "heldout", "fit-v3", "heldout-v3", "fit-v2", "fit-v1",
-                             "heldout-v1", "small"))
+                    choices=("fit", "heldout", "fit-v4", "heldout-v4", "fit-v3",
+                             "heldout-v3", "fit-v2", "fit-v1", "heldout-v1", "small"))
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",

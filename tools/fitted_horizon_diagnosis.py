@@ -32,7 +32,15 @@ tools/fitted_accuracy.py integrates it) and per configuration prints, RMS / max:
 
 each also for the first ``--rows`` rows above the horizon, and where the largest centre
 error sits (the row counted from the horizon, 0 the first; azimuth from the sun; angle
-from the sun).
+from the sun). Where the sun is not an elevation node and the reference holds every sun
+node of the model's stencil around it at the same altitude (``--suns`` with them, e.g.
+-1,0,0.5,1,2 for 0.5 deg), also
+
+* ``elevation alone``: the reference's own values at those sun nodes, interpolated in
+  elevation as the model does (y = ln(L / s + DELTA) and ln s, s the mean of the sky part
+  of the grid per wavelength, cubic over the four nodes of ``_coefficients.stencil``), at
+  the view grid's nodes against the reference computed at that sun: the share of the sun
+  elevation interval, which no fit at the nodes can remove.
 """
 
 from __future__ import annotations
@@ -138,10 +146,13 @@ def compare(ref: dict, aod=None, albedo=None, rows: int = 3) -> list[dict]:
             gc = np.degrees(np.arccos(np.clip(dc[:n_sky_c] @ sun.direction, -1, 1)))
             kn, kc = (gn > 5.0) & (yn_ref > 0), (gc > 5.0) & (yc_ref > 0)
             r = {"aod": aod, "albedo": albedo, "sun": float(e), "alt": float(h)}
-            for tag, rel, keep in (
-                    ("nodes", yn_fit / np.where(yn_ref > 0, yn_ref, 1) - 1, kn),
-                    ("centres", yc_fit / np.where(yc_ref > 0, yc_ref, 1) - 1, kc),
-                    ("angular", yc_ang / np.where(yc_ref > 0, yc_ref, 1) - 1, kc)):
+            cases = [("nodes", yn_fit / np.where(yn_ref > 0, yn_ref, 1) - 1, kn),
+                     ("centres", yc_fit / np.where(yc_ref > 0, yc_ref, 1) - 1, kc),
+                     ("angular", yc_ang / np.where(yc_ref > 0, yc_ref, 1) - 1, kc)]
+            ye = elevation_alone(ref, i, j)
+            if ye is not None:
+                cases.append(("elevation", ye / np.where(yn_ref > 0, yn_ref, 1) - 1, kn))
+            for tag, rel, keep in cases:
                 a = np.abs(np.where(keep, rel, 0.0))
                 r[tag] = (float(np.sqrt(np.sum(a ** 2) / keep.sum())), float(a.max()))
                 near = keep[:rows]
@@ -156,20 +167,48 @@ def compare(ref: dict, aod=None, albedo=None, rows: int = 3) -> list[dict]:
     return out
 
 
+def elevation_alone(ref: dict, i: int, j: int):
+    """The reference's luminance at its sun ``i`` and altitude ``j`` on the view grid's
+    sky nodes, interpolated from its sun nodes as the model interpolates in elevation
+    (module docstring); None where the sun is a node or the stencil's nodes are missing."""
+    from skydome.models.fitted import _coefficients as C
+    from skydome.models.fitted import _grid
+
+    nodes = _grid.SUN_ELEVATION_NODES_DEG
+    e = float(ref["suns"][i])
+    if np.any(np.isclose(nodes, e)):
+        return None
+    st = C.stencil(nodes, e, C.ELEMENT_ORDER["elevation"])
+    at = {float(x): k for k, x in enumerate(ref["suns"])}
+    if any(float(nodes[p]) not in at for p, _ in st):
+        return None
+    y = ln_s = 0.0
+    n_sky = _grid.N_SKY
+    for p, w in st:
+        L = ref["nodes"][at[float(nodes[p])], j].astype(np.float64)      # (rows, phi, wl)
+        s = L[:n_sky].mean(axis=(0, 1))
+        y = y + w * np.log(np.maximum(L, 0.0) / s + C.DELTA)
+        ln_s = ln_s + w * np.log(s)
+    L = np.maximum(np.exp(ln_s) * (np.exp(y) - C.DELTA), 0.0)
+    return ref_luminance(L, ref["wavelengths_nm"])[:n_sky]
+
+
 def _fmt(p):
     return f"{100 * p[0]:.2f} / {100 * p[1]:.1f}"
 
 
 def print_table(results, rows: int = 3) -> None:
-    print(f"| AOD, albedo | sun | altitude | nodes | centres | angular alone | centres, "
-          f"rows 0-{rows - 1} | angular alone, rows 0-{rows - 1} | max at (row, azimuth "
-          f"from sun, from sun, error) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(f"| AOD, albedo | sun | altitude | nodes | centres | angular alone | elevation "
+          f"alone | centres, rows 0-{rows - 1} | angular alone, rows 0-{rows - 1} | "
+          f"elevation alone, rows 0-{rows - 1} | max at (row, azimuth from sun, from sun, "
+          f"error) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         w = r["where"]
+        el = [_fmt(r[k]) if k in r else "-" for k in ("elevation", "elevation low")]
         print(f"| {r['aod']:g}, {r['albedo']:g} | {r['sun']:g} | {r['alt']:g} | "
               f"{_fmt(r['nodes'])} | {_fmt(r['centres'])} | {_fmt(r['angular'])} | "
-              f"{_fmt(r['centres low'])} | {_fmt(r['angular low'])} | "
+              f"{el[0]} | {_fmt(r['centres low'])} | {_fmt(r['angular low'])} | {el[1]} | "
               f"{w[0]}, {w[1]:.0f}, {w[2]:.0f} deg, {100 * w[3]:+.1f} % |", flush=True)
 
 

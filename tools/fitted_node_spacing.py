@@ -60,14 +60,19 @@ AOD_NODE_SETS = {
 AOD_TESTS = (0.003, 0.006, 0.009, 0.0125, 0.018, 0.03, 0.0375, 0.045, 0.06, 0.07, 0.09)
 AOD_VALUES = tuple(sorted(set(AOD_TESTS) | {0.0, 0.0125, 0.025, 0.05, 0.075, 0.1}))
 #: ``aod --hazy``: the node sets and AODs above 0.1 (ln L quadratic in sqrt(AOD) over the
-#: nodes from 0.1 up; the sets' nodes below 0.1 are not read there).
+#: nodes from 0.1 up; the sets' nodes below 0.1 are not read there); the shipped file's
+#: sweep at albedo 0.2 (docs/models.md, "fitted", "The AOD nodes at 0.35 and 0.75").
 AOD_NODE_SETS_HAZY = {
     "0.1, 0.25, 0.5, 1 (the file before)": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.25, 0.5,
                                             1.0),
     "+ 0.15": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 1.0),
+    "+ 0.15, 0.75": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 0.75, 1.0),
+    "+ 0.15, 0.35, 0.75 (this file)": (0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25,
+                                       0.35, 0.5, 0.75, 1.0),
 }
-AOD_TESTS_HAZY = (0.12, 0.135, 0.165, 0.18, 0.2, 0.22)
-AOD_VALUES_HAZY = tuple(sorted(set(AOD_TESTS_HAZY) | {0.1, 0.15, 0.25, 0.5}))
+AOD_TESTS_HAZY = (0.12, 0.135, 0.165, 0.18, 0.2, 0.22, 0.3, 0.35, 0.42, 0.6, 0.7, 0.85,
+                  0.9)
+AOD_VALUES_HAZY = tuple(sorted(set(AOD_TESTS_HAZY) | {0.1, 0.15, 0.25, 0.5, 0.75, 1.0}))
 AOD_SUN_DEG = (0.5, 4.0, 8.5, 16.0)
 AOD_ALTITUDES_M = (0.0, 2200.0)
 

@@ -34,10 +34,10 @@ the degrees in :data:`ELEMENT_ORDER`, chosen on the held-out grid):
   interpolated in its logarithm), L = s (exp(y) - DELTA);
 * in AOD (:func:`aod_stencil`), quadratic in sqrt(AOD): with the sun above the horizon up
   to 0.1 L over the nodes up to 0.1 (0, 0.0125, 0.025, 0.05, 0.075, 0.1), above ln L over
-  the nodes from 0.1 up (0.1, 0.15, 0.25, 0.5, 1); with the sun below -1 deg ln L; between -1 and 0 deg the two
-  blended linearly; with the sun above the horizon and the AOD below the second node above
-  0 (0.025), the thin-haze form L = (a + b tau) exp(-c tau) through the nodes 0, 0.0125,
-  0.025 (:func:`thin_haze_form`);
+  the nodes from 0.1 up (0.1, 0.15, 0.25, 0.35, 0.5, 0.75, 1); with the sun below -1 deg
+  ln L; between -1 and 0 deg the two blended linearly; with the sun above the horizon and
+  the AOD below the second node above 0 (0.025), the thin-haze form L = (a + b tau)
+  exp(-c tau) through the nodes 0, 0.0125, 0.025 (:func:`thin_haze_form`);
 * between the albedo nodes 0, 1/2 and 1 the radiance follows the form of a Lambertian
   ground under a scattering atmosphere,
 
@@ -216,7 +216,8 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     below the horizon (``twilight``): ln L (the twilight sky is light attenuated along
     long grazing paths, and falls by orders of magnitude between the AOD nodes). sqrt(AOD)
     as the coordinate: the sky changes fastest with the first aerosol, and the AOD nodes
-    (0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.5, 1) are 0.04-0.29 apart in it."""
+    (0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.35, 0.5, 0.75, 1) are 0.04-0.16
+    apart in it."""
     nodes = np.asarray(aod_nodes, dtype=np.float64)
     order = ELEMENT_ORDER["aod"]
     x = math.sqrt(max(aod, 0.0))

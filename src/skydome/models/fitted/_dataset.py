@@ -132,12 +132,14 @@ class DataSet:
         self.present = [(a, b) for a, b in self.atmospheres
                         if (self.folder / (chunk_key(a, b) + ".npy.sha256")).is_file()]
         if not gj.is_file() and self.present:
-            # still being generated: its wavelengths from a chunk's last axis (300-1100 nm,
-            # evenly spaced, as tools/fitted_dataset.py --wavelength-step writes them)
+            # still being generated: its wavelengths from a chunk's last axis (the gas
+            # bands' 8 of --gas-bands, the 49 of --with-gas-bands, else 300-1100 nm evenly
+            # spaced, as --wavelength-step writes them)
             n = np.load(self.folder / (chunk_key(*self.present[0]) + ".npy"),
                         mmap_mode="r").shape[-1]
-            self.wavelengths_nm = (_grid.GAS_BAND_WAVELENGTHS_NM.copy()
-                                   if n == _grid.GAS_BAND_WAVELENGTHS_NM.size
+            known = {v.size: v for v in (_grid.GAS_BAND_WAVELENGTHS_NM,
+                                         _grid.TABLE_WAVELENGTHS_NM)}
+            self.wavelengths_nm = (known[n].copy() if n in known
                                    else np.linspace(300.0, 1100.0, n))
 
     def chunk(self, aod: float, albedo: float) -> np.ndarray:
