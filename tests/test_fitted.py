@@ -792,3 +792,21 @@ def test_node_spacing_tool_refuses_bad_input_before_any_work(capsys):
     assert "--aod = -0.1 is out of range [0, 1]" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         mod.main(["neither"])
+
+
+def test_elevation_stencil_keeps_a_risen_sun_off_the_nodes_below_the_horizon():
+    """_coefficients.elevation_stencil: for a sun between 0 deg and the next node the cubic
+    reads the nodes 0, 1, 2, 3.5 deg (none below the horizon), reproduces any cubic in
+    elevation there and meets the nodes at 0 and 1 deg; a sun below the horizon and one
+    above 1 deg keep the centred cubic of _coefficients.stencil."""
+    nodes = _grid.SUN_ELEVATION_NODES_DEG
+    est = _coefficients.elevation_stencil
+    for e in (0.01, 0.25, 0.5, 0.75, 0.99):
+        st = est(nodes, e)
+        assert [float(nodes[i]) for i, _ in st] == [0.0, 1.0, 2.0, 3.5]
+        for poly in (lambda x: 1.0 + 0.0 * x, lambda x: 2.0 - x + 0.3 * x ** 3):
+            assert sum(w * poly(nodes[i]) for i, w in st) == pytest.approx(poly(e), abs=1e-12)
+    for e in (0.0, 1.0):
+        assert {float(nodes[i]): w for i, w in est(nodes, e) if abs(w) > 1e-15} == {e: 1.0}
+    for e in (-11.5, -1.5, -0.5, -0.01, 1.5, 16.0, 90.0):
+        assert est(nodes, e) == _coefficients.stencil(nodes, e, 3)

@@ -38,7 +38,8 @@ node of the model's stencil around it at the same altitude (``--suns`` with them
 
 * ``elevation alone``: the reference's own values at those sun nodes, interpolated in
   elevation as the model does (y = ln(L / s + DELTA) and ln s, s the mean of the sky part
-  of the grid per wavelength, cubic over the four nodes of ``_coefficients.stencil``), at
+  of the grid per wavelength, cubic over the four nodes of
+  ``_coefficients.elevation_stencil``), at
   the view grid's nodes against the reference computed at that sun: the share of the sun
   elevation interval, which no fit at the nodes can remove.
 """
@@ -178,7 +179,7 @@ def elevation_alone(ref: dict, i: int, j: int):
     e = float(ref["suns"][i])
     if np.any(np.isclose(nodes, e)):
         return None
-    st = C.stencil(nodes, e, C.ELEMENT_ORDER["elevation"])
+    st = C.elevation_stencil(nodes, e)
     at = {float(x): k for k, x in enumerate(ref["suns"])}
     if any(float(nodes[p]) not in at for p, _ in st):
         return None
