@@ -287,14 +287,15 @@ def _assert_same_tables(t_ref, t, rtol):
     same computation twice: bit for bit on some CPUs, but where the compiled loops' vector
     blocking follows the arrays' alignment in memory the sums round differently, measured up
     to 9.5e-13), the summed scattering density and the irradiance table within ``rtol``
-    (and 2e-5 / 1e-9 of their largest values absolute: the density's float32 products
+    (and 1e-4 / 1e-9 of their largest values absolute: the density's float32 products
     round by the blocking of the BLAS kernel, which differs between CPUs; measured up to
-    1.1e-5 of the largest value, at values 1e-2 of it, on one AMD EPYC machine, and
-    below 1e-6 on others)."""
+    1.1e-5 of the largest value, at values 1e-2 of it, on one AMD EPYC machine, 7.7e-5 at
+    two values 0.42 of it (1.8e-4 relative) on another, and below 1e-6 on others; a
+    wavelength's table computed from another's inputs would be off by tens of %)."""
     np.testing.assert_allclose(t.single_scattering, t_ref.single_scattering, rtol=1e-12,
                                atol=1e-15 * float(np.max(t_ref.single_scattering)))
     np.testing.assert_allclose(t.scattering_density, t_ref.scattering_density, rtol=rtol,
-                               atol=2e-5 * float(np.max(t_ref.scattering_density)))
+                               atol=1e-4 * float(np.max(t_ref.scattering_density)))
     np.testing.assert_allclose(t.irradiance, t_ref.irradiance, rtol=rtol,
                                atol=1e-9 * float(np.max(t_ref.irradiance)))
 
