@@ -117,7 +117,7 @@ def write_file(target: Path, arrays: dict, meta: dict) -> None:
 
 def extend(file: Path, dataset: str, out: Path) -> int:
     """``--extend``: FILE with DATASET's AOD nodes that it lacks added (module docstring)."""
-    from skydome.models.fitted import _grid
+    from skydome.models.fitted import _coefficients, _grid
     from skydome.models.fitted._dataset import DataSet
 
     t0 = time.perf_counter()
@@ -147,13 +147,15 @@ def extend(file: Path, dataset: str, out: Path) -> int:
     ne, nh, nw = (arr[k].size for k in ("elevation_nodes_deg", "altitude_nodes_m",
                                          "wavelengths_nm"))
     parts = (("sky", slice(0, n_sky)), ("ground", slice(n_sky, None)))
-    bases = {}
+    # the bases as the model reads them (_coefficients.load: float16 times its scale) and,
+    # per sun node, their least-squares projector (B B^T)^-1 B (orthonormal before the
+    # rounding), formed once
+    model = _coefficients.load(str(file))
+    bases, proj = {}, {}
     for part, _ in parts:
-        # the bases as the model reads them (_coefficients.load: float16 times its scale)
-        B = arr[f"{part}_basis"].astype(np.float32)
-        if f"{part}_basis_scale" in arr:
-            B = B * arr[f"{part}_basis_scale"][..., None]
-        bases[part] = B.astype(np.float64)
+        B = model[f"{part}_basis"].astype(np.float64)
+        bases[part] = B
+        proj[part] = np.stack([np.linalg.solve(b @ b.T, b) for b in B])
     added = {"sky": [], "ground": [], "log_scale": []}
     sq = {"sky": 0.0, "ground": 0.0}
     cnt = {"sky": 0, "ground": 0}
@@ -169,8 +171,7 @@ def extend(file: Path, dataset: str, out: Path) -> int:
                 coef = np.empty((ne, nh, nw, B.shape[1]))
                 for e in range(ne):
                     X = Y[e, :, :, cols].reshape(nh * nw, -1) - arr[f"{part}_mean"][e]
-                    # least squares on the stored basis (orthonormal before its rounding)
-                    C = np.linalg.solve(B[e] @ B[e].T, B[e] @ X.T).T
+                    C = X @ proj[part][e].T
                     R = X - C @ B[e]
                     sq[part] += float(np.sum(R ** 2))
                     cnt[part] += R.size
