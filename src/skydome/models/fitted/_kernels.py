@@ -21,9 +21,11 @@ are computed by :func:`_atan2_pos`, an arctangent of our own made of arithmetic 
 a few units in the last place (tests/test_fitted_kernels.py checks it against
 ``math.atan2``, and the lookups against the inverse mappings written with numpy).
 
-The kernel works in blocks of :data:`BLOCK` directions: first the cells and weights of the
-whole block, in a loop of arithmetic and selects only (no call, no branch), which LLVM
-vectorises (SIMD across the block's directions), then the table reads. It also counts
+The kernel works in blocks of :data:`BLOCK` directions: first the block's directions copied
+into contiguous arrays, then the cells and weights of the whole block, in a loop of
+arithmetic and selects only (no call, no branch, no float -> int conversion, contiguous
+loads), which LLVM vectorises (SIMD across the block's directions) on AVX2 and AVX-512
+targets alike, then the table reads. It also counts
 the non-finite and zero-length rows itself (on the bits of the floats, which fastmath
 leaves alone), so that the caller needs no separate pass over the directions to check
 them; such rows are looked up as the zenith meanwhile and the caller raises.
@@ -124,13 +126,14 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
     inv_ground = 1.0 / (math.pi - theta_h - EPS)
     th_g = theta_h + EPS
     row_c = N_PHI * c
+    cf = float(c)
     n_blocks = (n + BLOCK - 1) // BLOCK
     n_bad = 0
     n_zero = 0
     for blk in prange(n_blocks):
         i0 = blk * BLOCK
         m = min(BLOCK, n - i0)
-        idx = np.empty(BLOCK, np.int64)
+        idx = np.empty(BLOCK)
         wa_ = np.empty(BLOCK)
         wb_ = np.empty(BLOCK)
         wc_ = np.empty(BLOCK)
@@ -138,7 +141,14 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
         ft_ = np.empty(BLOCK)
         bad_b = 0
         zero_b = 0
-        # pass 1: cell and weights of every direction of the block (selects only)
+        xs = np.empty(BLOCK)
+        ys = np.empty(BLOCK)
+        zs = np.empty(BLOCK)
+        # pass 0: the block's directions copied into three contiguous arrays, the bad rows
+        # counted and replaced by the zenith. Read in place (x, y, z three floats apart),
+        # pass 1 would need strided loads that LLVM's cost model for AVX2 targets (AMD Zen 3)
+        # judged too dear: it left pass 1 scalar there, 3-4 times slower (it vectorised it
+        # on AVX-512 targets anyway); docs/performance.md, "The fitted lookup on AVX2"
         for j in range(m):
             i = i0 + j
             bx, by, bz = bits[i, 0], bits[i, 1], bits[i, 2]
@@ -147,9 +157,14 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
             bad_b += 1 if bad else 0
             zero_b += 1 if (zero and not bad) else 0
             skip = bad | zero
-            x = 0.0 if skip else d[i, 0]
-            y = 0.0 if skip else d[i, 1]
-            z = 1.0 if skip else d[i, 2]
+            xs[j] = 0.0 if skip else d[i, 0]
+            ys[j] = 0.0 if skip else d[i, 1]
+            zs[j] = 1.0 if skip else d[i, 2]
+        # pass 1: cell and weights of every direction of the block (selects only)
+        for j in range(m):
+            x = xs[j]
+            y = ys[j]
+            z = zs[j]
             mx = max(abs(x), abs(y), abs(z))
             # squares that would overflow or vanish: scale by a power of two (exact)
             s = _BIG if mx > 1e150 else 1.0
@@ -160,7 +175,9 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
             q = (1.0 - th * inv_sky) if sky else (th - th_g) * inv_ground
             u = math.sqrt(max(q, 0.0)) * ((N_SKY - 1) if sky else (N_GROUND - 1))
             last = (N_SKY - 2) if sky else (N_GROUND - 2)
-            iu = min(int(u), last)
+            # the cell as a float (np.floor): AVX2 has no packed float64 -> int64 conversion,
+            # so an int here would keep the loop scalar; pass 2 converts the index
+            iu = min(np.floor(u), float(last))
             # Catmull-Rom weights of the rows iu - 1, iu, iu + 1, iu + 2 at f = u - iu
             f = min(u - iu, 1.0)
             f2 = f * f
@@ -178,7 +195,7 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
             a1 = (w1 - wm) if lo else (wm if hi else w0)
             a2 = w2 if lo else ((w0 - w2) if hi else w1)
             a3 = 0.0 if lo else ((w1 + 2.0 * w2) if hi else w2)
-            r0 = 0 if lo else ((iu - 2) if hi else (iu - 1))
+            r0 = 0.0 if lo else ((iu - 2.0) if hi else (iu - 1.0))
             # azimuth from the sun's vertical plane, folded into [0, pi]
             cp = x * sin_az + y * cos_az
             sp = abs(x * cos_az - y * sin_az)
@@ -186,8 +203,8 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
             cp = 1.0 if (sp == 0.0 and cp == 0.0) else cp
             phi = _atan2_pos(sp, cp) * (1.0 / math.pi)
             t = (-a + math.sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * (N_PHI - 1)
-            it = min(int(t), N_PHI - 2)
-            idx[j] = ((r0 if sky else r0 + N_SKY) * N_PHI + it) * c
+            it = min(np.floor(t), float(N_PHI - 2))
+            idx[j] = ((r0 if sky else r0 + N_SKY) * N_PHI + it) * cf
             wa_[j] = a0
             wb_[j] = a1
             wc_[j] = a2
@@ -199,7 +216,7 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
         # by the spline's weights: v = sum_r a_r (T[r, it] + ft (T[r, it + 1] - T[r, it]))
         if c == 1:
             for j in range(m):
-                k = idx[j]
+                k = int(idx[j])
                 ft = ft_[j]
                 p0 = (wa_[j] * table[k] + wb_[j] * table[k + N_PHI]
                       + wc_[j] * table[k + 2 * N_PHI] + wd_[j] * table[k + 3 * N_PHI])
@@ -208,7 +225,7 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
                 out[i0 + j, 0] = max(p0 + ft * (p1 - p0), 0.0)
         elif c == 3:
             for j in range(m):
-                k = idx[j]
+                k = int(idx[j])
                 ft = ft_[j]
                 wa, wb, wc, wd = wa_[j], wb_[j], wc_[j], wd_[j]
                 for ch in range(3):
@@ -221,7 +238,7 @@ def lookup(d, bits, table, c, theta_h, sin_az, cos_az, out):
                     out[i0 + j, ch] = max(p0 + ft * (p1 - p0), 0.0)
         else:
             for j in range(m):
-                k = idx[j]
+                k = int(idx[j])
                 ft = ft_[j]
                 wa, wb, wc, wd = wa_[j], wb_[j], wc_[j], wd_[j]
                 for ch in range(c):
