@@ -281,11 +281,12 @@ def test_heldout_grid_is_off_the_fitting_nodes():
     np.testing.assert_array_equal(c["elevation_nodes_deg"], fe)
     np.testing.assert_array_equal(c["altitude_nodes_m"], fh)
     np.testing.assert_array_equal(c["aod_nodes"], _grid.AOD_NODES)
-    # the fourth file's held-out AODs are off its own nodes (the held-out AOD 0.7 lies
-    # between 0.5 and 1 there); the present nodes it lacks, 0.35 and 0.75, each have a
-    # held-out AOD on either side of them
-    _, _, atm4, _ = _grid.grid("heldout-v4")
-    assert not {a for a, _ in atm4} & set(_grid.V4_AOD_NODES.tolist())
+    # the fourth and fifth files' held-out AODs are off their own nodes (the held-out AOD
+    # 0.7 lies between 0.5 and 1 there, 0.006 between 0 and 0.0125); the present nodes the
+    # fourth lacks, 0.00625, 0.35 and 0.75, each have a held-out AOD on either side of them
+    for name, nodes in (("heldout-v4", _grid.V4_AOD_NODES), ("heldout-v5", _grid.V5_AOD_NODES)):
+        _, _, atm_v, _ = _grid.grid(name)
+        assert not {a for a, _ in atm_v} & set(nodes.tolist())
     for node in sorted(set(_grid.AOD_NODES.tolist()) - set(_grid.V4_AOD_NODES.tolist())):
         i = int(np.searchsorted(_grid.AOD_NODES, node))
         lo, hi = _grid.AOD_NODES[i - 1], _grid.AOD_NODES[i + 1]
@@ -682,6 +683,41 @@ def test_thin_haze_form_passes_its_nodes_and_reproduces_its_family():
     assert np.all(f(*v, 0.5) > 0.0) and np.all(np.isfinite(f(*v, 0.5)))
     assert f(np.array(0.0), np.array(1.0), np.array(0.0), 0.5) == pytest.approx(0.75)
     assert f(np.array(1.0), np.array(0.0), np.array(1.0), 0.5) >= 0.0
+
+
+def test_aod_rule_thin_haze_form_over_doubling_nodes():
+    """_coefficients.aod_stencil with the node at 0.00625 (nodes 0, 0.00625, 0.0125, 0.025
+    doubling): the form through 0, 0.00625, 0.0125 below 0.0125, through 0, 0.0125, 0.025
+    from 0.0125 to 0.025 (t = AOD / 0.0125 in [1, 2)); L quadratic in sqrt(AOD) from 0.025;
+    continuous at 0.0125, where both forms give the node's value (the form passes through its
+    three nodes); nodes that do not double (0, 0.01, 0.025) give no form."""
+    stn = _coefficients.aod_stencil
+    nodes = np.array([0.0, 0.00625, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.35, 0.5,
+                      0.75, 1.0])
+    for aod, idx in ((0.001, [0, 1, 2]), (0.006, [0, 1, 2]), (0.0124, [0, 1, 2]),
+                     (0.0125, [0, 2, 3]), (0.018, [0, 2, 3]), (0.0249, [0, 2, 3])):
+        st, how = stn(nodes, aod)
+        assert how == "form" and [i for i, _ in st] == idx, (aod, st)
+    assert stn(nodes, 0.025)[1] == "L" and stn(nodes, 0.03)[1] == "L"
+    assert stn(np.array([0.0, 0.01, 0.025, 0.05, 0.1]), 0.005)[1] == "L"
+    # the values: at 0.0125 the node's value from either side; between, positive and
+    # between the forms' limits, the same function as thin_haze_form through the nodes
+    rng = np.random.default_rng(3)
+    L = {float(a): rng.uniform(0.5, 1.5, 50) * (1.0 + 8.0 * a) for a in nodes}
+
+    def at(x):
+        st, how = stn(nodes, x)
+        return _coefficients.apply_aod_stencil(nodes, x, st, how, lambda i: L[float(nodes[i])])
+
+    np.testing.assert_allclose(at(0.0125), L[0.0125], rtol=1e-12)
+    np.testing.assert_allclose(at(0.0125 * (1 - 1e-9)), L[0.0125], rtol=1e-6)
+    np.testing.assert_allclose(at(0.00625), L[0.00625], rtol=1e-12)
+    np.testing.assert_allclose(
+        at(0.018), _coefficients.thin_haze_form(L[0.0], L[0.0125], L[0.025], 0.018 / 0.0125),
+        rtol=1e-12)
+    np.testing.assert_allclose(
+        at(0.003), _coefficients.thin_haze_form(L[0.0], L[0.00625], L[0.0125], 0.003 / 0.00625),
+        rtol=1e-12)
 
 
 def test_aod_rule_thin_haze_form_below_0p025_over_either_node_set():

@@ -1,7 +1,8 @@
 """Generate the data set of the ``fitted`` sky model from the ``precomputed`` reference.
 
-    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v4|heldout-v4|fit-v3|
-                                        heldout-v3|fit-v2|fit-v1|heldout-v1|small]
+    python tools/fitted_dataset.py OUT [--grid fit|heldout|fit-v5|heldout-v5|fit-v4|
+                                        heldout-v4|fit-v3|heldout-v3|fit-v2|fit-v1|
+                                        heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
         [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands | --with-gas-bands]
         [--altitudes M,...]
@@ -17,15 +18,18 @@ bar shows the chunks; at the end the run prints its cost (wall time, chunks comp
 
 Grids (skydome/models/fitted/_grid.py):
 
-* ``fit``: the fitting nodes (12 AOD x 3 albedo = 36 atmospheres, 28 sun elevations
+* ``fit``: the fitting nodes (13 AOD x 3 albedo = 39 atmospheres, 28 sun elevations
   -12..90 deg, 14 altitudes 0..15 km);
-* ``heldout``: the held-out grid (11 atmospheres, their AODs and albedos off the nodes, 13
+* ``heldout``: the held-out grid (12 atmospheres, their AODs and albedos off the nodes, 13
   sun elevations -11.5..70 deg off the nodes and 5 altitudes of which only 0 and 15 km
   are fitting nodes), every view direction at the centre of a cell of the view grid (the
   farthest from its nodes);
-* ``fit-v4``, ``heldout-v4``: the fourth file's grids (``fit`` without the AOD nodes 0.35
-  and 0.75; its held-out AOD 0.7 for the present 0.3, 0.42, 0.6 and 0.87): the shipped file
-  is the full fit of ``fit-v4`` extended with the chunks of AOD 0.35 and 0.75
+* ``fit-v5``, ``heldout-v5``: the fifth file's grids (``fit`` without the AOD node
+  0.00625; its held-out AOD 0.006 for the present 0.003 and 0.009): the shipped file is the
+  fifth file extended with the chunks of AOD 0.00625 (tools/fit_fitted.py --extend);
+* ``fit-v4``, ``heldout-v4``: the fourth file's grids (``fit-v5`` without the AOD nodes 0.35
+  and 0.75; its held-out AOD 0.7 for the 0.3, 0.42, 0.6 and 0.87 of ``heldout-v5``): the
+  fifth file is the full fit of ``fit-v4`` extended with the chunks of AOD 0.35 and 0.75
   (tools/fit_fitted.py --extend);
 * ``fit-v3``, ``heldout-v3``: the third file's grids (``fit-v4`` without the AOD nodes
   0.0125, 0.075 and 0.15; its five held-out atmospheres, AOD 0.0125 among them), whose
@@ -102,12 +106,17 @@ def available_memory_gb() -> float | None:
         return None
 
 
+def _grid_names():
+    from skydome.models.fitted import _grid as G
+
+    return G.GRID_NAMES
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
-                    choices=("fit", "heldout", "fit-v4", "heldout-v4", "fit-v3",
-                             "heldout-v3", "fit-v2", "fit-v1", "heldout-v1", "small"))
+                    choices=_grid_names())
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",

@@ -222,9 +222,10 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     nodes 0, h, 2 h at t = AOD / h (its weights: L quadratic in AOD, the form's own
     fallback where a node value is 0).
 
-    Sun above the horizon, AOD between 0 and the second node above 0 (0.025), where the
-    nodes 0, h, 2 h are evenly spaced: the thin-haze form through them (t = AOD / h in (0,
-    2)). Near the horizon the radiance is far from linear in the first 0.025 of AOD: along
+    Sun above the horizon, AOD between 0 and 0.025 (:data:`THIN_HAZE_MAX`), where the
+    nodes from 0 up double (0, 0.00625, 0.0125, 0.025): the thin-haze form through 0 and the
+    two nodes around the AOD (:func:`thin_haze_interval`: through 0, 0.00625, 0.0125 below
+    0.0125, through 0, 0.0125, 0.025 above; t = AOD / h in (0, 2)). Near the horizon the radiance is far from linear in the first 0.025 of AOD: along
     a grazing path of 30-100 air masses that much aerosol already makes the path's aerosol
     optical depth 1-2, so that its light rises and then saturates (on the ground, sun at 4
     deg, 1.45 deg above the horizon under the sun, 560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1
@@ -233,7 +234,9 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     still 6-25 % at 0.003-0.0125 seen from 2.2 km; with the node at 0.0125 the form through
     0, 0.0125, 0.025 is 1.3-9.4 % at most at 0.003-0.009 and 2.1 % at 0.018, where L
     quadratic in sqrt(AOD) through 0.0125, 0.025, 0.05 was 2.3 % (docs/models.md,
-    "fitted", "The AOD nodes at 0.0125 and 0.075").
+    "fitted", "The AOD nodes at 0.0125 and 0.075"); with the node at 0.00625 too, the form
+    through 0, 0.00625, 0.0125 is 1.9 % at most at 0.003 and 0.7 % at 0.009 ("The AOD node
+    at 0.00625").
 
     Sun above the horizon: up to :data:`LINEAR_AOD_MAX` (0.1) L itself, over the nodes up
     to it (in a thin haze the aerosol's light grows nearly in proportion to its optical
@@ -242,22 +245,44 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     below the horizon (``twilight``): ln L (the twilight sky is light attenuated along
     long grazing paths, and falls by orders of magnitude between the AOD nodes). sqrt(AOD)
     as the coordinate: the sky changes fastest with the first aerosol, and the AOD nodes
-    (0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.35, 0.5, 0.75, 1) are 0.04-0.16
-    apart in it."""
+    (0, 0.00625, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.35, 0.5, 0.75, 1) are
+    0.03-0.16 apart in it."""
     nodes = np.asarray(aod_nodes, dtype=np.float64)
     order = ELEMENT_ORDER["aod"]
     x = math.sqrt(max(aod, 0.0))
     if twilight:
         return stencil(np.sqrt(nodes), x, order), "lnL"
-    if (nodes.size >= 3 and nodes[0] == 0.0 and 0.0 < aod < min(nodes[2], THIN_HAZE_MAX)
-            and abs(nodes[2] - 2.0 * nodes[1]) <= 1e-12):
-        return stencil(nodes[:3], aod, 2), "form"
+    k = thin_haze_interval(nodes, aod)
+    if k:
+        # the form through 0, h, 2 h (h = nodes[k]) at t = AOD / h in [1, 2) (in (0, 2)
+        # for k = 1); the weights: L quadratic in AOD over the three nodes
+        return lagrange(nodes, (0, k, k + 1), float(aod)), "form"
     # the last node of the thin-haze part: the node at LINEAR_AOD_MAX (at least the third)
     n_thin = max(3, int(np.searchsorted(nodes, LINEAR_AOD_MAX + 1e-12)))
     if nodes.size <= n_thin or aod <= float(nodes[n_thin - 1]):
         return stencil(np.sqrt(nodes[:n_thin]), x, order), "L"
     k = n_thin - 1
     return [(i + k, w) for i, w in stencil(np.sqrt(nodes[k:]), x, order)], "lnL"
+
+
+def thin_haze_interval(nodes: np.ndarray, aod: float) -> int:
+    """k > 0 where the day sky at ``aod`` follows the thin-haze form through the nodes 0,
+    h = nodes[k], 2 h = nodes[k + 1] (:func:`aod_stencil`), else 0: for 0 < AOD <
+    THIN_HAZE_MAX, the smallest k with AOD < nodes[k + 1] where the nodes from 0 to nodes[k
+    + 1] double each time (0, h, 2 h for k = 1; 0, h/2, h, 2 h for k = 2). Each interval
+    between two such nodes is read by the form through 0 and the two nodes around it (t =
+    AOD / h in (0, 2) for k = 1, [1, 2) above): every form passes through its three nodes,
+    so the rule is continuous at the node where it changes. A file whose nodes are 0,
+    0.025, 0.05 keeps its rule (the form below 0.025 only, t < 1)."""
+    nodes = np.asarray(nodes, dtype=np.float64)
+    if nodes.size < 3 or nodes[0] != 0.0 or not 0.0 < aod < THIN_HAZE_MAX:
+        return 0
+    for k in range(1, nodes.size - 1):
+        if abs(nodes[k + 1] - 2.0 * nodes[k]) > 1e-12:
+            return 0
+        if aod < nodes[k + 1]:
+            return k
+    return 0
 
 
 def thin_haze_form(L0: np.ndarray, L1: np.ndarray, L2: np.ndarray, t: float) -> np.ndarray:
@@ -298,7 +323,8 @@ def apply_aod_stencil(aod_nodes, aod: float, st, how: str, value_at) -> np.ndarr
     (:func:`aod_stencil`'s ``(st, how)``): the thin-haze form, ln L or L combined with the
     stencil's weights (L clamped at 0)."""
     if how == "form":
-        return thin_haze_form(*(value_at(i) for i, _ in st), aod / float(aod_nodes[1]))
+        return thin_haze_form(*(value_at(i) for i, _ in st),
+                              aod / float(np.asarray(aod_nodes)[st[1][0]]))
     in_log = how == "lnL"
     acc = 0.0
     for i, wi in st:

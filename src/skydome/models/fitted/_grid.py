@@ -88,11 +88,13 @@ V2_ALTITUDE_NODES_M = np.setdiff1d(ALTITUDE_NODES_M, SUPPLEMENT_ALTITUDES_M)
 #: where the reference's own values were 8.5 % off at 0.35 and 10.6 % at 0.7 with a low
 #: sun (docs/models.md, "fitted", "The AOD nodes at 0.35 and 0.75"; added to the fourth
 #: file's fit by ``tools/fit_fitted.py --extend``).
-AOD_NODES = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.35, 0.5, 0.75,
-                      1.0])
+AOD_NODES = np.array([0.0, 0.00625, 0.0125, 0.025, 0.05, 0.075, 0.1, 0.15, 0.25, 0.35, 0.5,
+                      0.75, 1.0])
+#: The AOD nodes of the fifth file (``--grid fit-v5``): the present ones without 0.00625.
+V5_AOD_NODES = np.setdiff1d(AOD_NODES, [0.00625])
 #: The AOD nodes of the fourth file (``--grid fit-v4``): the present ones without 0.35 and
 #: 0.75.
-V4_AOD_NODES = np.setdiff1d(AOD_NODES, [0.35, 0.75])
+V4_AOD_NODES = np.setdiff1d(V5_AOD_NODES, [0.35, 0.75])
 #: The AOD nodes of the third file (``--grid fit-v3``): the present ones without 0.0125,
 #: 0.075 and 0.15.
 V3_AOD_NODES = np.array([0.0, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0])
@@ -105,16 +107,20 @@ ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
 #: Its atmospheres: the third file's five with AOD 0.006 for its 0.0125 (now a node), and
 #: AOD 0.018, 0.06 and 0.12 in three intervals between the AOD nodes that had none; AOD
 #: 0.3, 0.42, 0.6 and 0.87 for the fourth file's 0.7, one in each interval beside the nodes
-#: at 0.35 and 0.75 (near their middles in sqrt(AOD), the model's coordinate).
+#: at 0.35 and 0.75 (near their middles in sqrt(AOD), the model's coordinate); AOD 0.003 and
+#: 0.009 for the fifth file's 0.006, one in each interval beside the node at 0.00625 (0.006
+#: lies within 4 % of it).
 HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
                                       16.0, 28.0, 45.0, 70.0])
 HELDOUT_ALTITUDE_M = np.array([0.0, 400.0, 2200.0, 4500.0, 15000.0])
-HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.006, 0.6), (0.018, 0.9),
-                       (0.06, 0.15), (0.12, 0.55), (0.18, 0.4),
+HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.003, 0.6), (0.009, 0.35),
+                       (0.018, 0.9), (0.06, 0.15), (0.12, 0.55), (0.18, 0.4),
                        (0.3, 0.35), (0.42, 0.8), (0.6, 0.2),
                        (0.87, 0.65))               # (AOD at 550 nm, albedo)
+#: The held-out atmospheres of the fifth file (``--grid heldout-v5``).
+V5_HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.006, 0.6)) + HELDOUT_ATMOSPHERES[4:]
 #: The held-out atmospheres of the fourth file (``--grid heldout-v4``).
-V4_HELDOUT_ATMOSPHERES = HELDOUT_ATMOSPHERES[:7] + ((0.7, 0.2),)
+V4_HELDOUT_ATMOSPHERES = V5_HELDOUT_ATMOSPHERES[:7] + ((0.7, 0.2),)
 
 
 #: The held-out atmospheres of the third file (``--grid heldout-v3``).
@@ -137,7 +143,9 @@ V1_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
 
 def grid(name: str):
     """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
-    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v4" and
+    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v5" and
+    "heldout-v5" (the fifth file's: "fit" without the AOD node 0.00625, its held-out AOD
+    0.006 for 0.003 and 0.009), "fit-v4" and
     "heldout-v4" (the fourth file's: "fit" without the AOD nodes 0.35 and 0.75, its
     held-out AOD 0.7 for 0.3, 0.42, 0.6 and 0.87), "fit-v3" and
     "heldout-v3" (the third file's: "fit" without the AODs 0.0125, 0.075 and 0.15, its five
@@ -149,9 +157,13 @@ def grid(name: str):
         if name == "small":
             atm = [(0.1, 0.0), (0.1, 0.5)]
         return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
-    if name == "fit-v4":
-        atm = [(float(a), float(b)) for a in V4_AOD_NODES for b in ALBEDO_NODES]
+    if name in ("fit-v5", "fit-v4"):
+        nodes = V5_AOD_NODES if name == "fit-v5" else V4_AOD_NODES
+        atm = [(float(a), float(b)) for a in nodes for b in ALBEDO_NODES]
         return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+    if name == "heldout-v5":
+        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V5_HELDOUT_ATMOSPHERES),
+                True)
     if name == "heldout-v4":
         return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V4_HELDOUT_ATMOSPHERES),
                 True)
@@ -174,7 +186,7 @@ def grid(name: str):
     raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
 
 
-GRID_NAMES = ("fit", "heldout", "fit-v4", "heldout-v4", "fit-v3", "heldout-v3", "fit-v2", "fit-v1", "heldout-v1",
+GRID_NAMES = ("fit", "heldout", "fit-v5", "heldout-v5", "fit-v4", "heldout-v4", "fit-v3", "heldout-v3", "fit-v2", "fit-v1", "heldout-v1",
               "small")
 
 def horizon_zenith_rad(altitude_m: float) -> float:
