@@ -106,17 +106,13 @@ def available_memory_gb() -> float | None:
         return None
 
 
-def _grid_names():
+def main(argv=None) -> int:
     from skydome.models.fitted import _grid as G
 
-    return G.GRID_NAMES
-
-
-def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
-                    choices=_grid_names())
+                    choices=G.GRID_NAMES)
     ap.add_argument("--scheduler", default=None,
                     help="Dask scheduler address (default: a local cluster)")
     ap.add_argument("--twilight-reference", action="store_true",

@@ -23,12 +23,13 @@ AOD off its nodes,
 the RMS / max relative error (560 nm, sky part; the ground view from 2.2 km apart) of the
 model's own day rule over those nodes (``_coefficients.aod_stencil``: the thin-haze form
 below 0.025, through 0 and the two nodes around the AOD where the nodes double; L quadratic
-in sqrt(AOD) up to 0.1); then the rules tried between 0.0125 and 0.025. ``--out`` keeps the reference's values; a rerun with the same ``--out`` and albedo
+in sqrt(AOD) up to 0.1); then the rules tried between 0.0125 and 0.025. ``--out`` keeps the
+reference's values; a rerun with the same ``--out`` and albedo
 computes only the AODs the file lacks.
 
 Cost on the 2-core machine of docs/performance.md, with the data set running beside it: 107 s
 (altitude, per atmosphere) and 410 s (aod, 11 AODs; 210 s for five more over the same
-``--out``); ``aod`` with its 18 AODs of now 1330 s beside two data-set workers.
+``--out``); the present ``aod`` (18 AODs) 1330 s beside two data-set workers.
 """
 
 from __future__ import annotations

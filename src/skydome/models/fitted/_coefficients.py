@@ -225,9 +225,10 @@ def aod_stencil(aod_nodes: np.ndarray, aod: float, twilight: bool = False
     Sun above the horizon, AOD between 0 and 0.025 (:data:`THIN_HAZE_MAX`), where the
     nodes from 0 up double (0, 0.00625, 0.0125, 0.025): the thin-haze form through 0 and the
     two nodes around the AOD (:func:`thin_haze_interval`: through 0, 0.00625, 0.0125 below
-    0.0125, through 0, 0.0125, 0.025 above; t = AOD / h in (0, 2)). Near the horizon the radiance is far from linear in the first 0.025 of AOD: along
-    a grazing path of 30-100 air masses that much aerosol already makes the path's aerosol
-    optical depth 1-2, so that its light rises and then saturates (on the ground, sun at 4
+    0.0125, through 0, 0.0125, 0.025 above; t = AOD / h in (0, 2)). Near the horizon the
+    radiance is far from linear in the first 0.025 of AOD: along a grazing path of 30-100
+    air masses that much aerosol already makes the path's aerosol optical depth 1-2, so
+    that its light rises and then saturates (on the ground, sun at 4
     deg, 1.45 deg above the horizon under the sun, 560 nm: 0.050, 0.225, 0.320, 0.375 sr^-1
     at AOD 0, 0.0125, 0.025, 0.05); a quadratic in sqrt(AOD) through the nodes 0, 0.025,
     0.05 was 10-16 % off at AOD 0.0125 and 30-50 % at 0.005 there, the form through them

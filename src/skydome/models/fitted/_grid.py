@@ -186,8 +186,8 @@ def grid(name: str):
     raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
 
 
-GRID_NAMES = ("fit", "heldout", "fit-v5", "heldout-v5", "fit-v4", "heldout-v4", "fit-v3", "heldout-v3", "fit-v2", "fit-v1", "heldout-v1",
-              "small")
+GRID_NAMES = ("fit", "heldout", "fit-v5", "heldout-v5", "fit-v4", "heldout-v4", "fit-v3",
+              "heldout-v3", "fit-v2", "fit-v1", "heldout-v1", "small")
 
 def horizon_zenith_rad(altitude_m: float) -> float:
     """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius
