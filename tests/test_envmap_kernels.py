@@ -10,6 +10,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
+from skydome._threads import run_ranges
 from skydome.export import _kernels_envmap as K
 
 
@@ -35,7 +36,8 @@ def test_half_planes_round_as_numpy():
     out = np.empty((3, v.shape[0]), dtype=np.uint16)
     with np.errstate(over="ignore"):
         ref = v.astype(np.float16)
-    K.half_planes(v.view(np.uint64), *out)
+    # on threads, as the export runs it (skydome._threads.run_ranges), in ranges of 1000
+    run_ranges(K.half_planes, v.shape[0], (v.view(np.uint64), *out), 1000)
     for c in range(3):
         assert np.array_equal(out[c], ref[:, c].view(np.uint16)), c
 
@@ -43,7 +45,7 @@ def test_half_planes_round_as_numpy():
 def test_half_planes_nan():
     v = np.array([[np.nan, -np.nan, 1.0]])
     out = np.empty((3, 1), dtype=np.uint16)
-    K.half_planes(v.view(np.uint64), *out)
+    K.half_planes(v.view(np.uint64), *out, 0, 1)
     h = out.view(np.float16)
     assert np.isnan(h[0, 0]) and np.isnan(h[1, 0]) and h[2, 0] == 1.0
 
@@ -52,7 +54,7 @@ def test_float32_planes_as_numpy():
     rng = np.random.default_rng(3)
     v = rng.lognormal(0.0, 30.0, (100_000, 3)) * rng.choice([-1.0, 1.0], (100_000, 3))
     out = np.empty((3, v.shape[0]), dtype=np.float32)
-    K.float32_planes(v, *out)
+    run_ranges(K.float32_planes, v.shape[0], (v, *out), 1000)
     with np.errstate(over="ignore"):
         ref = v.astype(np.float32)
     assert np.array_equal(out.view(np.uint32), ref.T.view(np.uint32))

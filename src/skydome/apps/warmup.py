@@ -35,7 +35,7 @@ def warm_kernels(verbose: bool = True) -> float:
     model = sd.model("precomputed", sun=sun, cache=False, **PRECOMPUTE_WARM_SIZES)
     sd.render(model, make_projection("fisheye", "16"), output="xyz").to_srgb()
     # the fitted model: its lookup kernel (issue 29: no multi-second compilation on first
-    # use; 4.6-5.1 s of CPU otherwise), in its luminance, XYZ and spectral forms
+    # use; 1.8-3.8 s otherwise on 2 cores), in its luminance, XYZ and spectral forms
     fitted = sd.model("fitted", sun=sun)
     sd.render(fitted, make_projection("fisheye", "16"), output="xyz")
     fitted.luminance([[0.0, 0.6, 0.8]])

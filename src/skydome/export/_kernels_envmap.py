@@ -5,8 +5,10 @@ instead of several numpy passes and their temporaries.
 The per-band passes (directions, RGB) are serial: a parallel launch costs more than the
 work of a band (64 rows of a 4096-wide map) and, on a shared 2-core machine, numba's OpenMP
 threads wait for each other (17 bands' RGB: 0.28 s of wall and 0.14 s of CPU on two
-threads, 0.05 s and 0.03 s on one, at load 11). The whole map's half conversion, one call,
-runs on both cores (0.09 s against 0.10-0.16 s on one).
+threads, 0.05 s and 0.03 s on one, at load 11). The whole map's half or float32 conversion,
+one call, runs on both cores (0.09 s against 0.10-0.16 s on one), as serial kernels on
+Python threads (:func:`skydome._threads.run_ranges`: a ``prange`` kernel's first
+compilation costs seconds more, docs/performance.md, "Kernels on Python threads").
 
 Every kernel gives the values of the numpy code it replaces, bit for bit
 (tests/test_envmap_kernels.py): plain IEEE arithmetic (no fastmath), the XYZ -> RGB
@@ -20,7 +22,7 @@ import math
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, prange, types
+from numba import njit, types
 from numba.core.extending import intrinsic
 
 
@@ -119,20 +121,27 @@ def _half_bits(d):
     return sign | np.uint16(((e - _EXP_NORMAL) >> _U42) + (sig >> _U42))
 
 
-@njit(parallel=True, cache=True)
-def half_planes(bits, r, g, b):
+#: Pixels per thread below which a plane conversion runs on the calling thread alone.
+MIN_PIXELS_PER_THREAD = 65536
+
+
+@njit(nogil=True, cache=True)
+def half_planes(bits, r, g, b, i0, i1):
     """Interleaved float64 pixels (bits (n, 3) as uint64) -> the half bits of each channel
-    in r, g, b (n,) uint16: float64 -> float16 as numpy's astype rounds it."""
-    for i in prange(bits.shape[0]):
+    in r, g, b (n,) uint16: float64 -> float16 as numpy's astype rounds it; pixels i0 .. i1 -
+    1 (serial: :func:`skydome._threads.run_ranges` runs it on several threads)."""
+    for i in range(i0, i1):
         r[i] = _half_bits(bits[i, 0])
         g[i] = _half_bits(bits[i, 1])
         b[i] = _half_bits(bits[i, 2])
 
 
-@njit(parallel=True, cache=True)
-def float32_planes(flat, r, g, b):
-    """Interleaved float64 pixels (n, 3) -> float32 planes r, g, b (n,) (IEEE rounding)."""
-    for i in prange(flat.shape[0]):
+@njit(nogil=True, cache=True)
+def float32_planes(flat, r, g, b, i0, i1):
+    """Interleaved float64 pixels (n, 3) -> float32 planes r, g, b (n,) (IEEE rounding);
+    pixels i0 .. i1 - 1 (serial: :func:`skydome._threads.run_ranges` runs it on several
+    threads)."""
+    for i in range(i0, i1):
         r[i] = np.float32(flat[i, 0])
         g[i] = np.float32(flat[i, 1])
         b[i] = np.float32(flat[i, 2])

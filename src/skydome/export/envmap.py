@@ -546,7 +546,9 @@ def _channel_planes(im: np.ndarray, half: bool) -> tuple[np.ndarray, ...]:
     """The R, G and B planes (H, W) of an (H, W, 3) image as half or float32, each
     contiguous: ``im[..., i].astype(float16 or float32)`` bit for bit, in one parallel pass
     (:mod:`skydome.export._kernels_envmap`)."""
-    from skydome.export._kernels_envmap import float32_planes, half_planes
+    from skydome._threads import run_ranges
+    from skydome.export._kernels_envmap import (MIN_PIXELS_PER_THREAD, float32_planes,
+                                                half_planes)
 
     im = np.ascontiguousarray(im, dtype=np.float64)
     H, W = im.shape[:2]
@@ -555,11 +557,11 @@ def _channel_planes(im: np.ndarray, half: bool) -> tuple[np.ndarray, ...]:
     # process has already touched (fresh pages cost more than the conversion)
     if half:
         out = [np.empty(H * W, dtype=np.uint16) for _ in range(3)]
-        half_planes(flat.view(np.uint64), *out)
+        run_ranges(half_planes, H * W, (flat.view(np.uint64), *out), MIN_PIXELS_PER_THREAD)
         out = [o.view(np.float16) for o in out]
     else:
         out = [np.empty(H * W, dtype=np.float32) for _ in range(3)]
-        float32_planes(flat, *out)
+        run_ranges(float32_planes, H * W, (flat, *out), MIN_PIXELS_PER_THREAD)
     return tuple(o.reshape(H, W) for o in out)
 
 

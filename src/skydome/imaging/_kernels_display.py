@@ -1,6 +1,8 @@
 """numba kernel of the Hunt-effect chroma gain (:func:`skydome.imaging.display.scale_chroma`).
 
-The same arithmetic as the NumPy version, one pixel at a time in a parallel loop, so that
+The same arithmetic as the NumPy version, one pixel at a time in a loop run on several
+threads (:func:`skydome._threads.run_ranges`: serial kernels compile in a third of the time
+a ``prange`` loop takes, docs/performance.md, "Kernels on Python threads"), so that
 the save path of a large picture does not pay for a dozen full-size temporaries: scale
 each colour to Y = 1, CIELAB [CIE15] a* and b* times the gain at L* = 100, back to linear
 sRGB at the colour's own Y, then stop on the segment towards the boosted colour where its
@@ -13,9 +15,11 @@ from __future__ import annotations
 
 import math
 
-from numba import njit, prange
+from numba import njit
 
 _D = 6.0 / 29.0
+#: Pixels per thread below which a display kernel runs on the calling thread alone.
+MIN_PIXELS_PER_THREAD = 16384
 
 
 @njit(cache=True, inline="always")
@@ -33,11 +37,12 @@ def _lab_f_inv(f):
     return 3.0 * _D * _D * (f - 4.0 / 29.0)
 
 
-@njit(parallel=True, cache=True)
-def scale_chroma_kernel(rgb, gain, to_xyz, to_rgb, white, out):
-    """out[i] = rgb[i] with its CIELAB chroma times ``gain`` (rgb, out: (n, 3) linear sRGB;
-    to_xyz / to_rgb the 3 x 3 matrices; white the white's XYZ at Y = 1)."""
-    for i in prange(rgb.shape[0]):
+@njit(nogil=True, cache=True)
+def scale_chroma_kernel(rgb, gain, to_xyz, to_rgb, white, out, i0, i1):
+    """out[i] = rgb[i] with its CIELAB chroma times ``gain`` for i in i0 .. i1 - 1 (rgb,
+    out: (n, 3) linear sRGB; to_xyz / to_rgb the 3 x 3 matrices; white the white's XYZ at Y
+    = 1). Serial: :func:`skydome._threads.run_ranges` runs it on several threads."""
+    for i in range(i0, i1):
         r0 = rgb[i, 0]
         g0 = rgb[i, 1]
         b0 = rgb[i, 2]
@@ -90,8 +95,8 @@ def _srgb_encode(v):
     return min(max(1.055 * v ** (1.0 / 2.4) - 0.055, 0.0), 1.0)
 
 
-@njit(parallel=True, cache=True)
-def hue_preserving_srgb_kernel(rgb, luma, white_start, log2_span, mask, out):
+@njit(nogil=True, cache=True)
+def hue_preserving_srgb_kernel(rgb, luma, white_start, log2_span, mask, out, i0, i1):
     """out[i] = the sRGB-encoded display value in [0, 1] of exposed linear sRGB rgb[i] under
     the hue-preserving transform (:func:`skydome.imaging.display.display_transform`, its
     default), 0 where ``mask[i]`` is False; the number of pixels holding NaN (which the
@@ -100,9 +105,10 @@ def hue_preserving_srgb_kernel(rgb, luma, white_start, log2_span, mask, out):
     curve and every component scaled by f(m) / m, a path to white logarithmic in m from
     ``white_start`` over ``log2_span`` octaves, clipped to [0, 1], then [IEC]'s encoding
     (clipped to [0, 1] as the NumPy path clips it). Equal to that path to a few units in
-    the last place (libm's pow and log2 against NumPy's own)."""
+    the last place (libm's pow and log2 against NumPy's own). For the pixels i0 .. i1 - 1:
+    serial, :func:`skydome._threads.run_ranges` runs it on several threads."""
     n_nan = 0
-    for i in prange(rgb.shape[0]):
+    for i in range(i0, i1):
         r = rgb[i, 0]
         g = rgb[i, 1]
         b = rgb[i, 2]

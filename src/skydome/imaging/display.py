@@ -249,7 +249,8 @@ def scale_chroma(rgb, gain: float) -> np.ndarray:
     colours inside the sRGB gamut are boosted at most to its boundary (luminance kept),
     colours outside it (already more saturated than the display shows) not at all.
     """
-    from skydome.imaging._kernels_display import scale_chroma_kernel
+    from skydome._threads import run_ranges
+    from skydome.imaging._kernels_display import MIN_PIXELS_PER_THREAD, scale_chroma_kernel
     from skydome.spectra import SRGB_WHITE_XY, _M_SRGB_TO_XYZ, _M_XYZ_TO_SRGB, _xy_to_white_xyz
 
     rgb = np.asarray(rgb, dtype=np.float64)
@@ -259,8 +260,9 @@ def scale_chroma(rgb, gain: float) -> np.ndarray:
     # it replaced, without its full-size temporaries: benchmarks/bench_display.py)
     flat = np.ascontiguousarray(rgb.reshape(-1, 3))
     out = np.empty_like(flat)
-    scale_chroma_kernel(flat, float(gain), _M_SRGB_TO_XYZ, _M_XYZ_TO_SRGB,
-                        _xy_to_white_xyz(SRGB_WHITE_XY), out)
+    run_ranges(scale_chroma_kernel, flat.shape[0],
+               (flat, float(gain), _M_SRGB_TO_XYZ, _M_XYZ_TO_SRGB,
+                _xy_to_white_xyz(SRGB_WHITE_XY), out), MIN_PIXELS_PER_THREAD)
     return out.reshape(rgb.shape)
 
 

@@ -326,15 +326,19 @@ class SkyImage:
             # the default in one pass per pixel (a numba kernel, as the chroma gain's): the
             # NumPy expression below made about ten full-size temporaries, 0.03-0.05 s of
             # a warm 512 px `skydome render` (docs/performance.md)
-            from skydome.imaging._kernels_display import hue_preserving_srgb_kernel
+            from skydome._threads import run_ranges
+            from skydome.imaging._kernels_display import (MIN_PIXELS_PER_THREAD,
+                                                          hue_preserving_srgb_kernel)
             from skydome.imaging.display import _LUMA, _WHITE_FULL, _WHITE_START
 
             flat = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float64)
             out = np.empty_like(flat)
             mask = np.ascontiguousarray(np.broadcast_to(self.mask, rgb.shape[:-1]).reshape(-1))
-            if hue_preserving_srgb_kernel(flat, _LUMA, _WHITE_START,
-                                          float(np.log2(_WHITE_FULL / _WHITE_START)), mask,
-                                          out):
+            n_nan = run_ranges(hue_preserving_srgb_kernel, flat.shape[0],
+                               (flat, _LUMA, _WHITE_START,
+                                float(np.log2(_WHITE_FULL / _WHITE_START)), mask, out),
+                               MIN_PIXELS_PER_THREAD)
+            if sum(n_nan):
                 raise ValueError("linear contains NaN values")
             return out.reshape(rgb.shape)
         if tonemap in TONEMAPS[:3]:   # per-channel curves: out-of-gamut negatives to 0
