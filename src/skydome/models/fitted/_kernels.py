@@ -27,9 +27,10 @@ arithmetic and selects only (no call, no branch, no float -> int conversion, con
 loads), which LLVM vectorises (SIMD across the block's directions) on AVX2 and AVX-512
 targets alike, then the table reads (with numpy's error model: Python's puts a zero test
 that raises before every division, and the loop stayed scalar, 28 M directions/s against
-83 on a 2-core AMD EPYC). It also counts the non-finite and zero-length rows itself (on the bits of the floats, which fastmath
-leaves alone), so that the caller needs no separate pass over the directions to check
-them; such rows are looked up as the zenith meanwhile and the caller raises.
+83 on a 2-core AMD EPYC). It also counts the non-finite and zero-length rows itself (on
+the bits of the floats, which fastmath leaves alone), so that the caller needs no separate
+pass over the directions to check them; such rows are looked up as the zenith meanwhile
+and the caller raises.
 
 This module imports numba: the model imports it lazily, in its evaluation methods.
 """
