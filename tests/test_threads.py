@@ -104,3 +104,25 @@ def test_forked_child_gets_a_pool_of_its_own():
             os._exit(0 if ok else 1)
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == 0
+
+
+def test_a_range_calling_run_ranges_again_runs_it_inline():
+    """A kernel (here a Python function) that calls run_ranges from a pool thread gets one
+    inline range there instead of waiting for the pool's threads, which are all busy
+    running such ranges: every outer range completes and each inner call sees its items."""
+    if _threads.thread_count() < 2:
+        pytest.skip("one numba thread: no pool")
+
+    def outer(i0, i1):
+        inner = _threads.run_ranges(lambda a, b: b - a, 1000, (), 1)
+        return (i1 - i0, inner)
+
+    res = {}
+    t = threading.Thread(target=lambda: res.update(out=_threads.run_ranges(outer, 64, (), 1)),
+                         daemon=True)
+    t.start()
+    t.join(60.0)
+    assert not t.is_alive(), "the nested run_ranges call waits for the pool's busy threads"
+    out = res["out"]
+    assert sum(k for k, _ in out) == 64
+    assert all(inner == [1000] for _, inner in out)

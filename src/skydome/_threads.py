@@ -29,6 +29,11 @@ TASKS_PER_THREAD = 8
 _pool: ThreadPoolExecutor | None = None
 _pool_key = (0, 0)                # (threads, process id) of _pool
 _pool_lock = threading.Lock()
+_local = threading.local()        # .in_pool: True in the pool's own threads
+
+
+def _mark_pool_thread() -> None:
+    _local.in_pool = True
 
 
 def thread_count() -> int:
@@ -48,7 +53,8 @@ def _executor(n_threads: int) -> ThreadPoolExecutor:
         if _pool is None or _pool_key != key:
             if _pool is not None and _pool_key[1] == key[1]:
                 _pool.shutdown(wait=False)
-            _pool = ThreadPoolExecutor(max_workers=n_threads, thread_name_prefix="skydome")
+            _pool = ThreadPoolExecutor(max_workers=n_threads, thread_name_prefix="skydome",
+                                       initializer=_mark_pool_thread)
             _pool_key = key
         return _pool
 
@@ -61,10 +67,11 @@ def run_ranges(kernel, n: int, args: tuple, min_per_thread: int) -> list:
     ``kernel`` must release the interpreter lock (``nogil=True``) for the threads to run at
     once. Fewer than ``min_per_thread`` items per thread (a task's hand-over to the pool
     costs some tens of microseconds) and the call runs on the calling thread alone, in one
-    range."""
+    range; so does a call made from one of the pool's own threads (a range whose kernel
+    called ``run_ranges`` again would otherwise wait for threads busy waiting for it)."""
     n = int(n)
     n_threads = min(thread_count(), n // max(int(min_per_thread), 1))
-    if n_threads <= 1:
+    if n_threads <= 1 or getattr(_local, "in_pool", False):
         return [kernel(*args, 0, n)]
     n_tasks = min(n, TASKS_PER_THREAD * n_threads)
     edges = [k * n // n_tasks for k in range(n_tasks + 1)]
