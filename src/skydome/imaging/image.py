@@ -334,11 +334,11 @@ class SkyImage:
             flat = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float64)
             out = np.empty_like(flat)
             mask = np.ascontiguousarray(np.broadcast_to(self.mask, rgb.shape[:-1]).reshape(-1))
-            n_nan = run_ranges(hue_preserving_srgb_kernel, flat.shape[0],
+            nan_counts = run_ranges(hue_preserving_srgb_kernel, flat.shape[0],
                                (flat, _LUMA, _WHITE_START,
                                 float(np.log2(_WHITE_FULL / _WHITE_START)), mask, out),
                                MIN_PIXELS_PER_THREAD)
-            if sum(n_nan):
+            if sum(nan_counts):
                 raise ValueError("linear contains NaN values")
             return out.reshape(rgb.shape)
         if tonemap in TONEMAPS[:3]:   # per-channel curves: out-of-gamut negatives to 0

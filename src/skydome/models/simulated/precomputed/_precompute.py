@@ -1131,10 +1131,10 @@ def _azimuthal_products(q, L_in, w_col, beta_s, J, l_tab, add=False):
 
 def product_threads():
     """Threads of the scattering density's matrix products: numba's thread count (the
-    kernels' own; ``NUMBA_NUM_THREADS``)."""
-    import numba
+    kernels' own; ``NUMBA_NUM_THREADS``: :func:`skydome._threads.thread_count`)."""
+    from skydome._threads import thread_count
 
-    return max(1, int(numba.get_num_threads()))
+    return thread_count()
 
 
 def _blocks_in_threads(worker, starts):
