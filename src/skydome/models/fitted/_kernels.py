@@ -27,10 +27,11 @@ arithmetic and selects only (no call, no branch, no float -> int conversion, con
 loads), which LLVM vectorises (SIMD across the block's directions) on AVX2 and AVX-512
 targets alike, then the table reads (with numpy's error model: Python's puts a zero test
 that raises before every division, and the loop stayed scalar, 28 M directions/s against
-83 on a 2-core AMD EPYC). It also counts the non-finite and zero-length rows itself (on
-the bits of the floats, which fastmath leaves alone), so that the caller needs no separate
-pass over the directions to check them; such rows are looked up as the zenith meanwhile
-and the caller raises.
+83 on a 2-core AMD EPYC), with unsigned indices (no test for a negative index before each
+read: XYZ 29 -> 38 M directions/s on one thread of the same machine). It also counts the
+non-finite rows (on the bits of the floats, which fastmath leaves alone) and the
+zero-length rows itself, so that the caller needs no separate pass over the directions to
+check them; such rows are looked up as the zenith meanwhile and the caller raises.
 
 This module imports numba: the model imports it lazily, in its evaluation methods.
 """
@@ -105,8 +106,14 @@ BLOCK = 256
 #: the rows cannot overlap, where nine arrays' pointers would need run-time overlap checks
 #: before the vectorised loop (measured 10 % faster on one thread, 2-core AMD EPYC).
 _X, _Y, _Z, _IDX, _WA, _WB, _WC, _WD, _FT = (k * BLOCK for k in range(9))
+#: Unsigned offsets for the table and array reads of passes 0 and 2. numba indexes with a
+#: signed integer through a test for a negative index (Python's wrap-around: a compare and
+#: a conditional move per read, 72 instructions per direction for XYZ); an unsigned index
+#: has none. Every offset of such an index must be unsigned too: numba promotes uint64 +
+#: int64 to float64.
+_U1, _U2, _U3 = np.uint64(1), np.uint64(2), np.uint64(3)
+_U_PHI, _U_PHI2, _U_PHI3 = np.uint64(N_PHI), np.uint64(2 * N_PHI), np.uint64(3 * N_PHI)
 _EXP = 0x7FF0000000000000       # the exponent bits of a float64: all set for inf and NaN
-_MAG = 0x7FFFFFFFFFFFFFFF       # all bits but the sign: zero for +0.0 and -0.0
 _BIG = 2.0 ** -600              # exact rescaling of lengths beyond 1e150 / below 1e-150
 _SMALL = 2.0 ** 600
 
@@ -139,28 +146,46 @@ def lookup_blocks(d, bits, table, c, theta_h, sin_az, cos_az, out, b0, b1):
     cf = float(c)
     n_bad = 0
     n_zero = 0
+    # flat views of the C-contiguous arrays, read and written with unsigned indices
+    flat_bits = bits.reshape(bits.size)
+    flat_d = d.reshape(d.size)
+    flat_out = out.reshape(out.size)
+    cu = np.uint64(c)
+    ru = np.uint64(row_c)
+    ru2 = ru + ru
+    ru3 = ru2 + ru
     sc = np.empty(9 * BLOCK)    # the block's scratch (one per call: the call is serial)
     for blk in range(b0, b1):
         i0 = blk * BLOCK
         m = min(BLOCK, n - i0)
         bad_b = 0
         zero_b = 0
-        # pass 0: the block's directions copied into three contiguous rows, the bad rows
-        # counted and replaced by the zenith. Read in place (x, y, z three floats apart),
-        # pass 1 would need strided loads that LLVM's cost model for AVX2 targets (AMD Zen 3)
-        # judged too dear: it left pass 1 scalar there, 3-4 times slower (it vectorised it
-        # on AVX-512 targets anyway); docs/performance.md, "The fitted lookup on AVX2"
-        for j in range(m):
-            i = i0 + j
-            bx, by, bz = bits[i, 0], bits[i, 1], bits[i, 2]
-            bad = ((bx & _EXP) == _EXP) | ((by & _EXP) == _EXP) | ((bz & _EXP) == _EXP)
-            zero = ((bx & _MAG) | (by & _MAG) | (bz & _MAG)) == 0
-            bad_b += 1 if bad else 0
-            zero_b += 1 if (zero and not bad) else 0
-            skip = bad | zero
-            sc[_X + j] = 0.0 if skip else d[i, 0]
-            sc[_Y + j] = 0.0 if skip else d[i, 1]
-            sc[_Z + j] = 1.0 if skip else d[i, 2]
+        # pass 0: the block's directions copied into three contiguous rows. Read in place
+        # (x, y, z three floats apart), pass 1 would need strided loads that LLVM's cost
+        # model for AVX2 targets (AMD Zen 3) judged too dear: it left pass 1 scalar there,
+        # 3-4 times slower (it vectorised it on AVX-512 targets anyway); docs/performance.md,
+        # "The fitted lookup on AVX2". First the block's 3 m floats (contiguous: a
+        # vectorised loop) are tested for a non-finite entry; only a block that has one
+        # is copied row by row, its bad rows counted and replaced by the zenith. The
+        # zero-length rows are counted in pass 1.
+        nf = 0
+        for k in range(3 * i0, 3 * (i0 + m)):
+            nf += 1 if (flat_bits[k] & _EXP) == _EXP else 0
+        if nf == 0:
+            for j in range(m):
+                o = np.uint64(i0 + j) * _U3
+                sc[_X + j] = flat_d[o]
+                sc[_Y + j] = flat_d[o + _U1]
+                sc[_Z + j] = flat_d[o + _U2]
+        else:
+            for j in range(m):
+                i = i0 + j
+                bx, by, bz = bits[i, 0], bits[i, 1], bits[i, 2]
+                bad = ((bx & _EXP) == _EXP) | ((by & _EXP) == _EXP) | ((bz & _EXP) == _EXP)
+                bad_b += 1 if bad else 0
+                sc[_X + j] = 0.0 if bad else d[i, 0]
+                sc[_Y + j] = 0.0 if bad else d[i, 1]
+                sc[_Z + j] = 1.0 if bad else d[i, 2]
         # pass 1: cell and weights of every direction of the block (selects only)
         for j in range(m):
             x = sc[_X + j]
@@ -171,6 +196,9 @@ def lookup_blocks(d, bits, table, c, theta_h, sin_az, cos_az, out, b0, b1):
             s = _BIG if mx > 1e150 else 1.0
             s = _SMALL if mx < 1e-150 else s
             x, y, z = x * s, y * s, z * s
+            # a zero-length row (x = y = z = 0): counted, looked up as the zenith meanwhile
+            zero_b += 1 if mx == 0.0 else 0
+            z = 1.0 if mx == 0.0 else z
             th = _atan2_pos(math.sqrt(x * x + y * y), z)
             sky = th < theta_h
             q = (1.0 - th * inv_sky) if sky else (th - th_g) * inv_ground
@@ -214,42 +242,55 @@ def lookup_blocks(d, bits, table, c, theta_h, sin_az, cos_az, out, b0, b1):
         n_bad += bad_b
         n_zero += zero_b
         # pass 2: per row r0 .. r0 + 3 the linear interpolation in azimuth, the rows weighted
-        # by the spline's weights: v = sum_r a_r (T[r, it] + ft (T[r, it + 1] - T[r, it]))
+        # by the spline's weights: v = sum_r a_r (T[r, it] + ft (T[r, it + 1] - T[r, it])).
+        # XYZ written out channel by channel: the six values of a row (three channels at it
+        # and at it + 1) are contiguous
         if c == 1:
             for j in range(m):
-                k = int(sc[_IDX + j])
+                k = np.uint64(int(sc[_IDX + j]))
                 ft = sc[_FT + j]
-                p0 = (sc[_WA + j] * table[k] + sc[_WB + j] * table[k + N_PHI]
-                      + sc[_WC + j] * table[k + 2 * N_PHI] + sc[_WD + j] * table[k + 3 * N_PHI])
-                p1 = (sc[_WA + j] * table[k + 1] + sc[_WB + j] * table[k + N_PHI + 1]
-                      + sc[_WC + j] * table[k + 2 * N_PHI + 1] + sc[_WD + j] * table[k + 3 * N_PHI + 1])
-                out[i0 + j, 0] = max(p0 + ft * (p1 - p0), 0.0)
+                wa, wb, wc, wd = sc[_WA + j], sc[_WB + j], sc[_WC + j], sc[_WD + j]
+                p0 = (wa * table[k] + wb * table[k + _U_PHI]
+                      + wc * table[k + _U_PHI2] + wd * table[k + _U_PHI3])
+                k1 = k + _U1
+                p1 = (wa * table[k1] + wb * table[k1 + _U_PHI]
+                      + wc * table[k1 + _U_PHI2] + wd * table[k1 + _U_PHI3])
+                flat_out[np.uint64(i0 + j)] = max(p0 + ft * (p1 - p0), 0.0)
         elif c == 3:
             for j in range(m):
-                k = int(sc[_IDX + j])
+                k = np.uint64(int(sc[_IDX + j]))
                 ft = sc[_FT + j]
                 wa, wb, wc, wd = sc[_WA + j], sc[_WB + j], sc[_WC + j], sc[_WD + j]
-                for ch in range(3):
-                    kk = k + ch
-                    p0 = (wa * table[kk] + wb * table[kk + row_c]
-                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
-                    kk += 3
-                    p1 = (wa * table[kk] + wb * table[kk + row_c]
-                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
-                    out[i0 + j, ch] = max(p0 + ft * (p1 - p0), 0.0)
+                ka, kb, kc, kd = k, k + ru, k + ru2, k + ru3
+                x0 = wa * table[ka] + wb * table[kb] + wc * table[kc] + wd * table[kd]
+                ka, kb, kc, kd = ka + _U1, kb + _U1, kc + _U1, kd + _U1
+                y0 = wa * table[ka] + wb * table[kb] + wc * table[kc] + wd * table[kd]
+                ka, kb, kc, kd = ka + _U1, kb + _U1, kc + _U1, kd + _U1
+                z0 = wa * table[ka] + wb * table[kb] + wc * table[kc] + wd * table[kd]
+                ka, kb, kc, kd = ka + _U1, kb + _U1, kc + _U1, kd + _U1
+                x1 = wa * table[ka] + wb * table[kb] + wc * table[kc] + wd * table[kd]
+                ka, kb, kc, kd = ka + _U1, kb + _U1, kc + _U1, kd + _U1
+                y1 = wa * table[ka] + wb * table[kb] + wc * table[kc] + wd * table[kd]
+                ka, kb, kc, kd = ka + _U1, kb + _U1, kc + _U1, kd + _U1
+                z1 = wa * table[ka] + wb * table[kb] + wc * table[kc] + wd * table[kd]
+                o = np.uint64(i0 + j) * _U3
+                flat_out[o] = max(x0 + ft * (x1 - x0), 0.0)
+                flat_out[o + _U1] = max(y0 + ft * (y1 - y0), 0.0)
+                flat_out[o + _U2] = max(z0 + ft * (z1 - z0), 0.0)
         else:
             for j in range(m):
-                k = int(sc[_IDX + j])
+                k = np.uint64(int(sc[_IDX + j]))
                 ft = sc[_FT + j]
                 wa, wb, wc, wd = sc[_WA + j], sc[_WB + j], sc[_WC + j], sc[_WD + j]
+                o = np.uint64(i0 + j) * cu
                 for ch in range(c):
-                    kk = k + ch
-                    p0 = (wa * table[kk] + wb * table[kk + row_c]
-                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
-                    kk += c
-                    p1 = (wa * table[kk] + wb * table[kk + row_c]
-                          + wc * table[kk + 2 * row_c] + wd * table[kk + 3 * row_c])
-                    out[i0 + j, ch] = max(p0 + ft * (p1 - p0), 0.0)
+                    kk = k + np.uint64(ch)
+                    p0 = (wa * table[kk] + wb * table[kk + ru]
+                          + wc * table[kk + ru2] + wd * table[kk + ru3])
+                    kk += cu
+                    p1 = (wa * table[kk] + wb * table[kk + ru]
+                          + wc * table[kk + ru2] + wd * table[kk + ru3])
+                    flat_out[o + np.uint64(ch)] = max(p0 + ft * (p1 - p0), 0.0)
     return n_bad, n_zero
 
 
