@@ -213,6 +213,55 @@ def test_leading_shapes_and_layouts():
     np.testing.assert_array_equal(sky.xyz(d[0, 0]), flat[0])
 
 
+def test_out_receives_the_values_of_a_call_without_it():
+    """``out=`` (a reused output) gets the values of the same call without it (checked
+    against numpy's grid mappings above), every leading shape, and is returned."""
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=-4.0, azimuth_deg=200.0),
+                   observer_altitude_m=3000.0)
+    d = np.random.default_rng(21).normal(size=(4, 50_000, 3))
+    wl = np.array([400.0, 555.0, 700.0, 1010.0])
+    for f, shape in ((sky.xyz, (4, 50_000, 3)), (sky.luminance, (4, 50_000)),
+                     (lambda dd, **k: sky.radiance(dd, wl, **k), (4, 50_000, 4))):
+        want = f(d)
+        out = np.full(shape, np.nan)
+        assert f(d, out=out) is out
+        np.testing.assert_array_equal(out, want)
+        one = np.full(shape[1:], np.nan)
+        np.testing.assert_array_equal(f(d[1], out=one), want[1])
+    single = np.empty(3)
+    np.testing.assert_array_equal(sky.xyz(d[0, 0], out=single), sky.xyz(d[0, 0]))
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: np.empty((10, 3), dtype=np.float32), r"out must be .*float64.* float32 array"),
+    (lambda: np.empty((10, 4)), r"out must be .*shape \(10, 3\).*shape \(10, 4\)"),
+    (lambda: np.empty((30,)), r"out must be .*shape \(10, 3\).*shape \(30,\)"),
+    (lambda: np.empty((3, 10)).T, r"out must be .*C-contiguous.*non-C-contiguous"),
+    (lambda: _read_only((10, 3)), r"out must be .*writeable.*read-only"),
+    (lambda: [[0.0] * 3] * 10, r"out must be a numpy array or None, got list"),
+])
+def test_a_bad_out_is_refused_naming_what_it_must_be(make, message):
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=0.0))
+    d = np.random.default_rng(2).normal(size=(10, 3))
+    with pytest.raises(ValueError, match=message):
+        sky.xyz(d, out=make())
+
+
+def _read_only(shape):
+    a = np.zeros(shape)
+    a.setflags(write=False)
+    return a
+
+
+def test_out_sharing_memory_with_the_directions_is_refused():
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=30.0, azimuth_deg=0.0))
+    d = np.random.default_rng(3).normal(size=(10, 3))
+    with pytest.raises(ValueError, match="out must not share memory with directions"):
+        sky.xyz(d, out=d)
+    with pytest.raises(ValueError, match="out must not share memory with directions"):
+        sky.luminance(d, out=d.reshape(-1)[:10])
+
+
 def test_threads_give_identical_values():
     """Every thread has its own block buffers: the values do not depend on the number of
     threads (the values themselves are checked against numpy above)."""

@@ -121,6 +121,23 @@ def spectral_table(values, table_wl) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([v, extra], axis=-1)[..., order], wl[order]
 
 
+def _checked_out(out, shape: tuple, directions) -> np.ndarray:
+    """``out`` if it can take a result of ``shape``: a C-contiguous, writeable float64
+    array of that shape sharing no memory with ``directions``; else a ValueError that names
+    it, what it is and what it must be."""
+    if not isinstance(out, np.ndarray):
+        raise ValueError(f"out must be a numpy array or None, got {type(out).__name__}")
+    want = f"a C-contiguous, writeable float64 array of shape {shape}"
+    if out.dtype != np.float64 or out.shape != shape or not out.flags.c_contiguous \
+            or not out.flags.writeable:
+        raise ValueError(f"out must be {want}, got a {'' if out.flags.c_contiguous else 'non-'}"
+                         f"C-contiguous{'' if out.flags.writeable else ', read-only'} "
+                         f"{out.dtype} array of shape {out.shape}")
+    if isinstance(directions, np.ndarray) and np.shares_memory(out, directions):
+        raise ValueError("out must not share memory with directions")
+    return out
+
+
 def wavelength_weights(table_wl, wl) -> np.ndarray:
     """(n_table, n): linear interpolation in wavelength from the wavelengths ``table_wl``
     (the model's spectral wavelengths, :func:`spectral_table`) to ``wl`` [nm] of values
@@ -176,6 +193,14 @@ class FittedSky(SkyModel):
     returns the reference's ground (Lambertian, lit by the sun and the sky, seen through
     the air), for an observer on the ground as above it. Errors against the reference on
     a held-out grid: docs/models.md, "fitted".
+
+    :meth:`radiance`, :meth:`xyz` and :meth:`luminance` take ``out=``: a C-contiguous,
+    writeable float64 array of the result's shape that shares no memory with the
+    directions; the result is written into it and it is returned (its contents are
+    undefined where the call raises for bad directions). A caller that evaluates the model
+    again and again (a frame loop) saves the first touch of a fresh output's memory: page
+    faults that cost up to a third of an XYZ call of 2 M directions on a 2-core virtual
+    machine (docs/performance.md, "The fitted lookup into a reused output").
     """
 
     name = "fitted"
@@ -243,7 +268,9 @@ class FittedSky(SkyModel):
         wl = default_wavelengths()
         return self._weights(wl) @ integration_weights(wl, "linear") * K_M
 
-    def _lookup(self, directions, table) -> np.ndarray:
+    def _lookup(self, directions, table, out=None, squeeze=False) -> np.ndarray:
+        """The table at ``directions`` (..., 3): shape (..., C), or (...) with ``squeeze``
+        (C = 1); written into ``out`` where it is given (and ``out`` returned)."""
         from skydome.models.fitted import _kernels
 
         # the checks of flat_directions (skydome.models.analytic), with its messages: the
@@ -254,23 +281,29 @@ class FittedSky(SkyModel):
         lead = d.shape[:-1]
         flat = np.ascontiguousarray(d.reshape(-1, 3))
         c = table.shape[2]
-        out = np.empty((flat.shape[0], c))
+        shape = lead if squeeze else lead + (c,)
+        if out is None:
+            res = np.empty(shape)
+        else:
+            res = _checked_out(out, shape, directions)
         n_bad, n_zero = _kernels.lookup(flat, flat.view(np.int64), table.reshape(-1), c,
-                                        self._theta_h, self._sin_az, self._cos_az, out)
+                                        self._theta_h, self._sin_az, self._cos_az,
+                                        res.reshape(flat.shape[0], c))
         if n_bad:
             raise ValueError("directions contains NaN or infinite values")
         if n_zero:
             raise ValueError("directions contains zero-length vectors")
-        return out.reshape(lead + (c,))
+        return res
 
     # -- the protocol --------------------------------------------------------------------
-    def radiance(self, directions, wavelengths_nm) -> np.ndarray:
+    def radiance(self, directions, wavelengths_nm, *, out=None) -> np.ndarray:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] arriving from ``directions`` (..., 3),
-        shape (..., n_wavelengths); wavelengths in [300, 1100] nm."""
+        shape (..., n_wavelengths); wavelengths in [300, 1100] nm. ``out``: where to write
+        the result (returned), as numpy's ``out=`` (class Notes)."""
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
         key = ("wl", wl.tobytes())
         table = self._derived_table(key, lambda: self._table @ self._weights(wl))
-        return self._lookup(directions, table)
+        return self._lookup(directions, table, out)
 
     def _spectral_basis(self, wavelengths_nm):
         """(sample, B): ``radiance(d, wavelengths_nm) == sample(d) @ B``, sample(d) the
@@ -301,20 +334,22 @@ class FittedSky(SkyModel):
         table = self._derived_table(key, lambda: self._table @ (self._weights(wl) @ M))
         return lambda d: self._lookup(d, table)
 
-    def xyz(self, directions) -> np.ndarray:
-        """CIE 1931 XYZ, Y = luminance [cd m^-2], shape (..., 3)."""
+    def xyz(self, directions, *, out=None) -> np.ndarray:
+        """CIE 1931 XYZ, Y = luminance [cd m^-2], shape (..., 3). ``out``: where to write
+        the result (returned), as numpy's ``out=`` (class Notes)."""
         return self._lookup(directions, self._derived_table(
-            "xyz", lambda: self._table @ self._xyz_matrix()))
+            "xyz", lambda: self._table @ self._xyz_matrix()), out)
 
     def xyz_table(self) -> np.ndarray:
         """The angular table that :meth:`xyz` looks up: CIE 1931 XYZ [cd m^-2] on the view
         grid of :mod:`._grid`, (N_SKY + N_GROUND, N_PHI, 3) (for the GLSL evaluators)."""
         return self._derived_table("xyz", lambda: self._table @ self._xyz_matrix())
 
-    def luminance(self, directions) -> np.ndarray:
-        """Luminance [cd m^-2], shape (...)."""
+    def luminance(self, directions, *, out=None) -> np.ndarray:
+        """Luminance [cd m^-2], shape (...). ``out``: where to write the result
+        (returned), as numpy's ``out=`` (class Notes)."""
         return self._lookup(directions, self._derived_table(
-            "y", lambda: self._table @ self._xyz_matrix()[:, 1:2]))[..., 0]
+            "y", lambda: self._table @ self._xyz_matrix()[:, 1:2]), out, squeeze=True)
 
     def _sun_arrays(self) -> dict:
         if "sun_columns" not in self._c:
