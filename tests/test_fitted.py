@@ -846,3 +846,30 @@ def test_elevation_stencil_keeps_a_risen_sun_off_the_nodes_below_the_horizon():
         assert {float(nodes[i]): w for i, w in est(nodes, e) if abs(w) > 1e-15} == {e: 1.0}
     for e in (-11.5, -1.5, -0.5, -0.01, 1.5, 16.0, 90.0):
         assert est(nodes, e) == _coefficients.stencil(nodes, e, 3)
+
+
+def test_elevation_stencil_in_log_elevation_at_the_clear_aod_nodes():
+    """With the offset of _coefficients.elevation_log_offset (the AOD nodes up to 0.1:
+    2 deg; None above), a sun between 0 and 2 deg reads the nodes 0, 1, 2, 3.5 deg with
+    the cubic in x = ln(e + 2 deg), which it reproduces (and not the cubic in e), meeting
+    the nodes at 0, 1 and 2 deg; below 0 and from 2 deg up the stencil is the one in e."""
+    nodes = _grid.SUN_ELEVATION_NODES_DEG
+    est = _coefficients.elevation_stencil
+    off = _coefficients.elevation_log_offset
+    assert [off(a) for a in (0.0, 0.0125, 0.05, 0.075, 0.1)] == [2.0] * 5
+    assert [off(a) for a in (0.15, 0.25, 0.5, 1.0)] == [None] * 4
+    c = 2.0
+    for e in (0.01, 0.25, 0.5, 0.75, 0.99, 1.01, 1.5, 1.99):
+        st = est(nodes, e, c)
+        assert [float(nodes[i]) for i, _ in st] == [0.0, 1.0, 2.0, 3.5]
+        for poly in (lambda x: 1.0 + 0.0 * x, lambda x: 2.0 - x + 0.3 * x ** 3):
+            got = sum(w * poly(np.log(nodes[i] + c)) for i, w in st)
+            assert got == pytest.approx(poly(np.log(e + c)), abs=1e-12)
+        assert sum(w * nodes[i] ** 3 for i, w in st) != pytest.approx(e ** 3, abs=1e-6)
+    for e in (0.0, 1.0, 2.0):
+        assert {float(nodes[i]): w for i, w in est(nodes, e, c) if abs(w) > 1e-12} == \
+            pytest.approx({e: 1.0}, abs=1e-12)
+    for e in (-11.5, -1.5, -0.5, -0.01, 2.01, 16.0, 90.0):
+        assert est(nodes, e, c) == est(nodes, e)
+
+

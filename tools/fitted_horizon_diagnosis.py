@@ -179,7 +179,7 @@ def elevation_alone(ref: dict, i: int, j: int):
     e = float(ref["suns"][i])
     if np.any(np.isclose(nodes, e)):
         return None
-    st = C.elevation_stencil(nodes, e)
+    st = C.elevation_stencil(nodes, e, C.elevation_log_offset(float(ref["aod"])))
     at = {float(x): k for k, x in enumerate(ref["suns"])}
     if any(float(nodes[p]) not in at for p, _ in st):
         return None
