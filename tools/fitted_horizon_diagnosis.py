@@ -39,7 +39,8 @@ node of the model's stencil around it at the same altitude (``--suns`` with them
 * ``elevation alone``: the reference's own values at those sun nodes, interpolated in
   elevation as the model does (y = ln(L / s + DELTA) and ln s, s the mean of the sky part
   of the grid per wavelength, cubic over the four nodes of
-  ``_coefficients.elevation_stencil``), at
+  ``_coefficients.elevation_stencil``, in ln(e + 2 deg) from 0 to 2 deg where
+  ``_coefficients.elevation_log_offset`` takes it for the reference's AOD), at
   the view grid's nodes against the reference computed at that sun: the share of the sun
   elevation interval, which no fit at the nodes can remove.
 """

@@ -28,10 +28,11 @@ loads), which LLVM vectorises (SIMD across the block's directions) on AVX2 and A
 targets alike, then the table reads (with numpy's error model: Python's puts a zero test
 that raises before every division, and the loop stayed scalar, 28 M directions/s against
 83 on a 2-core AMD EPYC), with unsigned indices (no test for a negative index before each
-read: XYZ 29 -> 38 M directions/s on one thread of the same machine). It also counts the
-non-finite rows (on the bits of the floats, which fastmath leaves alone) and the
-zero-length rows itself, so that the caller needs no separate pass over the directions to
-check them; such rows are looked up as the zenith meanwhile and the caller raises.
+read: XYZ 31 -> 41 M directions/s on one thread of the same machine, output written
+before). It also counts the non-finite rows (on the bits of the floats, which fastmath
+leaves alone) and the zero-length rows itself, so that the caller needs no separate pass
+over the directions to check them; such rows are looked up as the zenith meanwhile and the
+caller raises.
 
 This module imports numba: the model imports it lazily, in its evaluation methods.
 """
