@@ -873,3 +873,25 @@ def test_elevation_stencil_in_log_elevation_at_the_clear_aod_nodes():
         assert est(nodes, e, c) == est(nodes, e)
 
 
+@pytest.mark.parametrize("aod", [0.05, 0.1, 0.12, 0.2])
+def test_the_sky_does_not_step_where_the_elevation_rule_changes(aod):
+    """The stencil in ln(e + 2 deg) between 0 and 2 deg (at the AOD nodes up to 0.1) meets
+    the stencils in e at 0 and 2 deg and the hazier nodes' across AOD 0.1-0.15: the model's
+    sky on either side of those sun elevations, and of AOD 0.1, differs by no more than a
+    change of 1e-6 deg (or 1e-7 in AOD) can make (a step would be percents: at 0.5 deg the
+    two rules' weights differ by up to 0.27)."""
+    d = np.random.default_rng(5).normal(size=(2000, 3))
+    d[:, 2] = np.abs(d[:, 2]) + 0.05
+
+    def lum(e, a=aod):
+        return sd.model("fitted", sun=sd.Sun(elevation_deg=e, azimuth_deg=120.0),
+                        aerosol_optical_depth=a).luminance(d)
+
+    for e in (0.0, 2.0):
+        lo, hi = lum(e - 1e-6), lum(e + 1e-6)
+        np.testing.assert_allclose(hi, lo, rtol=2e-5)
+    if aod == 0.1:
+        for e in (0.5, 1.5):
+            np.testing.assert_allclose(lum(e, 0.1 + 1e-7), lum(e, 0.1 - 1e-7), rtol=2e-5)
+
+
