@@ -717,3 +717,27 @@ def test_gauss_rule_in_v_integrates_length_and_density_profiles():
         V = np.log1p(L / ts)
         short = 1.0 - w[:n].sum() / L
         assert 0.5 * V ** 2 / (24 * 100) < short < 1.5 * V ** 2 / (24 * 100)
+
+
+@pytest.mark.parametrize("elevation, altitude", [(30.0, 0.0), (2.0, 3000.0), (-3.0, 0.0),
+                                                 (-20.0, 0.0)])
+def test_xyz_is_the_integrated_spectrum(elevation, altitude):
+    """PrecomputedSky.xyz (one product of the table values with the wavelength
+    interpolation, the solar spectrum and the CIE 1931 integration weights) equals the
+    protocol's definition: radiance on the default wavelengths integrated by
+    spectrum_to_xyz (skydome.spectra, checked against the CIE tables in test_spectra), over
+    the whole sphere (the ground below the horizon included) and at night (all zero)."""
+    from skydome.spectra import default_wavelengths, spectrum_to_xyz
+
+    sky = sd.model("precomputed", sun=sd.Sun(elevation_deg=elevation, azimuth_deg=200.0),
+                   observer_altitude_m=altitude)
+    d = np.random.default_rng(4).normal(size=(3, 700, 3))
+    wl = default_wavelengths()
+    want = spectrum_to_xyz(sky.radiance(d, wl), wl)
+    got = sky.xyz(d)
+    assert got.shape == (3, 700, 3)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * max(want.max(), 1.0))
+    np.testing.assert_allclose(sky.luminance(d), want[..., 1], rtol=1e-12,
+                               atol=1e-12 * max(want.max(), 1.0))
+    if elevation < -18.0:
+        assert not got.any()
