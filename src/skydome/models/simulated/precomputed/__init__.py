@@ -472,7 +472,7 @@ class PrecomputedSky(SkyModel):
         (:meth:`radiance` on the default wavelengths integrated with the CIE 1931 functions,
         ``spectrum_to_xyz``), computed as one product of the table values with (the
         wavelength interpolation x the solar spectrum x the integration weights), without
-        the (n, 81) spectrum between them: the same within rounding (the spectrum's clamp
+        the (n, 41) spectrum between them: the same within rounding (the spectrum's clamp
         at 0 changes nothing there: it interpolates non-negative table values with
         non-negative weights): 0.16-0.21 s against 0.26-0.71 s for 262 144 directions on a
         2-core AMD EPYC, of which the table lookup itself 0.16-0.22 s (docs/performance.md,
