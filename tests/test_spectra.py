@@ -255,6 +255,46 @@ def test_spectrum_to_xyz_broadcasts():
     np.testing.assert_allclose(sp.luminance_from_spectrum(L, w), xyz[..., 1], rtol=1e-14)
 
 
+def test_interpolation_matrix_is_numpy_interp_with_held_ends():
+    # oracle: numpy.interp (linear, end values held) applied to the values themselves
+    rng = np.random.default_rng(5)
+    src = np.array([300.0, 320.0, 330.0, 360.0, 500.0, 1100.0])
+    dst = np.array([250.0, 300.0, 305.0, 330.0, 331.5, 777.0, 1100.0, 1200.0])
+    v = rng.uniform(0.0, 2.0, (4, src.size))
+    W = sp.interpolation_matrix(src, dst)
+    assert W.shape == (src.size, dst.size)
+    want = np.stack([np.interp(dst, src, row) for row in v])
+    np.testing.assert_allclose(v @ W, want, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(W.sum(axis=0), 1.0, rtol=1e-15)
+    assert np.count_nonzero(W, axis=0).max() <= 2 and W.min() >= 0.0
+    # one source wavelength: its value everywhere
+    np.testing.assert_array_equal(sp.interpolation_matrix([550.0], dst), np.ones((1, dst.size)))
+
+
+def test_solar_xyz_matrix_is_the_integrated_interpolated_spectrum():
+    # oracle: the spectrum built step by step (numpy.interp to the default wavelengths, the
+    # G173 irradiance there) and integrated by spectrum_to_xyz
+    rng = np.random.default_rng(6)
+    tw = np.arange(300.0, 1100.0 + 1e-9, 20.0)
+    S = rng.uniform(0.0, 0.1, (3, tw.size))
+    wl = sp.default_wavelengths()
+    spec = np.stack([np.interp(wl, tw, row) for row in S]) * sp.solar_irradiance(wl)
+    want = sp.spectrum_to_xyz(spec, wl)
+    np.testing.assert_allclose(S @ sp.solar_xyz_matrix(tw), want, rtol=1e-13)
+    np.testing.assert_allclose(S @ sp.solar_xyz_matrix(tw, irradiance_scale=1.034),
+                               1.034 * want, rtol=1e-13)
+    # another wavelength grid, and another interpolation given as its matrix
+    wl2 = np.arange(400.0, 700.0 + 1e-9, 5.0)
+    spec2 = np.stack([np.interp(wl2, tw, row) for row in S]) * sp.solar_irradiance(wl2)
+    np.testing.assert_allclose(S @ sp.solar_xyz_matrix(tw, wl2), sp.spectrum_to_xyz(spec2, wl2),
+                               rtol=1e-13)
+    nearest = np.zeros((tw.size, wl.size))
+    nearest[np.abs(tw[:, None] - wl[None, :]).argmin(axis=0), np.arange(wl.size)] = 1.0
+    spec3 = S[:, np.abs(tw[:, None] - wl[None, :]).argmin(axis=0)] * sp.solar_irradiance(wl)
+    np.testing.assert_allclose(S @ sp.solar_xyz_matrix(tw, interpolation=nearest),
+                               sp.spectrum_to_xyz(spec3, wl), rtol=1e-13)
+
+
 # ----------------------------------------------------------------------------- colour spaces
 
 def _random_xyz(n=200, seed=3):

@@ -59,12 +59,6 @@ def turbidity_from_aod(aod: float) -> float:
     return (beta + 0.04586) / 0.04608
 
 
-def interp_matrix(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
-    """(n_src, n_dst) linear interpolation weights (np.interp of each unit vector)."""
-    eye = np.eye(src.size)
-    return np.stack([np.interp(dst, src, eye[i]) for i in range(src.size)])
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("heldout")
@@ -92,8 +86,8 @@ def main(argv=None) -> int:
     if a.nodes:
         return _at_nodes(a.heldout, a.albedo, a.aod)
     from skydome.models.fitted._dataset import DataSet
-    from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
-        solar_irradiance
+    from skydome.spectra import default_wavelengths, interpolation_matrix, \
+        luminance_from_spectrum, solar_irradiance
 
     ds = DataSet(a.heldout, require_all=False, grid="heldout")
     lo_aod, hi_aod = _grid.AOD_RANGE
@@ -128,7 +122,7 @@ def main(argv=None) -> int:
         s[2] = np.maximum(s[2], np.max(np.abs(r), axis=0))
 
     dwl = default_wavelengths()
-    to_default = interp_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
+    to_default = interpolation_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     e_table = solar_irradiance(wl)
     acc: dict = {}
 
@@ -253,8 +247,8 @@ def _at_nodes(folder, albedo, aod=None) -> int:
     import skydome as sd
     from skydome.models.fitted import _coefficients, _grid
     from skydome.models.fitted._dataset import DataSet
-    from skydome.spectra import default_wavelengths, luminance_from_spectrum, \
-        solar_irradiance
+    from skydome.spectra import default_wavelengths, interpolation_matrix, \
+        luminance_from_spectrum, solar_irradiance
 
     ds = DataSet(folder, require_all=False)
     if ds.midpoints:
@@ -280,7 +274,7 @@ def _at_nodes(folder, albedo, aod=None) -> int:
               file=sys.stderr)
         return 2
     dwl = default_wavelengths()
-    to_default = interp_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
+    to_default = interpolation_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     n_sky = _grid.N_SKY
     acc: dict = {}
     for aod, alb in atms:

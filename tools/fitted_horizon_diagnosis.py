@@ -98,12 +98,10 @@ def compute_reference(aod: float, albedo: float, suns, altitudes) -> dict:
 def _luminance_matrix(wl):
     """(n_wl, n_default): the table values [sr^-1] to the solar-weighted spectrum on the
     default wavelengths (as tools/fitted_accuracy.py integrates the reference)."""
-    from skydome.spectra import default_wavelengths, solar_irradiance
+    from skydome.spectra import default_wavelengths, interpolation_matrix, solar_irradiance
 
     dwl = default_wavelengths()
-    eye = np.eye(wl.size)
-    w = np.stack([np.interp(dwl, wl, eye[i]) for i in range(wl.size)])
-    return w * solar_irradiance(dwl)[None, :], dwl
+    return interpolation_matrix(wl, dwl) * solar_irradiance(dwl)[None, :], dwl
 
 
 def ref_luminance(L, wl):

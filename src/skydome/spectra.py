@@ -51,11 +51,13 @@ __all__ = [
     "wavelength_grid",
     "default_wavelengths",
     "resample",
+    "interpolation_matrix",
     "cmf_1931",
     "daylight_basis",
     "solar_irradiance",
     "integration_weights",
     "spectrum_to_xyz",
+    "solar_xyz_matrix",
     "luminance_from_spectrum",
     "xyz_to_xy",
     "xy_to_xyz",
@@ -223,6 +225,35 @@ def resample(wavelengths_nm, table_nm, values, outside: str = "zero") -> np.ndar
     if fp.ndim == 1:
         return np.interp(x, xp, fp, **kw)
     return np.stack([np.interp(x, xp, fp[:, j], **kw) for j in range(fp.shape[1])], axis=-1)
+
+
+def interpolation_matrix(source_nm, target_nm) -> np.ndarray:
+    """The matrix of :func:`resample`'s ``"hold"`` interpolation: W, (n_source, n_target),
+    with ``values_target = values_source @ W`` for values (..., n_source) tabulated at
+    ``source_nm`` (increasing): linear between the source wavelengths, the end values held
+    beyond them (a single source wavelength is held everywhere). Each column has at most
+    two non-zero weights, which sum to 1.
+
+    Parameters
+    ----------
+    source_nm : array_like
+        (n_source,) wavelengths of the table [nm], increasing.
+    target_nm : array_like
+        (n_target,) wavelengths to interpolate to [nm].
+    """
+    src = np.asarray(source_nm, dtype=np.float64).reshape(-1)
+    dst = np.asarray(target_nm, dtype=np.float64).reshape(-1)
+    W = np.zeros((src.size, dst.size))
+    if src.size == 1:
+        W[0, :] = 1.0
+        return W
+    x = np.clip(dst, src[0], src[-1])
+    j = np.clip(np.searchsorted(src, x) - 1, 0, src.size - 2)
+    f = (x - src[j]) / (src[j + 1] - src[j])
+    cols = np.arange(dst.size)
+    W[j, cols] = 1.0 - f
+    W[j + 1, cols] += f
+    return W
 
 
 def _interp_columns(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
@@ -460,6 +491,25 @@ def spectrum_to_xyz(spectral_radiance, wavelengths_nm, method: str = "linear") -
     L = _as_spectrum(spectral_radiance, w.size)
     W = integration_weights(w, method)
     return K_M * (L @ W)
+
+
+def solar_xyz_matrix(table_nm, wavelengths_nm=None, *, irradiance_scale: float = 1.0,
+                     interpolation=None) -> np.ndarray:
+    """K, (n_table, 3), with CIE 1931 XYZ [Y in cd m^-2] = ``S @ K`` for radiance per unit
+    extraterrestrial solar irradiance S (..., n_table) [sr^-1] tabulated at ``table_nm``:
+    :func:`spectrum_to_xyz` of the spectral radiance that S makes on ``wavelengths_nm``
+    (default :func:`default_wavelengths`) as one matrix: S interpolated there
+    (:func:`interpolation_matrix`, or the (n_table, n) matrix ``interpolation``), times
+    :func:`solar_irradiance` there times ``irradiance_scale`` (the sun's distance), then
+    integrated with the ``"linear"`` weights of :func:`integration_weights`, times K_m.
+    Equal to integrating the spectrum itself within rounding, without the (..., n)
+    spectrum between them."""
+    wl = default_wavelengths() if wavelengths_nm is None else \
+        _increasing(as_wavelengths(wavelengths_nm))
+    W = interpolation_matrix(table_nm, wl) if interpolation is None else \
+        np.asarray(interpolation, dtype=np.float64)
+    return (W * (solar_irradiance(wl) * irradiance_scale)[None, :]) \
+        @ (K_M * np.asarray(integration_weights(wl, "linear")))
 
 
 def luminance_from_spectrum(spectral_radiance, wavelengths_nm, method: str = "linear"

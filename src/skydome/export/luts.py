@@ -96,19 +96,12 @@ TABLE_FORMAT = "skydome.precomputed/4"
 
 def xyz_weights_for_table(table_wavelengths_nm, wavelengths_nm=None) -> np.ndarray:
     """(n_table, 3) weights K with XYZ = sum_j K_j S_j for radiance per unit solar
-    irradiance S on the table grid (see the module docstring)."""
-    from skydome.constants import K_M
-    from skydome.spectra import default_wavelengths, integration_weights, solar_irradiance
+    irradiance S on the table grid (see the module docstring):
+    :func:`skydome.spectra.solar_xyz_matrix`, through ``wavelengths_nm`` (default the
+    default wavelengths)."""
+    from skydome.spectra import solar_xyz_matrix
 
-    tw = np.asarray(table_wavelengths_nm, dtype=np.float64)
-    wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
-    # the model's table -> output interpolation (linear, end values held), column by column
-    if tw.size == 1:
-        W = np.ones((wl.size, 1))
-    else:
-        W = np.stack([np.interp(wl, tw, e) for e in np.eye(tw.size)], axis=1)
-    cmf = K_M * np.asarray(integration_weights(wl))                       # (n_out, 3)
-    return (W * solar_irradiance(wl)[:, None]).T @ cmf
+    return solar_xyz_matrix(table_wavelengths_nm, wavelengths_nm)
 
 
 def _bruneton_3d(tab: np.ndarray) -> np.ndarray:
@@ -574,16 +567,12 @@ def _solar_xyz_weights(grid_nm, wavelengths_nm=None, to_request=None) -> np.ndar
     """(n_grid, 3) weights K: XYZ [Y in cd m^-2] = sum_j K_j x_j of a spectrum per unit solar
     irradiance x given on ``grid_nm``, mapped to the output wavelengths by ``to_request``
     (a linear map (..., n_grid) -> (..., n_out); default linear interpolation)."""
-    from skydome.constants import K_M
-    from skydome.spectra import default_wavelengths, integration_weights, solar_irradiance
+    from skydome.spectra import default_wavelengths, solar_xyz_matrix
 
     grid = np.asarray(grid_nm, dtype=np.float64)
     wl = default_wavelengths() if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
-    if to_request is None:
-        return xyz_weights_for_table(grid, wl)
-    W = to_request(np.eye(grid.size), grid, wl)                      # (n_grid, n_out)
-    cmf = K_M * np.asarray(integration_weights(wl))                  # (n_out, 3)
-    return (W * solar_irradiance(wl)[None, :]) @ cmf
+    W = None if to_request is None else to_request(np.eye(grid.size), grid, wl)  # (n_grid, n_out)
+    return solar_xyz_matrix(grid, wl, interpolation=W)
 
 
 def _rgba(xyz: np.ndarray, alpha=None) -> np.ndarray:

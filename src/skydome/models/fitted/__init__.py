@@ -138,28 +138,15 @@ def _checked_out(out, shape: tuple, directions) -> np.ndarray:
     return out
 
 
-def wavelength_weights(table_wl, wl) -> np.ndarray:
-    """(n_table, n): linear interpolation in wavelength from the wavelengths ``table_wl``
-    (the model's spectral wavelengths, :func:`spectral_table`) to ``wl`` [nm] of values
-    relative to the extraterrestrial solar spectrum, held beyond the ends."""
-    tw = np.asarray(table_wl, dtype=np.float64)
-    wl = np.asarray(wl, dtype=np.float64)
-    x = np.clip(wl, tw[0], tw[-1])
-    j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
-    f = (x - tw[j]) / (tw[j + 1] - tw[j])
-    W = np.zeros((tw.size, wl.size))
-    W[j, np.arange(wl.size)] = 1.0 - f
-    W[j + 1, np.arange(wl.size)] += f
-    return W
-
-
 def interpolate_spectrum(values, table_wl, wl) -> np.ndarray:
     """``values`` (..., n_table) relative to the solar spectrum at the table wavelengths
     ``table_wl``, interpolated to ``wl`` [nm] as the model interpolates its tables
     (:func:`spectral_table`, then linear): (..., n) (tools/fitted_accuracy.py applies it
     to the reference's own values to measure the interpolation alone)."""
+    from skydome.spectra import interpolation_matrix
+
     v, sw = spectral_table(values, table_wl)
-    return v @ wavelength_weights(sw, wl)
+    return v @ interpolation_matrix(sw, wl)
 
 
 @register
@@ -247,9 +234,9 @@ class FittedSky(SkyModel):
         """(n_table, n): linear interpolation from the table wavelengths to ``wl``, times
         the extraterrestrial solar irradiance at ``wl`` [W m^-2 nm^-1] (the sun's distance
         included)."""
-        from skydome.spectra import solar_irradiance
+        from skydome.spectra import interpolation_matrix, solar_irradiance
 
-        W = wavelength_weights(self._table_wl, wl)
+        W = interpolation_matrix(self._table_wl, wl)
         return W * (solar_irradiance(wl) * self.sun.irradiance_scale)[None, :]
 
     def _derived_table(self, key, make):
@@ -263,10 +250,9 @@ class FittedSky(SkyModel):
     def _xyz_matrix(self) -> np.ndarray:
         """(n_table, 3): table values -> CIE XYZ [cd m^-2] through the default wavelength
         grid (as the base class integrates a spectral model's radiance)."""
-        from skydome.spectra import K_M, default_wavelengths, integration_weights
+        from skydome.spectra import solar_xyz_matrix
 
-        wl = default_wavelengths()
-        return self._weights(wl) @ integration_weights(wl, "linear") * K_M
+        return solar_xyz_matrix(self._table_wl, irradiance_scale=self.sun.irradiance_scale)
 
     def _lookup(self, directions, table, out=None, squeeze=False) -> np.ndarray:
         """The table at ``directions`` (..., 3): shape (..., C), or (...) with ``squeeze``

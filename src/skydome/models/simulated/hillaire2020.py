@@ -200,12 +200,12 @@ class Hillaire2020(SkyModel):
 
     @staticmethod
     def _weights(grid, wl):
-        """(n_wl, n_grid) matrix of the linear interpolation from ``grid`` to ``wl``: the
-        image of the identity under :func:`skydome.spectra.resample` (the library's one
+        """(n_wl, n_grid) matrix of the linear interpolation from ``grid`` to ``wl``
+        (:func:`skydome.spectra.interpolation_matrix`, the matrix of the library's one
         resampling convention; ``wl`` lies inside ``grid``, which spans it)."""
-        from skydome.spectra import resample
+        from skydome.spectra import interpolation_matrix
 
-        return resample(wl, grid, np.eye(grid.size), "hold")
+        return interpolation_matrix(grid, wl).T
 
     @classmethod
     def _to_grid(cls, x, grid, wl):

@@ -342,29 +342,16 @@ class PrecomputedSky(SkyModel):
 
         return solar_irradiance(wl) * self.sun.irradiance_scale
 
-    def _wavelength_matrix(self, wl) -> np.ndarray:
-        """(n_wl, n_table): linear interpolation in wavelength from the table grid to
-        ``wl`` (end values held beyond the table)."""
-        tw = self._t.table_wavelengths_nm
-        W = np.zeros((wl.size, tw.size))
-        if tw.size == 1:
-            W[:, 0] = 1.0
-        else:
-            x = np.clip(wl, tw[0], tw[-1])
-            j = np.clip(np.searchsorted(tw, x) - 1, 0, tw.size - 2)
-            f = (x - tw[j]) / (tw[j + 1] - tw[j])
-            W[np.arange(wl.size), j] = 1.0 - f
-            W[np.arange(wl.size), j + 1] += f
-        return W
-
     def _to_wavelengths(self, values, wl):
         """Per-unit-solar-irradiance values on the table grid (..., n_table) -> radiometric
         values on ``wl``: linear interpolation in wavelength (end values held beyond the
         table), times the solar spectrum at ``wl``."""
+        from skydome.spectra import interpolation_matrix
+
         tw = self._t.table_wavelengths_nm
         if wl.shape == tw.shape and np.allclose(wl, tw, rtol=0, atol=1e-9):
             return values * self._solar(wl)
-        return (values @ self._wavelength_matrix(wl).T) * self._solar(wl)
+        return (values @ interpolation_matrix(tw, wl)) * self._solar(wl)
 
     def _observer_slices(self, table_only=False):
         """The 4-D tables interpolated at the observer's r and the sun's mu_s."""
@@ -477,14 +464,13 @@ class PrecomputedSky(SkyModel):
         non-negative weights): 0.16-0.21 s against 0.26-0.71 s for 262 144 directions on a
         2-core AMD EPYC, of which the table lookup itself 0.16-0.22 s (docs/performance.md,
         "The precomputed sky's XYZ in one product")."""
-        from skydome.spectra import K_M, default_wavelengths, integration_weights
+        from skydome.spectra import solar_xyz_matrix
 
         d = as_directions(directions)
         M = self.__dict__.get("_xyz_from_table")
         if M is None:
-            wl = default_wavelengths()
-            M = self._xyz_from_table = (self._wavelength_matrix(wl).T * self._solar(wl)) \
-                @ integration_weights(wl, "linear") * K_M
+            M = self._xyz_from_table = solar_xyz_matrix(
+                self._t.table_wavelengths_nm, irradiance_scale=self.sun.irradiance_scale)
         out = self._radiance_table(np.ascontiguousarray(d.reshape(-1, 3))) @ M
         return out.reshape(d.shape[:-1] + (3,))
 
