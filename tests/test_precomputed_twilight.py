@@ -196,9 +196,10 @@ def test_reference_configuration_settings(reference_sky):
 # RMS noise). The reference's noise adds to the measured difference in quadrature, so the
 # bound on the measured RMS is sqrt(target^2 + noise^2), with the reference's noise held
 # under half the target so that it cannot decide the test. Measured RMS (max) / reference
-# noise: -4 deg 1.58 (3.5) / 0.32 %, -6 deg 2.54 (4.9) / 1.18 %, -8 deg 2.02 (3.1) / 1.64 %,
-# -10 deg 2.79 (5.4) / 2.04 %, -12 deg 2.77 (3.4) / 1.96 % (docs/models.md, "Twilight: the
-# reference configuration").
+# noise: -4 deg 0.92 (1.9) / 0.32 %, -6 deg 1.79 (2.6) / 1.18 %, -8 deg 1.70 (2.5) / 1.64 %,
+# -10 deg 2.90 (5.8) / 2.04 %, -12 deg 2.84 (3.5) / 1.96 % (docs/models.md, "Twilight: the
+# reference configuration"; when the configuration was introduced 1.58, 2.54, 2.02, 2.79
+# and 2.77 % RMS).
 REFERENCE_CASES = [(-4.0, CIVIL, 0.03, 0.005),
                    (-6.0, CIVIL, 0.03, 0.015),
                    (-8.0, SEGMENT, 0.10, 0.03),

@@ -33,6 +33,9 @@ __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
 # the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
 # in angle) and azimuth nodes from the sun's over [0, 180] deg
 _SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
+#: Gauss-Legendre nodes between two quadrature nodes of a view ray for its columns from
+#: the observer with ``observer_columns`` (docs/models.md, "The observer's own columns")
+OBSERVER_COLUMN_NODES = 6
 
 
 @register
@@ -129,7 +132,7 @@ class PrecomputedSky(SkyModel):
         within 3 % RMS of ``montecarlo`` to sun -6 deg and within 10 % to -12 deg
         (tests/test_precomputed_twilight.py; docs/models.md, "Twilight: the reference
         configuration"; its cost in docs/performance.md), and by day
-        ``observer_single_scattering=True``.
+        ``observer_single_scattering=True`` and ``observer_columns=True``.
     twilight_single_scattering, observer_single_scattering : bool
         Single scattering integrated at the observer's own altitude and sun on the
         observer's sky map (192 view zenith angles above the horizon, 48 below, 96
@@ -142,6 +145,17 @@ class PrecomputedSky(SkyModel):
         twilight is 7.6 against 4.9 % RMS off ``montecarlo`` at sun -4 deg, and between
         its mu_s nodes it draws the earth's shadow twice); ``observer_single_scattering``
         is opt-in. The viewer's shader and the LUT bakes read the table.
+    observer_columns : bool
+        The columns (hence the transmittance) from the observer to each quadrature node of
+        the observer's sky maps (orders 2..N; single scattering where it is integrated at
+        the observer) integrated along the view ray itself (6-point Gauss-Legendre from
+        node to node), not the difference of two columns to the top read from the column
+        table. Along a grazing ray from an observer inside haze those two columns exceed
+        100 optical depths, and their linear interpolation in r made the horizon step by
+        about 10 % where the observer crossed a table r node (docs/models.md, "The
+        observer's own columns"). Opt-in (default False; on with ``twilight_reference``):
+        the viewer's shader and the LUT bakes compute the table's differences, as the
+        model does without it.
     cache : bool
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
@@ -216,6 +230,15 @@ class PrecomputedSky(SkyModel):
                       "does below the horizon), not read from the 4-D table, whose linear "
                       "interpolation between its r nodes is up to 50 % off for observers "
                       "inside thick haze; opt-in (the viewer's shader reads the table)",
+                  kind="bool"),
+        Parameter("observer_columns", "", False,
+                  doc="the observer's sky maps (orders 2..N, and single scattering where it "
+                      "is integrated at the observer) with each view ray's columns from the "
+                      "observer integrated along the ray itself, not read as the difference "
+                      "of two columns to the top from the column table, which made the "
+                      "horizon of an observer inside haze step by about 10 % at the table's "
+                      "r nodes; opt-in (the viewer's shader and the LUT bakes compute the "
+                      "table's differences); part of twilight_reference",
                   kind="bool"),
         Parameter("twilight_reference", "", False,
                   doc="the twilight reference configuration: twilight_single_scattering on "
@@ -398,7 +421,7 @@ class PrecomputedSky(SkyModel):
                                                     self._mu_s_min, self._r0, mu_s,
                                                     int(self.integration_samples),
                                                     QUADRATURE_SCALE_M, cos_th, ground,
-                                                    cphi, reach, out)
+                                                    cphi, reach, out, *self._column_rule())
                 if reach[:, 0].min() >= j0 and reach[:, 1].max() <= j0 + J.shape[4]:
                     break
                 # a row outside the bound (which _reach proves cannot be): said, and the
@@ -409,6 +432,16 @@ class PrecomputedSky(SkyModel):
                 cache.clear()
             cache[key] = out
         return sl(ss, 0), cache[key]
+
+    def _column_rule(self):
+        """(gx, gw) of the observer's sky-map kernels: the Gauss-Legendre rule on [0, 1]
+        that integrates the view rays' columns between their nodes with
+        ``observer_columns``, else two empty arrays (the column table's differences)."""
+        from skydome.transport._quadrature import gauss_legendre_unit
+
+        if getattr(self, "observer_columns", False):
+            return gauss_legendre_unit(OBSERVER_COLUMN_NODES)
+        return np.empty(0), np.empty(0)
 
     def _slice_grid(self):
         """(cos of the view zenith angles, which of them look at the ground, cos of the
@@ -529,7 +562,8 @@ class PrecomputedSky(SkyModel):
             _twilight.single_scattering_slice(
                 t.columns, tables_medium(t), t.scattering_index,
                 np.ascontiguousarray(t.scattering_coefficient, dtype=np.float64), self._alpha,
-                self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw, cos_th, ground, cphi, out)
+                self._r0, mu_s, QUADRATURE_SCALE_M, rx, rw, cos_th, ground, cphi, out,
+                *self._column_rule())
             if len(cache) > 8:
                 cache.clear()
             cache[key] = out
@@ -724,12 +758,14 @@ class PrecomputedSky(SkyModel):
 Precomputed = PrecomputedSky
 
 #: The settings of ``twilight_reference=True`` (docs/models.md, "Twilight: the reference
-#: configuration"): single scattering integrated at the observer with the sun below the
-#: horizon, and the finer tables measured to bring the twilight sky within 3 % RMS of
+#: configuration"): single scattering integrated at the observer for every sun, the view
+#: rays' columns integrated along the rays themselves (docs/models.md, "The observer's own
+#: columns"), and the finer tables measured to bring the twilight sky within 3 % RMS of
 #: ``montecarlo`` to sun -6 deg and 10 % to -12 deg.
 TWILIGHT_REFERENCE_SETTINGS = {
     "twilight_single_scattering": True,
     "observer_single_scattering": True,
+    "observer_columns": True,
     "scattering_mu_s_size": 96,
     "high_order_sphere_samples": 32,
 }

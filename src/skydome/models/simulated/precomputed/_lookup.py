@@ -14,6 +14,7 @@ from numba import njit
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
 from skydome.transport._kernels import profile_density_many
+from skydome.transport._medium import profile_density
 from skydome.transport._vexp import exp_neg_many
 from skydome.transport._phase import phase_fill_coded
 from skydome.transport._tables import lookup_columns as columns_at
@@ -159,23 +160,12 @@ def ray_weights(col, m, sc_idx, r, mu, ground, nq, w, s):
     ray integrals against one node at a time. Scratch ``s``: the
     :class:`._multiple.RayWork` of :func:`._multiple.ray_scratch`."""
     tq = s.tq
-    wq = s.wq
     w1 = s.w1
     w2 = s.w2
     rts = s.rts
     cs = s.cs
-    xs = s.xs
-    es = s.es
-    ib = s.ib
-    dk = s.dk
-    tw = s.tw
     R = m.R
     Rt = m.Rt
-    codes = m.profile_code
-    p0s = m.profile_p0
-    p1s = m.profile_p1
-    beta_e = m.extinction
-    nl = tw.shape[2]
     nc = col.shape[0]
     columns_at(col, r, -mu if ground else mu, R, Rt, w2)
     for q in range(nq):
@@ -185,6 +175,72 @@ def ray_weights(col, m, sc_idx, r, mu, ground, nq, w, s):
         columns_at(col, rt, -mt if ground else mt, R, Rt, w1)
         for c in range(nc):
             cs[q, c] = max(w1[c] - w2[c], 0.0) if ground else max(w2[c] - w1[c], 0.0)
+    weights_from_columns(m, sc_idx, nq, w, s)
+
+
+@njit(cache=True)
+def columns_along(m, r, mu, t0, t1, gx, gw, acc):
+    """acc[c] += the column of constituent c of the medium m between the distances t0 and
+    t1 along the ray from radius r, zenith cosine mu: the integral of its relative density
+    ([KRZ06] eq. 12 without beta) by the rule (gx, gw) on [0, 1] (Gauss-Legendre,
+    :func:`skydome.transport._quadrature.gauss_legendre_unit`) over [t0, t1]."""
+    h = t1 - t0
+    if h <= 0.0:
+        return
+    for i in range(gx.shape[0]):
+        alt = point_along(r, mu, t0 + gx[i] * h, m.R, m.Rt) - m.R
+        for c in range(acc.shape[0]):
+            acc[c] += gw[i] * h * profile_density(m.profile_code[c], m.profile_p0[c],
+                                                  m.profile_p1[c], alt)
+
+
+@njit(cache=True)
+def ray_weights_integrated(m, sc_idx, r, mu, nq, w, gx, gw, s):
+    """:func:`ray_weights` with the columns from the ray's start to its nodes integrated
+    along the ray itself (:func:`columns_along` from node to node in order of distance,
+    the rule (gx, gw) between each two) instead of the difference of two columns to the
+    top read from the column table. Along a grazing ray from an observer inside haze those
+    two columns exceed 100 optical depths while the first kilometre holds about 0.3, and
+    their linear interpolation in r makes the difference piecewise constant in the
+    observer's altitude: the horizon of the observer's sky map stepped by about 10 % where
+    the observer crossed a node of the column table (docs/models.md, "The observer's own
+    columns")."""
+    tq = s.tq
+    rts = s.rts
+    cs = s.cs
+    nc = cs.shape[1]
+    acc = s.w1
+    acc[:] = 0.0
+    t_prev = 0.0
+    order = np.argsort(tq[:nq])
+    for k in range(nq):
+        q = order[k]
+        columns_along(m, r, mu, t_prev, tq[q], gx, gw, acc)
+        t_prev = max(t_prev, tq[q])
+        rts[q] = point_along(r, mu, tq[q], m.R, m.Rt)
+        for c in range(nc):
+            cs[q, c] = acc[c]
+    weights_from_columns(m, sc_idx, nq, w, s)
+
+
+@njit(cache=True)
+def weights_from_columns(m, sc_idx, nq, w, s):
+    """The second half of :func:`ray_weights`: s.tw from the columns s.cs and the radii
+    s.rts of the ray's ``nq`` nodes."""
+    wq = s.wq
+    rts = s.rts
+    cs = s.cs
+    xs = s.xs
+    es = s.es
+    ib = s.ib
+    dk = s.dk
+    tw = s.tw
+    R = m.R
+    codes = m.profile_code
+    p0s = m.profile_p0
+    p1s = m.profile_p1
+    beta_e = m.extinction
+    nl = tw.shape[2]
     for q in range(nq):
         for l in range(nl):
             xs[q * nl + l] = -_optical_depth(beta_e, cs[q], l)

@@ -14,7 +14,7 @@ from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top)
-from skydome.models.simulated.precomputed._lookup import ray_weights
+from skydome.models.simulated.precomputed._lookup import ray_weights, ray_weights_integrated
 from skydome.transport._quadrature import ray_nodes, ray_nodes_rule
 from skydome.models.simulated.precomputed._mapping import (_split, cell_mu, cell_nu, cell_r,
                                                             density_mu_s_index,
@@ -294,7 +294,7 @@ def table_from_coarse(coarse, mu_nodes, mu_cell, mu_frac, mu_s_nodes_sel, ms_cel
 
 @njit(parallel=True, cache=True, fastmath=True)
 def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, n_q, ts,
-                              mu_nodes, ground_nodes, cphi_nodes, reach, out):
+                              mu_nodes, ground_nodes, cphi_nodes, reach, out, gx, gw):
     """Orders 2..N seen by an observer at radius r with the sun at mu_s, on a sky map of view
     directions: view zenith cosines ``mu_nodes`` (with ``ground_nodes``: does the ray end on
     the ground) x azimuths from the sun's with cosines ``cphi_nodes``:
@@ -314,7 +314,13 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
     the values are those of the whole table, bit for bit). ``reach[mu]`` receives the
     first and one past the last mu_s row (of the whole table) that the rays of view zenith
     node mu read; a node whose rows J does not hold is not read (its ray's value is then
-    wrong, and ``reach`` says so: the caller checks it)."""
+    wrong, and ``reach`` says so: the caller checks it).
+
+    (gx, gw): empty, the transmittance from the observer to each node is the difference of
+    two columns read from the column table ``col`` (:func:`._lookup.ray_weights`, as the
+    shaders compute it); a Gauss-Legendre rule on [0, 1], the columns are integrated along
+    each ray itself with it between consecutive nodes
+    (:func:`._lookup.ray_weights_integrated`; the model's ``observer_columns``)."""
     n_mu, n_nu, nl = out.shape
     nc = col.shape[0]
     nsc, n_tj, n_pj, n_rj, n_held, _ = J.shape
@@ -334,7 +340,10 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
         s_v = math.sqrt(max(1.0 - mu * mu, 0.0)) * math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
         nq = ray_nodes(r, mu, d, n_q, ts, tq, w.wq)
-        ray_weights(col, m, sc_idx, r, mu, ground, nq, 1.0, w)
+        if gx.shape[0] > 0:
+            ray_weights_integrated(m, sc_idx, r, mu, nq, 1.0, gx, gw, w)
+        else:
+            ray_weights(col, m, sc_idx, r, mu, ground, nq, 1.0, w)
         for q in range(nq):
             t = tq[q]
             rt = rts[q]

@@ -21,7 +21,8 @@ from numba import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along)
-from skydome.models.simulated.precomputed._lookup import (columns_at, columns_segment,
+from skydome.models.simulated.precomputed._lookup import (columns_along, columns_at,
+                                                           columns_segment,
                                                            sun_visible_fraction)
 from skydome.transport._geometry import lowest_point
 from skydome.transport._kernels import view_break_points
@@ -37,7 +38,7 @@ TWILIGHT_SS_NODES = 24
 
 @njit(parallel=True, cache=True, fastmath=True)
 def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, mu_nodes,
-                            ground_nodes, cphi_nodes, out):
+                            ground_nodes, cphi_nodes, out, gx, gw):
     """out[k, mu, phi, l] = beta_s,k(l) int_0^d rho_k(r_t) T(r, mu, t) T_sun(r_t, mu_s_t)
     v(r_t, mu_s_t) dt ([BN08] eq. 4 without the phase function; v the visible fraction of
     the sun's disc, :func:`._lookup.sun_visible_fraction`, alpha its angular radius) in the
@@ -49,15 +50,23 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
     the ray split at its lowest point and where it crosses the shadow's boundary
     (:func:`skydome.transport._kernels.view_break_points`), the rule (rx, rw) on [0, 1]
     (:func:`skydome.transport._quadrature.gauss_legendre_unit`) in v = ln(1 + u / ts) on
-    every piece (:func:`skydome.transport._quadrature.piece_nodes_rule`)."""
+    every piece (:func:`skydome.transport._quadrature.piece_nodes_rule`).
+
+    (gx, gw): empty, the view ray's transmittance from the observer to a node is the
+    difference of two columns read from ``col`` (:func:`._lookup.columns_segment`); a
+    Gauss-Legendre rule on [0, 1], its columns are integrated along the ray itself with it,
+    from node to node in order of distance (:func:`._lookup.columns_along`; the model's
+    ``observer_columns``). The sun's transmittance is read from ``col`` either way."""
     nsc, n_mu, n_phi, nl = out.shape
     nc = col.shape[0]
+    integrated = gx.shape[0] > 0
     n_x = rx.shape[0]
     R, Rt = m.R, m.Rt
     for imu in prange(n_mu):
         w1 = np.empty(nc)
         w2 = np.empty(nc)
         cv = np.empty(nc)
+        run = np.empty(nc)          # the integrated view columns from the observer
         csun = np.empty(nc)
         dens = np.empty(nsc)
         acc = np.empty((nsc, nl))
@@ -72,6 +81,8 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
         for iphi in range(n_phi):
             nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[iphi])
             acc[:] = 0.0
+            run[:] = 0.0
+            t_run = 0.0
             nbrk = view_break_points(r, mu, mu_s, nu, R, 0.0, d, brk)
             for q in range(nbrk - 1):
                 a = brk[q]
@@ -84,15 +95,24 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
                 for half in range(2 if split else 1):
                     ha, hb, hd = piece_half(a, b, b <= tmin, split, half)
                     piece_nodes_rule(ha, hb, hd, rx, rw, ts, tq, tw, 0)
-                    for k in range(n_x):
+                    # the nodes in order of distance (the rule lays them from its dense end)
+                    rev = tq[0] > tq[n_x - 1]
+                    for kk_ in range(n_x):
+                        k = n_x - 1 - kk_ if rev else kk_
                         t = tq[k]
                         wq = tw[k]
+                        if integrated:
+                            columns_along(m, r, mu, t_run, t, gx, gw, run)
+                            t_run = max(t_run, t)
                         rt = point_along(r, mu, t, R, Rt)
                         mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
                         vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
                         if vis <= 0.0:
                             continue
-                        columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cv)
+                        if integrated:
+                            cv[:] = run
+                        else:
+                            columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cv)
                         columns_at(col, rt, mu_s_t, R, Rt, csun)
                         for kk in range(nsc):
                             c = sc_idx[kk]
