@@ -66,7 +66,7 @@ def _slice(m, J, j0, n=None):
     _multiple.multiple_scattering_slice(
         J, j0, n or t.density_shape[4], tables_medium(t), t.scattering_index, t.columns,
         t.mu_s_min, m._r0, float(m.sun.direction[2]), int(m.integration_samples),
-        QUADRATURE_SCALE_M, cos_th, ground, cphi, reach, out)
+        QUADRATURE_SCALE_M, cos_th, ground, cphi, reach, out, *m._column_rule())
     return out, reach
 
 
