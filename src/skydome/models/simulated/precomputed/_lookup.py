@@ -14,7 +14,7 @@ from numba import njit
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index
 from skydome.transport._kernels import profile_density_many
-from skydome.transport._medium import profile_density
+from skydome.transport._medium import density
 from skydome.transport._vexp import exp_neg_many
 from skydome.transport._phase import phase_fill_coded
 from skydome.transport._tables import lookup_columns as columns_at
@@ -190,8 +190,7 @@ def columns_along(m, r, mu, t0, t1, gx, gw, acc):
     for i in range(gx.shape[0]):
         alt = point_along(r, mu, t0 + gx[i] * h, m.R, m.Rt) - m.R
         for c in range(acc.shape[0]):
-            acc[c] += gw[i] * h * profile_density(m.profile_code[c], m.profile_p0[c],
-                                                  m.profile_p1[c], alt)
+            acc[c] += gw[i] * h * density(m, c, alt)
 
 
 @njit(cache=True)
