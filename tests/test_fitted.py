@@ -589,15 +589,12 @@ def test_dataset_being_generated_reads_its_wavelengths_from_a_chunk(tmp_path):
         np.testing.assert_array_equal(ds.wavelengths_nm, wl)
 
 
-def test_extend_adds_an_aod_node_on_the_file_bases(tmp_path, capsys):
-    """tools/fit_fitted.py --extend: a node added to a fitted file keeps every node the file
-    had bit for bit and inserts the new one in AOD order. Its coefficients are the
-    projection of its y on the file's bases and spectral vectors: for an atmosphere whose
-    radiance is that of a fitted node (the chunk of AOD 1 given as AOD 0.75), they are the
-    fit's own at that node (the fit's coefficients are the same projection). A data set
-    with no AOD node the file lacks is refused naming the option, and nothing written."""
+def _projection_case(tmp_path, seed, name, aod):
+    """(tool, albedo nodes) after writing a random data set "base" (AOD 0, 0.5, 1 x albedo
+    0, 0.5, 1; 2 sun nodes, 2 altitudes, 3 wavelengths) and a data set ``name`` holding the
+    chunks of AOD 1 as AOD ``aod``."""
     fit = _load_tool("fit_fitted")
-    rng = np.random.default_rng(5)
+    rng = np.random.default_rng(seed)
     el = np.array([-1.0, 10.0])
     alt = np.array([0.0, 15000.0])
     wl = np.array([500.0, 600.0, 700.0])
@@ -607,9 +604,36 @@ def test_extend_adds_an_aod_node_on_the_file_bases(tmp_path, capsys):
     chunks = {x: rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
               .astype(np.float32) for x in atms}
     _write_dataset(tmp_path / "base", el, alt, atms, wl, [chunks[x] for x in atms])
-    new = [(0.75, b) for b in albs]
-    _write_dataset(tmp_path / "new", el, alt, new, wl, [chunks[(1.0, b)] for b in albs])
-    for opts, tol in (([], 1e-5), (["--float16"], 4e-3)):
+    _write_dataset(tmp_path / name, el, alt, [(aod, b) for b in albs], wl,
+                   [chunks[(1.0, b)] for b in albs])
+    return fit, albs
+
+
+def _assert_node_projected(a, b, key, i_b, tol):
+    """The node ``i_b`` of array ``key`` in file ``b`` equals node AOD 1 (index 2) of file
+    ``a`` (scaled float16 rows compared as the model reads them) within ``tol`` of its
+    largest magnitude."""
+    x, y = b[key][i_b].astype(np.float64), a[key][2].astype(np.float64)
+    if key + "_scale" in a.files:
+        x = x * b[key + "_scale"][i_b][..., None]
+        y = y * a[key + "_scale"][2][..., None]
+    if not key.endswith("_scale"):
+        np.testing.assert_allclose(x, y, rtol=0, atol=tol * np.abs(y).max(), err_msg=key)
+
+
+#: (options of the base fit, tolerance of a projected node's arrays)
+_PROJECTION_FITS = (([], 1e-5), (["--float16"], 4e-3))
+
+
+def test_extend_adds_an_aod_node_on_the_file_bases(tmp_path, capsys):
+    """tools/fit_fitted.py --extend: a node added to a fitted file keeps every node the file
+    had bit for bit and inserts the new one in AOD order. Its coefficients are the
+    projection of its y on the file's bases and spectral vectors: for an atmosphere whose
+    radiance is that of a fitted node (the chunk of AOD 1 given as AOD 0.75), they are the
+    fit's own at that node (the fit's coefficients are the same projection). A data set
+    with no AOD node the file lacks is refused naming the option, and nothing written."""
+    fit, _ = _projection_case(tmp_path, 5, "new", 0.75)
+    for opts, tol in _PROJECTION_FITS:
         base, ext = tmp_path / f"base{len(opts)}.npz", tmp_path / f"ext{len(opts)}.npz"
         args = ["--k-sky", "3", "--k-ground", "2", "--spectral-rank", "2"] + opts
         assert fit.main([str(tmp_path / "base"), "--out", str(base)] + args) == 0
@@ -622,13 +646,7 @@ def test_extend_adds_an_aod_node_on_the_file_bases(tmp_path, capsys):
                 continue
             if a[key].shape[:1] == (3,) and b[key].shape[:1] == (4,):   # per AOD node
                 np.testing.assert_array_equal(b[key][[0, 1, 3]], a[key], err_msg=key)
-                x, y = b[key][2].astype(np.float64), a[key][2].astype(np.float64)
-                if key + "_scale" in a.files:
-                    x = x * b[key + "_scale"][2][..., None]
-                    y = y * a[key + "_scale"][2][..., None]
-                if not key.endswith("_scale"):
-                    np.testing.assert_allclose(x, y, rtol=0, atol=tol * np.abs(y).max(),
-                                               err_msg=key)
+                _assert_node_projected(a, b, key, 2, tol)
             else:
                 np.testing.assert_array_equal(b[key], a[key], err_msg=key)
         meta = json.loads(str(b["meta"]))
@@ -639,6 +657,53 @@ def test_extend_adds_an_aod_node_on_the_file_bases(tmp_path, capsys):
                      str(tmp_path / "c.npz")]) == 2
     assert "--extend" in capsys.readouterr().err
     assert not (tmp_path / "c.npz").exists()
+
+
+def test_replace_projects_a_node_again_and_keeps_the_others(tmp_path, capsys):
+    """tools/fit_fitted.py --replace: the arrays of an AOD node the file has are those of
+    the projection of a new data set's y on the file's bases, every other node and every
+    shared array kept bit for bit. Given the chunks of AOD 1 as AOD 0.5, node 0.5 gets the
+    fit's own coefficients of node 1 (the fit's coefficients are the same projection). A
+    data set with no node the file has is refused naming the option, as is --replace beside
+    --extend, and nothing is written."""
+    fit, albs = _projection_case(tmp_path, 7, "again", 0.5)
+    for opts, tol in _PROJECTION_FITS:
+        base, rep = tmp_path / f"base{len(opts)}.npz", tmp_path / f"rep{len(opts)}.npz"
+        args = ["--k-sky", "3", "--k-ground", "2", "--spectral-rank", "2"] + opts
+        assert fit.main([str(tmp_path / "base"), "--out", str(base)] + args) == 0
+        assert fit.main([str(tmp_path / "again"), "--replace", str(base), "--out",
+                         str(rep)]) == 0
+        a, b = np.load(base), np.load(rep)
+        assert sorted(a.files) == sorted(b.files)
+        for key in a.files:
+            if key == "meta":
+                continue
+            assert b[key].shape == a[key].shape and b[key].dtype == a[key].dtype, key
+            if a[key].shape[:2] == (3, 3):              # per (AOD, albedo) node
+                np.testing.assert_array_equal(b[key][[0, 2]], a[key][[0, 2]], err_msg=key)
+                _assert_node_projected(a, b, key, 1, tol)
+            else:
+                np.testing.assert_array_equal(b[key], a[key], err_msg=key)
+        meta = json.loads(str(b["meta"]))
+        assert meta["aod_nodes_reprojected"] == [0.5]
+    capsys.readouterr()
+    chunk = np.load(tmp_path / "again" / f"{_dataset_key(0.5, 0.0)}.npy")
+    _write_dataset(tmp_path / "other", np.array([-1.0, 10.0]), np.array([0.0, 15000.0]),
+                   [(0.75, b) for b in albs], np.array([500.0, 600.0, 700.0]),
+                   [chunk] * len(albs))
+    assert fit.main([str(tmp_path / "other"), "--replace", str(base), "--out",
+                     str(tmp_path / "c.npz")]) == 2
+    assert "--replace" in capsys.readouterr().err
+    assert fit.main([str(tmp_path / "again"), "--replace", str(base), "--extend", str(base),
+                     "--out", str(tmp_path / "c.npz")]) == 2
+    assert "--replace" in capsys.readouterr().err
+    assert not (tmp_path / "c.npz").exists()
+
+
+def _dataset_key(aod, albedo):
+    from skydome.models.fitted import _dataset
+
+    return _dataset.chunk_key(aod, albedo)
 
 
 def test_dataset_altitudes_option_refuses_altitudes_off_the_grid(tmp_path, capsys):

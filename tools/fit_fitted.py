@@ -4,6 +4,7 @@
         [--float16] [--gas-bands SUPPLEMENT] [--altitude-supplement SUPPLEMENT]
     python tools/fit_fitted.py --add-sun [--out FILE]
     python tools/fit_fitted.py DATASET --extend FILE [--out FILE2]
+    python tools/fit_fitted.py DATASET --replace FILE [--out FILE2]
 
 DATASET is a folder written by ``tools/fitted_dataset.py --grid fit``. The fit (the
 representation is described in skydome/models/fitted/_coefficients.py):
@@ -51,6 +52,13 @@ wavelengths and view grid). It prints the projection's RMS residual of y at the 
 beside FILE's fit residual. The shipped file is the full fit of the ``fit-v4`` grid (30
 atmospheres) extended with the AOD nodes 0.35 and 0.75 (their six chunks made with
 ``tools/fitted_dataset.py --atmospheres``).
+
+``--replace FILE``: the same projection for the AOD nodes of DATASET (every albedo node there)
+that FILE already has, whose arrays it replaces (the scale, the coefficients), every other
+node and FILE's means, bases and spectral vectors kept bit for bit: the nodes of a
+corrected reference (the reference's ``observer_columns``, docs/models.md) without a new
+basis. It prints the projection's RMS residual of y at the replaced nodes beside FILE's fit
+residual.
 
 ``--add-sun``: only step 4, into an existing FILE: its other arrays are written back
 unchanged (same dtypes, same compression), the sun's arrays added or replaced.
@@ -115,8 +123,10 @@ def write_file(target: Path, arrays: dict, meta: dict) -> None:
         np.savez_compressed(tmp, **dict(arrays, meta=np.array(json.dumps(meta))))
 
 
-def extend(file: Path, dataset: str, out: Path) -> int:
-    """``--extend``: FILE with DATASET's AOD nodes that it lacks added (module docstring)."""
+def extend(file: Path, dataset: str, out: Path, replace: bool = False) -> int:
+    """``--extend``: FILE with DATASET's AOD nodes that it lacks added; with ``replace``
+    (``--replace``), the AOD nodes of DATASET that FILE has projected again and their
+    arrays replaced (module docstring)."""
     from skydome.models.fitted import _coefficients, _grid
     from skydome.models.fitted._dataset import DataSet
 
@@ -128,15 +138,17 @@ def extend(file: Path, dataset: str, out: Path) -> int:
     albs = arr["albedo_nodes"]
     present = set(ds.present)
     new = sorted({a for a, _ in ds.atmospheres
-                  if not np.any(np.isclose(arr["aod_nodes"], a))
+                  if np.any(np.isclose(arr["aod_nodes"], a)) == replace
                   and all((a, float(b)) in present for b in albs)})
     same = (np.array_equal(ds.elevations_deg, arr["elevation_nodes_deg"])
             and np.array_equal(ds.altitudes_m, arr["altitude_nodes_m"])
             and np.array_equal(ds.wavelengths_nm, arr["wavelengths_nm"])
             and not ds.midpoints)
     if not same or not new:
-        print(f"error: --extend = {file}: DATASET = {dataset} "
-              + ("holds no AOD node that the file lacks with every albedo node "
+        print(f"error: {'--replace' if replace else '--extend'} = {file}: DATASET = "
+              f"{dataset} "
+              + (f"holds no AOD node that the file {'has' if replace else 'lacks'} with "
+                 f"every albedo node "
                  f"{albs.tolist()}" if same else
                  "is not of the file's grid (sun elevations, altitudes, table wavelengths, "
                  "view-grid nodes)"), file=sys.stderr)
@@ -193,19 +205,28 @@ def extend(file: Path, dataset: str, out: Path) -> int:
             added[k].append(np.stack(per_alb[k]))
     resid = {p: float(np.sqrt(sq[p] / cnt[p])) for p in sq}
     for p in ("sky", "ground"):
-        print(f"{p}: RMS residual of y at the new nodes {resid[p]:.4f} (the file's fit on "
+        print(f"{p}: RMS residual of y at the {'replaced' if replace else 'new'} nodes "
+              f"{resid[p]:.4f} (the file's fit on "
               f"its nodes: {meta['fit_residual_rms_y'][p]:.4f})"
               + (f"; relative RMS of the spectral terms' truncation there "
                  f"{np.sqrt(trunc[p][0] / max(trunc[p][1], 1e-300)):.2e}" if spectral
                  else ""), flush=True)
-    aods = np.concatenate([arr["aod_nodes"], np.array(new)])
-    order = np.argsort(aods, kind="stable")
     out_arr = dict(arr)
-    out_arr["aod_nodes"] = aods[order]
+    if replace:
+        # the replaced nodes' rows in FILE's AOD axis; every other row kept bit for bit
+        rows = [int(np.flatnonzero(np.isclose(arr["aod_nodes"], x))[0]) for x in new]
 
-    def join(key, values):
-        old = arr[key]
-        out_arr[key] = np.concatenate([old, values.astype(old.dtype)])[order]
+        def join(key, values):
+            out_arr[key] = arr[key].copy()
+            out_arr[key][rows] = values.astype(arr[key].dtype)
+    else:
+        aods = np.concatenate([arr["aod_nodes"], np.array(new)])
+        order = np.argsort(aods, kind="stable")
+        out_arr["aod_nodes"] = aods[order]
+
+        def join(key, values):
+            old = arr[key]
+            out_arr[key] = np.concatenate([old, values.astype(old.dtype)])[order]
 
     join("log_scale", np.stack(added["log_scale"]))
     for part in ("sky", "ground"):
@@ -215,9 +236,14 @@ def extend(file: Path, dataset: str, out: Path) -> int:
             v, scale = _float16_rows(v)
             join(key + "_scale", scale)
         join(key, v)
-    meta["aod_nodes_projected"] = [float(x) for x in new]
-    meta["projection_residual_rms_y"] = resid
-    meta["command_extend"] = "python tools/fit_fitted.py DATASET --extend FILE"
+    if replace:
+        meta["aod_nodes_reprojected"] = [float(x) for x in new]
+        meta["reprojection_residual_rms_y"] = resid
+        meta["command_replace"] = "python tools/fit_fitted.py DATASET --replace FILE"
+    else:
+        meta["aod_nodes_projected"] = [float(x) for x in new]
+        meta["projection_residual_rms_y"] = resid
+        meta["command_extend"] = "python tools/fit_fitted.py DATASET --extend FILE"
     write_file(out, out_arr, meta)
     print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB; AOD nodes "
           f"{out_arr['aod_nodes'].tolist()}) in {time.perf_counter() - t0:.0f} s")
@@ -282,6 +308,10 @@ def main(argv=None) -> int:
     ap.add_argument("--extend", default=None, metavar="FILE",
                     help="add DATASET's AOD nodes that FILE lacks on FILE's own bases "
                          "(written to --out, default FILE)")
+    ap.add_argument("--replace", default=None, metavar="FILE",
+                    help="project DATASET's AOD nodes that FILE has on FILE's own bases "
+                         "again and replace their arrays (a data set of a corrected "
+                         "reference at some nodes; written to --out, default FILE)")
     ap.add_argument("--k-sky", type=int, default=32)
     ap.add_argument("--k-ground", type=int, default=12)
     ap.add_argument("--float16", action="store_true",
@@ -307,11 +337,17 @@ def main(argv=None) -> int:
         return 0
     if a.dataset is None:
         ap.error("DATASET is required (unless --add-sun)")
-    if a.extend is not None:
-        if not Path(a.extend).is_file():
-            print(f"error: --extend = {a.extend}: no such coefficient file", file=sys.stderr)
+    if a.extend is not None and a.replace is not None:
+        print("error: --extend and --replace exclude each other", file=sys.stderr)
+        return 2
+    for option, file in (("--extend", a.extend), ("--replace", a.replace)):
+        if file is None:
+            continue
+        if not Path(file).is_file():
+            print(f"error: {option} = {file}: no such coefficient file", file=sys.stderr)
             return 2
-        return extend(Path(a.extend), a.dataset, Path(a.out) if a.out else Path(a.extend))
+        return extend(Path(file), a.dataset, Path(a.out) if a.out else Path(file),
+                      replace=option == "--replace")
     for name, v in (("--k-sky", a.k_sky), ("--k-ground", a.k_ground)):
         if not 1 <= v <= 256:
             print(f"error: {name} = {v} is out of range [1, 256]", file=sys.stderr)
