@@ -372,7 +372,8 @@ def density_from_desc(desc: dict) -> dict:
             "nScatterers": s["scatterers"], "blockColumns": s["block_columns"],
             "scatterer": list(s["scatterer_constituent"]),
             "profileCode": list(s["profile_code"]), "profileP0": list(s["profile_p0_m"]),
-            "profileP1": list(s["profile_p1_m"]), "samples": s["quadrature"]["samples"],
+            "profileP1": list(s["profile_p1_m"]), "nConstituents": s["constituents"],
+            "columnNodes": s["column_nodes"], "samples": s["quadrature"]["samples"],
             "scale": s["quadrature"]["scale_m"], "mapGround": s["sky_map"]["ground"],
             "mapSky": s["sky_map"]["sky"], "mapPhi": s["sky_map"]["phi"]}
 
@@ -410,6 +411,25 @@ def tau4(atm, l, col):
                      for c in range(4)], -1)
 
 
+# SKYDOME_PC_GL6_X, SKYDOME_PC_GL6_W as the GLSL file writes them
+GL6_X = (0.033765242898423975, 0.16939530676686776, 0.3806904069584016, 0.6193095930415985,
+         0.8306046932331322, 0.966234757101576)
+GL6_W = (0.0856622461895852, 0.1803807865240693, 0.2339569672863455, 0.2339569672863455,
+         0.1803807865240693, 0.0856622461895852)
+
+
+def columns_along(dens, r, mu, t0, t1, R, Rt):
+    """skydomePcColumnsAlong (arrays of rays): (..., 4) columns [m] between t0 and t1."""
+    h = t1 - t0
+    col = np.zeros(np.shape(h) + (4,))
+    for x, w in zip(GL6_X, GL6_W):
+        alt = radius_along(r, mu, t0 + x * h, R, Rt) - R
+        for c in range(dens["nConstituents"]):
+            col[..., c] += w * h * profile(dens["profileCode"][c], dens["profileP0"][c],
+                                           dens["profileP1"][c], alt)
+    return np.where((h > 0.0)[..., None], col, 0.0)
+
+
 def density_uvw(dens, b, f_mu_s, f_r, f_phi, size):
     bx = b % dens["blockColumns"]
     bz = b // dens["blockColumns"]
@@ -437,6 +457,8 @@ def multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground):
     acc = [np.zeros(mu.shape + (4,)) for _ in range(layers)]
     n0 = dens["samples"] if dens["samples"] >= 4 else 0
     hm = 0.5 * t_low
+    col_along = np.zeros(mu.shape + (4,))
+    t_prev = np.zeros(mu.shape)
     for piece in range(3):
         a = (np.zeros_like(t_low) if piece == 0
              else (hm if n0 > 0 else np.zeros_like(t_low)) if piece == 1 else t_low)
@@ -444,12 +466,21 @@ def multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground):
         n = n0 if piece == 0 else dens["samples"]
         live = (b - a > 0.0)[..., None]
         for q in range(min(n, MAX_SAMPLES)):
-            t, w = piece_node(a, b, piece == 1, q, n, dens["scale"])
+            t, w = piece_node(a, b, piece == 1, n - 1 - q if piece == 1 else q, n,
+                              dens["scale"])
             rt = radius_along(r, mu, t, R, Rt)
             mt = np.clip((r * mu + t) / rt, -1.0, 1.0)
             mu_st = np.clip((r * mu_s + t * nu) / rt, -1.0, 1.0)
-            c1 = columns(od, atm, rt, np.where(ground, -mt, mt))
-            col = np.maximum(np.where(ground[..., None], c1 - c0, c0 - c1), 0.0)
+            if dens["columnNodes"] > 0:
+                # a piece of no length (live false) leaves its t at its start: no column
+                with np.errstate(invalid="ignore"):
+                    step = np.where(live[..., 0], t, t_prev)
+                col_along = col_along + columns_along(dens, r, mu, t_prev, step, R, Rt)
+                t_prev = np.maximum(t_prev, step)
+                col = col_along * 1e-3
+            else:
+                c1 = columns(od, atm, rt, np.where(ground, -mt, mt))
+                col = np.maximum(np.where(ground[..., None], c1 - c0, c0 - c1), 0.0)
             f_r = np.clip(rho_(rt, R) / H * (dens["nR"] - 1), 0.0, dens["nR"] - 1)
             f_mu_s = mu_s_unit(mu_st, atm["muSMin"]) * (dens["nMuS"] - 1)
             den = np.sqrt(np.maximum((1.0 - nu * nu) * (1.0 - mu_st * mu_st), 0.0))

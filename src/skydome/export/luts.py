@@ -483,6 +483,8 @@ def _density_description(sky, t) -> dict[str, Any] | None:
         "theta": int(n_th), "phi": int(n_ph), "r": int(n_r), "mu_s": int(n_ms),
         "scatterers": int(nsc), "layers": int(layers), "block_columns": int(cols),
         "scatterer_constituent": [int(c) for c in t.scattering_index],
+        "constituents": len(t.profile_code),
+        "column_nodes": P.OBSERVER_COLUMN_NODES if sky.observer_columns else 0,
         "profile_code": [int(c) for c in t.profile_code],
         "profile_p0_m": [float(x) for x in t.profile_p0],
         "profile_p1_m": [float(x) for x in t.profile_p1],
@@ -503,7 +505,11 @@ def _density_description(sky, t) -> dict[str, Any] | None:
                 "its vertical plane (zenith side), both uniform over [0, pi], r and mu_s on "
                 "the 4-D table's mappings; quadrature: samples midpoint nodes per piece of "
                 "a ray split at its lowest point, uniform in ln(1 + u / scale_m), u the "
-                "distance from the piece's dense end; sky_map: the observer's map of orders "
+                "distance from the piece's dense end; column_nodes: 6 where the columns "
+                "from the observer to each node are integrated along the ray itself (the "
+                "6-point Gauss-Legendre rule from node to node in order of distance, over "
+                "the constituents' profiles, constituents of them), 0 where they are the "
+                "difference of two columns to the top read from optical_depth; sky_map: the observer's map of orders "
                 "2..N (zenith nodes nadir .. horizon for rays to the ground, horizon .. "
                 "zenith for the others, azimuth nodes over [0, pi] from the sun's)",
     }

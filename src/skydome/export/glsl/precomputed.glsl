@@ -475,6 +475,10 @@ struct SkydomeScatteringDensity {
     int profileCode[4];     // per constituent c: 0 exponential exp(-h / p0), 1 tent
     float profileP0[4];     // max(0, 1 - |h - p0| / p1), 2 uniform (1 below p0),
     float profileP1[4];     // 3 gaussian exp(-((h - p0) / p1)^2 / 2) [m]
+    int nConstituents;      // "constituents": entries of the profile arrays in use (<= 4)
+    int columnNodes;        // "column_nodes": 6 to integrate each ray's columns along the
+                            // ray itself (the model's observer_columns), 0 to take the
+                            // difference of two columns to the top from opticalDepth
     int samples;            // "quadrature"."samples": nodes per piece of a ray
     float scale;            // "quadrature"."scale_m": ts [m]
     int mapGround;          // "sky_map"."ground": zenith nodes of rays to the ground
@@ -501,6 +505,35 @@ float skydomePcProfile(int code, float p0, float p1, float h) {
         return exp(-0.5 * x * x);
     }
     return 0.0;
+}
+
+// the 6-point Gauss-Legendre rule on [0, 1] (nodes (1 + xi) / 2, weights w / 2 of the
+// rule on [-1, 1]: xi = +-0.2386191860831969, +-0.6612093864662645, +-0.9324695142031521,
+// w = 0.4679139345726910, 0.3607615730481386, 0.1713244923791704; Abramowitz & Stegun
+// table 25.4) that integrates a ray's columns between two of its nodes (columnNodes = 6)
+const float SKYDOME_PC_GL6_X[6] = float[6](0.033765242898423975, 0.16939530676686776,
+    0.3806904069584016, 0.6193095930415985, 0.8306046932331322, 0.966234757101576);
+const float SKYDOME_PC_GL6_W[6] = float[6](0.0856622461895852, 0.1803807865240693,
+    0.2339569672863455, 0.2339569672863455, 0.1803807865240693, 0.0856622461895852);
+
+// the constituents' columns [m at reference density] between the distances t0 and t1
+// along the ray from radius r, zenith cosine mu (the model's _lookup.columns_along):
+// the 6-point rule over [t0, t1] of each profile in use (nConstituents of them)
+vec4 skydomePcColumnsAlong(SkydomeScatteringDensity dens, float r, float mu, float t0,
+                           float t1, float R, float Rt) {
+    vec4 col = vec4(0.0);
+    float h = t1 - t0;
+    if (h <= 0.0) return col;
+    for (int i = 0; i < 6; ++i) {
+        float alt = skydomePcRadiusAlong(r, mu, t0 + SKYDOME_PC_GL6_X[i] * h, R, Rt) - R;
+        for (int c = 0; c < 4; ++c) {
+            if (c >= dens.nConstituents) break;
+            col[c] += SKYDOME_PC_GL6_W[i] * h * skydomePcProfile(dens.profileCode[c],
+                                                                dens.profileP0[c],
+                                                                dens.profileP1[c], alt);
+        }
+    }
+    return col;
 }
 
 // node k of the quadrature on the piece [a, b] of a ray, dense at b (denseAtB) or at a: the
@@ -537,9 +570,13 @@ vec3 skydomePcDensityUvw(SkydomeScatteringDensity dens, int b, float fMuS, float
 // ground is set, else to the top), the sun at zenith cosine muS and at cosine nu from the
 // ray: XYZ [cd m^-2]. Per table wavelength j, sum over the quadrature nodes t_q of
 // w_q T_j(x, x_q) sum_k rho_k(r_q) J_k,j(theta, phi_q, r_q, mu_s_q) ([BN08] eq. 8), T from
-// the difference of two columns to the top (both rays reversed for a ray to the ground,
-// [Bru17] GetTransmittance), rho_k the exact density profile, J interpolated linearly in
-// each of its four axes (theta by hand, the others in hardware), then the XYZ weights K_j.
+// the columns from x to x_q: with columnNodes = 6 integrated along the ray itself from
+// node to node in order of distance (skydomePcColumnsAlong; the model's observer_columns:
+// the difference below steps where an observer inside haze crosses an r node of the
+// column table), else the difference of two columns to the top (both rays reversed for a
+// ray to the ground, [Bru17] GetTransmittance); rho_k the exact density profile, J
+// interpolated linearly in each of its four axes (theta by hand, the others in hardware),
+// then the XYZ weights K_j.
 vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
                                     SkydomeAtmosphere atm, SkydomeScatteringDensity dens,
                                     float r, float mu, float muS, float nu, bool ground) {
@@ -561,8 +598,11 @@ vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
     // the ray's pieces as the model's (transport/_quadrature.py, ray_nodes): from the start
     // to the lowest point on two halves, the first dense at the start (none below 4
     // samples), the second at the lowest point, then from the lowest point to the end,
-    // dense at its start; samples nodes each
+    // dense at its start; samples nodes each, visited in order of distance (the second
+    // piece's from its last node) so that the columns accumulate from node to node
     int n0 = dens.samples >= 4 ? dens.samples : 0;
+    vec4 colAlong = vec4(0.0);      // columns from the observer to tPrev [m]
+    float tPrev = 0.0;
     float hm = 0.5 * tLow;
     for (int piece = 0; piece < 3; ++piece) {
         float a = piece == 0 ? 0.0 : (piece == 1 ? (n0 > 0 ? hm : 0.0) : tLow);
@@ -571,13 +611,21 @@ vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
         if (b - a <= 0.0 || n <= 0) continue;
         for (int q = 0; q < SKYDOME_PC_MAX_SAMPLES; ++q) {
             if (q >= n) break;
-            vec2 node = skydomePcPieceNode(a, b, piece == 1, q, n, dens.scale);
+            vec2 node = skydomePcPieceNode(a, b, piece == 1, piece == 1 ? n - 1 - q : q, n,
+                                           dens.scale);
             float t = node.x;
             float rt = skydomePcRadiusAlong(r, mu, t, R, Rt);
             float mt = clamp((r * mu + t) / rt, -1.0, 1.0);
             float muSt = clamp((r * muS + t * nu) / rt, -1.0, 1.0);
-            vec4 c1 = skydomeColumns(opticalDepth, atm, rt, ground ? -mt : mt);
-            vec4 col = max(ground ? c1 - c0 : c0 - c1, vec4(0.0));
+            vec4 col;
+            if (dens.columnNodes > 0) {
+                colAlong += skydomePcColumnsAlong(dens, r, mu, tPrev, t, R, Rt);
+                tPrev = max(tPrev, t);
+                col = colAlong * 1e-3;      // km, the unit of extinction's km^-1
+            } else {
+                vec4 c1 = skydomeColumns(opticalDepth, atm, rt, ground ? -mt : mt);
+                col = max(ground ? c1 - c0 : c0 - c1, vec4(0.0));
+            }
             float fR = clamp(skydomePcRho(rt, R) / H * float(dens.nR - 1), 0.0,
                              float(dens.nR - 1));
             float fMuS = skydomePcMuSUnit(muSt, atm.muSMin) * float(dens.nMuS - 1);

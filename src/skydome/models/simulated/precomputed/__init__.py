@@ -34,7 +34,9 @@ __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
 # in angle) and azimuth nodes from the sun's over [0, 180] deg
 _SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
 #: Gauss-Legendre nodes between two quadrature nodes of a view ray for its columns from
-#: the observer with ``observer_columns`` (docs/models.md, "The observer's own columns")
+#: the observer with ``observer_columns`` (docs/models.md, "The observer's own columns");
+#: the exported shader (export/glsl/precomputed.glsl, SKYDOME_PC_GL6_X) has the same rule
+#: written out, so this is 6 or the shader and the model part
 OBSERVER_COLUMN_NODES = 6
 
 
@@ -153,9 +155,10 @@ class PrecomputedSky(SkyModel):
         table. Along a grazing ray from an observer inside haze those two columns exceed
         100 optical depths, and their linear interpolation in r made the horizon step by
         about 10 % where the observer crossed a table r node (docs/models.md, "The
-        observer's own columns"). Opt-in (default False; on with ``twilight_reference``):
-        the viewer's shader and the LUT bakes compute the table's differences, as the
-        model does without it.
+        observer's own columns"). On by default; the exported shader's sky map
+        (export/glsl/precomputed.glsl, ``skydomeMultipleScatteringAlong``) integrates the
+        columns the same way where the bake's luts.json says ``column_nodes: 6``, and takes
+        the table's differences, as the model then does, for a sky made with ``False``.
     cache : bool
         Read and write the on-disk table cache (default True): a second model with the same
         atmosphere, wavelengths and settings reads its tables instead of computing them
@@ -231,14 +234,14 @@ class PrecomputedSky(SkyModel):
                       "interpolation between its r nodes is up to 50 % off for observers "
                       "inside thick haze; opt-in (the viewer's shader reads the table)",
                   kind="bool"),
-        Parameter("observer_columns", "", False,
+        Parameter("observer_columns", "", True,
                   doc="the observer's sky maps (orders 2..N, and single scattering where it "
                       "is integrated at the observer) with each view ray's columns from the "
                       "observer integrated along the ray itself, not read as the difference "
                       "of two columns to the top from the column table, which made the "
                       "horizon of an observer inside haze step by about 10 % at the table's "
-                      "r nodes; opt-in (the viewer's shader and the LUT bakes compute the "
-                      "table's differences); part of twilight_reference",
+                      "r nodes; on by default (the exported shader's sky map does the same, "
+                      "luts.json column_nodes); False: the table's differences",
                   kind="bool"),
         Parameter("twilight_reference", "", False,
                   doc="the twilight reference configuration: twilight_single_scattering on "
