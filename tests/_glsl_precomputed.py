@@ -375,7 +375,9 @@ def density_from_desc(desc: dict) -> dict:
             "profileP1": list(s["profile_p1_m"]), "nConstituents": s["constituents"],
             "columnNodes": s["column_nodes"], "samples": s["quadrature"]["samples"],
             "scale": s["quadrature"]["scale_m"], "mapGround": s["sky_map"]["ground"],
-            "mapSky": s["sky_map"]["sky"], "mapPhi": s["sky_map"]["phi"]}
+            "mapSky": s["sky_map"]["sky"], "mapPhi": s["sky_map"]["phi"],
+            "mapGroundLinear": s["sky_map"]["ground_linear"],
+            "mapSkyLinear": s["sky_map"]["sky_linear"]}
 
 
 def log1p_(x):
@@ -508,6 +510,18 @@ def multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground):
     return xyz
 
 
+def map_unit(x, a):
+    """skydomePcMapUnit."""
+    return a * x + (1.0 - a) * x * x
+
+
+def map_inverse(u, a):
+    """skydomePcMapInverse."""
+    u = np.clip(u, 0.0, 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(u <= 0.0, 0.0, 2.0 * u / (a + np.sqrt(a * a + 4.0 * (1.0 - a) * u)))
+
+
 def horizon_zenith(r, R):
     s = R / r
     return np.arccos(-np.sqrt(np.maximum(1.0 - s * s, 0.0)))
@@ -517,8 +531,10 @@ def sky_map_texel(density, od, atm, dens, r, mu_s, tx, ty):
     """skydomeSkyMapTexel at texels (tx, ty) (integer arrays)."""
     th_h = horizon_zenith(r, atm["bottomRadius"])
     ground = ty < dens["mapGround"]
-    th = np.where(ground, PI - (PI - th_h) * ty / (dens["mapGround"] - 1.0),
-                  th_h * (1.0 - (ty - dens["mapGround"]) / (dens["mapSky"] - 1.0)))
+    th = np.where(ground, th_h + (PI - th_h) * map_unit(1.0 - ty / (dens["mapGround"] - 1.0),
+                                                        dens["mapGroundLinear"]),
+                  th_h * (1.0 - map_unit((ty - dens["mapGround"]) / (dens["mapSky"] - 1.0),
+                                         dens["mapSkyLinear"])))
     mu = np.cos(th)
     cphi = np.cos(PI * tx / (dens["mapPhi"] - 1.0))
     sv = np.sqrt(np.maximum(1.0 - mu * mu, 0.0)) * np.sqrt(max(1.0 - mu_s * mu_s, 0.0))
@@ -552,8 +568,10 @@ def sky_map_lookup(smap, atm, dens, camera, view, sun):
     th = np.arccos(mu)
     n_g = float(dens["mapGround"])
     n_s = float(dens["mapSky"])
-    f = np.where(ground, np.clip((PI - th) / max(PI - th_h, 1e-12) * (n_g - 1.0), 0.0, n_g - 1.0),
-                 n_g + np.clip((th_h - th) / th_h * (n_s - 1.0), 0.0, n_s - 1.0))
+    f = np.where(ground,
+                 (1.0 - map_inverse((th - th_h) / max(PI - th_h, 1e-12),
+                                    dens["mapGroundLinear"])) * (n_g - 1.0),
+                 n_g + map_inverse((th_h - th) / th_h, dens["mapSkyLinear"]) * (n_s - 1.0))
     n_p = float(dens["mapPhi"])
     g = np.clip(np.arccos(cphi) / PI * (n_p - 1.0), 0.0, n_p - 1.0)
     return texture2d(smap, np.stack([(g + 0.5) / n_p, (f + 0.5) / (n_g + n_s)], -1))[..., :3]

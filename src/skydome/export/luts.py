@@ -491,7 +491,8 @@ def _density_description(sky, t) -> dict[str, Any] | None:
         "quadrature": {"samples": int(sky.integration_samples),
                        "scale_m": float(QUADRATURE_SCALE_M)},
         "sky_map": {"ground": int(P._SLICE_GROUND), "sky": int(P._SLICE_SKY),
-                    "phi": int(P._SLICE_PHI)},
+                    "phi": int(P._SLICE_PHI), "ground_linear": float(P._SLICE_GROUND_LINEAR),
+                    "sky_linear": float(P._SLICE_SKY_LINEAR)},
         "layout": "float32 (n_slabs n_phi, n_r, block_columns n_mu_s, 4): block b = "
                   "((i_theta n_scatterers) + k) layers + layer, four table wavelengths "
                   "4 layer .. 4 layer + 3 in RGBA (zeros past the last), at x = (b mod "
@@ -511,7 +512,10 @@ def _density_description(sky, t) -> dict[str, Any] | None:
                 "the constituents' profiles, constituents of them), 0 where they are the "
                 "difference of two columns to the top read from optical_depth; sky_map: the observer's map of orders "
                 "2..N (zenith nodes nadir .. horizon for rays to the ground, horizon .. "
-                "zenith for the others, azimuth nodes over [0, pi] from the sun's)",
+                "zenith for the others, each part at x uniform over [0, 1] from the horizon "
+                "and the angle from the horizon u(x) = a x + (1 - a) x^2 of the part's "
+                "whole, a = ground_linear, sky_linear; azimuth nodes over [0, pi] from the "
+                "sun's)",
     }
 
 

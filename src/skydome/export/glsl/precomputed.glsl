@@ -484,6 +484,8 @@ struct SkydomeScatteringDensity {
     int mapGround;          // "sky_map"."ground": zenith nodes of rays to the ground
     int mapSky;             // "sky_map"."sky": zenith nodes of rays to the sky
     int mapPhi;             // "sky_map"."phi": azimuth nodes over [0, pi]
+    float mapGroundLinear;  // "sky_map"."ground_linear", "sky_linear": the linear share a
+    float mapSkyLinear;     // of the rows' mapping u(x) = a x + (1 - a) x^2 from the horizon
 };
 
 // ln(1 + x) and exp(x) - 1 without cancellation for small x (GLSL has neither)
@@ -667,6 +669,20 @@ vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
     return xyz;
 }
 
+// the rows' mapping of the sky map (the model's _multiple.map_nodes): x uniform over [0, 1]
+// from the horizon (0) to the far end (1: the zenith, or the nadir for rays to the ground),
+// u(x) = a x + (1 - a) x^2 the fraction of the angle from the horizon; rows a times the
+// uniform spacing at the horizon, where the sky changes fastest
+float skydomePcMapUnit(float x, float a) {
+    return a * x + (1.0 - a) * x * x;
+}
+
+// its inverse: x in [0, 1] with u(x) = u (u clamped to [0, 1]; the root without cancellation)
+float skydomePcMapInverse(float u, float a) {
+    u = clamp(u, 0.0, 1.0);
+    return u <= 0.0 ? 0.0 : 2.0 * u / (a + sqrt(a * a + 4.0 * (1.0 - a) * u));
+}
+
 // zenith angle of the observer's horizon at radius r (pi / 2 on the ground)
 float skydomePcHorizonZenith(float r, float R) {
     float s = R / r;
@@ -675,16 +691,19 @@ float skydomePcHorizonZenith(float r, float R) {
 
 // texel (phi node, zenith node) of the sky map for an observer at radius r, the sun at
 // zenith cosine muS: orders 2..N from that node's direction, XYZ [cd m^-2]. Zenith nodes
-// 0 .. mapGround - 1 run uniformly in view zenith angle from the nadir to the horizon (rays
-// to the ground), mapGround .. mapGround + mapSky - 1 from the horizon to the zenith;
-// azimuth nodes uniformly over [0, pi] from the sun's.
+// 0 .. mapGround - 1 run from the nadir to the horizon (rays to the ground), mapGround ..
+// mapGround + mapSky - 1 from the horizon to the zenith, each part dense at the horizon
+// (skydomePcMapUnit); azimuth nodes uniformly over [0, pi] from the sun's.
 vec3 skydomeSkyMapTexel(sampler3D density, sampler2D opticalDepth, SkydomeAtmosphere atm,
                         SkydomeScatteringDensity dens, float r, float muS, ivec2 texel) {
     float thH = skydomePcHorizonZenith(r, atm.bottomRadius);
     bool ground = texel.y < dens.mapGround;
     float th = ground
-        ? SKYDOME_PC_PI - (SKYDOME_PC_PI - thH) * float(texel.y) / float(dens.mapGround - 1)
-        : thH * (1.0 - float(texel.y - dens.mapGround) / float(dens.mapSky - 1));
+        ? thH + (SKYDOME_PC_PI - thH)
+              * skydomePcMapUnit(1.0 - float(texel.y) / float(dens.mapGround - 1),
+                                 dens.mapGroundLinear)
+        : thH * (1.0 - skydomePcMapUnit(float(texel.y - dens.mapGround)
+                                        / float(dens.mapSky - 1), dens.mapSkyLinear));
     float mu = cos(th);
     float cphi = cos(SKYDOME_PC_PI * float(texel.x) / float(dens.mapPhi - 1));
     float sv = sqrt(max(1.0 - mu * mu, 0.0)) * sqrt(max(1.0 - muS * muS, 0.0));
@@ -712,9 +731,9 @@ vec3 skydomeSkyMapLookup(sampler2D skyMap, SkydomeAtmosphere atm,
     float nG = float(dens.mapGround);
     float nS = float(dens.mapSky);
     float f = ground
-        ? clamp((SKYDOME_PC_PI - th) / max(SKYDOME_PC_PI - thH, 1e-12) * (nG - 1.0), 0.0,
-                nG - 1.0)
-        : nG + clamp((thH - th) / thH * (nS - 1.0), 0.0, nS - 1.0);
+        ? (1.0 - skydomePcMapInverse((th - thH) / max(SKYDOME_PC_PI - thH, 1e-12),
+                                     dens.mapGroundLinear)) * (nG - 1.0)
+        : nG + skydomePcMapInverse((thH - th) / thH, dens.mapSkyLinear) * (nS - 1.0);
     float nP = float(dens.mapPhi);
     float g = clamp(acos(cphi) / SKYDOME_PC_PI * (nP - 1.0), 0.0, nP - 1.0);
     return texture(skyMap, vec2((g + 0.5) / nP, (f + 0.5) / (nG + nS))).rgb;

@@ -32,7 +32,13 @@ __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
 
 # the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
 # in angle) and azimuth nodes from the sun's over [0, 180] deg
-_SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 48, 192, 96
+_SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 64, 192, 96
+#: The linear share a of the map's row mapping u(x) = a x + (1 - a) x^2 from the horizon
+#: (_multiple.map_nodes): rows a times the uniform spacing at the horizon, 2 - a times it
+#: at the zenith (nadir). Uniform rows (a = 1, 48 to the ground) were up to 12 % off a map
+#: of 3072 rows at the limb seen from 15 km by day, 78 % in twilight (docs/models.md, "The
+#: observer's sky map dense at the horizon")
+_SLICE_GROUND_LINEAR, _SLICE_SKY_LINEAR = 0.15, 0.15
 #: Gauss-Legendre nodes between two quadrature nodes of a view ray for its columns from
 #: the observer with ``observer_columns`` (docs/models.md, "The observer's own columns");
 #: the exported shader (export/glsl/precomputed.glsl, SKYDOME_PC_GL6_X) has the same rule
@@ -137,8 +143,8 @@ class PrecomputedSky(SkyModel):
         ``observer_single_scattering=True`` and ``observer_columns=True``.
     twilight_single_scattering, observer_single_scattering : bool
         Single scattering integrated at the observer's own altitude and sun on the
-        observer's sky map (192 view zenith angles above the horizon, 48 below, 96
-        azimuths), not read from the 4-D table: with the sun below the horizon
+        observer's sky map (192 view zenith angles above the horizon, 64 below, both dense
+        at the horizon, 96 azimuths), not read from the 4-D table: with the sun below the horizon
         (``twilight_single_scattering``: each ray split at the earth's shadow), or for every
         sun (``observer_single_scattering``: the table's linear interpolation between its
         r nodes is up to 50 % off for an observer inside thick haze, AOD 1 at 0.1-1 km;
@@ -451,22 +457,32 @@ class PrecomputedSky(SkyModel):
         azimuths) of the observer's sky map that :meth:`_observer_slices` integrates
         (:meth:`_slice_geometry`: the ground's nodes from the nadir to the horizon, then the
         sky's from the horizon to the zenith)."""
+        from skydome.models.simulated.precomputed._multiple import map_nodes
+
         geom = self._slice_geometry()
-        n_g, n_s, th_h = int(geom[0]), int(geom[1]), float(geom[2])
-        th = np.concatenate([np.pi - (np.pi - th_h) * np.arange(n_g) / (n_g - 1.0),
-                             th_h * (1.0 - np.arange(n_s) / (n_s - 1.0))])
+        n_g, n_s = int(geom[0]), int(geom[1])
+        th = map_nodes(n_g, n_s, float(geom[2]), float(geom[4]), float(geom[5]))
         ground = np.arange(n_g + n_s) < n_g
         cphi = np.cos(np.pi * np.arange(_SLICE_PHI) / (_SLICE_PHI - 1.0))
         return np.cos(th), ground, cphi
 
+    def _slice_geometry_with_single_scattering(self):
+        """:meth:`_slice_geometry` with single scattering on the sky map too."""
+        geom = self._slice_geometry()
+        geom[3] = 1.0
+        return geom
+
     def _slice_geometry(self, table=False):
-        """``geom`` of :func:`._render.render_observer`: (n_ground, n_sky,
-        horizon zenith angle [rad]) of the observer's sky map, or (0, 0, 0) for the table's
-        own mu mapping."""
+        """``geom`` of :func:`._render.render_observer`: (n_ground, n_sky, horizon zenith
+        angle [rad], 0, the ground's and the sky's linear share of their row mapping,
+        :func:`._multiple.map_nodes`) of the observer's sky map (its fourth entry set to 1
+        where single scattering is on the map too), or zeros for the table's own mu
+        mapping."""
         if table or not self._t.has_density or float(self.sun.direction[2]) < self._mu_s_min:
-            return np.zeros(3)
+            return np.zeros(6)
         mu_h = -math.sqrt(max(1.0 - (self._R / self._r0) ** 2, 0.0))
-        return np.array([_SLICE_GROUND, _SLICE_SKY, math.acos(mu_h)])
+        return np.array([_SLICE_GROUND, _SLICE_SKY, math.acos(mu_h), 0.0, _SLICE_GROUND_LINEAR,
+                         _SLICE_SKY_LINEAR])
 
     # -- public API ---------------------------------------------------------------------------------
     def radiance(self, directions, wavelengths_nm) -> np.ndarray:
@@ -530,7 +546,7 @@ class PrecomputedSky(SkyModel):
         geom = self._slice_geometry()
         ss_map = self._single_scattering_map()
         if ss_map is not None:
-            ss_s, geom = ss_map, np.append(geom, 1.0)
+            ss_s, geom = ss_map, self._slice_geometry_with_single_scattering()
         t = self._t
         _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_s,
                            t.phase_code, t.phase_param, t.kernel_phase_table, ms_s, t.columns,
@@ -675,7 +691,7 @@ class PrecomputedSky(SkyModel):
             if ss_map is not None:
                 # the sun below the horizon: single scattering at the observer too (as in
                 # radiance()), in place of the table's
-                cases = ((ss_map, ms_s, a_sl, np.append(self._slice_geometry(), 1.0)),
+                cases = ((ss_map, ms_s, a_sl, self._slice_geometry_with_single_scattering()),
                          (ss_s, ms_tab, a_tab, self._slice_geometry(table=True)))
             for ss_x, ms_x, o, geom in cases:
                 _render.render_observer(flat, self._r0, np.ascontiguousarray(self.sun.direction), ss_x,

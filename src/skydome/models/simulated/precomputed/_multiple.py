@@ -300,8 +300,9 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
     the ground) x azimuths from the sun's with cosines ``cphi_nodes``:
     out[mu, phi, l] = int_0^d sum_k rho_k(r_t) J_k(r_t, mu_t, mu_s_t, nu) T(r, mu, t) dt
     ([BN08] eq. 8 with J summed over the orders), J as in :func:`multiple_scattering_table`.
-    (The map is uniform in view zenith angle and azimuth, see :func:`slice_index`: the
-    table's own (mu, nu) mapping is coarse near the zenith and near the sun.)
+    (The map's rows are dense at the horizon (:func:`map_nodes`), its azimuths uniform,
+    see :func:`slice_index`: the table's own (mu, nu) mapping is coarse near the zenith and
+    near the sun.)
 
     Integrating at the observer's own r and mu_s (instead of interpolating the 4-D table)
     keeps the multiply scattered aerosol aureole, which is sharp in the angle from the sun,
@@ -367,22 +368,48 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
                 out[imu, inu, l] = acc[inu, l]
 
 
+def map_nodes(n_ground, n_sky, theta_h, a_ground, a_sky):
+    """View zenith angles [rad] of the observer's sky map's rows: the ground's n_ground from
+    the nadir to the horizon theta_h, then the sky's n_sky from the horizon to the zenith.
+    Each part runs in x uniform over [0, 1] from the horizon (0) to its far end (1) through
+    u(x) = a x + (1 - a) x^2 (a = a_ground, a_sky; a = 1 uniform in angle): the rows are
+    a times the uniform spacing at the horizon, where the sky changes fastest (the limb seen
+    from altitude, the first degree above the horizon in haze), and 2 - a times it at the
+    far end. :func:`slice_index` inverts it."""
+    xs = np.arange(n_sky) / (n_sky - 1.0)
+    xg = 1.0 - np.arange(n_ground) / (n_ground - 1.0)      # the nadir first
+    ug = a_ground * xg + (1.0 - a_ground) * xg * xg
+    us = a_sky * xs + (1.0 - a_sky) * xs * xs
+    return np.concatenate([theta_h + (math.pi - theta_h) * ug, theta_h * (1.0 - us)])
+
+
+@njit(cache=True)
+def map_unit_inverse(u, a):
+    """x in [0, 1] with a x + (1 - a) x^2 = u, u clamped to [0, 1], 0 < a <= 1 (the root in
+    the form without cancellation)."""
+    u = min(max(u, 0.0), 1.0)
+    if u <= 0.0:
+        return 0.0
+    return 2.0 * u / (a + math.sqrt(a * a + 4.0 * (1.0 - a) * u))
+
+
 @njit(cache=True)
 def slice_index(mu, cphi, ground, geom):
     """(node, fraction) on the view-zenith axis and on the azimuth axis of the observer's
-    sky map of :func:`multiple_scattering_slice`. ``geom`` = (n_ground, n_sky, theta_h):
-    nodes 0..n_ground-1 run uniformly in view zenith angle from the nadir to the horizon
-    (theta_h), nodes n_ground.. from the horizon to the zenith; azimuth from the sun's,
-    n_phi nodes uniform over [0, pi]."""
+    sky map of :func:`multiple_scattering_slice`. ``geom`` = (n_ground, n_sky, theta_h,
+    single-scattering flag, a_ground, a_sky): nodes 0..n_ground-1 run from the nadir to
+    the horizon (theta_h), nodes n_ground.. from the horizon to the zenith, each part
+    dense at the horizon as :func:`map_nodes` lays them; azimuth from the sun's, n_phi
+    nodes uniform over [0, pi]."""
     n_g = int(geom[0])
     n_s = int(geom[1])
     th_h = geom[2]
     th = math.acos(clamp_cos(mu))
     if ground:
-        x = (math.pi - th) / max(math.pi - th_h, 1e-12)
-        i, b = _split(x * (n_g - 1.0), n_g)
+        y = map_unit_inverse((th - th_h) / max(math.pi - th_h, 1e-12), geom[4])
+        i, b = _split((1.0 - y) * (n_g - 1.0), n_g)
     else:
-        x = (th_h - th) / th_h
+        x = map_unit_inverse((th_h - th) / th_h, geom[5])
         i, b = _split(x * (n_s - 1.0), n_s)
         i += n_g
     return i, b

@@ -34,7 +34,9 @@ def render_observer(dirs, r, sun, ss_slice, pc, pp, pt, ms_slice, col, beta_e, a
     already interpolated at the observer's r and mu_s (multilinear interpolation is
     separable, so the result equals the full 4-D lookup). With ``geom[0] > 0``, ``ms_slice``
     is instead the observer's sky map (n_ground + n_sky, n_phi, nl) of
-    :func:`multiple_scattering_slice`, indexed by :func:`slice_index`; with ``geom[3] > 0`` too,
+    :func:`multiple_scattering_slice`, indexed by :func:`slice_index` (``geom`` = (n_ground,
+    n_sky, horizon zenith angle, single-scattering flag, the ground's and the sky's linear
+    share of the rows' mapping: :func:`._multiple.map_nodes`)); with ``geom[3] > 0`` too,
     ``ss_slice`` is on that sky map as well (:func:`._twilight.single_scattering_slice`, shape
     (nsc, n_ground + n_sky, n_phi, nl)). Ground-hitting rays add the
     Lambertian ground lit by the sun and the sky ([Bru17] GetSunAndSkyIrradiance) times the
