@@ -30,13 +30,13 @@ from skydome.models.simulated.precomputed._tables import Tables
 
 __all__ = ["PrecomputedSky", "Precomputed", "Tables", "clear_cache"]
 
-# the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (uniform
-# in angle) and azimuth nodes from the sun's over [0, 180] deg
+# the observer's sky map of orders 2..N: view zenith nodes below / above the horizon (dense
+# at the horizon: _multiple.map_nodes) and azimuth nodes from the sun's over [0, 180] deg
 _SLICE_GROUND, _SLICE_SKY, _SLICE_PHI = 64, 192, 96
 #: The linear share a of the map's row mapping u(x) = a x + (1 - a) x^2 from the horizon
 #: (_multiple.map_nodes): rows a times the uniform spacing at the horizon, 2 - a times it
 #: at the zenith (nadir). Uniform rows (a = 1, 48 to the ground) were up to 12 % off a map
-#: of 3072 rows at the limb seen from 15 km by day, 78 % in twilight (docs/models.md, "The
+#: of 3072 rows at the limb seen from 15 km by day, 83 % in twilight (docs/models.md, "The
 #: observer's sky map dense at the horizon")
 _SLICE_GROUND_LINEAR, _SLICE_SKY_LINEAR = 0.15, 0.15
 #: Gauss-Legendre nodes between two quadrature nodes of a view ray for its columns from
