@@ -22,7 +22,8 @@ import math
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, types
+from numba import types
+from skydome._kernel_cache import njit
 from numba.core.extending import intrinsic
 
 

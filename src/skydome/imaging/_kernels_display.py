@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from skydome._kernel_cache import njit
 
 _D = 6.0 / 29.0
 #: Pixels per thread below which a display kernel runs on the calling thread alone.

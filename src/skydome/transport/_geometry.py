@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from skydome._kernel_cache import njit
 
 
 # -- named guards ([Bru17] ClampCosine, SafeSqrt) -------------------------------------------------

@@ -25,7 +25,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.transport._geometry import (distance_to_sphere_far, lowest_point,  # noqa: F401
                                         radius_along_above, ray_hits_ground, ray_segment,

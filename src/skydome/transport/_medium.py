@@ -16,7 +16,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from skydome._kernel_cache import njit
 
 # profile codes (mirror of skydome.atmosphere.profiles.PROFILE_CODES)
 EXPONENTIAL, TENT, UNIFORM, GAUSSIAN = 0, 1, 2, 3

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from skydome._kernel_cache import njit
 
 from skydome.transport._geometry import clamp_cosine
 

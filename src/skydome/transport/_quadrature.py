@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from skydome._kernel_cache import njit
 
 from skydome.transport._geometry import lowest_point, radius_along, ray_segment, safe_sqrt
 from skydome.transport._medium import profile_density

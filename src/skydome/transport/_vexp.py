@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from skydome._kernel_cache import njit
 
 _LN2_HI = 6.93147180369123816490e-01   # ln 2, high 32 bits (fdlibm e_exp.c ln2HI)
 _LN2_LO = 1.90821492927058770002e-10   # ln 2 - _LN2_HI (fdlibm e_exp.c ln2LO)

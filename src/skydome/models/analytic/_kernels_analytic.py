@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 _OPTS = dict(parallel=True, cache=True, fastmath=True)
 

@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from skydome._kernel_cache import njit
 
 from skydome.models.fitted._grid import A_PHI, EPS, N_GROUND, N_PHI, N_SKY
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.transport._geometry import distance_to_sphere_far, ray_hits_ground, safe_sqrt
 from skydome.transport._medium import UNIFORM, profile_density

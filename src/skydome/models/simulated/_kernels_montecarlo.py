@@ -59,7 +59,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.transport._geometry import (radius_along, radius_along_above, ray_hits_ground,
                                         ray_segment, safe_sqrt)

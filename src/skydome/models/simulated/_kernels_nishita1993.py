@@ -32,7 +32,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.transport._geometry import clamp_cosine, radius_along_above, ray_hits_ground, safe_sqrt
 from skydome.transport._medium import profile_density, scatterer_indices

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.transport._geometry import ray_segment_xyz, safe_sqrt
 from skydome.transport._medium import profile_density

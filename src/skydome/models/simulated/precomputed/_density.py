@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, distance_to_ground, hits_ground
 from skydome.models.simulated.precomputed._irradiance import direct_irradiance_acc

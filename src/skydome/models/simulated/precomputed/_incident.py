@@ -20,7 +20,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.models.simulated.precomputed._density import (INV_PI, density_node,
                                                             ground_reflected_acc,

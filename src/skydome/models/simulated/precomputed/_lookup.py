@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from skydome._kernel_cache import njit
 
 from skydome.models.simulated.precomputed._geometry import clamp_cos, point_along
 from skydome.models.simulated.precomputed._mapping import _split, mu_index, mu_s_unit, r_index

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from skydome._kernel_cache import njit
 
 import numpy as np
 

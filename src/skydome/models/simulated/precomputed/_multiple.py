@@ -10,7 +10,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 
 # a purely absorbing part of a row of the optical properties is line-like when it is

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from skydome._kernel_cache import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along)
