@@ -455,7 +455,8 @@ def multiple_scattering_along(density, od, atm, dens, r, mu, mu_s, nu, ground):
                       dens["nTheta"] - 1)
     it = np.minimum(f_theta.astype(int), dens["nTheta"] - 2)
     jb = (f_theta - it)[..., None]
-    c0 = columns(od, atm, r, np.where(ground, -mu, mu))
+    c0 = (np.zeros(mu.shape + (4,)) if dens["columnNodes"] > 0
+          else columns(od, atm, r, np.where(ground, -mu, mu)))
     acc = [np.zeros(mu.shape + (4,)) for _ in range(layers)]
     n0 = dens["samples"] if dens["samples"] >= 4 else 0
     hm = 0.5 * t_low

@@ -594,7 +594,10 @@ vec3 skydomeMultipleScatteringAlong(sampler3D density, sampler2D opticalDepth,
                          0.0, float(dens.nTheta - 1));
     int it = min(int(fTheta), dens.nTheta - 2);
     float jb = fTheta - float(it);
-    vec4 c0 = skydomeColumns(opticalDepth, atm, r, ground ? -mu : mu);
+    // the observer's columns to the top: read only where the ray's columns are differences
+    // of the table's (columnNodes 0)
+    vec4 c0 = dens.columnNodes > 0 ? vec4(0.0)
+                                   : skydomeColumns(opticalDepth, atm, r, ground ? -mu : mu);
     vec4 acc[SKYDOME_PC_MAX_WAVELENGTHS / 4];
     for (int l = 0; l < SKYDOME_PC_MAX_WAVELENGTHS / 4; ++l) acc[l] = vec4(0.0);
     // the ray's pieces as the model's (transport/_quadrature.py, ray_nodes): from the start
