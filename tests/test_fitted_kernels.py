@@ -332,3 +332,36 @@ def test_render_reads_the_spectral_lookup_integrated(elevation, altitude, aod):
     ref = sky.radiance(d, wl) @ _xyz_weights(wl)
     assert got.shape == ref.shape == (20000, 3)
     np.testing.assert_allclose(got, ref, rtol=1e-11, atol=1e-12 * ref.max())
+
+
+@pytest.mark.parametrize("channels", [1, 3, 7])
+@pytest.mark.parametrize("azimuth, altitude", [(180.0, 2000.0), (90.0, 0.0), (0.0, 15000.0),
+                                               (237.0, 700.0)])
+def test_lookup_reads_nothing_outside_its_table(channels, azimuth, altitude):
+    """The table laid inside a buffer of NaN: every value of the lookup is finite and the
+    numpy lookup's. Directions in the sun's vertical plane on its side (azimuth from the
+    sun 0: the grid's first column, the zenith) put the azimuth's cell at 0, where
+    fastmath's rearranged root gave t = -5e-16: the kernel's floor made the cell -1 and
+    read the element before the table in the sky's first cell (1e216 and NaN came out of
+    ``radiance`` at the horizon of an observer at 2 km, 700 nm)."""
+    from skydome.models.fitted import _kernels
+
+    sky = sd.model("fitted", sun=sd.Sun(elevation_deg=19.0, azimuth_deg=azimuth),
+                   observer_altitude_m=altitude)
+    table = np.ascontiguousarray(sky._table[:, :, :channels])
+    pad = 4 * _grid.N_PHI * channels
+    buf = np.full(table.size + 2 * pad, np.nan)
+    buf[pad:pad + table.size] = table.reshape(-1)
+    inside = buf[pad:pad + table.size]
+    d = np.vstack([_grid.directions(altitude, azimuth).reshape(-1, 3),
+                   _grid.directions(altitude, azimuth, midpoints=True).reshape(-1, 3),
+                   [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
+    out = np.empty((d.shape[0], channels))
+    _kernels.lookup(d, d.view(np.int64), inside, channels, sky._theta_h, sky._sin_az,
+                    sky._cos_az, out)
+    assert np.isfinite(out).all(), np.argwhere(~np.isfinite(out))[:5]
+    ref = _reference_lookup_table(sky, table, d)
+    scale = np.maximum(np.abs(ref), 1e-12 * np.abs(ref).max())
+    # the grid's nodes next to the horizon: the angle's last-place rounding through the
+    # square-root mapping reaches 1.3e-9 relative here (at 700 m, azimuth 237 deg)
+    assert np.max(np.abs(out - ref) / scale) < 1e-8

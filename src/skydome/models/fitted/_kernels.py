@@ -207,7 +207,7 @@ def lookup_blocks(d, bits, table, c, theta_h, sin_az, cos_az, out, b0, b1):
             last = (N_SKY - 2) if sky else (N_GROUND - 2)
             # the cell as a float (np.floor): AVX2 has no packed float64 -> int64 conversion,
             # so an int here would keep the loop scalar; pass 2 converts the index
-            iu = min(np.floor(u), float(last))
+            iu = min(max(np.floor(u), 0.0), float(last))
             # Catmull-Rom weights of the rows iu - 1, iu, iu + 1, iu + 2 at f = u - iu
             f = min(u - iu, 1.0)
             f2 = f * f
@@ -233,7 +233,12 @@ def lookup_blocks(d, bits, table, c, theta_h, sin_az, cos_az, out, b0, b1):
             cp = 1.0 if (sp == 0.0 and cp == 0.0) else cp
             phi = _atan2_pos(sp, cp) * (1.0 / math.pi)
             t = (-a + math.sqrt(a * a + 4.0 * b * phi)) / (2.0 * b) * (N_PHI - 1)
-            it = min(np.floor(t), float(N_PHI - 2))
+            # t is 0 at phi = 0 in exact arithmetic, but fastmath may rearrange the root
+            # (the constants divided through) and give -1e-16: floor would then make the
+            # cell -1, and the read before it fall outside the table for the sky's first
+            # cell (a weight of 1e-16 times whatever lies there: 1e216 and NaN were seen).
+            # The cell is clamped to the table as the shaders' int() does.
+            it = min(max(np.floor(t), 0.0), float(N_PHI - 2))
             sc[_IDX + j] = ((r0 if sky else r0 + N_SKY) * N_PHI + it) * cf
             sc[_WA + j] = a0
             sc[_WB + j] = a1
