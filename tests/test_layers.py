@@ -27,10 +27,10 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 LAYERS = (
     # foundation: constants, input checks, data tables, atomic files, progress reports, the
     # generic Dask chunk runner, numba's start-up and its compilations' log, serial kernels
-    # run on threads
+    # run on threads, numba's cache locators of the kernels
     ("skydome.constants", "skydome._validate", "skydome.data", "skydome._io",
      "skydome._progress", "skydome.distributed", "skydome._numba_start",
-     "skydome._compile_log", "skydome._threads"),
+     "skydome._compile_log", "skydome._threads", "skydome._kernel_cache"),
     ("skydome.transport",),                       # the numerical core
     # the medium, the sun, colour science; the illuminance of planes (it integrates any
     # model, duck-typed; the analytic models use its quadrature nodes)
