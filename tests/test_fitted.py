@@ -686,6 +686,14 @@ def test_replace_projects_a_node_again_and_keeps_the_others(tmp_path, capsys):
                 np.testing.assert_array_equal(b[key], a[key], err_msg=key)
         meta = json.loads(str(b["meta"]))
         assert meta["aod_nodes_reprojected"] == [0.5]
+        assert [s["aod_nodes"] for s in meta["reprojection_steps"]] == [[0.5]]
+    # a second step (a data set generated over several runs) adds to the record
+    rep2 = tmp_path / "rep_twice.npz"
+    assert fit.main([str(tmp_path / "again"), "--replace", str(rep), "--out",
+                     str(rep2)]) == 0
+    meta = json.loads(str(np.load(rep2)["meta"]))
+    assert meta["aod_nodes_reprojected"] == [0.5]
+    assert [s["aod_nodes"] for s in meta["reprojection_steps"]] == [[0.5], [0.5]]
     capsys.readouterr()
     chunk = np.load(tmp_path / "again" / f"{_dataset_key(0.5, 0.0)}.npy")
     _write_dataset(tmp_path / "other", np.array([-1.0, 10.0]), np.array([0.0, 15000.0]),

@@ -237,7 +237,13 @@ def extend(file: Path, dataset: str, out: Path, replace: bool = False) -> int:
             join(key + "_scale", scale)
         join(key, v)
     if replace:
-        meta["aod_nodes_reprojected"] = [float(x) for x in new]
+        # cumulative: a file reprojected in steps (a data set generated over several
+        # runs) records every node reprojected and each step's residual
+        before = [float(x) for x in meta.get("aod_nodes_reprojected", [])]
+        meta["aod_nodes_reprojected"] = sorted(set(before) | {float(x) for x in new})
+        steps = meta.get("reprojection_steps", [])
+        steps.append({"aod_nodes": [float(x) for x in new], "residual_rms_y": resid})
+        meta["reprojection_steps"] = steps
         meta["reprojection_residual_rms_y"] = resid
         meta["command_replace"] = "python tools/fit_fitted.py DATASET --replace FILE"
     else:

@@ -334,6 +334,9 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
         tw = w.tw
         rts = w.rts
         acc = np.zeros((n_nu, nl))
+        nus = np.empty(n_nu)
+        jts = np.empty(n_nu, dtype=np.int64)
+        jbs = np.empty(n_nu)
         lo_read = n_msj
         hi_read = 0
         mu = mu_nodes[imu]
@@ -345,20 +348,26 @@ def multiple_scattering_slice(J, ms0, n_msj, m, sc_idx, col, mu_s_min, r, mu_s, 
             ray_weights_integrated(m, sc_idx, r, mu, nq, 1.0, gx, gw, w)
         else:
             ray_weights(col, m, sc_idx, r, mu, ground, nq, 1.0, w)
+        # the angle from the sun and its theta cell in J depend on the azimuth alone
+        for inu in range(n_nu):
+            nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
+            nus[inu] = nu
+            jts[inu], jbs[inu] = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
         for q in range(nq):
             t = tq[q]
             rt = rts[q]
             mt = clamp_cos((r * mu + t) / rt)
             jr, ja = r_index(rt, n_rj, R, Rt)
             for inu in range(n_nu):
-                nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[inu])
+                nu = nus[inu]
                 mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
                 ims_j, c = density_mu_s_index(mu_s_t, frame, n_msj)
                 lo_read = min(lo_read, ims_j)
                 hi_read = max(hi_read, ims_j + 2)
                 if ims_j < ms0 or ims_j + 2 > ms0 + n_held:
                     continue                    # rows not held: reported in reach
-                jt, jb = _split(math.acos(nu) / math.pi * (n_tj - 1), n_tj)
+                jt = jts[inu]
+                jb = jbs[inu]
                 ip, e = density_phi_index(nu, mu_s_t, mt, n_pj)
                 density_acc(J, tw[q], jt, jb, ip, e, jr, ja, ims_j - ms0, c, acc[inu])
         reach[imu, 0] = lo_read

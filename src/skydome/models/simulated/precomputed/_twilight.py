@@ -21,13 +21,14 @@ from skydome._kernel_cache import njit, prange
 
 from skydome.models.simulated.precomputed._geometry import (clamp_cos, distance_to_ground,
                                                              distance_to_top, point_along)
-from skydome.models.simulated.precomputed._lookup import (columns_along, columns_at,
-                                                           columns_segment,
+from skydome.models.simulated.precomputed._lookup import (_optical_depth, columns_along,
+                                                           columns_at, columns_segment,
                                                            sun_visible_fraction)
 from skydome.transport._geometry import lowest_point
 from skydome.transport._kernels import view_break_points
 from skydome.transport._medium import profile_density
 from skydome.transport._quadrature import piece_half, piece_nodes_rule
+from skydome.transport._vexp import exp_neg_many
 
 # Gauss-Legendre nodes per piece of a ray (ends, lowest point, shadow crossings) in
 # v = ln(1 + u / ts), dense at the piece's end nearer the lowest point or the shadow
@@ -62,17 +63,33 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
     integrated = gx.shape[0] > 0
     n_x = rx.shape[0]
     R, Rt = m.R, m.Rt
+    max_pts = 10 * n_x              # at most 5 pieces, each on two halves
     for imu in prange(n_mu):
         w1 = np.empty(nc)
         w2 = np.empty(nc)
-        cv = np.empty(nc)
         run = np.empty(nc)          # the integrated view columns from the observer
         csun = np.empty(nc)
-        dens = np.empty(nsc)
         acc = np.empty((nsc, nl))
         brk = np.empty(6)
         tq = np.empty(n_x)
         tw = np.empty(n_x)
+        cx = np.empty(nc)
+        xs = np.empty(nl)
+        es = np.empty(nl)
+        ib = np.empty(nl, dtype=np.int64)
+        fb = ib.view(np.float64)
+        # the ray's nodes (distance, weight, radius, view columns, densities of the
+        # scatterers): they depend on the ray's break points alone, which are the same at
+        # every azimuth whose ray crosses no shadow boundary, so they are kept from one
+        # azimuth to the next while its break points are (the same values, computed once)
+        pt_t = np.empty(max_pts)
+        pt_w = np.empty(max_pts)
+        pt_r = np.empty(max_pts)
+        pt_cv = np.empty((max_pts, nc))
+        pt_dens = np.empty((max_pts, nsc))
+        kept_brk = np.empty(6)
+        n_kept_brk = -1
+        n_pts = 0
         mu = mu_nodes[imu]
         ground = ground_nodes[imu]
         d = distance_to_ground(r, mu, R) if ground else distance_to_top(r, mu, Rt)
@@ -81,50 +98,75 @@ def single_scattering_slice(col, m, sc_idx, beta_s, alpha, r, mu_s, ts, rx, rw, 
         for iphi in range(n_phi):
             nu = clamp_cos(mu * mu_s + s_v * cphi_nodes[iphi])
             acc[:] = 0.0
-            run[:] = 0.0
-            t_run = 0.0
             nbrk = view_break_points(r, mu, mu_s, nu, R, 0.0, d, brk)
-            for q in range(nbrk - 1):
-                a = brk[q]
-                b = brk[q + 1]
-                if b - a <= 0.0:
-                    continue
-                # the piece from the observer down to the lowest point on two halves,
-                # each dense at its own end (transport._quadrature.piece_half)
-                split = b <= tmin and a == 0.0
-                for half in range(2 if split else 1):
-                    ha, hb, hd = piece_half(a, b, b <= tmin, split, half)
-                    piece_nodes_rule(ha, hb, hd, rx, rw, ts, tq, tw, 0)
-                    # the nodes in order of distance (the rule lays them from its dense end)
-                    rev = tq[0] > tq[n_x - 1]
-                    for kk_ in range(n_x):
-                        k = n_x - 1 - kk_ if rev else kk_
-                        t = tq[k]
-                        wq = tw[k]
-                        if integrated:
-                            columns_along(m, r, mu, t_run, t, gx, gw, run)
-                            t_run = max(t_run, t)
-                        rt = point_along(r, mu, t, R, Rt)
-                        mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
-                        vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
-                        if vis <= 0.0:
-                            continue
-                        if integrated:
-                            cv[:] = run
-                        else:
-                            columns_segment(col, r, mu, t, ground, R, Rt, w1, w2, cv)
-                        columns_at(col, rt, mu_s_t, R, Rt, csun)
-                        for kk in range(nsc):
-                            c = sc_idx[kk]
-                            dens[kk] = profile_density(m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
-                                                       rt - R)
-                        for l in range(nl):
-                            tau = 0.0
-                            for c in range(nc):
-                                tau += m.extinction[c, l] * (cv[c] + csun[c])
-                            e = wq * vis * math.exp(-tau)
+            same = nbrk == n_kept_brk
+            if same:
+                for q in range(nbrk):
+                    if brk[q] != kept_brk[q]:
+                        same = False
+                        break
+            if not same:
+                n_kept_brk = nbrk
+                for q in range(nbrk):
+                    kept_brk[q] = brk[q]
+                n_pts = 0
+                run[:] = 0.0
+                t_run = 0.0
+                for q in range(nbrk - 1):
+                    a = brk[q]
+                    b = brk[q + 1]
+                    if b - a <= 0.0:
+                        continue
+                    # the piece from the observer down to the lowest point on two halves,
+                    # each dense at its own end (transport._quadrature.piece_half)
+                    split = b <= tmin and a == 0.0
+                    for half in range(2 if split else 1):
+                        ha, hb, hd = piece_half(a, b, b <= tmin, split, half)
+                        piece_nodes_rule(ha, hb, hd, rx, rw, ts, tq, tw, 0)
+                        # the nodes in order of distance (the rule lays them from its
+                        # dense end)
+                        rev = tq[0] > tq[n_x - 1]
+                        for kk_ in range(n_x):
+                            k = n_x - 1 - kk_ if rev else kk_
+                            t = tq[k]
+                            if integrated:
+                                columns_along(m, r, mu, t_run, t, gx, gw, run)
+                                t_run = max(t_run, t)
+                            rt = point_along(r, mu, t, R, Rt)
+                            pt_t[n_pts] = t
+                            pt_w[n_pts] = tw[k]
+                            pt_r[n_pts] = rt
+                            if integrated:
+                                pt_cv[n_pts, :] = run
+                            else:
+                                columns_segment(col, r, mu, t, ground, R, Rt, w1, w2,
+                                                pt_cv[n_pts])
                             for kk in range(nsc):
-                                acc[kk, l] += dens[kk] * e
+                                c = sc_idx[kk]
+                                pt_dens[n_pts, kk] = profile_density(
+                                    m.profile_code[c], m.profile_p0[c], m.profile_p1[c],
+                                    rt - R)
+                            n_pts += 1
+            for p in range(n_pts):
+                t = pt_t[p]
+                rt = pt_r[p]
+                mu_s_t = clamp_cos((r * mu_s + t * nu) / rt)
+                vis = sun_visible_fraction(rt, mu_s_t, R, alpha)
+                if vis <= 0.0:
+                    continue
+                columns_at(col, rt, mu_s_t, R, Rt, csun)
+                # exp(-tau) of every wavelength in one vectorised pass (the core's
+                # exp_neg_many: within a few units in the last place of libm's)
+                for c in range(nc):
+                    cx[c] = pt_cv[p, c] + csun[c]
+                for l in range(nl):
+                    xs[l] = -_optical_depth(m.extinction, cx, l)
+                exp_neg_many(xs, nl, es, ib, fb)
+                g = pt_w[p] * vis
+                for kk in range(nsc):
+                    dk = pt_dens[p, kk]
+                    for l in range(nl):
+                        acc[kk, l] += dk * (g * es[l])
             for kk in range(nsc):
                 for l in range(nl):
                     out[kk, imu, iphi, l] = beta_s[kk, l] * acc[kk, l]
