@@ -171,3 +171,29 @@ def test_chunk_bit_identical_with_read_only_arguments(days):
 
     for c in chunks:
         np.testing.assert_array_equal(c.func(*[read_only(a) for a in c.args]), c.func(*c.args))
+
+
+def test_local_cluster_divides_the_cores_among_its_workers(tmp_path, monkeypatch):
+    """A local cluster's worker processes run numba's parallel kernels on their share of the
+    cores (the cores // workers, at least 1), not each on every core; a thread count the
+    caller set is left to the workers as it is."""
+    from skydome.distributed import Chunk, run_chunks, worker_environment
+
+    def threads(_):
+        import os
+
+        import numba
+
+        return np.array([numba.get_num_threads(),
+                         int(os.environ.get("NUMBA_NUM_THREADS", "0"))])
+
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    cores = len(os.sched_getaffinity(0))
+    want = max(1, cores // 2)
+    assert worker_environment(2) == {"NUMBA_NUM_THREADS": str(want)}
+    assert worker_environment(4 * cores) == {"NUMBA_NUM_THREADS": "1"}
+    run_chunks([Chunk(f"c{i}", threads, (i,)) for i in range(2)], tmp_path / "a", n_workers=2)
+    for i in range(2):
+        np.testing.assert_array_equal(np.load(tmp_path / "a" / f"c{i}.npy"), [want, want])
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "1")
+    assert worker_environment(2) == {}

@@ -196,6 +196,20 @@ def _remove_orphans(folder: Path, keys) -> list[str]:
     return removed
 
 
+def worker_environment(n_workers: int) -> dict:
+    """The environment of a local cluster's worker processes: numba's thread count
+    (``NUMBA_NUM_THREADS``) set to this process's cores divided among the ``n_workers``
+    workers (at least 1), unless the caller has set it. Otherwise every worker's parallel
+    kernels would start a thread per core, ``n_workers`` times the cores in all."""
+    if "NUMBA_NUM_THREADS" in os.environ:
+        return {}
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return {"NUMBA_NUM_THREADS": str(max(1, cores // max(1, int(n_workers))))}
+
+
 def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
                n_workers: int = 2, client=None, progress: bool = False,
                connect_timeout_s: float = CONNECT_TIMEOUT_S) -> JobReport:
@@ -209,7 +223,8 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
         Where the chunks are written (created if missing).
     scheduler : str, optional
         Address of a running dask.distributed scheduler ("tcp://HOST:8786"); default: a local
-        cluster of ``n_workers`` processes with one thread each, closed at the end. Checked
+        cluster of ``n_workers`` processes with one thread each (and numba's threads of
+        :func:`worker_environment`), closed at the end. Checked
         before any work (:func:`check_scheduler`).
     client : distributed.Client, optional
         Use this client (its cluster) instead.
@@ -263,7 +278,8 @@ def run_chunks(chunks: Sequence[Chunk], folder, *, scheduler: str | None = None,
                 cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1,
                                        processes=True, dashboard_address=None,
                                        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                                       silence_logs=logging.CRITICAL)
+                                       silence_logs=logging.CRITICAL,
+                                       env=worker_environment(n_workers))
                 own = client = Client(cluster)
         futures, failed = [], False
         try:
