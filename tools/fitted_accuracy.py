@@ -1,7 +1,7 @@
 """Measure the ``fitted`` model on its held-out grid, against the ``precomputed`` reference.
 
     python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
-        [--json OUT.json] [--coefficients FILE]
+        [--json OUT.json] [--coefficients FILE] [--per-atmosphere]
     python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--coefficients FILE]
 
 HELDOUT is a folder written by ``tools/fitted_dataset.py --grid heldout``: the reference's
@@ -72,6 +72,9 @@ def main(argv=None) -> int:
                     help="with --nodes: only the atmospheres of this albedo (default all)")
     ap.add_argument("--aod", type=float, default=None,
                     help="with --nodes: only the atmospheres of this AOD (default all)")
+    ap.add_argument("--per-atmosphere", action="store_true",
+                    help="also the luminance RMS / max per held-out atmosphere, regime and "
+                         "observer (which atmospheres the regimes' figures come from)")
     ap.add_argument("--spectral-figure", default=None,
                     help="figure of the spectral RMS per wavelength (a set with wavelengths "
                          "between the table wavelengths)")
@@ -157,6 +160,7 @@ def main(argv=None) -> int:
                 cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
                 hgt = (cls, hgt)
                 add((reg, hgt, "fitted", "Y"), rel_y[sky & keep])
+                add(("atmosphere", (aod, alb), reg, hgt[1]), rel_y[sky & keep])
                 sel = sky & keep
                 rs, ps = rel_s[sel], pos[sel]
                 add((reg, hgt, "fitted", "spectral"), rs[:, node][ps[:, node]])
@@ -227,10 +231,32 @@ def main(argv=None) -> int:
                   f"{100 * np.median(sb):.2f} %; with the sun at 4 deg or higher: largest "
                   f"{100 * sb[hi].max(initial=0.0):.2f} %, median "
                   f"{100 * np.median(sb[hi]) if hi.any() else 0.0:.2f} %")
+    per_atm = []
+    for key, parts in acc.items():
+        if key[0] == "atmosphere":
+            e = np.concatenate(parts)
+            per_atm.append({"aod": key[1][0], "albedo": key[1][1], "regime": key[2],
+                            "observer": key[3], "Y_rms": float(np.sqrt(np.mean(e * e))),
+                            "Y_max": float(e.max(initial=0.0))})
+    if a.per_atmosphere:
+        print("\nper atmosphere, luminance RMS / max (the regimes as above):\n")
+        heads = [f"{r[4:]}, {h}" for r, _, _ in REGIMES for h, _, _ in HEIGHTS]
+        print("| AOD, albedo | " + " | ".join(heads) + " |")
+        print("|---|" + "---|" * len(heads))
+        look = {(x["aod"], x["albedo"], x["regime"], x["observer"]): x for x in per_atm}
+        for aod, alb in atmospheres:
+            cells = []
+            for r, _, _ in REGIMES:
+                for h, _, _ in HEIGHTS:
+                    x = look.get((aod, alb, r, h))
+                    cells.append("-" if x is None else
+                                 f"{100 * x['Y_rms']:.2f} / {100 * x['Y_max']:.1f}")
+            print(f"| {aod:g}, {alb:g} | " + " | ".join(cells) + " |")
     spectral = _between_tables(acc, per_wl, wl, between) if between.any() else {}
     if a.json:
         Path(a.json).write_text(json.dumps({"rows": rows, "sun": sun_err,
-                                            "between": spectral}, indent=1))
+                                            "between": spectral,
+                                            "per_atmosphere": per_atm}, indent=1))
     if a.spectral_figure and spectral:
         _spectral_figure(a.spectral_figure, spectral, wl, node)
     if a.figure and examples:
