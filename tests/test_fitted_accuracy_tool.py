@@ -133,6 +133,45 @@ def test_nodes_mode_classes_points_by_whether_they_are_the_files_nodes(tmp_path,
     assert "--aod = 0.5" in err and "(0.1, 0.5)" in err
 
 
+def test_nodes_where_names_the_direction_of_the_largest_error(tmp_path, capsys):
+    """--where: one view-grid node of the set is given a larger factor than the rest; it must
+    lead the list, with its row, column, elevation and angle from the sun."""
+    c = _coefficients.load()
+    en = np.asarray(c["elevation_nodes_deg"], dtype=np.float64)
+    el = float(en[int(np.argmin(np.abs(en - 30.0)))])
+    aod, alb, h = 0.1, 0.5, 15000.0
+    wl = np.asarray(c["wavelengths_nm"], dtype=np.float64)
+    _dataset.write_grid(tmp_path, [el], [h], [(aod, alb)], wavelengths=wl)
+    n_dir = _grid.N_SKY + _grid.N_GROUND
+    out = np.zeros((1, 1, n_dir + 1, _grid.N_PHI, wl.size), dtype=np.float32)
+    fac = np.full((n_dir, _grid.N_PHI, 1), 1.01)
+    row, col = 5, 40                                   # the limb from 15 km, away from the sun
+    fac[row, col] = 1.25
+    out[0, 0, :n_dir] = _coefficients.radiance_grid(c, aod, alb, el, h) * fac
+    _store(tmp_path, aod, alb, out)
+    assert tool.main([str(tmp_path), "--nodes", "--where", "3"]) == 0
+    text = capsys.readouterr().out.split("largest errors")[1]
+    rows = [[x.strip() for x in line.strip("|").split("|")]
+            for line in text.splitlines() if line.startswith("| ") and "%" in line]
+    assert len(rows) == 3
+    d = _grid.directions(h, 180.0)[row, col]
+    sun = sd.Sun(elevation_deg=el, azimuth_deg=180.0)
+    first = rows[0]
+    # model / reference - 1 = 1 / 1.25 - 1, to the printed digits and the integration
+    assert float(first[0].rstrip(" %")) / 100 == pytest.approx(1 / 1.25 - 1, abs=2e-3)
+    assert (first[5], first[6]) == (str(row), str(col))
+    assert float(first[7].split()[0]) == pytest.approx(np.degrees(np.arcsin(d[2])), abs=0.01)
+    assert float(first[8].split()[0]) == pytest.approx(
+        np.degrees(np.arccos(d @ sun.direction)), abs=0.01)
+    # the others carry the common factor only
+    assert all(float(r[0].rstrip(" %")) / 100 == pytest.approx(1 / 1.01 - 1, abs=2e-3)
+               for r in rows[1:])
+    assert tool.main([str(tmp_path), "--where", "3"]) == 2
+    assert "--where = 3 needs --nodes" in capsys.readouterr().err
+    assert tool.main([str(tmp_path), "--nodes", "--where", "-1"]) == 2
+    assert "--where = -1 is out of range" in capsys.readouterr().err
+
+
 def test_bad_arguments_refused_with_the_value(heldout, tmp_path, capsys):
     missing = tmp_path / "none.npz"
     assert tool.main([str(heldout), "--coefficients", str(missing)]) == 2

@@ -2,7 +2,8 @@
 
     python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
         [--json OUT.json] [--coefficients FILE] [--per-atmosphere]
-    python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--coefficients FILE]
+    python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--where N]
+        [--coefficients FILE]
 
 HELDOUT is a folder written by ``tools/fitted_dataset.py --grid heldout``: the reference's
 spectral skies (computed by ``precomputed`` itself, never by the fitted model) at parameter
@@ -20,7 +21,10 @@ sun elevation and altitude, every view-grid node of the sky more than 5 deg from
 each point classed by whether its parameters are nodes of the measured file: the
 representation's own error (the truncated angular basis) at the file's nodes, and the
 interpolation's in sun elevation, altitude or AOD at a finer grid's nodes between them
-(the angular interpolation, which the held-out grid's cell centres add, is not in it). ``--coefficients``: measure that file instead of the package's
+(the angular interpolation, which the held-out grid's cell centres add, is not in it);
+``--where N`` lists its N largest errors with where they lie (the atmosphere, the sun, the
+altitude, the view-grid row and column, the elevation and the angle from the sun).
+``--coefficients``: measure that file instead of the package's
 (for instance the previous coefficients on the same held-out grid).
 
 A held-out set made with ``--wavelength-step 10`` also holds the reference at the
@@ -72,6 +76,10 @@ def main(argv=None) -> int:
                     help="with --nodes: only the atmospheres of this albedo (default all)")
     ap.add_argument("--aod", type=float, default=None,
                     help="with --nodes: only the atmospheres of this AOD (default all)")
+    ap.add_argument("--where", type=int, default=0, metavar="N",
+                    help="with --nodes: also list the N largest errors with where they lie "
+                         "(atmosphere, sun, altitude, view-grid row and column, height above "
+                         "the horizon, angle from the sun)")
     ap.add_argument("--per-atmosphere", action="store_true",
                     help="also the luminance RMS / max per held-out atmosphere, regime and "
                          "observer (which atmospheres the regimes' figures come from)")
@@ -86,8 +94,14 @@ def main(argv=None) -> int:
             print(f"error: --coefficients = {a.coefficients} is not a file", file=sys.stderr)
             return 2
         _coefficients.COEFFICIENT_FILE = Path(a.coefficients)
+    if not 0 <= a.where <= 10000:
+        print(f"error: --where = {a.where} is out of range [0, 10000]", file=sys.stderr)
+        return 2
+    if a.where and not a.nodes:
+        print(f"error: --where = {a.where} needs --nodes", file=sys.stderr)
+        return 2
     if a.nodes:
-        return _at_nodes(a.heldout, a.albedo, a.aod)
+        return _at_nodes(a.heldout, a.albedo, a.aod, a.where)
     from skydome.models.fitted._dataset import DataSet
     from skydome.spectra import default_wavelengths, interpolation_matrix, \
         luminance_from_spectrum, solar_irradiance
@@ -264,7 +278,7 @@ def main(argv=None) -> int:
     return 0
 
 
-def _at_nodes(folder, albedo, aod=None) -> int:
+def _at_nodes(folder, albedo, aod=None, where=0) -> int:
     """The luminance error on a ``--grid fit`` data set (module docstring, ``--nodes``),
     each point classed by which of its parameters are nodes of the measured coefficient
     file: all of them (the representation's own error), or the sun elevation, the altitude
@@ -303,6 +317,7 @@ def _at_nodes(folder, albedo, aod=None) -> int:
     to_default = interpolation_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     n_sky = _grid.N_SKY
     acc: dict = {}
+    worst_pts: list = []        # (|err|, err, aod, albedo, sun, altitude, row, column, ...)
     for aod, alb in atms:
         L_all, _ = ds.sky(aod, alb)
         cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
@@ -326,8 +341,19 @@ def _at_nodes(folder, albedo, aod=None) -> int:
                 fit = _coefficients.radiance_grid(c, aod, alb, float(el), float(h))[..., sel]
                 y_fit = luminance_from_spectrum(fit @ to_default, dwl)
                 hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
-                rel = np.abs(y_fit / y_ref - 1.0)[keep]
+                signed = (y_fit / y_ref - 1.0)[keep]
+                rel = np.abs(signed)
                 acc.setdefault((cls, reg, hgt, kind), []).append(rel)
+                if where:
+                    rows, cols = np.nonzero(keep)
+                    top = np.argsort(rel)[::-1][:where]
+                    ang = np.degrees(np.arccos(np.clip(d[rows[top], cols[top]]
+                                                       @ sun.direction, -1.0, 1.0)))
+                    up = np.degrees(np.arcsin(np.clip(d[rows[top], cols[top], 2], -1, 1)))
+                    worst_pts += [(float(rel[t]), float(signed[t]), aod, alb, float(el),
+                                   float(h), int(rows[t]), int(cols[t]), float(u), float(g),
+                                   kind) for t, u, g in zip(top, up, ang)]
+                    worst_pts = sorted(worst_pts, reverse=True)[:where]
                 acc.setdefault((cls, reg, hgt, kind, aod), []).append(rel)
     print(f"on the data set's nodes: atmospheres {atms}, sun {list(ds.elevations_deg)} "
           f"deg, altitude {list(ds.altitudes_m)} m; coefficient file "
@@ -355,6 +381,17 @@ def _at_nodes(folder, albedo, aod=None) -> int:
                     print(f"| {cls} | {reg[4:]} | {hgt} | {kind} ({n}) | "
                           f"{100 * np.sqrt(np.mean(v ** 2)):.2f} % | {100 * v.max():.1f} % | "
                           f"{worst:g} ({100 * per[worst]:.2f} %) |", flush=True)
+    if where:
+        print(f"\nthe {len(worst_pts)} largest errors (model / reference - 1; row and column "
+              "of the view grid: the row 0 the sky's lowest, at the horizon (from above: "
+              "the limb), the column 0 towards the sun's azimuth; elevation above the "
+              "horizontal)")
+        print("| error | AOD | albedo | sun | altitude | row | column | elevation | "
+              "from the sun | points |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+        for _, e, a_, b_, el, h, r, k, u, g, kind in worst_pts:
+            print(f"| {100 * e:+.2f} % | {a_:g} | {b_:g} | {el:g} deg | {h:g} m | {r} | {k} | "
+                  f"{u:.2f} deg | {g:.2f} deg | {kind} |")
     return 0
 
 
