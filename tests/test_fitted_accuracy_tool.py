@@ -102,6 +102,32 @@ def test_heldout_rows_give_the_known_error_in_each_regime_and_observer(heldout, 
     assert "| 0.04, 0.3 |" in text              # the --per-atmosphere table's row
 
 
+def test_heldout_where_lists_the_largest_errors_of_each_regime(heldout, capsys):
+    """--where on a held-out set: per regime, the largest errors come from the observer whose
+    factor is the larger there, with that factor's error (1/(1+eps) - 1, to the luminance
+    integration's 1 %)."""
+    assert tool.main([str(heldout), "--where", "2"]) == 0
+    text = capsys.readouterr().out.split("largest luminance errors")[1]
+    found, reg = {}, None
+    for line in text.splitlines():
+        if line.startswith("sun ") and line.endswith(":"):      # a regime's list
+            reg = line[:-1]
+            found[reg] = []
+        elif line.startswith("sun transmittance"):
+            break
+        elif reg and line.startswith("| ") and "%" in line:
+            found[reg].append([x.strip() for x in line.strip("|").split("|")])
+    assert set(found) == {"sun > 20 deg", "sun -6 to -12 deg"}
+    for reg, (el, eps, obs, h) in {"sun > 20 deg": (28.0, 0.03, "ground", 0.0),
+                                   "sun -6 to -12 deg": (-9.5, 0.10, "15 km", 15000.0)}.items():
+        assert len(found[reg]) == 2
+        for r in found[reg]:
+            assert float(r[0].rstrip(" %")) / 100 == pytest.approx(1 / (1 + eps) - 1,
+                                                                    abs=1e-2), reg
+            assert (r[1], r[2], r[3], r[4], r[9]) == ("0.04", "0.3", f"{el:g} deg",
+                                                      f"{h:g} m", obs)
+
+
 def test_nodes_mode_classes_points_by_whether_they_are_the_files_nodes(tmp_path, capsys):
     c = _coefficients.load()
     en = np.asarray(c["elevation_nodes_deg"], dtype=np.float64)
@@ -150,7 +176,7 @@ def test_nodes_where_names_the_direction_of_the_largest_error(tmp_path, capsys):
     out[0, 0, :n_dir] = _coefficients.radiance_grid(c, aod, alb, el, h) * fac
     _store(tmp_path, aod, alb, out)
     assert tool.main([str(tmp_path), "--nodes", "--where", "3"]) == 0
-    text = capsys.readouterr().out.split("largest errors")[1]
+    text = capsys.readouterr().out.split("largest luminance errors")[1]
     rows = [[x.strip() for x in line.strip("|").split("|")]
             for line in text.splitlines() if line.startswith("| ") and "%" in line]
     assert len(rows) == 3
@@ -166,8 +192,6 @@ def test_nodes_where_names_the_direction_of_the_largest_error(tmp_path, capsys):
     # the others carry the common factor only
     assert all(float(r[0].rstrip(" %")) / 100 == pytest.approx(1 / 1.01 - 1, abs=2e-3)
                for r in rows[1:])
-    assert tool.main([str(tmp_path), "--where", "3"]) == 2
-    assert "--where = 3 needs --nodes" in capsys.readouterr().err
     assert tool.main([str(tmp_path), "--nodes", "--where", "-1"]) == 2
     assert "--where = -1 is out of range" in capsys.readouterr().err
 

@@ -1,7 +1,7 @@
 """Measure the ``fitted`` model on its held-out grid, against the ``precomputed`` reference.
 
     python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
-        [--json OUT.json] [--coefficients FILE] [--per-atmosphere]
+        [--json OUT.json] [--coefficients FILE] [--per-atmosphere] [--where N]
     python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--where N]
         [--coefficients FILE]
 
@@ -22,8 +22,9 @@ each point classed by whether its parameters are nodes of the measured file: the
 representation's own error (the truncated angular basis) at the file's nodes, and the
 interpolation's in sun elevation, altitude or AOD at a finer grid's nodes between them
 (the angular interpolation, which the held-out grid's cell centres add, is not in it);
-``--where N`` lists its N largest errors with where they lie (the atmosphere, the sun, the
-altitude, the view-grid row and column, the elevation and the angle from the sun).
+``--where N`` lists the N largest errors of each regime with where they lie (the
+atmosphere, the sun, the altitude, the view-grid row and column, the elevation and the
+angle from the sun); on a held-out set too (the view grid's cell centres there).
 ``--coefficients``: measure that file instead of the package's
 (for instance the previous coefficients on the same held-out grid).
 
@@ -77,9 +78,9 @@ def main(argv=None) -> int:
     ap.add_argument("--aod", type=float, default=None,
                     help="with --nodes: only the atmospheres of this AOD (default all)")
     ap.add_argument("--where", type=int, default=0, metavar="N",
-                    help="with --nodes: also list the N largest errors with where they lie "
-                         "(atmosphere, sun, altitude, view-grid row and column, height above "
-                         "the horizon, angle from the sun)")
+                    help="also list the N largest luminance errors of each regime with "
+                         "where they lie (atmosphere, sun, altitude, view-grid row and "
+                         "column, elevation, angle from the sun)")
     ap.add_argument("--per-atmosphere", action="store_true",
                     help="also the luminance RMS / max per held-out atmosphere, regime and "
                          "observer (which atmospheres the regimes' figures come from)")
@@ -96,9 +97,6 @@ def main(argv=None) -> int:
         _coefficients.COEFFICIENT_FILE = Path(a.coefficients)
     if not 0 <= a.where <= 10000:
         print(f"error: --where = {a.where} is out of range [0, 10000]", file=sys.stderr)
-        return 2
-    if a.where and not a.nodes:
-        print(f"error: --where = {a.where} needs --nodes", file=sys.stderr)
         return 2
     if a.nodes:
         return _at_nodes(a.heldout, a.albedo, a.aod, a.where)
@@ -148,6 +146,7 @@ def main(argv=None) -> int:
 
     sun_err = []
     examples = []
+    largest = _Worst(a.where)
     for aod, alb in atmospheres:
         L_all, sunf = ds.sky(aod, alb)
         for i, el in enumerate(ds.elevations_deg):
@@ -175,6 +174,8 @@ def main(argv=None) -> int:
                 hgt = (cls, hgt)
                 add((reg, hgt, "fitted", "Y"), rel_y[sky & keep])
                 add(("atmosphere", (aod, alb), reg, hgt[1]), rel_y[sky & keep])
+                largest.add(reg, rel_y, sky & keep, d, sun.direction,
+                          (aod, alb, float(el), float(h), hgt[1]))
                 sel = sky & keep
                 rs, ps = rel_s[sel], pos[sel]
                 add((reg, hgt, "fitted", "spectral"), rs[:, node][ps[:, node]])
@@ -233,6 +234,8 @@ def main(argv=None) -> int:
                     cells.append(f"{100 * row['G_rms']:.2f} / {100 * row['G_max']:.1f} %"
                                  if "G_rms" in row else "-")
                     print(f"| {reg[4:]} | {hgt} | {model} | " + " | ".join(cells) + " |")
+    largest.print("per regime, the sky more than 5 deg from the sun",
+                [r for r, _, _ in REGIMES], "observer")
     if sun_err:
         se = np.array([x[3] for x in sun_err])
         print(f"sun transmittance (400-1100 nm, where it exceeds 1e-3 at 560 nm): largest "
@@ -278,6 +281,50 @@ def main(argv=None) -> int:
     return 0
 
 
+class _Worst:
+    """The ``n`` largest relative errors per group (``--where``), with where they lie."""
+
+    def __init__(self, n: int):
+        self.n = n
+        self.pts: dict = {}
+
+    def add(self, group, signed, keep, d, sun_dir, what):
+        """``signed`` (rows, columns): model / reference - 1 over the view grid ``d`` (rows,
+        columns, 3); only where ``keep``; ``what``: (AOD, albedo, sun, altitude, label)."""
+        if not self.n:
+            return
+        rows, cols = np.nonzero(keep)
+        err = signed[rows, cols]
+        top = np.argsort(np.abs(err))[::-1][:self.n]
+        v = d[rows[top], cols[top]]
+        ang = np.degrees(np.arccos(np.clip(v @ sun_dir, -1.0, 1.0)))
+        up = np.degrees(np.arcsin(np.clip(v[:, 2], -1.0, 1.0)))
+        pts = self.pts.setdefault(group, [])
+        pts += [(abs(float(err[t])), float(err[t])) + tuple(what[:4])
+                + (int(rows[t]), int(cols[t]), float(u), float(g), what[4])
+                for t, u, g in zip(top, up, ang)]
+        pts.sort(key=lambda x: -x[0])
+        del pts[self.n:]
+
+    def print(self, title, groups, label):
+        if not self.n:
+            return
+        print(f"\nthe {self.n} largest luminance errors {title} (model / reference - 1; row "
+              "and column of the view grid: the row 0 the sky's lowest, at the horizon (from "
+              "above: the limb), the column 0 towards the sun's azimuth; elevation above the "
+              "horizontal)")
+        for g in groups:
+            if g not in self.pts:
+                continue
+            print(f"\n{g}:\n")
+            print(f"| error | AOD | albedo | sun | altitude | row | column | elevation | "
+                  f"from the sun | {label} |")
+            print("|---|---|---|---|---|---|---|---|---|---|")
+            for _, e, a_, b_, el, h, r, k, u, gm, lab in self.pts[g]:
+                print(f"| {100 * e:+.2f} % | {a_:g} | {b_:g} | {el:g} deg | {h:g} m | {r} | "
+                      f"{k} | {u:.2f} deg | {gm:.2f} deg | {lab} |")
+
+
 def _at_nodes(folder, albedo, aod=None, where=0) -> int:
     """The luminance error on a ``--grid fit`` data set (module docstring, ``--nodes``),
     each point classed by which of its parameters are nodes of the measured coefficient
@@ -317,7 +364,7 @@ def _at_nodes(folder, albedo, aod=None, where=0) -> int:
     to_default = interpolation_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     n_sky = _grid.N_SKY
     acc: dict = {}
-    worst_pts: list = []        # (|err|, err, aod, albedo, sun, altitude, row, column, ...)
+    largest = _Worst(where)
     for aod, alb in atms:
         L_all, _ = ds.sky(aod, alb)
         cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
@@ -341,20 +388,11 @@ def _at_nodes(folder, albedo, aod=None, where=0) -> int:
                 fit = _coefficients.radiance_grid(c, aod, alb, float(el), float(h))[..., sel]
                 y_fit = luminance_from_spectrum(fit @ to_default, dwl)
                 hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
-                signed = (y_fit / y_ref - 1.0)[keep]
-                rel = np.abs(signed)
+                rel = np.abs(y_fit / y_ref - 1.0)[keep]
                 acc.setdefault((cls, reg, hgt, kind), []).append(rel)
-                if where:
-                    rows, cols = np.nonzero(keep)
-                    top = np.argsort(rel)[::-1][:where]
-                    ang = np.degrees(np.arccos(np.clip(d[rows[top], cols[top]]
-                                                       @ sun.direction, -1.0, 1.0)))
-                    up = np.degrees(np.arcsin(np.clip(d[rows[top], cols[top], 2], -1, 1)))
-                    worst_pts += [(float(rel[t]), float(signed[t]), aod, alb, float(el),
-                                   float(h), int(rows[t]), int(cols[t]), float(u), float(g),
-                                   kind) for t, u, g in zip(top, up, ang)]
-                    worst_pts = sorted(worst_pts, reverse=True)[:where]
                 acc.setdefault((cls, reg, hgt, kind, aod), []).append(rel)
+                largest.add(reg, y_fit / y_ref - 1.0, keep, d, sun.direction,
+                          (aod, alb, float(el), float(h), kind))
     print(f"on the data set's nodes: atmospheres {atms}, sun {list(ds.elevations_deg)} "
           f"deg, altitude {list(ds.altitudes_m)} m; coefficient file "
           f"{_coefficients.COEFFICIENT_FILE.name} (AOD nodes "
@@ -381,17 +419,8 @@ def _at_nodes(folder, albedo, aod=None, where=0) -> int:
                     print(f"| {cls} | {reg[4:]} | {hgt} | {kind} ({n}) | "
                           f"{100 * np.sqrt(np.mean(v ** 2)):.2f} % | {100 * v.max():.1f} % | "
                           f"{worst:g} ({100 * per[worst]:.2f} %) |", flush=True)
-    if where:
-        print(f"\nthe {len(worst_pts)} largest errors (model / reference - 1; row and column "
-              "of the view grid: the row 0 the sky's lowest, at the horizon (from above: "
-              "the limb), the column 0 towards the sun's azimuth; elevation above the "
-              "horizontal)")
-        print("| error | AOD | albedo | sun | altitude | row | column | elevation | "
-              "from the sun | points |")
-        print("|---|---|---|---|---|---|---|---|---|---|")
-        for _, e, a_, b_, el, h, r, k, u, g, kind in worst_pts:
-            print(f"| {100 * e:+.2f} % | {a_:g} | {b_:g} | {el:g} deg | {h:g} m | {r} | {k} | "
-                  f"{u:.2f} deg | {g:.2f} deg | {kind} |")
+    largest.print("per regime at the data set's nodes, the sky more than 5 deg from the sun",
+                [r for r, _, _ in REGIMES], "points")
     return 0
 
 
