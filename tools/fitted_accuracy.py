@@ -146,7 +146,7 @@ def main(argv=None) -> int:
 
     sun_err = []
     examples = []
-    largest = _Worst(a.where)
+    largest = _Largest(a.where)
     for aod, alb in atmospheres:
         L_all, sunf = ds.sky(aod, alb)
         for i, el in enumerate(ds.elevations_deg):
@@ -172,11 +172,11 @@ def main(argv=None) -> int:
                 hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
                 cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
                 hgt = (cls, hgt)
-                add((reg, hgt, "fitted", "Y"), rel_y[sky & keep])
-                add(("atmosphere", (aod, alb), reg, hgt[1]), rel_y[sky & keep])
-                largest.add(reg, rel_y, sky & keep, d, sun.direction,
-                          (aod, alb, float(el), float(h), hgt[1]))
                 sel = sky & keep
+                add((reg, hgt, "fitted", "Y"), rel_y[sel])
+                add(("atmosphere", (aod, alb), reg, hgt[1]), rel_y[sel])
+                largest.add(reg, rel_y, sel, d, sun.direction,
+                            (aod, alb, float(el), float(h), hgt[1]))
                 rs, ps = rel_s[sel], pos[sel]
                 add((reg, hgt, "fitted", "spectral"), rs[:, node][ps[:, node]])
                 if between.any():
@@ -235,7 +235,7 @@ def main(argv=None) -> int:
                                  if "G_rms" in row else "-")
                     print(f"| {reg[4:]} | {hgt} | {model} | " + " | ".join(cells) + " |")
     largest.print("per regime, the sky more than 5 deg from the sun",
-                [r for r, _, _ in REGIMES], "observer")
+                  [r for r, _, _ in REGIMES], "observer")
     if sun_err:
         se = np.array([x[3] for x in sun_err])
         print(f"sun transmittance (400-1100 nm, where it exceeds 1e-3 at 560 nm): largest "
@@ -281,7 +281,7 @@ def main(argv=None) -> int:
     return 0
 
 
-class _Worst:
+class _Largest:
     """The ``n`` largest relative errors per group (``--where``), with where they lie."""
 
     def __init__(self, n: int):
@@ -364,7 +364,7 @@ def _at_nodes(folder, albedo, aod=None, where=0) -> int:
     to_default = interpolation_matrix(wl, dwl) * solar_irradiance(dwl)[None, :]
     n_sky = _grid.N_SKY
     acc: dict = {}
-    largest = _Worst(where)
+    largest = _Largest(where)
     for aod, alb in atms:
         L_all, _ = ds.sky(aod, alb)
         cls = next(r for r, lo, hi in CLASSES if lo <= aod <= hi)
@@ -388,11 +388,12 @@ def _at_nodes(folder, albedo, aod=None, where=0) -> int:
                 fit = _coefficients.radiance_grid(c, aod, alb, float(el), float(h))[..., sel]
                 y_fit = luminance_from_spectrum(fit @ to_default, dwl)
                 hgt = next(r for r, lo, hi in HEIGHTS if lo <= h <= hi)
-                rel = np.abs(y_fit / y_ref - 1.0)[keep]
+                signed = y_fit / y_ref - 1.0
+                rel = np.abs(signed[keep])
                 acc.setdefault((cls, reg, hgt, kind), []).append(rel)
                 acc.setdefault((cls, reg, hgt, kind, aod), []).append(rel)
-                largest.add(reg, y_fit / y_ref - 1.0, keep, d, sun.direction,
-                          (aod, alb, float(el), float(h), kind))
+                largest.add(reg, signed, keep, d, sun.direction,
+                            (aod, alb, float(el), float(h), kind))
     print(f"on the data set's nodes: atmospheres {atms}, sun {list(ds.elevations_deg)} "
           f"deg, altitude {list(ds.altitudes_m)} m; coefficient file "
           f"{_coefficients.COEFFICIENT_FILE.name} (AOD nodes "
@@ -420,7 +421,7 @@ def _at_nodes(folder, albedo, aod=None, where=0) -> int:
                           f"{100 * np.sqrt(np.mean(v ** 2)):.2f} % | {100 * v.max():.1f} % | "
                           f"{worst:g} ({100 * per[worst]:.2f} %) |", flush=True)
     largest.print("per regime at the data set's nodes, the sky more than 5 deg from the sun",
-                [r for r, _, _ in REGIMES], "points")
+                  [r for r, _, _ in REGIMES], "points")
     return 0
 
 
