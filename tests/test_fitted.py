@@ -291,6 +291,13 @@ def test_heldout_grid_is_off_the_fitting_nodes():
         i = int(np.searchsorted(_grid.AOD_NODES, node))
         lo, hi = _grid.AOD_NODES[i - 1], _grid.AOD_NODES[i + 1]
         assert any(lo < a < node for a in aods) and any(node < a < hi for a in aods)
+    # the sixth file's held-out sun elevations are off its own sun nodes (0.5 deg between 0
+    # and 1 there); the sun node it lacks, 0.5 deg, has a held-out sun on either side of it
+    v6e, _, _, _ = _grid.grid("heldout-v6")
+    assert not set(v6e.tolist()) & set(_grid.grid("fit-v6")[0].tolist())
+    for node in _grid.SUPPLEMENT_SUN_ELEVATIONS_DEG:
+        i = int(np.searchsorted(fe, node))
+        assert any(fe[i - 1] < e < node for e in el) and any(node < e < fe[i + 1] for e in el)
     # the first file's grids stay, to reproduce its figures: its held-out sun elevations are
     # off its own nodes too
     ve, _, _, vmid = _grid.grid("heldout-v1")
@@ -513,58 +520,64 @@ def _load_tool(name):
 def _write_dataset(folder, el, alt, atms, wl, chunks):
     """A data-set folder as tools/fitted_dataset.py writes it: grid.json and one chunk per
     atmosphere with its SHA-256 (skydome.distributed's layout)."""
-    import hashlib
-    import io
-
+    from _tools import write_chunk
     from skydome.models.fitted import _dataset
 
     folder.mkdir(parents=True)
     for (aod, alb), arr in zip(atms, chunks):
-        buf = io.BytesIO()
-        np.save(buf, np.ascontiguousarray(arr))
-        key = _dataset.chunk_key(aod, alb)
-        (folder / f"{key}.npy").write_bytes(buf.getvalue())
-        (folder / f"{key}.npy.sha256").write_text(hashlib.sha256(buf.getvalue()).hexdigest())
+        write_chunk(folder, _dataset.chunk_key(aod, alb), arr)
     _dataset.write_grid(folder, el, alt, atms, False, True, wl)
 
 
-def test_altitude_supplement_joins_as_the_whole_grid(tmp_path, capsys):
-    """tools/fit_fitted.py --altitude-supplement: a data set split by altitude (the
-    supplement of tools/fitted_dataset.py --altitudes) gives the same coefficient arrays as
-    the whole data set; a supplement whose altitudes overlap, or whose wavelengths differ,
-    is refused naming the option, and no file is written."""
+@pytest.mark.parametrize("axis", ["altitude", "elevation"])
+def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
+    """tools/fit_fitted.py --altitude-supplement and --elevation-supplement: a data set
+    split by altitude or by sun elevation (the supplements of tools/fitted_dataset.py
+    --altitudes and --elevations) gives the same coefficient arrays as the whole data set;
+    a supplement whose altitudes or elevations overlap, or whose wavelengths differ, is
+    refused naming the option, and no file is written."""
     fit = _load_tool("fit_fitted")
     rng = np.random.default_rng(3)
-    el = np.array([-1.0, 10.0])
+    el = np.array([-1.0, 0.0, 0.5, 10.0])
     alt = np.array([0.0, 2000.0, 5000.0, 15000.0])
     atms = [(a, b) for a in (0.0, 0.5) for b in (0.0, 0.5, 1.0)]
     wl = np.array([500.0, 600.0])
     n_rows = _grid.N_SKY + _grid.N_GROUND + 1
     chunks = [rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
               .astype(np.float32) for _ in atms]
-    part = [0, 1, 3]                               # the data set; 5 km is the supplement
+    ax = 1 if axis == "altitude" else 0
+    option = f"--{axis}-supplement"
+
+    def cut(idx, shift=0.0):
+        e = el[idx] if ax == 0 else el
+        h = alt[idx] if ax == 1 else alt
+        return e, h, atms, wl + shift, [np.take(c, idx, axis=ax) for c in chunks]
+
+    part = [0, 1, 3]                   # the data set; 5 km or 0.5 deg is the supplement
     _write_dataset(tmp_path / "whole", el, alt, atms, wl, chunks)
-    _write_dataset(tmp_path / "part", el, alt[part], atms, wl, [c[:, part] for c in chunks])
-    _write_dataset(tmp_path / "sup", el, alt[[2]], atms, wl, [c[:, [2]] for c in chunks])
+    _write_dataset(tmp_path / "part", *cut(part))
+    _write_dataset(tmp_path / "sup", *cut([2]))
     args = ["--k-sky", "3", "--k-ground", "2"]
     assert fit.main([str(tmp_path / "whole"), "--out", str(tmp_path / "a.npz")] + args) == 0
-    assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "sup"),
+    assert fit.main([str(tmp_path / "part"), option, str(tmp_path / "sup"),
                      "--out", str(tmp_path / "b.npz")] + args) == 0
     a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
     np.testing.assert_array_equal(b["altitude_nodes_m"], alt)
+    np.testing.assert_array_equal(b["elevation_nodes_deg"], el)
     for key in a.files:
         if key != "meta":
             np.testing.assert_array_equal(a[key], b[key], err_msg=key)
     capsys.readouterr()
-    # a supplement at an altitude the data set has, or at other wavelengths: refused
-    _write_dataset(tmp_path / "dup", el, alt[[1]], atms, wl, [c[:, [1]] for c in chunks])
-    assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "dup"),
+    # a supplement at an altitude or elevation the data set has, or at other wavelengths:
+    # refused
+    _write_dataset(tmp_path / "dup", *cut([1]))
+    assert fit.main([str(tmp_path / "part"), option, str(tmp_path / "dup"),
                      "--out", str(tmp_path / "c.npz")] + args) == 2
-    assert "--altitude-supplement" in capsys.readouterr().err
-    _write_dataset(tmp_path / "wl", el, alt[[2]], atms, wl + 10.0, [c[:, [2]] for c in chunks])
-    assert fit.main([str(tmp_path / "part"), "--altitude-supplement", str(tmp_path / "wl"),
+    assert option in capsys.readouterr().err
+    _write_dataset(tmp_path / "wl", *cut([2], 10.0))
+    assert fit.main([str(tmp_path / "part"), option, str(tmp_path / "wl"),
                      "--out", str(tmp_path / "c.npz")] + args) == 2
-    assert "--altitude-supplement" in capsys.readouterr().err
+    assert option in capsys.readouterr().err
     assert not (tmp_path / "c.npz").exists()
 
 
@@ -715,9 +728,9 @@ def _dataset_key(aod, albedo):
 
 
 def test_dataset_altitudes_option_refuses_altitudes_off_the_grid(tmp_path, capsys):
-    """tools/fitted_dataset.py --altitudes: only the grid's altitude nodes (a supplement's
-    values must be the grid's); any other is refused before any work, naming the option and
-    the grid's altitudes. --with-gas-bands gives the 20-nm and the gas bands' wavelengths
+    """tools/fitted_dataset.py --altitudes and --elevations: only the grid's altitude and
+    sun elevation nodes (a supplement's values must be the grid's); any other is refused
+    before any work, naming the option and the grid's values. --with-gas-bands gives the 20-nm and the gas bands' wavelengths
     together and refuses --gas-bands beside it."""
     mod = _load_tool("fitted_dataset")
     out = tmp_path / "set"
@@ -726,6 +739,12 @@ def test_dataset_altitudes_option_refuses_altitudes_off_the_grid(tmp_path, capsy
     assert "--altitudes = '4000,4500'" in err and "12000.0" in err
     assert mod.main([str(out), "--altitudes", "4 km", "--ignore-memory-check"]) == 2
     assert "--altitudes" in capsys.readouterr().err
+    # --elevations likewise: the held-out grid's 0.25 deg is not a sun node of the fit grid
+    assert mod.main([str(out), "--elevations", "0.5,0.25", "--ignore-memory-check"]) == 2
+    err = capsys.readouterr().err
+    assert "--elevations = '0.5,0.25'" in err and "3.5" in err
+    assert mod.main([str(out), "--elevations", "low", "--ignore-memory-check"]) == 2
+    assert "--elevations" in capsys.readouterr().err
     assert mod.main([str(out), "--with-gas-bands", "--gas-bands",
                      "--ignore-memory-check"]) == 2
     assert "--with-gas-bands" in capsys.readouterr().err
@@ -903,46 +922,56 @@ def test_node_spacing_tool_refuses_bad_input_before_any_work(capsys):
         mod.main(["neither"])
 
 
-def test_elevation_stencil_keeps_a_risen_sun_off_the_nodes_below_the_horizon():
+#: (sun nodes, the nodes a sun between 0 deg and the next node reads, the first node above)
+_STENCIL_GRIDS = [(_grid.SUN_ELEVATION_NODES_DEG, [0.0, 0.5, 1.0, 2.0], 0.5),
+                  (_grid.V6_SUN_ELEVATION_NODES_DEG, [0.0, 1.0, 2.0, 3.5], 1.0)]
+
+
+@pytest.mark.parametrize("nodes, reads, first", _STENCIL_GRIDS)
+def test_elevation_stencil_keeps_a_risen_sun_off_the_nodes_below_the_horizon(nodes, reads,
+                                                                             first):
     """_coefficients.elevation_stencil: for a sun between 0 deg and the next node the cubic
-    reads the nodes 0, 1, 2, 3.5 deg (none below the horizon), reproduces any cubic in
-    elevation there and meets the nodes at 0 and 1 deg; a sun below the horizon and one
-    above 1 deg keep the centred cubic of _coefficients.stencil."""
-    nodes = _grid.SUN_ELEVATION_NODES_DEG
+    reads the four nodes from 0 deg up (0, 0.5, 1, 2 deg; 0, 1, 2, 3.5 on the sixth file's
+    nodes: none below the horizon), reproduces any cubic in elevation there and meets the
+    nodes at 0 deg and the next; a sun below the horizon and one above the next node keep
+    the centred cubic of _coefficients.stencil."""
     est = _coefficients.elevation_stencil
-    for e in (0.01, 0.25, 0.5, 0.75, 0.99):
+    for e in first * np.array([0.01, 0.25, 0.5, 0.75, 0.99]):
         st = est(nodes, e)
-        assert [float(nodes[i]) for i, _ in st] == [0.0, 1.0, 2.0, 3.5]
+        assert [float(nodes[i]) for i, _ in st] == reads
         for poly in (lambda x: 1.0 + 0.0 * x, lambda x: 2.0 - x + 0.3 * x ** 3):
             assert sum(w * poly(nodes[i]) for i, w in st) == pytest.approx(poly(e), abs=1e-12)
-    for e in (0.0, 1.0):
+    for e in (0.0, first):
         assert {float(nodes[i]): w for i, w in est(nodes, e) if abs(w) > 1e-15} == {e: 1.0}
-    for e in (-11.5, -1.5, -0.5, -0.01, 1.5, 16.0, 90.0):
+    for e in (-11.5, -1.5, -0.5, -0.01, first + 0.5, 16.0, 90.0):
         assert est(nodes, e) == _coefficients.stencil(nodes, e, 3)
 
 
-def test_elevation_stencil_in_log_elevation_at_the_clear_aod_nodes():
-    """With the offset of _coefficients.elevation_log_offset (the AOD nodes up to 0.1:
-    2 deg; None above), a sun between 0 and 2 deg reads the nodes 0, 1, 2, 3.5 deg with
-    the cubic in x = ln(e + 2 deg), which it reproduces (and not the cubic in e), meeting
-    the nodes at 0, 1 and 2 deg; below 0 and from 2 deg up the stencil is the one in e."""
-    nodes = _grid.SUN_ELEVATION_NODES_DEG
+@pytest.mark.parametrize("nodes, reads, first", _STENCIL_GRIDS)
+def test_elevation_stencil_in_log_elevation_at_the_clear_aod_nodes(nodes, reads, first):
+    """With the offset of _coefficients.elevation_log_offset (the AOD nodes 0 and 0.00625:
+    0.5 deg, the others up to 0.1: 2 deg; None above), a sun whose stencil reads the node at 0 deg from above (between 0
+    and 1 deg; 0 and 2 deg on the sixth file's nodes) reads the nodes from 0 deg up with the
+    cubic in x = ln(e + 2 deg), which it reproduces (and not the cubic in e), meeting the
+    nodes; below 0 and above that the stencil is the one in e."""
     est = _coefficients.elevation_stencil
     off = _coefficients.elevation_log_offset
-    assert [off(a) for a in (0.0, 0.0125, 0.05, 0.075, 0.1)] == [2.0] * 5
+    assert [off(a) for a in (0.0, 0.00625)] == [0.5] * 2
+    assert [off(a) for a in (0.0125, 0.05, 0.075, 0.1)] == [2.0] * 4
     assert [off(a) for a in (0.15, 0.25, 0.5, 1.0)] == [None] * 4
     c = 2.0
-    for e in (0.01, 0.25, 0.5, 0.75, 0.99, 1.01, 1.5, 1.99):
+    top = reads[2]                          # the log stencil's range: (0, top)
+    for e in top * np.array([0.005, 0.125, 0.25, 0.375, 0.495, 0.505, 0.75, 0.995]):
         st = est(nodes, e, c)
-        assert [float(nodes[i]) for i, _ in st] == [0.0, 1.0, 2.0, 3.5]
+        assert [float(nodes[i]) for i, _ in st] == reads
         for poly in (lambda x: 1.0 + 0.0 * x, lambda x: 2.0 - x + 0.3 * x ** 3):
             got = sum(w * poly(np.log(nodes[i] + c)) for i, w in st)
             assert got == pytest.approx(poly(np.log(e + c)), abs=1e-12)
         assert sum(w * nodes[i] ** 3 for i, w in st) != pytest.approx(e ** 3, abs=1e-6)
-    for e in (0.0, 1.0, 2.0):
+    for e in reads[:3]:
         assert {float(nodes[i]): w for i, w in est(nodes, e, c) if abs(w) > 1e-12} == \
             pytest.approx({e: 1.0}, abs=1e-12)
-    for e in (-11.5, -1.5, -0.5, -0.01, 2.01, 16.0, 90.0):
+    for e in (-11.5, -1.5, -0.5, -0.01, top + 0.01, 16.0, 90.0):
         assert est(nodes, e, c) == est(nodes, e)
 
 

@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 import skydome as sd
-from _tools import load_script
-from skydome.distributed import _compute_and_store
+from _tools import load_script, write_chunk
 from skydome.models.fitted import _coefficients, _dataset, _grid
 from skydome.spectra import solar_irradiance
 
@@ -24,7 +23,7 @@ tool = load_script("tools/fitted_accuracy.py")
 
 
 def _store(folder, aod, alb, arr):
-    _compute_and_store(str(folder), _dataset.chunk_key(aod, alb), np.asarray, (arr,))
+    write_chunk(folder, _dataset.chunk_key(aod, alb), arr)
 
 
 def _err(eps):
@@ -38,28 +37,32 @@ HELD_EPS = {(28.0, 0.0): 0.03, (28.0, 15000.0): 0.01, (-9.5, 0.0): 0.005,
 HELD_ATM = (0.04, 0.3)              # a clear atmosphere (AOD <= 0.1) off the nodes
 
 
-@pytest.fixture(scope="module")
-def heldout(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("held")
-    els, alts = [28.0, -9.5], [0.0, 15000.0]
+def _held_set(folder, els, alts, eps):
+    """A held-out set of HELD_ATM at the sun elevations ``els`` and altitudes ``alts``: the
+    model's values times (1 + eps[(el, h)])."""
     wl = np.asarray(_coefficients.load()["wavelengths_nm"], dtype=np.float64)
     _dataset.write_grid(folder, els, alts, [HELD_ATM], midpoints=True, wavelengths=wl)
     e_tab = solar_irradiance(wl)
     n_dir, n_phi = _grid.N_SKY + _grid.N_GROUND - 2, _grid.N_PHI - 1
-    out = np.zeros((2, 2, n_dir + 1, n_phi, wl.size), dtype=np.float32)
+    out = np.zeros((len(els), len(alts), n_dir + 1, n_phi, wl.size), dtype=np.float32)
     for i, el in enumerate(els):
         for j, h in enumerate(alts):
-            eps = HELD_EPS[(el, h)]
             sun = sd.Sun(elevation_deg=el, azimuth_deg=180.0)
             m = sd.model("fitted", sun=sun, aerosol_optical_depth=HELD_ATM[0],
                          ground_albedo=HELD_ATM[1], observer_altitude_m=h)
             d = _grid.directions(h, 180.0, midpoints=True)
             # the chunk holds radiance per unit extraterrestrial irradiance
-            out[i, j, :n_dir] = m.radiance(d, wl) / e_tab * (1.0 + eps)
+            out[i, j, :n_dir] = m.radiance(d, wl) / e_tab * (1.0 + eps[(el, h)])
             out[i, j, n_dir, 0] = (m.sun_radiance(wl) * sun.solid_angle_sr / e_tab
-                                   * (1.0 + eps))
+                                   * (1.0 + eps[(el, h)]))
     _store(folder, *HELD_ATM, out)
     return folder
+
+
+@pytest.fixture(scope="module")
+def heldout(tmp_path_factory):
+    return _held_set(tmp_path_factory.mktemp("held"), [28.0, -9.5], [0.0, 15000.0],
+                     HELD_EPS)
 
 
 def test_heldout_rows_give_the_known_error_in_each_regime_and_observer(heldout, tmp_path,
@@ -126,6 +129,38 @@ def test_heldout_where_lists_the_largest_errors_of_each_regime(heldout, capsys):
                                                                     abs=1e-2), reg
             assert (r[1], r[2], r[3], r[4], r[9]) == ("0.04", "0.3", f"{el:g} deg",
                                                       f"{h:g} m", obs)
+
+
+def test_supplement_joins_elevations_and_leaves_out_the_files_sun_nodes(heldout, tmp_path,
+                                                                       capsys):
+    """--supplement: the held-out set split by sun elevation measures as the whole set; a
+    joined elevation that is a sun node of the measured file (given a 50 % factor here) is
+    left out unless --elevations names it; overlapping sets and unknown elevations are
+    refused naming the option."""
+    node = float(np.asarray(_coefficients.load()["elevation_nodes_deg"])[-4])   # 50 deg
+    eps = {**HELD_EPS, (node, 0.0): 0.5, (node, 15000.0): 0.5}
+    alts = [0.0, 15000.0]
+    _held_set(tmp_path / "a", [28.0], alts, eps)
+    _held_set(tmp_path / "b", [-9.5, node], alts, eps)
+    whole, split = tmp_path / "whole.json", tmp_path / "split.json"
+    assert tool.main([str(heldout), "--json", str(whole)]) == 0
+    assert tool.main([str(tmp_path / "a"), "--supplement", str(tmp_path / "b"), "--json",
+                      str(split)]) == 0
+    assert f"left out (sun nodes of the measured file): [{node}]" in capsys.readouterr().out
+    rw, rs = (json.loads(f.read_text())["rows"] for f in (whole, split))
+    assert rw == rs
+    # named, the node is measured: its 50 % factor is the sun > 20 deg maximum
+    assert tool.main([str(tmp_path / "a"), "--supplement", str(tmp_path / "b"), "--json",
+                      str(split), "--elevations", f"28,{node:g}"]) == 0
+    rows = {(r["regime"], r["observer"]): r for r in json.loads(split.read_text())["rows"]
+            if r["model"] == "fitted"}
+    assert set(rows) == {("sun > 20 deg", "ground"), ("sun > 20 deg", "15 km")}
+    assert rows[("sun > 20 deg", "ground")]["S_max"] == pytest.approx(_err(0.5), abs=1e-6)
+    capsys.readouterr()
+    assert tool.main([str(heldout), "--supplement", str(tmp_path / "b")]) == 2
+    assert "--supplement" in capsys.readouterr().err
+    assert tool.main([str(heldout), "--elevations", "3.3"]) == 2
+    assert "--elevations = '3.3'" in capsys.readouterr().err
 
 
 def test_nodes_mode_classes_points_by_whether_they_are_the_files_nodes(tmp_path, capsys):

@@ -69,30 +69,31 @@ def test_angular_share_matches_the_spline_error_of_a_quadratic():
 def test_elevation_share_is_the_cubic_interpolation_error_of_ln_s():
     """"elevation alone": a reference whose shape on the grid does not change with the sun
     and whose brightness is exp(k e^4) (e the sun elevation in deg): y is the same at every
-    node, so the whole error is that of ln s cubic over the model's sun nodes at 0.5 deg,
-    0, 1, 2 and 3.5 deg (a risen sun reads no node below the horizon). The Lagrange weights
-    there are (9/28, 9/10, -1/4, 1/35), so e^4 = (0, 1, 16, 150.0625) is read as 1.1875
-    against 0.0625: the luminance off by exp(1.125 k) - 1 at every direction. A brightness
-    exp(k e^3) is read exactly. A sun at a node, or without its four nodes, has no such
-    figure."""
+    node, so the whole error is that of ln s cubic over the model's sun nodes at 0.25 deg,
+    0, 0.5, 1 and 2 deg (a risen sun reads no node below the horizon; the AOD 0.2 takes the
+    stencil in e). The Lagrange weights there are (21/64, 7/8, -7/32, 1/64), so e^4 = (0,
+    1/16, 1, 16) is read as 11/128 against 1/256: the luminance off by exp(21/256 k) - 1 at
+    every direction. A brightness exp(k e^3) is read exactly. A sun at a node, or without
+    its four nodes, has no such figure."""
     from skydome.models.fitted import _grid
 
     tool = _tool()
     wl = _grid.WAVELENGTHS_NM
-    suns = np.array([-1.0, 0.0, 0.5, 1.0, 2.0, 3.5])
+    suns = np.array([-1.0, 0.0, 0.25, 0.5, 1.0, 2.0, 3.5])
     rng = np.random.default_rng(2)
     g_n = rng.uniform(0.5, 1.5, (_grid.N_SKY + _grid.N_GROUND, _grid.N_PHI, wl.size))
     g_c = rng.uniform(0.5, 1.5, (_grid.N_SKY + _grid.N_GROUND - 2, _grid.N_PHI - 1, wl.size))
     k = 0.1
-    for power, expected in ((4, np.expm1(1.125 * k)), (3, 0.0)):
+    for power, expected in ((4, np.expm1(21.0 / 256.0 * k)), (3, 0.0)):
         c = np.exp(k * suns ** power)[:, None, None, None, None]
         ref = {"aod": 0.2, "albedo": 0.3, "suns": suns, "altitudes": np.array([0.0]),
                "wavelengths_nm": wl,
                "nodes": (c * g_n[None, None]).astype(np.float32),
                "centres": (c * g_c[None, None]).astype(np.float32)}
         res = tool.compare(ref, rows=2)
-        assert [("elevation" in r) for r in res] == [False, False, True, False, False, False]
+        assert [("elevation" in r) for r in res] == [False, False, True, False, False, False,
+                                                       False]
         rms, worst = res[2]["elevation"]
         assert worst == pytest.approx(abs(expected), abs=2e-6)
         assert rms == pytest.approx(abs(expected), abs=2e-6)
-    assert tool.elevation_alone(dict(ref, suns=np.array([0.0, 0.5, 1.0])), 1, 0) is None
+    assert tool.elevation_alone(dict(ref, suns=np.array([0.0, 0.25, 1.0])), 1, 0) is None

@@ -2,6 +2,7 @@
 
     python tools/fit_fitted.py DATASET [--out FILE] [--k-sky 32] [--k-ground 12]
         [--float16] [--gas-bands SUPPLEMENT] [--altitude-supplement SUPPLEMENT]
+        [--elevation-supplement SUPPLEMENT]
     python tools/fit_fitted.py --add-sun [--out FILE]
     python tools/fit_fitted.py DATASET --extend FILE [--out FILE2]
     python tools/fit_fitted.py DATASET --replace FILE [--out FILE2]
@@ -39,6 +40,12 @@ at altitudes DATASET lacks, made with ``tools/fitted_dataset.py --altitudes`` at
 table wavelengths (with ``--gas-bands``: ``--with-gas-bands``, the 20-nm and the gas bands'
 together); its altitudes join DATASET's (the shipped file: the second file's 10 altitudes
 and the 4, 5, 8 and 12 km supplement).
+
+``--elevation-supplement SUPPLEMENT``: likewise a data set of the same altitudes (with
+``--altitude-supplement``: its altitudes too), table wavelengths and atmospheres at sun
+elevations DATASET lacks, made with ``tools/fitted_dataset.py --elevations``; its elevations
+join DATASET's (the shipped file: the 28 sun nodes of the sixth file's data set and the
+0.5-deg supplement).
 
 DATASET may lack some atmospheres (a data set still being generated): the fit then uses
 the AOD nodes whose every albedo node is there, and says which it left out.
@@ -281,15 +288,14 @@ def add_sun_to_file(target: Path) -> None:
 def _supplement(option: str, folder: str, ds, aods, same: dict, axis: str,
                 values: np.ndarray, what: str):
     """(data set, order, joined values) of a supplement to ``ds`` along ``axis``
-    ("wavelengths_nm" or "altitudes_m"): the same sun elevations, view grid and the
+    ("wavelengths_nm", "altitudes_m" or "elevations_deg"): the same view grid and the
     attributes in ``same``, every atmosphere of the fitted AOD nodes, and no value of
     ``axis`` in common with ``values``; ``order`` sorts the concatenation ``values`` + the
     supplement's. None after printing the refusal, naming ``option``."""
     from skydome.models.fitted._dataset import DataSet
 
     sup = DataSet(folder, require_all=False)
-    ok = (np.array_equal(sup.elevations_deg, ds.elevations_deg)
-          and all(np.array_equal(getattr(sup, k), v) for k, v in same.items())
+    ok = (all(np.array_equal(getattr(sup, k), v) for k, v in same.items())
           and all(x in sup.present for x in ds.present if x[0] in set(aods.tolist())))
     if not ok or sup.midpoints != ds.midpoints:
         print(f"error: {option} = {folder}: not {what}, or an atmosphere missing",
@@ -330,6 +336,10 @@ def main(argv=None) -> int:
     ap.add_argument("--altitude-supplement", default=None, metavar="SUPPLEMENT",
                     help="a data set of the same sun elevations and atmospheres at other "
                          "altitudes (tools/fitted_dataset.py --altitudes): its altitudes "
+                         "added")
+    ap.add_argument("--elevation-supplement", default=None, metavar="SUPPLEMENT",
+                    help="a data set of the same altitudes and atmospheres at other sun "
+                         "elevations (tools/fitted_dataset.py --elevations): its elevations "
                          "added")
     a = ap.parse_args(argv)
     if a.add_sun:
@@ -382,7 +392,8 @@ def main(argv=None) -> int:
     el, alt, wl = ds.elevations_deg, ds.altitudes_m, ds.wavelengths_nm
     gas = None
     if a.gas_bands is not None:
-        joined = _supplement("--gas-bands", a.gas_bands, ds, aods, {"altitudes_m": alt},
+        joined = _supplement("--gas-bands", a.gas_bands, ds, aods,
+                             {"altitudes_m": alt, "elevations_deg": el},
                              "wavelengths_nm", wl, "the same grid as DATASET")
         if joined is None:
             return 2
@@ -392,7 +403,8 @@ def main(argv=None) -> int:
     sup = None
     if a.altitude_supplement is not None:
         joined = _supplement("--altitude-supplement", a.altitude_supplement, ds, aods,
-                             {"wavelengths_nm": wl}, "altitudes_m", alt,
+                             {"wavelengths_nm": wl, "elevations_deg": el}, "altitudes_m",
+                             alt,
                              "the same sun elevations and table wavelengths as DATASET "
                              "(with --gas-bands: its wavelengths too)")
         if joined is None:
@@ -400,6 +412,17 @@ def main(argv=None) -> int:
         sup, alt_order, alt = joined
         print(f"altitudes: {sup.altitudes_m.tolist()} m added ({alt.size} altitude nodes)",
               flush=True)
+    esup = None
+    if a.elevation_supplement is not None:
+        joined = _supplement("--elevation-supplement", a.elevation_supplement, ds, aods,
+                             {"wavelengths_nm": wl, "altitudes_m": alt}, "elevations_deg",
+                             el, "the same altitudes and table wavelengths as DATASET "
+                             "(with --gas-bands, --altitude-supplement: theirs too)")
+        if joined is None:
+            return 2
+        esup, el_order, el = joined
+        print(f"sun elevations: {esup.elevations_deg.tolist()} deg added ({el.size} sun "
+              "nodes)", flush=True)
 
     def sky_wavelengths(aod, alb):
         L, sun = ds.sky(aod, alb)
@@ -409,13 +432,21 @@ def main(argv=None) -> int:
         return (np.concatenate([L, Lg], axis=-1)[..., order],
                 np.concatenate([sun, sung], axis=-1)[..., order])
 
-    def sky(aod, alb):
+    def sky_altitudes(aod, alb):
         L, sun = sky_wavelengths(aod, alb)
         if sup is None:
             return L, sun
         La, suna = sup.sky(aod, alb)
         return (np.concatenate([L, La], axis=1)[:, alt_order],
                 np.concatenate([sun, suna], axis=1)[:, alt_order])
+
+    def sky(aod, alb):
+        L, sun = sky_altitudes(aod, alb)
+        if esup is None:
+            return L, sun
+        Le, sune = esup.sky(aod, alb)
+        return (np.concatenate([L, Le], axis=0)[el_order],
+                np.concatenate([sun, sune], axis=0)[el_order])
     n_sky = _grid.N_SKY * _grid.N_PHI
     n_dir = (_grid.N_SKY + _grid.N_GROUND) * _grid.N_PHI
     shape = (aods.size, albs.size, el.size, alt.size, wl.size)
@@ -467,13 +498,14 @@ def main(argv=None) -> int:
                   f"relative RMS of the truncation {rel:.2e}", flush=True)
     out = add_sun(out)
     dgrid = dict(ds.meta, wavelengths_nm=[float(x) for x in wl],
-                 altitudes_m=[float(x) for x in alt])
+                 altitudes_m=[float(x) for x in alt], elevations_deg=[float(x) for x in el])
     meta = {"dataset_grid": dgrid, "k_sky": a.k_sky, "k_ground": a.k_ground,
             "delta": DELTA, "fit_residual_rms_y": resid,
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
                        f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else "")
                        + (" --gas-bands SUPPLEMENT" if gas is not None else "")
                        + (" --altitude-supplement SUPPLEMENT" if sup is not None else "")
+                       + (" --elevation-supplement SUPPLEMENT" if esup is not None else "")
                        + (f" --spectral-rank {a.spectral_rank}" if a.spectral_rank else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     if a.float16:

@@ -1,7 +1,8 @@
 """Measure the ``fitted`` model on its held-out grid, against the ``precomputed`` reference.
 
-    python tools/fitted_accuracy.py HELDOUT [--figure docs/figures/fitted_heldout.png]
-        [--json OUT.json] [--coefficients FILE] [--per-atmosphere] [--where N]
+    python tools/fitted_accuracy.py HELDOUT [--supplement SUP ...] [--elevations DEG,...]
+        [--figure docs/figures/fitted_heldout.png] [--json OUT.json] [--coefficients FILE]
+        [--per-atmosphere] [--where N]
     python tools/fitted_accuracy.py DATASET --nodes [--albedo A] [--aod A] [--where N]
         [--coefficients FILE]
 
@@ -15,6 +16,14 @@ ground, at 0.4-4.5 km, at 15 km) it prints the luminance RMS and largest relativ
 luminance figures for ``hosek_wilkie2012`` (observer on the ground, sun above the horizon;
 turbidity from the AOD by Preetham's beta = 0.04608 T - 0.04586 and Angstrom's law with
 alpha 1.3), the ground seen from above (below the horizon) and the sun's transmittance.
+
+``--supplement SUP`` (repeatable): a held-out set of the same altitudes, atmospheres and
+wavelengths at other sun elevations (``tools/fitted_dataset.py --grid heldout --elevations``);
+its elevations join HELDOUT's (the present held-out grid: the sixth file's held-out set,
+whose sun 0.5 deg is now a node, and the 0.25 and 0.75 deg supplement). Of the joined sun
+elevations, those that are sun nodes of the measured file are left out (they are not held
+out), and with ``--elevations`` only those listed are measured (the same points for two
+files: for instance the present file and the sixth on 0.25 and 0.75 deg).
 
 ``--nodes``: DATASET is a ``--grid fit`` data set; the luminance error at its nodes (every
 sun elevation and altitude, every view-grid node of the sky more than 5 deg from the sun),
@@ -84,6 +93,12 @@ def main(argv=None) -> int:
     ap.add_argument("--per-atmosphere", action="store_true",
                     help="also the luminance RMS / max per held-out atmosphere, regime and "
                          "observer (which atmospheres the regimes' figures come from)")
+    ap.add_argument("--supplement", action="append", default=[], metavar="SUP",
+                    help="a held-out set at other sun elevations (same altitudes, "
+                         "atmospheres and wavelengths): its elevations joined (repeatable)")
+    ap.add_argument("--elevations", default=None, metavar="DEG,...",
+                    help="measure only these of the held-out sun elevations (default: every "
+                         "one that is not a sun node of the measured file)")
     ap.add_argument("--spectral-figure", default=None,
                     help="figure of the spectral RMS per wavelength (a set with wavelengths "
                          "between the table wavelengths)")
@@ -105,6 +120,13 @@ def main(argv=None) -> int:
         luminance_from_spectrum, solar_irradiance
 
     ds = DataSet(a.heldout, require_all=False, grid="heldout")
+    try:
+        ds = _HeldOut(ds, [DataSet(f, require_all=False, grid="heldout")
+                           for f in a.supplement], a.elevations,
+                      _coefficients.load()["elevation_nodes_deg"])
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     lo_aod, hi_aod = _grid.AOD_RANGE
     atmospheres = [x for x in ds.present if lo_aod <= x[0] <= hi_aod]
     left = sorted(set(ds.atmospheres) - set(atmospheres))
@@ -323,6 +345,55 @@ class _Largest:
             for _, e, a_, b_, el, h, r, k, u, gm, lab in self.pts[g]:
                 print(f"| {100 * e:+.2f} % | {a_:g} | {b_:g} | {el:g} deg | {h:g} m | {r} | "
                       f"{k} | {u:.2f} deg | {gm:.2f} deg | {lab} |")
+
+
+class _HeldOut:
+    """A held-out set joined with supplements at other sun elevations (``--supplement``),
+    reduced to the measured sun elevations: the attributes of
+    :class:`skydome.models.fitted._dataset.DataSet` that the held-out measure reads."""
+
+    def __init__(self, ds, supplements, elevations, file_nodes):
+        self.altitudes_m, self.wavelengths_nm = ds.altitudes_m, ds.wavelengths_nm
+        self.midpoints, self.atmospheres = ds.midpoints, ds.atmospheres
+        self.parts = [ds] + list(supplements)
+        for sup in supplements:
+            same = (np.array_equal(sup.altitudes_m, ds.altitudes_m)
+                    and np.array_equal(sup.wavelengths_nm, ds.wavelengths_nm)
+                    and sup.midpoints == ds.midpoints
+                    and set(sup.atmospheres) == set(ds.atmospheres))
+            if not same:
+                raise ValueError(f"--supplement = {sup.folder}: not the altitudes, "
+                                 "wavelengths, atmospheres and view grid of HELDOUT")
+        joined = np.concatenate([p.elevations_deg for p in self.parts])
+        if np.unique(np.round(joined, 9)).size < joined.size:
+            raise ValueError(f"--supplement: sun elevations {joined.tolist()} deg overlap "
+                             "between the held-out sets")
+        self.present = [x for x in ds.present
+                        if all(x in sup.present for sup in supplements)]
+        if elevations is not None:
+            try:
+                want = np.array([float(x) for x in elevations.split(",")])
+            except ValueError:
+                raise ValueError(f"--elevations = {elevations!r} is not a list of sun "
+                                 "elevations in deg") from None
+            bad = [float(e) for e in want if not np.isclose(joined, e).any()]
+            if bad or not want.size:
+                raise ValueError(f"--elevations = {elevations!r}: {bad} not among the "
+                                 f"held-out sun elevations {sorted(joined.tolist())} deg")
+            keep = np.isclose(joined[:, None], want[None, :]).any(axis=1)
+        else:
+            keep = ~np.isclose(joined[:, None], np.asarray(file_nodes)[None, :]).any(axis=1)
+            if not keep.all():
+                print(f"held-out sun elevations left out (sun nodes of the measured file): "
+                      f"{joined[~keep].tolist()} deg")
+        order = np.argsort(joined, kind="stable")
+        self.index = order[keep[order]]
+        self.elevations_deg = joined[self.index]
+
+    def sky(self, aod, alb):
+        Ls, suns = zip(*(p.sky(aod, alb) for p in self.parts))
+        return (np.concatenate(Ls, axis=0)[self.index],
+                np.concatenate(suns, axis=0)[self.index])
 
 
 def _at_nodes(folder, albedo, aod=None, where=0) -> int:

@@ -5,7 +5,7 @@
                                         heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
         [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands | --with-gas-bands]
-        [--altitudes M,...]
+        [--altitudes M,...] [--elevations DEG,...]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -58,6 +58,10 @@ earlier grid lacks, which ``tools/fit_fitted.py --altitude-supplement`` joins to
 (sun elevation, altitude) node is computed from the same tables on its own, and every table
 wavelength independently of the others, so a supplement's values are those a run of the
 whole grid gives at its nodes.
+``--elevations``: likewise only these of the grid's sun elevations (the sun node 0.5 deg
+that the sixth file's data set lacks, joined by ``tools/fit_fitted.py
+--elevation-supplement``; the held-out sun elevations 0.25 and 0.75 deg that replace the
+sixth file's 0.5, joined by ``tools/fitted_accuracy.py --supplement``).
 """
 
 from __future__ import annotations
@@ -106,6 +110,21 @@ def available_memory_gb() -> float | None:
         return None
 
 
+def _subset(option: str, text: str, values, what: str, unit: str) -> np.ndarray:
+    """The values of ``values`` listed in ``text`` (comma-separated, sorted, each once);
+    ValueError naming ``option`` and its value where one is not a number or not among
+    them."""
+    try:
+        want = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{option} = {text!r} is not a list of numbers in {unit}") from None
+    bad = [x for x in want if not np.any(np.isclose(values, x))]
+    if bad or not want:
+        raise ValueError(f"{option} = {text!r}: not among {what} "
+                         f"{[float(x) for x in values]} {unit}")
+    return np.array(sorted(set(float(values[np.isclose(values, x)][0]) for x in want)))
+
+
 def main(argv=None) -> int:
     from skydome.models.fitted import _grid as G
 
@@ -147,6 +166,11 @@ def main(argv=None) -> int:
                     help="compute only these of the grid's altitudes [m] (a supplement that "
                          "tools/fit_fitted.py --altitude-supplement joins to a data set of "
                          "the other altitudes)")
+    ap.add_argument("--elevations", default=None, metavar="DEG,...",
+                    help="compute only these of the grid's sun elevations [deg] (a supplement "
+                         "that tools/fit_fitted.py --elevation-supplement joins to a data set "
+                         "of the other elevations; tools/fitted_accuracy.py --supplement to a "
+                         "held-out set)")
     ap.add_argument("--ignore-memory-check", action="store_true",
                     help="start the local cluster even where --workers times the memory a "
                          "worker is expected to need (about 0.14 GB per table wavelength: "
@@ -197,19 +221,16 @@ def main(argv=None) -> int:
                   + " (or --ignore-memory-check)", file=sys.stderr)
             return 2
     el, alt, atms = grid(a.grid)
-    if a.altitudes is not None:
-        try:
-            want_h = [float(x) for x in a.altitudes.split(",")]
-        except ValueError:
-            print(f"error: --altitudes = {a.altitudes!r} is not a list of altitudes in m",
-                  file=sys.stderr)
-            return 2
-        bad = [h for h in want_h if not np.any(np.isclose(alt, h))]
-        if bad or not want_h:
-            print(f"error: --altitudes = {a.altitudes!r}: not among the {a.grid} grid's "
-                  f"altitudes {[float(h) for h in alt]} m", file=sys.stderr)
-            return 2
-        alt = np.array(sorted(set(float(alt[np.isclose(alt, h)][0]) for h in want_h)))
+    try:
+        if a.altitudes is not None:
+            alt = _subset("--altitudes", a.altitudes, alt, f"the {a.grid} grid's altitudes",
+                          "m")
+        if a.elevations is not None:
+            el = _subset("--elevations", a.elevations, el,
+                         f"the {a.grid} grid's sun elevations", "deg")
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     if a.max_aod is not None:
         if not 0.0 <= a.max_aod <= 1.0:
             print(f"error: --max-aod = {a.max_aod:g} is out of range [0, 1]", file=sys.stderr)

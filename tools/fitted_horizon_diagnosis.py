@@ -34,13 +34,13 @@ each also for the first ``--rows`` rows above the horizon, and where the largest
 error sits (the row counted from the horizon, 0 the first; azimuth from the sun; angle
 from the sun). Where the sun is not an elevation node and the reference holds every sun
 node of the model's stencil around it at the same altitude (``--suns`` with them, e.g.
--1,0,0.5,1,2 for 0.5 deg), also
+0,0.25,0.5,1,2 for 0.25 deg), also
 
 * ``elevation alone``: the reference's own values at those sun nodes, interpolated in
   elevation as the model does (y = ln(L / s + DELTA) and ln s, s the mean of the sky part
   of the grid per wavelength, cubic over the four nodes of
-  ``_coefficients.elevation_stencil``, in ln(e + 2 deg) from 0 to 2 deg where
-  ``_coefficients.elevation_log_offset`` takes it for the reference's AOD), at
+  ``_coefficients.elevation_stencil``, in ln(e + c) where the stencil reads the node 0 deg
+  from above and ``_coefficients.elevation_log_offset`` gives c for the reference's AOD), at
   the view grid's nodes against the reference computed at that sun: the share of the sun
   elevation interval, which no fit at the nodes can remove.
 """

@@ -54,7 +54,7 @@ def register_package(name: str, folder: str) -> None:
 
 def _forget() -> None:
     """Drop what this process has read of the packages' files."""
-    for cached in (_imports, _closure, _digest):
+    for cached in (_read, _imports, _closure, _digest):
         cached.cache_clear()
 
 
@@ -77,15 +77,12 @@ def _module_file(folder: str, parts: list[str]) -> str | None:
 
 
 @functools.lru_cache(maxsize=None)
-def _text(path: str, mtime_ns: int, size: int) -> tuple[str, bytes]:
+def _read(path: str) -> tuple[str, bytes]:
+    """(text, SHA-256) of a source file, read once per process as the caches that use it
+    (_imports, _digest) are; _forget drops it with them."""
     with open(path, "rb") as f:
         data = f.read()
     return data.decode("utf-8", errors="replace"), hashlib.sha256(data).digest()
-
-
-def _read(path: str) -> tuple[str, bytes]:
-    st = os.stat(path)
-    return _text(path, st.st_mtime_ns, st.st_size)
 
 
 def imported_files(path: str) -> list[str]:

@@ -194,8 +194,13 @@ def lagrange(nodes: np.ndarray, idx, x: float) -> list[tuple[int, float]]:
 
 #: The offset c [deg] of the variable ln(e + c) in which, at the clear AOD nodes (up to
 #: :data:`LOG_ELEVATION_AOD_MAX`), the elevation stencils that read the node at 0 deg (a sun
-#: between 0 and 2 deg) are Lagrange's: :func:`elevation_stencil`.
+#: between 0 and the node above 0 deg) are Lagrange's: :func:`elevation_stencil`.
 ELEVATION_LOG_OFFSET_DEG = 2.0
+#: The offset c [deg] at the clearest AOD nodes (below :data:`CLEAREST_AOD_BELOW`: pure air
+#: and 0.00625), where the node at 0 deg departs most from the risen sun's sky:
+#: :func:`elevation_log_offset`.
+ELEVATION_LOG_OFFSET_CLEAREST_DEG = 0.5
+CLEAREST_AOD_BELOW = 0.0125
 #: The largest AOD node whose elevation stencil is taken in ln(e + c) (the hazier nodes
 #: keep it in e): :func:`elevation_log_offset`.
 LOG_ELEVATION_AOD_MAX = 0.1
@@ -216,7 +221,18 @@ def elevation_log_offset(aod_node: float) -> float | None:
     2.0 % at most, at 0.075 and 0.1 from 7.1 to 4.9 % at most, and raised it at AOD 0.15
     on the ground from 1.9 to 5.3 % (from 0.25 up little change either way): hence the
     nodes up to 0.1 (docs/models.md, "fitted", "The elevation interval 0-2 deg in clear
-    air")."""
+    air").
+
+    With the sun node at 0.5 deg the stencil reads 0, 0.5, 1, 2 deg for a sun between 0 and
+    1 deg, and at the two clearest nodes (AOD 0 and 0.00625) c = 0.5 deg: the reference's
+    own values interpolated so ("elevation alone", albedo 0.5, suns 0.25 and 0.75 deg, 0 and
+    350 m; node atmospheres only) were at AOD 0 0.45 / 7.8 % (largest RMS / max, luminance
+    more than 5 deg from the sun) with c = 2 deg and 0.38 / 6.0 % with 0.5 deg, at 0.00625
+    0.26 / 4.1 and 0.27 / 3.3 %; at 0.0125, 0.05 and 0.1 c = 2 deg stayed the better
+    (0.14 / 1.9, 0.06 / 0.3, 0.15 / 1.1 %; with 0.5 deg 0.22 / 1.9, 0.28 / 1.2, 0.30 / 2.0
+    %): docs/models.md, "fitted", "The sun node at 0.5 deg"."""
+    if aod_node < CLEAREST_AOD_BELOW - 1e-12:
+        return ELEVATION_LOG_OFFSET_CLEAREST_DEG
     return ELEVATION_LOG_OFFSET_DEG if aod_node <= LOG_ELEVATION_AOD_MAX + 1e-12 else None
 
 
@@ -225,7 +241,8 @@ def elevation_stencil(nodes: np.ndarray, elevation_deg: float,
     """[(node index, weight)] of the sun elevation: :func:`stencil` of degree
     ``ELEMENT_ORDER["elevation"]`` (cubic), but with the sun above the horizon no node below
     it: where the stencil of a sun between 0 deg and the next node reaches below 0 deg, the
-    nodes from 0 deg up (0, 1, 2, 3.5 deg: one-sided, through the node at 0). A sun below
+    nodes from 0 deg up (0, 0.5, 1, 2 deg; 0, 1, 2, 3.5 deg on the nodes of the files
+    before the node at 0.5 deg: one-sided, through the node at 0). A sun below
     the horizon lights the sky next to it only from below the horizon, so the node at -1
     deg bends the cubic through the aureole of a sun at 0.5 deg: on the reference itself
     (AOD 0.15, albedo 0.5, 2 km, all nodes but the sun; ``tools/fitted_horizon_diagnosis.py``,
@@ -234,8 +251,9 @@ def elevation_stencil(nodes: np.ndarray, elevation_deg: float,
     1.6 % (docs/models.md, "fitted", "The elevation interval 0-1 deg").
 
     With ``log_offset_deg`` = c (:func:`elevation_log_offset`: the clear AOD nodes), where
-    the stencil reads the node at 0 deg with the sun above it (a sun between 0 and 2 deg:
-    the nodes 0, 1, 2, 3.5), the weights are Lagrange's in x = ln(e + c), not in e. On the
+    the stencil reads the node at 0 deg with the sun above it (a sun between 0 and 1 deg:
+    the nodes 0, 0.5, 1, 2; between 0 and 2 deg over the nodes 0, 1, 2, 3.5 of the files
+    before), the weights are Lagrange's in x = ln(e + c), not in e. On the
     reference itself ("elevation alone") at the node atmospheres AOD 0, 0.0125, 0.05 and
     0.25 (albedo 0.5; 0, 1.1 and 3 km), at 0.5 deg: mean RMS 0.27 -> 0.21 %, largest 8.7 ->
     6.2 %; at 1.5 deg 0.14 -> 0.08 %, 2.7 -> 1.3 % (c chosen there among 1.25-6 deg). The
@@ -423,14 +441,15 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
                                                                      (1.0 - f, True))
              if w > 0.0]
     st_e = elevation_stencil(c["elevation_nodes_deg"], elevation_deg)
-    # at the clear AOD nodes the same nodes with the weights in ln(e + c)
-    # (elevation_log_offset)
-    st_l = elevation_stencil(c["elevation_nodes_deg"], elevation_deg,
-                             ELEVATION_LOG_OFFSET_DEG)
+    # at the clear AOD nodes the same nodes with the weights in ln(e + c), c per AOD node
+    # (elevation_log_offset); None: in e
+    offsets = {elevation_log_offset(float(a)) for a in c["aod_nodes"]}
+    st_by = {off: elevation_stencil(c["elevation_nodes_deg"], elevation_deg, off)
+             for off in offsets}
     st_h = stencil(c["altitude_nodes_m"], altitude_m, ELEMENT_ORDER["altitude"])
     st_hg = ground_altitude_stencil(c["altitude_nodes_m"], altitude_m)
-    ks = [k for k, _ in st_e]                 # the same nodes in st_l, other weights
-    weights = {False: np.array([w for _, w in st_e]), True: np.array([w for _, w in st_l])}
+    ks = [k for k, _ in st_e]                 # the same nodes in every st_by, other weights
+    weights = {off: np.array([w for _, w in st]) for off, st in st_by.items()}
     # near the sun each elevation node's sky is read where it stands to its own sun as the
     # grid's directions stand to this one (:func:`turned_reads`); elsewhere at the grid's
     # own directions
@@ -463,7 +482,7 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
     def at_node(i, j):
         """L at AOD node i, albedo node j, interpolated in elevation and altitude."""
         if (i, j) not in cache:
-            log = elevation_log_offset(float(c["aod_nodes"][i])) is not None
+            log = elevation_log_offset(float(c["aod_nodes"][i]))
             we = weights[log]
             mean_sky, mean_ground = means[log]
             # coefficients and ln s of each elevation node, interpolated in altitude

@@ -65,8 +65,16 @@ ALBEDO_RANGE = (0.0, 1.0)
 #: at 0.35, 1.1 and 2 km, sun nodes at -11 and -9 deg, where the first file's errors between
 #: its nodes were largest (docs/models.md "fitted", "The refit").
 SUN_ELEVATION_NODES_DEG = np.array([-12.0, -11.0, -10.0, -9.0, -8.0, -7.0, -6.0, -5.0, -4.0,
-                                    -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0, 14.0,
-                                    19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
+                                    -3.0, -2.0, -1.0, 0.0, 0.5, 1.0, 2.0, 3.5, 5.0, 7.0, 10.0,
+                                    14.0, 19.0, 25.0, 32.0, 40.0, 50.0, 62.0, 75.0, 90.0])
+#: The sun node added to the sixth file's (``tools/fitted_dataset.py --elevations 0.5``):
+#: with the sun between the nodes 0 and 1 deg, the reference's own values interpolated in
+#: sun elevation alone were 4.4 % off in the hazy aureole near the horizon (AOD 0.6 at
+#: 2.2 km, sun 0.5 deg: docs/models.md, "fitted", "The sun node at 0.5 deg").
+SUPPLEMENT_SUN_ELEVATIONS_DEG = np.array([0.5])
+#: The sun nodes of the sixth file (``--grid fit-v6``): the present ones without 0.5 deg.
+V6_SUN_ELEVATION_NODES_DEG = np.setdiff1d(SUN_ELEVATION_NODES_DEG,
+                                          SUPPLEMENT_SUN_ELEVATIONS_DEG)
 #: Altitude nodes: denser in the aerosol's first scale heights (1.2 km), where the
 #: radiance changes fastest with altitude (0.35-0.5 km apart up to 2 km), then 1-3 km
 #: apart. The nodes at 4, 5, 8 and 12 km were added to the second file's (3-6 km and 6-10-15
@@ -110,8 +118,12 @@ ALBEDO_NODES = np.array([0.0, 0.5, 1.0])
 #: at 0.35 and 0.75 (near their middles in sqrt(AOD), the model's coordinate); AOD 0.003 and
 #: 0.009 for the fifth file's 0.006, one in each interval beside the node at 0.00625 (0.006
 #: lies within 4 % of it).
-HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
-                                      16.0, 28.0, 45.0, 70.0])
+HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.25, 0.75, 4.0,
+                                      8.5, 16.0, 28.0, 45.0, 70.0])
+#: The held-out sun elevations of the sixth file (``--grid heldout-v6``): 0.5 deg (now a
+#: node) for the present 0.25 and 0.75, the middles of the intervals beside it.
+V6_HELDOUT_SUN_ELEVATION_DEG = np.array([-11.5, -9.5, -6.5, -4.5, -2.5, -1.5, 0.5, 4.0, 8.5,
+                                         16.0, 28.0, 45.0, 70.0])
 HELDOUT_ALTITUDE_M = np.array([0.0, 400.0, 2200.0, 4500.0, 15000.0])
 HELDOUT_ATMOSPHERES = ((0.04, 0.3), (0.08, 0.75), (0.003, 0.6), (0.009, 0.35),
                        (0.018, 0.9), (0.06, 0.15), (0.12, 0.55), (0.18, 0.4),
@@ -143,40 +155,36 @@ V1_HELDOUT_ATMOSPHERES = ((0.05, 0.3), (0.08, 0.75), (0.025, 0.6), (0.18, 0.4),
 
 def grid(name: str):
     """(sun elevations [deg], altitudes [m], atmospheres [(AOD, albedo)], cell centres)
-    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v5" and
-    "heldout-v5" (the fifth file's: "fit" without the AOD node 0.00625, its held-out AOD
-    0.006 for 0.003 and 0.009), "fit-v4" and
-    "heldout-v4" (the fourth file's: "fit" without the AOD nodes 0.35 and 0.75, its
+    of a named data-set grid: "fit" and "heldout" (the shipped file's), "fit-v6" and
+    "heldout-v6" (the sixth file's: "fit" without the sun node 0.5 deg, its held-out sun
+    0.5 deg for 0.25 and 0.75), "fit-v5" and "heldout-v5" (the fifth file's: "fit-v6"
+    without the AOD node 0.00625, its held-out AOD 0.006 for 0.003 and 0.009), "fit-v4" and
+    "heldout-v4" (the fourth file's: "fit-v5" without the AOD nodes 0.35 and 0.75, its
     held-out AOD 0.7 for 0.3, 0.42, 0.6 and 0.87), "fit-v3" and
-    "heldout-v3" (the third file's: "fit" without the AODs 0.0125, 0.075 and 0.15, its five
-    held-out atmospheres), "fit-v2" (the second file's: "fit-v3" without the altitudes 4,
-    5, 8 and 12 km), "fit-v1" and
+    "heldout-v3" (the third file's: "fit-v4" without the AODs 0.0125, 0.075 and 0.15, its
+    five held-out atmospheres), "fit-v2" (the second file's: "fit-v3" without the altitudes
+    4, 5, 8 and 12 km), "fit-v1" and
     "heldout-v1" (the first file's), "small" (two atmospheres of "fit")."""
-    if name in ("fit", "small"):
+    if name in ("fit", "small", "fit-v6"):
         atm = [(float(a), float(b)) for a in AOD_NODES for b in ALBEDO_NODES]
         if name == "small":
             atm = [(0.1, 0.0), (0.1, 0.5)]
-        return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+        el = V6_SUN_ELEVATION_NODES_DEG if name == "fit-v6" else SUN_ELEVATION_NODES_DEG
+        return el, ALTITUDE_NODES_M, atm, False
     if name in ("fit-v5", "fit-v4"):
         nodes = V5_AOD_NODES if name == "fit-v5" else V4_AOD_NODES
         atm = [(float(a), float(b)) for a in nodes for b in ALBEDO_NODES]
-        return SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
-    if name == "heldout-v5":
-        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V5_HELDOUT_ATMOSPHERES),
-                True)
-    if name == "heldout-v4":
-        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V4_HELDOUT_ATMOSPHERES),
-                True)
+        return V6_SUN_ELEVATION_NODES_DEG, ALTITUDE_NODES_M, atm, False
+    held = {"heldout": HELDOUT_ATMOSPHERES, "heldout-v6": HELDOUT_ATMOSPHERES,
+            "heldout-v5": V5_HELDOUT_ATMOSPHERES, "heldout-v4": V4_HELDOUT_ATMOSPHERES,
+            "heldout-v3": V3_HELDOUT_ATMOSPHERES}
+    if name in held:
+        el = HELDOUT_SUN_ELEVATION_DEG if name == "heldout" else V6_HELDOUT_SUN_ELEVATION_DEG
+        return el, HELDOUT_ALTITUDE_M, list(held[name]), True
     if name in ("fit-v3", "fit-v2"):
         atm = [(float(a), float(b)) for a in V3_AOD_NODES for b in ALBEDO_NODES]
         alt = ALTITUDE_NODES_M if name == "fit-v3" else V2_ALTITUDE_NODES_M
-        return SUN_ELEVATION_NODES_DEG, alt, atm, False
-    if name == "heldout-v3":
-        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(V3_HELDOUT_ATMOSPHERES),
-                True)
-    if name == "heldout":
-        return (HELDOUT_SUN_ELEVATION_DEG, HELDOUT_ALTITUDE_M, list(HELDOUT_ATMOSPHERES),
-                True)
+        return V6_SUN_ELEVATION_NODES_DEG, alt, atm, False
     if name == "fit-v1":
         atm = [(float(a), float(b)) for a in V1_AOD_NODES for b in ALBEDO_NODES]
         return V1_SUN_ELEVATION_NODES_DEG, V1_ALTITUDE_NODES_M, atm, False
@@ -186,8 +194,9 @@ def grid(name: str):
     raise ValueError(f"grid = {name!r} is not one of {', '.join(GRID_NAMES)}")
 
 
-GRID_NAMES = ("fit", "heldout", "fit-v5", "heldout-v5", "fit-v4", "heldout-v4", "fit-v3",
-              "heldout-v3", "fit-v2", "fit-v1", "heldout-v1", "small")
+GRID_NAMES = ("fit", "heldout", "fit-v6", "heldout-v6", "fit-v5", "heldout-v5", "fit-v4",
+              "heldout-v4", "fit-v3", "heldout-v3", "fit-v2", "fit-v1", "heldout-v1", "small")
+
 
 def horizon_zenith_rad(altitude_m: float) -> float:
     """Zenith angle of the horizon [rad] seen from ``altitude_m`` above a sphere of radius
