@@ -529,29 +529,31 @@ def _write_dataset(folder, el, alt, atms, wl, chunks):
     _dataset.write_grid(folder, el, alt, atms, False, True, wl)
 
 
-@pytest.mark.parametrize("axis", ["altitude", "elevation"])
+@pytest.mark.parametrize("axis", ["altitude", "elevation", "gas"])
 def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
-    """tools/fit_fitted.py --altitude-supplement and --elevation-supplement: a data set
-    split by altitude or by sun elevation (the supplements of tools/fitted_dataset.py
-    --altitudes and --elevations) gives the same coefficient arrays as the whole data set;
-    a supplement whose altitudes or elevations overlap, or whose wavelengths differ, is
-    refused naming the option, and no file is written."""
+    """tools/fit_fitted.py --altitude-supplement, --elevation-supplement and --gas-bands: a
+    data set split by altitude, sun elevation or wavelength (the supplements of
+    tools/fitted_dataset.py --altitudes, --elevations and --gas-bands) gives the same
+    coefficient arrays as the whole data set; a supplement whose altitudes, elevations or
+    wavelengths overlap, or (altitude, elevation) whose wavelengths differ, is refused
+    naming the option, and no file is written."""
     fit = _load_tool("fit_fitted")
     rng = np.random.default_rng(3)
     el = np.array([-1.0, 0.0, 0.5, 10.0])
     alt = np.array([0.0, 2000.0, 5000.0, 15000.0])
     atms = [(a, b) for a in (0.0, 0.5) for b in (0.0, 0.5, 1.0)]
-    wl = np.array([500.0, 600.0])
+    wl = np.array([500.0, 550.0, 600.0, 650.0])
     n_rows = _grid.N_SKY + _grid.N_GROUND + 1
     chunks = [rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
               .astype(np.float32) for _ in atms]
-    ax = 1 if axis == "altitude" else 0
-    option = f"--{axis}-supplement"
+    ax = {"altitude": 1, "elevation": 0, "gas": -1}[axis]
+    option = "--gas-bands" if axis == "gas" else f"--{axis}-supplement"
 
     def cut(idx, shift=0.0):
         e = el[idx] if ax == 0 else el
         h = alt[idx] if ax == 1 else alt
-        return e, h, atms, wl + shift, [np.take(c, idx, axis=ax) for c in chunks]
+        w = wl[idx] if ax == -1 else wl
+        return e, h, atms, w + shift, [np.take(c, idx, axis=ax) for c in chunks]
 
     part = [0, 1, 3]                   # the data set; 5 km or 0.5 deg is the supplement
     _write_dataset(tmp_path / "whole", el, alt, atms, wl, chunks)
@@ -564,6 +566,7 @@ def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
     a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
     np.testing.assert_array_equal(b["altitude_nodes_m"], alt)
     np.testing.assert_array_equal(b["elevation_nodes_deg"], el)
+    np.testing.assert_array_equal(b["wavelengths_nm"], wl)
     for key in a.files:
         if key != "meta":
             np.testing.assert_array_equal(a[key], b[key], err_msg=key)
@@ -574,6 +577,9 @@ def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
     assert fit.main([str(tmp_path / "part"), option, str(tmp_path / "dup"),
                      "--out", str(tmp_path / "c.npz")] + args) == 2
     assert option in capsys.readouterr().err
+    if axis == "gas":
+        assert not (tmp_path / "c.npz").exists()
+        return
     _write_dataset(tmp_path / "wl", *cut([2], 10.0))
     assert fit.main([str(tmp_path / "part"), option, str(tmp_path / "wl"),
                      "--out", str(tmp_path / "c.npz")] + args) == 2

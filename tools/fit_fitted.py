@@ -390,7 +390,10 @@ def main(argv=None) -> int:
         print("error: fewer than two complete AOD nodes in the data set", file=sys.stderr)
         return 2
     el, alt, wl = ds.elevations_deg, ds.altitudes_m, ds.wavelengths_nm
-    gas = None
+    # the supplements joined to DATASET, in order: (data set, axis of the chunk's arrays,
+    # order of the joined values); a chunk's radiance (e, h, rows, phi, wl) and sun factor
+    # (e, h, wl) share the elevation (0), altitude (1) and wavelength (-1) axes
+    joins = []
     if a.gas_bands is not None:
         joined = _supplement("--gas-bands", a.gas_bands, ds, aods,
                              {"altitudes_m": alt, "elevations_deg": el},
@@ -398,9 +401,9 @@ def main(argv=None) -> int:
         if joined is None:
             return 2
         gas, order, wl = joined
+        joins.append((gas, -1, order))
         print(f"gas bands: {gas.wavelengths_nm.tolist()} nm added ({wl.size} table "
               "wavelengths)", flush=True)
-    sup = None
     if a.altitude_supplement is not None:
         joined = _supplement("--altitude-supplement", a.altitude_supplement, ds, aods,
                              {"wavelengths_nm": wl, "elevations_deg": el}, "altitudes_m",
@@ -410,9 +413,9 @@ def main(argv=None) -> int:
         if joined is None:
             return 2
         sup, alt_order, alt = joined
+        joins.append((sup, 1, alt_order))
         print(f"altitudes: {sup.altitudes_m.tolist()} m added ({alt.size} altitude nodes)",
               flush=True)
-    esup = None
     if a.elevation_supplement is not None:
         joined = _supplement("--elevation-supplement", a.elevation_supplement, ds, aods,
                              {"wavelengths_nm": wl, "altitudes_m": alt}, "elevations_deg",
@@ -421,32 +424,17 @@ def main(argv=None) -> int:
         if joined is None:
             return 2
         esup, el_order, el = joined
+        joins.append((esup, 0, el_order))
         print(f"sun elevations: {esup.elevations_deg.tolist()} deg added ({el.size} sun "
               "nodes)", flush=True)
 
-    def sky_wavelengths(aod, alb):
-        L, sun = ds.sky(aod, alb)
-        if gas is None:
-            return L, sun
-        Lg, sung = gas.sky(aod, alb)
-        return (np.concatenate([L, Lg], axis=-1)[..., order],
-                np.concatenate([sun, sung], axis=-1)[..., order])
-
-    def sky_altitudes(aod, alb):
-        L, sun = sky_wavelengths(aod, alb)
-        if sup is None:
-            return L, sun
-        La, suna = sup.sky(aod, alb)
-        return (np.concatenate([L, La], axis=1)[:, alt_order],
-                np.concatenate([sun, suna], axis=1)[:, alt_order])
-
     def sky(aod, alb):
-        L, sun = sky_altitudes(aod, alb)
-        if esup is None:
-            return L, sun
-        Le, sune = esup.sky(aod, alb)
-        return (np.concatenate([L, Le], axis=0)[el_order],
-                np.concatenate([sun, sune], axis=0)[el_order])
+        L, sun = ds.sky(aod, alb)
+        for part, axis, order in joins:
+            Lp, sunp = part.sky(aod, alb)
+            L = np.take(np.concatenate([L, Lp], axis=axis), order, axis=axis)
+            sun = np.take(np.concatenate([sun, sunp], axis=axis), order, axis=axis)
+        return L, sun
     n_sky = _grid.N_SKY * _grid.N_PHI
     n_dir = (_grid.N_SKY + _grid.N_GROUND) * _grid.N_PHI
     shape = (aods.size, albs.size, el.size, alt.size, wl.size)
@@ -503,9 +491,11 @@ def main(argv=None) -> int:
             "delta": DELTA, "fit_residual_rms_y": resid,
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
                        f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else "")
-                       + (" --gas-bands SUPPLEMENT" if gas is not None else "")
-                       + (" --altitude-supplement SUPPLEMENT" if sup is not None else "")
-                       + (" --elevation-supplement SUPPLEMENT" if esup is not None else "")
+                       + "".join(f" {opt} SUPPLEMENT" for opt, folder in
+                                 (("--gas-bands", a.gas_bands),
+                                  ("--altitude-supplement", a.altitude_supplement),
+                                  ("--elevation-supplement", a.elevation_supplement))
+                                 if folder is not None)
                        + (f" --spectral-rank {a.spectral_rank}" if a.spectral_rank else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     if a.float16:

@@ -440,15 +440,14 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
     parts = [(w, aod_stencil(c["aod_nodes"], aod, tw)) for w, tw in ((f, False),
                                                                      (1.0 - f, True))
              if w > 0.0]
-    st_e = elevation_stencil(c["elevation_nodes_deg"], elevation_deg)
-    # at the clear AOD nodes the same nodes with the weights in ln(e + c), c per AOD node
-    # (elevation_log_offset); None: in e
-    offsets = {elevation_log_offset(float(a)) for a in c["aod_nodes"]}
+    # the stencil in e (None) and, at the clear AOD nodes, the same nodes with the weights
+    # in ln(e + c), c per AOD node (elevation_log_offset)
+    offsets = {None} | {elevation_log_offset(float(a)) for a in c["aod_nodes"]}
     st_by = {off: elevation_stencil(c["elevation_nodes_deg"], elevation_deg, off)
              for off in offsets}
     st_h = stencil(c["altitude_nodes_m"], altitude_m, ELEMENT_ORDER["altitude"])
     st_hg = ground_altitude_stencil(c["altitude_nodes_m"], altitude_m)
-    ks = [k for k, _ in st_e]                 # the same nodes in every st_by, other weights
+    ks = [k for k, _ in st_by[None]]          # the same nodes in every st_by, other weights
     weights = {off: np.array([w for _, w in st]) for off, st in st_by.items()}
     # near the sun each elevation node's sky is read where it stands to its own sun as the
     # grid's directions stand to this one (:func:`turned_reads`); elsewhere at the grid's
@@ -474,17 +473,17 @@ def radiance_grid(c: dict, aod: float, albedo: float, elevation_deg: float,
             np.concatenate([c["ground_basis"][k] for k in ks]).astype(np.float32)),
             np.stack(sky_m))
     basis_sky, basis_ground = last[1]
-    means = {log: (np.einsum("k,kd->d", we, last[2]),
+    means = {off: (np.einsum("k,kd->d", we, last[2]),
                    np.einsum("k,kd->d", we, c["ground_mean"][ks].astype(np.float64)))
-             for log, we in weights.items()}
+             for off, we in weights.items()}
     cache: dict = {}
 
     def at_node(i, j):
         """L at AOD node i, albedo node j, interpolated in elevation and altitude."""
         if (i, j) not in cache:
-            log = elevation_log_offset(float(c["aod_nodes"][i]))
-            we = weights[log]
-            mean_sky, mean_ground = means[log]
+            off = elevation_log_offset(float(c["aod_nodes"][i]))
+            we = weights[off]
+            mean_sky, mean_ground = means[off]
             # coefficients and ln s of each elevation node, interpolated in altitude
             cs = _coefficients_mixed(c, "coef_sky", i, j, ks, st_h)          # (k, wl, n)
             cg = _coefficients_mixed(c, "coef_ground", i, j, ks, st_hg)
