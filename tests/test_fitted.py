@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -529,9 +530,10 @@ def _write_dataset(folder, el, alt, atms, wl, chunks):
     _dataset.write_grid(folder, el, alt, atms, False, True, wl)
 
 
-@pytest.mark.parametrize("axis", ["altitude", "elevation", "gas"])
+@pytest.mark.parametrize("axis", ["altitude", "elevation", "gas", "wavelength"])
 def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
-    """tools/fit_fitted.py --altitude-supplement, --elevation-supplement and --gas-bands: a
+    """tools/fit_fitted.py --altitude-supplement, --elevation-supplement and
+    --wavelength-supplement (or its earlier name --gas-bands): a
     data set split by altitude, sun elevation or wavelength (the supplements of
     tools/fitted_dataset.py --altitudes, --elevations and --gas-bands) gives the same
     coefficient arrays as the whole data set; a supplement whose altitudes, elevations or
@@ -546,7 +548,7 @@ def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
     n_rows = _grid.N_SKY + _grid.N_GROUND + 1
     chunks = [rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
               .astype(np.float32) for _ in atms]
-    ax = {"altitude": 1, "elevation": 0, "gas": -1}[axis]
+    ax = {"altitude": 1, "elevation": 0, "gas": -1, "wavelength": -1}[axis]
     option = "--gas-bands" if axis == "gas" else f"--{axis}-supplement"
 
     def cut(idx, shift=0.0):
@@ -577,7 +579,7 @@ def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
     assert fit.main([str(tmp_path / "part"), option, str(tmp_path / "dup"),
                      "--out", str(tmp_path / "c.npz")] + args) == 2
     assert option in capsys.readouterr().err
-    if axis == "gas":
+    if ax == -1:
         assert not (tmp_path / "c.npz").exists()
         return
     _write_dataset(tmp_path / "wl", *cut([2], 10.0))
@@ -587,17 +589,63 @@ def test_supplement_joins_as_the_whole_grid(tmp_path, capsys, axis):
     assert not (tmp_path / "c.npz").exists()
 
 
+def test_supplements_join_in_the_order_given(tmp_path, capsys):
+    """Two supplements along two axes (the eighth file's: the sun node 0.5 deg at the 49
+    wavelengths, then 570, 590 and 610 nm at every sun node, the new one included) join in
+    command-line order: elevations first, then the wavelengths at the joined elevations,
+    give the whole data set's arrays; the other order is refused (the wavelength
+    supplement has an elevation that the data set lacks until its elevation supplement
+    joins), naming the option, and writes no file."""
+    fit = _load_tool("fit_fitted")
+    rng = np.random.default_rng(5)
+    el = np.array([-1.0, 0.0, 0.5, 10.0])
+    alt = np.array([0.0, 15000.0])
+    atms = [(a, b) for a in (0.0, 0.5) for b in (0.0, 1.0)]
+    wl = np.array([560.0, 570.0, 580.0, 600.0])
+    n_rows = _grid.N_SKY + _grid.N_GROUND + 1
+    chunks = [rng.uniform(0.01, 1.0, (el.size, alt.size, n_rows, _grid.N_PHI, wl.size))
+              .astype(np.float32) for _ in atms]
+    e_base, e_sup, w_base, w_sup = [0, 1, 3], [2], [0, 2, 3], [1]
+
+    def cut(ei, wi):
+        return (el[ei], alt, atms, wl[wi],
+                [c[ei][..., wi] for c in chunks])
+    _write_dataset(tmp_path / "whole", el, alt, atms, wl, chunks)
+    _write_dataset(tmp_path / "base", *cut(e_base, w_base))
+    _write_dataset(tmp_path / "sun", *cut(e_sup, w_base))
+    _write_dataset(tmp_path / "wl", *cut(list(range(el.size)), w_sup))
+    args = ["--k-sky", "3", "--k-ground", "2"]
+    assert fit.main([str(tmp_path / "whole"), "--out", str(tmp_path / "a.npz")] + args) == 0
+    assert fit.main([str(tmp_path / "base"), "--elevation-supplement", str(tmp_path / "sun"),
+                     "--wavelength-supplement", str(tmp_path / "wl"),
+                     "--out", str(tmp_path / "b.npz")] + args) == 0
+    a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
+    for key in a.files:
+        if key != "meta":
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+    capsys.readouterr()
+    assert fit.main([str(tmp_path / "base"), "--wavelength-supplement", str(tmp_path / "wl"),
+                     "--elevation-supplement", str(tmp_path / "sun"),
+                     "--out", str(tmp_path / "c.npz")] + args) == 2
+    assert "--wavelength-supplement" in capsys.readouterr().err
+    assert not (tmp_path / "c.npz").exists()
+
+
 def test_dataset_being_generated_reads_its_wavelengths_from_a_chunk(tmp_path):
     """A data set whose run has not ended (no grid.json yet) takes its table wavelengths
-    from a chunk's last axis: the gas bands' 8 (--gas-bands), the 20-nm ones and the gas
-    bands' together, 49 (--with-gas-bands: not evenly spaced), or 300-1100 nm evenly
-    spaced (--wavelength-step 10: 81)."""
+    from a chunk's last axis: the gas bands' 11 (--gas-bands), the 20-nm ones and the gas
+    bands' together, 52 (--with-gas-bands: not evenly spaced), the earlier files' 8 and 49,
+    the Chappuis band's 3 (--wavelengths 570,590,610), or 300-1100 nm evenly spaced
+    (--wavelength-step 10: 81)."""
     from skydome.models.fitted._dataset import DataSet
 
     el, alt = np.array([10.0]), np.array([0.0])
     n_rows = _grid.N_SKY + _grid.N_GROUND + 1
     for name, wl in (("gas", _grid.GAS_BAND_WAVELENGTHS_NM),
                      ("with", _grid.TABLE_WAVELENGTHS_NM),
+                     ("gas7", _grid.V7_GAS_BAND_WAVELENGTHS_NM),
+                     ("with7", _grid.V7_TABLE_WAVELENGTHS_NM),
+                     ("chappuis", np.array([570.0, 590.0, 610.0])),
                      ("ten", np.arange(300.0, 1100.0 + 1e-9, 10.0))):
         folder = tmp_path / name
         _write_dataset(folder, el, alt, [(0.1, 0.0)], wl,
@@ -727,6 +775,37 @@ def test_replace_projects_a_node_again_and_keeps_the_others(tmp_path, capsys):
     assert not (tmp_path / "c.npz").exists()
 
 
+def test_dataset_wavelengths_option_computes_only_those(tmp_path, monkeypatch):
+    """tools/fitted_dataset.py --wavelengths 610,570,590: every chunk of the grid is asked
+    for exactly 570, 590 and 610 nm (sorted, each once), every sun node and altitude of the
+    grid, and the data set's grid.json records those wavelengths (the chunks' computation
+    replaced by a recorder: a real chunk takes minutes)."""
+    import skydome.distributed as dist
+    from skydome.models.fitted._dataset import DataSet
+
+    mod = _load_tool("fitted_dataset")
+    seen = []
+
+    class Report:
+        computed, verified = [], []
+
+    def run_chunks(chunks, out, **kw):
+        seen.extend(chunks)
+        Path(out).mkdir(parents=True, exist_ok=True)
+        return Report()
+    monkeypatch.setattr(dist, "run_chunks", run_chunks)
+    out = tmp_path / "chappuis"
+    assert mod.main([str(out), "--grid", "small", "--wavelengths", "610,570,590,570",
+                     "--ignore-memory-check"]) == 0
+    el, alt, atms = _grid.grid("small")[:3]
+    assert len(seen) == len(atms)
+    for c in seen:
+        np.testing.assert_array_equal(c.args[-1], [570.0, 590.0, 610.0])
+        np.testing.assert_array_equal(c.args[2], el)
+        np.testing.assert_array_equal(c.args[3], alt)
+    np.testing.assert_array_equal(DataSet(out).wavelengths_nm, [570.0, 590.0, 610.0])
+
+
 def _dataset_key(aod, albedo):
     from skydome.models.fitted import _dataset
 
@@ -736,8 +815,9 @@ def _dataset_key(aod, albedo):
 def test_dataset_altitudes_option_refuses_altitudes_off_the_grid(tmp_path, capsys):
     """tools/fitted_dataset.py --altitudes and --elevations: only the grid's altitude and
     sun elevation nodes (a supplement's values must be the grid's); any other is refused
-    before any work, naming the option and the grid's values. --with-gas-bands gives the 20-nm and the gas bands' wavelengths
-    together and refuses --gas-bands beside it."""
+    before any work, naming the option and the grid's values. --with-gas-bands refuses
+    --gas-bands beside it; --wavelengths takes only the 10-nm grid's wavelengths and
+    neither --gas-bands nor --wavelength-step."""
     mod = _load_tool("fitted_dataset")
     out = tmp_path / "set"
     assert mod.main([str(out), "--altitudes", "4000,4500", "--ignore-memory-check"]) == 2
@@ -754,6 +834,16 @@ def test_dataset_altitudes_option_refuses_altitudes_off_the_grid(tmp_path, capsy
     assert mod.main([str(out), "--with-gas-bands", "--gas-bands",
                      "--ignore-memory-check"]) == 2
     assert "--with-gas-bands" in capsys.readouterr().err
+    # --wavelengths: only the 10-nm grid's wavelengths, and alone
+    assert mod.main([str(out), "--wavelengths", "570,575", "--ignore-memory-check"]) == 2
+    err = capsys.readouterr().err
+    assert "--wavelengths = '570,575'" in err and "580.0" in err
+    assert mod.main([str(out), "--wavelengths", "570", "--gas-bands",
+                     "--ignore-memory-check"]) == 2
+    assert "--wavelengths" in capsys.readouterr().err
+    assert mod.main([str(out), "--wavelengths", "570", "--wavelength-step", "10",
+                     "--ignore-memory-check"]) == 2
+    assert "--wavelengths" in capsys.readouterr().err
     assert not out.exists()
     np.testing.assert_array_equal(
         np.union1d(_grid.WAVELENGTHS_NM, _grid.GAS_BAND_WAVELENGTHS_NM),

@@ -30,10 +30,19 @@ coefficients (one node and wavelength) and each basis vector divided by its larg
 magnitude (the scales in float32): half the file, for the rounding error measured in
 docs/models.md ("fitted").
 
-``--gas-bands SUPPLEMENT``: a data set of the same grid made with ``tools/fitted_dataset.py
---gas-bands`` (the reference at the gas bands' own wavelengths, 310, 330, 690, 710, 730,
-770, 890 and 930 nm); its wavelengths join DATASET's as table wavelengths of their own (49
-in all), fitted with the others (the same bases, per elevation node).
+``--wavelength-supplement SUPPLEMENT`` (``--gas-bands``, its name in earlier files'
+commands): a data set of the same grid made with ``tools/fitted_dataset.py --gas-bands``
+(the reference at the gas bands' own wavelengths, 310, 330, 570, 590, 610, 690, 710, 730,
+770, 890 and 930 nm) or ``--wavelengths`` (some of them: the shipped file's 570, 590 and
+610 nm); its wavelengths join DATASET's as table wavelengths of their own, fitted with the
+others (the same bases, per elevation node).
+
+Every supplement option is repeatable, and the supplements join in the order of the
+command line, each to the data set joined so far: it must hold that state's values of the
+two other axes. The shipped file: ``DATASET --elevation-supplement SUN
+--wavelength-supplement CHAPPUIS`` (the 49-wavelength data set of the seventh file's 28 sun
+nodes, its 0.5-deg supplement at the same 49 wavelengths, then 570, 590 and 610 nm at all
+29 sun nodes).
 
 ``--altitude-supplement SUPPLEMENT``: a data set of the same sun elevations and atmospheres
 at altitudes DATASET lacks, made with ``tools/fitted_dataset.py --altitudes`` at DATASET's
@@ -285,6 +294,21 @@ def add_sun_to_file(target: Path) -> None:
         np.savez_compressed(tmp, **out)
 
 
+#: The axis of the data set along which each supplement option joins.
+SUPPLEMENT_AXES = {"--wavelength-supplement": "wavelengths_nm", "--gas-bands": "wavelengths_nm",
+                   "--altitude-supplement": "altitudes_m",
+                   "--elevation-supplement": "elevations_deg"}
+AXIS_NAMES = {"wavelengths_nm": "table wavelengths", "altitudes_m": "altitudes",
+              "elevations_deg": "sun elevations"}
+
+
+class _Supplement(argparse.Action):
+    """Appends (option, folder) to ``supplements``: the supplements in command-line order."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, getattr(namespace, self.dest) + [(option_string, values)])
+
+
 def _supplement(option: str, folder: str, ds, aods, same: dict, axis: str,
                 values: np.ndarray, what: str):
     """(data set, order, joined values) of a supplement to ``ds`` along ``axis``
@@ -331,16 +355,21 @@ def main(argv=None) -> int:
     ap.add_argument("--spectral-rank", type=int, default=0, metavar="K",
                     help="store the coefficients as K spectral terms per sun node (the "
                          "truncated SVD along the wavelength); 0: every wavelength's own")
-    ap.add_argument("--gas-bands", default=None, metavar="SUPPLEMENT",
-                    help="a --gas-bands data set of the same grid: its wavelengths added")
-    ap.add_argument("--altitude-supplement", default=None, metavar="SUPPLEMENT",
-                    help="a data set of the same sun elevations and atmospheres at other "
-                         "altitudes (tools/fitted_dataset.py --altitudes): its altitudes "
-                         "added")
-    ap.add_argument("--elevation-supplement", default=None, metavar="SUPPLEMENT",
-                    help="a data set of the same altitudes and atmospheres at other sun "
-                         "elevations (tools/fitted_dataset.py --elevations): its elevations "
-                         "added")
+    for option, text in (
+            ("--wavelength-supplement", "a data set of the same sun elevations, altitudes "
+             "and atmospheres at other table wavelengths (tools/fitted_dataset.py "
+             "--wavelengths or --gas-bands): its wavelengths added"),
+            ("--gas-bands", "the same as --wavelength-supplement (the name in the commands "
+             "of earlier files)"),
+            ("--altitude-supplement", "a data set of the same sun elevations, wavelengths "
+             "and atmospheres at other altitudes (tools/fitted_dataset.py --altitudes): its "
+             "altitudes added"),
+            ("--elevation-supplement", "a data set of the same altitudes, wavelengths and "
+             "atmospheres at other sun elevations (tools/fitted_dataset.py --elevations): "
+             "its elevations added")):
+        ap.add_argument(option, dest="supplements", action=_Supplement, default=[],
+                        metavar="SUPPLEMENT", help=text + "; repeatable, joined in the "
+                        "order given")
     a = ap.parse_args(argv)
     if a.add_sun:
         from skydome.models.fitted._coefficients import COEFFICIENT_FILE
@@ -394,39 +423,23 @@ def main(argv=None) -> int:
     # order of the joined values); a chunk's radiance (e, h, rows, phi, wl) and sun factor
     # (e, h, wl) share the elevation (0), altitude (1) and wavelength (-1) axes
     joins = []
-    if a.gas_bands is not None:
-        joined = _supplement("--gas-bands", a.gas_bands, ds, aods,
-                             {"altitudes_m": alt, "elevations_deg": el},
-                             "wavelengths_nm", wl, "the same grid as DATASET")
+    # each supplement joins the data set as joined so far, in the order of the command
+    # line: it must hold that state's values of the two other axes
+    axes = {"wavelengths_nm": -1, "altitudes_m": 1, "elevations_deg": 0}
+    state = {"wavelengths_nm": wl, "altitudes_m": alt, "elevations_deg": el}
+    for option, folder in a.supplements:
+        axis = SUPPLEMENT_AXES[option]
+        same = {k: v for k, v in state.items() if k != axis}
+        what = ("the " + " and ".join(AXIS_NAMES[k] for k in same) + " of DATASET"
+                + (" with the supplements before it" if joins else ""))
+        joined = _supplement(option, folder, ds, aods, same, axis, state[axis], what)
         if joined is None:
             return 2
-        gas, order, wl = joined
-        joins.append((gas, -1, order))
-        print(f"gas bands: {gas.wavelengths_nm.tolist()} nm added ({wl.size} table "
-              "wavelengths)", flush=True)
-    if a.altitude_supplement is not None:
-        joined = _supplement("--altitude-supplement", a.altitude_supplement, ds, aods,
-                             {"wavelengths_nm": wl, "elevations_deg": el}, "altitudes_m",
-                             alt,
-                             "the same sun elevations and table wavelengths as DATASET "
-                             "(with --gas-bands: its wavelengths too)")
-        if joined is None:
-            return 2
-        sup, alt_order, alt = joined
-        joins.append((sup, 1, alt_order))
-        print(f"altitudes: {sup.altitudes_m.tolist()} m added ({alt.size} altitude nodes)",
-              flush=True)
-    if a.elevation_supplement is not None:
-        joined = _supplement("--elevation-supplement", a.elevation_supplement, ds, aods,
-                             {"wavelengths_nm": wl, "altitudes_m": alt}, "elevations_deg",
-                             el, "the same altitudes and table wavelengths as DATASET "
-                             "(with --gas-bands, --altitude-supplement: theirs too)")
-        if joined is None:
-            return 2
-        esup, el_order, el = joined
-        joins.append((esup, 0, el_order))
-        print(f"sun elevations: {esup.elevations_deg.tolist()} deg added ({el.size} sun "
-              "nodes)", flush=True)
+        sup, order, state[axis] = joined
+        joins.append((sup, axes[axis], order))
+        print(f"{option}: {getattr(sup, axis).tolist()} added ({state[axis].size} "
+              f"{axis.split('_')[0]})", flush=True)
+    wl, alt, el = state["wavelengths_nm"], state["altitudes_m"], state["elevations_deg"]
 
     def sky(aod, alb):
         L, sun = ds.sky(aod, alb)
@@ -491,11 +504,7 @@ def main(argv=None) -> int:
             "delta": DELTA, "fit_residual_rms_y": resid,
             "command": f"python tools/fit_fitted.py DATASET --k-sky {a.k_sky} "
                        f"--k-ground {a.k_ground}" + (" --float16" if a.float16 else "")
-                       + "".join(f" {opt} SUPPLEMENT" for opt, folder in
-                                 (("--gas-bands", a.gas_bands),
-                                  ("--altitude-supplement", a.altitude_supplement),
-                                  ("--elevation-supplement", a.elevation_supplement))
-                                 if folder is not None)
+                       + "".join(f" {opt} SUPPLEMENT" for opt, _ in a.supplements)
                        + (f" --spectral-rank {a.spectral_rank}" if a.spectral_rank else ""),
             "fitted": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     if a.float16:

@@ -5,7 +5,7 @@
                                         heldout-v1|small]
         [--scheduler ADDR] [--workers N] [--twilight-reference] [--max-aod A]
         [--atmospheres A:B,...] [--wavelength-step NM] [--gas-bands | --with-gas-bands]
-        [--altitudes M,...] [--elevations DEG,...]
+        [--altitudes M,...] [--elevations DEG,...] [--wavelengths NM,...]
 
 One chunk per atmosphere (aerosol optical depth at 550 nm x ground albedo), each holding
 every (sun elevation, observer altitude) node of the grid: the reference's tables hold every
@@ -45,10 +45,11 @@ Grids (skydome/models/fitted/_grid.py):
 default (the fitting wavelengths), 10 nm for a held-out set that measures the model between
 them too (81 wavelengths: the 20-nm ones are every other one, so the set's 20-nm subset is
 the default set; the chunk layout is the same, with 81 on the wavelength axis).
-``--gas-bands``: the reference at the gas bands' own table wavelengths only (310, 330, 690,
-710, 730, 770, 890, 930 nm; skydome/models/fitted/_grid.py), a supplement to the 20-nm set
-of the same grid in a folder of its own, which ``tools/fit_fitted.py --gas-bands`` joins to it;
-``--with-gas-bands``: the 20-nm wavelengths and the gas bands' together (49): a whole data
+``--gas-bands``: the reference at the gas bands' own table wavelengths only (310, 330, 570,
+590, 610, 690, 710, 730, 770, 890, 930 nm; skydome/models/fitted/_grid.py), a supplement to
+the 20-nm set of the same grid in a folder of its own, which ``tools/fit_fitted.py
+--wavelength-supplement`` joins to it;
+``--with-gas-bands``: the 20-nm wavelengths and the gas bands' together (52): a whole data
 set in one run (the twilight reference's geometry costs the same whatever the number of
 wavelengths, so this is cheaper than a 20-nm set and its gas-band supplement), which
 ``tools/fit_fitted.py`` fits as it is.
@@ -62,6 +63,10 @@ whole grid gives at its nodes.
 that the sixth file's data set lacks, joined by ``tools/fit_fitted.py
 --elevation-supplement``; the held-out sun elevations 0.25 and 0.75 deg that replace the
 sixth file's 0.5, joined by ``tools/fitted_accuracy.py --supplement``).
+``--wavelengths``: only these table wavelengths (on the 10-nm grid, 300-1100 nm): a
+supplement of table wavelengths of their own, such as 570, 590 and 610 nm (ozone's Chappuis
+band, between the 20-nm ones) that the seventh file's 49-wavelength data set lacks, joined
+by ``tools/fit_fitted.py --wavelength-supplement``.
 """
 
 from __future__ import annotations
@@ -154,14 +159,15 @@ def main(argv=None) -> int:
                          "fitting wavelengths; 10, 5, 4, 2 or 1 nm to measure the model "
                          "between them)")
     ap.add_argument("--gas-bands", action="store_true",
-                    help="table wavelengths: the gas bands' own (310, 330, 690, 710, 730, "
-                         "770, 890, 930 nm) only: the supplement that tools/fit_fitted.py "
-                         "--gas-bands adds to a 20-nm data set of the same grid")
+                    help="table wavelengths: the gas bands' own (310, 330, 570, 590, 610, "
+                         "690, 710, 730, 770, 890, 930 nm) only: the supplement that "
+                         "tools/fit_fitted.py --wavelength-supplement adds to a 20-nm data "
+                         "set of the same grid")
     ap.add_argument("--with-gas-bands", action="store_true",
-                    help="table wavelengths: the 20-nm ones and the gas bands' (49): the "
+                    help="table wavelengths: the 20-nm ones and the gas bands' (52): the "
                          "whole data set in one run (what tools/fit_fitted.py fits without "
-                         "--gas-bands), or a supplement in --altitudes to a data set joined "
-                         "with its --gas-bands supplement")
+                         "a wavelength supplement), or a supplement in --altitudes or "
+                         "--elevations to a data set joined with its gas-band supplement")
     ap.add_argument("--altitudes", default=None, metavar="M,...",
                     help="compute only these of the grid's altitudes [m] (a supplement that "
                          "tools/fit_fitted.py --altitude-supplement joins to a data set of "
@@ -171,6 +177,10 @@ def main(argv=None) -> int:
                          "that tools/fit_fitted.py --elevation-supplement joins to a data set "
                          "of the other elevations; tools/fitted_accuracy.py --supplement to a "
                          "held-out set)")
+    ap.add_argument("--wavelengths", default=None, metavar="NM,...",
+                    help="table wavelengths: only these of the 10-nm grid 300-1100 nm (a "
+                         "supplement that tools/fit_fitted.py --wavelength-supplement joins "
+                         "to a data set of the other wavelengths)")
     ap.add_argument("--ignore-memory-check", action="store_true",
                     help="start the local cluster even where --workers times the memory a "
                          "worker is expected to need (about 0.14 GB per table wavelength: "
@@ -193,16 +203,30 @@ def main(argv=None) -> int:
         if a.gas_bands:
             if a.wavelength_step != 20.0:
                 print("error: --gas-bands takes no --wavelength-step (its wavelengths are "
-                      "fixed: 310, 330, 690, 710, 730, 770, 890, 930 nm)", file=sys.stderr)
+                      "fixed: 310, 330, 570, 590, 610, 690, 710, 730, 770, 890, 930 nm)",
+                      file=sys.stderr)
                 return 2
             wl = _dataset.gas_band_wavelengths_nm()
         if a.with_gas_bands:
             if a.gas_bands or a.wavelength_step != 20.0:
                 print("error: --with-gas-bands takes neither --gas-bands nor "
                       "--wavelength-step (its wavelengths are fixed: 300-1100 nm every 20 nm "
-                      "and 310, 330, 690, 710, 730, 770, 890, 930 nm)", file=sys.stderr)
+                      "and 310, 330, 570, 590, 610, 690, 710, 730, 770, 890, 930 nm)",
+                      file=sys.stderr)
                 return 2
             wl = np.union1d(wl, _dataset.gas_band_wavelengths_nm())
+        if a.wavelengths is not None:
+            if a.gas_bands or a.with_gas_bands or a.wavelength_step != 20.0:
+                print("error: --wavelengths takes neither --gas-bands, --with-gas-bands nor "
+                      "--wavelength-step (it lists the table wavelengths itself)",
+                      file=sys.stderr)
+                return 2
+            try:
+                wl = _subset("--wavelengths", a.wavelengths, _dataset.wavelengths_nm(10.0),
+                             "the 10-nm grid's wavelengths", "nm")
+            except ValueError as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 2
     except ValueError:
         print(f"error: --wavelength-step = {a.wavelength_step:g} nm is out of range: one of "
               "20, 10, 5, 4, 2, 1 nm (a divisor of the fitting wavelengths' 20 nm)",

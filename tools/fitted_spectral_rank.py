@@ -5,16 +5,17 @@
 
 The coefficients are, per atmosphere, sun-elevation node, altitude and table wavelength,
 the 32 (sky) and 12 (ground) coefficients of the angular basis of its sun node
-(skydome/models/fitted/_coefficients.py): 49 table wavelengths. Along the wavelength they
-vary smoothly but for the gas bands. A file stores them per wavelength, or as spectral
-terms (``tools/fit_fitted.py --spectral-rank K``, the shipped file: K = 24); either is
-read here, expanded to the 49 wavelengths. This tool writes a file
-whose coefficients are the truncated singular value decomposition along the wavelength
-(per sun node, over every atmosphere, altitude and coefficient: the rows; the mean row
-removed first) kept to its first K terms: what a file holding K coefficients per node
-instead of 49, and per sun node K spectral vectors of 49 values, would give. The file
+(skydome/models/fitted/_coefficients.py): 52 table wavelengths (49 up to the seventh
+file). Along the wavelength they vary smoothly but for the gas bands. A file stores them
+per wavelength, or as spectral terms (``tools/fit_fitted.py --spectral-rank K``, the
+shipped file: K = 24); either is read here, expanded to the table wavelengths. This tool
+writes a file whose coefficients are the truncated singular value decomposition along the
+wavelength (per sun node, over every atmosphere, altitude and coefficient: the rows; the
+mean row removed first) kept to its first K terms: what a file holding K coefficients per
+node instead of one per wavelength, and per sun node K spectral vectors of one value per
+wavelength, would give. The file
 written is for measuring (its coefficients are stored in float32, already expanded to the
-49 wavelengths, which the model reads like any other file): ``tools/fitted_accuracy.py
+table wavelengths, which the model reads like any other file): ``tools/fitted_accuracy.py
 --coefficients OUT`` on the held-out grid gives its errors beside the shipped file's.
 
 It prints the relative RMS of the truncation per array and the size the coefficients

@@ -172,9 +172,9 @@ class FittedSky(SkyModel):
     The atmosphere is ``Atmosphere.earth(aerosol_optical_depth=..., ground_albedo=...)``
     with its other constituents at their defaults (ozone 300 DU, water vapour 1.42 cm,
     mixed gases). The reference's table wavelengths are 300-1100 nm every 20 nm and the gas
-    bands' 310, 330, 690, 710, 730, 770, 890, 930 nm; halfway between two of them where the
-    gases absorb (ozone's Huggins band, O2, water vapour) the value comes from the
-    logarithms of the nearest three (:func:`spectral_table`); other
+    bands' 310, 330, 570, 590, 610, 690, 710, 730, 770, 890, 930 nm; halfway between two of
+    them where the gases absorb (ozone's Huggins band, O2, water vapour) the value comes
+    from the logarithms of the nearest three (:func:`spectral_table`); other
     wavelengths are interpolated linearly, relative to the solar spectrum, between these
     10-nm values (docs/models.md, "fitted", "Wavelengths"). Below the horizon the model
     returns the reference's ground (Lambertian, lit by the sun and the sky, seen through

@@ -133,12 +133,16 @@ class DataSet:
                         if (self.folder / (chunk_key(a, b) + ".npy.sha256")).is_file()]
         if not gj.is_file() and self.present:
             # still being generated: its wavelengths from a chunk's last axis (the gas
-            # bands' 8 of --gas-bands, the 49 of --with-gas-bands, else 300-1100 nm evenly
-            # spaced, as --wavelength-step writes them)
+            # bands' 11 of --gas-bands, the 52 of --with-gas-bands, the earlier files' 8 and
+            # 49, the Chappuis band's 3 of --wavelengths 570,590,610, else 300-1100 nm
+            # evenly spaced, as --wavelength-step writes them)
             n = np.load(self.folder / (chunk_key(*self.present[0]) + ".npy"),
                         mmap_mode="r").shape[-1]
             known = {v.size: v for v in (_grid.GAS_BAND_WAVELENGTHS_NM,
-                                         _grid.TABLE_WAVELENGTHS_NM)}
+                                         _grid.TABLE_WAVELENGTHS_NM,
+                                         _grid.V7_GAS_BAND_WAVELENGTHS_NM,
+                                         _grid.V7_TABLE_WAVELENGTHS_NM,
+                                         _grid.CHAPPUIS_WAVELENGTHS_NM)}
             self.wavelengths_nm = (known[n].copy() if n in known
                                    else np.linspace(300.0, 1100.0, n))
 

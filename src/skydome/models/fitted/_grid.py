@@ -49,10 +49,22 @@ WAVELENGTHS_NM = np.arange(300.0, 1100.0 + 1e-9, 20.0)
 #: in-between error, measured against the reference computed there (the held-out grid at
 #: 10 nm, docs/models.md "fitted", "Wavelengths"), was 5-8 % RMS by day or more: ozone's
 #: Huggins band (310, 330 nm), water vapour (690, 710, 730, 890, 930 nm) and the O2 A band's
-#: edge (770 nm). A supplement data set holds them (``tools/fitted_dataset.py --gas-bands``).
-GAS_BAND_WAVELENGTHS_NM = np.array([310.0, 330.0, 690.0, 710.0, 730.0, 770.0, 890.0, 930.0])
-#: The table wavelengths of a file fitted with that supplement (49 wavelengths).
+#: edge (770 nm); and ozone's Chappuis band (570, 590, 610 nm, its peaks near 575 and 603
+#: nm), where interpolating the reference's own 20-nm values put the luminance of clear
+#: skies up to 2.8 % low by day (3.5 % at 0.4-4.5 km) and 5.9 % in twilight (the
+#: luminance's "interpolation alone", docs/models.md). A supplement data set holds them
+#: (``tools/fitted_dataset.py --gas-bands``, or ``--wavelengths`` for some of them).
+GAS_BAND_WAVELENGTHS_NM = np.array([310.0, 330.0, 570.0, 590.0, 610.0, 690.0, 710.0, 730.0,
+                                    770.0, 890.0, 930.0])
+#: The table wavelengths of a file fitted with that supplement (52 wavelengths).
 TABLE_WAVELENGTHS_NM = np.union1d(WAVELENGTHS_NM, GAS_BAND_WAVELENGTHS_NM)
+#: The Chappuis band's wavelengths: the supplement that the seventh file's data set (49
+#: wavelengths) lacks (``tools/fitted_dataset.py --wavelengths 570,590,610``).
+CHAPPUIS_WAVELENGTHS_NM = np.array([570.0, 590.0, 610.0])
+#: The gas bands' and table wavelengths of the first to seventh files (8 and 49: without
+#: the Chappuis band's).
+V7_GAS_BAND_WAVELENGTHS_NM = np.setdiff1d(GAS_BAND_WAVELENGTHS_NM, CHAPPUIS_WAVELENGTHS_NM)
+V7_TABLE_WAVELENGTHS_NM = np.union1d(WAVELENGTHS_NM, V7_GAS_BAND_WAVELENGTHS_NM)
 
 #: The model's parameter range (inclusive).
 SUN_ELEVATION_RANGE_DEG = (-12.0, 90.0)
