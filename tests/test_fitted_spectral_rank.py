@@ -29,11 +29,17 @@ def _known_rank_two(rng, weak_scale=0.1, A=2, B=3, E=4, H=5, W=11, T=6):
     return C, weak
 
 
-@pytest.mark.parametrize("rank", [0, 50])
+@pytest.mark.parametrize("rank", [0, 53])
 def test_rank_out_of_range_refused_before_work(tmp_path, capsys, rank):
+    """The rank is one of 1 .. the shipped file's number of table wavelengths (52:
+    _grid.TABLE_WAVELENGTHS_NM, which tests/test_fitted.py checks the file holds)."""
+    from skydome.models.fitted import _grid
+
+    n = _grid.TABLE_WAVELENGTHS_NM.size
+    assert n == 52
     out = tmp_path / "r.npz"
     assert _tool().main([str(out), "--rank", str(rank)]) == 2
-    assert f"--rank = {rank} is out of range [1, 49]" in capsys.readouterr().err
+    assert f"--rank = {rank} is out of range [1, {n}]" in capsys.readouterr().err
     assert not out.exists()
 
 

@@ -299,8 +299,9 @@ class FittedSky(SkyModel):
         weights (skydome.imaging.render)."""
         wl = as_wavelengths(wavelengths_nm, *WAVELENGTH_RANGE_NM)
         B = self._weights(wl)
-        # only the spectral wavelengths that reach ``wavelengths_nm`` (380-780 nm: 29 of
-        # the 63): the other rows of B are zero, so the product is the same, at less cost
+        # only the spectral wavelengths that reach ``wavelengths_nm`` (380-780 nm: 39 of
+        # the shipped file's 81): the other rows of B are zero, so the product is the same,
+        # at less cost
         used = np.flatnonzero(np.any(B != 0.0, axis=1))
         j0, j1 = (int(used[0]), int(used[-1]) + 1) if used.size else (0, 1)
         table = self._derived_table(("rows", j0, j1), lambda: self._table[:, :, j0:j1])
