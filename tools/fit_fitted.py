@@ -298,8 +298,10 @@ def add_sun_to_file(target: Path) -> None:
 SUPPLEMENT_AXES = {"--wavelength-supplement": "wavelengths_nm", "--gas-bands": "wavelengths_nm",
                    "--altitude-supplement": "altitudes_m",
                    "--elevation-supplement": "elevations_deg"}
-AXIS_NAMES = {"wavelengths_nm": "table wavelengths", "altitudes_m": "altitudes",
-              "elevations_deg": "sun elevations"}
+#: Per axis (the data set's attribute): its index in a chunk's radiance (e, h, rows, phi,
+#: wl) and sun factor (e, h, wl), and its name in messages.
+AXES = {"wavelengths_nm": (-1, "table wavelengths"), "altitudes_m": (1, "altitudes"),
+        "elevations_deg": (0, "sun elevations")}
 
 
 class _Supplement(argparse.Action):
@@ -425,18 +427,17 @@ def main(argv=None) -> int:
     joins = []
     # each supplement joins the data set as joined so far, in the order of the command
     # line: it must hold that state's values of the two other axes
-    axes = {"wavelengths_nm": -1, "altitudes_m": 1, "elevations_deg": 0}
     state = {"wavelengths_nm": wl, "altitudes_m": alt, "elevations_deg": el}
     for option, folder in a.supplements:
         axis = SUPPLEMENT_AXES[option]
         same = {k: v for k, v in state.items() if k != axis}
-        what = ("the " + " and ".join(AXIS_NAMES[k] for k in same) + " of DATASET"
+        what = ("the " + " and ".join(AXES[k][1] for k in same) + " of DATASET"
                 + (" with the supplements before it" if joins else ""))
         joined = _supplement(option, folder, ds, aods, same, axis, state[axis], what)
         if joined is None:
             return 2
         sup, order, state[axis] = joined
-        joins.append((sup, axes[axis], order))
+        joins.append((sup, AXES[axis][0], order))
         print(f"{option}: {getattr(sup, axis).tolist()} added ({state[axis].size} "
               f"{axis.split('_')[0]})", flush=True)
     wl, alt, el = state["wavelengths_nm"], state["altitudes_m"], state["elevations_deg"]

@@ -133,6 +133,7 @@ def _subset(option: str, text: str, values, what: str, unit: str) -> np.ndarray:
 def main(argv=None) -> int:
     from skydome.models.fitted import _grid as G
 
+    gas = ", ".join(f"{x:g}" for x in G.GAS_BAND_WAVELENGTHS_NM)     # for the messages
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="folder of the chunks (created; a rerun resumes)")
     ap.add_argument("--grid", default="fit",
@@ -159,15 +160,15 @@ def main(argv=None) -> int:
                          "fitting wavelengths; 10, 5, 4, 2 or 1 nm to measure the model "
                          "between them)")
     ap.add_argument("--gas-bands", action="store_true",
-                    help="table wavelengths: the gas bands' own (310, 330, 570, 590, 610, "
-                         "690, 710, 730, 770, 890, 930 nm) only: the supplement that "
-                         "tools/fit_fitted.py --wavelength-supplement adds to a 20-nm data "
-                         "set of the same grid")
+                    help=f"table wavelengths: the gas bands' own ({gas} nm) only: the "
+                         "supplement that tools/fit_fitted.py --wavelength-supplement adds "
+                         "to a 20-nm data set of the same grid")
     ap.add_argument("--with-gas-bands", action="store_true",
-                    help="table wavelengths: the 20-nm ones and the gas bands' (52): the "
-                         "whole data set in one run (what tools/fit_fitted.py fits without "
-                         "a wavelength supplement), or a supplement in --altitudes or "
-                         "--elevations to a data set joined with its gas-band supplement")
+                    help=f"table wavelengths: the 20-nm ones and the gas bands' "
+                         f"({G.TABLE_WAVELENGTHS_NM.size}): the whole data set in one run "
+                         "(what tools/fit_fitted.py fits without a wavelength supplement), "
+                         "or a supplement in --altitudes or --elevations to a data set "
+                         "joined with its gas-band supplement")
     ap.add_argument("--altitudes", default=None, metavar="M,...",
                     help="compute only these of the grid's altitudes [m] (a supplement that "
                          "tools/fit_fitted.py --altitude-supplement joins to a data set of "
@@ -202,17 +203,15 @@ def main(argv=None) -> int:
         wl = _dataset.wavelengths_nm(a.wavelength_step)
         if a.gas_bands:
             if a.wavelength_step != 20.0:
-                print("error: --gas-bands takes no --wavelength-step (its wavelengths are "
-                      "fixed: 310, 330, 570, 590, 610, 690, 710, 730, 770, 890, 930 nm)",
-                      file=sys.stderr)
+                print(f"error: --gas-bands takes no --wavelength-step (its wavelengths are "
+                      f"fixed: {gas} nm)", file=sys.stderr)
                 return 2
             wl = _dataset.gas_band_wavelengths_nm()
         if a.with_gas_bands:
             if a.gas_bands or a.wavelength_step != 20.0:
-                print("error: --with-gas-bands takes neither --gas-bands nor "
-                      "--wavelength-step (its wavelengths are fixed: 300-1100 nm every 20 nm "
-                      "and 310, 330, 570, 590, 610, 690, 710, 730, 770, 890, 930 nm)",
-                      file=sys.stderr)
+                print(f"error: --with-gas-bands takes neither --gas-bands nor "
+                      f"--wavelength-step (its wavelengths are fixed: 300-1100 nm every 20 nm "
+                      f"and {gas} nm)", file=sys.stderr)
                 return 2
             wl = np.union1d(wl, _dataset.gas_band_wavelengths_nm())
         if a.wavelengths is not None:
